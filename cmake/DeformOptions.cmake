@@ -1,0 +1,9 @@
+# Compiler flags shared by every target of the project (not exported to users).
+add_library(deform_warnings INTERFACE)
+target_compile_options(deform_warnings INTERFACE
+  $<$<CXX_COMPILER_ID:GNU,Clang>:-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion>)
+
+if(DEFORM_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()

@@ -1,0 +1,1 @@
+// Importer through Assimp (import.hpp): filled in by the importer module.

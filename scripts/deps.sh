@@ -1,0 +1,27 @@
+# Sourced by scripts/test and scripts/demo: installs the Debian packages libdeform needs when they are missing.
+# As root it runs apt-get; otherwise it prints the one `sudo apt-get install` line and stops.
+deform_packages=(
+  build-essential cmake pkg-config
+  libglm-dev doctest-dev libopenmesh-dev nlohmann-json3-dev libbenchmark-dev
+  libassimp-dev assimp-testmodels
+  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth
+)
+
+deform_install_deps() {
+  local missing=()
+  for p in "${deform_packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  if [ "$(id -u)" -eq 0 ]; then
+    echo "==> installing ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq && apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  else
+    echo "libdeform needs these Debian packages; install them with:" >&2
+    echo "  sudo apt-get install -y ${missing[*]}" >&2
+    return 1
+  fi
+}
+
+deform_jobs() { nproc 2>/dev/null || echo 2; }

@@ -1,0 +1,103 @@
+#include "cli.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <iostream>
+
+namespace cli {
+
+Args::Args(std::vector<std::string> argv, std::vector<std::string> value_flags, std::vector<std::string> switch_flags) {
+  auto is_in = [](const std::vector<std::string>& list, const std::string& s) {
+    for (const std::string& item : list)
+      if (item == s) return true;
+    return false;
+  };
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& a = argv[i];
+    if (a == "--help" || a == "-h") {
+      help_ = true;
+    } else if (a.size() > 2 && a.rfind("--", 0) == 0) {
+      std::string flag = a, inline_value;
+      const std::size_t eq = a.find('=');
+      const bool has_inline = eq != std::string::npos;
+      if (has_inline) flag = a.substr(0, eq), inline_value = a.substr(eq + 1);
+      if (is_in(value_flags, flag)) {
+        if (has_inline) values_.emplace_back(flag, inline_value);
+        else if (i + 1 < argv.size()) values_.emplace_back(flag, argv[++i]);
+        else throw UsageError(flag + " needs a value");
+      } else if (is_in(switch_flags, flag) && !has_inline) {
+        switches_.push_back(flag);
+      } else {
+        throw UsageError("unknown option " + a);
+      }
+    } else {
+      positionals_.push_back(a);
+    }
+  }
+}
+
+bool Args::has(std::string_view flag) const {
+  for (const auto& s : switches_)
+    if (s == flag) return true;
+  return value(flag).has_value();
+}
+
+std::optional<std::string> Args::value(std::string_view flag) const {
+  std::optional<std::string> found;
+  for (const auto& [f, v] : values_)
+    if (f == flag) found = v;
+  return found;
+}
+
+std::string Args::required(std::string_view flag) const {
+  auto v = value(flag);
+  if (!v) throw UsageError(std::string(flag) + " is required");
+  return *v;
+}
+
+double parse_number(const std::string& text, std::string_view what) {
+  double value = 0.0;
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  if (begin != end && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  if (ec != std::errc() || ptr != end || begin == end || !std::isfinite(value))
+    throw UsageError(std::string(what) + ": '" + text + "' is not a finite number");
+  return value;
+}
+
+long long parse_integer(const std::string& text, std::string_view what, long long min, long long max) {
+  long long value = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || ptr != text.data() + text.size() || text.empty())
+    throw UsageError(std::string(what) + ": '" + text + "' is not an integer");
+  if (value < min || value > max)
+    throw UsageError(std::string(what) + ": " + text + " is outside [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "]");
+  return value;
+}
+
+glm::vec3 parse_vec3(const std::string& text, std::string_view what) {
+  glm::vec3 v(0.0f);
+  std::size_t start = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t comma = text.find(',', start);
+    const bool last = axis == 2;
+    if (last != (comma == std::string::npos))
+      throw UsageError(std::string(what) + ": '" + text + "' is not X,Y,Z");
+    const std::string part = text.substr(start, last ? std::string::npos : comma - start);
+    const double d = parse_number(part, what);
+    if (std::abs(d) > 3.0e38) throw UsageError(std::string(what) + ": '" + part + "' is out of range");
+    v[axis] = static_cast<float>(d);
+    start = comma + 1;
+  }
+  return v;
+}
+
+void print_json(const nlohmann::json& document) { std::cout << document.dump(2) << '\n'; }
+
+void note(const std::string& message) { std::cerr << "deform: " << message << '\n'; }
+
+nlohmann::json to_json(glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+
+}  // namespace cli
