@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -45,8 +46,9 @@ struct Mesh {
 
   // --- render vertices ---
   std::vector<std::uint32_t> vertex_point;  // render vertex -> point index (size = render vertex count)
-  std::vector<glm::vec3> vertex_normals;    // per render vertex; from `vn`, or computed when the file has none
-  std::vector<glm::vec2> vertex_uvs;        // per render vertex; empty when the file has no `vt` at all
+  std::vector<glm::vec3> vertex_normals;    // per render vertex; from `vn` as written, or computed where a corner has none
+  std::vector<glm::vec2> vertex_uvs;        // per render vertex ((0, 0) where a corner has no `vt`); empty when no
+                                            // face corner uses a `vt`
 
   // --- triangles (3 render-vertex indices each), grouped by submesh ---
   std::vector<std::uint32_t> triangles;
@@ -69,9 +71,11 @@ struct Warnings {
 
 // Reads an OBJ file and the MTL files it names. Supports `v` (extra w / colour components ignored), `vn`, `vt`,
 // `f` in the forms v, v/vt, v//vn, v/vt/vn with negative (relative) indices, polygons (fan-triangulated), `o`, `g`,
-// `s` (ignored), `mtllib`, `usemtl`; MTL `newmtl`, `Ka`, `Kd`, `Ks`, `d`, `Tr`, `Ns`, `illum`, `map_Kd`.
+// `s` (ignored), `mtllib`, `usemtl`, `\` line continuation; MTL `newmtl`, `Ka`, `Kd`, `Ks`, `d`, `Tr`, `Ns`, `illum`,
+// `map_Kd`. Render vertices are the distinct (v, vt, vn) triples, numbered in order of first use.
 // A malformed line or an out-of-range index throws deform::Error with the file and line; a missing MTL, an unknown
-// material or a missing texture is a warning. Normals missing from the file are computed (area-weighted).
+// material, a missing texture or an unsupported statement (`l`, `p`, curves...) is a warning. Normals missing from
+// the file are computed as compute_vertex_normals does. Linear time and memory in the file size.
 DEFORM_API Mesh read_obj(const std::string& path, Warnings* warnings = nullptr);
 
 // Parses OBJ text held in memory; `name` is used in messages, MTL files are resolved relative to `base_folder`.
@@ -91,7 +95,9 @@ struct ObjWriteOptions {
 
 // Formats the mesh as OBJ text: one `v` per point (in order, from `positions`, which must have point_count()
 // entries), then `vt`/`vn` per render vertex (normals from `normals` if not empty, else mesh.vertex_normals), then
-// the faces as the file had them. Vertex i in means vertex i out.
+// the faces as the file had them, with `o`/`g`/`usemtl` where the submesh changes. Vertex i in means vertex i out;
+// numbers are written in the shortest form that reads back to the same float. Throws std::invalid_argument when a
+// span has the wrong size.
 DEFORM_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions,
                                   std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
 // Writes format_obj() to `path` atomically. Throws deform::Error on failure.
@@ -100,17 +106,38 @@ DEFORM_API void write_obj(const std::string& path, const Mesh& mesh, std::span<c
 // Formats the mesh's materials as MTL text (map_Kd written as given).
 DEFORM_API std::string format_mtl(std::span<const Material> materials);
 
-// Recomputes per-render-vertex normals for deformed point positions: each triangle's normal weighted by its corner
-// angle, accumulated per *point* (so seams split only by UV stay smooth), normalised, gathered to render vertices.
-// `scratch` must have point_count() entries. No allocation; safe to call every frame.
-DEFORM_API void compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positions,
+// Recomputes per-render-vertex normals for deformed point positions: each triangle's unit normal weighted by its
+// corner angle (Thürmer & Wüthrich 1998), accumulated per *point* (so seams split by UV or normal become smooth),
+// normalised, gathered to render vertices; (0, 0, 0) for a point no non-degenerate triangle touches or whose
+// contributions cancel (|sum| <= 1e-5).
+// `positions` and `scratch` need point_count() entries, `out_vertex_normals` vertex_count(). Returns false (and
+// leaves the outputs unspecified) on a size mismatch or an index out of range. No allocation; O(triangles).
+DEFORM_API bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positions,
                                        std::span<glm::vec3> scratch, std::span<glm::vec3> out_vertex_normals);
 
-// Axis-aligned bounds of a set of points.
+// Axis-aligned bounds of a set of points; min = max = (0, 0, 0) for no points.
 struct Bounds {
   glm::vec3 min{0.0f};
   glm::vec3 max{0.0f};
 };
 DEFORM_API Bounds compute_bounds(std::span<const glm::vec3> points);
+
+// Point adjacency (edges taken in point space, so UV/normal seams are not boundaries): each point's one-ring and the
+// mesh's boundary edges. Built once at bind time for smoothing and seam checks; O(T log T) for T triangles.
+struct PointTopology {
+  std::vector<std::uint32_t> neighbour_offsets;  // point_count() + 1 entries; neighbours of p: [offsets[p], offsets[p+1])
+  std::vector<std::uint32_t> neighbours;         // each point's one-ring, ascending, no duplicates, never p itself
+  std::vector<std::uint32_t> boundary_edges;     // pairs (a, b), a < b, of edges used by exactly one triangle, sorted
+
+  // The points sharing a triangle edge with `point` (empty for an isolated point).
+  std::span<const std::uint32_t> point_neighbours(std::uint32_t point) const noexcept {
+    return {neighbours.data() + neighbour_offsets[point], neighbours.data() + neighbour_offsets[point + 1]};
+  }
+  std::size_t boundary_edge_count() const noexcept { return boundary_edges.size() / 2; }
+};
+
+// Builds the point topology of a mesh's triangles. Triangles with a repeated point contribute only their real edges.
+// Throws std::invalid_argument when a triangle or vertex_point index is out of range.
+DEFORM_API PointTopology build_point_topology(const Mesh& mesh);
 
 }  // namespace deform

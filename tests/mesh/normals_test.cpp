@@ -1,0 +1,298 @@
+// Vertex normals, bounds and point topology: hand-computed cases, invariances, a plain reference implementation,
+// and OpenMesh as an independent reference for the angle-weighted normals, one-rings and boundary edges.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include "deform/mesh.hpp"
+
+namespace {
+
+using deform::Mesh;
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+// A mesh whose render vertices are its points (no seams).
+Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> triangles) {
+  Mesh mesh;
+  mesh.positions = std::move(positions);
+  for (std::uint32_t p = 0; p < mesh.positions.size(); ++p) mesh.vertex_point.push_back(p);
+  mesh.triangles = std::move(triangles);
+  return mesh;
+}
+
+std::vector<glm::vec3> normals_of(const Mesh& mesh) {
+  std::vector<glm::vec3> scratch(mesh.point_count()), out(mesh.vertex_count());
+  REQUIRE(deform::compute_vertex_normals(mesh, mesh.positions, scratch, out));
+  return out;
+}
+
+void check_near(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-5f) {
+  INFO("got (", a.x, ", ", a.y, ", ", a.z, "), expected (", b.x, ", ", b.y, ", ", b.z, ")");
+  CHECK(glm::length(a - b) < tolerance);
+}
+
+// The unit cube as 12 triangles; `flip` picks the other diagonal of every face.
+Mesh cube(bool flip) {
+  const std::vector<glm::vec3> corners = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const std::uint32_t quads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+  std::vector<std::uint32_t> triangles;
+  for (const auto& q : quads) {
+    if (flip)
+      triangles.insert(triangles.end(), {q[0], q[1], q[3], q[1], q[2], q[3]});
+    else
+      triangles.insert(triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  }
+  return make_mesh(corners, triangles);
+}
+
+// An n x m grid of points in z = 0 (jittered in-plane), each cell split along a random diagonal.
+Mesh flat_grid(int n, int m, std::mt19937& random) {
+  std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+  std::vector<glm::vec3> positions;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) positions.emplace_back(float(i) + jitter(random), float(j) + jitter(random), 0.0f);
+  std::vector<std::uint32_t> triangles;
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < m; ++j) {
+      const auto a = std::uint32_t(i * m + j), b = a + std::uint32_t(m), c = b + 1, d = a + 1;
+      if (random() % 2)
+        triangles.insert(triangles.end(), {a, b, c, a, c, d});
+      else
+        triangles.insert(triangles.end(), {a, b, d, b, c, d});
+    }
+  return make_mesh(positions, triangles);
+}
+
+// A closed torus of n x m points with random diagonals and radial noise; its render vertices are split along the
+// u = 0 and v = 0 seams the way a UV-mapped torus is, (n + 1) x (m + 1) of them.
+Mesh torus(int n, int m, std::mt19937& random) {
+  std::uniform_real_distribution<float> noise(-0.05f, 0.05f);
+  Mesh mesh;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const float u = 2 * std::numbers::pi_v<float> * float(i) / float(n);
+      const float v = 2 * std::numbers::pi_v<float> * float(j) / float(m);
+      const float r = 0.4f + noise(random);
+      mesh.positions.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u),
+                                  r * std::sin(v));
+    }
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= m; ++j) {
+      mesh.vertex_point.push_back(std::uint32_t((i % n) * m + j % m));
+      mesh.vertex_uvs.emplace_back(float(i) / float(n), float(j) / float(m));
+    }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const auto a = std::uint32_t(i * (m + 1) + j), b = a + std::uint32_t(m + 1), c = b + 1, d = a + 1;
+      if (random() % 2)
+        mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
+      else
+        mesh.triangles.insert(mesh.triangles.end(), {a, b, d, b, c, d});
+    }
+  return mesh;
+}
+
+// Plain reference: the corner angle from acos of the normalised edge dot product, per corner, in double.
+std::vector<glm::vec3> reference_normals(const Mesh& mesh) {
+  std::vector<glm::dvec3> sums(mesh.point_count(), glm::dvec3(0.0));
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    std::uint32_t p[3];
+    for (int k = 0; k < 3; ++k) p[k] = mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]];
+    const glm::dvec3 x[3] = {mesh.positions[p[0]], mesh.positions[p[1]], mesh.positions[p[2]]};
+    const glm::dvec3 cross = glm::cross(x[1] - x[0], x[2] - x[0]);
+    if (glm::length(cross) == 0.0) continue;
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 e1 = x[(k + 1) % 3] - x[k], e2 = x[(k + 2) % 3] - x[k];
+      if (glm::length(e1) == 0.0 || glm::length(e2) == 0.0) continue;
+      const double angle = std::acos(std::clamp(glm::dot(glm::normalize(e1), glm::normalize(e2)), -1.0, 1.0));
+      sums[p[k]] += angle * glm::normalize(cross);
+    }
+  }
+  std::vector<glm::vec3> out;
+  for (const std::uint32_t point : mesh.vertex_point) {
+    const glm::dvec3 s = sums[point];
+    out.push_back(glm::length(s) > 1e-5 ? glm::vec3(glm::normalize(s)) : glm::vec3(0.0f));
+  }
+  return out;
+}
+
+OmMesh to_openmesh(const Mesh& mesh) {
+  OmMesh om;
+  for (const glm::vec3& p : mesh.positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const auto vh = [&](int k) { return OmMesh::VertexHandle(int(mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]])); };
+    REQUIRE(om.add_face(vh(0), vh(1), vh(2)).is_valid());
+  }
+  return om;
+}
+
+}  // namespace
+
+TEST_CASE("normals: hand-computed corner — 90 and 45 degree corners weigh 2 : 1") {
+  // Corner O of a right angle in z = 0 (normal +z) and of a 45-degree triangle in x = 0 (normal +x).
+  const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 1, 1}}, {0, 1, 2, 0, 2, 3});
+  const auto normals = normals_of(mesh);
+  check_near(normals[0], glm::vec3(1, 0, 2) / std::sqrt(5.0f));
+  check_near(normals[1], glm::vec3(0, 0, 1));
+  check_near(normals[3], glm::vec3(1, 0, 0));
+  // Point 2 (0,1,0): 45 degrees in the +z triangle, 90 degrees (between (0,-1,0) and (0,0,1)) in the +x one.
+  check_near(normals[2], glm::vec3(2, 0, 1) / std::sqrt(5.0f));
+}
+
+TEST_CASE("normals: a cube's corners point along the diagonal, whichever way the faces are split") {
+  for (const bool flip : {false, true}) {
+    const Mesh mesh = cube(flip);
+    const auto normals = normals_of(mesh);
+    for (std::size_t p = 0; p < 8; ++p) check_near(normals[p], glm::normalize(mesh.positions[p] - glm::vec3(0.5f)));
+  }
+}
+
+TEST_CASE("normals: a flat grid gives +z everywhere for any triangulation") {
+  std::mt19937 random(7);
+  for (int round = 0; round < 20; ++round) {
+    const Mesh mesh = flat_grid(2 + int(random() % 8), 2 + int(random() % 8), random);
+    for (const glm::vec3& n : normals_of(mesh)) check_near(n, glm::vec3(0, 0, 1));
+  }
+}
+
+TEST_CASE("normals: seams split by UV share the point's normal; degenerate triangles add nothing") {
+  std::mt19937 random(3);
+  const Mesh mesh = torus(12, 8, random);
+  const auto normals = normals_of(mesh);
+  for (int j = 0; j <= 8; ++j) CHECK(normals[std::size_t(j)] == normals[std::size_t(12 * 9 + j)]);  // u = 0 and u = 1
+
+  Mesh with_degenerate = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3});
+  const auto normals2 = normals_of(with_degenerate);
+  check_near(normals2[0], glm::vec3(0, 0, 1));
+  CHECK(normals2[3] == glm::vec3(0.0f));  // touched only by a degenerate triangle
+}
+
+TEST_CASE("normals: agree with a plain reference on random meshes, manifold or not") {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
+  for (int round = 0; round < 300; ++round) {
+    Mesh mesh;
+    const int points = 3 + int(random() % 20);
+    for (int i = 0; i < points; ++i) mesh.positions.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+    for (int r = 0; r < points + int(random() % 10); ++r) mesh.vertex_point.push_back(std::uint32_t(random() % unsigned(points)));
+    const int triangles = 1 + int(random() % 30);
+    for (int i = 0; i < 3 * triangles; ++i) mesh.triangles.push_back(std::uint32_t(random() % mesh.vertex_count()));
+    const auto ours = normals_of(mesh);
+    const auto reference = reference_normals(mesh);
+    for (std::size_t r = 0; r < ours.size(); ++r) check_near(ours[r], reference[r], 1e-4f);
+  }
+}
+
+TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge circulators") {
+  std::mt19937 random(5);
+  const Mesh mesh = torus(24, 16, random);
+  OmMesh om = to_openmesh(mesh);
+  om.request_face_normals();
+  om.update_face_normals();
+  const auto ours = normals_of(mesh);
+  std::vector<std::size_t> vertex_of_point(mesh.point_count());
+  for (std::size_t r = 0; r < mesh.vertex_count(); ++r) vertex_of_point[mesh.vertex_point[r]] = r;
+  for (const auto vh : om.vertices()) {
+    OmMesh::Normal sum(0, 0, 0);
+    for (const auto heh : om.vih_range(vh))  // sector of the face left of each incoming half-edge, at vh
+      if (!om.is_boundary(heh)) sum += om.calc_sector_angle(heh) * om.normal(om.face_handle(heh));
+    sum.normalize();
+    check_near(ours[vertex_of_point[std::size_t(vh.idx())]], glm::vec3(sum[0], sum[1], sum[2]), 1e-5f);
+  }
+  // OpenMesh's own update_normals() weighs faces differently (not by angle): the two agree where every weighting
+  // must, on a flat grid.
+  std::mt19937 random2(9);
+  const Mesh grid = flat_grid(6, 5, random2);
+  OmMesh om_grid = to_openmesh(grid);
+  om_grid.request_face_normals();
+  om_grid.request_vertex_normals();
+  om_grid.update_normals();
+  const auto grid_normals = normals_of(grid);
+  for (const auto vh : om_grid.vertices()) {
+    const auto n = om_grid.normal(vh);
+    check_near(grid_normals[std::size_t(vh.idx())], glm::vec3(n[0], n[1], n[2]));
+  }
+}
+
+TEST_CASE("normals: wrong sizes and out-of-range indices return false") {
+  const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2});
+  std::vector<glm::vec3> scratch(3), out(3), short_span(2);
+  CHECK(deform::compute_vertex_normals(mesh, mesh.positions, scratch, out));
+  CHECK_FALSE(deform::compute_vertex_normals(mesh, short_span, scratch, out));
+  CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, short_span, out));
+  CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, scratch, short_span));
+  Mesh bad = mesh;
+  bad.triangles[2] = 3;
+  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
+  bad = mesh;
+  bad.vertex_point[1] = 7;
+  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
+}
+
+TEST_CASE("bounds") {
+  const std::vector<glm::vec3> points = {{1, -2, 3}, {-4, 5, 0}, {0, 0, 9}};
+  const deform::Bounds bounds = deform::compute_bounds(points);
+  CHECK(bounds.min == glm::vec3(-4, -2, 0));
+  CHECK(bounds.max == glm::vec3(1, 5, 9));
+  const deform::Bounds empty = deform::compute_bounds({});
+  CHECK(empty.min == glm::vec3(0.0f));
+  CHECK(empty.max == glm::vec3(0.0f));
+}
+
+TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and closed meshes") {
+  std::mt19937 random(21);
+  for (int round = 0; round < 10; ++round) {
+    const Mesh mesh = round % 2 ? torus(5 + int(random() % 6), 4 + int(random() % 6), random)
+                                : flat_grid(2 + int(random() % 7), 2 + int(random() % 7), random);
+    const deform::PointTopology topology = deform::build_point_topology(mesh);
+    const OmMesh om = to_openmesh(mesh);
+    REQUIRE(topology.neighbour_offsets.size() == mesh.point_count() + 1);
+    for (const auto vh : om.vertices()) {
+      std::vector<std::uint32_t> expected;
+      for (const auto other : om.vv_range(vh)) expected.push_back(std::uint32_t(other.idx()));
+      std::sort(expected.begin(), expected.end());
+      const auto ring = topology.point_neighbours(std::uint32_t(vh.idx()));
+      CHECK(std::vector<std::uint32_t>(ring.begin(), ring.end()) == expected);
+    }
+    std::vector<std::uint32_t> boundary;
+    for (const auto eh : om.edges())
+      if (om.is_boundary(eh)) {
+        const auto a = std::uint32_t(om.from_vertex_handle(om.halfedge_handle(eh, 0)).idx());
+        const auto b = std::uint32_t(om.to_vertex_handle(om.halfedge_handle(eh, 0)).idx());
+        boundary.push_back(std::min(a, b));
+        boundary.push_back(std::max(a, b));
+      }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    for (std::size_t i = 0; i < boundary.size(); i += 2) pairs.emplace_back(boundary[i], boundary[i + 1]);
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<std::uint32_t> sorted;
+    for (const auto& [a, b] : pairs) sorted.insert(sorted.end(), {a, b});
+    CHECK(topology.boundary_edges == sorted);
+    if (round % 2) CHECK(topology.boundary_edge_count() == 0);  // closed torus: the UV seams are not boundaries
+  }
+}
+
+TEST_CASE("topology: non-manifold soups, isolated points and bad indices") {
+  // Three triangles on one edge (0, 1), a degenerate triangle, and an isolated point 5.
+  const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {9, 9, 9}},
+                              {0, 1, 2, 0, 1, 3, 1, 0, 4, 2, 2, 3});
+  const deform::PointTopology topology = deform::build_point_topology(mesh);
+  const auto ring = [&](std::uint32_t p) {
+    const auto span = topology.point_neighbours(p);
+    return std::vector<std::uint32_t>(span.begin(), span.end());
+  };
+  CHECK(ring(0) == std::vector<std::uint32_t>{1, 2, 3, 4});
+  CHECK(ring(2) == std::vector<std::uint32_t>{0, 1, 3});
+  CHECK(ring(5).empty());
+  // Edge (0, 1) has three triangles (not a boundary); the degenerate triangle (2, 2, 3) uses edge (2, 3) once.
+  CHECK(topology.boundary_edges == std::vector<std::uint32_t>{0, 2, 0, 3, 0, 4, 1, 2, 1, 3, 1, 4, 2, 3});
+  Mesh bad = mesh;
+  bad.triangles[0] = 99;
+  CHECK_THROWS_AS(deform::build_point_topology(bad), std::invalid_argument);
+}
