@@ -1,15 +1,131 @@
+// deform info PATH: what a .sk skeleton or a mesh holds, as JSON (shared/spec/cli.md).
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
 #include "cli.hpp"
+#include "deform/error.hpp"
+#include "deform/mesh.hpp"
+#include "deform/skeleton.hpp"
+#ifdef DEFORM_HAVE_IMPORT  // imported models (importer module)
+#include "deform/import.hpp"
+#endif
 
 namespace cli {
 namespace {
 
-int run(const std::vector<std::string>&) {
-  note("'info' is not available in this build yet");
-  return exit_failure;
+using Json = nlohmann::ordered_json;  // keeps the spec's key order: "kind" first
+
+// A float as its shortest decimal form, so that 0.1f prints as 0.1 and not 0.10000000149011612.
+double shortest(float value) {
+  if (value == 0.0f) return 0.0;
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof text - 1, value);
+  *result.ptr = '\0';
+  return std::strtod(text, nullptr);
+}
+
+Json vec3(glm::vec3 v) { return Json::array({shortest(v.x), shortest(v.y), shortest(v.z)}); }
+
+Json skeleton_info(const deform::Skeleton& skeleton) {
+  Json bones = Json::array();
+  for (std::size_t i = 0; i < skeleton.bone_count(); ++i) {
+    const deform::Bone& b = skeleton.bones()[i];
+    bones.push_back({{"id", i},
+                     {"name", b.name},
+                     {"parent", b.parent},
+                     {"head", vec3(glm::vec3(skeleton.bind_world()[i][3]))},
+                     {"limits", {{"min", vec3(b.limits.min)}, {"max", vec3(b.limits.max)}}}});
+  }
+  return {{"kind", "skeleton"}, {"bones", std::move(bones)}};
+}
+
+Json mesh_info(const deform::Mesh& mesh) {
+  Json materials = Json::array();
+  for (const deform::Material& m : mesh.materials) materials.push_back(m.name);
+  Json submeshes = Json::array();
+  for (const deform::Submesh& s : mesh.submeshes) {
+    const bool has_material = s.material >= 0 && static_cast<std::size_t>(s.material) < mesh.materials.size();
+    submeshes.push_back(
+        {{"material", has_material ? Json(mesh.materials[static_cast<std::size_t>(s.material)].name) : Json(nullptr)},
+         {"object", s.object},
+         {"group", s.group},
+         {"first_triangle", s.first_triangle},
+         {"triangles", s.triangle_count}});
+  }
+  const deform::Bounds bounds = deform::compute_bounds(mesh.positions);
+  return {{"kind", "mesh"},
+          {"vertices", mesh.point_count()},
+          {"triangles", mesh.triangle_count()},
+          {"materials", std::move(materials)},
+          {"render_vertices", mesh.vertex_count()},
+          {"faces", mesh.face_sizes.size()},
+          {"has_uvs", !mesh.vertex_uvs.empty()},
+          {"submeshes", std::move(submeshes)},
+          {"bounds", {{"min", vec3(bounds.min)}, {"max", vec3(bounds.max)}}}};
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(argv, {}, {});
+  if (args.positionals().size() != 1) throw UsageError("expected exactly one file (a .sk skeleton or an .obj mesh)");
+  const std::string& path = args.positionals()[0];
+  const std::string ext = lower_extension(path);
+  Json info;
+  if (ext == ".sk") {
+    info = skeleton_info(deform::read_sk(path));
+  } else if (ext == ".obj") {
+    deform::Warnings warnings;
+    info = mesh_info(deform::read_obj(path, &warnings));
+    for (const std::string& w : warnings.messages) note(w);
+#ifdef DEFORM_HAVE_IMPORT  // --- imported models (importer module) ---
+  } else if (deform::is_importable(path)) {
+    const deform::ImportedModel imported = deform::import_model(path);
+    for (const std::string& w : imported.warnings) note(path + ": " + w);
+    info = mesh_info(imported.model.mesh);  // "vertices": the distinct points (docs/import.md)
+    if (imported.rigged) {
+      info["bones"] = imported.model.skeleton.bone_count();
+      Json clips = Json::array();
+      for (const deform::Animation& clip : imported.clips)
+        clips.push_back({{"name", clip.name}, {"duration", shortest(clip.duration)}, {"channels", clip.channels.size()}});
+      info["clips"] = std::move(clips);
+    }
+#endif  // --- end of imported models ---
+  } else {
+    throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
+  }
+  std::cout << info.dump(2, ' ', false, Json::error_handler_t::replace) << '\n';
+  return exit_ok;
 }
 
 }  // namespace
 
-const Command info_command = {"info", "inspect a .sk skeleton or a mesh", "usage: deform info ...\n", run};
+const Command info_command = {
+    "info", "inspect a .sk skeleton or an .obj mesh",
+    "usage: deform info PATH\n"
+    "\n"
+    "Prints what PATH holds as one JSON document on stdout.\n"
+    "  S.sk      {\"kind\": \"skeleton\", \"bones\": [{\"id\", \"name\", \"parent\", \"head\": [x, y, z],\n"
+    "             \"limits\": {\"min\": [x, y, z], \"max\": [x, y, z]}}, ...]}\n"
+    "            head: the bone's bind-pose world position; limits: local Euler X·Y·Z, degrees.\n"
+    "  MESH.obj  {\"kind\": \"mesh\", \"vertices\" (OBJ `v` lines), \"triangles\", \"materials\" (names),\n"
+    "             \"render_vertices\", \"faces\", \"has_uvs\", \"submeshes\", \"bounds\": {\"min\", \"max\"}}\n"
+    "            Reader warnings (a missing MTL or texture) go to stderr.\n"
+    "  MODEL     any format the importer reads (glTF, FBX, .x, ...; builds with deform::import): the mesh keys\n"
+    "            (\"vertices\": distinct points) and, when rigged, \"bones\": B and \"clips\": [{\"name\",\n"
+    "            \"duration\" (seconds), \"channels\"}]. Importer warnings go to stderr.\n"
+    "\n"
+    "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
+    "line, and the bone or element); 1 any other failure.\n",
+    run};
 
 }  // namespace cli

@@ -23,6 +23,7 @@ namespace deform {
 struct DofLimits {
   glm::vec3 min{-180.0f};
   glm::vec3 max{180.0f};
+  bool operator==(const DofLimits&) const = default;
 };
 
 struct Bone {
@@ -32,6 +33,7 @@ struct Bone {
   glm::vec3 bind_translation{0.0f};      // relative to the parent
   glm::vec3 bind_rotation{0.0f};         // Euler X·Y·Z, degrees, relative to the parent
   DofLimits limits;
+  bool operator==(const Bone&) const = default;
 };
 
 // A pose: each bone's local rotation and translation (relative to its parent). Index = bone id.
@@ -43,8 +45,10 @@ struct Pose {
 class DEFORM_API Skeleton {
  public:
   Skeleton() = default;
-  // Takes the bones as given and validates them (one root at id 0... see validate()); throws deform::Error naming
-  // `source` on an invalid hierarchy.
+  // Takes the bones as given and validates them: 1 to 65535 bones, exactly one root and it is bone 0 (parent -1),
+  // parents in range, no cycles, child lists that agree with the parent ids (each non-root bone listed exactly once,
+  // by its parent), limits with min <= max, every number finite. Throws deform::Error naming `source` and the bone.
+  // Cost: O(bones + children); computes order() and the bind matrices once.
   explicit Skeleton(std::vector<Bone> bones, const std::string& source = "<memory>");
 
   std::span<const Bone> bones() const noexcept { return bones_; }
@@ -53,9 +57,9 @@ class DEFORM_API Skeleton {
   // Bone ids with every parent before its children (bone 0 first). FK runs in this order.
   std::span<const std::int32_t> order() const noexcept { return order_; }
 
-  // Id of the first bone with this name, or "#ID" for an explicit id; -1 if none.
+  // Id of the first bone with this name, or of bone ID for "#ID"; -1 if none.
   std::int32_t find(std::string_view name) const noexcept;
-  // The name a pose or the CLI uses for a bone: its name, or "#ID" when the name is empty or shared.
+  // The name a pose or the CLI uses for a bone: its name, or "#ID" when the name is empty, shared or starts with '#'.
   std::string key(std::int32_t id) const;
   // True if `ancestor` is `bone` or one of its ancestors.
   bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
@@ -69,7 +73,8 @@ class DEFORM_API Skeleton {
   // Sets the bone's local rotation from Euler angles (degrees, X·Y·Z); clamps them into the bone's limits first
   // unless `clamp` is false. Returns the angles actually used.
   glm::vec3 set_euler(Pose& pose, std::int32_t bone, glm::vec3 degrees, bool clamp = true) const;
-  // Clamps the bone's current local rotation into its DOF limits (convert to Euler, clamp, convert back).
+  // Clamps the bone's current local rotation into its DOF limits (convert to Euler, clamp, convert back). Of the two
+  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged.
   void clamp_to_limits(Pose& pose, std::int32_t bone) const;
 
  private:
@@ -95,17 +100,22 @@ DEFORM_API bool within_limits(glm::vec3 degrees, const DofLimits& limits, float 
 
 // Local matrix L = T · R of one bone of a pose.
 DEFORM_API glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept;
-// World matrices of every bone, one pass over skeleton.order(). `out` must have bone_count() entries. No allocation.
-DEFORM_API void compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out);
-// The skinning palette T_C = T_W · T_B⁻¹ (thesis eq. 13) per bone. `world` and `out` have bone_count() entries.
-DEFORM_API void compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world,
+// World matrices of every bone, one pass over skeleton.order(). The pose and `out` must have bone_count() entries;
+// returns false (and writes nothing) otherwise. No allocation, O(bones).
+DEFORM_API bool compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out);
+// The skinning palette T_C = T_W · T_B⁻¹ (thesis eq. 13) per bone. `world` and `out` must have bone_count()
+// entries; returns false (and writes nothing) otherwise. No allocation.
+DEFORM_API bool compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world,
                                          std::span<glm::mat4> out);
 
 // --- .sk files (binary, shared/spec/sk-format.md) ---
 
-// Reads a .sk file; throws deform::Error with file, byte offset and bone id on any malformed input.
+// Reads a .sk file; throws deform::Error with file, byte offset and bone id on any malformed input (names must be
+// UTF-8, NUL-terminated within their 80 bytes and NUL-padded). Allocates at most O(file size).
 DEFORM_API Skeleton read_sk(const std::string& path);
 DEFORM_API Skeleton parse_sk(std::span<const std::uint8_t> bytes, const std::string& name = "<memory>");
+// The .sk bytes of a skeleton: parse_sk(format_sk(s)) == s, format_sk(parse_sk(b)) == b. Throws deform::Error for a
+// name longer than 79 bytes or holding a NUL.
 DEFORM_API std::vector<std::uint8_t> format_sk(const Skeleton& skeleton);
 DEFORM_API void write_sk(const std::string& path, const Skeleton& skeleton);  // atomic
 
@@ -118,13 +128,18 @@ struct SkinWeights {
   std::vector<glm::u16vec4> bones;
   std::vector<glm::vec4> weights;
   std::size_t size() const noexcept { return bones.size(); }
+  bool operator==(const SkinWeights&) const = default;
 };
 
 // Reads a .skw file for a mesh with `point_count` points and a skeleton with `bone_count` bones; keeps the strongest
-// 4 influences per vertex and renormalises. Throws deform::Error with file, line and vertex on malformed input.
+// 4 influences per vertex and renormalises. Throws deform::Error with file, line and vertex on malformed input
+// (wrong header or count, a vertex missing, repeated or out of order, a bone out of range or listed twice on a line,
+// a weight negative or non-finite, no positive weight). Allocates O(point_count) only once `vertices N` matches.
 DEFORM_API SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size_t bone_count);
 DEFORM_API SkinWeights parse_skw(std::string_view text, std::size_t point_count, std::size_t bone_count,
                                  const std::string& name = "<memory>");
+// .skw text: one line per vertex with its positive-weight pairs; weights written shortest-exact, so parse_skw reads
+// them back to within one rounding of the renormalisation. Throws deform::Error for a vertex with no positive weight.
 DEFORM_API std::string format_skw(const SkinWeights& weights);
 DEFORM_API void write_skw(const std::string& path, const SkinWeights& weights);  // atomic
 
