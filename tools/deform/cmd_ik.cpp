@@ -1,15 +1,89 @@
+// deform ik: solve a bone chain toward a target point (shared/spec/cli.md, docs/cli.md).
+#include <iostream>
+#include <string>
+
 #include "cli.hpp"
+#include "deform/builtin.hpp"
+#include "deform/ik.hpp"
+#include "deform/skeleton.hpp"
 
 namespace cli {
 namespace {
 
-int run(const std::vector<std::string>&) {
-  note("'ik' is not available in this build yet");
-  return exit_failure;
+std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name, std::string_view flag) {
+  const std::int32_t id = skeleton.find(name);
+  if (id < 0) throw UsageError(std::string(flag) + ": no bone named '" + name + "'");
+  return id;
+}
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(argv, {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance"},
+                  {"--builtin"});
+  const bool builtin = args.has("--builtin");
+  if (args.positionals().size() != (builtin ? 0u : 1u))
+    throw UsageError(builtin ? "--builtin takes no skeleton file" : "expected one skeleton file (S.sk) or --builtin");
+  const deform::Skeleton skeleton =
+      builtin ? deform::builtin_character().skeleton : deform::read_sk(args.positionals()[0]);
+
+  const std::int32_t effector = find_bone(skeleton, args.required("--effector"), "--effector");
+  const std::int32_t root = args.value("--root") ? find_bone(skeleton, *args.value("--root"), "--root") : 0;
+  const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
+  const std::string solver = args.value("--solver").value_or("ccd");
+  if (solver != "ccd" && solver != "fabrik" && solver != "two-bone")
+    throw UsageError("--solver: '" + solver + "' is not ccd, fabrik or two-bone");
+  deform::IkSettings settings;
+  settings.max_iterations = 100;
+  if (auto n = args.value("--max-iterations"))
+    settings.max_iterations = static_cast<int>(parse_integer(*n, "--max-iterations", 1, 1000000));
+
+  deform::Pose pose = skeleton.bind_pose();
+  const deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
+  settings.tolerance = 1e-4f * deform::chain_length(chain, pose);
+  if (auto t = args.value("--tolerance")) {
+    const double tolerance = parse_number(*t, "--tolerance");
+    if (tolerance < 0.0) throw UsageError("--tolerance: must not be negative");
+    settings.tolerance = static_cast<float>(tolerance);
+  }
+
+  deform::IkResult result;
+  bool solved = false;
+  if (solver == "ccd") solved = deform::CcdSolver(skeleton, root, effector).solve(pose, target, settings, result);
+  if (solver == "fabrik") solved = deform::FabrikSolver(skeleton, root, effector).solve(pose, target, settings, result);
+  if (solver == "two-bone")  // no pole: the limb keeps its bind-pose bend plane
+    solved = deform::TwoBoneSolver(skeleton, root, effector).solve(pose, target, glm::vec3(0.0f), settings.tolerance, result);
+  if (!solved) throw UsageError("the target or a setting is not valid");
+
+  // Report what the printed angles give: read them back as `deform skin --pose` will, and measure that pose.
+  const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones);
+  const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton);
+  const glm::vec3 reached_point = deform::effector_position(skeleton, chain, printed);
+  const float distance = glm::length(reached_point - target);
+
+  nlohmann::ordered_json out;
+  out["solver"] = solver;
+  out["reached"] = distance <= settings.tolerance;
+  out["distance"] = distance;
+  out["iterations"] = result.iterations;
+  out["effector"] = to_json(reached_point);
+  out["bones"] = nlohmann::ordered_json::parse(bones);
+  std::cout << out.dump(2) << '\n';
+  return exit_ok;
 }
 
 }  // namespace
 
-const Command ik_command = {"ik", "solve inverse kinematics for a bone chain", "usage: deform ik ...\n", run};
+const Command ik_command = {
+    "ik", "solve inverse kinematics for a bone chain",
+    "usage: deform ik (S.sk | --builtin) --effector NAME --target X,Y,Z [--root NAME] [--solver ccd|fabrik|two-bone]\n"
+    "                 [--max-iterations N] [--tolerance T]\n\n"
+    "Moves the chain from --root (default: the skeleton root) to --effector, starting from the bind pose and within\n"
+    "the DOF limits, so that the effector's head reaches the target (world coordinates).\n"
+    "  --solver            ccd (default), fabrik, or two-bone (a chain of exactly two joints, closed form)\n"
+    "  --max-iterations N  sweeps or passes, default 100\n"
+    "  --tolerance T       reached when |effector - target| <= T, default 1e-4 x the chain length\n"
+    "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", \"effector\": [x, y, z], \"bones\": {...}}; `bones`\n"
+    "holds every chain bone's local rotation (Euler degrees) and translation, ready for `deform skin --pose`.\n"
+    "An unreachable target is not an error: the closest pose found, \"reached\": false.\n",
+    run};
 
 }  // namespace cli

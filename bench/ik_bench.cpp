@@ -1,0 +1,107 @@
+// IK benchmarks: ik/ccd, ik/fabrik on 2- to 6-joint chains with random DOF limits, ik/two_bone; random reachable
+// targets (FK of random in-limit poses), tolerance 1e-4 of the chain length, from the bind pose each solve.
+// Items = solves. Counters: mean iterations, reached (fraction), median_us (median time of one solve).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <random>
+#include <vector>
+
+#include "../tests/ik/ik_test_rig.hpp"
+#include "deform/ik.hpp"
+
+namespace {
+
+constexpr int rig_count = 32;
+constexpr int targets_per_rig = 32;
+
+struct Case {
+  ik_test::RandomChain rig;
+  std::vector<glm::vec3> targets;
+  deform::Pose bind;
+};
+
+std::vector<Case> make_cases(std::size_t joints, std::uint32_t seed, bool free_joints = false) {
+  std::mt19937 random(seed);
+  std::vector<Case> cases;
+  for (int r = 0; r < rig_count; ++r) {
+    Case c{ik_test::random_chain(random, joints, free_joints), {}, {}};
+    for (int t = 0; t < targets_per_rig; ++t) c.targets.push_back(ik_test::random_reachable_target(random, c.rig));
+    c.bind = c.rig.skeleton.bind_pose();
+    cases.push_back(std::move(c));
+  }
+  return cases;
+}
+
+template <class Solver>
+void solve_loop(benchmark::State& state, bool escape_stalls) {
+  const auto joints = static_cast<std::size_t>(state.range(0));
+  const std::vector<Case> cases = make_cases(joints, 1234);
+  std::vector<Solver> solvers;
+  for (const Case& c : cases) solvers.emplace_back(c.rig.skeleton, c.rig.root, c.rig.effector);
+  deform::Pose pose = cases[0].bind;
+  std::vector<double> times;
+  times.reserve(1 << 22);
+  long iterations = 0, reached = 0, solves = 0;
+  for (auto _ : state) {
+    const auto i = static_cast<std::size_t>(solves % rig_count);
+    const auto t = static_cast<std::size_t>((solves / rig_count) % targets_per_rig);
+    const Case& c = cases[i];
+    pose.rotations.assign(c.bind.rotations.begin(), c.bind.rotations.end());  // capacity kept: no allocation
+    pose.translations.assign(c.bind.translations.begin(), c.bind.translations.end());
+    deform::IkSettings settings;
+    settings.tolerance = 1e-4f * c.rig.length;
+    settings.max_iterations = 200;
+    settings.escape_stalls = escape_stalls;
+    deform::IkResult result;
+    const auto start = std::chrono::steady_clock::now();
+    solvers[i].solve(pose, c.targets[t], settings, result);
+    const auto stop = std::chrono::steady_clock::now();
+    if (times.size() < times.capacity()) times.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
+    benchmark::DoNotOptimize(pose.rotations.data());
+    iterations += result.iterations;
+    reached += result.reached;
+    ++solves;
+  }
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  state.SetItemsProcessed(solves);
+  state.counters["iterations"] = static_cast<double>(iterations) / static_cast<double>(solves);
+  state.counters["reached"] = static_cast<double>(reached) / static_cast<double>(solves);
+  state.counters["median_us"] = times.empty() ? 0.0 : times[times.size() / 2];
+}
+
+void ccd(benchmark::State& state) { solve_loop<deform::CcdSolver>(state, true); }
+void ccd_plain(benchmark::State& state) { solve_loop<deform::CcdSolver>(state, false); }
+void fabrik(benchmark::State& state) { solve_loop<deform::FabrikSolver>(state, true); }
+
+// state.range(0): 1 = random DOF limits (the closed form, then clamps), 0 = free joints (the closed form alone).
+void two_bone(benchmark::State& state) {
+  const std::vector<Case> cases = make_cases(2, 99, state.range(0) == 0);
+  std::vector<deform::TwoBoneSolver> solvers;
+  for (const Case& c : cases) solvers.emplace_back(c.rig.skeleton, c.rig.root, c.rig.effector);
+  deform::Pose pose = cases[0].bind;
+  long solves = 0, reached = 0;
+  for (auto _ : state) {
+    const auto i = static_cast<std::size_t>(solves % rig_count);
+    const auto t = static_cast<std::size_t>((solves / rig_count) % targets_per_rig);
+    const Case& c = cases[i];
+    pose.rotations.assign(c.bind.rotations.begin(), c.bind.rotations.end());
+    pose.translations.assign(c.bind.translations.begin(), c.bind.translations.end());
+    deform::IkResult result;
+    solvers[i].solve(pose, c.targets[t], glm::vec3(0, 0, 1), 1e-4f * c.rig.length, result);
+    benchmark::DoNotOptimize(pose.rotations.data());
+    reached += result.reached;
+    ++solves;
+  }
+  state.SetItemsProcessed(solves);
+  state.counters["iterations"] = 1.0;
+  state.counters["reached"] = static_cast<double>(reached) / static_cast<double>(solves);
+}
+
+}  // namespace
+
+BENCHMARK(ccd)->Name("ik/ccd")->DenseRange(2, 6);
+BENCHMARK(ccd_plain)->Name("ik/ccd_plain")->DenseRange(2, 6);
+BENCHMARK(fabrik)->Name("ik/fabrik")->DenseRange(2, 6);
+BENCHMARK(two_bone)->Name("ik/two_bone")->Arg(1)->Arg(0);
