@@ -1,0 +1,130 @@
+// skin/lbs and skin/dqs: positions + normals, 4 influences per vertex, a 28-bone palette, at 2,552 (the built-in
+// character's size), 100k and 1M vertices; one thread and all threads. Also the forced instruction-set paths and
+// a plain glm loop (skin/lbs_reference), so docs/performance.md can show what the SIMD kernels buy.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "deform/parallel.hpp"
+#include "deform/skinning.hpp"
+
+namespace {
+
+constexpr int bone_count = 28;
+
+struct SkinData {
+  std::vector<glm::vec3> positions, normals, out_positions, out_normals;
+  std::vector<glm::u16vec4> bones;
+  std::vector<glm::vec4> weights;
+  std::vector<glm::mat4> palette;
+  std::vector<deform::DualQuat> dual_quats;
+  std::vector<glm::mat3> scales;
+};
+
+// Deterministic random mesh data: every vertex has four distinct influences with weights summing to one.
+const SkinData& data(std::size_t vertices) {
+  static std::vector<std::unique_ptr<SkinData>> cache;
+  for (const auto& d : cache)
+    if (d->positions.size() == vertices) return *d;
+  auto d = std::make_unique<SkinData>();
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), positive(0.1f, 1.0f);
+  for (std::size_t i = 0; i < vertices; ++i) {
+    d->positions.emplace_back(u(rng), u(rng), u(rng));
+    d->normals.push_back(glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(0.0f, 0.0f, 2.0f)));
+    const auto first = static_cast<std::uint16_t>(rng() % bone_count);
+    d->bones.emplace_back(first, (first + 1) % bone_count, (first + 5) % bone_count, (first + 11) % bone_count);
+    glm::vec4 w(positive(rng), positive(rng), positive(rng), positive(rng));
+    d->weights.push_back(w / (w.x + w.y + w.z + w.w));
+  }
+  d->out_positions.resize(vertices);
+  d->out_normals.resize(vertices);
+  for (int b = 0; b < bone_count; ++b) {
+    glm::mat4 m = glm::rotate(glm::mat4(1.0f), u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1.0f)));
+    m[3] = glm::vec4(u(rng), u(rng), u(rng), 1.0f);
+    d->palette.push_back(m);
+  }
+  d->dual_quats.resize(bone_count);
+  d->scales.resize(bone_count);
+  bool has_scale = false;
+  deform::compute_dual_quat_palette(d->palette, d->dual_quats, d->scales, has_scale);
+  cache.push_back(std::move(d));
+  return *cache.back();
+}
+
+deform::ThreadPool& pool() {
+  static deform::ThreadPool p;
+  return p;
+}
+
+// state.range(0) = vertices, state.range(1) = threads (0: all).
+void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::SkinningIsa isa) {
+  const auto vertices = static_cast<std::size_t>(state.range(0));
+  SkinData& d = const_cast<SkinData&>(data(vertices));
+  deform::SkinningJob job;
+  job.method = method;
+  job.isa = isa;
+  job.matrices = d.palette;
+  job.dual_quats = d.dual_quats;
+  job.bone_indices = d.bones;
+  job.bone_weights = d.weights;
+  job.in_positions = deform::as_floats(d.positions);
+  job.in_normals = deform::as_floats(d.normals);
+  job.out_positions = deform::as_floats(d.out_positions);
+  job.out_normals = deform::as_floats(d.out_normals);
+  if (!job.validate()) {
+    state.SkipWithError("invalid job (instruction set not available?)");
+    return;
+  }
+  const bool all_threads = state.range(1) == 0;
+  for (auto _ : state) {
+    if (all_threads) job.run(pool(), 4096);
+    else job.run();
+    benchmark::DoNotOptimize(d.out_positions.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+  state.counters["threads"] = all_threads ? pool().size() : 1;
+}
+
+// The plain loop a first implementation would write: blend the four mat4 with glm, transform, inverse-transpose.
+void skin_lbs_reference(benchmark::State& state) {
+  const auto vertices = static_cast<std::size_t>(state.range(0));
+  SkinData& d = const_cast<SkinData&>(data(vertices));
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < vertices; ++i) {
+      glm::mat4 m(0.0f);
+      for (int k = 0; k < 4; ++k) m += d.weights[i][k] * d.palette[d.bones[i][k]];
+      d.out_positions[i] = glm::vec3(m * glm::vec4(d.positions[i], 1.0f));
+      d.out_normals[i] = glm::normalize(glm::inverseTranspose(glm::mat3(m)) * d.normals[i]);
+    }
+    benchmark::DoNotOptimize(d.out_positions.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+}
+
+void sizes_and_threads(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"vertices", "threads"})->ArgsProduct({{2552, 100'000, 1'000'000}, {1, 0}});
+}
+void sizes_one_thread(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"vertices", "threads"})->ArgsProduct({{2552, 100'000, 1'000'000}, {1}});
+}
+
+using deform::SkinningIsa;
+using deform::SkinningMethod;
+BENCHMARK_CAPTURE(run_skin, lbs, SkinningMethod::lbs, SkinningIsa::automatic)->Name("skin/lbs")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, dqs, SkinningMethod::dqs, SkinningIsa::automatic)->Name("skin/dqs")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, lbs_avx2, SkinningMethod::lbs, SkinningIsa::avx2)->Name("skin/lbs_avx2")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, dqs_avx2, SkinningMethod::dqs, SkinningIsa::avx2)->Name("skin/dqs_avx2")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, lbs_scalar, SkinningMethod::lbs, SkinningIsa::scalar)->Name("skin/lbs_scalar")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, dqs_scalar, SkinningMethod::dqs, SkinningIsa::scalar)->Name("skin/dqs_scalar")->Apply(sizes_one_thread);
+BENCHMARK(skin_lbs_reference)->Name("skin/lbs_reference")->Apply(sizes_one_thread);
+
+}  // namespace
