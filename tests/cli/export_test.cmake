@@ -1,38 +1,7 @@
 # `deform export` (and `deform info` on imports) end to end on Debian's assimp-testmodels: the native files appear,
 # hold the import's counts and read back with `deform info`; bad input exits 2 naming the file.
 # Run as: cmake -DDEFORM=<deform executable> -DMODELS=<assimp models folder> -DWORK=<scratch folder> -P export_test.cmake
-cmake_minimum_required(VERSION 3.25)
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-
-function(fail message)
-  message(SEND_ERROR "FAIL: ${message}")
-endfunction()
-
-function(deform)
-  execute_process(COMMAND "${DEFORM}" ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${stderr}" PARENT_SCOPE)
-endfunction()
-
-function(expect_equal what actual expected)
-  if(NOT "${actual}" STREQUAL "${expected}")
-    fail("${what}: got '${actual}', expected '${expected}'")
-  endif()
-endfunction()
-
-function(expect_json expected)
-  string(JSON value GET "${out}" ${ARGN})
-  expect_equal("${ARGN}" "${value}" "${expected}")
-endfunction()
-
-function(expect_mentions text)
-  string(FIND "${err}" "${text}" found)
-  if(found EQUAL -1)
-    fail("stderr '${err}' does not mention '${text}'")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 set(wuson "${MODELS}/X/Testwuson.X")
 if(NOT EXISTS "${wuson}")

@@ -1,31 +1,7 @@
 # `deform ffd` end to end: hand-computed trilinear values, the vertex list, untouched vertices and faces, the JSON
 # summary, exit 2 naming the key on bad lattices, and no output written on failure.
 # Run as: cmake -DDEFORM=<deform executable> -DWORK=<scratch folder> -P ffd_test.cmake
-cmake_minimum_required(VERSION 3.25)
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-
-function(fail message)
-  message(SEND_ERROR "FAIL: ${message}")
-endfunction()
-
-function(deform)
-  execute_process(COMMAND "${DEFORM}" ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${stderr}" PARENT_SCOPE)
-endfunction()
-
-function(expect_equal what actual expected)
-  if(NOT "${actual}" STREQUAL "${expected}")
-    fail("${what}: got '${actual}', expected '${expected}'")
-  endif()
-endfunction()
-
-function(expect_json expected)
-  string(JSON value GET "${out}" ${ARGN})
-  expect_equal("${ARGN}" "${value}" "${expected}")
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # The `v` lines of an OBJ file, as a list of "x y z" strings; and the number of `f` lines.
 function(read_obj path)

@@ -1,39 +1,6 @@
 # `deform info` end to end: the spec's JSON for a .sk and a mesh, and exit 2 with file and offset/line on bad input.
 # Run as: cmake -DDEFORM=<deform executable> -DDATA=<tests/data> -DWORK=<scratch folder> -P info_test.cmake
-cmake_minimum_required(VERSION 3.25)
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-
-function(fail message)
-  message(SEND_ERROR "FAIL: ${message}")
-endfunction()
-
-# Runs `deform ARGS...`; sets rc, out, err in the caller.
-function(deform)
-  execute_process(COMMAND "${DEFORM}" ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${stderr}" PARENT_SCOPE)
-endfunction()
-
-function(expect_equal what actual expected)
-  if(NOT "${actual}" STREQUAL "${expected}")
-    fail("${what}: got '${actual}', expected '${expected}'")
-  endif()
-endfunction()
-
-# JSON value at PATH... of `out` must lie within [lo, hi].
-function(expect_between lo hi)
-  string(JSON value GET "${out}" ${ARGN})
-  if(NOT (value GREATER_EQUAL lo AND value LESS_EQUAL hi))
-    fail("${ARGN}: ${value} not in [${lo}, ${hi}]")
-  endif()
-endfunction()
-
-function(expect_json expected)
-  string(JSON value GET "${out}" ${ARGN})
-  expect_equal("${ARGN}" "${value}" "${expected}")
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # Invalid input: exit 2, a message naming the file and the given location text.
 function(expect_invalid location)

@@ -1,31 +1,14 @@
 # `deform weights` end to end: the built-in character and its files give the same .skw as samples/data holds, the
 # options act, bad usage and bad input exit 2 without touching the output.
 # Run as: cmake -DDEFORM=<deform executable> -DSAMPLES=<samples/data> -DWORK=<scratch folder> -P weights_test.cmake
-cmake_minimum_required(VERSION 3.25)
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-
-function(fail message)
-  message(SEND_ERROR "FAIL: ${message}")
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # Runs `deform weights ARGS...`; sets rc, out, err in the caller.
 function(weights)
-  execute_process(COMMAND "${DEFORM}" weights ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${stderr}" PARENT_SCOPE)
-endfunction()
-
-function(expect_equal what actual expected)
-  if(NOT "${actual}" STREQUAL "${expected}")
-    fail("${what}: got '${actual}', expected '${expected}'")
-  endif()
-endfunction()
-
-function(expect_json expected)
-  string(JSON value GET "${out}" ${ARGN})
-  expect_equal("${ARGN}" "${value}" "${expected}")
+  deform(weights ${ARGN})
+  set(rc "${rc}" PARENT_SCOPE)
+  set(out "${out}" PARENT_SCOPE)
+  set(err "${err}" PARENT_SCOPE)
 endfunction()
 
 # Bad usage or input: exit 2, nothing on stdout, stderr mentions `text`.

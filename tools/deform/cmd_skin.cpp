@@ -1,15 +1,143 @@
+// deform skin: deform a rigged mesh by a pose, LBS or DQS (shared/spec/cli.md, docs/cli.md).
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
 #include "cli.hpp"
+#include "deform/error.hpp"
+#include "deform/skinning.hpp"
+#include "model_loader.hpp"
 
 namespace cli {
 namespace {
 
-int run(const std::vector<std::string>&) {
-  note("'skin' is not available in this build yet");
-  return exit_failure;
+// Skins one stream of the model: `positions` (and `normals` when not empty) with the given per-entry weights.
+void skin(deform::SkinningJob job, std::span<const glm::u16vec4> bones, std::span<const glm::vec4> weights,
+          std::span<const glm::vec3> positions, std::span<glm::vec3> out_positions, std::span<const glm::vec3> normals,
+          std::span<glm::vec3> out_normals, const std::string& source) {
+  job.bone_indices = bones;
+  job.bone_weights = weights;
+  job.in_positions = deform::as_floats(positions);
+  job.out_positions = deform::as_floats(out_positions);
+  job.in_normals = deform::as_floats(normals);
+  job.out_normals = deform::as_floats(out_normals);
+  if (!job.validate()) throw deform::Error::in_file(source, "", "the weights do not fit the skeleton or the mesh");
+  job.run();
+}
+
+// --- --clip NAME --time T (importer module) ---
+// The pose of an imported model's clip NAME at T seconds (clips loop), over the bind pose.
+deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
+  if (args.has("--pose")) throw UsageError("--clip and --pose exclude each other");
+  if (!loaded.imported) throw UsageError("--clip needs an imported model (glTF, FBX, .x, ...), not " + loaded.source);
+  const std::string name = args.required("--clip");
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+  const std::int32_t clip = deform::find_clip(loaded.clips, name);
+  if (clip < 0) throw deform::Error::in_file(loaded.source, "clip '" + name + "'", "no clip of that name");
+  deform::Pose pose = loaded.model.skeleton.bind_pose();
+  loaded.clips[static_cast<std::size_t>(clip)].sample(seconds, pose);
+  return pose;
+}
+// --- end of --clip ---
+
+int run(const std::vector<std::string>& argv) {
+  std::vector<std::string> value_flags = model_value_flags;
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time"});
+  std::vector<std::string> switch_flags = model_switch_flags;
+  switch_flags.push_back("--no-limits");
+  const Args args(argv, value_flags, switch_flags);
+
+  const std::string method_name = args.value("--method").value_or("lbs");
+  if (method_name != "lbs" && method_name != "dqs") throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
+  const std::string pose_path = args.has("--clip") ? std::string() : args.required("--pose");
+  const std::string out_path = args.required("--out");
+  const bool limits = !args.has("--no-limits");
+
+  const LoadedModel loaded = load_model(args);
+  const deform::Model& model = loaded.model;
+  const deform::Skeleton& skeleton = model.skeleton;
+  const deform::Pose pose =
+      args.has("--clip") ? clip_pose(args, loaded) : deform::read_pose_json(pose_path, skeleton, limits);
+
+  const std::size_t bone_count = skeleton.bone_count();
+  std::vector<glm::mat4> world(bone_count), palette(bone_count);
+  if (!deform::compute_world_matrices(skeleton, pose, world) ||
+      !deform::compute_skinning_palette(skeleton, world, palette))
+    throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
+
+  deform::SkinningJob job;
+  job.method = method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+  job.matrices = palette;
+  std::vector<deform::DualQuat> dual_quats(bone_count);
+  std::vector<glm::mat3> scales(bone_count);
+  if (job.method == deform::SkinningMethod::dqs) {
+    bool has_scale = false;
+    if (!deform::compute_dual_quat_palette(palette, dual_quats, scales, has_scale))
+      throw deform::Error::in_file(pose_path, "", "the pose gives a singular bone transform");
+    job.dual_quats = dual_quats;
+    if (has_scale) job.scales = scales;
+  }
+
+  // Points (the OBJ's `v`, in order) carry the weights; render vertices carry the normals, so they are skinned with
+  // their point's weights.
+  const deform::Mesh& mesh = model.mesh;
+  std::vector<glm::vec3> positions(mesh.point_count());
+  skin(job, model.weights.bones, model.weights.weights, mesh.positions, positions, {}, {}, loaded.source);
+  const std::size_t render_vertices = mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count() : 0;
+  std::vector<glm::u16vec4> vertex_bones(render_vertices);
+  std::vector<glm::vec4> vertex_weights(render_vertices);
+  std::vector<glm::vec3> vertex_positions(render_vertices), normals(render_vertices), scratch(render_vertices);
+  for (std::size_t r = 0; r < render_vertices; ++r) {
+    const std::uint32_t point = mesh.vertex_point[r];
+    vertex_bones[r] = model.weights.bones[point];
+    vertex_weights[r] = model.weights.weights[point];
+    vertex_positions[r] = mesh.positions[point];
+  }
+  if (render_vertices > 0)
+    skin(job, vertex_bones, vertex_weights, vertex_positions, scratch, mesh.vertex_normals, normals, loaded.source);
+
+  deform::write_obj(out_path, mesh, positions, normals);
+
+  const deform::Pose bind = skeleton.bind_pose();
+  int posed = 0;
+  for (std::size_t b = 0; b < bone_count; ++b)
+    if (std::abs(glm::dot(pose.rotations[b], bind.rotations[b])) < 1.0f - 1e-7f ||
+        pose.translations[b] != bind.translations[b])
+      ++posed;
+  float max_displacement = 0.0f;
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    max_displacement = std::max(max_displacement, glm::length(positions[i] - mesh.positions[i]));
+  const deform::Bounds bounds = deform::compute_bounds(positions);
+
+  nlohmann::ordered_json out;
+  out["method"] = method_name;
+  out["model"] = loaded.source;
+  out["vertices"] = mesh.point_count();
+  out["normals"] = render_vertices;
+  out["bones"] = bone_count;
+  out["bones_posed"] = posed;
+  out["limits"] = limits;
+  out["max_displacement"] = max_displacement;
+  out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
+  out["kernel"] = deform::skinning_isa_name(deform::skinning_isa_best());
+  out["out"] = out_path;
+  std::cout << out.dump(2) << '\n';
+  return exit_ok;
 }
 
 }  // namespace
 
-const Command skin_command = {"skin", "deform a mesh by a pose (LBS or DQS)", "usage: deform skin ...\n", run};
+const Command skin_command = {
+    "skin", "deform a mesh by a pose (LBS or DQS)",
+    "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
+    "                   [--no-limits] --out OUT.obj\n"
+    "       deform skin MODEL (--pose P.json | --clip NAME --time T) ... (MODEL: an import: glTF, FBX, .x, ...)\n\n"
+    "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
+    "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
+    "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
+    "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
+    "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", \"bones_posed\", \"limits\",\n"
+    "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", \"out\"}.\n",
+    run};
 
 }  // namespace cli

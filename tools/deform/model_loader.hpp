@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "deform/animation.hpp"
 #include "deform/model.hpp"
 
 namespace cli {
@@ -15,6 +16,7 @@ struct LoadedModel {
   deform::Model model;
   std::string source;   // what was loaded, for messages ("builtin" or the path)
   bool imported = false;
+  std::vector<deform::Animation> clips;  // an import's animation clips (empty otherwise)
 };
 
 // Value flags a model-taking command must accept: --skeleton, --weights.  Switch: --builtin.
