@@ -1,0 +1,67 @@
+// frame/builtin_3_lattices: one whole frame of the thesis' scene on one thread — the built-in character (2,554
+// points) reaching far, its three arm lattices stretched and springing: elastic step, FK, skinning, lattices.
+// The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <random>
+
+#include "deform/builtin.hpp"
+#include "deform/character.hpp"
+
+namespace {
+
+// The built-in character with every point repeated (within a millimetre) to reach `points` points.
+deform::Model scaled_model(std::size_t points) {
+  deform::Model base = deform::builtin_character();
+  if (points <= base.mesh.point_count()) return base;
+  deform::Model big;
+  big.name = "builtin-" + std::to_string(points);
+  big.skeleton = base.skeleton;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> jitter(-1e-3f, 1e-3f);
+  for (std::size_t p = 0; p < points; ++p) {
+    const std::size_t source = p % base.mesh.point_count();
+    big.mesh.positions.push_back(base.mesh.positions[source] + glm::vec3(jitter(rng), jitter(rng), jitter(rng)));
+    big.weights.bones.push_back(base.weights.bones[source]);
+    big.weights.weights.push_back(base.weights.weights[source]);
+  }
+  return big;
+}
+
+// A character mid-reach: its arm stretched toward a point 1 m beyond the shoulder and springing.
+std::unique_ptr<deform::Character> reaching_character(std::size_t points) {
+  deform::Model model = scaled_model(points);
+  const deform::Rig rig = deform::builtin_rig(model);
+  auto c = std::make_unique<deform::Character>(std::move(model), rig);
+  const std::int32_t hand = c->skeleton().find("hand_l");
+  c->reach(hand, c->bone_position(c->skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
+  return c;
+}
+
+void frame(benchmark::State& state) {
+  const auto c = reaching_character(std::size_t(state.range(0)));
+  std::size_t bound = 0;
+  for (std::size_t l = 0; l < c->deformers().lattice_count(); ++l) bound += c->deformers().bound_count(l);
+  for (auto _ : state) {
+    c->update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c->positions().data());
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c->positions().size()));
+  state.counters["bound"] = double(bound);
+}
+
+void frame_with_normals(benchmark::State& state) {
+  const auto c = reaching_character(0);
+  for (auto _ : state) {
+    c->update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c->normals().data());
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c->positions().size()));
+}
+
+BENCHMARK(frame)->Name("frame/builtin_3_lattices")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(frame)->Name("frame/3_lattices")->Arg(100000)->Arg(1000000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(frame_with_normals)->Name("frame/builtin_3_lattices_normals")->Unit(benchmark::kMicrosecond);
+
+}  // namespace

@@ -1,0 +1,248 @@
+// The Character facade on the built-in character: bind pose, reach (IK + stretch) within 1% of the residual, the
+// damped spring-back on release, frame-rate independence, no seam on the real mesh, argument checks.
+#include "deform/character.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "deform/builtin.hpp"
+#include "deform/deform.hpp"
+
+using deform::Character;
+
+namespace {
+
+struct Arm {
+  std::int32_t hand;
+  std::int32_t clavicle;
+};
+
+Arm left_arm(const Character& c) {
+  const Arm arm{c.skeleton().find("hand_l"), c.skeleton().find("clavicle_l")};
+  REQUIRE(arm.hand > 0);
+  REQUIRE(arm.clavicle > 0);
+  return arm;
+}
+
+// Puts the character back in its bind pose, unstretched, at rest.
+void rest(Character& c) {
+  REQUIRE(c.set_pose(c.skeleton().bind_pose()));
+  c.deformers().reset();
+  REQUIRE(c.update(0.0f));
+}
+
+void run_for(Character& c, double seconds, float dt) {
+  for (long n = std::lround(seconds / double(dt)); n > 0; --n) REQUIRE(c.update(dt));
+}
+
+// A far target to the character's left, in a cone around the relaxed arm (its reachable side).
+glm::vec3 far_target(const Character& c, std::mt19937& rng) {
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), scale(1.1f, 1.8f);
+  const Arm arm = left_arm(c);
+  const glm::vec3 shoulder = c.bone_position(arm.clavicle);
+  const float arm_length = glm::length(c.bone_position(arm.hand) - shoulder);
+  const glm::vec3 direction = glm::normalize(glm::vec3(1.0f, 0.6f * unit(rng), 0.6f * unit(rng)));
+  return shoulder + direction * arm_length * scale(rng);
+}
+
+}  // namespace
+
+TEST_CASE("at rest the character is its bind pose: mesh, lattices, normals") {
+  Character c(deform::builtin_character());
+  REQUIRE(c.deformers().lattice_count() == 3);
+  const deform::Mesh& mesh = c.model().mesh;
+  REQUIRE(c.positions().size() == mesh.point_count());
+  for (std::size_t p = 0; p < mesh.point_count(); ++p) CHECK(glm::length(c.positions()[p] - mesh.positions[p]) < 1e-5f);
+  for (std::size_t l = 0; l < 3; ++l) {
+    const deform::BezierLattice& rest = c.deformers().rest_lattice(l);
+    const glm::mat4& bind = c.skeleton().bind_world()[std::size_t(c.deformers().spec(l).bone)];
+    REQUIRE(c.control_points(l).size() == 64);
+    for (std::size_t n = 0; n < 64; ++n) {
+      CHECK(glm::length(c.control_points(l)[n] - glm::vec3(bind * glm::vec4(rest.control_points()[n], 1.0f))) < 1e-5f);
+    }
+  }
+  // The three arm lattices nest: upper arm, then forearm, then hand.
+  CHECK(c.deformers().parent(0) == -1);
+  CHECK(c.deformers().parent(1) == 0);
+  CHECK(c.deformers().parent(2) == 1);
+  const auto normals = c.normals();
+  REQUIRE(normals.size() == mesh.vertex_count());
+  for (const glm::vec3& n : normals) CHECK(glm::length(n) == doctest::Approx(1.0f).epsilon(1e-4));
+  CHECK(c.stretch() == 0.0f);
+}
+
+TEST_CASE("reach: IK within the limits, then the stretch meets the target within 1% of the residual") {
+  Character c(deform::builtin_character());
+  const Arm arm = left_arm(c);
+  std::mt19937 rng(2010);
+  for (int trial = 0; trial < 25; ++trial) {
+    CAPTURE(trial);
+    rest(c);
+    const glm::vec3 target = far_target(c, rng);
+    const deform::ReachResult result = c.reach(arm.hand, target);
+    REQUIRE(result.valid);
+    CHECK(result.residual > 0.05f);  // out of reach: IK alone cannot get there
+    CHECK(result.stretch > 0.0f);
+    CHECK(result.distance <= 0.01f * result.residual);
+    // The IK pose stays inside the DOF limits of the chain it moved.
+    for (std::int32_t b : {arm.clavicle, c.skeleton().find("upperarm_l"), c.skeleton().find("forearm_l")}) {
+      CHECK(deform::within_limits(deform::euler_from_quat(c.pose().rotations[std::size_t(b)]),
+                                  c.skeleton().bone(b).limits, 0.05f));
+    }
+    run_for(c, 4.0, 1.0f / 60.0f);
+    CHECK(glm::length(c.bone_position(arm.hand) - target) <= 0.01f * result.residual);
+    CHECK(c.stretch() == doctest::Approx(result.stretch).epsilon(0.01));
+  }
+}
+
+TEST_CASE("a reachable target needs no stretch") {
+  Character c(deform::builtin_character());
+  const Arm arm = left_arm(c);
+  const glm::vec3 shoulder = c.bone_position(arm.clavicle);
+  const glm::vec3 hand = c.bone_position(arm.hand);
+  const glm::vec3 target = shoulder + 0.8f * (hand - shoulder) + glm::vec3(0.0f, 0.05f, 0.1f);
+  const deform::ReachResult result = c.reach(arm.hand, target);
+  REQUIRE(result.valid);
+  CHECK(result.residual < 1e-3f);
+  CHECK(result.stretch == 0.0f);
+  run_for(c, 0.5, 1.0f / 60.0f);
+  CHECK(glm::length(c.bone_position(arm.hand) - target) < 1e-3f);
+  CHECK(c.stretch() == 0.0f);
+}
+
+TEST_CASE("release: the stretch springs back as a damped oscillation and settles at rest") {
+  Character c(deform::builtin_character());
+  const Arm arm = left_arm(c);
+  const glm::vec3 shoulder = c.bone_position(arm.clavicle);
+  const glm::vec3 target = shoulder + glm::vec3(1.1f, 0.1f, 0.1f);
+  const deform::ReachResult result = c.reach(arm.hand, target);
+  REQUIRE(result.stretch > 0.2f);
+  run_for(c, 4.0, 1.0f / 120.0f);
+  c.release();
+  std::vector<float> curve;
+  for (int n = 0; n < 480; ++n) {
+    REQUIRE(c.update(1.0f / 120.0f));
+    curve.push_back(c.stretch());
+  }
+  // Extremes alternate in sign and shrink; the first undershoot is the under-damped one, exp(-ζπ/√(1-ζ²)) of the
+  // stretch (ζ = 0.2 in the built-in rig).
+  std::vector<float> extremes;
+  for (std::size_t n = 1; n + 1 < curve.size(); ++n) {
+    if ((curve[n] < curve[n - 1] && curve[n] <= curve[n + 1]) ||
+        (curve[n] > curve[n - 1] && curve[n] >= curve[n + 1])) {
+      extremes.push_back(curve[n]);
+    }
+  }
+  REQUIRE(extremes.size() >= 4);
+  const double zeta = 0.2;
+  CHECK(-extremes[0] / result.stretch ==
+        doctest::Approx(std::exp(-zeta * M_PI / std::sqrt(1 - zeta * zeta))).epsilon(0.02));
+  for (std::size_t n = 1; n < extremes.size(); ++n) {
+    CHECK(extremes[n] * extremes[n - 1] < 0.0f);
+    CHECK(std::abs(extremes[n]) < std::abs(extremes[n - 1]));
+  }
+  CHECK(std::abs(curve.back()) < 0.01f * result.stretch);
+  // Back at rest, the hand is where IK alone put it.
+  deform::IkChain chain = deform::make_chain(c.skeleton(), arm.clavicle, arm.hand);
+  CHECK(glm::length(c.bone_position(arm.hand) - deform::effector_position(c.skeleton(), chain, c.pose())) <
+        0.01f * result.stretch);
+}
+
+TEST_CASE("the reach-release curve does not depend on the frame rate") {
+  const auto curve = [](float dt) {
+    Character c(deform::builtin_character());
+    const Arm arm = left_arm(c);
+    const glm::vec3 target = c.bone_position(arm.clavicle) + glm::vec3(1.0f, 0.2f, 0.0f);
+    c.reach(arm.hand, target);
+    std::vector<float> samples;
+    const int per_sample = int(std::lround((1.0f / 6.0f) / dt));
+    for (int n = 1; n <= per_sample * 18; ++n) {
+      if (n == per_sample * 9 + 1) c.release();  // at t = 1.5 s
+      c.update(dt);
+      if (n % per_sample == 0) samples.push_back(c.stretch());
+    }
+    return samples;
+  };
+  const auto reference = curve(1.0f / 60.0f);
+  const float amplitude = *std::max_element(reference.begin(), reference.end());
+  for (float dt : {1.0f / 30.0f, 1.0f / 144.0f, 1.0f / 240.0f}) {
+    CAPTURE(dt);
+    const auto other = curve(dt);
+    REQUIRE(other.size() == reference.size());
+    for (std::size_t n = 0; n < other.size(); ++n) CHECK(std::abs(other[n] - reference[n]) <= 0.02f * amplitude);
+  }
+}
+
+TEST_CASE("on the real mesh the stretched forearm has no seam; without the hierarchy the hand tears off") {
+  // Largest change of the stretch displacement along a mesh edge, per unit of edge length, with the forearm lattice
+  // stretched by 0.3 m (its length is 0.26 m).
+  const auto steepest = [](bool carry) {
+    deform::Model model = deform::builtin_character();
+    deform::Rig rig = deform::builtin_rig(model);
+    for (deform::LatticeSpec& spec : rig.lattices) spec.carry_descendants = carry;
+    Character c(std::move(model), rig);
+    const std::vector<glm::vec3> unstretched(c.positions().begin(), c.positions().end());
+    const std::int32_t forearm = c.deformers().find("forearm_l");
+    REQUIRE(forearm >= 0);
+    REQUIRE(c.deformers().set_stretch_target(std::size_t(forearm), 0.3f));
+    run_for(c, 4.0, 1.0f / 60.0f);
+    REQUIRE(c.deformers().stretch(std::size_t(forearm)) == doctest::Approx(0.3f).epsilon(0.01));
+    const deform::Mesh& mesh = c.model().mesh;
+    float worst = 0.0f;
+    for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
+      for (std::size_t e = 0; e < 3; ++e) {
+        const std::uint32_t a = mesh.vertex_point[mesh.triangles[t + e]];
+        const std::uint32_t b = mesh.vertex_point[mesh.triangles[t + (e + 1) % 3]];
+        const glm::vec3 da = c.positions()[a] - unstretched[a], db = c.positions()[b] - unstretched[b];
+        worst = std::max(worst, glm::length(da - db) / glm::length(mesh.positions[a] - mesh.positions[b]));
+      }
+    }
+    return worst;
+  };
+  const float with_hierarchy = steepest(true);
+  const float without = steepest(false);
+  CAPTURE(with_hierarchy);
+  CAPTURE(without);
+  // The stretch gradient is 0.3 / 0.26 per metre, steeper where skin weights blend; a tear is far steeper.
+  CHECK(with_hierarchy < 3.0f * 0.3f / 0.26f);
+  CHECK(without > 4.0f * with_hierarchy);
+}
+
+TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {
+  Character c(deform::builtin_character());
+  const Arm arm = left_arm(c);
+  const std::int32_t elbow = c.skeleton().find("forearm_l");
+  deform::Pose pose = c.skeleton().bind_pose();
+  c.skeleton().set_euler(pose, elbow, glm::vec3(-60.0f, 0.0f, 0.0f), false);  // elbows do not bend backwards
+  REQUIRE(c.set_pose(pose));
+  CHECK(deform::within_limits(deform::euler_from_quat(c.pose().rotations[std::size_t(elbow)]),
+                              c.skeleton().bone(elbow).limits));
+  deform::Pose wrong = pose;
+  wrong.rotations.pop_back();
+  CHECK_FALSE(c.set_pose(wrong));
+  wrong = pose;
+  wrong.translations[3].x = NAN;
+  CHECK_FALSE(c.set_pose(wrong));
+  CHECK_FALSE(c.update(-0.1f));
+  CHECK_FALSE(c.update(NAN));
+  CHECK_FALSE(c.reach(-1, glm::vec3(1.0f)).valid);
+  CHECK_FALSE(c.reach(9999, glm::vec3(1.0f)).valid);
+  CHECK_FALSE(c.reach(arm.hand, glm::vec3(NAN, 0.0f, 0.0f)).valid);
+  CHECK(c.stretch() == 0.0f);
+}
+
+TEST_CASE("a model that is not the built-in character gets no lattices by default") {
+  deform::Model model = deform::builtin_character();
+  model.name = "other";
+  Character c(std::move(model));
+  CHECK(c.deformers().lattice_count() == 0);
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  const deform::ReachResult result = c.reach(hand, glm::vec3(3.0f, 1.5f, 0.0f));
+  CHECK(result.valid);
+  CHECK(result.stretch == 0.0f);
+  REQUIRE(c.update(1.0f / 60.0f));
+}

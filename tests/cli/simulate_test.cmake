@@ -1,0 +1,134 @@
+# `deform simulate` end to end: the reach-stretch-release-settle curve of the built-in character, a rig file naming
+# its model, frame-rate independence, and exit 2 on bad usage and bad rigs.
+# Run as: cmake -DDEFORM=<deform executable> -DWORK=<scratch folder> -P simulate_test.cmake
+cmake_minimum_required(VERSION 3.25)
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+
+function(fail message)
+  message(SEND_ERROR "FAIL: ${message}")
+endfunction()
+
+function(deform)
+  execute_process(COMMAND "${DEFORM}" ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+  set(rc "${code}" PARENT_SCOPE)
+  set(out "${stdout}" PARENT_SCOPE)
+  set(err "${stderr}" PARENT_SCOPE)
+endfunction()
+
+function(expect_equal what actual expected)
+  if(NOT "${actual}" STREQUAL "${expected}")
+    fail("${what}: got '${actual}', expected '${expected}'")
+  endif()
+endfunction()
+
+# The JSON number at PATH... of `out` must lie within [lo, hi].
+function(expect_between lo hi)
+  string(JSON value GET "${out}" ${ARGN})
+  if(NOT (value GREATER_EQUAL lo AND value LESS_EQUAL hi))
+    fail("${ARGN}: ${value} not in [${lo}, ${hi}]")
+  endif()
+endfunction()
+
+# Bad usage or input: exit 2, nothing on stdout, stderr mentions `text`.
+function(expect_invalid text)
+  deform(simulate ${ARGN})
+  expect_equal("exit status of simulate ${ARGN}" "${rc}" 2)
+  expect_equal("stdout of simulate ${ARGN}" "${out}" "")
+  string(FIND "${err}" "${text}" found)
+  if(found EQUAL -1)
+    fail("simulate ${ARGN}: stderr '${err}' does not mention '${text}'")
+  endif()
+endfunction()
+
+# --- the built-in character reaches (1.2, 1.6, 0.3), far beyond its arm, holds until 2.5 s, lets go, settles ---
+deform(simulate --builtin --target 1.2,1.6,0.3 --release-at 2.5 --seconds 5 --dt 0.05)
+expect_equal("exit status" "${rc}" 0)
+expect_between(0.05 0.05 dt)
+string(JSON count LENGTH "${out}" samples)
+expect_equal("sample count" "${count}" 101)
+expect_between(0 0 samples 0 t)
+expect_between(0 0 samples 0 stretch)
+expect_between(4.99 5.01 samples 100 t)
+# Reaching: the stretch overshoots (t = 0.3 s) ...
+expect_between(0.7 0.9 samples 6 stretch)
+# ... and has settled on the target by the release: within 1% of the 0.53 m stretch it took.
+expect_between(1.195 1.205 samples 50 effector 0)
+expect_between(1.595 1.605 samples 50 effector 1)
+expect_between(0.295 0.305 samples 50 effector 2)
+expect_between(0.5 0.56 samples 50 stretch)
+# Released: it springs back past rest (a damped oscillation) and settles there.
+set(lowest 1)
+foreach(n RANGE 51 100)
+  string(JSON s GET "${out}" samples ${n} stretch)
+  if(s LESS lowest)
+    set(lowest ${s})
+  endif()
+endforeach()
+if(NOT lowest LESS -0.2)
+  fail("no spring-back past rest after the release: lowest stretch ${lowest}")
+endif()
+expect_between(-0.006 0.006 samples 100 stretch)
+
+# --- frame-rate independence: the same curve at dt = 0.025 s agrees at t = 1 s within 0.01 m (2% of the stretch) ---
+# A decimal number as an integer count of micrometres (CMake has only integer arithmetic).
+function(to_micro value out_var)
+  if(value MATCHES "[eE]")  # 1.2e-05 and the like: below a micrometre here
+    set(${out_var} 0 PARENT_SCOPE)
+    return()
+  endif()
+  string(REGEX MATCH "^(-?)([0-9]*)\\.?([0-9]*)$" matched "${value}")
+  set(sign "${CMAKE_MATCH_1}")
+  set(whole "${CMAKE_MATCH_2}")
+  string(SUBSTRING "${CMAKE_MATCH_3}000000" 0 6 fraction)
+  if(whole STREQUAL "")
+    set(whole 0)
+  endif()
+  string(REGEX REPLACE "^0+([0-9])" "\\1" fraction "${fraction}")
+  math(EXPR micro "${sign}(${whole} * 1000000 + ${fraction})")
+  set(${out_var} ${micro} PARENT_SCOPE)
+endfunction()
+string(JSON coarse GET "${out}" samples 20 stretch)
+deform(simulate --builtin --target 1.2,1.6,0.3 --release-at 2.5 --seconds 1 --dt 0.025)
+expect_equal("exit status" "${rc}" 0)
+expect_between(0.99 1.01 samples 40 t)
+string(JSON fine GET "${out}" samples 40 stretch)
+to_micro("${coarse}" coarse_micro)
+to_micro("${fine}" fine_micro)
+math(EXPR difference "${fine_micro} - ${coarse_micro}")
+if(difference GREATER 10000 OR difference LESS -10000)
+  fail("stretch at t = 1 s: ${coarse} at dt 0.05, ${fine} at dt 0.025")
+endif()
+
+# --- a rig file that names its model ---
+file(WRITE "${WORK}/forearm.rig.json" [=[
+{"rig": 1, "model": "builtin",
+ "reach": {"effector": "hand_l", "root": "clavicle_l"},
+ "lattices": [{"name": "upper", "bone": "upperarm_l"},
+              {"name": "fore", "bone": "forearm_l", "elastic": {"stiffness": 400, "damping_ratio": 1}}]}
+]=])
+deform(simulate "${WORK}/forearm.rig.json" --target 1.2,1.6,0.3 --seconds 2 --dt 0.1)
+expect_equal("exit status with a rig file" "${rc}" 0)
+expect_between(1.19 1.21 samples 15 effector 0)
+
+# --- bad usage and bad input: exit 2 ---
+expect_invalid("--target" --builtin)
+expect_invalid("either --builtin or one RIG" --target 1,2,3)
+expect_invalid("either --builtin or one RIG" --builtin "${WORK}/forearm.rig.json" --target 1,2,3)
+expect_invalid("--dt" --builtin --target 1,2,3 --dt 0)
+expect_invalid("--dt" --builtin --target 1,2,3 --dt fast)
+expect_invalid("--target" --builtin --target 1,2)
+expect_invalid("--effector" --builtin --target 1,2,3 --effector tail)
+expect_invalid("--integrator" --builtin --target 1,2,3 --integrator euler)
+expect_invalid("missing.rig.json" "${WORK}/missing.rig.json" --target 1,2,3)
+file(WRITE "${WORK}/bad.rig.json" [=[{"rig": 1, "model": "builtin", "lattices": [{"name": "a", "bone": "forearm_l", "degree": [3, 0, 3]}]}]=])
+expect_invalid("lattices[0].degree[1]" "${WORK}/bad.rig.json" --target 1,2,3)
+file(WRITE "${WORK}/no-effector.rig.json" [=[{"rig": 1, "model": "builtin", "lattices": []}]=])
+expect_invalid("--effector" "${WORK}/no-effector.rig.json" --target 1,2,3)
+
+deform(simulate --help)
+expect_equal("exit status of --help" "${rc}" 0)
+string(FIND "${out}" "usage: deform simulate" found)
+if(found EQUAL -1)
+  fail("--help does not print the usage")
+endif()
