@@ -1,10 +1,10 @@
 # Sourced by scripts/test and scripts/demo: installs the Debian packages libdeform needs when they are missing.
 # As root it runs apt-get; otherwise it prints the one `sudo apt-get install` line and stops.
 deform_packages=(
-  build-essential cmake pkg-config
+  build-essential cmake pkg-config python3
   libglm-dev doctest-dev libopenmesh-dev nlohmann-json3-dev libbenchmark-dev
   libassimp-dev assimp-testmodels
-  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth
+  libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
 )
 
 deform_install_deps() {

@@ -1,34 +1,7 @@
 # `deform simulate` end to end: the reach-stretch-release-settle curve of the built-in character, a rig file naming
 # its model, frame-rate independence, and exit 2 on bad usage and bad rigs.
 # Run as: cmake -DDEFORM=<deform executable> -DWORK=<scratch folder> -P simulate_test.cmake
-cmake_minimum_required(VERSION 3.25)
-file(REMOVE_RECURSE "${WORK}")
-file(MAKE_DIRECTORY "${WORK}")
-
-function(fail message)
-  message(SEND_ERROR "FAIL: ${message}")
-endfunction()
-
-function(deform)
-  execute_process(COMMAND "${DEFORM}" ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  set(rc "${code}" PARENT_SCOPE)
-  set(out "${stdout}" PARENT_SCOPE)
-  set(err "${stderr}" PARENT_SCOPE)
-endfunction()
-
-function(expect_equal what actual expected)
-  if(NOT "${actual}" STREQUAL "${expected}")
-    fail("${what}: got '${actual}', expected '${expected}'")
-  endif()
-endfunction()
-
-# The JSON number at PATH... of `out` must lie within [lo, hi].
-function(expect_between lo hi)
-  string(JSON value GET "${out}" ${ARGN})
-  if(NOT (value GREATER_EQUAL lo AND value LESS_EQUAL hi))
-    fail("${ARGN}: ${value} not in [${lo}, ${hi}]")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # Bad usage or input: exit 2, nothing on stdout, stderr mentions `text`.
 function(expect_invalid text)

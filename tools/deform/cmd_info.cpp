@@ -110,7 +110,7 @@ int run(const std::vector<std::string>& argv) {
 }  // namespace
 
 const Command info_command = {
-    "info", "inspect a .sk skeleton or an .obj mesh",
+    "info", "inspect a .sk skeleton, an .obj mesh or an importable model",
     "usage: deform info PATH\n"
     "\n"
     "Prints what PATH holds as one JSON document on stdout.\n"
