@@ -1,0 +1,132 @@
+#pragma once
+// The thin framework every libdeform sample shares: a GLFW window with an OpenGL 3.3 core context (4.3 when the
+// driver offers it, for compute shaders), Dear ImGui, an orbit camera, a renderer for a deforming mesh streamed as one
+// interleaved buffer (position, normal, UV), line/point overlays, and offscreen PNG screenshots for headless runs.
+// All OpenGL of the project lives under samples/.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <epoxy/gl.h>
+#include <glm/glm.hpp>
+
+#include "deform/mesh.hpp"
+
+struct GLFWwindow;
+
+namespace sample {
+
+struct WindowOptions {
+  std::string title = "libdeform";
+  int width = 1280;
+  int height = 800;
+  bool hidden = false;  // headless runs: an invisible window, rendering into an offscreen framebuffer
+};
+
+// Mouse and keyboard state of the current frame, already filtered for ImGui (clicks on the panel are not the scene's).
+struct Input {
+  glm::vec2 mouse{0.0f};         // pixels, origin top-left
+  glm::vec2 mouse_delta{0.0f};
+  float scroll = 0.0f;
+  bool left_down = false, left_pressed = false, left_released = false;
+  bool right_down = false, middle_down = false;
+  bool shift = false;
+  int key_pressed = 0;           // last GLFW key pressed this frame (0 if none)
+};
+
+class Window {
+ public:
+  ~Window();
+  // Opens the window and context and initialises ImGui. Returns false (with a message on stderr) on failure,
+  // for example when there is no display.
+  bool open(const WindowOptions& options);
+  bool should_close() const;
+  // Polls events and starts an ImGui frame; binds the offscreen framebuffer when hidden.
+  void begin_frame();
+  // Renders ImGui and swaps buffers.
+  void end_frame();
+  // Writes the current frame (before end_frame) as an RGB PNG; false on failure.
+  bool save_png(const std::string& path) const;
+
+  glm::ivec2 framebuffer_size() const { return size_; }
+  float aspect() const { return size_.y > 0 ? float(size_.x) / float(size_.y) : 1.0f; }
+  const Input& input() const { return input_; }
+  // True when the context is OpenGL 4.3 or newer (compute shaders available).
+  bool has_compute() const { return gl_version_ >= 43; }
+  const std::string& renderer_name() const { return renderer_; }
+
+ private:
+  GLFWwindow* window_ = nullptr;
+  bool hidden_ = false;
+  GLuint fbo_ = 0, color_ = 0, depth_ = 0;
+  glm::ivec2 size_{0};
+  glm::vec2 last_mouse_{0.0f};
+  float scroll_accum_ = 0.0f;
+  int key_accum_ = 0;
+  bool was_left_down_ = false;
+  Input input_;
+  int gl_version_ = 0;
+  std::string renderer_;
+  static void on_scroll(GLFWwindow*, double, double);
+  static void on_key(GLFWwindow*, int, int, int, int);
+};
+
+// Orbit camera: right drag orbits, middle drag (or shift + right) pans, wheel zooms.
+struct OrbitCamera {
+  glm::vec3 target{0.0f, 1.0f, 0.0f};
+  float distance = 3.5f;
+  float yaw = 0.5f;     // radians about +Y
+  float pitch = 0.15f;  // radians above the horizon
+  float fov_y = 0.8f;   // radians
+
+  void handle(const Input& input, glm::ivec2 viewport);
+  glm::vec3 eye() const;
+  glm::mat4 view() const;
+  glm::mat4 projection(float aspect) const;
+};
+
+// Draws a Mesh whose points move every frame. Topology, UVs and materials are uploaded once; each frame upload()
+// streams positions and normals into the one interleaved buffer (T2F_N3F_V3F in spirit, §9.4.2 of the thesis).
+class MeshRenderer {
+ public:
+  ~MeshRenderer();
+  // `mesh` must outlive the renderer. Textures (map_Kd) are loaded with stb_image; a missing one falls back to Kd.
+  void create(const deform::Mesh& mesh);
+  // Replaces a material's texture with RGB pixels held in memory (row 0 = top), e.g. deform::builtin_texture().
+  void set_texture_rgb(std::size_t material, int width, int height, const std::uint8_t* pixels);
+  // Per render vertex positions and normals (size = mesh.vertex_count()).
+  void upload(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals);
+  void draw(const glm::mat4& model, const glm::mat4& view, const glm::mat4& projection, glm::vec3 eye,
+            glm::vec3 tint = glm::vec3(1.0f)) const;
+  // Binds the interleaved VBO as a shader storage buffer (GPU paths write positions/normals into it directly).
+  GLuint vertex_buffer() const { return vbo_; }
+  static constexpr int floats_per_vertex = 8;  // u v, nx ny nz, x y z
+
+ private:
+  const deform::Mesh* mesh_ = nullptr;
+  GLuint vao_ = 0, vbo_ = 0, ibo_ = 0, program_ = 0;
+  std::vector<GLuint> textures_;  // per material (0 = none)
+  std::vector<float> interleaved_;
+};
+
+// Coloured lines and points in world space, rebuilt every frame (skeleton, lattices, targets, the floor grid).
+class OverlayRenderer {
+ public:
+  ~OverlayRenderer();
+  void create();
+  void line(glm::vec3 a, glm::vec3 b, glm::vec3 colour);
+  void point(glm::vec3 p, glm::vec3 colour, float size = 8.0f);
+  // Draws and clears what was added; `on_top` ignores depth (skeleton and handles show through the skin).
+  void flush(const glm::mat4& view_projection, bool on_top);
+
+ private:
+  GLuint vao_ = 0, vbo_ = 0, program_ = 0;
+  std::vector<float> lines_, points_;
+};
+
+// Compiles and links a program from sources; aborts with the GL log on failure (samples only).
+GLuint build_program(const char* vertex_source, const char* fragment_source);
+GLuint build_compute_program(const char* compute_source);
+
+}  // namespace sample

@@ -1,0 +1,46 @@
+// ik_reach: CCD inverse kinematics. A target circles in front of the built-in character; each frame the left arm's
+// chain (clavicle to hand) is solved toward it from the current pose, within every joint's DOF limits, and the mesh
+// is skinned with the result. The orange point is the target, the skeleton is drawn on top.
+#include <cmath>
+
+#include "deform/builtin.hpp"
+#include "deform/ik.hpp"
+#include "deform/skinning.hpp"
+#include "sample_app.hpp"
+
+int main(int argc, char** argv) {
+  const deform::Model model = deform::builtin_character();
+  const deform::Skeleton& skeleton = model.skeleton;
+  deform::CcdSolver solver(skeleton, skeleton.find("clavicle_l"), skeleton.find("hand_l"));
+  deform::IkSettings settings;
+  settings.tolerance = 1e-3f;
+  deform::Pose pose = skeleton.bind_pose();
+  std::vector<glm::mat4> world(skeleton.bone_count()), palette(skeleton.bone_count());
+  std::vector<glm::vec3> points(model.mesh.point_count());
+  sample::PointMeshRenderer renderer;
+
+  return sample::run_sample(
+      argc, argv, "libdeform: CCD reach", [&] { renderer.create(model.mesh); },
+      [&](const sample::Frame& f) {
+        const glm::vec3 target(0.45f + 0.25f * std::cos(f.time), 1.35f + 0.3f * std::sin(f.time), 0.35f);
+        deform::IkResult result;
+        solver.solve(pose, target, settings, result);
+
+        deform::compute_world_matrices(skeleton, pose, world);
+        deform::compute_skinning_palette(skeleton, world, palette);
+        deform::SkinningJob job;
+        job.matrices = palette;
+        job.bone_indices = model.weights.bones;
+        job.bone_weights = model.weights.weights;
+        job.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
+        job.out_positions = deform::as_floats(std::span<glm::vec3>(points));
+        job.run();
+        renderer.draw(points, f);
+
+        for (std::size_t b = 1; b < skeleton.bone_count(); ++b) {
+          const glm::vec3 head(world[b][3]), parent(world[std::size_t(skeleton.bone(std::int32_t(b)).parent)][3]);
+          f.overlay->line(parent, head, glm::vec3(1.0f, 0.9f, 0.3f));
+        }
+        f.overlay->point(target, result.reached ? glm::vec3(0.2f, 1.0f, 0.3f) : glm::vec3(1.0f, 0.5f, 0.0f), 12.0f);
+      });
+}

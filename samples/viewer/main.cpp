@@ -1,0 +1,555 @@
+// deform_viewer: the rubber-arm character on screen. Click a point of the scene: the nearest arm reaches for it by
+// IK and, when it is out of reach, stretches elastically; let go and it springs back. Everything deforming is the
+// libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
+//
+//   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]...
+//   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "framework.hpp"  // epoxy before any other GL header
+
+#include <GLFW/glfw3.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <imgui.h>
+
+#include "deform/deform.hpp"
+#include "deform/error.hpp"
+#include "deform/picking.hpp"
+#include "deform/weights.hpp"
+#include "scene.hpp"
+#include "shapes.hpp"
+#ifdef DEFORM_HAVE_IMPORT
+#include "deform/import.hpp"
+#endif
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const char* usage =
+    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]...\n"
+    "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]]\n"
+    "                     [--width W] [--height H] [--bare]\n"
+    "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
+    "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
+    "Mouse: left click/drag a point to reach for it, release to let go; right drag orbits; middle drag or\n"
+    "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
+    "L the lattices, R resets, Esc quits.\n";
+
+struct Options {
+  std::string model, skeleton, weights, rig, screenshot;
+  std::vector<std::string> props;
+  int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
+  bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
+  std::optional<glm::vec3> reach;
+};
+
+[[noreturn]] void fail(const std::string& message) {
+  std::fprintf(stderr, "deform_viewer: %s\n", message.c_str());
+  std::exit(2);
+}
+
+int parse_int(const std::string& s, const char* what) {
+  char* end = nullptr;
+  const long v = std::strtol(s.c_str(), &end, 10);
+  if (s.empty() || *end || v < 0 || v > 1000000) fail(std::string(what) + ": '" + s + "' is not a count");
+  return int(v);
+}
+
+glm::vec3 parse_vec3(const std::string& s) {
+  glm::vec3 v;
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%f,%f,%f%c", &v.x, &v.y, &v.z, &tail) != 3 || !std::isfinite(v.x + v.y + v.z))
+    fail("--reach: '" + s + "' is not X,Y,Z");
+  return v;
+}
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) fail(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") std::fputs(usage, stdout), std::exit(0);
+    else if (a == "--skeleton") o.skeleton = next();
+    else if (a == "--weights") o.weights = next();
+    else if (a == "--rig") o.rig = next();
+    else if (a == "--prop") o.props.push_back(next());
+    else if (a == "--screenshot") o.screenshot = next();
+    else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
+    else if (a == "--reach") o.reach = parse_vec3(next());
+    else if (a == "--at") o.reach_at = parse_int(next(), "--at");
+    else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
+    else if (a == "--bare") o.bare = true;
+    else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
+    else if (a == "--height") o.height = std::max(64, parse_int(next(), "--height"));
+    else if (a.rfind("--", 0) == 0) fail("unknown option " + a + "\n" + usage);
+    else if (o.model.empty()) o.model = a;
+    else fail("more than one model given");
+  }
+  return o;
+}
+
+struct LoadedCharacter {
+  deform::Model model;
+  std::vector<deform::Animation> clips;
+};
+
+LoadedCharacter load(const Options& o) {
+  LoadedCharacter loaded;
+  const bool is_obj = o.model.size() > 4 && (o.model.substr(o.model.size() - 4) == ".obj" ||
+                                             o.model.substr(o.model.size() - 4) == ".OBJ");
+  if (o.model.empty()) {
+    loaded.model = deform::builtin_character();
+  } else if (is_obj) {
+    if (o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
+    if (!o.weights.empty()) {
+      loaded.model = deform::load_model(o.model, o.skeleton, o.weights);
+    } else {
+      loaded.model.mesh = deform::read_obj(o.model);
+      loaded.model.skeleton = deform::read_sk(o.skeleton);
+      loaded.model.weights = deform::compute_automatic_weights(loaded.model.mesh, loaded.model.skeleton);
+      loaded.model.name = o.model;
+    }
+  } else {
+#ifdef DEFORM_HAVE_IMPORT
+    deform::ImportedModel imported = deform::import_model(o.model);
+    for (const std::string& w : imported.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    loaded.model = std::move(imported.model);
+    loaded.clips = std::move(imported.clips);
+#else
+    fail(o.model + ": this build has no importer (deform::import); give an OBJ with --skeleton");
+#endif
+  }
+  return loaded;
+}
+
+glm::vec3 heat(float t) {  // 0 blue, 0.5 green, 1 red
+  t = std::clamp(t, 0.0f, 1.0f);
+  return t < 0.5f ? glm::mix(glm::vec3(0.2f, 0.4f, 1.0f), glm::vec3(0.2f, 1.0f, 0.3f), 2.0f * t)
+                  : glm::mix(glm::vec3(0.2f, 1.0f, 0.3f), glm::vec3(1.0f, 0.2f, 0.1f), 2.0f * t - 1.0f);
+}
+
+// Marks "take the rig's elastic settings" until the first character is built.
+deform::ElasticSettings unset_elastic() {
+  deform::ElasticSettings s;
+  s.oscillator.stiffness = 0.0f;
+  return s;
+}
+
+glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+
+// Everything the viewer shows and edits.
+class Viewer {
+ public:
+  Viewer(const Options& options, sample::Window& window) : options_(options), window_(window) {
+    LoadedCharacter loaded = load(options);
+    clips_ = std::move(loaded.clips);
+    base_model_ = loaded.model;
+    rig_ = options.rig.empty() ? deform::builtin_rig(base_model_)
+                               : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
+    rebuild_character();
+
+    // The scene (the thesis' version 1): the world holds the floor, the character and the props; the target ball
+    // is a child of the character node, so moving the character carries its target along.
+    world_node_ = scene_.add("world");
+    floor_node_ = scene_.add("floor", world_node_);
+    character_node_ = scene_.add("character", world_node_);
+    ball_node_ = scene_.add("target", character_node_, glm::vec3(0.0f), glm::vec3(1.0f));
+    const deform::Bounds b = deform::compute_bounds(base_model_.mesh.positions);
+    const float height = std::max(1e-3f, b.max.y - b.min.y);
+    const float extent = std::max({b.max.x - b.min.x, height, b.max.z - b.min.z});
+    scene_.node(floor_node_).translation = glm::vec3(0.5f * (b.min.x + b.max.x), b.min.y, 0.5f * (b.min.z + b.max.z));
+    floor_mesh_ = sample::make_floor(extent * 4.0f, 16);
+    ball_mesh_ = sample::make_sphere(extent * 0.025f, 12, 24, glm::vec3(1.0f, 0.55f, 0.1f));
+    for (const std::string& path : options.props) {
+      props_.push_back(std::make_unique<deform::Mesh>(deform::read_obj(path)));
+      prop_nodes_.push_back(scene_.add(path, world_node_, glm::vec3(extent * 0.6f * float(props_.size()), b.min.y, 0.0f)));
+    }
+    camera_.target = 0.5f * (b.min + b.max);
+    camera_.distance = extent * 1.6f;
+    camera_.yaw = 0.35f;
+    camera_.pitch = 0.12f;
+    pick_radius_ = extent;
+
+    floor_renderer_.create(floor_mesh_);
+    upload_static(floor_renderer_, floor_mesh_);
+    ball_renderer_.create(ball_mesh_);
+    upload_static(ball_renderer_, ball_mesh_);
+    for (auto& prop : props_) {
+      prop_renderers_.push_back(std::make_unique<sample::MeshRenderer>());
+      prop_renderers_.back()->create(*prop);
+      upload_static(*prop_renderers_.back(), *prop);
+    }
+    overlay_.create();
+  }
+
+  void frame(float dt) {
+    const sample::Input& in = window_.input();
+    camera_.handle(in, window_.framebuffer_size());
+    handle_keys(in.key_pressed);
+    handle_mouse(in);
+    if (playing_ && clip_ >= 0) {
+      clip_time_ += dt;
+      deform::Pose pose = character_->skeleton().bind_pose();
+      clips_[std::size_t(clip_)].sample(clip_time_, pose);
+      character_->set_pose(pose);
+      if (reaching_) character_->reach(effector_, target_);
+    }
+    const auto start = Clock::now();
+    character_->update(dt);
+    const auto normals = character_->normals();
+    deform_ms_ = 0.9f * deform_ms_ + 0.1f * std::chrono::duration<float, std::milli>(Clock::now() - start).count();
+    draw(normals);
+  }
+
+  // Headless scripting: reach for a world point, let go.
+  void reach_world(glm::vec3 world_target) { begin_reach(world_target); }
+  void release() {
+    if (reaching_) character_->release();
+    reaching_ = false;
+  }
+  glm::vec3 effector_position() const {
+    return effector_ >= 0 ? transform_point(character_world(), character_->bone_position(effector_)) : glm::vec3(0.0f);
+  }
+
+  void panel(float frame_ms) {
+    if (options_.bare) return;
+    ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
+    ImGui::Begin("libdeform");
+    ImGui::Text("%s: %zu points, %zu bones", base_model_.name.c_str(), base_model_.mesh.point_count(),
+                base_model_.skeleton.bone_count());
+    ImGui::Text("frame %.2f ms, deformation %.3f ms", frame_ms, deform_ms_);
+    ImGui::TextWrapped("Left click/drag: reach. Right drag: orbit. Wheel: zoom.");
+    ImGui::Separator();
+    int method = character_->skinning == deform::SkinningMethod::dqs;
+    ImGui::Text("Skinning");
+    ImGui::SameLine();
+    ImGui::RadioButton("LBS", &method, 0);
+    ImGui::SameLine();
+    ImGui::RadioButton("DQS", &method, 1);
+    character_->skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+    ImGui::Checkbox("escape IK stalls", &character_->ik.escape_stalls);
+    ImGui::SliderInt("IK iterations", &character_->ik.max_iterations, 1, 256);
+
+    ImGui::Separator();
+    ImGui::Text("Elastic lattices (%zu)", character_->deformers().lattice_count());
+    bool changed = ImGui::SliderFloat("stiffness k", &elastic_.oscillator.stiffness, 5.0f, 1000.0f, "%.0f",
+                                      ImGuiSliderFlags_Logarithmic);
+    changed |= ImGui::SliderFloat("damping ratio", &elastic_.oscillator.damping_ratio, 0.0f, 2.0f);
+    int integrator = elastic_.integrator == deform::Integrator::verlet;
+    changed |= ImGui::RadioButton("exact (frame-rate independent)", &integrator, 0);
+    changed |= ImGui::RadioButton("Verlet, constant Kd (the seed's)", &integrator, 1);
+    elastic_.integrator = integrator ? deform::Integrator::verlet : deform::Integrator::exact;
+    if (changed) apply_elastic();
+    if (ImGui::SliderInt("lattice degree", &degree_, 1, 6)) rebuild_character();
+    if (reaching_ || character_->stretch() != 0.0f)
+      ImGui::Text("stretch %.3f, residual %.3f", character_->stretch(), last_reach_.residual);
+
+    ImGui::Separator();
+    ImGui::Checkbox("skeleton", &show_skeleton_);
+    ImGui::SameLine();
+    ImGui::Checkbox("lattices", &show_lattices_);
+    if (!clips_.empty()) {
+      ImGui::Separator();
+      std::vector<const char*> names{"(bind pose)"};
+      for (const auto& c : clips_) names.push_back(c.name.empty() ? "(unnamed)" : c.name.c_str());
+      int selected = clip_ + 1;
+      if (ImGui::Combo("clip", &selected, names.data(), int(names.size()))) {
+        clip_ = selected - 1;
+        clip_time_ = 0.0f;
+        if (clip_ < 0) character_->set_pose(character_->skeleton().bind_pose());
+      }
+      ImGui::Checkbox("play", &playing_);
+    }
+    ImGui::Separator();
+    ImGui::Text("Scene");
+    SceneEdit("character", character_node_);
+    ImGui::End();
+  }
+
+ private:
+  void SceneEdit(const char* label, int node) {
+    sample::SceneNode& n = scene_.node(node);
+    ImGui::PushID(label);
+    ImGui::DragFloat3("position", &n.translation.x, 0.01f);
+    float yaw = glm::degrees(glm::eulerAngles(n.rotation).y);
+    if (ImGui::SliderFloat("turn", &yaw, -180.0f, 180.0f))
+      n.rotation = glm::angleAxis(glm::radians(yaw), glm::vec3(0, 1, 0));
+    ImGui::PopID();
+  }
+
+  void rebuild_character() {
+    deform::Rig rig = rig_;
+    for (auto& spec : rig.lattices) {
+      if (degree_ == 0) degree_ = spec.degree.x;
+      spec.degree = glm::ivec3(degree_);
+      if (elastic_.oscillator.stiffness <= 0.0f) elastic_ = spec.elastic;
+      spec.elastic = elastic_.oscillator.stiffness > 0.0f ? elastic_ : spec.elastic;
+    }
+    if (degree_ == 0) degree_ = 3;
+    if (elastic_.oscillator.stiffness <= 0.0f) elastic_ = deform::ElasticSettings{};
+    character_ = std::make_unique<deform::Character>(base_model_, rig);
+    const deform::Mesh& mesh = character_->model().mesh;
+    triangle_points_.resize(mesh.triangles.size());
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) triangle_points_[i] = mesh.vertex_point[mesh.triangles[i]];
+    character_->update(0.0f);
+    bvh_.build(character_->positions(), triangle_points_);
+    renderer_ = std::make_unique<sample::MeshRenderer>();
+    renderer_->create(mesh);
+    // The in-memory built-in character names builtin.png without a folder: draw its texture from memory.
+    if (options_.model.empty() && !mesh.materials.empty()) {
+      const int size = 512;
+      const std::vector<std::uint8_t> pixels = deform::builtin_texture(size);
+      renderer_->set_texture_rgb(0, size, size, pixels.data());
+    }
+    reaching_ = false;
+    effector_ = -1;
+  }
+
+  void apply_elastic() {
+    for (std::size_t i = 0; i < character_->deformers().lattice_count(); ++i) {
+      deform::ElasticSettings s = character_->deformers().spec(i).elastic;
+      s.oscillator = elastic_.oscillator;
+      s.integrator = elastic_.integrator;
+      if (s.integrator == deform::Integrator::verlet) s.springs = deform::NeighbourSprings{};  // exact only
+      character_->deformers().set_elastic(i, s);
+    }
+  }
+
+  static void upload_static(sample::MeshRenderer& r, const deform::Mesh& m) {
+    std::vector<glm::vec3> positions(m.vertex_count());
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) positions[v] = m.positions[m.vertex_point[v]];
+    r.upload(positions, m.vertex_normals);
+  }
+
+  glm::mat4 character_world() const { return scene_.node(character_node_).world; }
+
+  void handle_keys(int key) {
+    if (key == GLFW_KEY_D)
+      character_->skinning = character_->skinning == deform::SkinningMethod::lbs ? deform::SkinningMethod::dqs
+                                                                                  : deform::SkinningMethod::lbs;
+    if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
+    if (key == GLFW_KEY_L) show_lattices_ = !show_lattices_;
+    if (key == GLFW_KEY_R) rebuild_character();
+  }
+
+  // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
+  std::optional<glm::vec3> pick(glm::vec2 pixel) {
+    const glm::ivec2 size = window_.framebuffer_size();
+    const deform::Ray ray = deform::ray_from_pixel(camera_.view(), camera_.projection(window_.aspect()), pixel,
+                                                   glm::vec4(0, 0, size.x, size.y));
+    std::optional<glm::vec3> best;
+    float best_distance = std::numeric_limits<float>::infinity();
+    // The character's triangles live in its node's frame: carry the ray there.
+    const glm::mat4 to_local = glm::inverse(character_world());
+    deform::Ray local{transform_point(to_local, ray.origin), glm::vec3(to_local * glm::vec4(ray.direction, 0.0f))};
+    bvh_.refit(character_->positions());
+    const deform::RayHit hit = bvh_.intersect(local);
+    if (hit.hit) {
+      const glm::vec3 p = transform_point(character_world(), local.origin + hit.distance * local.direction);
+      best_distance = glm::length(p - ray.origin);
+      best = p;
+    }
+    const float floor_y = scene_.node(floor_node_).world[3].y;
+    if (std::abs(ray.direction.y) > 1e-6f) {
+      const float t = (floor_y - ray.origin.y) / ray.direction.y;
+      if (t > 0.0f && t < best_distance) best = ray.origin + t * ray.direction;
+    }
+    return best;
+  }
+
+  void begin_reach(glm::vec3 world_target) {
+    const glm::vec3 local = transform_point(glm::inverse(character_world()), world_target);
+    // The nearest hand reaches; a rig's reach effector is the fallback (and the one with lattices to stretch).
+    std::int32_t best = character_->rig().reach_effector;
+    float best_distance = std::numeric_limits<float>::infinity();
+    const deform::Skeleton& sk = character_->skeleton();
+    for (std::size_t b = 0; b < sk.bone_count(); ++b) {
+      std::string name = sk.bone(std::int32_t(b)).name;
+      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+      if (name.find("hand") == std::string::npos) continue;
+      const float d = glm::length(character_->bone_position(std::int32_t(b)) - local);
+      if (d < best_distance) best_distance = d, best = std::int32_t(b);
+    }
+    if (best < 0) return;
+    effector_ = best;
+    target_ = local;
+    last_reach_ = character_->reach(effector_, target_);
+    if (!last_reach_.valid && character_->rig().reach_effector >= 0) {
+      effector_ = character_->rig().reach_effector;
+      last_reach_ = character_->reach(effector_, target_);
+    }
+    reaching_ = last_reach_.valid;
+  }
+
+  void handle_mouse(const sample::Input& in) {
+    if (in.left_pressed) {
+      if (const auto p = pick(in.mouse)) {
+        begin_reach(*p);
+        drag_depth_ = glm::dot(*p - camera_.eye(), glm::normalize(camera_.target - camera_.eye()));
+      }
+    } else if (in.left_down && reaching_ && in.mouse_delta != glm::vec2(0.0f)) {
+      // Drag: the target slides on the plane facing the camera at the depth first clicked.
+      const glm::ivec2 size = window_.framebuffer_size();
+      const deform::Ray ray = deform::ray_from_pixel(camera_.view(), camera_.projection(window_.aspect()), in.mouse,
+                                                     glm::vec4(0, 0, size.x, size.y));
+      const glm::vec3 forward = glm::normalize(camera_.target - camera_.eye());
+      const float along = glm::dot(ray.direction, forward);
+      if (along > 1e-4f) {
+        target_ = transform_point(glm::inverse(character_world()),
+                                  ray.origin + ray.direction * (drag_depth_ - glm::dot(ray.origin - camera_.eye(), forward)) / along);
+        last_reach_ = character_->reach(effector_, target_);
+      }
+    } else if (in.left_released) {
+      release();
+    }
+  }
+
+  void draw(std::span<const glm::vec3> normals) {
+    scene_.node(ball_node_).translation = target_;
+    scene_.update();
+    const glm::mat4 view = camera_.view(), projection = camera_.projection(window_.aspect());
+    const glm::vec3 eye = camera_.eye();
+    if (!options_.bare) {
+      floor_renderer_.draw(scene_.node(floor_node_).world, view, projection, eye);
+      for (std::size_t i = 0; i < props_.size(); ++i)
+        prop_renderers_[i]->draw(scene_.node(prop_nodes_[i]).world, view, projection, eye);
+    }
+
+    const deform::Mesh& mesh = character_->model().mesh;
+    render_positions_.resize(mesh.vertex_count());
+    const auto points = character_->positions();
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) render_positions_[v] = points[mesh.vertex_point[v]];
+    renderer_->upload(render_positions_, normals);
+    renderer_->draw(character_world(), view, projection, eye);
+    if (options_.bare) return;
+    if (reaching_) ball_renderer_.draw(scene_.node(ball_node_).world, view, projection, eye);
+
+    const glm::mat4 to_world = character_world();
+    if (show_lattices_) {
+      for (std::size_t l = 0; l < character_->deformers().lattice_count(); ++l) {
+        const auto cps = character_->control_points(l);
+        const glm::ivec3 n = character_->deformers().spec(l).degree + 1;
+        const float stretch = character_->deformers().stretch(l) / std::max(1e-6f, character_->deformers().length(l));
+        auto at = [&](int i, int j, int k) { return transform_point(to_world, cps[std::size_t(i + n.x * (j + n.y * k))]); };
+        for (int k = 0; k < n.z; ++k)
+          for (int j = 0; j < n.y; ++j)
+            for (int i = 0; i < n.x; ++i) {
+              // Control point i of a stretched lattice moves by stretch · i/l along the bone: colour by that.
+              const glm::vec3 c = heat(0.5f + 0.5f * stretch * float(i) / float(std::max(1, n.x - 1)) * 2.0f);
+              overlay_.point(at(i, j, k), c, 6.0f);
+              if (i + 1 < n.x) overlay_.line(at(i, j, k), at(i + 1, j, k), c);
+              if (j + 1 < n.y) overlay_.line(at(i, j, k), at(i, j + 1, k), c);
+              if (k + 1 < n.z) overlay_.line(at(i, j, k), at(i, j, k + 1), c);
+            }
+      }
+      overlay_.flush(projection * view, false);
+    }
+    if (show_skeleton_) {
+      const deform::Skeleton& sk = character_->skeleton();
+      for (std::size_t b = 0; b < sk.bone_count(); ++b) {
+        const glm::vec3 head = transform_point(to_world, character_->bone_position(std::int32_t(b)));
+        const std::int32_t parent = sk.bone(std::int32_t(b)).parent;
+        if (parent >= 0)
+          overlay_.line(transform_point(to_world, character_->bone_position(parent)), head, glm::vec3(1.0f, 0.9f, 0.3f));
+        overlay_.point(head, std::int32_t(b) == effector_ ? glm::vec3(1, 0.3f, 0.2f) : glm::vec3(1, 1, 1), 7.0f);
+      }
+    }
+    if (reaching_) overlay_.point(transform_point(to_world, target_), glm::vec3(1.0f, 0.5f, 0.0f), 12.0f);
+    overlay_.flush(projection * view, true);
+  }
+
+  const Options& options_;
+  sample::Window& window_;
+  deform::Model base_model_;
+  deform::Rig rig_;
+  std::vector<deform::Animation> clips_;
+  std::unique_ptr<deform::Character> character_;
+  std::unique_ptr<sample::MeshRenderer> renderer_;
+  std::vector<std::uint32_t> triangle_points_;
+  std::vector<glm::vec3> render_positions_;
+  deform::TriangleBvh bvh_;
+  sample::Scene scene_;
+  int world_node_ = -1, floor_node_ = -1, character_node_ = -1, ball_node_ = -1;
+  std::vector<int> prop_nodes_;
+  deform::Mesh floor_mesh_, ball_mesh_;
+  std::vector<std::unique_ptr<deform::Mesh>> props_;
+  sample::MeshRenderer floor_renderer_, ball_renderer_;
+  std::vector<std::unique_ptr<sample::MeshRenderer>> prop_renderers_;
+  sample::OverlayRenderer overlay_;
+  sample::OrbitCamera camera_;
+  deform::ElasticSettings elastic_ = unset_elastic();
+  int degree_ = 0;
+  bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
+  bool playing_ = true;
+  int clip_ = -1;
+  float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
+  std::int32_t effector_ = -1;
+  glm::vec3 target_{0.0f};
+  deform::ReachResult last_reach_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options options = parse_options(argc, argv);
+  const bool headless = !options.screenshot.empty();
+  sample::Window window;
+  if (!window.open({"libdeform viewer", options.width, options.height, headless})) {
+    std::fprintf(stderr, "deform_viewer: cannot open an OpenGL 3.3 window%s\n",
+                 std::getenv("DISPLAY") ? "" : " (no DISPLAY: run under xvfb-run, or use --screenshot with xvfb-run)");
+    return 1;
+  }
+  try {
+    Viewer viewer(options, window);
+    if (headless) {
+      // Fixed 60 Hz steps: the same command gives the same picture.
+      for (int f = 0; f < options.frames; ++f) {
+        if (options.reach && f == options.reach_at) viewer.reach_world(*options.reach);
+        if (f == options.release_at) viewer.release();
+        window.begin_frame();
+        viewer.frame(1.0f / 60.0f);
+        viewer.panel(0.0f);
+        if (f + 1 == options.frames) {
+          if (!window.save_png(options.screenshot)) {
+            std::fprintf(stderr, "deform_viewer: cannot write %s\n", options.screenshot.c_str());
+            return 1;
+          }
+        }
+        window.end_frame();
+      }
+      const glm::vec3 e = viewer.effector_position();
+      std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"effector\": [%.5f, %.5f, %.5f]}\n",
+                  options.screenshot.c_str(), options.frames, window.renderer_name().c_str(), e.x, e.y, e.z);
+      return 0;
+    }
+    auto last = Clock::now();
+    float frame_ms = 16.0f;
+    while (!window.should_close()) {
+      const auto now = Clock::now();
+      const float dt = std::min(0.1f, std::chrono::duration<float>(now - last).count());
+      last = now;
+      frame_ms = 0.95f * frame_ms + 0.05f * dt * 1000.0f;
+      window.begin_frame();
+      if (window.input().key_pressed == GLFW_KEY_ESCAPE) break;
+      viewer.frame(dt);
+      viewer.panel(frame_ms);
+      window.end_frame();
+    }
+  } catch (const deform::Error& e) {
+    std::fprintf(stderr, "deform_viewer: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
