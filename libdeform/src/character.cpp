@@ -13,7 +13,8 @@ namespace {
 
 bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-Rig default_rig(const Model& model) { return model.name == "builtin" ? builtin_rig(model) : Rig{}; }
+// Character(Model) binds the built-in rig to the built-in character only: other models get lattices by asking.
+Rig implicit_rig(const Model& model) { return model.name == "builtin" ? builtin_rig(model) : Rig{}; }
 
 }  // namespace
 
@@ -23,7 +24,7 @@ Character::Character(Model model, const Rig& rig) : Character(std::move(model), 
 
 Character::Character(Model model, const Rig& rig, bool use_default_rig)
     : model_(std::move(model)),
-      rig_(use_default_rig ? default_rig(model_) : rig),
+      rig_(use_default_rig ? implicit_rig(model_) : rig),
       hierarchy_(model_.skeleton, model_.mesh.positions, model_.weights, rig_.lattices, model_.name),
       pose_(model_.skeleton.bind_pose()),
       world_(model_.skeleton.bone_count()),

@@ -155,7 +155,7 @@ class Viewer {
     LoadedCharacter loaded = load(options);
     clips_ = std::move(loaded.clips);
     base_model_ = loaded.model;
-    rig_ = options.rig.empty() ? deform::builtin_rig(base_model_)
+    rig_ = options.rig.empty() ? deform::default_rig(base_model_)
                                : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
     rebuild_character();
 
@@ -299,7 +299,15 @@ class Viewer {
     }
     if (degree_ == 0) degree_ = 3;
     if (elastic_.oscillator.stiffness <= 0.0f) elastic_ = deform::ElasticSettings{};
-    character_ = std::make_unique<deform::Character>(base_model_, rig);
+    try {
+      character_ = std::make_unique<deform::Character>(base_model_, rig);
+    } catch (const deform::Error& e) {
+      // A rig made by default_rig() for an unusual model may not bind: the character still reaches, without stretch.
+      if (!options_.rig.empty()) throw;
+      std::fprintf(stderr, "warning: %s; reaching without elastic lattices\n", e.what());
+      rig_ = deform::Rig{};
+      character_ = std::make_unique<deform::Character>(base_model_, rig_);
+    }
     const deform::Mesh& mesh = character_->model().mesh;
     triangle_points_.resize(mesh.triangles.size());
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) triangle_points_[i] = mesh.vertex_point[mesh.triangles[i]];

@@ -9,6 +9,7 @@
 
 #include "deform/atomic_file.hpp"
 #include "deform/builtin.hpp"
+#include "deform/character.hpp"
 #include "deform/error.hpp"
 
 namespace {
@@ -134,4 +135,52 @@ TEST_CASE("bad rig files: the error names the file and the key") {
     CHECK_THROWS_WITH_AS(parse(c.text), doctest::Contains("test.rig.json"), deform::Error);
   }
   CHECK_THROWS_AS(deform::read_rig_json("/nonexistent/rig.json", model().skeleton, 10), deform::Error);
+}
+
+// default_rig: the built-in character gets its own rig; any other model gets lattices on the limb its names or its
+// depth point to, and binds.
+TEST_CASE("default_rig finds a limb by name, then by depth, and binds") {
+  CHECK(deform::default_rig(model()) == deform::builtin_rig(model()));
+
+  deform::Model renamed = model();
+  renamed.name = "imported";
+  const deform::Rig by_name = deform::default_rig(renamed);
+  const deform::Rig builtin = deform::builtin_rig(model());
+  REQUIRE(by_name.lattices.size() == 3);
+  for (std::size_t i = 0; i < 3; ++i) CHECK(by_name.lattices[i].bone == builtin.lattices[i].bone);
+  CHECK(by_name.reach_effector == builtin.reach_effector);
+  CHECK(by_name.reach_root == builtin.reach_root);
+
+  // Without telling names the deepest weighted bone is the effector and its weighted ancestors carry the lattices.
+  std::vector<deform::Bone> bones(renamed.skeleton.bones().begin(), renamed.skeleton.bones().end());
+  for (std::size_t b = 0; b < bones.size(); ++b) bones[b].name = "b" + std::to_string(b);
+  renamed.skeleton = deform::Skeleton(bones);
+  const deform::Rig by_depth = deform::default_rig(renamed);
+  const auto depth = [&](std::int32_t b) {
+    int d = 0;
+    while ((b = renamed.skeleton.bone(b).parent) >= 0) ++d;
+    return d;
+  };
+  REQUIRE(by_depth.reach_effector >= 0);
+  std::vector<bool> weighted(bones.size(), false);
+  for (std::size_t p = 0; p < renamed.weights.size(); ++p)
+    for (int i = 0; i < deform::max_influences; ++i)
+      if (renamed.weights.weights[p][i] > 0.0f) weighted[renamed.weights.bones[p][i]] = true;
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (weighted[b]) CHECK(depth(std::int32_t(b)) <= depth(by_depth.reach_effector));
+  REQUIRE(!by_depth.lattices.empty());
+  for (const deform::LatticeSpec& spec : by_depth.lattices) {
+    CHECK(weighted[std::size_t(spec.bone)]);
+    CHECK(renamed.skeleton.is_ancestor(spec.bone, by_depth.reach_effector));
+  }
+  CHECK(renamed.skeleton.is_ancestor(by_depth.reach_root, by_depth.lattices.front().bone));
+
+  // The rig binds, and a far target stretches the limb.
+  deform::Character character(renamed, by_depth);
+  const glm::vec3 tip = character.bone_position(by_depth.reach_effector);
+  const deform::ReachResult reach = character.reach(by_depth.reach_effector, tip + glm::vec3(0.0f, -0.5f, 0.3f));
+  CHECK(reach.valid);
+  CHECK(reach.stretch > 0.0f);
+
+  CHECK_THROWS_AS(deform::default_rig(renamed, 1000), deform::Error);
 }

@@ -39,6 +39,13 @@ struct Rig {
 // lacks those bones.
 DEFORM_API Rig builtin_rig(const Model& model);
 
+// A rig for any rigged model, so an imported character stretches too: up to three lattices on the limb that ends at
+// `effector` (the effector's bone and its two nearest ancestors that carry skin weight: hand, forearm, upper arm on a
+// humanoid), springs as in builtin_rig(), reach chain from the bone above them. With `effector` = -1 it is chosen:
+// the first bone whose name contains "hand" (a left one first), else "wrist", else the deepest bone with skin weight.
+// For the built-in character it is builtin_rig(). Throws deform::Error when no bone carries skin weight.
+DEFORM_API Rig default_rig(const Model& model, std::int32_t effector = -1);
+
 // Reads only the "model" key of a rig file, so the caller can load the model the rest of the file refers to.
 // Throws deform::Error (naming `name` and the key) for malformed JSON or a malformed "model".
 DEFORM_API RigModel parse_rig_model(std::string_view json, const std::string& name = "<memory>");
