@@ -191,11 +191,11 @@ void point_segments_at(const Skeleton& skeleton, const IkChain& chain, Pose& pos
 
 void damped_least_squares_step(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
-                               float damping, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept {
+                               float lambda, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept {
   static const glm::vec3 axes[3] = {glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1)};
   const std::size_t joints = chain.joint_count();
   const glm::vec3 effector = heads[joints];
-  glm::dmat3 jjt(damping * damping);
+  glm::dmat3 jjt(lambda * lambda);
   for (std::size_t k = 0; k < joints; ++k) {
     const DofLimits& limits = skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits;
     const glm::vec3 euler = limited_euler(pose.rotations[static_cast<std::size_t>(chain.bones[k])], limits);

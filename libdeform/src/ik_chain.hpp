@@ -56,7 +56,7 @@ void point_segments_at(const Skeleton& skeleton, const IkChain& chain, Pose& pos
 // `pose` on entry (they are not updated); `angles` and `columns` are scratch of 3 × joint_count() entries.
 void damped_least_squares_step(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
-                               float damping, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept;
+                               float lambda, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept;
 
 // Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
 void save_joints(const IkChain& chain, const Pose& pose, std::span<glm::quat> saved) noexcept;
