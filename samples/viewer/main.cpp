@@ -34,7 +34,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 const char* usage =
-    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]...\n"
+    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]]\n"
     "                     [--width W] [--height H] [--bare]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
@@ -44,7 +44,7 @@ const char* usage =
     "L the lattices, R resets, Esc quits.\n";
 
 struct Options {
-  std::string model, skeleton, weights, rig, screenshot;
+  std::string model, skeleton, weights, rig, screenshot, clip;
   std::vector<std::string> props;
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
@@ -84,6 +84,7 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--weights") o.weights = next();
     else if (a == "--rig") o.rig = next();
     else if (a == "--prop") o.props.push_back(next());
+    else if (a == "--clip") o.clip = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
     else if (a == "--reach") o.reach = parse_vec3(next());
@@ -158,6 +159,10 @@ class Viewer {
     rig_ = options.rig.empty() ? deform::default_rig(base_model_)
                                : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
     rebuild_character();
+    if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
+      clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
+      if (clip_ < 0 || clip_ >= int(clips_.size())) fail(options.model + ": no clip '" + options.clip + "'");
+    }
 
     // The scene (the thesis' version 1): the world holds the floor, the character and the props; the target ball
     // is a child of the character node, so moving the character carries its target along.
