@@ -10,7 +10,7 @@
 #include "deform/error.hpp"
 #include "deform/mesh.hpp"
 #include "deform/skeleton.hpp"
-#ifdef DEFORM_HAVE_IMPORT  // imported models (importer module)
+#ifdef DEFORM_HAVE_IMPORT
 #include "deform/import.hpp"
 #endif
 
@@ -87,7 +87,7 @@ int run(const std::vector<std::string>& argv) {
     deform::Warnings warnings;
     info = mesh_info(deform::read_obj(path, &warnings));
     for (const std::string& w : warnings.messages) note(w);
-#ifdef DEFORM_HAVE_IMPORT  // --- imported models (importer module) ---
+#ifdef DEFORM_HAVE_IMPORT  // imported models: bones and clips
   } else if (deform::is_importable(path)) {
     const deform::ImportedModel imported = deform::import_model(path);
     for (const std::string& w : imported.warnings) note(path + ": " + w);
@@ -99,7 +99,7 @@ int run(const std::vector<std::string>& argv) {
         clips.push_back({{"name", clip.name}, {"duration", shortest(clip.duration)}, {"channels", clip.channels.size()}});
       info["clips"] = std::move(clips);
     }
-#endif  // --- end of imported models ---
+#endif
   } else {
     throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
   }

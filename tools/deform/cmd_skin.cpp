@@ -25,7 +25,6 @@ void skin(deform::SkinningJob job, std::span<const glm::u16vec4> bones, std::spa
   job.run();
 }
 
-// --- --clip NAME --time T (importer module) ---
 // The pose of an imported model's clip NAME at T seconds (clips loop), over the bind pose.
 deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
   if (args.has("--pose")) throw UsageError("--clip and --pose exclude each other");
@@ -38,7 +37,6 @@ deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
   loaded.clips[static_cast<std::size_t>(clip)].sample(seconds, pose);
   return pose;
 }
-// --- end of --clip ---
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;

@@ -2,7 +2,7 @@
 #include "model_loader.hpp"
 
 #include "deform/builtin.hpp"
-#ifdef DEFORM_HAVE_IMPORT  // rigged imports (importer module)
+#ifdef DEFORM_HAVE_IMPORT
 #include <filesystem>
 
 #include "deform/import.hpp"
@@ -40,7 +40,7 @@ LoadedModel load_model(const Args& args) {
     return loaded;
   }
 
-  // --- rigged imports (importer module): a glTF, FBX, ... file that carries its own skeleton and weights ---
+  // A rigged import: a glTF, FBX, ... file that carries its own skeleton and weights.
 #ifdef DEFORM_HAVE_IMPORT
   if (deform::is_importable(path) && std::filesystem::path(path).extension() != ".obj" &&
       std::filesystem::path(path).extension() != ".OBJ") {
@@ -54,7 +54,6 @@ LoadedModel load_model(const Args& args) {
     return loaded;
   }
 #endif
-  // --- end of rigged imports ---
 
   throw UsageError("'" + path + "': a mesh needs --skeleton S.sk and --weights W.skw (or use --builtin)");
 }
