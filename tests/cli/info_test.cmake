@@ -4,13 +4,7 @@ include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # Invalid input: exit 2, a message naming the file and the given location text.
 function(expect_invalid location)
-  deform(info ${ARGN})
-  expect_equal("exit status of info ${ARGN}" "${rc}" 2)
-  expect_equal("stdout of info ${ARGN}" "${out}" "")
-  string(FIND "${err}" "${location}" found)
-  if(found EQUAL -1)
-    fail("info ${ARGN}: stderr '${err}' does not mention '${location}'")
-  endif()
+  expect_rejected("${location}" info ${ARGN})
 endfunction()
 
 # --- a skeleton: tests/data/skeleton/arm.sk (written by test_skeleton_formats from skeleton_test_util.hpp) ---

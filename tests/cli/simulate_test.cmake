@@ -5,13 +5,7 @@ include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
 # Bad usage or input: exit 2, nothing on stdout, stderr mentions `text`.
 function(expect_invalid text)
-  deform(simulate ${ARGN})
-  expect_equal("exit status of simulate ${ARGN}" "${rc}" 2)
-  expect_equal("stdout of simulate ${ARGN}" "${out}" "")
-  string(FIND "${err}" "${text}" found)
-  if(found EQUAL -1)
-    fail("simulate ${ARGN}: stderr '${err}' does not mention '${text}'")
-  endif()
+  expect_rejected("${text}" simulate ${ARGN})
 endfunction()
 
 # --- the built-in character reaches (1.2, 1.6, 0.3), far beyond its arm, holds until 2.5 s, lets go, settles ---

@@ -13,13 +13,7 @@ endfunction()
 
 # Bad usage or input: exit 2, nothing on stdout, stderr mentions `text`.
 function(expect_invalid text)
-  weights(${ARGN})
-  expect_equal("exit status of weights ${ARGN}" "${rc}" 2)
-  expect_equal("stdout of weights ${ARGN}" "${out}" "")
-  string(FIND "${err}" "${text}" found)
-  if(found EQUAL -1)
-    fail("weights ${ARGN}: stderr '${err}' does not mention '${text}'")
-  endif()
+  expect_rejected("${text}" weights ${ARGN})
 endfunction()
 
 # --- the built-in character ---
