@@ -85,15 +85,15 @@ struct Avx512 {
 
   static V splat(float x) { return {_mm512_set1_ps(x)}; }
 
-  // Bone ids of influence k of vertices i .. i+15 as 32-bit lanes.
+  // Bone ids of influence k of vertices i .. i+15 as 32-bit lanes, in their low 16 bits (for even k the high bits
+  // hold influence k + 1: the table lookups read only the low 5 bits). As 32-bit words, vertex l's four 16-bit ids
+  // are words 2l (influences 0, 1) and 2l + 1 (influences 2, 3).
   static __m512i bone_ids(const SkinningJob& job, std::size_t i, int k) {
-    const __m512i* ids = reinterpret_cast<const __m512i*>(&job.bone_indices[i]);
-    const __m512i first = _mm512_loadu_si512(ids), second = _mm512_loadu_si512(ids + 1);  // 32 ids each
-    const __m512i pick = _mm512_add_epi16(
-        _mm512_set_epi16(0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 60, 56, 52, 48, 44, 40, 36, 32, 28, 24, 20,
-                         16, 12, 8, 4, 0),
-        _mm512_set1_epi16(static_cast<short>(k)));
-    return _mm512_cvtepu16_epi32(_mm512_castsi512_si256(_mm512_permutex2var_epi16(first, pick, second)));
+    const __m512i* p = reinterpret_cast<const __m512i*>(&job.bone_indices[i]);
+    const __m512i words = _mm512_add_epi32(
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30), _mm512_set1_epi32(k >> 1));
+    const __m512i pair = _mm512_permutex2var_epi32(_mm512_loadu_si512(p), words, _mm512_loadu_si512(p + 1));
+    return (k & 1) != 0 ? _mm512_srli_epi32(pair, 16) : pair;
   }
 
   __m512 lookup(int component, __m512i ids) const {
@@ -102,7 +102,8 @@ struct Avx512 {
 
   void blend_matrices(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
     if (use_tables) {
-      const __m512i ids[4] = {bone_ids(job, i, 0), bone_ids(job, i, 1), bone_ids(job, i, 2), bone_ids(job, i, 3)};
+      const __m512i low = bone_ids(job, i, 0), high = bone_ids(job, i, 2);
+      const __m512i ids[4] = {low, _mm512_srli_epi32(low, 16), high, _mm512_srli_epi32(high, 16)};
       for (int c = 0; c < 12; ++c) {
         __m512 sum = _mm512_mul_ps(w[0].v, lookup(c, ids[0]));
         for (int k = 1; k < 4; ++k) sum = _mm512_fmadd_ps(w[k].v, lookup(c, ids[k]), sum);
@@ -138,12 +139,19 @@ struct Avx512 {
 
   static void load_weights(const SkinningJob& job, std::size_t i, V w[4]) {
     const float* p = &job.bone_weights[i].x;
-    __m512 r[4];
-    transpose4_in_lanes(_mm512_loadu_ps(p), _mm512_loadu_ps(p + 16), _mm512_loadu_ps(p + 32), _mm512_loadu_ps(p + 48),
-                        r);
-    // r[e] lane 4c + j holds weight e of vertex 4j + c.
-    const __m512i order = _mm512_setr_epi32(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15);
-    for (int e = 0; e < 4; ++e) w[e].v = _mm512_permutexvar_ps(order, r[e]);
+    const __m512 r0 = _mm512_loadu_ps(p), r1 = _mm512_loadu_ps(p + 16);       // vertices 0-7: weight k at 4v + k
+    const __m512 r2 = _mm512_loadu_ps(p + 32), r3 = _mm512_loadu_ps(p + 48);  // vertices 8-15
+    const __m512i even_pair = _mm512_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28, 1, 5, 9, 13, 17, 21, 25, 29);
+    const __m512i odd_pair = _mm512_add_epi32(even_pair, _mm512_set1_epi32(2));
+    // Weights 0 | 1 (and 2 | 3) of eight vertices per register, then the halves of the two vertex groups joined.
+    const __m512 w01_low = _mm512_permutex2var_ps(r0, even_pair, r1);
+    const __m512 w01_high = _mm512_permutex2var_ps(r2, even_pair, r3);
+    const __m512 w23_low = _mm512_permutex2var_ps(r0, odd_pair, r1);
+    const __m512 w23_high = _mm512_permutex2var_ps(r2, odd_pair, r3);
+    w[0].v = _mm512_shuffle_f32x4(w01_low, w01_high, _MM_SHUFFLE(1, 0, 1, 0));
+    w[1].v = _mm512_shuffle_f32x4(w01_low, w01_high, _MM_SHUFFLE(3, 2, 3, 2));
+    w[2].v = _mm512_shuffle_f32x4(w23_low, w23_high, _MM_SHUFFLE(1, 0, 1, 0));
+    w[3].v = _mm512_shuffle_f32x4(w23_low, w23_high, _MM_SHUFFLE(3, 2, 3, 2));
   }
 
   void load_dual_quat(const SkinningJob& job, std::size_t i, int k, V q[8]) const {
