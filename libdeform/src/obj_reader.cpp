@@ -1,5 +1,6 @@
 // Wavefront OBJ reader: one pass over the text, std::from_chars for numbers, every index checked where it is read.
 // Memory grows only with what the file holds (nothing is reserved from counts the file claims).
+#include <algorithm>
 #include <filesystem>
 #include <unordered_map>
 #include <unordered_set>
@@ -204,6 +205,9 @@ class ObjParser {
                      "MTL file " + obj_text::quoted(file) + " not found (looked for '" + path + "')");
       return;
     }
+    if (std::find(mesh_.material_libraries.begin(), mesh_.material_libraries.end(), path) ==
+        mesh_.material_libraries.end())
+      mesh_.material_libraries.push_back(path);
     const std::string folder = std::filesystem::path(path).parent_path().generic_string();
     for (Material& material : parse_mtl(read_file_text(path), path, folder.empty() ? "." : folder, warnings_)) {
       if (material_index_.contains(material.name)) {

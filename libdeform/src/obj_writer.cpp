@@ -1,5 +1,6 @@
 // Wavefront OBJ and MTL writers: the input's points and faces in their order, numbers in shortest round-trip form.
 #include <charconv>
+#include <filesystem>
 #include <stdexcept>
 
 #include "deform/atomic_file.hpp"
@@ -95,6 +96,21 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
 void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::vec3> positions,
                std::span<const glm::vec3> normals, const ObjWriteOptions& options) {
   write_file_atomic(path, format_obj(mesh, positions, normals, options));
+}
+
+std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path folder = fs::absolute(fs::path(obj_path), error).lexically_normal().parent_path();
+  std::string out;
+  for (const std::string& library : mesh.material_libraries) {
+    const fs::path absolute = fs::absolute(library, error).lexically_normal();
+    fs::path relative = absolute.lexically_relative(folder);
+    if (relative.empty()) relative = absolute;  // another root: no relative path exists
+    if (!out.empty()) out.push_back(' ');
+    out.append(relative.generic_string());
+  }
+  return out;
 }
 
 std::string format_mtl(std::span<const Material> materials) {

@@ -78,6 +78,37 @@ TEST_CASE("obj writer: round trip of the cube fixture with materials and an MTL"
   std::filesystem::remove_all(folder);
 }
 
+TEST_CASE("obj writer: an OBJ written elsewhere names the input's MTL files relative to itself") {
+  const Mesh cube = deform::read_obj(DEFORM_TEST_DATA "/mesh/cube.obj");
+  REQUIRE(cube.material_libraries.size() == 1);
+  CHECK(std::filesystem::equivalent(cube.material_libraries[0], DEFORM_TEST_DATA "/mesh/cube.mtl"));
+  CHECK(deform::parse_obj("v 0 0 0\n").material_libraries.empty());
+
+  // Next to the input, two folders below it, and in another tree: each reads back with the same materials.
+  const auto root = std::filesystem::temp_directory_path() / ("deform_mesh_mtllib_" + std::to_string(::getpid()));
+  const auto data = root / "data", deep = root / "out" / "deeper";
+  std::filesystem::create_directories(data);
+  std::filesystem::create_directories(deep);
+  std::filesystem::copy_file(DEFORM_TEST_DATA "/mesh/cube.mtl", data / "cube.mtl");
+  std::filesystem::copy(DEFORM_TEST_DATA "/mesh/textures", data / "textures");  // cube.mtl's map_Kd
+  deform::write_file_atomic((data / "cube.obj").string(), deform::format_obj(cube, cube.positions, {},
+                                                                              {.mtllib = "cube.mtl"}));
+  const Mesh input = deform::read_obj((data / "cube.obj").string());
+  CHECK(deform::material_libraries_for(input, (data / "same.obj").string()) == "cube.mtl");
+  CHECK(deform::material_libraries_for(input, (deep / "o.obj").string()) == "../../data/cube.mtl");
+  for (const auto& out : {data / "same.obj", deep / "o.obj"}) {
+    deform::write_obj(out.string(), input, input.positions, {},
+                      {.mtllib = deform::material_libraries_for(input, out.string())});
+    deform::Warnings warnings;
+    const Mesh back = deform::read_obj(out.string(), &warnings);
+    CHECK(warnings.messages.empty());
+    REQUIRE(back.materials.size() == cube.materials.size());
+    for (std::size_t m = 0; m < cube.materials.size(); ++m) CHECK(back.materials[m].name == cube.materials[m].name);
+    CHECK(back.submeshes[0].material == cube.submeshes[0].material);
+  }
+  std::filesystem::remove_all(root);
+}
+
 TEST_CASE("obj writer: seeded random meshes survive read(format(mesh)) exactly") {
   std::mt19937 random(12345);
   std::uniform_real_distribution<float> coordinate(-1e3f, 1e3f);

@@ -63,7 +63,8 @@ int run(const std::vector<std::string>& argv) {
     const float length = glm::length(n);
     if (length > 0.0f && std::isfinite(length)) normals[r] = n / length;
   }
-  deform::write_obj(out_path, mesh, positions, normals);
+  // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
+  deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
 
   nlohmann::json lattice_json = {{"origin", to_json(frame.origin)},
                                  {"size", to_json(size)},

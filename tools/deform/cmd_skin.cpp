@@ -94,7 +94,8 @@ int run(const std::vector<std::string>& argv) {
   if (render_vertices > 0)
     skin(job, vertex_bones, vertex_weights, vertex_positions, scratch, mesh.vertex_normals, normals, loaded.source);
 
-  deform::write_obj(out_path, mesh, positions, normals);
+  // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
+  deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
 
   const deform::Pose bind = skeleton.bind_pose();
   int posed = 0;

@@ -54,6 +54,9 @@ struct Mesh {
   std::vector<std::uint32_t> triangles;
   std::vector<Submesh> submeshes;
   std::vector<Material> materials;
+  // The MTL files the OBJ's `mtllib` lines named and read_obj read, as it opened them (resolved against the OBJ's
+  // folder), in file order. write_obj does not use them by itself: see material_libraries_for.
+  std::vector<std::string> material_libraries;
 
   // --- the file's polygons, kept so that write_obj reproduces faces as they were (quads stay quads) ---
   std::vector<std::uint32_t> face_sizes;    // corners per face, in file order
@@ -103,6 +106,10 @@ DEFORM_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> p
 // Writes format_obj() to `path` atomically. Throws deform::Error on failure.
 DEFORM_API void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::vec3> positions,
                           std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
+// The ObjWriteOptions::mtllib value with which an OBJ written to `obj_path` uses the MTL files `mesh` was read with:
+// each of mesh.material_libraries relative to obj_path's folder (absolute when no relative path exists), joined by
+// spaces. Empty when the mesh has none (a mesh built in code, or an OBJ without `mtllib`).
+DEFORM_API std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path);
 // Formats the mesh's materials as MTL text (map_Kd written as given).
 DEFORM_API std::string format_mtl(std::span<const Material> materials);
 
