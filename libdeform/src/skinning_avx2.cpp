@@ -1,6 +1,7 @@
 // Skinning kernels for AVX2 + FMA: 8 vertices per step. Compiled with -mavx2 -mfma; only reached when the CPU
 // reports both (skinning.cpp). Same scheme as skinning_avx512.cpp at half the width: a blended mat4 is two registers
 // (columns 0-1, columns 2-3), transposed to SoA by two 8×8 transposes; dual quaternions by one 8×8 per influence.
+// Packed vec3 streams (stride 12) move with full-width loads and stores and in-lane shuffles; other strides gather.
 #include <immintrin.h>
 
 #include "skinning_kernels.hpp"
@@ -98,6 +99,20 @@ struct Avx2 {
 
   static void load3(const float* base, std::size_t stride, std::size_t i, F8 out[3]) {
     const float* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(base) + i * stride);
+    if (stride == 12) {
+      // Packed vec3: six 4-float loads put vertices 0-3 in the low halves and 4-7 in the high halves, so that
+      // in-lane shuffles (no gathers, no lane crossing) separate x, y, z.
+      const __m256 m03 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p)), _mm_loadu_ps(p + 12), 1);
+      const __m256 m14 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 4)), _mm_loadu_ps(p + 16), 1);
+      const __m256 m25 = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p + 8)), _mm_loadu_ps(p + 20), 1);
+      // Per half: m03 = x0 y0 z0 x1, m14 = y1 z1 x2 y2, m25 = z2 x3 y3 z3.
+      const __m256 xy = _mm256_shuffle_ps(m14, m25, _MM_SHUFFLE(2, 1, 3, 2));  // x2 y2 x3 y3
+      const __m256 yz = _mm256_shuffle_ps(m03, m14, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
+      out[0].v = _mm256_shuffle_ps(m03, xy, _MM_SHUFFLE(2, 0, 3, 0));
+      out[1].v = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
+      out[2].v = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
+      return;
+    }
     const __m256i offsets =
         _mm256_mullo_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(static_cast<int>(stride)));
     for (int c = 0; c < 3; ++c) out[c].v = _mm256_i32gather_ps(p + c, offsets, 1);
@@ -105,6 +120,21 @@ struct Avx2 {
 
   static void store3(float* base, std::size_t stride, std::size_t i, const F8 in[3]) {
     unsigned char* p = reinterpret_cast<unsigned char*>(base) + i * stride;
+    if (stride == 12) {
+      // load3's shuffles run backwards: per half, x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3, then halves regrouped.
+      const __m256 x = in[0].v, y = in[1].v, z = in[2].v;
+      const __m256 xy = _mm256_shuffle_ps(x, y, _MM_SHUFFLE(2, 0, 2, 0));  // x0 x2 y0 y2
+      const __m256 yz = _mm256_shuffle_ps(y, z, _MM_SHUFFLE(3, 1, 3, 1));  // y1 y3 z1 z3
+      const __m256 zx = _mm256_shuffle_ps(z, x, _MM_SHUFFLE(3, 1, 2, 0));  // z0 z2 x1 x3
+      const __m256 m03 = _mm256_shuffle_ps(xy, zx, _MM_SHUFFLE(2, 0, 2, 0));
+      const __m256 m14 = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
+      const __m256 m25 = _mm256_shuffle_ps(zx, yz, _MM_SHUFFLE(3, 1, 3, 1));
+      float* out = reinterpret_cast<float*>(p);
+      _mm256_storeu_ps(out, _mm256_permute2f128_ps(m03, m14, 0x20));
+      _mm256_storeu_ps(out + 8, _mm256_permute2f128_ps(m25, m03, 0x30));
+      _mm256_storeu_ps(out + 16, _mm256_permute2f128_ps(m14, m25, 0x31));
+      return;
+    }
     __m256 r[4];
     transpose4_in_lanes(in[0].v, in[1].v, in[2].v, in[2].v, r);
     // r[e] half c = x y z z of vertex 4c + e.
