@@ -198,7 +198,11 @@ bool Character::update(float dt) {
   }
   job.run();
   hierarchy_.update(world_);
-  hierarchy_.apply(positions_);
+  if (lattice_fields) {
+    hierarchy_.apply(positions_);
+  } else {
+    hierarchy_.apply_carried(positions_);
+  }
   normals_current_ = false;
   return true;
 }

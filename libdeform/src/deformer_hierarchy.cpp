@@ -140,11 +140,12 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::span<const g
 
     // Points the Bézier field moves, and points it carries.
     std::vector<std::uint8_t> bound(point_count, 0);
-    for (std::uint32_t p : lattice.binding.vertices) {
+    lattice.lane_weights.assign(lattice.binding.vertices.size(), 0.0f);
+    for (std::size_t lane = 0; lane < lattice.binding.vertices.size(); ++lane) {
+      const std::uint32_t p = lattice.binding.vertices[lane];
       if (p == LatticeBinding::no_vertex) continue;
       bound[p] = 1;
-      lattice.inside_points.push_back(p);
-      lattice.inside_weights.push_back(selection[p]);
+      lattice.lane_weights[lane] = selection[p];
     }
     if (spec.carry_descendants) {
       for (std::size_t p = 0; p < point_count; ++p) {
@@ -277,21 +278,29 @@ bool DeformerHierarchy::update(std::span<const glm::mat4> world) {
   return true;
 }
 
-bool DeformerHierarchy::apply(std::span<glm::vec3> positions) {
+bool DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
   if (positions.size() != scratch_.size()) return false;
+  for (const Lattice& lattice : lattices_) {
+    if (!lattice.active) continue;
+    for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
+      positions[lattice.carried_points[n]] += lattice.carried_weights[n] * lattice.far_displacement;
+    }
+  }
+  return true;
+}
+
+bool DeformerHierarchy::apply(std::span<glm::vec3> positions) {
+  if (!apply_carried(positions)) return false;
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
     LatticeEvaluateJob job;
     job.binding = &lattice.binding;
     job.control_points = lattice.world_displacements;
     job.positions = scratch_;
-    if (!job.run()) return false;
-    for (std::size_t n = 0; n < lattice.inside_points.size(); ++n) {
-      const std::uint32_t p = lattice.inside_points[n];
-      positions[p] += lattice.inside_weights[n] * scratch_[p];
-    }
-    for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
-      positions[lattice.carried_points[n]] += lattice.carried_weights[n] * lattice.far_displacement;
+    job.run();  // cannot fail: the binding was made for these control points and scratch_ spans every point
+    const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
+    for (std::size_t n = 0; n < lanes.size(); ++n) {
+      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
     }
   }
   return true;

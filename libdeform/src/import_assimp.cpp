@@ -220,6 +220,13 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   ImportedModel result;
   std::vector<std::string>& warnings = result.warnings;
   result.model.name = fs::path(path).stem().string();
+  // The up axis the file declares, where Assimp reads one (its FBX reader; glTF is +Y by definition).
+  int up_axis = 1, up_sign = 1;
+  if (scene->mMetaData != nullptr && scene->mMetaData->Get("UpAxis", up_axis) && up_axis >= 0 && up_axis <= 2) {
+    scene->mMetaData->Get("UpAxisSign", up_sign);
+    result.up = glm::vec3(0.0f);
+    result.up[up_axis] = up_sign < 0 ? -1.0f : 1.0f;
+  }
 
   std::vector<Node> nodes;
   try {

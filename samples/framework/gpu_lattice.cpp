@@ -27,12 +27,14 @@ layout(std430, binding = 1) readonly buffer Params { float param[]; };         /
 layout(std430, binding = 2) readonly buffer RestNormals { float normal_in[]; }; // per vertex: nx ny nz
 layout(std430, binding = 3) readonly buffer Points { float point[]; };         // control points, i-fastest, x y z
 layout(std430, binding = 4) buffer Output { float result[]; };
+layout(std430, binding = 5) readonly buffer Weights { float weight[]; };       // per vertex (additive only)
 
 uniform uint first_vertex;
 uniform uint vertex_count;
 uniform mat3 normal_basis;
 uniform bool with_normals;
 uniform bool scatter;  // write at target[] (an interleaved vertex buffer) or at the vertex's own slot (read back)
+uniform bool additive;  // add weight[] · Q to the position there instead of writing Q (control points = displacements)
 uniform uint stride, position_offset, normal_offset;
 
 const int max_points = 17;  // deform::max_bezier_degree + 1
@@ -97,6 +99,13 @@ void main() {
   }
 
   uint base = (scatter ? target[e] : e) * stride;
+  if (additive) {
+    q *= weight[e];
+    result[base + position_offset] += q.x;
+    result[base + position_offset + 1u] += q.y;
+    result[base + position_offset + 2u] += q.z;
+    return;
+  }
   result[base + position_offset] = q.x;
   result[base + position_offset + 1u] = q.y;
   result[base + position_offset + 2u] = q.z;
@@ -133,26 +142,33 @@ void GpuBezierLattice::release() {
   // GLFW may already be terminated).
   if (program_) {
     const GLFWerrorfun previous = glfwSetErrorCallback(nullptr);
-    if (!glfwGetCurrentContext()) program_ = targets_ = params_ = normals_ = points_ = results_ = 0;
+    if (!glfwGetCurrentContext()) program_ = targets_ = params_ = normals_ = points_ = results_ = weights_ = 0;
     glfwSetErrorCallback(previous);
   }
-  const GLuint buffers[] = {targets_, params_, normals_, points_, results_};
+  const GLuint buffers[] = {targets_, params_, normals_, points_, results_, weights_};
   for (GLuint b : buffers)
     if (b) glDeleteBuffers(1, &b);
   if (program_) glDeleteProgram(program_);
-  program_ = targets_ = params_ = normals_ = points_ = results_ = 0;
+  program_ = targets_ = params_ = normals_ = points_ = results_ = weights_ = 0;
   count_ = 0;
-  has_normals_ = false;
+  has_normals_ = additive_ = false;
 }
 
 bool GpuBezierLattice::supported() { return epoxy_gl_version() >= 43; }
 
+namespace {
+
+bool usable(const deform::LatticeBinding& binding) {
+  return GpuBezierLattice::supported() && binding.kind == deform::LatticeKind::bezier &&
+         !glm::any(glm::lessThan(binding.point_counts, glm::ivec3(2))) &&
+         !glm::any(glm::greaterThan(binding.point_counts, glm::ivec3(deform::max_bezier_degree + 1)));
+}
+
+}  // namespace
+
 bool GpuBezierLattice::create(const deform::LatticeBinding& binding, std::span<const glm::vec3> rest_normals) {
   release();
-  if (!supported() || binding.kind != deform::LatticeKind::bezier) return false;
-  if (glm::any(glm::lessThan(binding.point_counts, glm::ivec3(2))) ||
-      glm::any(glm::greaterThan(binding.point_counts, glm::ivec3(deform::max_bezier_degree + 1))))
-    return false;
+  if (!usable(binding)) return false;
   const bool normals = !rest_normals.empty();
   if (normals && binding.vertex_count > 0 && rest_normals.size() <= binding.max_vertex) return false;
 
@@ -168,23 +184,58 @@ bool GpuBezierLattice::create(const deform::LatticeBinding& binding, std::span<c
       normal_list.insert(normal_list.end(), {n.x, n.y, n.z});
     }
   }
+  upload(binding.point_counts, binding.normal_basis, params, normal_list, {});
+  return true;
+}
+
+bool GpuBezierLattice::create_additive(const deform::LatticeBinding& binding, std::span<const float> weights,
+                                       std::span<const std::uint32_t> vertex_point) {
+  release();
+  if (!usable(binding) || weights.size() != binding.vertices.size()) return false;
+  // Each bound point's lane, then one entry per render vertex of a bound point (a point split at a UV or normal
+  // seam is evaluated once per render vertex, as in create()).
+  std::vector<std::uint32_t> lane_of_point(binding.vertex_count ? std::size_t{binding.max_vertex} + 1 : 0,
+                                           deform::LatticeBinding::no_vertex);
+  for (std::size_t lane = 0; lane < binding.vertices.size(); ++lane) {
+    const std::uint32_t point = binding.vertices[lane];
+    if (point != deform::LatticeBinding::no_vertex) lane_of_point[point] = std::uint32_t(lane);
+  }
+  std::vector<float> params, weight_list;
+  target_list_.clear();
+  for (std::size_t r = 0; r < vertex_point.size(); ++r) {
+    const std::uint32_t point = vertex_point[r];
+    if (point >= lane_of_point.size() || lane_of_point[point] == deform::LatticeBinding::no_vertex) continue;
+    const std::size_t lane = lane_of_point[point];
+    target_list_.push_back(std::uint32_t(r));
+    params.insert(params.end(), {binding.u[lane], binding.v[lane], binding.w[lane]});
+    weight_list.push_back(weights[lane]);
+  }
+  upload(binding.point_counts, binding.normal_basis, params, {}, weight_list);
+  additive_ = true;
+  return true;
+}
+
+void GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal_basis, std::span<const float> params,
+                              std::span<const float> normals, std::span<const float> weights) {
   count_ = target_list_.size();
   max_target_ = count_ ? *std::max_element(target_list_.begin(), target_list_.end()) : 0;
-  point_counts_ = binding.point_counts;
-  normal_basis_ = binding.normal_basis;
-  has_normals_ = normals;
+  point_counts_ = point_counts;
+  normal_basis_ = normal_basis;
+  has_normals_ = !normals.empty();
 
-  const glm::ivec3 d = binding.point_counts - 1;
+  const glm::ivec3 d = point_counts - 1;
   const std::string source = "#version 430\nconst ivec3 degree = ivec3(" + std::to_string(d.x) + ", " +
                              std::to_string(d.y) + ", " + std::to_string(d.z) + ");\n" + shader_body;
   program_ = build_compute_program(source.c_str());
   targets_ = storage_buffer(target_list_.data(), target_list_.size() * sizeof(std::uint32_t), GL_STATIC_DRAW);
   params_ = storage_buffer(params.data(), params.size() * sizeof(float), GL_STATIC_DRAW);
-  normals_ = storage_buffer(normal_list.data(), normal_list.size() * sizeof(float), GL_STATIC_DRAW);
-  points_ = storage_buffer(nullptr, binding.control_point_count() * sizeof(glm::vec3), GL_STREAM_DRAW);
+  normals_ = storage_buffer(normals.data(), normals.size() * sizeof(float), GL_STATIC_DRAW);
+  weights_ = storage_buffer(weights.data(), weights.size() * sizeof(float), GL_STATIC_DRAW);
+  const std::size_t point_count =
+      std::size_t(point_counts.x) * std::size_t(point_counts.y) * std::size_t(point_counts.z);
+  points_ = storage_buffer(nullptr, point_count * sizeof(glm::vec3), GL_STREAM_DRAW);
   staging_.assign(count_ * 6, 0.0f);
   results_ = storage_buffer(nullptr, staging_.size() * sizeof(float), GL_STREAM_READ);
-  return true;
 }
 
 bool GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, GLuint output, bool scatter,
@@ -202,11 +253,12 @@ bool GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, GLuin
   glUniformMatrix3fv(glGetUniformLocation(program_, "normal_basis"), 1, GL_FALSE, glm::value_ptr(normal_basis_));
   glUniform1i(glGetUniformLocation(program_, "with_normals"), has_normals_ ? 1 : 0);
   glUniform1i(glGetUniformLocation(program_, "scatter"), scatter ? 1 : 0);
+  glUniform1i(glGetUniformLocation(program_, "additive"), additive_ ? 1 : 0);
   glUniform1ui(glGetUniformLocation(program_, "stride"), GLuint(layout.floats_per_vertex));
   glUniform1ui(glGetUniformLocation(program_, "position_offset"), GLuint(layout.position_offset));
   glUniform1ui(glGetUniformLocation(program_, "normal_offset"), GLuint(layout.normal_offset));
-  const GLuint buffers[] = {targets_, params_, normals_, points_, output};
-  for (GLuint i = 0; i < 5; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);
+  const GLuint buffers[] = {targets_, params_, normals_, points_, output, weights_};
+  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);
 
   // Dispatches of at most 65,535 groups (the least every 4.3 driver allows), 4 million vertices each.
   const GLint first_location = glGetUniformLocation(program_, "first_vertex");
@@ -216,17 +268,18 @@ bool GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, GLuin
     glUniform1ui(first_location, GLuint(first));
     glDispatchCompute(GLuint((n + group_size - 1) / group_size), 1, 1);
   }
-  for (GLuint i = 0; i < 5; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   glUseProgram(0);
   return true;
 }
 
 bool GpuBezierLattice::evaluate(std::span<const glm::vec3> control_points) {
+  if (additive_) return false;
   return dispatch(control_points, results_, false, InterleavedLayout{6, 0, 3});
 }
 
 bool GpuBezierLattice::read_back(std::span<glm::vec3> positions, std::span<glm::vec3> normals) {
-  if (!program_) return false;
+  if (!program_ || additive_) return false;
   if (count_ == 0) return true;
   if (positions.size() <= max_target_ || (!normals.empty() && normals.size() <= max_target_)) return false;
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -252,7 +305,32 @@ bool GpuBezierLattice::evaluate_into(std::span<const glm::vec3> control_points, 
     if (bytes < 0 || std::size_t(bytes) < needed) return false;
   }
   if (!dispatch(control_points, vertex_buffer, true, layout)) return false;
-  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  return true;
+}
+
+bool GpuLatticeFields::create(const deform::DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point) {
+  lattices_.clear();
+  for (std::size_t l = 0; l < hierarchy.lattice_count(); ++l) {
+    auto lattice = std::make_unique<GpuBezierLattice>();
+    if (!lattice->create_additive(hierarchy.binding(l), hierarchy.bound_weights(l), vertex_point)) {
+      lattices_.clear();
+      return false;
+    }
+    lattices_.push_back(std::move(lattice));
+  }
+  return true;
+}
+
+bool GpuLatticeFields::add_into(const deform::DeformerHierarchy& hierarchy, GLuint vertex_buffer,
+                                const InterleavedLayout& layout) {
+  if (hierarchy.lattice_count() != lattices_.size()) return false;
+  for (std::size_t l = 0; l < lattices_.size(); ++l) {
+    // A lattice at rest adds nothing (its displacements are below 1e-7 of its length): skipped, as the CPU does.
+    if (hierarchy.active(l) && !lattices_[l]->evaluate_into(hierarchy.displacements(l), vertex_buffer, layout)) {
+      return false;
+    }
+  }
   return true;
 }
 

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Smoke test of the viewer under Xvfb with Mesa's software renderer: a frame before a reach and one after it,
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
-# (non-bare) screenshot.  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
+# (non-bare) screenshot; the frame after the reach again with the lattices on the GPU (--gpu), which must be the same
+# picture (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are
+# there).  usage: viewer_smoke.sh VIEWER PNG_CHECK SAME_PICTURE_CHECK WORKDIR
 set -euo pipefail
-viewer=$1 check=$2 work=$3
+viewer=$1 check=$2 same=$3 work=$4
 mkdir -p "$work"
 run() { xvfb-run -a -s "-screen 0 640x480x24" "$viewer" --width 640 --height 480 "$@"; }
 run --bare --screenshot "$work/before.png" --frames 20
@@ -11,4 +13,22 @@ run --bare --screenshot "$work/after.png" --frames 40 --reach 1.3,1.6,0.4 --at 2
 "$check" "$work/before.png" "$work/after.png"
 run --screenshot "$work/full.png" --frames 30 --reach 1.3,1.6,0.4 --at 2 --release-at 20 >/dev/null
 test -s "$work/full.png"
+
+run --bare --gpu --screenshot "$work/after_gpu.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 > "$work/gpu.json"
+if grep -q '"gpu_lattices": true' "$work/gpu.json"; then
+  "$same" --same-picture "$work/after.png" "$work/after_gpu.png"
+else
+  echo "GPU lattices skipped: no OpenGL 4.3"
+fi
+
+fbx=/usr/share/assimp/models/FBX/embedded_ascii/box.FBX  # UpAxis 2 in its metadata
+if [ -f "$fbx" ]; then
+  declared=$(run "$fbx" --bare --frames 1 --screenshot "$work/box.png" 2>&1 || true)
+  if grep -q "no importer" <<<"$declared"; then
+    echo "up axis skipped: no importer in this build"
+  else
+    grep -q '"up": \[0, 0, 1\]' <<<"$declared" || { echo "$declared"; exit 1; }
+    run "$fbx" --bare --frames 1 --screenshot "$work/box.png" --up y 2>/dev/null | grep -q '"up": \[0, 1, 0\]'
+  fi
+fi
 echo "viewer smoke test passed"

@@ -2,8 +2,12 @@
 // IK and, when it is out of reach, stretches elastically; let go and it springs back. Everything deforming is the
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
-//   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]...
+//   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]... [--gpu] [--up y|z]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F]
+//
+// GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
+// (Character::lattice_fields = false) and sample::GpuLatticeFields adds them in the vertex buffer. --up z stands a
+// Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,6 +20,7 @@
 #include "framework.hpp"  // epoxy before any other GL header
 
 #include <GLFW/glfw3.h>
+#include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <imgui.h>
 
@@ -23,6 +28,7 @@
 #include "deform/error.hpp"
 #include "deform/picking.hpp"
 #include "deform/weights.hpp"
+#include "gpu_lattice.hpp"
 #include "scene.hpp"
 #include "shapes.hpp"
 #ifdef DEFORM_HAVE_IMPORT
@@ -36,18 +42,22 @@ using Clock = std::chrono::steady_clock;
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]]\n"
-    "                     [--width W] [--height H] [--bare]\n"
+    "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
+    "--gpu: evaluate the lattices on the GPU (OpenGL 4.3). --up z: the model's up axis is +Z (default: +Y, or what\n"
+    "an imported file's metadata says).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
-    "L the lattices, R resets, Esc quits.\n";
+    "L the lattices, G the GPU lattices, R resets, Esc quits.\n";
 
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip;
   std::vector<std::string> props;
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
+  bool gpu = false;   // start with the lattices evaluated on the GPU
+  char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   std::optional<glm::vec3> reach;
 };
 
@@ -91,6 +101,12 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--at") o.reach_at = parse_int(next(), "--at");
     else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
     else if (a == "--bare") o.bare = true;
+    else if (a == "--gpu") o.gpu = true;
+    else if (a == "--up") {
+      const std::string up = next();
+      if (up != "y" && up != "z") fail("--up: '" + up + "' is not y or z");
+      o.up = up[0];
+    }
     else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
     else if (a == "--height") o.height = std::max(64, parse_int(next(), "--height"));
     else if (a.rfind("--", 0) == 0) fail("unknown option " + a + "\n" + usage);
@@ -103,7 +119,16 @@ Options parse_options(int argc, char** argv) {
 struct LoadedCharacter {
   deform::Model model;
   std::vector<deform::Animation> clips;
+  glm::vec3 up{0.0f, 1.0f, 0.0f};  // the model's up direction, in its own space
 };
+
+// The rotation that stands a model whose up direction is `up` (a unit basis vector) upright, +Y.
+glm::quat upright(glm::vec3 up) {
+  const glm::vec3 y(0.0f, 1.0f, 0.0f);
+  if (glm::dot(up, y) > 0.5f) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  if (glm::dot(up, y) < -0.5f) return glm::angleAxis(glm::pi<float>(), glm::vec3(1.0f, 0.0f, 0.0f));
+  return glm::angleAxis(glm::half_pi<float>(), glm::normalize(glm::cross(up, y)));
+}
 
 LoadedCharacter load(const Options& o) {
   LoadedCharacter loaded;
@@ -127,10 +152,12 @@ LoadedCharacter load(const Options& o) {
     for (const std::string& w : imported.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     loaded.model = std::move(imported.model);
     loaded.clips = std::move(imported.clips);
+    if (o.up == 0) loaded.up = imported.up;
 #else
     fail(o.model + ": this build has no importer (deform::import); give an OBJ with --skeleton");
 #endif
   }
+  if (o.up == 'z') loaded.up = glm::vec3(0.0f, 0.0f, 1.0f);
   return loaded;
 }
 
@@ -152,7 +179,10 @@ glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m 
 // Everything the viewer shows and edits.
 class Viewer {
  public:
-  Viewer(const Options& options, sample::Window& window) : options_(options), window_(window) {
+  Viewer(const Options& options, sample::Window& window)
+      : options_(options),
+        window_(window),
+        gpu_available_(window.has_compute() && sample::GpuBezierLattice::supported()) {
     LoadedCharacter loaded = load(options);
     clips_ = std::move(loaded.clips);
     base_model_ = loaded.model;
@@ -164,13 +194,19 @@ class Viewer {
       if (clip_ < 0 || clip_ >= int(clips_.size())) fail(options.model + ": no clip '" + options.clip + "'");
     }
 
-    // The scene (the thesis' version 1): the world holds the floor, the character and the props; the target ball
-    // is a child of the character node, so moving the character carries its target along.
+    // The scene (the thesis' version 1): the world holds the floor, the character and the props. The character node
+    // (moved and turned from the panel) holds the model node, which stands the model upright (its up axis onto +Y)
+    // and is the model's own space; the target ball is its child, so moving the character carries its target along.
     world_node_ = scene_.add("world");
     floor_node_ = scene_.add("floor", world_node_);
     character_node_ = scene_.add("character", world_node_);
-    ball_node_ = scene_.add("target", character_node_, glm::vec3(0.0f), glm::vec3(1.0f));
-    const deform::Bounds b = deform::compute_bounds(base_model_.mesh.positions);
+    model_node_ = scene_.add("model", character_node_);
+    up_ = loaded.up;
+    scene_.node(model_node_).rotation = upright(up_);
+    ball_node_ = scene_.add("target", model_node_, glm::vec3(0.0f), glm::vec3(1.0f));
+    std::vector<glm::vec3> standing(base_model_.mesh.positions);  // framing, floor and props see the upright model
+    for (glm::vec3& p : standing) p = scene_.node(model_node_).rotation * p;
+    const deform::Bounds b = deform::compute_bounds(standing);
     const float height = std::max(1e-3f, b.max.y - b.min.y);
     const float extent = std::max({b.max.x - b.min.x, height, b.max.z - b.min.z});
     scene_.node(floor_node_).translation = glm::vec3(0.5f * (b.min.x + b.max.x), b.min.y, 0.5f * (b.min.z + b.max.z));
@@ -196,7 +232,15 @@ class Viewer {
       upload_static(*prop_renderers_.back(), *prop);
     }
     overlay_.create();
+    scene_.update();
+    if (options.gpu) {
+      if (gpu_available_) set_gpu(true);
+      else std::fprintf(stderr, "deform_viewer: --gpu: %s; lattices on the CPU\n", gpu_missing().c_str());
+    }
   }
+
+  bool gpu_lattices() const { return gpu_; }
+  glm::vec3 up() const { return up_; }
 
   void frame(float dt) {
     const sample::Input& in = window_.input();
@@ -258,6 +302,14 @@ class Viewer {
     elastic_.integrator = integrator ? deform::Integrator::verlet : deform::Integrator::exact;
     if (changed) apply_elastic();
     if (ImGui::SliderInt("lattice degree", &degree_, 1, 6)) rebuild_character();
+    bool gpu = gpu_;
+    ImGui::BeginDisabled(!gpu_available_);
+    if (ImGui::Checkbox("GPU lattices", &gpu)) set_gpu(gpu);
+    ImGui::EndDisabled();
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
+      ImGui::SetTooltip("%s", gpu_available_ ? "Bezier fields in a compute shader, added in the vertex buffer"
+                                             : gpu_missing().c_str());
+    }
     if (reaching_ || character_->stretch() != 0.0f)
       ImGui::Text("stretch %.3f, residual %.3f", character_->stretch(), last_reach_.residual);
 
@@ -294,6 +346,20 @@ class Viewer {
     ImGui::PopID();
   }
 
+  std::string gpu_missing() const {
+    const int version = epoxy_gl_version();
+    return "needs OpenGL 4.3 compute shaders; this context is OpenGL " + std::to_string(version / 10) + "." +
+           std::to_string(version % 10) + " (" + window_.renderer_name() + ")";
+  }
+
+  // The lattice fields on the GPU (on) or the CPU (off): the character leaves them out and the GPU adds them.
+  void set_gpu(bool on) {
+    gpu_ = on && gpu_available_;
+    gpu_fields_.clear();
+    if (gpu_ && !gpu_fields_.create(character_->deformers(), character_->model().mesh.vertex_point)) gpu_ = false;
+    character_->lattice_fields = !gpu_;
+  }
+
   void rebuild_character() {
     deform::Rig rig = rig_;
     for (auto& spec : rig.lattices) {
@@ -328,6 +394,7 @@ class Viewer {
     }
     reaching_ = false;
     effector_ = -1;
+    set_gpu(gpu_);
   }
 
   void apply_elastic() {
@@ -346,7 +413,8 @@ class Viewer {
     r.upload(positions, m.vertex_normals);
   }
 
-  glm::mat4 character_world() const { return scene_.node(character_node_).world; }
+  // The model's space in the world (the character node, then the upright turn).
+  glm::mat4 character_world() const { return scene_.node(model_node_).world; }
 
   void handle_keys(int key) {
     if (key == GLFW_KEY_D)
@@ -355,6 +423,7 @@ class Viewer {
     if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
     if (key == GLFW_KEY_L) show_lattices_ = !show_lattices_;
     if (key == GLFW_KEY_R) rebuild_character();
+    if (key == GLFW_KEY_G) set_gpu(!gpu_);
   }
 
   // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
@@ -445,6 +514,7 @@ class Viewer {
     const auto points = character_->positions();
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) render_positions_[v] = points[mesh.vertex_point[v]];
     renderer_->upload(render_positions_, normals);
+    if (gpu_) gpu_fields_.add_into(character_->deformers(), renderer_->vertex_buffer());
     renderer_->draw(character_world(), view, projection, eye);
     if (options_.bare) return;
     if (reaching_) ball_renderer_.draw(scene_.node(ball_node_).world, view, projection, eye);
@@ -490,11 +560,15 @@ class Viewer {
   std::vector<deform::Animation> clips_;
   std::unique_ptr<deform::Character> character_;
   std::unique_ptr<sample::MeshRenderer> renderer_;
+  glm::vec3 up_{0.0f, 1.0f, 0.0f};  // the model's up direction, turned onto +Y by the model node
+  const bool gpu_available_;
+  bool gpu_ = false;  // lattice fields on the GPU
+  sample::GpuLatticeFields gpu_fields_;
   std::vector<std::uint32_t> triangle_points_;
   std::vector<glm::vec3> render_positions_;
   deform::TriangleBvh bvh_;
   sample::Scene scene_;
-  int world_node_ = -1, floor_node_ = -1, character_node_ = -1, ball_node_ = -1;
+  int world_node_ = -1, floor_node_ = -1, character_node_ = -1, model_node_ = -1, ball_node_ = -1;
   std::vector<int> prop_nodes_;
   deform::Mesh floor_mesh_, ball_mesh_;
   std::vector<std::unique_ptr<deform::Mesh>> props_;
@@ -543,8 +617,11 @@ int main(int argc, char** argv) {
         window.end_frame();
       }
       const glm::vec3 e = viewer.effector_position();
-      std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"effector\": [%.5f, %.5f, %.5f]}\n",
-                  options.screenshot.c_str(), options.frames, window.renderer_name().c_str(), e.x, e.y, e.z);
+      const glm::vec3 up = viewer.up();
+      std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
+                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f]}\n",
+                  options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
+                  viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z);
       return 0;
     }
     auto last = Clock::now();

@@ -212,6 +212,59 @@ TEST_CASE("on the real mesh the stretched forearm has no seam; without the hiera
   CHECK(without > 4.0f * with_hierarchy);
 }
 
+TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them gives the whole deformation") {
+  Character whole(deform::builtin_character()), split(deform::builtin_character());
+  CHECK(whole.lattice_fields);
+  split.lattice_fields = false;
+  const Arm arm = left_arm(whole);
+  std::mt19937 rng(77);
+  const deform::DeformerHierarchy& h = split.deformers();
+  std::vector<glm::vec3> field(split.positions().size()), added;
+  for (int trial = 0; trial < 3; ++trial) {
+    CAPTURE(trial);
+    const glm::vec3 target = far_target(whole, rng);
+    REQUIRE(whole.reach(arm.hand, target).valid);
+    REQUIRE(split.reach(arm.hand, target).valid);
+    for (int frame = 0; frame < 20; ++frame) {  // mid-stretch, still oscillating
+      REQUIRE(whole.update(1.0f / 60.0f));
+      REQUIRE(split.update(1.0f / 60.0f));
+    }
+    CHECK(split.stretch() == whole.stretch());
+    CHECK(split.stretch() > 0.05f);
+    added.assign(split.positions().begin(), split.positions().end());
+    std::size_t active = 0;
+    for (std::size_t l = 0; l < h.lattice_count(); ++l) {
+      if (!h.active(l)) continue;
+      ++active;
+      deform::LatticeEvaluateJob job;
+      job.binding = &h.binding(l);
+      job.control_points = h.displacements(l);
+      job.positions = field;
+      REQUIRE(job.run());
+      for (std::size_t n = 0; n < h.binding(l).vertices.size(); ++n) {
+        const std::uint32_t p = h.binding(l).vertices[n];
+        if (p != deform::LatticeBinding::no_vertex) added[p] += h.bound_weights(l)[n] * field[p];
+      }
+    }
+    CHECK(active >= 2);  // the upper arm and the forearm stretch
+    float left_out = 0.0f;
+    for (std::size_t p = 0; p < added.size(); ++p) {
+      left_out = std::max(left_out, glm::length(whole.positions()[p] - split.positions()[p]));
+      CHECK(added[p] == whole.positions()[p]);
+    }
+    CHECK(left_out > 0.02f);  // the fields are a real part of the deformation (metres)
+    // Bones and control points do not depend on where the fields are evaluated.
+    CHECK(split.bone_position(arm.hand) == whole.bone_position(arm.hand));
+    for (std::size_t l = 0; l < h.lattice_count(); ++l) {
+      for (std::size_t n = 0; n < h.rest_lattice(l).point_count(); ++n) {
+        CHECK(split.control_points(l)[n] == whole.control_points(l)[n]);
+      }
+    }
+    whole.release();
+    split.release();
+  }
+}
+
 TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {
   Character c(deform::builtin_character());
   const Arm arm = left_arm(c);

@@ -290,6 +290,93 @@ TEST_CASE("apply equals a plain Bernstein reference, with springs making the lat
   CHECK(carried > 100);
 }
 
+TEST_CASE("apply is apply_carried plus the fields a caller evaluates from binding, weights and displacements") {
+  const Limb limb = make_limb();
+  LatticeSpec upper = spec_on("upper", 1, 0.3f), fore = spec_on("fore", 2, 0.2f), hand = spec_on("hand", 3);
+  fore.degree = glm::ivec3(4, 2, 3);
+  fore.elastic.springs.structural = fore.elastic.springs.shear = true;
+  fore.elastic.springs.stiffness = 300.0f;
+  DeformerHierarchy h(limb.skeleton, limb.points, limb.weights, {upper, fore, hand});
+  deform::Pose pose = limb.skeleton.bind_pose();
+  limb.skeleton.set_euler(pose, 1, glm::vec3(20.0f, 10.0f, -35.0f), false);
+  limb.skeleton.set_euler(pose, 2, glm::vec3(-40.0f, 0.0f, 15.0f), false);
+  const auto world = world_of(limb.skeleton, pose);
+  const auto skinned = skin(limb, world);
+
+  // The caller's half: every active lattice's field, evaluated from what the hierarchy exposes, in index order.
+  const auto add_fields = [&](std::vector<glm::vec3>& positions) {
+    std::vector<glm::vec3> field(positions.size());
+    for (std::size_t l = 0; l < h.lattice_count(); ++l) {
+      if (!h.active(l)) continue;
+      const deform::LatticeBinding& binding = h.binding(l);
+      REQUIRE(h.bound_weights(l).size() == binding.vertices.size());
+      REQUIRE(h.displacements(l).size() == h.rest_lattice(l).point_count());
+      deform::LatticeEvaluateJob job;
+      job.binding = &binding;
+      job.control_points = h.displacements(l);
+      job.positions = field;
+      REQUIRE(job.run());
+      for (std::size_t n = 0; n < binding.vertices.size(); ++n) {
+        const std::uint32_t p = binding.vertices[n];
+        if (p != deform::LatticeBinding::no_vertex) positions[p] += h.bound_weights(l)[n] * field[p];
+      }
+    }
+  };
+
+  // Every lane weight is the point's selection weight; padding lanes weigh nothing.
+  for (std::size_t l = 0; l < h.lattice_count(); ++l) {
+    const deform::LatticeBinding& binding = h.binding(l);
+    CHECK(binding.vertex_count == h.bound_count(l));
+    std::size_t real = 0;
+    for (std::size_t n = 0; n < binding.vertices.size(); ++n) {
+      const std::uint32_t p = binding.vertices[n];
+      if (p == deform::LatticeBinding::no_vertex) {
+        CHECK(h.bound_weights(l)[n] == 0.0f);
+        continue;
+      }
+      ++real;
+      CHECK(p != limb.intruder);
+      CHECK(h.bound_weights(l)[n] == doctest::Approx(std::min(1.0f, subtree_weight(limb, p, h.spec(l).bone))));
+      CHECK(h.bound_weights(l)[n] > 0.0f);
+    }
+    CHECK(real == binding.vertex_count);
+  }
+
+  // At rest nothing is active and both halves add nothing.
+  REQUIRE(h.update(world));
+  for (std::size_t l = 0; l < h.lattice_count(); ++l) CHECK_FALSE(h.active(l));
+  std::vector<glm::vec3> whole = skinned, split = skinned;
+  REQUIRE(h.apply(whole));
+  REQUIRE(h.apply_carried(split));
+  CHECK(whole == skinned);
+  CHECK(split == skinned);
+
+  // Stretched, mid-oscillation (non-affine with the springs), in a bent pose: the same positions to the bit.
+  h.set_stretch_target(0, 0.3f);
+  h.set_stretch_target(1, 0.6f);
+  h.set_stretch_target(2, -0.2f);
+  for (int frame = 0; frame < 8; ++frame) REQUIRE(h.step(1.0f / 60.0f));
+  for (int frame = 0; frame < 7; ++frame) {
+    REQUIRE(h.step(1.0f / 60.0f));
+    REQUIRE(h.update(world));
+    for (std::size_t l = 0; l < h.lattice_count(); ++l) CHECK(h.active(l));
+    whole = skinned;
+    split = skinned;
+    REQUIRE(h.apply(whole));
+    REQUIRE(h.apply_carried(split));
+    float fields = 0.0f;  // what the fields move, to be sure the split leaves something to the caller
+    for (std::size_t p = 0; p < split.size(); ++p) fields = std::max(fields, glm::length(whole[p] - split[p]));
+    CHECK(fields > 0.01f);
+    add_fields(split);
+    for (std::size_t p = 0; p < split.size(); ++p) {
+      CAPTURE(p);
+      CHECK(split[p] == whole[p]);
+    }
+  }
+  std::vector<glm::vec3> short_points(3);
+  CHECK_FALSE(h.apply_carried(short_points));
+}
+
 TEST_CASE("the stretch moves as the oscillator says") {
   const Limb limb = make_limb();
   DeformerHierarchy h(limb.skeleton, limb.points, limb.weights, {spec_on("fore", 2, 0.3f)});

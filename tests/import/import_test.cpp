@@ -11,6 +11,7 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <filesystem>
+#include <utility>
 #include <fstream>
 #include <map>
 
@@ -365,6 +366,20 @@ TEST_CASE("an unrigged model imports as a static mesh with a one-bone skeleton")
   CHECK(fs::is_regular_file(imported.model.mesh.materials[material].diffuse_map));
   const std::vector<glm::vec3> rest = skin(imported.model, imported.model.skeleton.bind_pose());
   CHECK(rest == imported.model.mesh.positions);
+}
+
+TEST_CASE("the up axis a file declares: +Z for a Z-up FBX, +Y for glTF and for files that say nothing") {
+  const std::pair<const char*, glm::vec3> cases[] = {
+      {"FBX/embedded_ascii/box.FBX", {0.0f, 0.0f, 1.0f}},  // UpAxis 2, UpAxisSign 1 in its GlobalSettings
+      {"glTF2/simple_skin/simple_skin.gltf", {0.0f, 1.0f, 0.0f}},
+      {"X/Testwuson.X", {0.0f, 1.0f, 0.0f}},
+  };
+  for (const auto& [relative, up] : cases) {
+    const std::string path = test_model(relative);
+    if (path.empty()) continue;
+    CAPTURE(relative);
+    CHECK(deform::import_model(path).up == up);
+  }
 }
 
 TEST_CASE("malformed files give a deform::Error naming the file, never a crash") {

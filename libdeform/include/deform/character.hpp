@@ -58,6 +58,11 @@ class DEFORM_API Character {
   const Pose& pose() const noexcept { return pose_; }
 
   SkinningMethod skinning = SkinningMethod::lbs;
+  // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
+  // (DeformerHierarchy::apply_carried instead of apply) for a caller that evaluates them elsewhere, e.g. on a GPU,
+  // from deformers().binding(l), bound_weights(l) and displacements(l); positions() and normals() are then those of
+  // the skinned, carried surface, and adding the fields to positions() gives what true gives.
+  bool lattice_fields = true;
   IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
 
   // Reaches for `target` (world space) with `effector`'s head: IK, then the stretch target of the chain's lattices.

@@ -71,7 +71,7 @@ class DEFORM_API DeformerHierarchy {
   // Its length along the bone, |U|, model units.
   float length(std::size_t lattice) const { return lattices_.at(lattice).length; }
   // Points moved by the lattice's Bézier field, and points it carries (beyond its far face).
-  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).inside_points.size(); }
+  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).binding.vertex_count; }
   std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).carried_points.size(); }
 
   // The stretch the lattice springs toward, model units along its bone (negative squashes). Must be finite and
@@ -95,8 +95,29 @@ class DEFORM_API DeformerHierarchy {
   bool update(std::span<const glm::mat4> world);
   // Adds every lattice's displacement to `positions` (the skinned points, mesh.point_count() entries). Returns false
   // (changing nothing) on a size mismatch. O(bound points) Bézier evaluations (LatticeEvaluateJob) plus one add per
-  // carried point; a lattice at rest is skipped. No allocation.
+  // carried point; a lattice at rest is skipped. No allocation. Exactly apply_carried(), then for every active
+  // lattice l, in index order, the field: positions[p] += bound_weights(l)[n] · D_l(n) for each lane n of
+  // binding(l) with a point p (D_l(n): LatticeEvaluateJob's output for binding(l) with displacements(l)).
   bool apply(std::span<glm::vec3> positions);
+  // apply() without the Bézier fields: adds only the translations of the carried points (beyond the far faces), for
+  // a caller that evaluates the fields itself, e.g. on a GPU. Returns false (changing nothing) on a size mismatch.
+  // O(carried points), no allocation.
+  bool apply_carried(std::span<glm::vec3> positions);
+
+  // What evaluating a lattice's field takes, for callers of apply_carried():
+  // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
+  // lanes LatticeBinding::no_vertex) and their (u, v, w) in the lattice's rest frame (bone bind space).
+  const LatticeBinding& binding(std::size_t lattice) const { return lattices_.at(lattice).binding; }
+  // One selection weight per binding lane (binding(l).vertices.size() entries, 0 in padding lanes): in (0, 1].
+  std::span<const float> bound_weights(std::size_t lattice) const { return lattices_.at(lattice).lane_weights; }
+  // As of update(): the control points of the lattice's displacement field, world space, i-fastest (point_counts of
+  // rest_lattice(l)); evaluating binding(l) with them gives each bound point's displacement before its weight.
+  std::span<const glm::vec3> displacements(std::size_t lattice) const {
+    return lattices_.at(lattice).world_displacements;
+  }
+  // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
+  // length), which apply() skips.
+  bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
   // The displacement update() gives a point `bind_point` (bind-pose world space) that moves with `bone` with full
   // weight: e.g. a bone's head, an IK effector. O(lattices).
   glm::vec3 point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept;
@@ -112,9 +133,8 @@ class DEFORM_API DeformerHierarchy {
     BezierLattice field{LatticeFrame{}};  // control points = world displacements (for point_displacement)
     glm::vec3 axis{0.0f, 1.0f, 0.0f};     // unit U in the bone's frame
     float length = 0.0f;
-    LatticeBinding binding;
-    std::vector<std::uint32_t> inside_points;  // bound points and their selection weights
-    std::vector<float> inside_weights;
+    LatticeBinding binding;           // the points the Bézier field moves
+    std::vector<float> lane_weights;  // their selection weights, per binding lane
     std::vector<std::uint32_t> carried_points;  // beyond the far face
     std::vector<float> carried_weights;
     std::vector<std::uint32_t> far_face;  // control point indices with i = l

@@ -44,6 +44,10 @@ struct ImportedModel {
   // Per bone, the file's bind world transform with its scale (mesh-node · offset⁻¹, or the node-tree world
   // transform for bones without an offset); the skeleton holds its rigid part. For callers that handle scale.
   std::vector<glm::mat4> file_bind_world;
+  // The up direction the file declares (a unit axis): its FBX `UpAxis`/`UpAxisSign`, as Assimp reports them; +Y
+  // for files that declare none (glTF is +Y by definition). The data is left as the file has it: a viewer turns its
+  // scene so that `up` points up.
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
 };
 
 // Imports the model at `path`. Throws deform::Error naming the file for a file Assimp cannot read (missing,
