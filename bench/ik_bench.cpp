@@ -1,11 +1,13 @@
 // IK benchmarks: ik/ccd, ik/fabrik on 2- to 6-joint chains with random DOF limits, ik/two_bone; random reachable
 // targets (FK of random in-limit poses), tolerance 1e-4 of the chain length, from the bind pose each solve.
 // Items = solves. Counters: mean iterations, reached (fraction), median_us (median time of one solve).
+// ik/clamp: one joint's DOF clamp, the solvers' clamp_rotation against Skeleton::clamp_to_limits.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "../tests/ik/ik_test_rig.hpp"
@@ -99,9 +101,43 @@ void two_bone(benchmark::State& state) {
   state.counters["reached"] = static_cast<double>(reached) / static_cast<double>(solves);
 }
 
+// One joint clamp on random rotations and the tests' random limits: state.range(0) = 1 the solvers' clamp_rotation,
+// 0 the double-precision Skeleton::clamp_to_limits (convert, clamp, convert back). Items = clamps.
+void clamp(benchmark::State& state) {
+  constexpr std::size_t count = 1024;
+  std::mt19937 random(5);
+  std::normal_distribution<float> normal;
+  std::vector<deform::Bone> bones(count);
+  for (std::size_t b = 0; b < count; ++b) {
+    bones[b].name = "b" + std::to_string(b);
+    bones[b].parent = static_cast<std::int32_t>(b) - 1;
+    if (b + 1 < count) bones[b].children = {static_cast<std::int32_t>(b + 1)};
+    bones[b].limits = ik_test::random_limits(random);
+  }
+  const deform::Skeleton skeleton(bones);
+  std::vector<deform::EulerLimits> limits;
+  for (const deform::Bone& bone : skeleton.bones()) limits.push_back(deform::prepare_limits(bone.limits));
+  deform::Pose rotations = skeleton.bind_pose(), pose = rotations;
+  for (glm::quat& q : rotations.rotations)
+    q = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+  const bool fast = state.range(0) == 1;
+  long clamps = 0;
+  for (auto _ : state) {
+    pose.rotations.assign(rotations.rotations.begin(), rotations.rotations.end());
+    for (std::size_t b = 0; b < count; ++b) {
+      if (fast) deform::clamp_rotation(limits[b], pose.rotations[b]);
+      else skeleton.clamp_to_limits(pose, static_cast<std::int32_t>(b));
+    }
+    benchmark::DoNotOptimize(pose.rotations.data());
+    clamps += count;
+  }
+  state.SetItemsProcessed(clamps);
+}
+
 }  // namespace
 
 BENCHMARK(ccd)->Name("ik/ccd")->DenseRange(2, 6);
 BENCHMARK(ccd_plain)->Name("ik/ccd_plain")->DenseRange(2, 6);
 BENCHMARK(fabrik)->Name("ik/fabrik")->DenseRange(2, 6);
 BENCHMARK(two_bone)->Name("ik/two_bone")->Arg(1)->Arg(0);
+BENCHMARK(clamp)->Name("ik/clamp")->Arg(1)->Arg(0);

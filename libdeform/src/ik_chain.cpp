@@ -1,6 +1,7 @@
 // IK chains: finding the bones from root to effector, and the helpers every solver shares (ik_chain.hpp).
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "deform/error.hpp"
@@ -82,106 +83,51 @@ void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::sp
   }
 }
 
-glm::quat rotation_between(glm::vec3 from, glm::vec3 to, float max_radians) noexcept {
-  const float from_length = glm::length(from), to_length = glm::length(to);
-  if (!(from_length > 1e-12f) || !(to_length > 1e-12f)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-  const glm::vec3 a = from / from_length, b = to / to_length;
-  const float cosine = glm::dot(a, b);
-  glm::vec3 axis = glm::cross(a, b);
-  const float sine = glm::length(axis);
-  if (sine < 1e-7f) {
-    if (cosine > 0.0f) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-    // Opposite: any axis perpendicular to `a` does; take the one from the coordinate axis least aligned with it.
-    const glm::vec3 helper = std::abs(a.x) < 0.6f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
-    axis = glm::normalize(glm::cross(a, helper));
-    if (max_radians > 0.0f && max_radians < 3.14159265f) return glm::angleAxis(max_radians, axis);
-    return glm::quat(0.0f, axis.x, axis.y, axis.z);
+StepCap cap_for(float max_radians) noexcept {
+  if (!(max_radians > 0.0f) || max_radians >= std::numbers::pi_v<float>) return {};
+  return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
+}
+
+glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap) noexcept {
+  // With |from| |to| = r: (r + from · to, from × to) normalised is the rotation by the angle between them about
+  // their normal: two square roots, no trigonometry. In double so that r² neither underflows nor overflows.
+  const glm::dvec3 a(from), b(to);
+  const double aa = glm::dot(a, a), bb = glm::dot(b, b);
+  if (!(aa > 1e-24) || !(bb > 1e-24)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const double r = std::sqrt(aa * bb), cosine = glm::dot(a, b);  // cosine and axis are scaled by r
+  const glm::dvec3 axis = glm::cross(a, b);
+  const double sine2 = glm::dot(axis, axis);
+  if (sine2 < 1e-14 * aa * bb) {
+    if (cosine > 0.0) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    // Opposite: any axis perpendicular to `from` does; take the one from the coordinate axis least aligned with it.
+    const glm::dvec3 helper = std::abs(a.x) < 0.6 * std::sqrt(aa) ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+    const glm::vec3 normal(glm::normalize(glm::cross(a, helper)) * static_cast<double>(cap.half.y));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
   }
-  if (max_radians > 0.0f) {
-    const float angle = std::atan2(sine, cosine);
-    if (angle > max_radians) return glm::angleAxis(max_radians, axis / sine);
+  if (cosine < static_cast<double>(cap.cos_angle) * r) {
+    const glm::vec3 normal(axis * (static_cast<double>(cap.half.y) / std::sqrt(sine2)));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
   }
-  // q = (1 + cos θ, sin θ · n) normalised is the rotation by θ about n: no trigonometry needed.
-  return glm::normalize(glm::quat(1.0f + cosine, axis.x, axis.y, axis.z));
+  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);
+  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
 }
 
-bool clamp_joint(const Skeleton& skeleton, Pose& pose, std::int32_t bone) noexcept {
-  const DofLimits& limits = skeleton.bones()[static_cast<std::size_t>(bone)].limits;
-  const bool free = glm::all(glm::lessThanEqual(limits.min, glm::vec3(-180.0f))) &&
-                    glm::all(glm::greaterThanEqual(limits.max, glm::vec3(180.0f)));
-  glm::quat& rotation = pose.rotations[static_cast<std::size_t>(bone)];
-  rotation = glm::normalize(rotation);
-  if (free) return false;
-  const glm::quat before = rotation;
-  skeleton.clamp_to_limits(pose, bone);
-  return rotation != before;
+std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain) {
+  std::vector<EulerLimits> limits(chain.joint_count());
+  for (std::size_t k = 0; k < limits.size(); ++k)
+    limits[k] = prepare_limits(skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits);
+  return limits;
 }
 
-namespace {
-
-float wrap_degrees(float a) { return a > 180.0f ? a - 360.0f : (a <= -180.0f ? a + 360.0f : a); }
-
-// The joint's Euler triple that its limits mean: of the two triples of the rotation, the one nearer the limits,
-// clamped (the rotation is in the limits already, so this only removes rounding).
-glm::vec3 limited_euler(glm::quat rotation, const DofLimits& limits) {
-  const glm::vec3 first = euler_from_quat(rotation);
-  const glm::vec3 second(wrap_degrees(first.x + 180.0f), wrap_degrees(180.0f - first.y), wrap_degrees(first.z + 180.0f));
-  auto miss = [&](glm::vec3 e) {
-    const glm::vec3 d = e - clamp_euler(e, limits);
-    return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
-  };
-  return clamp_euler(miss(second) < miss(first) ? second : first, limits);
-}
-
-// The angle in [min, max] (degrees) nearest, around the circle, to `best` (degrees): where the 1-D objective
-// -cos(angle - best) is smallest.
-float nearest_in_range(float best, float min, float max) {
-  if (max - min >= 360.0f) return wrap_degrees(best);
-  for (float shift : {-360.0f, 0.0f, 360.0f})
-    if (best + shift >= min && best + shift <= max) return best + shift;
-  const float to_min = std::abs(wrap_degrees(best - min)), to_max = std::abs(wrap_degrees(best - max));
-  return to_min <= to_max ? min : max;
-}
-
-}  // namespace
-
-void reaim_joint(const Skeleton& skeleton, Pose& pose, std::int32_t bone, glm::quat parent, glm::vec3 head,
-                      glm::vec3 point, glm::vec3 goal) noexcept {
-  const DofLimits& limits = skeleton.bones()[static_cast<std::size_t>(bone)].limits;
-  glm::quat& rotation = pose.rotations[static_cast<std::size_t>(bone)];
-  glm::vec3 euler = limited_euler(rotation, limits);
-  // In the parent's frame, the point is R(euler) · carried and should be at wanted.
-  const glm::vec3 carried = glm::conjugate(parent * rotation) * (point - head);
-  const glm::vec3 wanted = glm::conjugate(parent) * (goal - head);
-  static const glm::vec3 axes[3] = {glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1)};
-  for (int axis = 0; axis < 3; ++axis) {
-    if (limits.min[axis] == limits.max[axis]) continue;
-    // R = Rx · Ry · Rz: axis k turns v = (the rotations after k) · carried; compare with (those before k)⁻¹ · wanted.
-    glm::quat before(1.0f, 0.0f, 0.0f, 0.0f), after(1.0f, 0.0f, 0.0f, 0.0f);
-    for (int other = 0; other < 3; ++other) {
-      const glm::quat q = glm::angleAxis(glm::radians(euler[other]), axes[other]);
-      if (other < axis) before = before * q;
-      if (other > axis) after = after * q;
-    }
-    const glm::vec3 v = after * carried, u = glm::conjugate(before) * wanted;
-    const int i = (axis + 1) % 3, j = (axis + 2) % 3;  // the plane the axis turns
-    if (v[i] * v[i] + v[j] * v[j] < 1e-20f || u[i] * u[i] + u[j] * u[j] < 1e-20f) continue;
-    const float best = glm::degrees(std::atan2(u[j], u[i]) - std::atan2(v[j], v[i]));
-    euler[axis] = nearest_in_range(wrap_degrees(best), limits.min[axis], limits.max[axis]);
-  }
-  rotation = quat_from_euler(euler);
-}
-
-void point_segments_at(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
+void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept {
   for (std::size_t k = 0; k < chain.joint_count(); ++k) {
     const glm::quat parent = k == 0 ? base : frames[k - 1];
-    const std::int32_t bone = chain.bones[k];
-    glm::quat& local = pose.rotations[static_cast<std::size_t>(bone)];
+    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain.bones[k + 1])];
-    local = glm::conjugate(parent) * rotation_between((parent * local) * offset, target - heads[k]) * parent * local;
-    if (clamp_joint(skeleton, pose, bone))
-      reaim_joint(skeleton, pose, bone, parent, heads[k], heads[k] + (parent * local) * offset, target);
+    const glm::vec3 wanted = glm::conjugate(parent) * (target - heads[k]);
+    local = rotation_between(local * offset, wanted) * local;
+    clamp_joint(limits[k], local, true, offset, wanted);
     frames[k] = parent * local;
     heads[k + 1] = heads[k] + frames[k] * offset;
   }
@@ -189,44 +135,57 @@ void point_segments_at(const Skeleton& skeleton, const IkChain& chain, Pose& pos
                                 pose.rotations[static_cast<std::size_t>(chain.bones.back())];
 }
 
-void damped_least_squares_step(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
+namespace {
+
+constexpr double at_limit = 1e-6;  // radians
+
+}  // namespace
+
+void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
-                               float lambda, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept {
-  static const glm::vec3 axes[3] = {glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1)};
+                               float lambda, bool angles_current, std::span<glm::dvec3> angles,
+                               std::span<glm::vec3> columns) noexcept {
   const std::size_t joints = chain.joint_count();
   const glm::vec3 effector = heads[joints];
   glm::dmat3 jjt(lambda * lambda);
   for (std::size_t k = 0; k < joints; ++k) {
-    const DofLimits& limits = skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits;
-    const glm::vec3 euler = limited_euler(pose.rotations[static_cast<std::size_t>(chain.bones[k])], limits);
-    angles[k] = euler;
-    glm::quat frame = k == 0 ? base : frames[k - 1];
+    EulerAngles euler;
+    if (angles_current) {
+      euler = euler_at(limits[k], angles[k]);
+    } else {
+      limit_euler(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])], euler);
+      angles[k] = euler.angle;
+    }
+    // Euler axis k turns about its world direction: the parent's frame times the rotations of the axes before it.
+    const glm::mat3 parent = glm::mat3_cast(k == 0 ? base : frames[k - 1]);
+    const glm::vec2 x(euler.dir[0]), y(euler.dir[1]);
+    const glm::vec3 axes[3] = {parent[0], x.x * parent[1] + x.y * parent[2],
+                               y.y * parent[0] + y.x * (x.x * parent[2] - x.y * parent[1])};
     for (int axis = 0; axis < 3; ++axis) {
-      // Column of Euler axis `axis`: its world direction (after the axes before it) × (effector − head).
-      // Axes locked, or at a limit with the error pulling outward, take no part (an active set).
-      glm::vec3 column = glm::cross(frame * axes[axis], effector - heads[k]);
+      // Column of Euler axis `axis`: its world direction × (effector − head). Axes locked, or at a limit (to the
+      // float rounding of a clamped rotation, 1e-6 rad) with the error pulling outward, take no part (an active set).
+      glm::vec3 column = glm::cross(axes[axis], effector - heads[k]);
       const float pull = glm::dot(column, target - effector);
-      const bool bounded = limits.max[axis] - limits.min[axis] < 360.0f;
-      if (limits.min[axis] == limits.max[axis] ||
-          (bounded && ((euler[axis] >= limits.max[axis] && pull > 0.0f) || (euler[axis] <= limits.min[axis] && pull < 0.0f))))
+      const double min = limits[k].min[axis], max = limits[k].max[axis], angle = euler.angle[axis];
+      const bool bounded = max - min < 2.0 * std::numbers::pi;
+      if (min == max ||
+          (bounded && ((angle >= max - at_limit && pull > 0.0f) || (angle <= min + at_limit && pull < 0.0f))))
         column = glm::vec3(0.0f);
       columns[3 * k + static_cast<std::size_t>(axis)] = column;
       jjt += glm::outerProduct(glm::dvec3(column), glm::dvec3(column));
-      frame = frame * glm::angleAxis(glm::radians(euler[axis]), axes[axis]);
     }
   }
   const glm::vec3 y(glm::inverse(jjt) * glm::dvec3(target - effector));
   for (std::size_t k = 0; k < joints; ++k) {
-    const std::int32_t bone = chain.bones[k];
-    const DofLimits& limits = skeleton.bones()[static_cast<std::size_t>(bone)].limits;
-    glm::vec3 euler = angles[k];
-    for (int axis = 0; axis < 3; ++axis)
-      euler[axis] += glm::degrees(glm::dot(columns[3 * k + static_cast<std::size_t>(axis)], y));
-    for (int axis = 0; axis < 3; ++axis)
-      euler[axis] = limits.max[axis] - limits.min[axis] >= 360.0f
-                        ? wrap_degrees(euler[axis])
-                        : std::clamp(euler[axis], limits.min[axis], limits.max[axis]);
-    pose.rotations[static_cast<std::size_t>(bone)] = quat_from_euler(euler);
+    const EulerLimits& limit = limits[k];
+    for (int axis = 0; axis < 3; ++axis) {
+      const double min = limit.min[axis], max = limit.max[axis];
+      double& angle = angles[k][axis];
+      angle += static_cast<double>(glm::dot(columns[3 * k + static_cast<std::size_t>(axis)], y));
+      angle = max - min >= 2.0 * std::numbers::pi ? std::remainder(angle, 2.0 * std::numbers::pi)
+                                                  : std::clamp(angle, min, max);
+    }
+    pose.rotations[static_cast<std::size_t>(chain.bones[k])] = to_quat(euler_at(limit, angles[k]));
   }
 }
 
@@ -240,7 +199,7 @@ void load_joints(const IkChain& chain, std::span<const glm::quat> saved, Pose& p
     pose.rotations[static_cast<std::size_t>(chain.bones[k])] = saved[k];
 }
 
-void perturb_joints(const Skeleton& skeleton, const IkChain& chain, Pose& pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, std::uint32_t& state,
                     float degrees) noexcept {
   auto uniform = [&state]() {  // xorshift32, in [-1, 1)
     state ^= state << 13;
@@ -249,11 +208,10 @@ void perturb_joints(const Skeleton& skeleton, const IkChain& chain, Pose& pose, 
     return static_cast<float>(state >> 8) * (2.0f / 16777216.0f) - 1.0f;
   };
   for (std::size_t k = 0; k + 1 < chain.bones.size(); ++k) {
-    const std::int32_t bone = chain.bones[k];
     const glm::vec3 delta(uniform() * degrees, uniform() * degrees, uniform() * degrees);
-    glm::quat& rotation = pose.rotations[static_cast<std::size_t>(bone)];
+    glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     rotation = rotation * quat_from_euler(delta);
-    clamp_joint(skeleton, pose, bone);
+    clamp_rotation(limits[k], rotation);
   }
 }
 

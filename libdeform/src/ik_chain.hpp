@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "deform/ik.hpp"
 
@@ -27,49 +28,86 @@ Frame base_frame(const IkChain& chain, const Pose& pose) noexcept;
 void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
               std::span<glm::vec3> heads) noexcept;
 
+// A cap on the angle of one rotation, prepared so that applying it needs no trigonometry. The default caps nothing.
+struct StepCap {
+  float cos_angle = -1.0f;     // cos of the largest angle
+  glm::vec2 half{0.0f, 1.0f};  // (cos, sin) of half of it
+};
+StepCap cap_for(float max_radians) noexcept;  // max_radians <= 0 or >= π: no cap
+
 // The shortest-arc unit rotation turning direction `from` onto direction `to` (angle from the dot product, axis from
-// the cross product); identity when either is (nearly) zero; a half turn about a perpendicular axis when opposite.
-// With max_radians > 0 the angle is capped to it.
-glm::quat rotation_between(glm::vec3 from, glm::vec3 to, float max_radians = 0.0f) noexcept;
+// the cross product), its angle capped by `cap`; identity when either is (nearly) zero; a half turn (or the cap)
+// about a perpendicular axis when opposite.
+glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}) noexcept;
 
-// Clamps a joint's local rotation into its DOF limits (Skeleton::clamp_to_limits), skipping joints free on every axis.
-// Returns true when the clamp changed the rotation.
-bool clamp_joint(const Skeleton& skeleton, Pose& pose, std::int32_t bone) noexcept;
+// A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its unit direction (cos, sin).
+struct EulerAngles {
+  glm::dvec3 angle{0.0};
+  glm::dvec2 dir[3]{};
+};
 
-// Re-aims a joint after a clamp: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
-// limits, a 1-D problem with a closed form) so that `point` — a world point carried by the joint, such as the
-// effector — comes as close to `goal` as the limits allow. `parent` is the world rotation of the joint's parent and
-// `head` the joint's world head; `point` is where the current rotation puts it. The rotation stays within the limits.
-void reaim_joint(const Skeleton& skeleton, Pose& pose, std::int32_t bone, glm::quat parent, glm::vec3 head,
-                 glm::vec3 point, glm::vec3 goal) noexcept;
+// The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
+// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it.
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept;
+
+// Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
+// direction, the others a polynomial (cos, sin) within 1e-12.
+EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept;
+
+// (cos, sin) of half the angle of the non-zero direction `d` of the given length, times a positive factor, the
+// half angle in (-90°, 90°]: the quaternion (h.x, h.y · axis) of a turn whose cosine and sine are known, without
+// trigonometry, normalised by whoever uses it.
+glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept;
+
+// The unit quaternion qx · qy · qz of the directions of `euler` (its angles are not read).
+glm::quat to_quat(const EulerAngles& euler) noexcept;
+
+// Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
+// limits, a 1-D problem with a closed form) so that `carried` — a point in the joint's own frame relative to its
+// head, such as the effector — comes as close to `wanted` — in the parent's frame, relative to the head — as the
+// limits allow. `euler` must be within the limits and stays so.
+void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept;
+
+// Normalises a joint's local rotation and clamps it into its limits; when it was outside and `reaim` is set, the
+// clamped rotation is re-aimed (reaim_euler) with `carried` and `wanted`. Returns true when it was outside.
+bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried, glm::vec3 wanted) noexcept;
+
+// Each joint's prepared limits, in chain order (joint_count() entries).
+std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain);
 
 // Points every segment at `target`, root first (each joint the smallest turn of its segment, clamped and re-aimed):
 // for an out-of-reach target this is the straight chain, the answer an unconstrained chain minimises the distance
 // with, which CCD only approaches slowly (the distance is second order in the joints' deviation from it).
 // `frames` and `heads` hold the chain's FK for `pose` on entry and are updated.
-void point_segments_at(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
+void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept;
 
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
 // pseudoinverse and damped least squares methods") on the joints' Euler angles: Δθ = Jᵀ (J Jᵀ + λ² I)⁻¹ (target −
 // effector), a 3×3 solve, then each joint is clamped into its limits. `heads` and `frames` hold the chain's FK for
-// `pose` on entry (they are not updated); `angles` and `columns` are scratch of 3 × joint_count() entries.
-void damped_least_squares_step(const Skeleton& skeleton, const IkChain& chain, Pose& pose, glm::quat base,
+// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles; with
+// `angles_current` it holds their current ones on entry (the previous step was this one), which saves reading them
+// from the pose. `columns` (3 × joint_count()) is scratch.
+void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
-                               float lambda, std::span<glm::vec3> angles, std::span<glm::vec3> columns) noexcept;
+                               float lambda, bool angles_current, std::span<glm::dvec3> angles,
+                               std::span<glm::vec3> columns) noexcept;
 
 // Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
 void save_joints(const IkChain& chain, const Pose& pose, std::span<glm::quat> saved) noexcept;
 void load_joints(const IkChain& chain, std::span<const glm::quat> saved, Pose& pose) noexcept;
 
 // Rotates every joint by up to `degrees` per Euler axis at random (xorshift32 on `state`), then clamps it.
-void perturb_joints(const Skeleton& skeleton, const IkChain& chain, Pose& pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, std::uint32_t& state,
                     float degrees) noexcept;
 
 // A solve's settings check: finite target, max_iterations >= 1, finite non-negative tolerance and step.
 bool settings_valid(glm::vec3 target, const IkSettings& settings) noexcept;
 
-// A sweep that shortens the distance (above the out-of-reach floor) by less than this fraction is a stall.
+// A CCD sweep or FABRIK pass that fails to shorten the distance above the out-of-reach floor by this fraction has
+// slowed to a crawl: damped least-squares steps take over (chosen by measurement, docs/ik.md).
+inline constexpr float handover_gain = 0.7f;
+// Least-squares steps that shorten it by less than this fraction have stalled: a random kick follows.
 inline constexpr float stall_gain = 0.1f;
 // Damping of the stall escape's least-squares steps, as a fraction of the chain length.
 inline constexpr float damping_fraction = 0.05f;

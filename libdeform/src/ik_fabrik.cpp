@@ -18,7 +18,8 @@ glm::vec3 reach(glm::vec3 from, glm::vec3 to, float length, glm::vec3 fallback) 
 }  // namespace
 
 FabrikSolver::FabrikSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector)
-    : skeleton_(&skeleton), chain_(make_chain(skeleton, root, effector)) {
+    : skeleton_(&skeleton), chain_(make_chain(skeleton, root, effector)),
+      limits_(detail::prepare_chain_limits(skeleton, chain_)) {
   frames_.resize(chain_.bones.size());
   heads_.resize(chain_.bones.size());
   goals_.resize(chain_.bones.size());
@@ -31,7 +32,8 @@ FabrikSolver::FabrikSolver(const Skeleton& skeleton, std::int32_t root, std::int
 bool FabrikSolver::solve(Pose& pose, glm::vec3 target, const IkSettings& settings, IkResult& result) {
   if (!detail::pose_fits(*skeleton_, pose) || !detail::settings_valid(target, settings)) return false;
   const std::size_t joints = chain_.joint_count();
-  for (std::size_t k = 0; k < joints; ++k) detail::clamp_joint(*skeleton_, pose, chain_.bones[k]);
+  for (std::size_t k = 0; k < joints; ++k)
+    clamp_rotation(limits_[k], pose.rotations[static_cast<std::size_t>(chain_.bones[k])]);
   const detail::Frame base = detail::base_frame(chain_, pose);
 
   detail::chain_fk(chain_, pose, base, frames_, heads_);
@@ -45,17 +47,19 @@ bool FabrikSolver::solve(Pose& pose, glm::vec3 target, const IkSettings& setting
   float best_distance = distance;
   detail::save_joints(chain_, pose, best_);
   int iterations = 0;
-  bool polishing = false;  // the stall escape's damped least-squares steps are running
+  bool polishing = false;       // the stall escape's damped least-squares steps are running
+  bool angles_current = false;  // angles_ hold the joints' Euler angles: the last step was a least-squares step
   // Within tolerance of the floor nothing better exists: an out-of-reach target stops there too.
   while (distance > floor + settings.tolerance && iterations < settings.max_iterations) {
     ++iterations;
     if (polishing) {
-      detail::damped_least_squares_step(*skeleton_, chain_, pose, base.rotation, frames_, heads_, target,
-                                        detail::damping_fraction * reach_length, angles_, columns_);
+      detail::damped_least_squares_step(chain_, limits_, pose, base.rotation, frames_, heads_, target,
+                                        detail::damping_fraction * reach_length, angles_current, angles_, columns_);
       detail::chain_fk(chain_, pose, base, frames_, heads_);
     } else {
       pass(pose, target, base.rotation, reach_length, settings.escape_stalls);
     }
+    angles_current = polishing;
     const float previous = distance;
     distance = glm::length(heads_.back() - target);
     if (distance < best_distance) {
@@ -63,13 +67,14 @@ bool FabrikSolver::solve(Pose& pose, glm::vec3 target, const IkSettings& setting
       detail::save_joints(chain_, pose, best_);
     }
     if (settings.escape_stalls && distance > settings.tolerance &&
-        previous - distance < detail::stall_gain * (previous - floor)) {
+        previous - distance < (polishing ? detail::stall_gain : detail::handover_gain) * (previous - floor)) {
       // As in CcdSolver::solve: damped least-squares steps, then a random kick from the best pose.
       if (polishing) {
         detail::load_joints(chain_, best_, pose);
-        detail::perturb_joints(*skeleton_, chain_, pose, random_state_, detail::escape_degrees);
+        detail::perturb_joints(chain_, limits_, pose, random_state_, detail::escape_degrees);
         detail::chain_fk(chain_, pose, base, frames_, heads_);
         distance = glm::length(heads_.back() - target);
+        angles_current = false;
       }
       polishing = !polishing;
     }
@@ -101,16 +106,12 @@ void FabrikSolver::pass(Pose& pose, glm::vec3 target, glm::quat base, float reac
   // is (clamps above it may have moved it), then is clamped; FK follows joint by joint.
   for (std::size_t k = 0; k < joints; ++k) {
     const glm::quat parent = k == 0 ? base : frames_[k - 1];
-    const std::int32_t bone = chain_.bones[k];
+    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain_.bones[k])];
     const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain_.bones[k + 1])];
-    const glm::quat world = parent * pose.rotations[static_cast<std::size_t>(bone)];
-    const glm::quat turn = detail::rotation_between(world * offset, goals_[k + 1] - heads_[k]);
-    pose.rotations[static_cast<std::size_t>(bone)] = glm::conjugate(parent) * turn * world;
-    if (detail::clamp_joint(*skeleton_, pose, bone) && reaim) {
-      const glm::vec3 moved = heads_[k] + (parent * pose.rotations[static_cast<std::size_t>(bone)]) * offset;
-      detail::reaim_joint(*skeleton_, pose, bone, parent, heads_[k], moved, goals_[k + 1]);
-    }
-    frames_[k] = parent * pose.rotations[static_cast<std::size_t>(bone)];
+    const glm::vec3 wanted = glm::conjugate(parent) * (goals_[k + 1] - heads_[k]);
+    local = detail::rotation_between(local * offset, wanted) * local;
+    detail::clamp_joint(limits_[k], local, reaim, offset, wanted);
+    frames_[k] = parent * local;
     heads_[k + 1] = heads_[k] + frames_[k] * offset;
   }
 }

@@ -16,12 +16,6 @@ glm::vec3 perpendicular(glm::vec3 v) {
   return glm::normalize(glm::cross(v, helper));
 }
 
-// Angle at the vertex between directions u and v, radians in [0, π], accurate near 0 and π.
-double angle_between(glm::vec3 u, glm::vec3 v) {
-  const glm::dvec3 a(u), b(v);
-  return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
-}
-
 }  // namespace
 
 TwoBoneSolver::TwoBoneSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector)
@@ -30,64 +24,83 @@ TwoBoneSolver::TwoBoneSolver(const Skeleton& skeleton, std::int32_t root, std::i
     throw Error::in_file("<ik>", "bone " + std::to_string(effector),
                          "the two-bone solver needs a chain of exactly two joints, '" + skeleton.key(root) + "' has " +
                              std::to_string(chain_.joint_count()) + " above '" + skeleton.key(effector) + "'");
+  for (std::size_t k = 0; k < 2; ++k) limits_[k] = prepare_limits(skeleton.bone(chain_.bones[k]).limits);
 }
 
 bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float tolerance, IkResult& result) const {
   if (!detail::pose_fits(*skeleton_, pose) || !detail::finite(target) || !detail::finite(pole) ||
       !std::isfinite(tolerance) || tolerance < 0.0f)
     return false;
-  const auto upper = static_cast<std::size_t>(chain_.bones[0]);
-  const auto lower = static_cast<std::size_t>(chain_.bones[1]);
-  detail::clamp_joint(*skeleton_, pose, chain_.bones[0]);
-  detail::clamp_joint(*skeleton_, pose, chain_.bones[1]);
+  glm::quat& upper = pose.rotations[static_cast<std::size_t>(chain_.bones[0])];
+  glm::quat& lower = pose.rotations[static_cast<std::size_t>(chain_.bones[1])];
+  const glm::vec3 u = pose.translations[static_cast<std::size_t>(chain_.bones[1])];  // root → middle, upper's frame
+  const glm::vec3 lower_offset = pose.translations[static_cast<std::size_t>(chain_.bones[2])];
+  clamp_rotation(limits_[0], upper);
+  clamp_rotation(limits_[1], lower);
+  // Steps 2 and 3 work in the frame of the root's parent with the root's head at the origin, where the upper
+  // bone's rotation turns the limb directly; the target and the pole are brought there once.
   const detail::Frame base = detail::base_frame(chain_, pose);
-  glm::quat frames[3];
-  glm::vec3 heads[3];
-  detail::chain_fk(chain_, pose, base, frames, heads);
-
-  const glm::vec3 root = heads[0];
-  const glm::vec3 to_target = target - root;
-  const float a = glm::length(heads[1] - heads[0]);
-  const float b = glm::length(heads[2] - heads[1]);
+  const glm::quat to_base = glm::conjugate(base.rotation);
+  const glm::vec3 to_target =
+      to_base * (target - base.translation) - pose.translations[static_cast<std::size_t>(chain_.bones[0])];
+  const glm::vec3 base_pole = to_base * pole;
   const float target_distance = glm::length(to_target);
+  const double a = glm::length(u), b = glm::length(lower_offset);
+  glm::vec3 v = lower * lower_offset;  // middle → effector, upper's frame
 
-  // 1. The middle joint opens or closes about the limb's bend axis until |effector - root| is the reachable
-  //    distance nearest the target's: c in [|a - b|, a + b], interior angle from the law of cosines.
+  // 1. In the upper bone's frame, the middle joint opens or closes about the limb's bend axis until |effector −
+  //    root| is the reachable distance c nearest the target's, c in [|a − b|, a + b]: the interior angle's cosine
+  //    from the law of cosines. The turn (current − wanted interior angle) is built from cosines and sines.
   if (a > tiny && b > tiny) {
-    const glm::vec3 u = heads[1] - heads[0], v = heads[2] - heads[1];
-    glm::vec3 axis = glm::cross(u, v);
-    if (glm::length(axis) < 1e-7f * a * b) {  // a straight limb: bend toward the pole, or any way
-      axis = glm::cross(u, pole - u * (glm::dot(pole, u) / (a * a)));
-      if (glm::length(axis) < 1e-7f * a * glm::length(pole) || glm::length(pole) <= tiny) axis = perpendicular(u);
+    const glm::dvec3 cross = glm::cross(glm::dvec3(u), glm::dvec3(v));
+    const double sine = glm::length(cross);  // a · b · sin(interior angle)
+    glm::vec3 axis;
+    if (sine < 1e-7 * a * b) {  // a straight limb: bend toward the pole, or any way
+      const glm::vec3 upper_pole = glm::conjugate(upper) * base_pole;
+      axis = glm::cross(u, upper_pole - u * (glm::dot(upper_pole, u) / static_cast<float>(a * a)));
+      axis = glm::length(axis) < 1e-7f * static_cast<float>(a) * glm::length(pole) || glm::length(pole) <= tiny
+                 ? perpendicular(u)
+                 : glm::normalize(axis);
+    } else {
+      axis = glm::vec3(cross / sine);
     }
-    axis = glm::normalize(axis);
-    const double c = std::clamp(static_cast<double>(target_distance), std::abs(double(a) - double(b)),
-                                double(a) + double(b));
-    const double cosine = (double(a) * a + double(b) * b - c * c) / (2.0 * double(a) * b);
-    const double wanted = std::acos(std::clamp(cosine, -1.0, 1.0));
-    const double current = angle_between(-u, v);
-    const glm::quat turn = glm::angleAxis(static_cast<float>(current - wanted), axis);
-    pose.rotations[lower] = glm::conjugate(frames[0]) * turn * frames[1];
-    detail::clamp_joint(*skeleton_, pose, chain_.bones[1]);
-    detail::chain_fk(chain_, pose, base, frames, heads);
+    const glm::dvec2 current(-glm::dot(glm::dvec3(u), glm::dvec3(v)), sine);  // (cos, sin) · a · b
+    const double c = std::clamp(static_cast<double>(target_distance), std::abs(a - b), a + b);
+    const double cos_wanted = std::clamp((a * a + b * b - c * c) / (2.0 * a * b), -1.0, 1.0);
+    const glm::dvec2 wanted(cos_wanted, std::sqrt(1.0 - cos_wanted * cos_wanted));
+    const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
+    // The turn's quaternion from its half angle, normalised by the clamp; v turned with it (Rodrigues, v ⊥ axis),
+    // or from the pose again when a limit moved the joint.
+    const glm::dvec2 half = detail::scaled_half_angle(turn, a * b);
+    const glm::vec3 turn_axis = axis * static_cast<float>(half.y);
+    lower = glm::quat(static_cast<float>(half.x), turn_axis.x, turn_axis.y, turn_axis.z) * lower;
+    const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
+                               static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
+    v = clamp_rotation(limits_[1], lower) ? lower * lower_offset : turned_v;
   }
   // 2. The root turns the effector onto the line to the target, 3. then twists about that line so the middle joint
   //    lies on the pole's side. A target on the root leaves the direction as it is; a pole on the line, the plane.
+  glm::vec3 effector = upper * (u + v);
   if (target_distance > tiny) {
-    glm::quat turn = detail::rotation_between(heads[2] - root, to_target);
-    const glm::vec3 d = to_target / target_distance;
-    const glm::vec3 mid = turn * (heads[1] - root);
+    const glm::quat turned = detail::rotation_between(effector, to_target) * upper;
+    const glm::vec3 d = to_target * (1.0f / target_distance);
+    const glm::vec3 mid = turned * u;
     const glm::vec3 mid_across = mid - d * glm::dot(mid, d);
-    const glm::vec3 pole_across = pole - d * glm::dot(pole, d);
-    if (glm::length(mid_across) > 1e-6f * a && glm::length(pole_across) > 1e-6f * glm::length(pole)) {
-      const float twist = std::atan2(glm::dot(glm::cross(mid_across, pole_across), d), glm::dot(mid_across, pole_across));
-      turn = glm::angleAxis(twist, d) * turn;
+    const glm::vec3 pole_across = base_pole - d * glm::dot(base_pole, d);
+    const float mid_across2 = glm::dot(mid_across, mid_across), pole_across2 = glm::dot(pole_across, pole_across);
+    upper = turned;
+    if (mid_across2 > 1e-12f * static_cast<float>(a * a) && pole_across2 > 1e-12f * glm::dot(base_pole, base_pole)) {
+      // The twist from mid_across to pole_across: cosine and sine times |mid_across| |pole_across|.
+      const glm::dvec2 half = detail::scaled_half_angle(
+          glm::dvec2(glm::dot(mid_across, pole_across), glm::dot(glm::cross(mid_across, pole_across), d)),
+          std::sqrt(static_cast<double>(mid_across2) * static_cast<double>(pole_across2)));
+      const glm::vec3 twist_axis = d * static_cast<float>(half.y);
+      upper = glm::quat(static_cast<float>(half.x), twist_axis.x, twist_axis.y, twist_axis.z) * turned;
     }
-    pose.rotations[upper] = glm::conjugate(base.rotation) * turn * frames[0];
-    detail::clamp_joint(*skeleton_, pose, chain_.bones[0]);
-    detail::chain_fk(chain_, pose, base, frames, heads);
+    // The limb now lies along the line to the target, unless a limit moved the root. (The clamp also normalises.)
+    effector = clamp_rotation(limits_[0], upper) ? upper * (u + v) : d * glm::length(effector);
   }
-  const float distance = glm::length(heads[2] - target);
+  const float distance = glm::length(effector - to_target);
   result = IkResult{distance <= tolerance, distance, 1};
   return true;
 }

@@ -11,6 +11,7 @@
 //  - is constructed once (allocates) and solves per frame without allocating, throwing or doing I/O.
 // docs/ik.md describes the algorithms, their guarantees and measured behaviour.
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -40,6 +41,26 @@ DEFORM_API float chain_length(const IkChain& chain, const Pose& pose) noexcept;
 // The world position of the effector's head in `pose` (forward kinematics of the ancestors and the chain only).
 // The pose must have skeleton.bone_count() entries. O(depth of the effector), no allocation.
 DEFORM_API glm::vec3 effector_position(const Skeleton& skeleton, const IkChain& chain, const Pose& pose) noexcept;
+
+// A joint's DOF limits prepared once for clamping per frame (prepare_limits): the bounds in radians and as unit
+// (cos, sin) directions, so that clamp_rotation needs no sin, cos or atan2 call. The solvers hold one per joint.
+// The default is free, as DofLimits{}.
+struct EulerLimits {
+  glm::dvec3 min{-std::numbers::pi}, max{std::numbers::pi};  // radians, DofLimits' bounds
+  glm::dvec2 min_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of min per axis
+  glm::dvec2 max_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of max per axis
+  bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
+};
+
+// The prepared form of `limits` (degrees, X·Y·Z as in shared/spec/sk-format.md). O(1), a few sin/cos calls.
+DEFORM_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
+
+// Normalises `rotation` and clamps it into the limits as Skeleton::clamp_to_limits does (of its two Euler triples the
+// one nearer the limits, angles in (-180°, 180°], clamped per axis, converted back), with square roots and a
+// polynomial arctangent instead of trigonometric calls: the same rotation to float rounding (the tests allow 4e-6
+// rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. Returns
+// true when the rotation was outside the limits and was changed.
+DEFORM_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept;
 
 // How an iterative solve stops and steps.
 struct IkSettings {
@@ -76,15 +97,16 @@ class DEFORM_API CcdSolver {
   const IkChain& chain() const noexcept { return chain_; }
 
  private:
-  void sweep(Pose& pose, glm::vec3 target, glm::quat base, float max_step, bool reaim);  // one CCD sweep
+  void sweep(Pose& pose, glm::vec3 target, glm::quat base, float max_step_radians, bool reaim);  // one CCD sweep
 
   const Skeleton* skeleton_;
   IkChain chain_;
-  std::vector<glm::quat> frames_;  // world rotation per chain bone
-  std::vector<glm::vec3> heads_;   // world head per chain bone
-  std::vector<glm::quat> best_;    // best joint rotations seen
-  std::vector<glm::vec3> angles_;  // Euler angles per joint (stall escape)
-  std::vector<glm::vec3> columns_; // Jacobian columns, 3 per joint (stall escape)
+  std::vector<EulerLimits> limits_;  // per joint
+  std::vector<glm::quat> frames_;    // world rotation per chain bone
+  std::vector<glm::vec3> heads_;     // world head per chain bone
+  std::vector<glm::quat> best_;      // best joint rotations seen
+  std::vector<glm::dvec3> angles_;   // Euler angles per joint (stall escape)
+  std::vector<glm::vec3> columns_;   // Jacobian columns, 3 per joint (stall escape)
   std::uint32_t random_state_ = 0x9e3779b9u;
 };
 
@@ -108,12 +130,13 @@ class DEFORM_API FabrikSolver {
 
   const Skeleton* skeleton_;
   IkChain chain_;
+  std::vector<EulerLimits> limits_;
   std::vector<glm::quat> frames_;
   std::vector<glm::vec3> heads_;
   std::vector<glm::vec3> goals_;   // FABRIK's joint positions
   std::vector<float> lengths_;     // segment lengths
   std::vector<glm::quat> best_;
-  std::vector<glm::vec3> angles_;
+  std::vector<glm::dvec3> angles_;
   std::vector<glm::vec3> columns_;
   std::uint32_t random_state_ = 0x9e3779b9u;
 };
@@ -141,6 +164,7 @@ class DEFORM_API TwoBoneSolver {
  private:
   const Skeleton* skeleton_;
   IkChain chain_;
+  EulerLimits limits_[2];  // root, middle
 };
 
 }  // namespace deform

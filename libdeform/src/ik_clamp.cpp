@@ -1,0 +1,207 @@
+// The solvers' per-frame DOF clamp: Skeleton::clamp_to_limits (convert to Euler X·Y·Z, clamp, convert back) without
+// trigonometric calls. A joint's Euler angles are kept both as angles and as (cos, sin) directions: the directions
+// come straight from the rotation matrix entries, an angle from a polynomial arctangent, and the quaternion back from
+// half-angle directions. Clamped axes take directions precomputed by prepare_limits.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "ik_chain.hpp"
+
+namespace deform {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+constexpr double tan_pi_8 = 0.41421356237309503;  // √2 − 1
+
+// atan2(y, x) in (-π, π], to within 7e-9 rad. The angle of (|x|, |y|) is reduced by 0, π/4 or π/2 to
+// |atan t| <= π/8, where atan t = t · P(t²), P interpolating atan(√s)/√s at 5 Chebyshev nodes of [0, tan²(π/8)]
+// (near-minimax). Written with selects rather than branches, which random angles would mispredict.
+inline double polynomial_atan2(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const bool low = ay <= tan_pi_8 * ax, high = ax < tan_pi_8 * ay;
+  const double numerator = low ? ay : (high ? -ax : ay - ax);
+  const double denominator = low ? ax : (high ? ay : ay + ax);
+  const double base = low ? 0.0 : (high ? 0.5 * pi : 0.25 * pi);
+  const double t = denominator > 0.0 ? numerator / denominator : 0.0;  // (0, 0) gives 0, as std::atan2
+  const double s = t * t;
+  const double angle = base + t * (0.99999998126461132 + s * (-0.33332785771926865 + s * (0.19974082415557812 +
+                                   s * (-0.13848490212692172 + s * 0.079762918079436945))));
+  const double quadrant = x < 0.0 ? pi - angle : angle;
+  return y < 0.0 ? -quadrant : quadrant;
+}
+
+inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
+
+// How far the angles lie outside the limits, summed over the axes (radians): 0 when within.
+inline double outside(const EulerLimits& limits, glm::dvec3 angle) {
+  double sum = 0.0;
+  for (int axis = 0; axis < 3; ++axis)
+    sum += std::max(0.0, limits.min[axis] - angle[axis]) + std::max(0.0, angle[axis] - limits.max[axis]);
+  return sum;
+}
+
+// v turned about Euler axis `axis` by the angle of the direction d (by its inverse when `inverse`).
+inline glm::dvec3 turn_about(glm::dvec3 v, int axis, glm::dvec2 d, bool inverse) {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const double s = inverse ? -d.y : d.y;
+  const double vi = v[i], vj = v[j];
+  v[i] = d.x * vi - s * vj;
+  v[j] = s * vi + d.x * vj;
+  return v;
+}
+
+// (cos a, sin a) to within 1e-12 for |a| < 100 rad (the angles here lie within a few π).
+glm::dvec2 direction(double angle) {
+  // Reduced by the nearest multiple of π/2 to |r| <= π/4, where the Taylor series of sin to r^13 and cos to r^12
+  // are within 5e-13.
+  const auto quarter = static_cast<long>(angle * (2.0 / pi) + (angle >= 0.0 ? 0.5 : -0.5));
+  const double r = angle - static_cast<double>(quarter) * (0.5 * pi), r2 = r * r;
+  const double sine = r * (1.0 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 +
+                                r2 * (-1.0 / 39916800 + r2 * (1.0 / 6227020800.0)))))));
+  const double cosine = 1.0 + r2 * (-1.0 / 2 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 +
+                              r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+  switch (quarter & 3) {
+    case 0: return {cosine, sine};
+    case 1: return {-sine, cosine};
+    case 2: return {-cosine, -sine};
+    default: return {sine, -cosine};
+  }
+}
+
+}  // namespace
+
+EulerLimits prepare_limits(const DofLimits& limits) noexcept {
+  EulerLimits prepared;
+  for (int axis = 0; axis < 3; ++axis) {
+    prepared.min[axis] = static_cast<double>(limits.min[axis]) * (pi / 180.0);
+    prepared.max[axis] = static_cast<double>(limits.max[axis]) * (pi / 180.0);
+    prepared.min_dir[axis] = glm::dvec2(std::cos(prepared.min[axis]), std::sin(prepared.min[axis]));
+    prepared.max_dir[axis] = glm::dvec2(std::cos(prepared.max[axis]), std::sin(prepared.max[axis]));
+  }
+  prepared.free = glm::all(glm::lessThanEqual(limits.min, glm::vec3(-180.0f))) &&
+                  glm::all(glm::greaterThanEqual(limits.max, glm::vec3(180.0f)));
+  return prepared;
+}
+
+bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
+  rotation = glm::normalize(rotation);
+  detail::EulerAngles euler;
+  if (limits.free || !detail::limit_euler(limits, rotation, euler)) return false;
+  rotation = detail::to_quat(euler);
+  return true;
+}
+
+namespace detail {
+
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept {
+  // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
+  // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
+  // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
+  // the small ones keep their precision.
+  const glm::dquat q(rotation);
+  const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
+  if (!(norm2 > 1e-24) || !std::isfinite(norm2)) return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler);
+  const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
+  const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
+  const double r22 = ww - xx - yy + zz;
+  const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
+  EulerAngles first;
+  first.dir[1] = glm::dvec2(cos_b, r02) * (1.0 / norm2);
+  if (cos_b > 1e-9 * norm2) {
+    const double scale = 1.0 / cos_b;
+    first.dir[0] = glm::dvec2(r22, -r12) * scale;
+    first.dir[2] = glm::dvec2(r00, -r01) * scale;
+  } else {
+    first.dir[0] = glm::dvec2(r11, r21) * (1.0 / norm2);
+    first.dir[2] = glm::dvec2(1.0, 0.0);
+  }
+  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(first.dir[axis].y, first.dir[axis].x);
+  const double first_outside = outside(limits, first.angle);
+  if (first_outside == 0.0) {
+    euler = first;
+    return false;
+  }
+  // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
+  EulerAngles second;
+  second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
+  second.dir[0] = -first.dir[0];
+  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
+  second.dir[2] = -first.dir[2];
+  const double second_outside = outside(limits, second.angle);
+  euler = second_outside < first_outside ? second : first;
+  if (second_outside == 0.0) return false;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (euler.angle[axis] < limits.min[axis]) {
+      euler.angle[axis] = limits.min[axis], euler.dir[axis] = limits.min_dir[axis];
+    } else if (euler.angle[axis] > limits.max[axis]) {
+      euler.angle[axis] = limits.max[axis], euler.dir[axis] = limits.max_dir[axis];
+    }
+  }
+  return true;
+}
+
+EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
+  EulerAngles euler;
+  euler.angle = angle;
+  for (int axis = 0; axis < 3; ++axis)
+    euler.dir[axis] = angle[axis] <= limits.min[axis]   ? limits.min_dir[axis]
+                      : angle[axis] >= limits.max[axis] ? limits.max_dir[axis]
+                                                        : direction(angle[axis]);
+  return euler;
+}
+
+glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
+  // (r + cos, sin), or near ±180°, where that cancels, the parallel (|sin|, ±(r − cos)).
+  return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
+}
+
+glm::quat to_quat(const EulerAngles& euler) noexcept {
+  const glm::dvec2 x = scaled_half_angle(euler.dir[0], 1.0), y = scaled_half_angle(euler.dir[1], 1.0);
+  const glm::dvec2 z = scaled_half_angle(euler.dir[2], 1.0);
+  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once.
+  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
+  const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
+  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
+}
+
+void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (limits.min[axis] == limits.max[axis]) continue;
+    // R = Rx · Ry · Rz: axis k turns v = (the rotations after k) · carried; compare with (those before k)⁻¹ · wanted.
+    glm::dvec3 v = carried, u = wanted;
+    for (int later = 2; later > axis; --later) v = turn_about(v, later, euler.dir[later], false);
+    for (int earlier = 0; earlier < axis; ++earlier) u = turn_about(u, earlier, euler.dir[earlier], true);
+    const int i = (axis + 1) % 3, j = (axis + 2) % 3;  // the plane the axis turns
+    if (v[i] * v[i] + v[j] * v[j] < 1e-20 || u[i] * u[i] + u[j] * u[j] < 1e-20) continue;
+    // The best angle turns v's direction in the plane onto u's: the direction of u · conj(v) as complex numbers.
+    const glm::dvec2 best_dir(u[i] * v[i] + u[j] * v[j], u[j] * v[i] - u[i] * v[j]);
+    const double best = polynomial_atan2(best_dir.y, best_dir.x);
+    // The angle in [min, max] nearest to `best` around the circle (where −cos(angle − best) is smallest).
+    const double min = limits.min[axis], max = limits.max[axis];
+    bool inside = max - min >= 2.0 * pi;
+    double angle = best;
+    for (const double shift : {-2.0 * pi, 0.0, 2.0 * pi})
+      if (!inside && best + shift >= min && best + shift <= max) angle = best + shift, inside = true;
+    if (inside) {
+      euler.angle[axis] = angle, euler.dir[axis] = best_dir * (1.0 / glm::length(best_dir));
+    } else if (std::abs(wrap(best - min)) <= std::abs(wrap(best - max))) {
+      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    } else {
+      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+    }
+  }
+}
+
+bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
+                 glm::vec3 wanted) noexcept {
+  local = glm::normalize(local);
+  EulerAngles euler;
+  if (limits.free || !limit_euler(limits, local, euler)) return false;
+  if (reaim) reaim_euler(limits, euler, carried, wanted);
+  local = to_quat(euler);
+  return true;
+}
+
+}  // namespace detail
+}  // namespace deform
