@@ -56,20 +56,6 @@ glm::vec3 effector_position(const Skeleton& skeleton, const IkChain& chain, cons
 
 namespace detail {
 
-bool pose_fits(const Skeleton& skeleton, const Pose& pose) noexcept {
-  return pose.rotations.size() == skeleton.bone_count() && pose.translations.size() == skeleton.bone_count();
-}
-
-Frame base_frame(const IkChain& chain, const Pose& pose) noexcept {
-  Frame frame;
-  for (const std::int32_t id : chain.ancestors) {
-    const auto b = static_cast<std::size_t>(id);
-    frame.translation += frame.rotation * pose.translations[b];
-    frame.rotation = frame.rotation * pose.rotations[b];
-  }
-  return frame;
-}
-
 void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
               std::span<glm::vec3> heads) noexcept {
   glm::quat rotation = base.rotation;
@@ -86,30 +72,6 @@ void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::sp
 StepCap cap_for(float max_radians) noexcept {
   if (!(max_radians > 0.0f) || max_radians >= std::numbers::pi_v<float>) return {};
   return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
-}
-
-glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap) noexcept {
-  // With |from| |to| = r: (r + from · to, from × to) normalised is the rotation by the angle between them about
-  // their normal: two square roots, no trigonometry. In double so that r² neither underflows nor overflows.
-  const glm::dvec3 a(from), b(to);
-  const double aa = glm::dot(a, a), bb = glm::dot(b, b);
-  if (!(aa > 1e-24) || !(bb > 1e-24)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-  const double r = std::sqrt(aa * bb), cosine = glm::dot(a, b);  // cosine and axis are scaled by r
-  const glm::dvec3 axis = glm::cross(a, b);
-  const double sine2 = glm::dot(axis, axis);
-  if (sine2 < 1e-14 * aa * bb) {
-    if (cosine > 0.0) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-    // Opposite: any axis perpendicular to `from` does; take the one from the coordinate axis least aligned with it.
-    const glm::dvec3 helper = std::abs(a.x) < 0.6 * std::sqrt(aa) ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-    const glm::vec3 normal(glm::normalize(glm::cross(a, helper)) * static_cast<double>(cap.half.y));
-    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
-  }
-  if (cosine < static_cast<double>(cap.cos_angle) * r) {
-    const glm::vec3 normal(axis * (static_cast<double>(cap.half.y) / std::sqrt(sine2)));
-    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
-  }
-  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);
-  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
 }
 
 std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain) {

@@ -18,11 +18,24 @@ struct Frame {
 
 inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// The small helpers below are defined here so that they inline into the solvers' per-solve code (a two-bone solve
+// is ~200 ns: a call each would show).
+
 // True when `pose` has an entry per bone of `skeleton`.
-bool pose_fits(const Skeleton& skeleton, const Pose& pose) noexcept;
+inline bool pose_fits(const Skeleton& skeleton, const Pose& pose) noexcept {
+  return pose.rotations.size() == skeleton.bone_count() && pose.translations.size() == skeleton.bone_count();
+}
 
 // World frame of the root's parent (identity for the skeleton root). O(ancestors).
-Frame base_frame(const IkChain& chain, const Pose& pose) noexcept;
+inline Frame base_frame(const IkChain& chain, const Pose& pose) noexcept {
+  Frame frame;
+  for (const std::int32_t id : chain.ancestors) {
+    const auto b = static_cast<std::size_t>(id);
+    frame.translation += frame.rotation * pose.translations[b];
+    frame.rotation = frame.rotation * pose.rotations[b];
+  }
+  return frame;
+}
 
 // World rotation and head of every chain bone, from the base frame. Spans have chain.bones.size() entries.
 void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
@@ -38,7 +51,29 @@ StepCap cap_for(float max_radians) noexcept;  // max_radians <= 0 or >= π: no c
 // The shortest-arc unit rotation turning direction `from` onto direction `to` (angle from the dot product, axis from
 // the cross product), its angle capped by `cap`; identity when either is (nearly) zero; a half turn (or the cap)
 // about a perpendicular axis when opposite.
-glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}) noexcept;
+inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}) noexcept {
+  // With |from| |to| = r: (r + from · to, from × to) normalised is the rotation by the angle between them about
+  // their normal: two square roots, no trigonometry. In double so that r² neither underflows nor overflows.
+  const glm::dvec3 a(from), b(to);
+  const double aa = glm::dot(a, a), bb = glm::dot(b, b);
+  if (!(aa > 1e-24) || !(bb > 1e-24)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const double r = std::sqrt(aa * bb), cosine = glm::dot(a, b);  // cosine and axis are scaled by r
+  const glm::dvec3 axis = glm::cross(a, b);
+  const double sine2 = glm::dot(axis, axis);
+  if (sine2 < 1e-14 * aa * bb) {
+    if (cosine > 0.0) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    // Opposite: any axis perpendicular to `from` does; take the one from the coordinate axis least aligned with it.
+    const glm::dvec3 helper = std::abs(a.x) < 0.6 * std::sqrt(aa) ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+    const glm::vec3 normal(glm::normalize(glm::cross(a, helper)) * static_cast<double>(cap.half.y));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
+  }
+  if (cosine < static_cast<double>(cap.cos_angle) * r) {
+    const glm::vec3 normal(axis * (static_cast<double>(cap.half.y) / std::sqrt(sine2)));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
+  }
+  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);
+  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
+}
 
 // A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its unit direction (cos, sin).
 struct EulerAngles {
@@ -57,7 +92,10 @@ EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept;
 // (cos, sin) of half the angle of the non-zero direction `d` of the given length, times a positive factor, the
 // half angle in (-90°, 90°]: the quaternion (h.x, h.y · axis) of a turn whose cosine and sine are known, without
 // trigonometry, normalised by whoever uses it.
-glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept;
+inline glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
+  // (r + cos, sin), or near ±180°, where that cancels, the parallel (|sin|, ±(r − cos)).
+  return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
+}
 
 // The unit quaternion qx · qy · qz of the directions of `euler` (its angles are not read).
 glm::quat to_quat(const EulerAngles& euler) noexcept;

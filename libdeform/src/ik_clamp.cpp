@@ -151,11 +151,6 @@ EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
   return euler;
 }
 
-glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
-  // (r + cos, sin), or near ±180°, where that cancels, the parallel (|sin|, ±(r − cos)).
-  return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
-}
-
 glm::quat to_quat(const EulerAngles& euler) noexcept {
   const glm::dvec2 x = scaled_half_angle(euler.dir[0], 1.0), y = scaled_half_angle(euler.dir[1], 1.0);
   const glm::dvec2 z = scaled_half_angle(euler.dir[2], 1.0);

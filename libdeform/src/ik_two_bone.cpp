@@ -35,8 +35,11 @@ bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float to
   glm::quat& lower = pose.rotations[static_cast<std::size_t>(chain_.bones[1])];
   const glm::vec3 u = pose.translations[static_cast<std::size_t>(chain_.bones[1])];  // root → middle, upper's frame
   const glm::vec3 lower_offset = pose.translations[static_cast<std::size_t>(chain_.bones[2])];
-  clamp_rotation(limits_[0], upper);
-  clamp_rotation(limits_[1], lower);
+  // The start pose is only normalised: the answer's root rotation does not depend on it (the effector line and the
+  // pole fix it) and the middle joint is clamped after its turn, so clamping the start as well would not change the
+  // limits the answer keeps, only cost two more clamps.
+  upper = glm::normalize(upper);
+  lower = glm::normalize(lower);
   // Steps 2 and 3 work in the frame of the root's parent with the root's head at the origin, where the upper
   // bone's rotation turns the limb directly; the target and the pole are brought there once.
   const detail::Frame base = detail::base_frame(chain_, pose);
