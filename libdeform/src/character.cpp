@@ -33,7 +33,7 @@ Character::Character(Model model, const Rig& rig, bool use_default_rig)
       scales_(model_.skeleton.bone_count()),
       positions_(model_.mesh.positions),
       normals_(model_.mesh.vertex_count()),
-      normal_scratch_(model_.mesh.point_count()) {
+      vertex_normals_(model_.mesh) {
   const auto bones = std::int32_t(model_.skeleton.bone_count());
   if (rig_.reach_effector >= bones || rig_.reach_root >= bones) {
     throw Error::in_file(model_.name, "rig", "reach bone out of range");
@@ -209,7 +209,7 @@ bool Character::update(float dt) {
 
 std::span<const glm::vec3> Character::normals() {
   if (!normals_current_) {
-    compute_vertex_normals(model_.mesh, positions_, normal_scratch_, normals_);
+    vertex_normals_.compute(positions_, normals_);
     normals_current_ = true;
   }
   return normals_;

@@ -1,12 +1,34 @@
 // Angle-weighted vertex normals (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998) and
-// bounds: per-frame safe (no allocation, no exceptions).
+// bounds: per-frame safe (no allocation, no exceptions). VertexNormals runs the block kernel of
+// mesh_normals_kernel.inl, this file's baseline copy or the AVX-512 one, chosen once at run time.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "deform/mesh.hpp"
+#include "mesh_normals_kernel.hpp"
+
+#define DEFORM_NORMALS_ENTRY vertex_normals_baseline
+#include "mesh_normals_kernel.inl"
 
 namespace deform {
+namespace {
+
+using KernelEntry = void (*)(const detail::NormalsKernelArgs&) noexcept;
+
+// AVX-512 where the CPU has it. Asked on every call (a bit of libgcc's CPUID table), so that no static initialisation
+// order is involved; before libgcc has read the CPU the answer is the baseline, which is as correct.
+KernelEntry automatic_kernel() noexcept {
+#if defined(DEFORM_HAVE_NORMALS_AVX512)
+  if (__builtin_cpu_supports("avx512f")) return detail::vertex_normals_avx512;
+#endif
+  return detail::vertex_normals_baseline;
+}
+
+constexpr std::size_t block = detail::triangles_per_block;
+
+}  // namespace
 
 bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<glm::vec3> scratch,
                             std::span<glm::vec3> out_vertex_normals) {
@@ -31,19 +53,16 @@ bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positio
     const float twice_area = glm::length(area_normal);
     if (!(twice_area > 0.0f)) continue;  // degenerate: no direction to contribute
     const glm::vec3 unit_normal = area_normal / twice_area;
-    const float angle_a = std::atan2(twice_area, glm::dot(ab, ac));
-    const float angle_b = std::atan2(twice_area, -glm::dot(ab, bc));
+    const float angle_a = detail::corner_angle(twice_area, glm::dot(ab, ac));
+    const float angle_b = detail::corner_angle(twice_area, -glm::dot(ab, bc));
     const float angle_c = std::numbers::pi_v<float> - angle_a - angle_b;
     scratch[a] += angle_a * unit_normal;
     scratch[b] += angle_b * unit_normal;
     scratch[c] += std::max(angle_c, 0.0f) * unit_normal;
   }
-  // The sums are dimensionless (radians times unit normals): below this length the contributions cancelled (a
-  // point between opposite faces) and the direction would be rounding noise.
-  constexpr float cancelled = 1e-5f;
   for (glm::vec3& n : scratch) {
     const float length = glm::length(n);
-    n = length > cancelled ? n / length : glm::vec3(0.0f);
+    n = length > detail::cancelled_normal_sum ? n / length : glm::vec3(0.0f);
   }
   for (std::size_t r = 0; r < vertex_count; ++r) {
     const std::uint32_t point = mesh.vertex_point[r];
@@ -52,6 +71,43 @@ bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positio
   }
   return true;
 }
+
+VertexNormals::VertexNormals(const Mesh& mesh) : vertex_point_(mesh.vertex_point), point_sums_(mesh.point_count()) {
+  const std::size_t point_count = mesh.point_count();
+  if (mesh.triangles.size() % 3 != 0)
+    throw std::invalid_argument("VertexNormals: triangle index count not a multiple of 3");
+  for (const std::uint32_t point : vertex_point_)
+    if (point >= point_count) throw std::invalid_argument("VertexNormals: vertex_point index out of range");
+  std::vector<std::uint32_t> kept;  // 3 points per triangle without a repeated point
+  kept.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    std::uint32_t p[3];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t vertex = mesh.triangles[3 * t + k];
+      if (vertex >= vertex_point_.size()) throw std::invalid_argument("VertexNormals: triangle index out of range");
+      p[k] = vertex_point_[vertex];
+    }
+    if (p[0] != p[1] && p[1] != p[2] && p[0] != p[2]) kept.insert(kept.end(), {p[0], p[1], p[2]});
+  }
+  triangle_count_ = kept.size() / 3;
+  block_points_.assign(3 * block * ((triangle_count_ + block - 1) / block), 0);
+  for (std::size_t t = 0; t < triangle_count_; ++t)
+    for (std::size_t k = 0; k < 3; ++k)
+      block_points_[3 * block * (t / block) + block * k + t % block] = kept[3 * t + k];
+}
+
+bool VertexNormals::compute(std::span<const glm::vec3> positions, std::span<glm::vec3> out_vertex_normals,
+                            Kernel kernel) {
+  if (positions.size() != point_count() || out_vertex_normals.size() != vertex_count()) return false;
+  const detail::NormalsKernelArgs args{block_points_.data(), triangle_count_, positions.data(), point_sums_.data(),
+                                       point_sums_.size()};
+  (kernel == Kernel::portable ? detail::vertex_normals_baseline : automatic_kernel())(args);
+  for (std::size_t r = 0; r < vertex_point_.size(); ++r)
+    out_vertex_normals[r] = glm::vec3(point_sums_[vertex_point_[r]]);
+  return true;
+}
+
+bool VertexNormals::has_avx512() noexcept { return automatic_kernel() != detail::vertex_normals_baseline; }
 
 Bounds compute_bounds(std::span<const glm::vec3> points) {
   if (points.empty()) return {};

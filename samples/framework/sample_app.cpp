@@ -62,12 +62,12 @@ void PointMeshRenderer::create(const deform::Mesh& mesh) {
   renderer_.create(mesh);
   positions_.resize(mesh.vertex_count());
   normals_.resize(mesh.vertex_count());
-  scratch_.resize(mesh.point_count());
+  vertex_normals_ = deform::VertexNormals(mesh);
 }
 
 void PointMeshRenderer::draw(std::span<const glm::vec3> points, const Frame& frame, glm::mat4 model, glm::vec3 tint) {
   for (std::size_t v = 0; v < positions_.size(); ++v) positions_[v] = points[mesh_->vertex_point[v]];
-  deform::compute_vertex_normals(*mesh_, points, scratch_, normals_);
+  vertex_normals_.compute(points, normals_);
   renderer_.upload(positions_, normals_);
   renderer_.draw(model, frame.view, frame.projection, frame.eye, tint);
 }

@@ -31,7 +31,8 @@ class PointMeshRenderer {
  private:
   const deform::Mesh* mesh_ = nullptr;
   MeshRenderer renderer_;
-  std::vector<glm::vec3> positions_, normals_, scratch_;
+  std::vector<glm::vec3> positions_, normals_;
+  deform::VertexNormals vertex_normals_;
 };
 
 }  // namespace sample

@@ -1,14 +1,21 @@
-// Vertex normals, bounds and point topology: hand-computed cases, invariances, a plain reference implementation,
-// and OpenMesh as an independent reference for the angle-weighted normals, one-rings and boundary edges.
+// Vertex normals, bounds and point topology: hand-computed cases, invariances, plain reference implementations (the
+// library's former atan2 code and a double-precision acos one), and OpenMesh as an independent reference for the
+// angle-weighted normals, one-rings and boundary edges. Every normals case runs on the three paths: the one-shot
+// compute_vertex_normals and VertexNormals' automatic (AVX-512 where the CPU has it) and portable kernels.
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <span>
+#include <stdexcept>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <glm/gtc/matrix_transform.hpp>
 
+#include "deform/builtin.hpp"
 #include "deform/mesh.hpp"
 
 namespace {
@@ -25,10 +32,36 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
   return mesh;
 }
 
-std::vector<glm::vec3> normals_of(const Mesh& mesh) {
-  std::vector<glm::vec3> scratch(mesh.point_count()), out(mesh.vertex_count());
-  REQUIRE(deform::compute_vertex_normals(mesh, mesh.positions, scratch, out));
+// The three ways to get normals.
+enum class Path { function, bound_automatic, bound_portable };
+constexpr Path all_paths[] = {Path::function, Path::bound_automatic, Path::bound_portable};
+const char* path_name(Path path) {
+  return path == Path::function ? "compute_vertex_normals"
+                                : path == Path::bound_automatic ? "VertexNormals automatic" : "VertexNormals portable";
+}
+
+std::vector<glm::vec3> normals_of(const Mesh& mesh, std::span<const glm::vec3> positions, Path path) {
+  std::vector<glm::vec3> out(mesh.vertex_count());
+  if (path == Path::function) {
+    std::vector<glm::vec3> scratch(mesh.point_count());
+    REQUIRE(deform::compute_vertex_normals(mesh, positions, scratch, out));
+  } else {
+    deform::VertexNormals normals(mesh);
+    const auto kernel = path == Path::bound_portable ? deform::VertexNormals::Kernel::portable
+                                                     : deform::VertexNormals::Kernel::automatic;
+    REQUIRE(normals.compute(positions, out, kernel));
+  }
   return out;
+}
+std::vector<glm::vec3> normals_of(const Mesh& mesh, Path path = Path::function) {
+  return normals_of(mesh, mesh.positions, path);
+}
+
+// The angle between two directions, in radians (0 when both are zero; pi when only one is).
+double angle_between(const glm::vec3& a, const glm::vec3& b) {
+  if (a == glm::vec3(0.0f) || b == glm::vec3(0.0f)) return a == b ? 0.0 : std::numbers::pi;
+  const glm::dvec3 x = glm::normalize(glm::dvec3(a)), y = glm::normalize(glm::dvec3(b));
+  return std::atan2(glm::length(glm::cross(x, y)), glm::dot(x, y));
 }
 
 void check_near(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-5f) {
@@ -98,9 +131,13 @@ Mesh torus(int n, int m, std::mt19937& random) {
   return mesh;
 }
 
-// Plain reference: the corner angle from acos of the normalised edge dot product, per corner, in double.
-std::vector<glm::vec3> reference_normals(const Mesh& mesh) {
+// Plain reference: the corner angle from acos of the normalised edge dot product, per corner, in double. When
+// `condition` is given it receives, per render vertex, the sum of the point's corner angles over the length of its
+// weighted sum: how much rounding in the weights is amplified in the direction (1 on a flat or convex fan, large
+// where a fold makes the contributions nearly cancel).
+std::vector<glm::vec3> reference_normals(const Mesh& mesh, std::vector<double>* condition = nullptr) {
   std::vector<glm::dvec3> sums(mesh.point_count(), glm::dvec3(0.0));
+  std::vector<double> angle_sums(mesh.point_count(), 0.0);
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     std::uint32_t p[3];
     for (int k = 0; k < 3; ++k) p[k] = mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]];
@@ -112,14 +149,53 @@ std::vector<glm::vec3> reference_normals(const Mesh& mesh) {
       if (glm::length(e1) == 0.0 || glm::length(e2) == 0.0) continue;
       const double angle = std::acos(std::clamp(glm::dot(glm::normalize(e1), glm::normalize(e2)), -1.0, 1.0));
       sums[p[k]] += angle * glm::normalize(cross);
+      angle_sums[p[k]] += angle;
     }
   }
   std::vector<glm::vec3> out;
+  if (condition) condition->clear();
   for (const std::uint32_t point : mesh.vertex_point) {
     const glm::dvec3 s = sums[point];
     out.push_back(glm::length(s) > 1e-5 ? glm::vec3(glm::normalize(s)) : glm::vec3(0.0f));
+    if (condition)
+      condition->push_back(glm::length(s) > 0.0 ? std::max(1.0, angle_sums[point] / glm::length(s)) : 1e30);
   }
   return out;
+}
+
+// Plain reference: the library's code before the fast paths, verbatim (float, std::atan2 per corner).
+std::vector<glm::vec3> atan2_reference_normals(const Mesh& mesh, std::span<const glm::vec3> positions) {
+  std::vector<glm::vec3> scratch(mesh.point_count(), glm::vec3(0.0f)), out;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const std::uint32_t a = mesh.vertex_point[mesh.triangles[3 * t]];
+    const std::uint32_t b = mesh.vertex_point[mesh.triangles[3 * t + 1]];
+    const std::uint32_t c = mesh.vertex_point[mesh.triangles[3 * t + 2]];
+    const glm::vec3 ab = positions[b] - positions[a];
+    const glm::vec3 ac = positions[c] - positions[a];
+    const glm::vec3 bc = positions[c] - positions[b];
+    const glm::vec3 area_normal = glm::cross(ab, ac);
+    const float twice_area = glm::length(area_normal);
+    if (!(twice_area > 0.0f)) continue;
+    const glm::vec3 unit_normal = area_normal / twice_area;
+    const float angle_a = std::atan2(twice_area, glm::dot(ab, ac));
+    const float angle_b = std::atan2(twice_area, -glm::dot(ab, bc));
+    const float angle_c = std::numbers::pi_v<float> - angle_a - angle_b;
+    scratch[a] += angle_a * unit_normal;
+    scratch[b] += angle_b * unit_normal;
+    scratch[c] += std::max(angle_c, 0.0f) * unit_normal;
+  }
+  for (glm::vec3& n : scratch) {
+    const float length = glm::length(n);
+    n = length > 1e-5f ? n / length : glm::vec3(0.0f);
+  }
+  for (const std::uint32_t point : mesh.vertex_point) out.push_back(scratch[point]);
+  return out;
+}
+
+// A smooth non-rigid deformation: a twist about y growing with height, a bend and a squash.
+glm::vec3 warp(glm::vec3 p) {
+  const float twist = 0.8f * p.y, c = std::cos(twist), s = std::sin(twist);
+  return {c * p.x + s * p.z + 0.3f * p.y * p.y, 0.9f * p.y, -s * p.x + c * p.z + 0.1f * std::sin(3.0f * p.x)};
 }
 
 OmMesh to_openmesh(const Mesh& mesh) {
@@ -137,19 +213,45 @@ OmMesh to_openmesh(const Mesh& mesh) {
 TEST_CASE("normals: hand-computed corner — 90 and 45 degree corners weigh 2 : 1") {
   // Corner O of a right angle in z = 0 (normal +z) and of a 45-degree triangle in x = 0 (normal +x).
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 1, 1}}, {0, 1, 2, 0, 2, 3});
-  const auto normals = normals_of(mesh);
-  check_near(normals[0], glm::vec3(1, 0, 2) / std::sqrt(5.0f));
-  check_near(normals[1], glm::vec3(0, 0, 1));
-  check_near(normals[3], glm::vec3(1, 0, 0));
-  // Point 2 (0,1,0): 45 degrees in the +z triangle, 90 degrees (between (0,-1,0) and (0,0,1)) in the +x one.
-  check_near(normals[2], glm::vec3(2, 0, 1) / std::sqrt(5.0f));
+  for (const Path path : all_paths) {
+    INFO(path_name(path));
+    const auto normals = normals_of(mesh, path);
+    check_near(normals[0], glm::vec3(1, 0, 2) / std::sqrt(5.0f));
+    check_near(normals[1], glm::vec3(0, 0, 1));
+    check_near(normals[3], glm::vec3(1, 0, 0));
+    // Point 2 (0,1,0): 45 degrees in the +z triangle, 90 degrees (between (0,-1,0) and (0,0,1)) in the +x one.
+    check_near(normals[2], glm::vec3(2, 0, 1) / std::sqrt(5.0f));
+  }
+}
+
+TEST_CASE("normals: hand-computed obtuse and acute corners, every octant of the polynomial atan2") {
+  // Fans of two triangles around point 0 in the planes z = 0 and x = 0, with corner angles chosen to reach every
+  // branch of corner_angle (|x| < y and |x| > y, x < 0 and x > 0): the normal at 0 is (w_x, 0, w_z) / |.|
+  // with w the two corner angles.
+  for (const double first : {0.3, 0.7, 1.2, 1.9, 2.6, 3.0})
+    for (const double second : {0.2, 0.785, 1.5, 2.2, 2.9}) {
+      const Mesh mesh = make_mesh({{0, 0, 0},
+                                   {1, 0, 0},
+                                   {float(std::cos(first)), float(std::sin(first)), 0},
+                                   {0, 0, -1},
+                                   {0, float(std::sin(second)), -float(std::cos(second))}},
+                                  {0, 1, 2, 0, 3, 4});
+      const glm::vec3 expected = glm::normalize(glm::vec3(float(second), 0, float(first)));
+      for (const Path path : all_paths) {
+        INFO(path_name(path), " corners ", first, " and ", second);
+        check_near(normals_of(mesh, path)[0], expected, 1e-6f);
+      }
+    }
 }
 
 TEST_CASE("normals: a cube's corners point along the diagonal, whichever way the faces are split") {
   for (const bool flip : {false, true}) {
     const Mesh mesh = cube(flip);
-    const auto normals = normals_of(mesh);
-    for (std::size_t p = 0; p < 8; ++p) check_near(normals[p], glm::normalize(mesh.positions[p] - glm::vec3(0.5f)));
+    for (const Path path : all_paths) {
+      INFO(path_name(path));
+      const auto normals = normals_of(mesh, path);
+      for (std::size_t p = 0; p < 8; ++p) check_near(normals[p], glm::normalize(mesh.positions[p] - glm::vec3(0.5f)));
+    }
   }
 }
 
@@ -157,35 +259,147 @@ TEST_CASE("normals: a flat grid gives +z everywhere for any triangulation") {
   std::mt19937 random(7);
   for (int round = 0; round < 20; ++round) {
     const Mesh mesh = flat_grid(2 + int(random() % 8), 2 + int(random() % 8), random);
-    for (const glm::vec3& n : normals_of(mesh)) check_near(n, glm::vec3(0, 0, 1));
+    for (const Path path : all_paths)
+      for (const glm::vec3& n : normals_of(mesh, path)) check_near(n, glm::vec3(0, 0, 1));
   }
 }
 
 TEST_CASE("normals: seams split by UV share the point's normal; degenerate triangles add nothing") {
   std::mt19937 random(3);
   const Mesh mesh = torus(12, 8, random);
-  const auto normals = normals_of(mesh);
-  for (int j = 0; j <= 8; ++j) CHECK(normals[std::size_t(j)] == normals[std::size_t(12 * 9 + j)]);  // u = 0 and u = 1
+  for (const Path path : all_paths) {
+    INFO(path_name(path));
+    const auto normals = normals_of(mesh, path);
+    for (int j = 0; j <= 8; ++j) CHECK(normals[std::size_t(j)] == normals[std::size_t(12 * 9 + j)]);  // u = 0, u = 1
 
-  Mesh with_degenerate = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3});
-  const auto normals2 = normals_of(with_degenerate);
-  check_near(normals2[0], glm::vec3(0, 0, 1));
-  CHECK(normals2[3] == glm::vec3(0.0f));  // touched only by a degenerate triangle
+    const Mesh with_degenerate = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3});
+    const auto normals2 = normals_of(with_degenerate, path);
+    check_near(normals2[0], glm::vec3(0, 0, 1));
+    CHECK(normals2[3] == glm::vec3(0.0f));  // touched only by a degenerate triangle
+  }
+  CHECK(deform::VertexNormals(make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3}))
+            .triangle_count() == 1);  // the two with a repeated point are dropped at bind time
 }
 
-TEST_CASE("normals: agree with a plain reference on random meshes, manifold or not") {
+TEST_CASE("normals: degenerate triangles, cancelling faces and non-finite points give finite results as documented") {
+  // Points 0-2: a real triangle (+z). 3-5: exactly collinear (zero cross product). 6-8: one triangle and its mirror
+  // image (the same points reversed), whose contributions cancel exactly. 9: NaN. 10: infinite.
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
+                         {0, 0, 1}, {1, 1, 1}, {2, 2, 1},
+                         {0, 0, 2}, {1, 0, 2}, {0, 1, 2},
+                         {nan, 0, 0}, {inf, 0, 0}},
+                        {0, 1, 2, 3, 4, 5, 6, 7, 8, 8, 7, 6, 9, 1, 2, 3, 4, 9, 10, 4, 5});
+  // Enough copies of the real triangle to fill two blocks of 16 and part of a third (padding lanes).
+  for (int copy = 0; copy < 35; ++copy) mesh.triangles.insert(mesh.triangles.end(), {0, 1, 2});
+  for (const Path path : all_paths) {
+    INFO(path_name(path));
+    const auto normals = normals_of(mesh, path);
+    for (const glm::vec3& n : normals) CHECK((std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z)));
+    for (std::size_t p = 0; p < 3; ++p) check_near(normals[p], glm::vec3(0, 0, 1));  // the NaN triangle adds nothing
+    for (std::size_t p = 6; p < 9; ++p) CHECK(normals[p] == glm::vec3(0.0f));       // cancelled
+    CHECK(normals[9] == glm::vec3(0.0f));  // only in a NaN triangle
+    CHECK(normals[3] == glm::vec3(0.0f));  // only in the collinear and NaN triangles
+  }
+}
+
+TEST_CASE("normals: agree with plain references on random meshes, manifold or not (thousands of seeded cases)") {
   std::mt19937 random(11);
   std::uniform_real_distribution<float> coordinate(-2.0f, 2.0f);
-  for (int round = 0; round < 300; ++round) {
+  for (int round = 0; round < 2000; ++round) {
     Mesh mesh;
-    const int points = 3 + int(random() % 20);
-    for (int i = 0; i < points; ++i) mesh.positions.emplace_back(coordinate(random), coordinate(random), coordinate(random));
-    for (int r = 0; r < points + int(random() % 10); ++r) mesh.vertex_point.push_back(std::uint32_t(random() % unsigned(points)));
-    const int triangles = 1 + int(random() % 30);
+    const int points = 3 + int(random() % 30);
+    for (int i = 0; i < points; ++i)
+      mesh.positions.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+    for (int r = 0; r < points + int(random() % 10); ++r)
+      mesh.vertex_point.push_back(std::uint32_t(random() % unsigned(points)));
+    const int triangles = 1 + int(random() % 60);
     for (int i = 0; i < 3 * triangles; ++i) mesh.triangles.push_back(std::uint32_t(random() % mesh.vertex_count()));
-    const auto ours = normals_of(mesh);
     const auto reference = reference_normals(mesh);
-    for (std::size_t r = 0; r < ours.size(); ++r) check_near(ours[r], reference[r], 1e-4f);
+    const auto former = atan2_reference_normals(mesh, mesh.positions);
+    for (const Path path : all_paths) {
+      INFO(path_name(path), " round ", round);
+      const auto ours = normals_of(mesh, path);
+      for (std::size_t r = 0; r < ours.size(); ++r) {
+        check_near(ours[r], reference[r], 1e-4f);
+        CHECK(angle_between(ours[r], former[r]) < 1e-4);
+      }
+    }
+  }
+}
+
+TEST_CASE("normals: the built-in character and seeded deformed tori — fast paths equal the references") {
+  // Against the double reference: within 5e-6 times the point's condition (1e-5 on the undeformed character, whose
+  // every fan is well conditioned). Against the former atan2 code: within the 1e-4 rad the fast paths promise.
+  std::vector<Mesh> meshes;
+  meshes.push_back(deform::builtin_character().mesh);
+  std::mt19937 random(17);
+  for (int round = 0; round < 40; ++round)
+    meshes.push_back(torus(3 + int(random() % 40), 3 + int(random() % 30), random));
+  for (const Mesh& mesh : meshes) {
+    std::vector<glm::vec3> warped;
+    for (const glm::vec3& p : mesh.positions) warped.push_back(warp(p));
+    for (const auto& positions : {std::span<const glm::vec3>(mesh.positions), std::span<const glm::vec3>(warped)}) {
+      const auto former = atan2_reference_normals(mesh, positions);
+      Mesh at_pose = mesh;
+      at_pose.positions.assign(positions.begin(), positions.end());
+      std::vector<double> condition;
+      const auto reference = reference_normals(at_pose, &condition);
+      for (const Path path : all_paths) {
+        INFO(path_name(path), " mesh of ", mesh.point_count(), " points");
+        const auto ours = normals_of(mesh, positions, path);
+        for (std::size_t r = 0; r < ours.size(); ++r) {
+          check_near(ours[r], reference[r], float(5e-6 * condition[r]));
+          CHECK(angle_between(ours[r], former[r]) < 1e-4);
+        }
+      }
+    }
+  }
+  const Mesh& character = meshes.front();
+  for (const Path path : all_paths) {
+    const auto ours = normals_of(character, path);
+    const auto reference = reference_normals(character);
+    for (std::size_t r = 0; r < ours.size(); ++r) check_near(ours[r], reference[r], 1e-5f);
+  }
+}
+
+TEST_CASE("normals: rotating, scaling and moving the points rotates the normals (seeded)") {
+  std::mt19937 random(23);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int round = 0; round < 50; ++round) {
+    const Mesh mesh = torus(4 + int(random() % 20), 3 + int(random() % 20), random);
+    const glm::vec3 axis = glm::normalize(glm::vec3(unit(random), unit(random), unit(random)) + glm::vec3(0, 0, 2));
+    const float angle = 3.0f * unit(random), scale = 0.1f + 10.0f * std::abs(unit(random));
+    const glm::vec3 offset = scale * glm::vec3(unit(random), unit(random), unit(random));
+    const glm::mat3 rotation = glm::mat3(glm::rotate(glm::mat4(1.0f), angle, axis));
+    std::vector<glm::vec3> moved;
+    for (const glm::vec3& p : mesh.positions) moved.push_back(scale * (rotation * p) + offset);
+    for (const Path path : all_paths) {
+      INFO(path_name(path), " round ", round);
+      const auto before = normals_of(mesh, path);
+      const auto after = normals_of(mesh, moved, path);
+      for (std::size_t r = 0; r < before.size(); ++r) check_near(after[r], rotation * before[r], 2e-5f);
+    }
+  }
+}
+
+TEST_CASE("normals: the AVX-512 and portable kernels and the one-shot function agree to float rounding") {
+  // Float rounding in the weights moves a normal by about 1e-7 times its point's condition; 2e-6 leaves room for
+  // the rounding of the edges themselves on thin triangles.
+  INFO("AVX-512 on this CPU: ", deform::VertexNormals::has_avx512());
+  std::mt19937 random(29);
+  for (int round = 0; round < 100; ++round) {
+    Mesh mesh = torus(3 + int(random() % 50), 3 + int(random() % 50), random);
+    for (glm::vec3& p : mesh.positions) p = warp(p);
+    std::vector<double> condition;
+    reference_normals(mesh, &condition);
+    const auto automatic = normals_of(mesh, Path::bound_automatic);
+    const auto portable = normals_of(mesh, Path::bound_portable);
+    const auto function = normals_of(mesh, Path::function);
+    for (std::size_t r = 0; r < automatic.size(); ++r) {
+      check_near(automatic[r], portable[r], float(2e-6 * condition[r]));
+      check_near(automatic[r], function[r], float(2e-6 * condition[r]));
+    }
   }
 }
 
@@ -195,16 +409,8 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
   OmMesh om = to_openmesh(mesh);
   om.request_face_normals();
   om.update_face_normals();
-  const auto ours = normals_of(mesh);
   std::vector<std::size_t> vertex_of_point(mesh.point_count());
   for (std::size_t r = 0; r < mesh.vertex_count(); ++r) vertex_of_point[mesh.vertex_point[r]] = r;
-  for (const auto vh : om.vertices()) {
-    OmMesh::Normal sum(0, 0, 0);
-    for (const auto heh : om.vih_range(vh))  // sector of the face left of each incoming half-edge, at vh
-      if (!om.is_boundary(heh)) sum += om.calc_sector_angle(heh) * om.normal(om.face_handle(heh));
-    sum.normalize();
-    check_near(ours[vertex_of_point[std::size_t(vh.idx())]], glm::vec3(sum[0], sum[1], sum[2]), 1e-5f);
-  }
   // OpenMesh's own update_normals() weighs faces differently (not by angle): the two agree where every weighting
   // must, on a flat grid.
   std::mt19937 random2(9);
@@ -213,26 +419,62 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
   om_grid.request_face_normals();
   om_grid.request_vertex_normals();
   om_grid.update_normals();
-  const auto grid_normals = normals_of(grid);
-  for (const auto vh : om_grid.vertices()) {
-    const auto n = om_grid.normal(vh);
-    check_near(grid_normals[std::size_t(vh.idx())], glm::vec3(n[0], n[1], n[2]));
+  for (const Path path : all_paths) {
+    INFO(path_name(path));
+    const auto ours = normals_of(mesh, path);
+    for (const auto vh : om.vertices()) {
+      OmMesh::Normal sum(0, 0, 0);
+      for (const auto heh : om.vih_range(vh))  // sector of the face left of each incoming half-edge, at vh
+        if (!om.is_boundary(heh)) sum += om.calc_sector_angle(heh) * om.normal(om.face_handle(heh));
+      sum.normalize();
+      check_near(ours[vertex_of_point[std::size_t(vh.idx())]], glm::vec3(sum[0], sum[1], sum[2]), 1e-5f);
+    }
+    const auto grid_normals = normals_of(grid, path);
+    for (const auto vh : om_grid.vertices()) {
+      const auto n = om_grid.normal(vh);
+      check_near(grid_normals[std::size_t(vh.idx())], glm::vec3(n[0], n[1], n[2]));
+    }
   }
 }
 
-TEST_CASE("normals: wrong sizes and out-of-range indices return false") {
+TEST_CASE("normals: wrong sizes and out-of-range indices return false (or throw when binding)") {
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2});
   std::vector<glm::vec3> scratch(3), out(3), short_span(2);
   CHECK(deform::compute_vertex_normals(mesh, mesh.positions, scratch, out));
   CHECK_FALSE(deform::compute_vertex_normals(mesh, short_span, scratch, out));
   CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, short_span, out));
   CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, scratch, short_span));
+  deform::VertexNormals normals(mesh);
+  CHECK(normals.point_count() == 3);
+  CHECK(normals.vertex_count() == 3);
+  CHECK(normals.compute(mesh.positions, out));
+  std::vector<glm::vec3> untouched(2, glm::vec3(7.0f));
+  CHECK_FALSE(normals.compute(short_span, out));
+  CHECK_FALSE(normals.compute(mesh.positions, untouched));
+  CHECK(untouched == std::vector<glm::vec3>(2, glm::vec3(7.0f)));  // "writing nothing"
+
   Mesh bad = mesh;
   bad.triangles[2] = 3;
   CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
+  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
   bad = mesh;
   bad.vertex_point[1] = 7;
   CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
+  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
+  bad = mesh;
+  bad.triangles.pop_back();
+  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
+  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
+
+  // No triangles: every normal is zero. An unbound object takes empty spans.
+  Mesh bare = mesh;
+  bare.triangles.clear();
+  deform::VertexNormals none(bare);
+  out.assign(3, glm::vec3(1.0f));
+  CHECK(none.compute(bare.positions, out));
+  CHECK(out == std::vector<glm::vec3>(3, glm::vec3(0.0f)));
+  deform::VertexNormals unbound;
+  CHECK(unbound.compute({}, {}));
 }
 
 TEST_CASE("bounds") {

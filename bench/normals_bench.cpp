@@ -1,0 +1,144 @@
+// normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,554 points, 3,036
+// render vertices, 5,056 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
+// UV seams), with the points warped so that no two frames are alike to the caches' eyes. Items are render vertices.
+//   normals/builtin, normals/100k                    VertexNormals::compute, the kernel the CPU gets (AVX-512 here)
+//   normals/builtin_portable, normals/100k_portable  the baseline kernel forced (what a CPU without AVX-512 runs)
+//   normals/builtin_function, normals/100k_function  compute_vertex_normals, one triangle at a time
+//   normals/builtin_atan2                            the former code (std::atan2 per corner), for the speed-up
+//   normals/bind/builtin, normals/bind/100k          building a VertexNormals (once per mesh)
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "deform/builtin.hpp"
+#include "deform/mesh.hpp"
+
+namespace {
+
+// A closed torus of n x m points, its render vertices split along the u = 0 and v = 0 seams ((n + 1) x (m + 1)).
+deform::Mesh torus(int n, int m) {
+  deform::Mesh mesh;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const float u = 2 * std::numbers::pi_v<float> * float(i) / float(n);
+      const float v = 2 * std::numbers::pi_v<float> * float(j) / float(m);
+      mesh.positions.emplace_back((1 + 0.4f * std::cos(v)) * std::cos(u), (1 + 0.4f * std::cos(v)) * std::sin(u),
+                                  0.4f * std::sin(v));
+    }
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= m; ++j) mesh.vertex_point.push_back(std::uint32_t((i % n) * m + j % m));
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const auto a = std::uint32_t(i * (m + 1) + j), b = a + std::uint32_t(m + 1), c = b + 1, d = a + 1;
+      mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
+    }
+  return mesh;
+}
+
+const deform::Mesh& mesh(bool builtin) {
+  static const deform::Mesh character = deform::builtin_character().mesh;
+  static const deform::Mesh big = torus(400, 250);
+  return builtin ? character : big;
+}
+
+// The points bent a little differently each frame.
+std::vector<glm::vec3> pose(const deform::Mesh& m, int frame) {
+  std::vector<glm::vec3> points;
+  const float bend = 0.05f * float(frame % 16);
+  for (const glm::vec3& p : m.positions) points.emplace_back(p.x + bend * p.y * p.y, p.y, p.z + bend * p.x * p.y);
+  return points;
+}
+
+void set_counters(benchmark::State& state, const deform::Mesh& m) {
+  state.SetItemsProcessed(state.iterations() * std::int64_t(m.vertex_count()));
+  state.counters["points"] = double(m.point_count());
+  state.counters["triangles"] = double(m.triangle_count());
+}
+
+void bound(benchmark::State& state, bool builtin, deform::VertexNormals::Kernel kernel) {
+  const deform::Mesh& m = mesh(builtin);
+  deform::VertexNormals normals(m);
+  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  std::vector<glm::vec3> out(m.vertex_count());
+  int frame = 0;
+  for (auto _ : state) {
+    normals.compute(poses[frame++ & 1], out, kernel);
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_counters(state, m);
+}
+
+void function(benchmark::State& state, bool builtin) {
+  const deform::Mesh& m = mesh(builtin);
+  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  std::vector<glm::vec3> scratch(m.point_count()), out(m.vertex_count());
+  int frame = 0;
+  for (auto _ : state) {
+    deform::compute_vertex_normals(m, poses[frame++ & 1], scratch, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_counters(state, m);
+}
+
+// The library's code before VertexNormals: std::atan2 for two corners of every triangle.
+void atan2_former(benchmark::State& state) {
+  const deform::Mesh& m = mesh(true);
+  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  std::vector<glm::vec3> scratch(m.point_count()), out(m.vertex_count());
+  int frame = 0;
+  for (auto _ : state) {
+    const std::vector<glm::vec3>& positions = poses[frame++ & 1];
+    std::fill(scratch.begin(), scratch.end(), glm::vec3(0.0f));
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+      const std::uint32_t a = m.vertex_point[m.triangles[3 * t]], b = m.vertex_point[m.triangles[3 * t + 1]],
+                          c = m.vertex_point[m.triangles[3 * t + 2]];
+      const glm::vec3 ab = positions[b] - positions[a], ac = positions[c] - positions[a],
+                      bc = positions[c] - positions[b];
+      const glm::vec3 area_normal = glm::cross(ab, ac);
+      const float twice_area = glm::length(area_normal);
+      if (!(twice_area > 0.0f)) continue;
+      const glm::vec3 unit_normal = area_normal / twice_area;
+      const float angle_a = std::atan2(twice_area, glm::dot(ab, ac));
+      const float angle_b = std::atan2(twice_area, -glm::dot(ab, bc));
+      scratch[a] += angle_a * unit_normal;
+      scratch[b] += angle_b * unit_normal;
+      scratch[c] += std::max(std::numbers::pi_v<float> - angle_a - angle_b, 0.0f) * unit_normal;
+    }
+    for (glm::vec3& n : scratch) {
+      const float length = glm::length(n);
+      n = length > 1e-5f ? n / length : glm::vec3(0.0f);
+    }
+    for (std::size_t r = 0; r < m.vertex_count(); ++r) out[r] = scratch[m.vertex_point[r]];
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_counters(state, m);
+}
+
+void bind(benchmark::State& state, bool builtin) {
+  const deform::Mesh& m = mesh(builtin);
+  for (auto _ : state) {
+    deform::VertexNormals normals(m);
+    benchmark::DoNotOptimize(&normals);
+  }
+  set_counters(state, m);
+}
+
+using Kernel = deform::VertexNormals::Kernel;
+BENCHMARK_CAPTURE(bound, builtin, true, Kernel::automatic)->Name("normals/builtin")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k, false, Kernel::automatic)->Name("normals/100k")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_portable, true, Kernel::portable)
+    ->Name("normals/builtin_portable")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k_portable, false, Kernel::portable)
+    ->Name("normals/100k_portable")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(function, builtin, true)->Name("normals/builtin_function")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(function, 100k, false)->Name("normals/100k_function")->Unit(benchmark::kMicrosecond);
+BENCHMARK(atan2_former)->Name("normals/builtin_atan2")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bind, builtin, true)->Name("normals/bind/builtin")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bind, 100k, false)->Name("normals/bind/100k")->Unit(benchmark::kMicrosecond);
+
+}  // namespace
