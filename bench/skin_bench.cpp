@@ -1,6 +1,7 @@
 // skin/lbs and skin/dqs: positions + normals, 4 influences per vertex, a 28-bone palette, at 2,552 (the built-in
 // character's size), 100k and 1M vertices; one thread and all threads. Also the forced instruction-set paths and
-// a plain glm loop (skin/lbs_reference), so docs/performance.md can show what the SIMD kernels buy.
+// a plain glm loop (skin/lbs_reference), so docs/performance.md can show what the SIMD kernels buy; skin/*_stream
+// with SkinningJob::stream_outputs.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -64,12 +65,14 @@ deform::ThreadPool& pool() {
 }
 
 // state.range(0) = vertices, state.range(1) = threads (0: all).
-void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::SkinningIsa isa) {
+// stream: SkinningJob::stream_outputs (non-temporal stores).
+void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::SkinningIsa isa, bool stream = false) {
   const auto vertices = static_cast<std::size_t>(state.range(0));
   SkinData& d = const_cast<SkinData&>(data(vertices));
   deform::SkinningJob job;
   job.method = method;
   job.isa = isa;
+  job.stream_outputs = stream;
   job.matrices = d.palette;
   job.dual_quats = d.dual_quats;
   job.bone_indices = d.bones;
@@ -121,6 +124,8 @@ using deform::SkinningIsa;
 using deform::SkinningMethod;
 BENCHMARK_CAPTURE(run_skin, lbs, SkinningMethod::lbs, SkinningIsa::automatic)->Name("skin/lbs")->Apply(sizes_and_threads);
 BENCHMARK_CAPTURE(run_skin, dqs, SkinningMethod::dqs, SkinningIsa::automatic)->Name("skin/dqs")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, lbs_stream, SkinningMethod::lbs, SkinningIsa::automatic, true)->Name("skin/lbs_stream")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, dqs_stream, SkinningMethod::dqs, SkinningIsa::automatic, true)->Name("skin/dqs_stream")->Apply(sizes_and_threads);
 BENCHMARK_CAPTURE(run_skin, lbs_avx2, SkinningMethod::lbs, SkinningIsa::avx2)->Name("skin/lbs_avx2")->Apply(sizes_one_thread);
 BENCHMARK_CAPTURE(run_skin, dqs_avx2, SkinningMethod::dqs, SkinningIsa::avx2)->Name("skin/dqs_avx2")->Apply(sizes_one_thread);
 BENCHMARK_CAPTURE(run_skin, lbs_scalar, SkinningMethod::lbs, SkinningIsa::scalar)->Name("skin/lbs_scalar")->Apply(sizes_one_thread);

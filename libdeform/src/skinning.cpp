@@ -139,8 +139,8 @@ bool SkinningJob::run(ThreadPool& pool, std::size_t min_chunk) const {
     detail::SkinKernel kernel;
   } split{this, select_kernel(*this)};
   const Split* context = &split;  // one pointer: the std::function below stores it without allocating
-  // Chunks start on multiples of 16 vertices, so every vertex takes the same SIMD or tail path as in run(): the
-  // result is bit-identical to the single-thread one.
+  // A vertex's result does not depend on where its range begins (partial blocks run the block code), so the result
+  // is bit-identical to run(); chunks of whole 16-vertex blocks keep each thread on its own cache lines.
   constexpr std::size_t block = 16;
   const std::size_t blocks = (count + block - 1) / block;
   pool.parallel_for(blocks, std::max<std::size_t>(1, min_chunk / block),

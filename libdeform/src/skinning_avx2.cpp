@@ -53,6 +53,8 @@ inline void transpose8(const __m256 r[8], __m256 out[8], unsigned want = 0xff) {
 struct Avx2 {
   using V = F8;
   static constexpr std::size_t width = 8;
+  static constexpr bool can_stream = false;  // streaming stores are left to the AVX-512 kernels
+  static void fence() {}
   explicit Avx2(const SkinningJob&) {}
 
   static F8 splat(float x) { return {_mm256_set1_ps(x)}; }
@@ -118,7 +120,7 @@ struct Avx2 {
     for (int c = 0; c < 3; ++c) out[c].v = _mm256_i32gather_ps(p + c, offsets, 1);
   }
 
-  static void store3(float* base, std::size_t stride, std::size_t i, const F8 in[3]) {
+  static void store3(float* base, std::size_t stride, std::size_t i, const F8 in[3], bool /*stream*/) {
     unsigned char* p = reinterpret_cast<unsigned char*>(base) + i * stride;
     if (stride == 12) {
       // load3's shuffles run backwards: per half, x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3, then halves regrouped.

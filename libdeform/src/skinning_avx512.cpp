@@ -61,6 +61,8 @@ struct Avx512 {
   using V = F16;
   static constexpr std::size_t width = 16;
   static constexpr std::size_t max_table_bones = 32;
+  static constexpr bool can_stream = true;
+  static void fence() { _mm_sfence(); }  // streamed lines reach memory before what the caller writes next
 
   // Component tables: table[c][b] = component c of bone b (LBS: columns 0..2 rows 0..2, then the translation; DQS:
   // real xyzw, dual xyzw). Used when the palette has at most 32 bones.
@@ -202,7 +204,7 @@ struct Avx512 {
     for (int c = 0; c < 3; ++c) out[c].v = _mm512_i32gather_ps(offsets, p + c, 1);
   }
 
-  static void store3(float* base, std::size_t stride, std::size_t i, const F16 in[3]) {
+  static void store3(float* base, std::size_t stride, std::size_t i, const F16 in[3], bool stream) {
     float* p = reinterpret_cast<float*>(reinterpret_cast<unsigned char*>(base) + i * stride);
     if (stride == 12) {
       __m512 t[3];
@@ -217,9 +219,15 @@ struct Avx512 {
         const __m512 xy = _mm512_permutex2var_ps(in[0].v, _mm512_load_si512(first), in[1].v);
         t[r] = _mm512_permutex2var_ps(xy, _mm512_load_si512(second), in[2].v);
       }
-      _mm512_storeu_ps(p, t[0]);
-      _mm512_storeu_ps(p + 16, t[1]);
-      _mm512_storeu_ps(p + 32, t[2]);
+      if (stream) {  // p is 64-byte aligned (first_streaming_vertex): no read-for-ownership of the lines
+        _mm512_stream_ps(p, t[0]);
+        _mm512_stream_ps(p + 16, t[1]);
+        _mm512_stream_ps(p + 32, t[2]);
+      } else {
+        _mm512_storeu_ps(p, t[0]);
+        _mm512_storeu_ps(p + 16, t[1]);
+        _mm512_storeu_ps(p + 32, t[2]);
+      }
       return;
     }
     __m512 r[4];

@@ -11,9 +11,15 @@
 //                                w = the SoA weights from load_weights
 //   load_weights(job, i, w)      w[4] = the four weights, per influence (SoA)
 //   load_dual_quat(job, i, k, q) q[8] = real xyzw, dual xyzw of influence k (SoA)
-//   load3 / store3               a stream's x, y, z for vertices i .. i+width-1 (SoA), any valid stride
+//   load3 / store3               a stream's x, y, z for vertices i .. i+width-1 (SoA), any valid stride; store3's
+//                                `stream` asks for non-temporal stores (the block's packed output 64-byte aligned)
+//   can_stream, fence()          whether store3 honours `stream`; fence() ends a streaming call (store ordering)
 // The math below is skin_lbs_scalar / skin_dqs_scalar on lanes, to float rounding (its reciprocals and square roots
 // are refined estimates); the tests hold every path to the reference within 1e-5.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
 #include "skinning_kernels.hpp"
 
 namespace deform::detail {
@@ -34,86 +40,166 @@ void cross3(const V a[3], const V b[3], V out[3]) {
   out[2] = fms(a[0], b[1], a[1] * b[0]);
 }
 
+// One block of Isa::width vertices from vertex i. Forced inline: as a call per block it lost ~5% (the loop's
+// constants reloaded every block).
 template <class Isa>
-void skin_lbs_blocks(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+[[gnu::always_inline]] inline void skin_lbs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
+                                                  bool stream) noexcept {
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
-  const V tiny = Isa::splat(1e-30f);
-  const Isa isa(job);
-  std::size_t i = begin;
-  for (; i + Isa::width <= end; i += Isa::width) {
-    V a[12], w[4], p[3], n[3], out[3];
-    isa.load_weights(job, i, w);
-    isa.blend_matrices(job, i, w, a);
-    isa.load3(job.in_positions.data(), job.in_positions_stride, i, p);
-    if (normals) isa.load3(job.in_normals.data(), job.in_normals_stride, i, n);
-    const V inverse_sum = rcp((w[0] + w[1]) + (w[2] + w[3]));
-    for (int r = 0; r < 3; ++r) out[r] = fma(a[r], p[0], fma(a[3 + r], p[1], fma(a[6 + r], p[2], a[9 + r]))) * inverse_sum;
-    isa.store3(job.out_positions.data(), job.out_positions_stride, i, out);
-    if (normals) {
-      // Cofactor matrix of the blended 3×3 (columns a1×a2, a2×a0, a0×a1) times the normal.
-      V c0[3], c1[3], c2[3];
-      cross3(a + 3, a + 6, c0);
-      cross3(a + 6, a + 0, c1);
-      cross3(a + 0, a + 3, c2);
-      for (int r = 0; r < 3; ++r) out[r] = fma(c0[r], n[0], fma(c1[r], n[1], c2[r] * n[2]));
-      normalize_or_zero3(out, tiny);
-      isa.store3(job.out_normals.data(), job.out_normals_stride, i, out);
-    }
+  V a[12], w[4], p[3], n[3], out[3];
+  isa.load_weights(job, i, w);
+  isa.blend_matrices(job, i, w, a);
+  isa.load3(job.in_positions.data(), job.in_positions_stride, i, p);
+  if (normals) isa.load3(job.in_normals.data(), job.in_normals_stride, i, n);
+  const V inverse_sum = rcp((w[0] + w[1]) + (w[2] + w[3]));
+  for (int r = 0; r < 3; ++r) out[r] = fma(a[r], p[0], fma(a[3 + r], p[1], fma(a[6 + r], p[2], a[9 + r]))) * inverse_sum;
+  isa.store3(job.out_positions.data(), job.out_positions_stride, i, out, stream);
+  if (normals) {
+    // Cofactor matrix of the blended 3×3 (columns a1×a2, a2×a0, a0×a1) times the normal.
+    V c0[3], c1[3], c2[3];
+    cross3(a + 3, a + 6, c0);
+    cross3(a + 6, a + 0, c1);
+    cross3(a + 0, a + 3, c2);
+    for (int r = 0; r < 3; ++r) out[r] = fma(c0[r], n[0], fma(c1[r], n[1], c2[r] * n[2]));
+    normalize_or_zero3(out, Isa::splat(1e-30f));
+    isa.store3(job.out_normals.data(), job.out_normals_stride, i, out, stream);
   }
-  if (i < end) skin_lbs_scalar(job, i, end);
+}
+
+template <class Isa>
+[[gnu::always_inline]] inline void skin_dqs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
+                                                  bool stream) noexcept {
+  using V = typename Isa::V;
+  const bool normals = !job.in_normals.empty();
+  const V two = Isa::splat(2.0f);
+  V w[4], b[8], q[8];
+  isa.load_weights(job, i, w);
+  isa.load_dual_quat(job, i, 0, b);
+  const V pivot[4] = {b[0], b[1], b[2], b[3]};
+  for (int c = 0; c < 8; ++c) b[c] = b[c] * w[0];
+  for (int k = 1; k < 4; ++k) {
+    isa.load_dual_quat(job, i, k, q);
+    // Antipodality: blend each influence in the hemisphere of the first one.
+    const V d = fma(q[0], pivot[0], fma(q[1], pivot[1], fma(q[2], pivot[2], q[3] * pivot[3])));
+    const V signed_weight = flip_sign(w[k], d);
+    for (int c = 0; c < 8; ++c) b[c] = fma(q[c], signed_weight, b[c]);
+  }
+  const V inverse_length = rsqrt(fma(b[0], b[0], fma(b[1], b[1], fma(b[2], b[2], b[3] * b[3]))));
+  for (int c = 0; c < 8; ++c) b[c] = b[c] * inverse_length;
+  const V* real = b;
+  const V* dual = b + 4;
+  // translation = 2 (real.w · dual.xyz - dual.w · real.xyz + real.xyz × dual.xyz)
+  V translation[3];
+  cross3(real, dual, translation);
+  for (int c = 0; c < 3; ++c) translation[c] = two * (fma(real[3], dual[c], translation[c]) - dual[3] * real[c]);
+
+  V p[3], n[3], t[3], u[3];
+  isa.load3(job.in_positions.data(), job.in_positions_stride, i, p);
+  if (normals) isa.load3(job.in_normals.data(), job.in_normals_stride, i, n);
+  // rotate(v) = v + 2 r × (r × v + w v)
+  cross3(real, p, t);
+  for (int c = 0; c < 3; ++c) t[c] = fma(real[3], p[c], t[c]);
+  cross3(real, t, u);
+  for (int c = 0; c < 3; ++c) u[c] = fma(u[c], two, p[c]) + translation[c];
+  isa.store3(job.out_positions.data(), job.out_positions_stride, i, u, stream);
+  if (normals) {
+    cross3(real, n, t);
+    for (int c = 0; c < 3; ++c) t[c] = fma(real[3], n[c], t[c]);
+    cross3(real, t, u);
+    for (int c = 0; c < 3; ++c) u[c] = fma(u[c], two, n[c]);
+    normalize_or_zero3(u, Isa::splat(1e-30f));
+    isa.store3(job.out_normals.data(), job.out_normals_stride, i, u, stream);
+  }
+}
+
+// One block of either method.
+template <class Isa, SkinningMethod method>
+[[gnu::always_inline]] inline void skin_block(const SkinningJob& job, const Isa& isa, std::size_t i, bool stream) {
+  if constexpr (method == SkinningMethod::lbs) {
+    skin_lbs_block(job, isa, i, stream);
+  } else {
+    skin_dqs_block(job, isa, i, stream);
+  }
+}
+
+// Vertices [i, i + count), count < width, through the block code: staged in packed local arrays padded with a
+// harmless vertex (bone 0, weight 1, at the origin), so that a partial block gives the bits a full one would — the
+// lanes never mix — and a vertex's result does not depend on where a block or a thread's range begins.
+template <class Isa, SkinningMethod method>
+void skin_partial_block(const SkinningJob& job, const Isa& isa, std::size_t i, std::size_t count) noexcept {
+  constexpr std::size_t width = Isa::width;
+  const bool normals = !job.in_normals.empty();
+  glm::u16vec4 bones[width];
+  glm::vec4 weights[width];
+  float in_positions[3 * width] = {}, in_normals[3 * width] = {}, out_positions[3 * width], out_normals[3 * width];
+  for (std::size_t l = 0; l < width; ++l) {
+    bones[l] = l < count ? job.bone_indices[i + l] : glm::u16vec4(0);
+    weights[l] = l < count ? job.bone_weights[i + l] : glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+  }
+  for (std::size_t l = 0; l < count; ++l) {
+    std::memcpy(in_positions + 3 * l, stream_at(job.in_positions, job.in_positions_stride, i + l), 12);
+    if (normals) std::memcpy(in_normals + 3 * l, stream_at(job.in_normals, job.in_normals_stride, i + l), 12);
+  }
+  SkinningJob local = job;
+  local.bone_indices = bones;
+  local.bone_weights = weights;
+  local.in_positions = in_positions, local.out_positions = out_positions;
+  local.in_positions_stride = local.out_positions_stride = 12;
+  if (normals) {
+    local.in_normals = in_normals, local.out_normals = out_normals;
+    local.in_normals_stride = local.out_normals_stride = 12;
+  }
+  skin_block<Isa, method>(local, isa, 0, false);
+  for (std::size_t l = 0; l < count; ++l) {
+    std::memcpy(stream_at(job.out_positions, job.out_positions_stride, i + l), out_positions + 3 * l, 12);
+    if (normals) std::memcpy(stream_at(job.out_normals, job.out_normals_stride, i + l), out_normals + 3 * l, 12);
+  }
+}
+
+// The first vertex at or after `begin` whose outputs start on a 64-byte line, when the job asks for streaming
+// stores and they can be used: packed outputs (stride 12) whose lines fall alike for positions and normals. Else
+// `end` (no streaming).
+template <class Isa>
+std::size_t first_streaming_vertex(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+  if (!Isa::can_stream || !job.stream_outputs || job.out_positions_stride != 12) return end;
+  const auto address = [&](std::span<float> s) { return reinterpret_cast<std::uintptr_t>(s.data()) + 12 * begin; };
+  const std::uintptr_t positions = address(job.out_positions);
+  if (positions % 4 != 0) return end;
+  if (!job.out_normals.empty() && (job.out_normals_stride != 12 || address(job.out_normals) % 64 != positions % 64))
+    return end;
+  // 12 · k runs through every multiple of 4 modulo 64 for k in [0, 16).
+  std::size_t k = 0;
+  while ((positions + 12 * k) % 64 != 0) ++k;
+  return std::min(end, begin + k);
+}
+
+// Full blocks from `begin` (or from the first 64-byte-aligned vertex, streaming), partial blocks at either end.
+// The two loops differ only in the constant `stream`, so each inlines its block with no per-store test.
+template <class Isa, SkinningMethod method>
+void skin_blocks(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+  const Isa isa(job);
+  const std::size_t aligned = first_streaming_vertex<Isa>(job, begin, end);
+  const bool stream = aligned < end;
+  std::size_t i = begin;
+  if (stream) {
+    if (aligned > begin) skin_partial_block<Isa, method>(job, isa, begin, aligned - begin);
+    for (i = aligned; i + Isa::width <= end; i += Isa::width) skin_block<Isa, method>(job, isa, i, true);
+  } else {
+    for (; i + Isa::width <= end; i += Isa::width) skin_block<Isa, method>(job, isa, i, false);
+  }
+  if (i < end) skin_partial_block<Isa, method>(job, isa, i, end - i);
+  if (stream) Isa::fence();
+}
+
+template <class Isa>
+void skin_lbs_blocks(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+  skin_blocks<Isa, SkinningMethod::lbs>(job, begin, end);
 }
 
 template <class Isa>
 void skin_dqs_blocks(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
-  using V = typename Isa::V;
-  const bool normals = !job.in_normals.empty();
-  const V tiny = Isa::splat(1e-30f);
-  const V two = Isa::splat(2.0f);
-  const Isa isa(job);
-  std::size_t i = begin;
-  for (; i + Isa::width <= end; i += Isa::width) {
-    V w[4], b[8], q[8];
-    isa.load_weights(job, i, w);
-    isa.load_dual_quat(job, i, 0, b);
-    const V pivot[4] = {b[0], b[1], b[2], b[3]};
-    for (int c = 0; c < 8; ++c) b[c] = b[c] * w[0];
-    for (int k = 1; k < 4; ++k) {
-      isa.load_dual_quat(job, i, k, q);
-      // Antipodality: blend each influence in the hemisphere of the first one.
-      const V d = fma(q[0], pivot[0], fma(q[1], pivot[1], fma(q[2], pivot[2], q[3] * pivot[3])));
-      const V signed_weight = flip_sign(w[k], d);
-      for (int c = 0; c < 8; ++c) b[c] = fma(q[c], signed_weight, b[c]);
-    }
-    const V inverse_length = rsqrt(fma(b[0], b[0], fma(b[1], b[1], fma(b[2], b[2], b[3] * b[3]))));
-    for (int c = 0; c < 8; ++c) b[c] = b[c] * inverse_length;
-    const V* real = b;
-    const V* dual = b + 4;
-    // translation = 2 (real.w · dual.xyz - dual.w · real.xyz + real.xyz × dual.xyz)
-    V translation[3];
-    cross3(real, dual, translation);
-    for (int c = 0; c < 3; ++c)
-      translation[c] = two * (fma(real[3], dual[c], translation[c]) - dual[3] * real[c]);
-
-    V p[3], n[3], t[3], u[3];
-    isa.load3(job.in_positions.data(), job.in_positions_stride, i, p);
-    if (normals) isa.load3(job.in_normals.data(), job.in_normals_stride, i, n);
-    // rotate(v) = v + 2 r × (r × v + w v)
-    cross3(real, p, t);
-    for (int c = 0; c < 3; ++c) t[c] = fma(real[3], p[c], t[c]);
-    cross3(real, t, u);
-    for (int c = 0; c < 3; ++c) u[c] = fma(u[c], two, p[c]) + translation[c];
-    isa.store3(job.out_positions.data(), job.out_positions_stride, i, u);
-    if (normals) {
-      cross3(real, n, t);
-      for (int c = 0; c < 3; ++c) t[c] = fma(real[3], n[c], t[c]);
-      cross3(real, t, u);
-      for (int c = 0; c < 3; ++c) u[c] = fma(u[c], two, n[c]);
-      normalize_or_zero3(u, tiny);
-      isa.store3(job.out_normals.data(), job.out_normals_stride, i, u);
-    }
-  }
-  if (i < end) skin_dqs_scalar(job, i, end);
+  skin_blocks<Isa, SkinningMethod::dqs>(job, begin, end);
 }
 
 }  // namespace

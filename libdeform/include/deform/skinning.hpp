@@ -94,6 +94,13 @@ struct DEFORM_API SkinningJob {
   std::span<float> out_normals;
   std::size_t out_normals_stride = 12;
 
+  // Streaming (non-temporal) stores for the outputs: they go to memory without first reading each cache line and
+  // without keeping it in the caches. For results the CPU will not read again soon — a GPU upload buffer, a mesh
+  // much larger than the caches: about 7% faster at 1M vertices (docs/performance.md). Taken by the AVX-512 kernels
+  // for packed outputs (strides 12) whose positions and normals lie alike on 64-byte lines (as two allocations of
+  // the same size do); ignored otherwise. The results are the same bits either way.
+  bool stream_outputs = false;
+
   // True when the call is well formed: a non-empty palette of at most 65536 bones for the chosen method (and scales
   // empty or of the same size), matching index and weight counts, every index < palette size, every weight finite and
   // >= 0 with a positive sum per vertex, strides valid, each span long enough ((count-1)·stride + 12 bytes), normals
@@ -108,7 +115,7 @@ struct DEFORM_API SkinningJob {
   bool run() const noexcept;
   bool run(std::size_t begin, std::size_t end) const noexcept;
   // Splits the vertex range across the pool's threads in chunks of at least `min_chunk` vertices (small meshes stay
-  // on the calling thread), cut at multiples of 16 vertices so the result is bit-identical to run(). Same checks.
+  // on the calling thread), cut at multiples of 16 vertices; the result is bit-identical to run(). Same checks.
   bool run(ThreadPool& pool, std::size_t min_chunk = 16384) const;
 };
 
