@@ -54,6 +54,7 @@ struct Avx2 {
   using V = F8;
   static constexpr std::size_t width = 8;
   static constexpr bool can_stream = false;  // streaming stores are left to the AVX-512 kernels
+  static constexpr bool has_component_tables = false;
   static void fence() {}
   explicit Avx2(const SkinningJob&) {}
 

@@ -62,6 +62,8 @@ struct Avx512 {
   static constexpr std::size_t width = 16;
   static constexpr std::size_t max_table_bones = 32;
   static constexpr bool can_stream = true;
+  static constexpr bool has_component_tables = true;
+  using Ids = __m512i;
   static void fence() { _mm_sfence(); }  // streamed lines reach memory before what the caller writes next
 
   // Component tables: table[c][b] = component c of bone b (LBS: columns 0..2 rows 0..2, then the translation; DQS:
@@ -97,6 +99,8 @@ struct Avx512 {
     const __m512i pair = _mm512_permutex2var_epi32(_mm512_loadu_si512(p), words, _mm512_loadu_si512(p + 1));
     return (k & 1) != 0 ? _mm512_srli_epi32(pair, 16) : pair;
   }
+
+  V component(int c, __m512i ids) const { return {lookup(c, ids)}; }
 
   __m512 lookup(int component, __m512i ids) const {
     return _mm512_permutex2var_ps(_mm512_load_ps(table[component]), ids, _mm512_load_ps(table[component] + 16));

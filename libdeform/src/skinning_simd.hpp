@@ -11,6 +11,9 @@
 //                                w = the SoA weights from load_weights
 //   load_weights(job, i, w)      w[4] = the four weights, per influence (SoA)
 //   load_dual_quat(job, i, k, q) q[8] = real xyzw, dual xyzw of influence k (SoA)
+//   has_component_tables         true when the Isa may hold the palette as per-component tables; then, when its
+//                                use_tables is set, bone_ids(job, i, k) (type Ids) and component(c, ids) fetch one
+//                                component of influence k for the block
 //   load3 / store3               a stream's x, y, z for vertices i .. i+width-1 (SoA), any valid stride; store3's
 //                                `stream` asks for non-temporal stores (the block's packed output 64-byte aligned)
 //   can_stream, fence()          whether store3 honours `stream`; fence() ends a streaming call (store ordering)
@@ -73,17 +76,44 @@ template <class Isa>
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
   const V two = Isa::splat(2.0f);
-  V w[4], b[8], q[8];
+  V w[4], b[8];
   isa.load_weights(job, i, w);
-  isa.load_dual_quat(job, i, 0, b);
-  const V pivot[4] = {b[0], b[1], b[2], b[3]};
-  for (int c = 0; c < 8; ++c) b[c] = b[c] * w[0];
-  for (int k = 1; k < 4; ++k) {
-    isa.load_dual_quat(job, i, k, q);
-    // Antipodality: blend each influence in the hemisphere of the first one.
-    const V d = fma(q[0], pivot[0], fma(q[1], pivot[1], fma(q[2], pivot[2], q[3] * pivot[3])));
-    const V signed_weight = flip_sign(w[k], d);
-    for (int c = 0; c < 8; ++c) b[c] = fma(q[c], signed_weight, b[c]);
+  bool blended = false;
+  if constexpr (Isa::has_component_tables) {
+    if (isa.use_tables) {
+      // Components fetched one at a time from the tables: the real halves first (they decide each influence's
+      // sign), then the dual halves with those signs, so that no influence's eight components are live at once
+      // (all of them spilled registers).
+      typename Isa::Ids ids[4];
+      for (int k = 0; k < 4; ++k) ids[k] = isa.bone_ids(job, i, k);
+      V pivot[4];
+      for (int c = 0; c < 4; ++c) pivot[c] = isa.component(c, ids[0]), b[c] = pivot[c] * w[0];
+      for (int k = 1; k < 4; ++k) {
+        V q[4];
+        for (int c = 0; c < 4; ++c) q[c] = isa.component(c, ids[k]);
+        const V d = fma(q[0], pivot[0], fma(q[1], pivot[1], fma(q[2], pivot[2], q[3] * pivot[3])));
+        w[k] = flip_sign(w[k], d);
+        for (int c = 0; c < 4; ++c) b[c] = fma(q[c], w[k], b[c]);
+      }
+      for (int c = 4; c < 8; ++c) {
+        b[c] = isa.component(c, ids[0]) * w[0];
+        for (int k = 1; k < 4; ++k) b[c] = fma(isa.component(c, ids[k]), w[k], b[c]);
+      }
+      blended = true;
+    }
+  }
+  if (!blended) {
+    V q[8];
+    isa.load_dual_quat(job, i, 0, b);
+    const V pivot[4] = {b[0], b[1], b[2], b[3]};
+    for (int c = 0; c < 8; ++c) b[c] = b[c] * w[0];
+    for (int k = 1; k < 4; ++k) {
+      isa.load_dual_quat(job, i, k, q);
+      // Antipodality: blend each influence in the hemisphere of the first one.
+      const V d = fma(q[0], pivot[0], fma(q[1], pivot[1], fma(q[2], pivot[2], q[3] * pivot[3])));
+      const V signed_weight = flip_sign(w[k], d);
+      for (int c = 0; c < 8; ++c) b[c] = fma(q[c], signed_weight, b[c]);
+    }
   }
   const V inverse_length = rsqrt(fma(b[0], b[0], fma(b[1], b[1], fma(b[2], b[2], b[3] * b[3]))));
   for (int c = 0; c < 8; ++c) b[c] = b[c] * inverse_length;
