@@ -13,6 +13,7 @@
 #include <numbers>
 #include <vector>
 
+#include "../tests/mesh/normals_reference.hpp"
 #include "deform/builtin.hpp"
 #include "deform/mesh.hpp"
 
@@ -90,28 +91,7 @@ void atan2_former(benchmark::State& state) {
   std::vector<glm::vec3> scratch(m.point_count()), out(m.vertex_count());
   int frame = 0;
   for (auto _ : state) {
-    const std::vector<glm::vec3>& positions = poses[frame++ & 1];
-    std::fill(scratch.begin(), scratch.end(), glm::vec3(0.0f));
-    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
-      const std::uint32_t a = m.vertex_point[m.triangles[3 * t]], b = m.vertex_point[m.triangles[3 * t + 1]],
-                          c = m.vertex_point[m.triangles[3 * t + 2]];
-      const glm::vec3 ab = positions[b] - positions[a], ac = positions[c] - positions[a],
-                      bc = positions[c] - positions[b];
-      const glm::vec3 area_normal = glm::cross(ab, ac);
-      const float twice_area = glm::length(area_normal);
-      if (!(twice_area > 0.0f)) continue;
-      const glm::vec3 unit_normal = area_normal / twice_area;
-      const float angle_a = std::atan2(twice_area, glm::dot(ab, ac));
-      const float angle_b = std::atan2(twice_area, -glm::dot(ab, bc));
-      scratch[a] += angle_a * unit_normal;
-      scratch[b] += angle_b * unit_normal;
-      scratch[c] += std::max(std::numbers::pi_v<float> - angle_a - angle_b, 0.0f) * unit_normal;
-    }
-    for (glm::vec3& n : scratch) {
-      const float length = glm::length(n);
-      n = length > 1e-5f ? n / length : glm::vec3(0.0f);
-    }
-    for (std::size_t r = 0; r < m.vertex_count(); ++r) out[r] = scratch[m.vertex_point[r]];
+    normals_reference::atan2_vertex_normals(m, poses[frame++ & 1], scratch, out);
     benchmark::DoNotOptimize(out.data());
   }
   set_counters(state, m);

@@ -17,6 +17,7 @@
 
 #include "deform/builtin.hpp"
 #include "deform/mesh.hpp"
+#include "normals_reference.hpp"
 
 namespace {
 
@@ -163,32 +164,10 @@ std::vector<glm::vec3> reference_normals(const Mesh& mesh, std::vector<double>* 
   return out;
 }
 
-// Plain reference: the library's code before the fast paths, verbatim (float, std::atan2 per corner).
+// Plain reference: the library's code before the fast paths (float, std::atan2 per corner).
 std::vector<glm::vec3> atan2_reference_normals(const Mesh& mesh, std::span<const glm::vec3> positions) {
-  std::vector<glm::vec3> scratch(mesh.point_count(), glm::vec3(0.0f)), out;
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const std::uint32_t a = mesh.vertex_point[mesh.triangles[3 * t]];
-    const std::uint32_t b = mesh.vertex_point[mesh.triangles[3 * t + 1]];
-    const std::uint32_t c = mesh.vertex_point[mesh.triangles[3 * t + 2]];
-    const glm::vec3 ab = positions[b] - positions[a];
-    const glm::vec3 ac = positions[c] - positions[a];
-    const glm::vec3 bc = positions[c] - positions[b];
-    const glm::vec3 area_normal = glm::cross(ab, ac);
-    const float twice_area = glm::length(area_normal);
-    if (!(twice_area > 0.0f)) continue;
-    const glm::vec3 unit_normal = area_normal / twice_area;
-    const float angle_a = std::atan2(twice_area, glm::dot(ab, ac));
-    const float angle_b = std::atan2(twice_area, -glm::dot(ab, bc));
-    const float angle_c = std::numbers::pi_v<float> - angle_a - angle_b;
-    scratch[a] += angle_a * unit_normal;
-    scratch[b] += angle_b * unit_normal;
-    scratch[c] += std::max(angle_c, 0.0f) * unit_normal;
-  }
-  for (glm::vec3& n : scratch) {
-    const float length = glm::length(n);
-    n = length > 1e-5f ? n / length : glm::vec3(0.0f);
-  }
-  for (const std::uint32_t point : mesh.vertex_point) out.push_back(scratch[point]);
+  std::vector<glm::vec3> scratch(mesh.point_count()), out(mesh.vertex_count());
+  normals_reference::atan2_vertex_normals(mesh, positions, scratch, out);
   return out;
 }
 

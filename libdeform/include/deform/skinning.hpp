@@ -96,9 +96,9 @@ struct DEFORM_API SkinningJob {
 
   // Streaming (non-temporal) stores for the outputs: they go to memory without first reading each cache line and
   // without keeping it in the caches. For results the CPU will not read again soon — a GPU upload buffer, a mesh
-  // much larger than the caches: about 7% faster at 1M vertices (docs/performance.md). Taken by the AVX-512 kernels
-  // for packed outputs (strides 12) whose positions and normals lie alike on 64-byte lines (as two allocations of
-  // the same size do); ignored otherwise. The results are the same bits either way.
+  // much larger than the caches (it saves 24 of the ~96 bytes a vertex moves; docs/performance.md has the measured
+  // effect). Taken by the AVX-512 kernels for packed outputs (strides 12) whose positions and normals lie alike on
+  // 64-byte lines (as two allocations of the same size do); ignored otherwise. The results are the same bits.
   bool stream_outputs = false;
 
   // True when the call is well formed: a non-empty palette of at most 65536 bones for the chosen method (and scales
