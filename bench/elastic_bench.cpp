@@ -6,8 +6,7 @@
 
 #include <vector>
 
-#include "deform/elastic.hpp"
-
+#include "deform/runtime/elastic.hpp"
 namespace {
 
 std::vector<glm::vec3> grid(glm::ivec3 dims) {

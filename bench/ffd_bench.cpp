@@ -12,9 +12,10 @@
 #include <random>
 #include <vector>
 
-#include "deform/lattice.hpp"
-#include "deform/parallel.hpp"
-
+#include "deform/runtime/lattice.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/io/lattice_json.hpp"
+#include "deform/runtime/parallel.hpp"
 namespace {
 
 using deform::LatticeFrame;
@@ -58,7 +59,7 @@ deform::ThreadPool& pool() {
 
 template <class Lattice>
 void run_lattice(benchmark::State& state, Lattice& lattice, const Scene& scene) {
-  const auto binding = lattice.bind(scene.positions);
+  const auto binding = deform::bind_lattice(lattice, scene.positions);
   jitter(lattice.control_points());
   std::vector<glm::vec3> positions = scene.positions, normals = scene.normals;
   deform::LatticeEvaluateJob job;
@@ -103,7 +104,7 @@ void bezier_degree(benchmark::State& state) {
   const Scene scene(100000);
   deform::BezierLattice lattice(scene.frame, glm::ivec3(static_cast<int>(state.range(0))));
   state.SetLabel("degree " + std::to_string(state.range(0)));
-  const auto binding = lattice.bind(scene.positions);
+  const auto binding = deform::bind_lattice(lattice, scene.positions);
   jitter(lattice.control_points());
   std::vector<glm::vec3> positions = scene.positions;
   deform::LatticeEvaluateJob job;

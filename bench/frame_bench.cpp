@@ -6,9 +6,10 @@
 #include <memory>
 #include <random>
 
-#include "deform/builtin.hpp"
-#include "deform/character.hpp"
-
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/model.hpp"
 namespace {
 
 // The built-in character with every point repeated (within a millimetre) to reach `points` points.

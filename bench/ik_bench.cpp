@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "../tests/ik/ik_test_rig.hpp"
-#include "deform/ik.hpp"
-
+#include "../tests/runtime/ik_test_rig.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/skeleton.hpp"
 namespace {
 
 constexpr int rig_count = 32;

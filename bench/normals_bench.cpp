@@ -13,10 +13,12 @@
 #include <numbers>
 #include <vector>
 
-#include "../tests/mesh/normals_reference.hpp"
-#include "deform/builtin.hpp"
-#include "deform/mesh.hpp"
-
+#include "../tests/runtime/normals_reference.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/normals.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/offline/topology.hpp"
 namespace {
 
 // A closed torus of n x m points, its render vertices split along the u = 0 and v = 0 seams ((n + 1) x (m + 1)).

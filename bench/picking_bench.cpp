@@ -6,8 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "deform/picking.hpp"
-
+#include "deform/offline/picking.hpp"
 namespace {
 
 // A closed, bumpy sphere of about `triangles` triangles (a UV sphere), radius about 1.

@@ -12,9 +12,8 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "deform/parallel.hpp"
-#include "deform/skinning.hpp"
-
+#include "deform/runtime/parallel.hpp"
+#include "deform/runtime/skinning.hpp"
 namespace {
 
 constexpr int bone_count = 28;

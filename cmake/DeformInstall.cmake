@@ -1,28 +1,33 @@
-# install() rules and the exported package so that an engine can do
-#   find_package(libdeform CONFIG REQUIRED)
-#   target_link_libraries(app PRIVATE deform::deform)
+# install() rules and the exported package, so that an engine can do
+#   find_package(libdeform CONFIG REQUIRED)                      # runtime, offline, io, character, extras
+#   target_link_libraries(engine PRIVATE deform::runtime)        # or any layer, or deform::deform for all of them
+#   find_package(libdeform CONFIG REQUIRED COMPONENTS import)    # also deform::import: only then is Assimp looked for
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(DEFORM_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/libdeform)
-
-install(TARGETS deform EXPORT libdeformTargets
+set(deform_install_args
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+
+install(TARGETS deform_runtime deform_offline deform_io deform_character deform_extras deform
+  EXPORT libdeformTargets ${deform_install_args})
+install(EXPORT libdeformTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+  PATTERN "import" EXCLUDE PATTERN "gpu" EXCLUDE)
+set(DEFORM_HAVE_IMPORT_COMPONENT 0)
 if(TARGET deform_import)
-  install(TARGETS deform_import EXPORT libdeformTargets
-    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  set(DEFORM_HAVE_IMPORT_COMPONENT 1)
+  install(TARGETS deform_import EXPORT libdeformImportTargets ${deform_install_args})
+  install(EXPORT libdeformImportTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform/import DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/deform)
 endif()
 if(TARGET deform_cli)
   install(TARGETS deform_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 endif()
 
-install(EXPORT libdeformTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/libdeformConfig.cmake.in
   ${PROJECT_BINARY_DIR}/libdeformConfig.cmake INSTALL_DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/libdeformConfigVersion.cmake COMPATIBILITY SameMinorVersion)

@@ -3,11 +3,13 @@
 // the rest of the way; a second and a half later it lets go and the arm springs back with a damped oscillation.
 #include <cmath>
 
+#include "deform/character/character.hpp"
 #include "deform/deform.hpp"
+#include "deform/extras/builtin.hpp"
 #include "sample_app.hpp"
 
 int main(int argc, char** argv) {
-  deform::Character hero(deform::builtin_character());  // the built-in rig: 3 elastic lattices on the left arm
+  deform::Character hero = deform::make_builtin_character();  // the built-in rig: 3 elastic lattices on the left arm
   const std::int32_t hand = hero.skeleton().find("hand_l");
   const glm::vec3 targets[] = {{1.5f, 1.7f, 0.3f}, {1.1f, 2.1f, 0.6f}, {1.4f, 1.1f, 0.7f}};
   sample::PointMeshRenderer renderer;

@@ -11,8 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "deform/builtin.hpp"
-#include "deform/lattice.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/io/lattice_json.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
 #include "gpu_lattice.hpp"  // epoxy first
 #include "sample_app.hpp"
 
@@ -32,7 +36,7 @@ int main(int argc, char** argv) {
   deform::BezierLattice lattice(frame, glm::ivec3(3));
   std::vector<glm::vec3> rest_positions(mesh.vertex_count());  // per render vertex
   for (std::size_t r = 0; r < rest_positions.size(); ++r) rest_positions[r] = mesh.positions[mesh.vertex_point[r]];
-  const deform::LatticeBinding binding = lattice.bind(rest_positions);  // once: each vertex's (u, v, w)
+  const deform::LatticeBinding binding = deform::bind_lattice(lattice, rest_positions);  // once: each vertex's (u, v, w)
   std::vector<glm::vec3> positions = rest_positions, normals = mesh.vertex_normals;
   sample::MeshRenderer renderer;
   sample::GpuBezierLattice gpu;

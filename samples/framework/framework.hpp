@@ -11,8 +11,10 @@
 #include <epoxy/gl.h>
 #include <glm/glm.hpp>
 
-#include "deform/mesh.hpp"
-
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/normals.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/offline/topology.hpp"
 struct GLFWwindow;
 
 namespace sample {

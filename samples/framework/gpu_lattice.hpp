@@ -24,9 +24,10 @@
 #include <epoxy/gl.h>
 #include <glm/glm.hpp>
 
-#include "deform/hierarchy.hpp"
-#include "deform/lattice.hpp"
-
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/io/lattice_json.hpp"
 namespace sample {
 
 // Where evaluate_into() writes inside each vertex of an interleaved float buffer; the defaults are MeshRenderer's.

@@ -3,9 +3,11 @@
 // is skinned with the result. The orange point is the target, the skeleton is drawn on top.
 #include <cmath>
 
-#include "deform/builtin.hpp"
-#include "deform/ik.hpp"
-#include "deform/skinning.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include "sample_app.hpp"
 
 int main(int argc, char** argv) {

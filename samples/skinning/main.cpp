@@ -3,8 +3,10 @@
 // its volume. Shows the SkinningJob API: palette per frame, one job per method, no allocation per frame.
 #include <cmath>
 
-#include "deform/builtin.hpp"
-#include "deform/skinning.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include "sample_app.hpp"
 
 int main(int argc, char** argv) {

@@ -12,7 +12,13 @@
 #include <cstring>
 #include <vector>
 
+#include "deform/character/character.hpp"
 #include "deform/deform.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
 #include "framework.hpp"
 
 namespace {
@@ -103,7 +109,7 @@ bool check_degree(int degree, bool springs) {
 
 // Bad input is refused, not drawn.
 bool check_refusals() {
-  const deform::Character character(deform::builtin_character());
+  const deform::Character character = deform::make_builtin_character();
   const deform::DeformerHierarchy& h = character.deformers();
   const deform::Mesh& mesh = character.model().mesh;
   sample::GpuBezierLattice lattice;

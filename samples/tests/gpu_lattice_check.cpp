@@ -22,7 +22,10 @@
 #include <glm/gtc/quaternion.hpp>
 #include <stb/stb_image.h>
 
-#include "deform/builtin.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/model.hpp"
 #include "framework.hpp"
 
 namespace {
@@ -83,7 +86,7 @@ bool check(const Case& c) {
     positions.push_back(frame.to_world(glm::vec3(float(corner & 1), float((corner >> 1) & 1), float(corner >> 2))));
     normals.push_back(random_unit(rng));
   }
-  const deform::LatticeBinding binding = lattice.bind(positions);
+  const deform::LatticeBinding binding = deform::bind_lattice(lattice, positions);
   std::vector<bool> bound(positions.size(), false);
   for (std::uint32_t v : binding.vertices)
     if (v != deform::LatticeBinding::no_vertex) bound[v] = true;
@@ -165,9 +168,9 @@ bool check_refusals() {
   const std::vector<glm::vec3> points = {glm::vec3(0.5f), glm::vec3(0.25f), glm::vec3(2.0f)};
   const deform::BsplineLattice bspline(frame, glm::ivec3(5));
   const deform::BezierLattice bezier(frame, glm::ivec3(2));
-  const deform::LatticeBinding bezier_binding = bezier.bind(points);
+  const deform::LatticeBinding bezier_binding = deform::bind_lattice(bezier, points);
   sample::GpuBezierLattice gpu;
-  bool ok = !gpu.create(bspline.bind(points)) && !gpu.create(bezier_binding, std::span(points).first(1));
+  bool ok = !gpu.create(deform::bind_lattice(bspline, points)) && !gpu.create(bezier_binding, std::span(points).first(1));
   ok = ok && gpu.create(bezier_binding) && !gpu.evaluate(std::span(bezier.control_points()).first(26));
   GLuint buffer = 0;
   glGenBuffers(1, &buffer);
@@ -234,7 +237,7 @@ void bench() {
     render_positions[r] = model.mesh.positions[model.mesh.vertex_point[r]];
   const deform::BezierLattice sample_lattice(
       deform::LatticeFrame::axis_aligned({-0.35f, 1.15f, -0.25f}, {0.7f, 0.7f, 0.5f}), glm::ivec3(3));
-  bench_one("ffd_lattice sample (tricubic)", sample_lattice, sample_lattice.bind(render_positions),
+  bench_one("ffd_lattice sample (tricubic)", sample_lattice, deform::bind_lattice(sample_lattice, render_positions),
             model.mesh.vertex_normals);
 
   std::mt19937 rng(7);
@@ -246,7 +249,7 @@ void bench() {
   }
   deform::BezierLattice cube(deform::LatticeFrame::axis_aligned(glm::vec3(0.0f), glm::vec3(1.0f)), glm::ivec3(3));
   for (glm::vec3& p : cube.control_points()) p += 0.05f * glm::vec3(unit(rng), unit(rng), unit(rng));
-  bench_one("100k points (tricubic)", cube, cube.bind(points), normals);
+  bench_one("100k points (tricubic)", cube, deform::bind_lattice(cube, points), normals);
 }
 
 int same_picture(const char* path_a, const char* path_b) {

@@ -24,15 +24,29 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <imgui.h>
 
+#include "deform/character/character.hpp"
 #include "deform/deform.hpp"
-#include "deform/error.hpp"
-#include "deform/picking.hpp"
-#include "deform/weights.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/import/import.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/offline/picking.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/offline/weights.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include "gpu_lattice.hpp"
 #include "scene.hpp"
 #include "shapes.hpp"
 #ifdef DEFORM_HAVE_IMPORT
-#include "deform/import.hpp"
 #endif
 
 namespace {
@@ -186,8 +200,9 @@ class Viewer {
     LoadedCharacter loaded = load(options);
     clips_ = std::move(loaded.clips);
     base_model_ = loaded.model;
-    rig_ = options.rig.empty() ? deform::default_rig(base_model_)
-                               : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
+    rig_ = !options.rig.empty()              ? deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count())
+           : base_model_.name == "builtin" ? deform::builtin_rig(base_model_)
+                                           : deform::default_rig(base_model_);
     rebuild_character();
     if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
       clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);

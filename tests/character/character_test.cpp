@@ -1,7 +1,15 @@
 // The Character facade on the built-in character: bind pose, reach (IK + stretch) within 1% of the residual, the
 // damped spring-back on release, frame-rate independence, no seam on the real mesh, argument checks.
-#include "deform/character.hpp"
-
+#include "deform/character/character.hpp"
+#include "deform/deform.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -9,8 +17,6 @@
 #include <random>
 #include <vector>
 
-#include "deform/builtin.hpp"
-#include "deform/deform.hpp"
 
 using deform::Character;
 
@@ -52,7 +58,7 @@ glm::vec3 far_target(const Character& c, std::mt19937& rng) {
 }  // namespace
 
 TEST_CASE("at rest the character is its bind pose: mesh, lattices, normals") {
-  Character c(deform::builtin_character());
+  Character c = deform::make_builtin_character();
   REQUIRE(c.deformers().lattice_count() == 3);
   const deform::Mesh& mesh = c.model().mesh;
   REQUIRE(c.positions().size() == mesh.point_count());
@@ -76,7 +82,7 @@ TEST_CASE("at rest the character is its bind pose: mesh, lattices, normals") {
 }
 
 TEST_CASE("reach: IK within the limits, then the stretch meets the target within 1% of the residual") {
-  Character c(deform::builtin_character());
+  Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
   std::mt19937 rng(2010);
   for (int trial = 0; trial < 25; ++trial) {
@@ -100,7 +106,7 @@ TEST_CASE("reach: IK within the limits, then the stretch meets the target within
 }
 
 TEST_CASE("a reachable target needs no stretch") {
-  Character c(deform::builtin_character());
+  Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
   const glm::vec3 shoulder = c.bone_position(arm.clavicle);
   const glm::vec3 hand = c.bone_position(arm.hand);
@@ -115,7 +121,7 @@ TEST_CASE("a reachable target needs no stretch") {
 }
 
 TEST_CASE("release: the stretch springs back as a damped oscillation and settles at rest") {
-  Character c(deform::builtin_character());
+  Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
   const glm::vec3 shoulder = c.bone_position(arm.clavicle);
   const glm::vec3 target = shoulder + glm::vec3(1.1f, 0.1f, 0.1f);
@@ -154,7 +160,7 @@ TEST_CASE("release: the stretch springs back as a damped oscillation and settles
 
 TEST_CASE("the reach-release curve does not depend on the frame rate") {
   const auto curve = [](float dt) {
-    Character c(deform::builtin_character());
+    Character c = deform::make_builtin_character();
     const Arm arm = left_arm(c);
     const glm::vec3 target = c.bone_position(arm.clavicle) + glm::vec3(1.0f, 0.2f, 0.0f);
     c.reach(arm.hand, target);
@@ -213,7 +219,7 @@ TEST_CASE("on the real mesh the stretched forearm has no seam; without the hiera
 }
 
 TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them gives the whole deformation") {
-  Character whole(deform::builtin_character()), split(deform::builtin_character());
+  Character whole = deform::make_builtin_character(), split = deform::make_builtin_character();
   CHECK(whole.lattice_fields);
   split.lattice_fields = false;
   const Arm arm = left_arm(whole);
@@ -266,7 +272,7 @@ TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them g
 }
 
 TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {
-  Character c(deform::builtin_character());
+  Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
   const std::int32_t elbow = c.skeleton().find("forearm_l");
   deform::Pose pose = c.skeleton().bind_pose();
@@ -288,9 +294,9 @@ TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {
   CHECK(c.stretch() == 0.0f);
 }
 
-TEST_CASE("a model that is not the built-in character gets no lattices by default") {
+TEST_CASE("a Character made without a rig has no lattices, whatever its model") {
   deform::Model model = deform::builtin_character();
-  model.name = "other";
+  model.name = "builtin";
   Character c(std::move(model));
   CHECK(c.deformers().lattice_count() == 0);
   const std::int32_t hand = c.skeleton().find("hand_l");

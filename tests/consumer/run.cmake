@@ -1,5 +1,6 @@
 # Installs the already-built libdeform into a scratch prefix, then configures, builds and runs a tiny consumer
-# project against it with find_package(libdeform CONFIG): what an engine integrating the SDK does.
+# project against it with find_package(libdeform CONFIG): what an engine integrating the SDK does. Twice: once
+# without components (Assimp must not be looked for), once with COMPONENTS import when the build has it.
 file(REMOVE_RECURSE ${WORK_DIR})
 if(NOT BUILD_TYPE)
   set(BUILD_TYPE Release)
@@ -9,17 +10,33 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${WORK
 if(rc)
   message(FATAL_ERROR "install failed (${rc})")
 endif()
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build -G ${GENERATOR}
-  -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=${BUILD_TYPE} RESULT_VARIABLE rc)
-if(rc)
-  message(FATAL_ERROR "configuring the consumer failed (${rc})")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/build RESULT_VARIABLE rc)
-if(rc)
-  message(FATAL_ERROR "building the consumer failed (${rc})")
-endif()
-execute_process(COMMAND ${WORK_DIR}/build/consumer RESULT_VARIABLE rc OUTPUT_VARIABLE out)
-message(STATUS "${out}")
-if(rc)
-  message(FATAL_ERROR "the consumer failed (${rc})")
+
+function(consume name with_import)
+  set(build ${WORK_DIR}/${name})
+  execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${build} -G ${GENERATOR}
+    -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DWITH_IMPORT=${with_import}
+    RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "configuring the consumer (${name}) failed (${rc})")
+  endif()
+  execute_process(COMMAND ${CMAKE_COMMAND} --build ${build} RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "building the consumer (${name}) failed (${rc})")
+  endif()
+  set(programs runtime_only facade)
+  if(with_import)
+    list(APPEND programs importer)
+  endif()
+  foreach(program ${programs})
+    execute_process(COMMAND ${build}/${program} RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+    message(STATUS "${out}")
+    if(rc)
+      message(FATAL_ERROR "the consumer's ${program} failed (${rc})")
+    endif()
+  endforeach()
+endfunction()
+
+consume(plain OFF)
+if(HAVE_IMPORT)
+  consume(with-import ON)
 endif()

@@ -1,7 +1,13 @@
 // Importer on real models no one here made (Debian's assimp-testmodels), checked against Assimp's own scene: the bind
 // pose reproduces the file's vertices, clips drive the mesh as Assimp's node animation does, export reloads equal.
-#include "deform/import.hpp"
-
+#include "deform/import/import.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -14,9 +20,6 @@
 #include <utility>
 #include <fstream>
 #include <map>
-
-#include "deform/error.hpp"
-#include "deform/skinning.hpp"
 
 namespace fs = std::filesystem;
 

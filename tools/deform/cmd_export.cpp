@@ -6,7 +6,10 @@
 #include "cli.hpp"
 #include "model_loader.hpp"
 #ifdef DEFORM_HAVE_IMPORT
-#include "deform/import.hpp"
+#include "deform/import/import.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/model.hpp"
 #endif
 
 namespace cli {

@@ -4,9 +4,14 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "deform/lattice.hpp"
-#include "deform/mesh.hpp"
-
+#include "deform/io/lattice_json.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/offline/topology.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/normals.hpp"
 namespace cli {
 namespace {
 
@@ -38,7 +43,7 @@ int run(const std::vector<std::string>& argv) {
   // The rest lattice binds (so (u, v, w) are those of the undeformed mesh); the displaced points evaluate.
   const deform::BezierLattice rest(lattice.frame(), lattice.degree(), lattice_path);
   const deform::LatticeBinding binding =
-      doc.has_vertices ? rest.bind(mesh.positions, doc.vertices) : rest.bind(mesh.positions);
+      doc.has_vertices ? deform::bind_lattice(rest, mesh.positions, doc.vertices) : deform::bind_lattice(rest, mesh.positions);
   std::vector<glm::vec3> positions = mesh.positions;
   deform::LatticeEvaluateJob job;
   job.binding = &binding;

@@ -3,10 +3,11 @@
 #include <string>
 
 #include "cli.hpp"
-#include "deform/builtin.hpp"
-#include "deform/ik.hpp"
-#include "deform/skeleton.hpp"
-
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/io/pose_json.hpp"
 namespace cli {
 namespace {
 

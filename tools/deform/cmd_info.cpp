@@ -7,11 +7,17 @@
 #include <iostream>
 
 #include "cli.hpp"
-#include "deform/error.hpp"
-#include "deform/mesh.hpp"
-#include "deform/skeleton.hpp"
+#include "deform/import/import.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/pose_json.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/offline/topology.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/normals.hpp"
+#include "deform/runtime/skeleton.hpp"
 #ifdef DEFORM_HAVE_IMPORT
-#include "deform/import.hpp"
 #endif
 
 namespace cli {

@@ -5,12 +5,16 @@
 #include <iostream>
 
 #include "cli.hpp"
-#include "deform/atomic_file.hpp"
-#include "deform/builtin.hpp"
-#include "deform/character.hpp"
-#include "deform/error.hpp"
-#include "deform/rig.hpp"
-
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/model.hpp"
 namespace cli {
 namespace {
 

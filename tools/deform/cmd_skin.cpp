@@ -4,8 +4,15 @@
 #include <iostream>
 
 #include "cli.hpp"
-#include "deform/error.hpp"
-#include "deform/skinning.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/pose_json.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include "model_loader.hpp"
 
 namespace cli {

@@ -2,9 +2,14 @@
 #include <algorithm>
 
 #include "cli.hpp"
-#include "deform/builtin.hpp"
-#include "deform/weights.hpp"
-
+#include "deform/extras/builtin.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/offline/weights.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
 namespace cli {
 namespace {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "deform/error.hpp"
+#include "deform/runtime/error.hpp"
 #include "deform/version.hpp"
 
 namespace {

@@ -1,11 +1,13 @@
 // How model-taking subcommands find their model: --builtin, the native OBJ + .sk + .skw triple, or a rigged import.
 #include "model_loader.hpp"
 
-#include "deform/builtin.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/import/import.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/runtime/error.hpp"
 #ifdef DEFORM_HAVE_IMPORT
 #include <filesystem>
 
-#include "deform/import.hpp"
 #endif
 
 namespace cli {

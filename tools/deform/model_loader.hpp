@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "cli.hpp"
-#include "deform/animation.hpp"
-#include "deform/model.hpp"
-
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/io/model_files.hpp"
 namespace cli {
 
 struct LoadedModel {

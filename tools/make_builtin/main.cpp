@@ -9,9 +9,11 @@
 
 #include <stb_image_write.h>
 
-#include "deform/atomic_file.hpp"
-#include "deform/builtin.hpp"
-
+#include "deform/extras/builtin.hpp"
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/runtime/model.hpp"
 namespace {
 
 constexpr int texture_size = 512;

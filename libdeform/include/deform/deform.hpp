@@ -1,16 +1,17 @@
 #pragma once
-// libdeform's facade: one include for an engine that wants the Character and what it is made of.
-// The per-module headers (mesh.hpp, skeleton.hpp, skinning.hpp, ik.hpp, lattice.hpp, elastic.hpp, ...) stay usable
-// on their own for finer control.
-#include "deform/builtin.hpp"
-#include "deform/character.hpp"
-#include "deform/elastic.hpp"
-#include "deform/error.hpp"
-#include "deform/hierarchy.hpp"
-#include "deform/ik.hpp"
-#include "deform/lattice.hpp"
-#include "deform/mesh.hpp"
-#include "deform/model.hpp"
-#include "deform/rig.hpp"
-#include "deform/skeleton.hpp"
-#include "deform/skinning.hpp"
+// libdeform's facade: one include for an engine that wants the Character and what it is made of. Each target's
+// headers (deform/runtime/..., deform/io/..., deform/offline/...) stay usable on their own; docs/architecture.md
+// says which target holds what.
+#include "deform/character/character.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"

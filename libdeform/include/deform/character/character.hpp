@@ -1,0 +1,109 @@
+#pragma once
+// Character: the facade over the SDK — a rigged mesh, its skin, its elastic lattices — behind a few calls:
+//
+//   deform::Character hero = deform::make_builtin_character();  // extras: the built-in model and its rig
+//   hero.reach(hero.skeleton().find("hand_l"), {1.6f, 1.5f, 0.3f});   // IK, then stretch for the rest
+//   every frame: hero.update(dt); draw hero.positions(), hero.normals(), hero.control_points(i)
+//   hero.release();                                         // the stretch springs back, a damped oscillation
+//
+// reach(effector, target): the chain (rig reach root, or the parent of the topmost lattice above the effector) turns
+// toward the target by CCD within the DOF limits; what distance remains is covered by stretching the chain's
+// lattices along their bones (shares in proportion to their lengths; IK and stretch are solved together, so a bent
+// chain that straightens as it grows is accounted for). The stretch is a spring target: update() lets the lattices
+// spring toward it, so the effector arrives — within 1% of that remaining distance once settled — with the
+// overshoot and settling of the lattices' damping. release() sets the targets back to zero.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <span>
+#include <vector>
+
+#include "deform/character/export.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/normals.hpp"
+#include "deform/runtime/skinning.hpp"
+namespace deform {
+
+// What reach() decided.
+struct ReachResult {
+  bool valid = false;     // false: bad effector or target, nothing changed
+  float residual = 0.0f;  // |target - effector| after IK alone, before stretching (model units)
+  float stretch = 0.0f;   // total stretch asked of the chain's lattices (model units)
+  float distance = 0.0f;  // |target - effector| once the stretch has settled
+  int iterations = 0;     // IK + stretch rounds
+};
+
+class DEFORM_CHARACTER_API Character {
+ public:
+  // Binds the rig's lattices to the model (see DeformerHierarchy) and puts it in its bind pose. Throws
+  // deform::Error when the rig does not fit the model. Allocates everything the per-frame path needs.
+  Character(Model model, const Rig& rig);
+  // No lattices: skinning and IK only.
+  explicit Character(Model model);
+  // Bound to its own model (the lattices point into it): not copyable, not movable.
+  Character(const Character&) = delete;
+  Character& operator=(const Character&) = delete;
+
+  const Model& model() const noexcept { return model_; }
+  const Skeleton& skeleton() const noexcept { return model_.skeleton; }
+  const Rig& rig() const noexcept { return rig_; }
+  DeformerHierarchy& deformers() noexcept { return hierarchy_; }
+  const DeformerHierarchy& deformers() const noexcept { return hierarchy_; }
+
+  // The held pose (every bone's local rotation and translation), clamped into the DOF limits. Cancels nothing: a
+  // stretch in progress goes on. Returns false (changing nothing) when the pose has the wrong size or is not finite.
+  bool set_pose(const Pose& pose);
+  const Pose& pose() const noexcept { return pose_; }
+
+  SkinningMethod skinning = SkinningMethod::lbs;
+  // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
+  // (DeformerHierarchy::apply_carried instead of apply) for a caller that evaluates them elsewhere, e.g. on a GPU,
+  // from deformers().binding(l), bound_weights(l) and displacements(l); positions() and normals() are then those of
+  // the skinned, carried surface, and adding the fields to positions() gives what true gives.
+  bool lattice_fields = true;
+  IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
+
+  // Reaches for `target` (world space) with `effector`'s head: IK, then the stretch target of the chain's lattices.
+  // Allocates (a solver per chain); not for every frame, but cheap enough for every mouse move (microseconds).
+  ReachResult reach(std::int32_t effector, glm::vec3 target);
+  // Lets go: every stretch target back to zero; the pose reached stays.
+  void release();
+
+  // Advances the springs by dt seconds and deforms: FK, skinning, lattices. Returns false (changing nothing) when dt
+  // is negative or not finite. No allocation; O(points + bound points · lattice cost).
+  bool update(float dt);
+
+  // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
+  std::span<const glm::vec3> positions() const noexcept { return positions_; }
+  // Deformed normals, one per render vertex, recomputed from positions() on the first call after update()
+  // (VertexNormals, bound at construction: O(triangles)).
+  std::span<const glm::vec3> normals();
+  // A lattice's control points in world space (for drawing), i-fastest.
+  std::span<const glm::vec3> control_points(std::size_t lattice) const { return hierarchy_.control_points(lattice); }
+  // World head of a bone including what the lattices above it carry it by.
+  glm::vec3 bone_position(std::int32_t bone) const;
+  // The stretch the lattices have now, summed over those reach() stretches (model units); 0 when not reaching.
+  float stretch() const;
+  // The effector of the last reach (-1 before any).
+  std::int32_t effector() const noexcept { return effector_; }
+
+ private:
+  Model model_;
+  Rig rig_;
+  DeformerHierarchy hierarchy_;
+  Pose pose_;
+  std::vector<glm::mat4> world_;
+  std::vector<glm::mat4> palette_;
+  std::vector<DualQuat> dual_quats_;
+  std::vector<glm::mat3> scales_;
+  std::vector<glm::vec3> positions_;
+  std::vector<glm::vec3> normals_;
+  VertexNormals vertex_normals_;
+  bool normals_current_ = false;
+  std::int32_t effector_ = -1;
+  std::vector<std::size_t> stretched_;  // lattices of the last reach
+};
+
+}  // namespace deform

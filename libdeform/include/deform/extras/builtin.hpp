@@ -1,0 +1,38 @@
+#pragma once
+// The built-in character: a rigged humanoid built by code, so every sample, test, benchmark and CLI command has a
+// model without any file (docs/builtin-character.md). samples/data/builtin.{obj,mtl,png,sk,skw} hold the same
+// character, written by tools/make_builtin, and a test keeps them equal to what this library builds.
+//
+// Conventions: metres, Y up, facing +Z, the character's left on +X, T-pose, 1.8 m tall. Every bone except the root
+// points along its local +Y axis: its first child's head lies on its local +Y axis (the direction an elastic stretch
+// pushes). The root (hips) has its local +Y pointing forward (+Z), so that both the spine and the legs hang off it
+// with bind rotations of ±90° rather than 180° and every joint's DOF range is a plain [min, max] around its bind angle.
+#include <cstdint>
+#include <vector>
+
+#include "deform/character/character.hpp"
+#include "deform/extras/export.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/model.hpp"
+
+namespace deform {
+
+// The character: name "builtin", about 2,550 points in 13 closed, overlapping body parts (triangles only, UVs in an
+// atlas, normals), one material "skin" with map_Kd "builtin.png", 29 bones with anatomical DOF limits, and the weights
+// compute_automatic_weights() gives with default options. Deterministic: every call gives the same values (across
+// platforms, to within the rounding of their sin/exp/pow). Cost: about 13 ms; allocates the model.
+DEFORM_EXTRAS_API Model builtin_character();
+
+// The texture the material names: `size` × `size` RGB pixels (row 0 = top, i.e. v = 1), 8 bits per channel, a
+// checker of 8 × 8 squares per body-part atlas cell with a tint per part, so deformation and UV seams are visible.
+// `size` must be a power of two from 16 to 4096 (throws deform::Error otherwise). Cost O(size²).
+DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
+
+// The rig of the built-in character (builtin_character(); model.builtin set): three lattices on the left arm — upper
+// arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l. Throws deform::Error when `model`
+// lacks those bones.
+DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
+// The built-in character with builtin_rig(): the Character every sample starts from.
+DEFORM_EXTRAS_API Character make_builtin_character();
+
+}  // namespace deform

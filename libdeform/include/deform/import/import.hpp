@@ -1,0 +1,75 @@
+#pragma once
+// Importer (optional component deform::import, link deform::import): rigged characters from any format Assimp reads
+// (glTF 2.0, FBX, Collada, DirectX .x, IQM, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md
+// explains every conversion; in short:
+//  - all meshes merge into one Mesh in the scene's world space (node transforms applied), one submesh per mesh
+//    instance, with its materials; texture paths are resolved relative to the model's folder.
+//  - a *point* (Mesh::positions, .skw line, OBJ `v`) is a unique (exact bind position, skin influences) pair: Assimp
+//    vertices that differ only by normal or UV share one point; each Assimp vertex is one render vertex.
+//  - bones are the nodes skinning needs (those named by the meshes' bones, the nodes of meshes with unweighted
+//    vertices) and every node on the paths between them, rooted at their lowest common ancestor (raised to the
+//    topmost animated ancestor). A bone's bind world transform is mesh-node · offset⁻¹ (the file's inverse bind
+//    matrix), so the rest pose reproduces the file's mesh exactly; a node without an offset binds at its node-tree
+//    world transform. Clips hold every bone whose node-tree rest differs from its bind at the node-tree value.
+//  - a Skeleton has no scale: uniform scale is folded into child translations (exact for skinning while the scale
+//    is not animated); non-uniform or animated scale is approximated and reported in `warnings`.
+//  - weights: the strongest 4 per vertex, renormalised; a vertex with no weight is bound rigidly to its mesh's node.
+#include <string>
+#include <vector>
+
+#include "deform/import/export.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/model.hpp"
+namespace deform {
+
+struct ImportOptions {
+  // Clip time base when the file gives none (Assimp reports 0 ticks per second).
+  double default_ticks_per_second = 25.0;
+  // Whether imported clips loop (the formats do not say).
+  bool loop_clips = true;
+};
+
+struct ImportedModel {
+  // mesh in bind pose (world space), skeleton, weights (one per point). model.name is the file's stem.
+  Model model;
+  // The file's animations, in skeleton space (see Animation), validated against model.skeleton.
+  std::vector<Animation> clips;
+  // Non-fatal findings, one line each: unweighted vertices bound rigidly, influences dropped beyond 4, scale that a
+  // Skeleton cannot hold, textures missing or embedded, bones with no node, names shortened to fit .sk.
+  std::vector<std::string> warnings;
+  // False for a static scene (no mesh has bones): the skeleton is then one bone "root" at the origin, every point
+  // weighted 1 to it, and `clips` is empty.
+  bool rigged = false;
+  // Per bone, the file's bind world transform with its scale (mesh-node · offset⁻¹, or the node-tree world
+  // transform for bones without an offset); the skeleton holds its rigid part. For callers that handle scale.
+  std::vector<glm::mat4> file_bind_world;
+  // The up direction the file declares (a unit axis): its FBX `UpAxis`/`UpAxisSign`, as Assimp reports them; +Y
+  // for files that declare none (glTF is +Y by definition). The data is left as the file has it: a viewer turns its
+  // scene so that `up` points up.
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+};
+
+// Imports the model at `path`. Throws deform::Error naming the file for a file Assimp cannot read (missing,
+// truncated, malformed: Assimp's message is included), a scene with no triangles, non-finite data, more than 65535
+// bones or more than 2^32 - 1 vertices. Never crashes on bad input (Assimp's own validation runs first).
+// Cost: Assimp's import plus O(vertices · influences + bones + keys).
+DEFORM_IMPORT_API ImportedModel import_model(const std::string& path, const ImportOptions& options = {});
+
+// The native files export_native wrote (full paths) and what it could not copy.
+struct ExportedFiles {
+  std::string obj, mtl, sk, skw;
+  std::vector<std::string> textures;  // copies, one per distinct source texture
+  std::vector<std::string> warnings;  // textures missing at their source (their map_Kd is left out)
+};
+
+// Writes `model` into `folder` (created if needed) as STEM.obj + STEM.mtl + STEM.sk + STEM.skw, STEM = model.name
+// with anything outside [A-Za-z0-9._-] replaced by '_' ("model" if empty), and copies each material's diffuse
+// texture beside them (map_Kd then names the copy). The OBJ holds the mesh in the bind pose the .sk describes, so
+// load_model(obj, sk, skw) skins exactly as `model` does. Every file is written atomically (textures first, the OBJ
+// last). Throws deform::Error when a file cannot be written or the skeleton does not fit .sk.
+DEFORM_IMPORT_API ExportedFiles export_native(const Model& model, const std::string& folder);
+
+// True when `path`'s extension is one Assimp can read (case-insensitive). Cheap: no file access.
+DEFORM_IMPORT_API bool is_importable(const std::string& path);
+
+}  // namespace deform

@@ -1,0 +1,57 @@
+#pragma once
+// Wavefront OBJ and MTL: meshes read from and written to text, faithfully (vertex i in is vertex i out).
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "deform/io/export.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+
+namespace deform {
+
+// Reads an OBJ file and the MTL files it names. Supports `v` (extra w / colour components ignored), `vn`, `vt`,
+// `f` in the forms v, v/vt, v//vn, v/vt/vn with negative (relative) indices, polygons (fan-triangulated), `o`, `g`,
+// `s` (ignored), `mtllib`, `usemtl`, `\` line continuation; MTL `newmtl`, `Ka`, `Kd`, `Ks`, `d`, `Tr`, `Ns`, `illum`,
+// `map_Kd`. Render vertices are the distinct (v, vt, vn) triples, numbered in order of first use.
+// A malformed line or an out-of-range index throws deform::Error with the file and line; a missing MTL, an unknown
+// material, a missing texture or an unsupported statement (`l`, `p`, curves...) is a warning. Normals missing from
+// the file are computed as compute_vertex_normals does. Linear time and memory in the file size.
+DEFORM_IO_API Mesh read_obj(const std::string& path, Warnings* warnings = nullptr);
+
+// Parses OBJ text held in memory; `name` is used in messages, MTL files are resolved relative to `base_folder`.
+DEFORM_IO_API Mesh parse_obj(std::string_view text, const std::string& name = "<memory>",
+                          const std::string& base_folder = ".", Warnings* warnings = nullptr);
+
+// Parses MTL text; `name` for messages, texture paths resolved relative to `base_folder`.
+DEFORM_IO_API std::vector<Material> parse_mtl(std::string_view text, const std::string& name,
+                                           const std::string& base_folder, Warnings* warnings = nullptr);
+
+// Options for write_obj.
+struct ObjWriteOptions {
+  std::string mtllib;         // written as `mtllib` when non-empty (materials are then named by `usemtl`)
+  bool write_normals = true;  // `vn` lines (one per render vertex) and v//vn face indices
+  bool write_uvs = true;      // `vt` lines when the mesh has UVs
+};
+
+// Formats the mesh as OBJ text: one `v` per point (in order, from `positions`, which must have point_count()
+// entries), then `vt`/`vn` per render vertex (normals from `normals` if not empty, else mesh.vertex_normals), then
+// the faces as the file had them, with `o`/`g`/`usemtl` where the submesh changes. Vertex i in means vertex i out;
+// numbers are written in the shortest form that reads back to the same float. Throws std::invalid_argument when a
+// span has the wrong size.
+DEFORM_IO_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions,
+                                  std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
+// Writes format_obj() to `path` atomically. Throws deform::Error on failure.
+DEFORM_IO_API void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::vec3> positions,
+                          std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
+// The ObjWriteOptions::mtllib value with which an OBJ written to `obj_path` uses the MTL files `mesh` was read with:
+// each of mesh.material_libraries relative to obj_path's folder (absolute when no relative path exists), joined by
+// spaces. Empty when the mesh has none (a mesh built in code, or an OBJ without `mtllib`).
+DEFORM_IO_API std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path);
+// Formats the mesh's materials as MTL text (map_Kd written as given).
+DEFORM_IO_API std::string format_mtl(std::span<const Material> materials);
+
+}  // namespace deform

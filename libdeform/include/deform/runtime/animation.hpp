@@ -1,0 +1,75 @@
+#pragma once
+// Animation clips (thesis RV03F01, bone animation): per-bone keyframe tracks sampled into a Pose.
+//
+// A clip drives the pose; IK and the elastic deformers then act on top of it. Tracks are in the skeleton's own
+// space: a bone's translation and rotation keys are the local values a Pose holds (relative to the parent bone).
+// Sampling is the per-frame path: a binary search per track, no allocation, no I/O.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <string>
+#include <vector>
+
+#include "deform/runtime/export.hpp"
+#include "deform/runtime/skeleton.hpp"
+namespace deform {
+
+// How a track moves between two keys.
+//  - step: holds a key's value until the next key.
+//  - linear: lerp for vectors, shortest-path slerp for rotations.
+//  - cubic_spline: cubic Hermite with per-key in/out tangents (glTF CUBICSPLINE: tangents are per second, scaled by
+//    the key interval); a rotation result is normalised.
+enum class Interpolation : std::uint8_t { step, linear, cubic_spline };
+
+// One animated property of a bone: key times (seconds, strictly increasing) and values, same size. For cubic_spline,
+// `in_tangents` and `out_tangents` have one entry per key too; otherwise they are empty. Before the first key the
+// track holds the first value, after the last it holds the last. An empty track does not animate its property.
+template <class T>
+struct Track {
+  Interpolation interpolation = Interpolation::linear;
+  std::vector<float> times;
+  std::vector<T> values;
+  std::vector<T> in_tangents;
+  std::vector<T> out_tangents;
+  bool empty() const noexcept { return times.empty(); }
+};
+
+// The tracks of one bone. `scale` is kept as the file gave it (relative to the bone's bind scale, 1 = unchanged) but
+// is not applied by Animation::sample, because a Pose has no scale.
+struct Channel {
+  std::int32_t bone = -1;  // skeleton bone id
+  Track<glm::vec3> translation;
+  Track<glm::quat> rotation;
+  Track<glm::vec3> scale;
+};
+
+// A clip: named channels over [0, duration] seconds. Bones without a channel are not touched by sample().
+struct DEFORM_RUNTIME_API Animation {
+  std::string name;
+  float duration = 0.0f;  // seconds, >= 0
+  bool loop = true;       // sample() wraps time into [0, duration) when true, clamps into [0, duration] otherwise
+  std::vector<Channel> channels;
+
+  // Checks the clip against a skeleton with `bone_count` bones: duration finite and >= 0, bones in range and at most
+  // one channel per bone, every track with times finite and strictly increasing, values (and tangents, sized as
+  // above) finite. Throws deform::Error naming `source`, the clip and the bone.
+  void validate(std::size_t bone_count, const std::string& source = "<memory>") const;
+
+  // Writes the local rotation and translation of every animated bone at time `seconds` into `pose` (other bones keep
+  // their values; start from Skeleton::bind_pose()). Returns false and writes nothing when a channel's bone is out of
+  // the pose's range or `seconds` is not finite. No allocation; O(channels · log keys). Assumes validate() passed.
+  bool sample(float seconds, Pose& pose) const noexcept;
+
+  // The clip-local time `seconds` maps to: wrapped into [0, duration) when looping (negative times too), clamped
+  // into [0, duration] otherwise; 0 for a zero-length clip.
+  float local_time(float seconds) const noexcept;
+};
+
+// One track's value at clip-local time `seconds` (no wrapping). `fallback` is returned for an empty track.
+DEFORM_RUNTIME_API glm::vec3 sample_track(const Track<glm::vec3>& track, float seconds, glm::vec3 fallback) noexcept;
+DEFORM_RUNTIME_API glm::quat sample_track(const Track<glm::quat>& track, float seconds, glm::quat fallback) noexcept;
+
+// Index of the clip named `name` in `clips`, or -1.
+DEFORM_RUNTIME_API std::int32_t find_clip(const std::vector<Animation>& clips, const std::string& name) noexcept;
+
+}  // namespace deform

@@ -1,0 +1,168 @@
+#pragma once
+// Elasticity: lattice control points as damped harmonic oscillators (thesis §4.4, §8.4.2), optional neighbour springs.
+//
+// Each point of an ElasticLattice is a mass m pulled toward its rest position r by a spring k and slowed by a damper b
+// acting on its velocity relative to the rest (eq. 12: m·y'' = -k·y - b·y', y = p - r). The rest is the caller's: it
+// is where the point would be without elasticity (a lattice's stretched or bone-carried grid), given anew each step.
+// Damping is set as the ratio ζ = b / (2·√(k·m)): ζ < 1 oscillates (under-damped), ζ = 1 returns fastest without
+// overshoot (critical), ζ > 1 creeps back (over-damped) — the sign of b² - 4km of §4.4.
+//
+// Two integrators:
+//  - Integrator::exact (default): the closed-form solution of eq. 12 over each step. Frame-rate independent (any
+//    sequence of steps summing to T gives the state at T, up to float rounding) and unconditionally stable.
+//  - Integrator::verlet: the thesis' position Verlet with a constant per-frame damping Kd,
+//    p += (p - p_old)·(1 - Kd) + a·dt². Kept for fidelity; its motion changes with the frame rate (Kd is per frame,
+//    not per second) and it diverges for dt > 2/ω. docs/elasticity.md derives both.
+// With neighbour springs on, the state advances in fixed sub-steps (see NeighbourSprings).
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <span>
+#include <vector>
+
+#include "deform/runtime/export.hpp"
+namespace deform {
+
+// One oscillator: stiffness, damping ratio, mass. Units: with positions in metres and time in seconds, k is N/m and
+// m kg; only ω = √(k/m) and ζ matter to the motion.
+struct ElasticParams {
+  float stiffness = 150.0f;    // k > 0
+  float damping_ratio = 0.2f;  // ζ >= 0: < 1 under-, 1 critically, > 1 over-damped
+  float mass = 1.0f;           // m > 0 (the thesis uses unit mass)
+  bool operator==(const ElasticParams&) const = default;
+};
+
+enum class DampingRegime { under, critical, over };
+
+// True when every field is finite and k > 0, m > 0, ζ >= 0.
+DEFORM_RUNTIME_API bool is_valid(const ElasticParams& params) noexcept;
+// ω = √(k/m), rad/s.
+DEFORM_RUNTIME_API double angular_frequency(const ElasticParams& params) noexcept;
+// b = 2·ζ·√(k·m), the damper of eq. 11 (force per unit velocity).
+DEFORM_RUNTIME_API double damping_coefficient(const ElasticParams& params) noexcept;
+// The regime; |ζ - 1| <= 1e-6 counts as critical.
+DEFORM_RUNTIME_API DampingRegime damping_regime(const ElasticParams& params) noexcept;
+// The seed's Kd that matches ζ at one frame step: the velocity lost per frame, Kd = 1 - exp(-(b/m)·frame_dt).
+// Valid only at that frame step: the same Kd at another frame rate is another damping (hence frame-rate dependence).
+DEFORM_RUNTIME_API double verlet_kd(const ElasticParams& params, double frame_dt) noexcept;
+// Time for a point released at rest-offset A with zero velocity to stay within `tolerance`·A for good (0 < tolerance
+// < 1). Under-damped: the envelope bound ln(1/(tolerance·√(1-ζ²)))/(ζω) (infinite when ζ = 0); critical and over:
+// the exact crossing of the monotonic response, found by bisection.
+DEFORM_RUNTIME_API double settling_time(const ElasticParams& params, double tolerance = 0.02) noexcept;
+
+// The exact solution of eq. 12 over a time t as a 2×2 map of (offset y, velocity v):
+//   y(t) = position_from_offset·y0 + position_from_velocity·v0,
+//   v(t) = velocity_from_offset·y0 + velocity_from_velocity·v0.
+// Computed in double for all three regimes (one expression with cos/sin or cosh/sinh, no cancellation near ζ = 1,
+// no overflow for large t). Cost: a few exp/sin calls; per point the step is then 4 multiply-adds per axis.
+struct OscillatorStep {
+  double position_from_offset = 1.0;
+  double position_from_velocity = 0.0;
+  double velocity_from_offset = 0.0;
+  double velocity_from_velocity = 1.0;
+};
+DEFORM_RUNTIME_API OscillatorStep oscillator_step(const ElasticParams& params, double t) noexcept;
+
+enum class Integrator { exact, verlet };
+
+// Springs between control points of a grid (thesis §8.2.3, fig. 38): structural (axis neighbours), shear (face and
+// body diagonals), bend (two apart along an axis). Each pulls its two points toward the distance their rests have
+// now, so the springs add wobble while the points move and never shift where they settle.
+// With springs on, the state advances in fixed sub-steps of `substep` seconds (leftover time kept for the next call,
+// the positions reported for the exact end of the step): each sub-step integrates the anchor oscillator exactly with
+// the spring forces held constant, so only the neighbour springs bound the sub-step (stable for
+// substep < 2·√(m / (springs per point · stiffness)) roughly; docs/elasticity.md).
+struct NeighbourSprings {
+  bool structural = false;
+  bool shear = false;
+  bool bend = false;
+  float stiffness = 50.0f;        // per spring, force per unit of length change, >= 0
+  float damping = 1.0f;           // per spring, force per unit of relative speed along it, >= 0
+  float substep = 1.0f / 240.0f;  // seconds, > 0
+  bool any() const noexcept { return structural || shear || bend; }
+  bool operator==(const NeighbourSprings&) const = default;
+};
+
+// A spring between two points, by index.
+struct Spring {
+  std::uint32_t a = 0;
+  std::uint32_t b = 0;
+};
+
+// The springs of a dims.x × dims.y × dims.z grid of points indexed i + dims.x·(j + dims.y·k) (i fastest, as
+// lattice.hpp orders control points), of the kinds `springs` switches on. Empty when no kind is on or a dimension
+// is < 1.
+DEFORM_RUNTIME_API std::vector<Spring> grid_springs(glm::ivec3 dims, const NeighbourSprings& springs);
+
+// Everything that sets how an ElasticLattice moves.
+struct ElasticSettings {
+  ElasticParams oscillator;
+  Integrator integrator = Integrator::exact;
+  float verlet_kd = 0.05f;   // Integrator::verlet only: the seed's per-frame damping in [0, 1]
+  NeighbourSprings springs;  // off by default; Integrator::exact only
+  bool operator==(const ElasticSettings&) const = default;
+};
+
+// The elastic state of a set of points (a lattice's control points): positions, velocities, rests. Construction and
+// configuration allocate; step() does not.
+class DEFORM_RUNTIME_API ElasticLattice {
+ public:
+  ElasticLattice() = default;
+  // Points start at `rest` with zero velocity. `grid` (points per axis, product = rest.size()) places them for the
+  // neighbour springs; {0,0,0} means no grid (springs then ignored). Throws deform::Error when the settings are not
+  // valid (see validate_settings), a rest position is not finite, or `grid` does not match rest.size().
+  explicit ElasticLattice(std::span<const glm::vec3> rest, const ElasticSettings& settings = {},
+                          glm::ivec3 grid = glm::ivec3(0));
+
+  // Changes the settings keeping the state. Throws deform::Error when they are not valid.
+  void set_settings(const ElasticSettings& settings);
+  const ElasticSettings& settings() const noexcept { return settings_; }
+
+  // Pinned points sit on their rest every step (a lattice face that must not move). `pinned` has size() entries,
+  // non-zero = pinned. An empty span unpins all. Returns false (and changes nothing) on a size mismatch.
+  bool set_pinned(std::span<const std::uint8_t> pinned);
+
+  // Advances the state by dt seconds toward `rest` (size() entries; the rest in effect for the whole step: a rest
+  // that moves is sampled once per step). dt = 0 only re-anchors pinned points. Returns false and changes nothing
+  // when dt is negative or not finite, or `rest` has the wrong size. Cost O(points (+ springs · sub-steps)), no
+  // allocation.
+  bool step(float dt, std::span<const glm::vec3> rest);
+
+  // Puts every point on `rest` with zero velocity (size() entries; returns false otherwise).
+  bool reset(std::span<const glm::vec3> rest);
+
+  std::size_t size() const noexcept { return positions_.size(); }
+  std::span<const glm::vec3> positions() const noexcept { return positions_; }
+  std::span<const glm::vec3> velocities() const noexcept { return velocities_; }
+  std::span<const glm::vec3> rest() const noexcept { return rest_; }
+  std::span<const Spring> springs() const noexcept { return springs_; }
+
+ private:
+  void step_exact(double dt);
+  void step_verlet(float dt);
+  void step_with_springs(double dt);
+  void substep(double h, std::span<glm::vec3> positions, std::span<glm::vec3> velocities);
+  const OscillatorStep& cached_step(double dt, OscillatorStep& cache, double& cache_dt) const;
+
+  ElasticSettings settings_;
+  glm::ivec3 grid_{0};
+  std::vector<glm::vec3> positions_;
+  std::vector<glm::vec3> velocities_;
+  std::vector<glm::vec3> rest_;
+  std::vector<glm::vec3> previous_;   // Verlet: last step's positions
+  std::vector<std::uint8_t> pinned_;  // empty = none pinned
+  std::vector<Spring> springs_;
+  // Sub-stepping: the state at the last whole sub-step, time owed to it, scratch for forces and the reported state.
+  std::vector<glm::vec3> sub_positions_;
+  std::vector<glm::vec3> sub_velocities_;
+  std::vector<glm::vec3> forces_;
+  double owed_ = 0.0;
+  OscillatorStep step_cache_;
+  double step_cache_dt_ = -1.0;
+  OscillatorStep sub_cache_;
+  double sub_cache_dt_ = -1.0;
+};
+
+// Throws deform::Error ("<settings>", naming the field) when a parameter is not finite or out of its range.
+DEFORM_RUNTIME_API void validate_settings(const ElasticSettings& settings);
+
+}  // namespace deform

@@ -1,0 +1,164 @@
+#pragma once
+// The deformer hierarchy (thesis §9.4.1, fig. 53/54): elastic Bézier lattices bound to bones, whose stretch carries
+// everything below them. docs/elasticity.md.
+//
+// Each lattice lives in its bone's bind frame with its U axis along the bone: u = 0 at the bone's head, u = 1 at the
+// head of the bone's first child (for a leaf, at the farthest bound point), V and W fitted around the bound points.
+// Its control points are an ElasticLattice simulated in that frame, so the rest moves with the bone and only the
+// stretch (set_stretch_target) drives the springs. A stretch of s moves control point P_ijk by s·(i/l) along U; the
+// first face (i = 0) is pinned and the last face (i = l) moves rigidly (its mean displacement), so
+//  - a point the lattice selects is moved by  weight · D(u, v, w), where D is the lattice's displacement field
+//    (Σ ΔP_ijk B_i B_j B_k, carried into world space by the bone's current matrix) and weight the point's selection
+//    weight (its skin weight on the bone's subtree, or 1 for an explicit list);
+//  - a selected point beyond the far face (u >= 1, the hand below a forearm) is translated by weight · δ, δ the far
+//    face's displacement: exactly D at u = 1, so there is no seam at the border; points before the near face (u <= 0)
+//    do not move, exactly D at u = 0 = 0.
+// Displacements of several lattices add up, applied after skinning (positions skinned with the unstretched pose), so
+// skin blending at the joints is kept. A lattice on a mid-chain bone thus carries the bones and points below it —
+// the hand follows a stretched forearm — and so does any lattice below it.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/export.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/skeleton.hpp"
+namespace deform {
+
+// How a lattice chooses the points it moves.
+enum class VertexSelection : std::uint8_t {
+  subtree_weight,  // points whose summed skin weight on the bone and its descendants exceeds weight_threshold
+  list,            // an explicit list of points (thesis fig. 52), each moved fully
+};
+
+// The set-up of one lattice (what a rig file stores, docs/formats.md).
+struct LatticeSpec {
+  std::string name;        // unique within a hierarchy
+  std::int32_t bone = -1;  // the bone it is bound to
+  glm::ivec3 degree{3};    // Bézier degree along U (the bone), V, W; 1 .. max_bezier_degree
+  VertexSelection selection = VertexSelection::subtree_weight;
+  float weight_threshold = 0.0f;        // subtree_weight: in [0, 1)
+  std::vector<std::uint32_t> vertices;  // list: point indices, ascending, unique
+  float margin = 0.05f;                 // sideways padding of the fitted box, fraction of its width, in [0, 1]
+  ElasticSettings elastic;              // how its control points spring
+  bool carry_descendants = true;        // points beyond the far face follow it (fig. 54); false = fig. 53
+  bool operator==(const LatticeSpec&) const = default;
+};
+
+// One lattice of a hierarchy as bind_hierarchy (deform::offline, offline/hierarchy_binding.hpp) fits and binds it to
+// a mesh: what the per-frame path reads.
+struct BoundLattice {
+  LatticeSpec spec;
+  BezierLattice rest{LatticeFrame{}};  // the rest lattice in its bone's bind frame (U along the bone)
+  glm::vec3 axis{0.0f, 1.0f, 0.0f};    // unit U in the bone's frame
+  float length = 0.0f;                 // |U|, model units
+  LatticeBinding binding;              // the points the Bézier field moves
+  std::vector<float> lane_weights;     // their selection weights, per binding lane (0 in padding lanes)
+  std::vector<std::uint32_t> carried_points;  // points beyond the far face, carried by it
+  std::vector<float> carried_weights;         // their selection weights
+};
+
+class DEFORM_RUNTIME_API DeformerHierarchy {
+ public:
+  DeformerHierarchy() = default;
+  // Takes the lattices bind_hierarchy (deform::offline) fitted and bound, for a mesh of `point_count` points and
+  // `skeleton`, whose bone parents and bind matrices it copies (it keeps no reference: a hierarchy is movable).
+  // Links each lattice to its parent lattice, sets up its springs (first face pinned) and puts it at rest. Throws
+  // deform::Error when a lattice's bone is out of range or its binding does not fit its rest lattice or the points.
+  // Allocates; O(lattices × control points + bones).
+  DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices, std::size_t point_count);
+
+  std::size_t lattice_count() const noexcept { return lattices_.size(); }
+  const LatticeSpec& spec(std::size_t lattice) const { return lattices_.at(lattice).spec; }
+  // The lattice index with this name, or -1.
+  std::int32_t find(std::string_view name) const noexcept;
+  // The nearest lattice whose bone is a proper ancestor of this lattice's bone, or -1 (the hierarchy of fig. 54).
+  std::int32_t parent(std::size_t lattice) const { return lattices_.at(lattice).parent; }
+  // The rest lattice in its bone's bind frame (frame, degree, rest control points).
+  const BezierLattice& rest_lattice(std::size_t lattice) const { return lattices_.at(lattice).rest; }
+  // Its length along the bone, |U|, model units.
+  float length(std::size_t lattice) const { return lattices_.at(lattice).length; }
+  // Points moved by the lattice's Bézier field, and points it carries (beyond its far face).
+  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).binding.vertex_count; }
+  std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).carried_points.size(); }
+
+  // The stretch the lattice springs toward, model units along its bone (negative squashes). Must be finite and
+  // > -length(); returns false otherwise.
+  bool set_stretch_target(std::size_t lattice, float stretch);
+  float stretch_target(std::size_t lattice) const { return lattices_.at(lattice).target; }
+  // The stretch it has now: the far face's displacement along the bone (model units).
+  float stretch(std::size_t lattice) const;
+  // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid.
+  void set_elastic(std::size_t lattice, const ElasticSettings& settings);
+
+  // Advances every lattice's springs by dt seconds (see ElasticLattice::step). Returns false and changes nothing when
+  // dt is negative or not finite. No allocation.
+  bool step(float dt);
+  // Every control point back on the unstretched rest, at rest; stretch targets 0.
+  void reset();
+
+  // Per frame, after step(): carries the lattices into world space with the bones' current matrices (`world`, one per
+  // bone, from compute_world_matrices of the pose the points were skinned with). Returns false (changing nothing)
+  // on a size mismatch. O(lattices × control points), no allocation.
+  bool update(std::span<const glm::mat4> world);
+  // Adds every lattice's displacement to `positions` (the skinned points, mesh.point_count() entries). Returns false
+  // (changing nothing) on a size mismatch. O(bound points) Bézier evaluations (LatticeEvaluateJob) plus one add per
+  // carried point; a lattice at rest is skipped. No allocation. Exactly apply_carried(), then for every active
+  // lattice l, in index order, the field: positions[p] += bound_weights(l)[n] · D_l(n) for each lane n of
+  // binding(l) with a point p (D_l(n): LatticeEvaluateJob's output for binding(l) with displacements(l)).
+  bool apply(std::span<glm::vec3> positions);
+  // apply() without the Bézier fields: adds only the translations of the carried points (beyond the far faces), for
+  // a caller that evaluates the fields itself, e.g. on a GPU. Returns false (changing nothing) on a size mismatch.
+  // O(carried points), no allocation.
+  bool apply_carried(std::span<glm::vec3> positions);
+
+  // What evaluating a lattice's field takes, for callers of apply_carried():
+  // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
+  // lanes LatticeBinding::no_vertex) and their (u, v, w) in the lattice's rest frame (bone bind space).
+  const LatticeBinding& binding(std::size_t lattice) const { return lattices_.at(lattice).binding; }
+  // One selection weight per binding lane (binding(l).vertices.size() entries, 0 in padding lanes): in (0, 1].
+  std::span<const float> bound_weights(std::size_t lattice) const { return lattices_.at(lattice).lane_weights; }
+  // As of update(): the control points of the lattice's displacement field, world space, i-fastest (point_counts of
+  // rest_lattice(l)); evaluating binding(l) with them gives each bound point's displacement before its weight.
+  std::span<const glm::vec3> displacements(std::size_t lattice) const {
+    return lattices_.at(lattice).world_displacements;
+  }
+  // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
+  // length), which apply() skips.
+  bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
+  // The displacement update() gives a point `bind_point` (bind-pose world space) that moves with `bone` with full
+  // weight: e.g. a bone's head, an IK effector. O(lattices).
+  glm::vec3 point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept;
+  // The lattice's control points in world space as of update(), i-fastest (for drawing): the bone-carried,
+  // elastically displaced points, plus what the lattices above carry them by.
+  std::span<const glm::vec3> control_points(std::size_t lattice) const { return lattices_.at(lattice).world_points; }
+
+ private:
+  struct Lattice : BoundLattice {
+    std::int32_t parent = -1;
+    glm::mat4 bind_world{1.0f};           // the bone's bind world matrix and its inverse
+    glm::mat4 inverse_bind_world{1.0f};
+    BezierLattice field{LatticeFrame{}};  // control points = world displacements (for point_displacement)
+    std::vector<std::uint32_t> far_face;  // control point indices with i = l
+    ElasticLattice elastic;
+    std::vector<glm::vec3> target_points;  // rest stretched by `target`, bone frame
+    float target = 0.0f;
+    // Per frame (update): world displacements of the control points, the far face's, world control points.
+    std::vector<glm::vec3> world_displacements;
+    glm::vec3 far_displacement{0.0f};
+    std::vector<glm::vec3> world_points;
+    bool active = false;
+  };
+  void stretch_points(Lattice& lattice) const;
+  bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
+
+  std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
+  std::vector<Lattice> lattices_;
+  std::vector<glm::vec3> scratch_;  // per mesh point: Bézier displacements of the lattice being applied
+};
+
+}  // namespace deform

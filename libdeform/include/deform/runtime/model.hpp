@@ -1,0 +1,16 @@
+#pragma once
+// Model: a rigged mesh — the mesh, its skeleton and per-point skin weights — as one value.
+// What the OBJ + .sk + .skw triple, the built-in character and the importer all produce.
+#include <string>
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/skeleton.hpp"
+
+namespace deform {
+
+struct Model {
+  std::string name;      // for messages and output names ("builtin", a file stem)
+  Mesh mesh;
+  Skeleton skeleton;
+  SkinWeights weights;   // one entry per mesh point (mesh.point_count())
+};
+}  // namespace deform

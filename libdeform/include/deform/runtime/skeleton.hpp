@@ -1,0 +1,121 @@
+#pragma once
+// Skeleton: a bone hierarchy with bind transforms and DOF limits, poses, forward kinematics, skin weights.
+// io/sk.hpp reads and writes them as .sk and .skw files, io/pose_json.hpp poses as JSON.
+//
+// Conventions (fixed by shared/spec/sk-format.md, they decide every number downstream):
+//  - a bone's local transform is L = T(t) · Rx(rx) · Ry(ry) · Rz(rz), column vectors, angles in degrees;
+//    as a quaternion, q = qx · qy · qz.
+//  - world W = W_parent · L; a bone's head is W · (0,0,0,1).
+//  - DOF limits bound the local Euler angles, per axis, in degrees; min == max locks an axis.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "deform/runtime/export.hpp"
+
+namespace deform {
+
+// Per-axis limits of a bone's local Euler angles, degrees. Free = [-180, 180] on every axis.
+struct DofLimits {
+  glm::vec3 min{-180.0f};
+  glm::vec3 max{180.0f};
+  bool operator==(const DofLimits&) const = default;
+};
+
+struct Bone {
+  std::string name;                      // may be empty or shared; ids are the reference
+  std::int32_t parent = -1;              // id of the parent, -1 for the root
+  std::vector<std::int32_t> children;    // ids, in file order
+  glm::vec3 bind_translation{0.0f};      // relative to the parent
+  glm::vec3 bind_rotation{0.0f};         // Euler X·Y·Z, degrees, relative to the parent
+  DofLimits limits;
+  bool operator==(const Bone&) const = default;
+};
+
+// A pose: each bone's local rotation and translation (relative to its parent). Index = bone id.
+struct Pose {
+  std::vector<glm::quat> rotations;
+  std::vector<glm::vec3> translations;
+};
+
+class DEFORM_RUNTIME_API Skeleton {
+ public:
+  Skeleton() = default;
+  // Takes the bones as given and validates them: 1 to 65535 bones, exactly one root and it is bone 0 (parent -1),
+  // parents in range, no cycles, child lists that agree with the parent ids (each non-root bone listed exactly once,
+  // by its parent), limits with min <= max, every number finite. Throws deform::Error naming `source` and the bone.
+  // Cost: O(bones + children); computes order() and the bind matrices once.
+  explicit Skeleton(std::vector<Bone> bones, const std::string& source = "<memory>");
+
+  std::span<const Bone> bones() const noexcept { return bones_; }
+  const Bone& bone(std::int32_t id) const { return bones_.at(static_cast<std::size_t>(id)); }
+  std::size_t bone_count() const noexcept { return bones_.size(); }
+  // Bone ids with every parent before its children (bone 0 first). FK runs in this order.
+  std::span<const std::int32_t> order() const noexcept { return order_; }
+
+  // Id of the first bone with this name, or of bone ID for "#ID"; -1 if none.
+  std::int32_t find(std::string_view name) const noexcept;
+  // The name a pose or the CLI uses for a bone: its name, or "#ID" when the name is empty, shared or starts with '#'.
+  std::string key(std::int32_t id) const;
+  // True if `ancestor` is `bone` or one of its ancestors.
+  bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
+
+  // The bind pose (file translations and rotations).
+  Pose bind_pose() const;
+  // Bind-pose world matrices (T_B of thesis eq. 13) and their inverses, computed once at construction.
+  std::span<const glm::mat4> bind_world() const noexcept { return bind_world_; }
+  std::span<const glm::mat4> inverse_bind_world() const noexcept { return inverse_bind_world_; }
+
+  // Sets the bone's local rotation from Euler angles (degrees, X·Y·Z); clamps them into the bone's limits first
+  // unless `clamp` is false. Returns the angles actually used.
+  glm::vec3 set_euler(Pose& pose, std::int32_t bone, glm::vec3 degrees, bool clamp = true) const;
+  // Clamps the bone's current local rotation into its DOF limits (convert to Euler, clamp, convert back). Of the two
+  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged.
+  void clamp_to_limits(Pose& pose, std::int32_t bone) const;
+
+ private:
+  std::vector<Bone> bones_;
+  std::vector<std::int32_t> order_;
+  std::vector<glm::mat4> bind_world_;
+  std::vector<glm::mat4> inverse_bind_world_;
+};
+
+// --- Euler angles (X·Y·Z, degrees) ---
+
+// q = qx(x) · qy(y) · qz(z), i.e. the rotation of Rx · Ry · Rz.
+DEFORM_RUNTIME_API glm::quat quat_from_euler(glm::vec3 degrees) noexcept;
+// The inverse of quat_from_euler with angles in [-180, 180] and y in [-90, 90]; robust at y = ±90° (gimbal lock:
+// the whole X/Z rotation is put on x, z = 0), never NaN for a unit or near-unit quaternion.
+DEFORM_RUNTIME_API glm::vec3 euler_from_quat(glm::quat q) noexcept;
+// Clamps each angle into [min, max] of its axis.
+DEFORM_RUNTIME_API glm::vec3 clamp_euler(glm::vec3 degrees, const DofLimits& limits) noexcept;
+// True when every angle is within its axis' limits (with `slack` degrees of tolerance).
+DEFORM_RUNTIME_API bool within_limits(glm::vec3 degrees, const DofLimits& limits, float slack = 1e-3f) noexcept;
+
+// --- forward kinematics ---
+
+// Local matrix L = T · R of one bone of a pose.
+DEFORM_RUNTIME_API glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept;
+// World matrices of every bone, one pass over skeleton.order(). The pose and `out` must have bone_count() entries;
+// returns false (and writes nothing) otherwise. No allocation, O(bones).
+DEFORM_RUNTIME_API bool compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out);
+// The skinning palette T_C = T_W · T_B⁻¹ (thesis eq. 13) per bone. `world` and `out` must have bone_count()
+// entries; returns false (and writes nothing) otherwise. No allocation.
+DEFORM_RUNTIME_API bool compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world,
+                                         std::span<glm::mat4> out);
+// Up to four influences per point, strongest first, weights normalised to sum 1; unused slots have weight 0 and
+// bone 0. Index = point (OBJ `v`) index.
+inline constexpr int max_influences = 4;
+struct SkinWeights {
+  std::vector<glm::u16vec4> bones;
+  std::vector<glm::vec4> weights;
+  std::size_t size() const noexcept { return bones.size(); }
+  bool operator==(const SkinWeights&) const = default;
+};
+
+}  // namespace deform

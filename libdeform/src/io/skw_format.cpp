@@ -1,0 +1,190 @@
+// .skw skin weight files: text, one line per OBJ `v` (shared/spec/sk-format.md).
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include "deform/io/atomic_file.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/io/pose_json.hpp"
+namespace deform {
+namespace {
+
+// Splits a line (comment already cut) into whitespace-separated tokens, reusing `tokens`.
+void split(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() &&
+           (line[i] == ' ' || line[i] == '\t' || line[i] == '\r' || line[i] == '\v' || line[i] == '\f'))
+      ++i;
+    const std::size_t start = i;
+    while (i < line.size() &&
+           !(line[i] == ' ' || line[i] == '\t' || line[i] == '\r' || line[i] == '\v' || line[i] == '\f'))
+      ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+template <typename T>
+bool parse_number(std::string_view token, T& value) {
+  const char* end = token.data() + token.size();
+  const auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  return ec == std::errc() && ptr == end;
+}
+
+struct Influence {
+  std::uint32_t bone;
+  float weight;
+};
+
+class SkwParser {
+ public:
+  SkwParser(const std::string& name, std::size_t point_count, std::size_t bone_count)
+      : name_(name), point_count_(point_count), bone_count_(bone_count) {}
+
+  SkinWeights parse(std::string_view text) {
+    std::vector<std::string_view> tokens;
+    std::size_t start = 0;
+    while (start < text.size()) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string_view::npos) end = text.size();
+      ++line_;
+      std::string_view line = text.substr(start, end - start);
+      start = end + 1;
+      line = line.substr(0, line.find('#'));
+      split(line, tokens);
+      if (!tokens.empty()) take(tokens);
+    }
+    if (state_ == State::header) fail("", "missing header 'skw 1'");
+    if (state_ == State::count) fail("", "missing 'vertices N' line");
+    if (next_vertex_ < point_count_) fail(vertex(next_vertex_), "missing (the file ends before it)");
+    return std::move(weights_);
+  }
+
+ private:
+  enum class State { header, count, vertices };
+
+  [[noreturn]] void fail(const std::string& element, const std::string& message) const {
+    throw Error::at_line(name_, line_, element, message);
+  }
+  static std::string vertex(std::size_t index) { return "vertex " + std::to_string(index); }
+
+  void take(const std::vector<std::string_view>& tokens) {
+    if (state_ == State::header) {
+      if (tokens.size() != 2 || tokens[0] != "skw") fail("", "expected the header 'skw 1'");
+      if (tokens[1] != "1") fail("", "unsupported .skw version '" + std::string(tokens[1]) + "' (this reads 1)");
+      state_ = State::count;
+      return;
+    }
+    if (state_ == State::count) {
+      std::uint64_t count = 0;
+      if (tokens.size() != 2 || tokens[0] != "vertices" || !parse_number(tokens[1], count))
+        fail("", "expected 'vertices N'");
+      if (count != point_count_)
+        fail("", "vertices " + std::to_string(count) + " does not match the mesh's " + std::to_string(point_count_) +
+                     " points");
+      // Only now, with the count known to be the mesh's own, is it safe to allocate from it.
+      weights_.bones.assign(point_count_, glm::u16vec4(0));
+      weights_.weights.assign(point_count_, glm::vec4(0.0f));
+      state_ = State::vertices;
+      return;
+    }
+    take_vertex(tokens);
+  }
+
+  void take_vertex(const std::vector<std::string_view>& tokens) {
+    std::uint64_t index = 0;
+    if (!parse_number(tokens[0], index)) fail("", "expected a vertex index, got '" + std::string(tokens[0]) + "'");
+    if (next_vertex_ == point_count_)
+      fail(vertex(index), "one line more than the " + std::to_string(point_count_) + " vertices declared");
+    if (index < next_vertex_) fail(vertex(index), "listed again (vertices come once each, in order)");
+    if (index > next_vertex_)
+      fail(vertex(next_vertex_), "missing (the next line is vertex " + std::to_string(index) + ")");
+    const std::string element = vertex(index);
+    if (tokens.size() < 3 || tokens.size() % 2 == 0) fail(element, "expected (bone id, weight) pairs after the index");
+
+    influences_.clear();
+    double sum = 0.0;
+    for (std::size_t t = 1; t < tokens.size(); t += 2) {
+      std::uint64_t bone = 0;
+      if (!parse_number(tokens[t], bone)) fail(element, "bad bone id '" + std::string(tokens[t]) + "'");
+      if (bone >= bone_count_ || bone > 0xFFFF)
+        fail(element, "bone " + std::to_string(bone) + " is out of range (the skeleton has " +
+                          std::to_string(bone_count_) + " bones)");
+      float weight = 0.0f;
+      if (!parse_number(tokens[t + 1], weight) || !std::isfinite(weight))
+        fail(element, "bad weight '" + std::string(tokens[t + 1]) + "' (a finite number >= 0)");
+      if (weight < 0.0f) fail(element, "weight " + std::string(tokens[t + 1]) + " is negative");
+      for (const Influence& other : influences_)
+        if (other.bone == bone) fail(element, "bone " + std::to_string(bone) + " listed twice");
+      influences_.push_back({static_cast<std::uint32_t>(bone), weight});
+      sum += weight;
+    }
+    if (!(sum > 0.0)) fail(element, "no positive weight (every vertex must follow some bone)");
+
+    // Strongest first; equal weights by bone id, so the choice does not depend on the order of the pairs.
+    const auto kept = std::min<std::size_t>(influences_.size(), max_influences);
+    std::partial_sort(influences_.begin(), influences_.begin() + static_cast<std::ptrdiff_t>(kept), influences_.end(),
+                      [](const Influence& a, const Influence& b) {
+                        return a.weight != b.weight ? a.weight > b.weight : a.bone < b.bone;
+                      });
+    double kept_sum = 0.0;
+    for (std::size_t k = 0; k < kept; ++k) kept_sum += influences_[k].weight;
+    for (std::size_t k = 0; k < kept && influences_[k].weight > 0.0f; ++k) {
+      weights_.bones[index][static_cast<int>(k)] = static_cast<std::uint16_t>(influences_[k].bone);
+      weights_.weights[index][static_cast<int>(k)] = static_cast<float>(influences_[k].weight / kept_sum);
+    }
+    ++next_vertex_;
+  }
+
+  const std::string& name_;
+  std::size_t point_count_;
+  std::size_t bone_count_;
+  State state_ = State::header;
+  std::int64_t line_ = 0;
+  std::size_t next_vertex_ = 0;
+  std::vector<Influence> influences_;
+  SkinWeights weights_;
+};
+
+}  // namespace
+
+SkinWeights parse_skw(std::string_view text, std::size_t point_count, std::size_t bone_count, const std::string& name) {
+  return SkwParser(name, point_count, bone_count).parse(text);
+}
+
+SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size_t bone_count) {
+  return parse_skw(read_file_text(path), point_count, bone_count, path);
+}
+
+std::string format_skw(const SkinWeights& weights) {
+  if (weights.weights.size() != weights.bones.size())
+    throw Error::invalid_argument("", "bones and weights differ in size");
+  std::string text = "skw 1\nvertices " + std::to_string(weights.size()) + "\n";
+  char number[32];
+  for (std::size_t v = 0; v < weights.size(); ++v) {
+    text += std::to_string(v);
+    bool any = false;
+    for (int k = 0; k < max_influences; ++k) {
+      const float w = weights.weights[v][k];
+      if (!std::isfinite(w) || w < 0.0f)
+        throw Error::invalid_argument("vertex " + std::to_string(v), "weight is negative or not finite");
+      if (w == 0.0f) continue;
+      any = true;
+      text += ' ';
+      text += std::to_string(weights.bones[v][k]);
+      text += ' ';
+      const auto result = std::to_chars(number, number + sizeof number, w);
+      text.append(number, result.ptr);
+    }
+    if (!any) throw Error::invalid_argument("vertex " + std::to_string(v), "no positive weight");
+    text += '\n';
+  }
+  return text;
+}
+
+void write_skw(const std::string& path, const SkinWeights& weights) { write_file_atomic(path, format_skw(weights)); }
+
+}  // namespace deform

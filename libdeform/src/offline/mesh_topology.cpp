@@ -1,0 +1,69 @@
+// Point topology from a triangle list: every triangle edge as a sorted 64-bit key (low point, high point); runs of
+// equal keys give the boundary (edges used by exactly one triangle), and the distinct edges in both directions,
+// sorted, give the one-rings (CSR). Works on any triangle soup, manifold or not.
+#include <algorithm>
+#include <stdexcept>
+
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/normals.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/offline/topology.hpp"
+namespace deform {
+namespace {
+
+std::uint64_t edge_key(std::uint32_t from, std::uint32_t to) { return std::uint64_t(from) << 32 | to; }
+std::uint32_t key_from(std::uint64_t key) { return std::uint32_t(key >> 32); }
+std::uint32_t key_to(std::uint64_t key) { return std::uint32_t(key); }
+
+}  // namespace
+
+PointTopology build_point_topology(const Mesh& mesh) {
+  const std::size_t point_count = mesh.point_count();
+  const auto point_of = [&](std::uint32_t vertex) {
+    if (vertex >= mesh.vertex_count() || mesh.vertex_point[vertex] >= point_count)
+      throw std::invalid_argument("build_point_topology: triangle or vertex_point index out of range");
+    return mesh.vertex_point[vertex];
+  };
+
+  // One key per undirected edge per triangle: the count of a key is how many triangles use that edge.
+  std::vector<std::uint64_t> edges;
+  edges.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
+    const std::uint32_t corners[3] = {point_of(mesh.triangles[t]), point_of(mesh.triangles[t + 1]),
+                                      point_of(mesh.triangles[t + 2])};
+    const std::size_t first = edges.size();
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t a = corners[i], b = corners[(i + 1) % 3];
+      const std::uint64_t key = edge_key(std::min(a, b), std::max(a, b));
+      // A triangle with a repeated point has one real edge, counted once.
+      if (a != b && std::find(edges.begin() + std::ptrdiff_t(first), edges.end(), key) == edges.end())
+        edges.push_back(key);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+
+  PointTopology topology;
+  std::vector<std::uint64_t> directed;  // each distinct edge in both directions
+  directed.reserve(edges.size());
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    const std::uint32_t a = key_from(edges[i]), b = key_to(edges[i]);
+    if (j - i == 1) topology.boundary_edges.insert(topology.boundary_edges.end(), {a, b});
+    directed.push_back(edge_key(a, b));
+    directed.push_back(edge_key(b, a));
+    i = j;
+  }
+  std::sort(directed.begin(), directed.end());
+
+  topology.neighbour_offsets.assign(point_count + 1, 0);
+  topology.neighbours.reserve(directed.size());
+  for (const std::uint64_t key : directed) {
+    ++topology.neighbour_offsets[key_from(key) + 1];
+    topology.neighbours.push_back(key_to(key));
+  }
+  for (std::size_t p = 0; p < point_count; ++p) topology.neighbour_offsets[p + 1] += topology.neighbour_offsets[p];
+  return topology;
+}
+
+}  // namespace deform

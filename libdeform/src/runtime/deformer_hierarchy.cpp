@@ -1,0 +1,216 @@
+// Elastic lattices bound to bones, and the hierarchy that makes a stretched lattice carry what lies below it.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/hierarchy.hpp"
+
+namespace deform {
+namespace {
+
+glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+
+}  // namespace
+
+DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
+                                     std::size_t point_count)
+    : scratch_(point_count, glm::vec3(0.0f)) {
+  bone_parents_.reserve(skeleton.bone_count());
+  for (const Bone& bone : skeleton.bones()) bone_parents_.push_back(bone.parent);
+  lattices_.reserve(lattices.size());
+  for (BoundLattice& bound : lattices) {
+    const std::string element = "lattice '" + bound.spec.name + "'";
+    if (bound.spec.bone < 0 || std::size_t(bound.spec.bone) >= skeleton.bone_count()) {
+      throw Error::invalid_argument(element, "bone is out of range");
+    }
+    const LatticeBinding& binding = bound.binding;
+    if (binding.kind != LatticeKind::bezier || binding.point_counts != bound.rest.point_counts() ||
+        bound.lane_weights.size() != binding.vertices.size() ||
+        (binding.vertex_count > 0 && binding.max_vertex >= point_count) ||
+        bound.carried_points.size() != bound.carried_weights.size() || !(bound.length > 0.0f)) {
+      throw Error::invalid_argument(element, "binding does not fit its rest lattice or the mesh");
+    }
+    for (std::uint32_t p : bound.carried_points) {
+      if (p >= point_count) throw Error::invalid_argument(element, "a carried point is out of range");
+    }
+    Lattice lattice;
+    static_cast<BoundLattice&>(lattice) = std::move(bound);
+    lattice.bind_world = skeleton.bind_world()[std::size_t(lattice.spec.bone)];
+    lattice.inverse_bind_world = skeleton.inverse_bind_world()[std::size_t(lattice.spec.bone)];
+    lattice.field = lattice.rest;
+
+    // The springs: the first face pinned, the last face read as one rigid translation.
+    const glm::ivec3 counts = lattice.rest.point_counts();
+    std::vector<std::uint8_t> pinned(lattice.rest.point_count(), 0);
+    for (int k = 0; k < counts.z; ++k) {
+      for (int j = 0; j < counts.y; ++j) {
+        pinned[lattice.rest.index(0, j, k)] = 1;
+        lattice.far_face.push_back(std::uint32_t(lattice.rest.index(counts.x - 1, j, k)));
+      }
+    }
+    lattice.elastic = ElasticLattice(lattice.rest.control_points(), lattice.spec.elastic, counts);
+    lattice.elastic.set_pinned(pinned);
+    lattice.target_points.assign(lattice.rest.control_points().begin(), lattice.rest.control_points().end());
+    lattice.world_displacements.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattice.world_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattices_.push_back(std::move(lattice));
+  }
+
+  for (Lattice& lattice : lattices_) {
+    for (std::int32_t b = bone_parents_[std::size_t(lattice.spec.bone)]; b >= 0 && lattice.parent < 0;
+         b = bone_parents_[std::size_t(b)]) {
+      for (std::size_t other = 0; other < lattices_.size(); ++other) {
+        if (lattices_[other].spec.bone == b) {
+          lattice.parent = std::int32_t(other);
+          break;
+        }
+      }
+    }
+  }
+  std::vector<glm::mat4> world(skeleton.bind_world().begin(), skeleton.bind_world().end());
+  update(world);
+}
+
+bool DeformerHierarchy::is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept {
+  for (std::int32_t b = bone; b >= 0 && std::size_t(b) < bone_parents_.size(); b = bone_parents_[std::size_t(b)]) {
+    if (b == ancestor) return true;
+  }
+  return false;
+}
+
+std::int32_t DeformerHierarchy::find(std::string_view name) const noexcept {
+  for (std::size_t i = 0; i < lattices_.size(); ++i) {
+    if (lattices_[i].spec.name == name) return std::int32_t(i);
+  }
+  return -1;
+}
+
+void DeformerHierarchy::stretch_points(Lattice& lattice) const {
+  const glm::ivec3 counts = lattice.rest.point_counts();
+  const float last = float(counts.x - 1);
+  for (int k = 0; k < counts.z; ++k) {
+    for (int j = 0; j < counts.y; ++j) {
+      for (int i = 0; i < counts.x; ++i) {
+        const std::size_t n = lattice.rest.index(i, j, k);
+        lattice.target_points[n] = lattice.rest.control_points()[n] + lattice.axis * (lattice.target * float(i) / last);
+      }
+    }
+  }
+}
+
+bool DeformerHierarchy::set_stretch_target(std::size_t index, float stretch) {
+  Lattice& lattice = lattices_.at(index);
+  if (!std::isfinite(stretch) || !(stretch > -lattice.length)) return false;
+  lattice.target = stretch;
+  stretch_points(lattice);
+  return true;
+}
+
+float DeformerHierarchy::stretch(std::size_t index) const {
+  const Lattice& lattice = lattices_.at(index);
+  float sum = 0.0f;
+  for (std::uint32_t n : lattice.far_face) {
+    sum += glm::dot(lattice.elastic.positions()[n] - lattice.rest.control_points()[n], lattice.axis);
+  }
+  return sum / float(lattice.far_face.size());
+}
+
+void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& settings) {
+  Lattice& lattice = lattices_.at(index);
+  lattice.elastic.set_settings(settings);
+  lattice.spec.elastic = settings;
+}
+
+bool DeformerHierarchy::step(float dt) {
+  if (!(dt >= 0.0f) || !std::isfinite(dt)) return false;
+  for (Lattice& lattice : lattices_) lattice.elastic.step(dt, lattice.target_points);
+  return true;
+}
+
+void DeformerHierarchy::reset() {
+  for (Lattice& lattice : lattices_) {
+    lattice.target = 0.0f;
+    stretch_points(lattice);
+    lattice.elastic.reset(lattice.rest.control_points());
+  }
+}
+
+bool DeformerHierarchy::update(std::span<const glm::mat4> world) {
+  if (world.size() != bone_parents_.size()) return false;
+  for (Lattice& lattice : lattices_) {
+    const std::span<const glm::vec3> rest = lattice.rest.control_points();
+    const std::span<const glm::vec3> now = lattice.elastic.positions();
+    glm::vec3 far(0.0f);
+    for (std::uint32_t n : lattice.far_face) far += now[n] - rest[n];
+    far /= float(lattice.far_face.size());
+    const glm::mat3 linear(world[std::size_t(lattice.spec.bone)]);
+    const float still = 1e-7f * lattice.length;
+    lattice.active = glm::length(far) > still;
+    std::span<glm::vec3> field = lattice.field.control_points();
+    for (std::size_t n = 0; n < rest.size(); ++n) {
+      const glm::vec3 local = now[n] - rest[n];
+      lattice.active = lattice.active || glm::length(local) > still;
+      lattice.world_displacements[n] = linear * local;
+    }
+    for (std::uint32_t n : lattice.far_face) lattice.world_displacements[n] = linear * far;
+    std::copy(lattice.world_displacements.begin(), lattice.world_displacements.end(), field.begin());
+    lattice.far_displacement = linear * far;
+  }
+  // Drawing positions, once every lattice's field is known (a lattice is carried by those above it).
+  for (Lattice& lattice : lattices_) {
+    const std::size_t bone = std::size_t(lattice.spec.bone);
+    const glm::vec3 carried = point_displacement(lattice.spec.bone, glm::vec3(lattice.bind_world[3]));
+    const std::span<const glm::vec3> rest = lattice.rest.control_points();
+    for (std::size_t n = 0; n < rest.size(); ++n) {
+      lattice.world_points[n] = transform_point(world[bone], rest[n]) + lattice.world_displacements[n] + carried;
+    }
+  }
+  return true;
+}
+
+bool DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
+  if (positions.size() != scratch_.size()) return false;
+  for (const Lattice& lattice : lattices_) {
+    if (!lattice.active) continue;
+    for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
+      positions[lattice.carried_points[n]] += lattice.carried_weights[n] * lattice.far_displacement;
+    }
+  }
+  return true;
+}
+
+bool DeformerHierarchy::apply(std::span<glm::vec3> positions) {
+  if (!apply_carried(positions)) return false;
+  for (const Lattice& lattice : lattices_) {
+    if (!lattice.active) continue;
+    LatticeEvaluateJob job;
+    job.binding = &lattice.binding;
+    job.control_points = lattice.world_displacements;
+    job.positions = scratch_;
+    job.run();  // cannot fail: the binding was made for these control points and scratch_ spans every point
+    const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
+    for (std::size_t n = 0; n < lanes.size(); ++n) {
+      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+    }
+  }
+  return true;
+}
+
+glm::vec3 DeformerHierarchy::point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept {
+  glm::vec3 sum(0.0f);
+  for (const Lattice& lattice : lattices_) {
+    if (!lattice.active || !is_ancestor(lattice.spec.bone, bone)) continue;
+    const glm::vec3 local = transform_point(lattice.inverse_bind_world, bind_point);
+    const glm::vec3 uvw = lattice.rest.frame().to_lattice(local);
+    if (uvw.x <= 0.0f) continue;
+    if (uvw.x >= 1.0f) {
+      if (lattice.spec.carry_descendants) sum += lattice.far_displacement;
+      continue;
+    }
+    sum += lattice.field.evaluate(glm::clamp(uvw, glm::vec3(0.0f), glm::vec3(1.0f)));
+  }
+  return sum;
+}
+
+}  // namespace deform

@@ -1,0 +1,236 @@
+// Damped harmonic oscillators over a flat array of points: the closed-form step, the seed's Verlet, the state.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
+namespace deform {
+namespace {
+
+bool finite(float x) noexcept { return std::isfinite(x); }
+
+bool finite(glm::vec3 p) noexcept { return finite(p.x) && finite(p.y) && finite(p.z); }
+
+void require(bool ok, const char* field, const char* what) {
+  if (!ok) throw Error::invalid_argument(field, what);
+}
+
+}  // namespace
+
+bool is_valid(const ElasticParams& params) noexcept {
+  return finite(params.stiffness) && finite(params.damping_ratio) && finite(params.mass) && params.stiffness > 0.0f &&
+         params.mass > 0.0f && params.damping_ratio >= 0.0f;
+}
+
+double angular_frequency(const ElasticParams& params) noexcept {
+  return std::sqrt(double(params.stiffness) / double(params.mass));
+}
+
+double damping_coefficient(const ElasticParams& params) noexcept {
+  return 2.0 * double(params.damping_ratio) * std::sqrt(double(params.stiffness) * double(params.mass));
+}
+
+DampingRegime damping_regime(const ElasticParams& params) noexcept {
+  const double zeta = params.damping_ratio;
+  if (std::abs(zeta - 1.0) <= 1e-6) return DampingRegime::critical;
+  return zeta < 1.0 ? DampingRegime::under : DampingRegime::over;
+}
+
+double verlet_kd(const ElasticParams& params, double frame_dt) noexcept {
+  return 1.0 - std::exp(-damping_coefficient(params) / double(params.mass) * frame_dt);
+}
+
+OscillatorStep oscillator_step(const ElasticParams& params, double t) noexcept {
+  // y(t) = e^(-a t) [(C + a S) y0 + S v0],  v(t) = e^(-a t) [-ω² S y0 + (C - a S) v0], with a = ζω and
+  // (C, S) = (cos st, sin st / s) under-damped, (1, t) critical, (cosh st, sinh st / s) over-damped, s = ω√|1 - ζ²|.
+  const double omega = angular_frequency(params);
+  const double zeta = params.damping_ratio;
+  const double a = zeta * omega;
+  double eC = 0.0;  // e^(-a t) · C
+  double eS = 0.0;  // e^(-a t) · S
+  switch (damping_regime(params)) {
+    case DampingRegime::under: {
+      const double s = omega * std::sqrt(1.0 - zeta * zeta);
+      const double e = std::exp(-a * t);
+      eC = e * std::cos(s * t);
+      eS = e * std::sin(s * t) / s;
+      break;
+    }
+    case DampingRegime::critical: {
+      const double e = std::exp(-omega * t);
+      eC = e;
+      eS = e * t;
+      break;
+    }
+    case DampingRegime::over: {
+      const double s = omega * std::sqrt(zeta * zeta - 1.0);
+      const double st = s * t;
+      if (st < 20.0) {  // expm1 keeps sinh(st)/s accurate when s·t is small (ζ near 1)
+        const double e = std::exp(-a * t);
+        eC = e * std::cosh(st);
+        eS = e * 0.5 * (std::expm1(st) - std::expm1(-st)) / s;
+      } else {  // both exponents are <= 0 here (s < a), so nothing overflows
+        const double slow = std::exp((s - a) * t);
+        const double fast = std::exp(-(s + a) * t);
+        eC = 0.5 * (slow + fast);
+        eS = 0.5 * (slow - fast) / s;
+      }
+      break;
+    }
+  }
+  OscillatorStep m;
+  m.position_from_offset = eC + a * eS;
+  m.position_from_velocity = eS;
+  m.velocity_from_offset = -omega * omega * eS;
+  m.velocity_from_velocity = eC - a * eS;
+  return m;
+}
+
+double settling_time(const ElasticParams& params, double tolerance) noexcept {
+  if (!is_valid(params) || !(tolerance > 0.0 && tolerance < 1.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double omega = angular_frequency(params);
+  const double zeta = params.damping_ratio;
+  if (damping_regime(params) == DampingRegime::under) {
+    if (zeta == 0.0) return std::numeric_limits<double>::infinity();
+    return std::log(1.0 / (tolerance * std::sqrt(1.0 - zeta * zeta))) / (zeta * omega);
+  }
+  // Critical or over-damped from rest offset 1: y(t) falls monotonically from 1 to 0.
+  double lo = 0.0;
+  double hi = 1.0 / omega;
+  while (oscillator_step(params, hi).position_from_offset > tolerance) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (oscillator_step(params, mid).position_from_offset > tolerance ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+void validate_settings(const ElasticSettings& settings) {
+  const ElasticParams& p = settings.oscillator;
+  require(finite(p.stiffness) && p.stiffness > 0.0f, "stiffness", "must be finite and > 0");
+  require(finite(p.mass) && p.mass > 0.0f, "mass", "must be finite and > 0");
+  require(finite(p.damping_ratio) && p.damping_ratio >= 0.0f, "damping_ratio", "must be finite and >= 0");
+  require(finite(settings.verlet_kd) && settings.verlet_kd >= 0.0f && settings.verlet_kd <= 1.0f, "verlet_kd",
+          "must be in [0, 1]");
+  const NeighbourSprings& s = settings.springs;
+  require(finite(s.stiffness) && s.stiffness >= 0.0f, "springs.stiffness", "must be finite and >= 0");
+  require(finite(s.damping) && s.damping >= 0.0f, "springs.damping", "must be finite and >= 0");
+  require(finite(s.substep) && s.substep > 0.0f && s.substep <= 1.0f, "springs.substep", "must be in (0, 1] seconds");
+}
+
+ElasticLattice::ElasticLattice(std::span<const glm::vec3> rest, const ElasticSettings& settings, glm::ivec3 grid)
+    : grid_(grid) {
+  validate_settings(settings);
+  for (std::size_t i = 0; i < rest.size(); ++i) {
+    if (!finite(rest[i])) throw Error::invalid_argument("point " + std::to_string(i), "rest position is not finite");
+  }
+  const bool no_grid = grid == glm::ivec3(0);
+  if (!no_grid && (grid.x < 1 || grid.y < 1 || grid.z < 1 ||
+                   std::size_t(grid.x) * std::size_t(grid.y) * std::size_t(grid.z) != rest.size())) {
+    throw Error::invalid_argument("grid", "grid dimensions do not match the point count");
+  }
+  positions_.assign(rest.begin(), rest.end());
+  previous_ = positions_;
+  rest_ = positions_;
+  velocities_.assign(rest.size(), glm::vec3(0.0f));
+  sub_positions_ = positions_;
+  sub_velocities_ = velocities_;
+  forces_.assign(rest.size(), glm::vec3(0.0f));
+  set_settings(settings);
+}
+
+void ElasticLattice::set_settings(const ElasticSettings& settings) {
+  validate_settings(settings);
+  if (settings.integrator != settings_.integrator) previous_ = positions_;  // Verlet restarts from rest velocity
+  settings_ = settings;
+  springs_ = grid_ == glm::ivec3(0) ? std::vector<Spring>{} : grid_springs(grid_, settings.springs);
+  step_cache_dt_ = -1.0;
+  sub_cache_dt_ = -1.0;
+  sub_positions_ = positions_;  // the sub-step clock restarts from the reported state
+  sub_velocities_ = velocities_;
+  owed_ = 0.0;
+}
+
+bool ElasticLattice::set_pinned(std::span<const std::uint8_t> pinned) {
+  if (!pinned.empty() && pinned.size() != size()) return false;
+  pinned_.assign(pinned.begin(), pinned.end());
+  return true;
+}
+
+bool ElasticLattice::reset(std::span<const glm::vec3> rest) {
+  if (rest.size() != size()) return false;
+  std::copy(rest.begin(), rest.end(), positions_.begin());
+  std::copy(rest.begin(), rest.end(), previous_.begin());
+  std::copy(rest.begin(), rest.end(), rest_.begin());
+  std::copy(rest.begin(), rest.end(), sub_positions_.begin());
+  std::fill(velocities_.begin(), velocities_.end(), glm::vec3(0.0f));
+  std::fill(sub_velocities_.begin(), sub_velocities_.end(), glm::vec3(0.0f));
+  owed_ = 0.0;
+  return true;
+}
+
+bool ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
+  if (!(dt >= 0.0f) || !finite(dt) || rest.size() != size()) return false;
+  std::copy(rest.begin(), rest.end(), rest_.begin());
+  if (dt > 0.0f) {
+    if (settings_.integrator == Integrator::verlet) {
+      step_verlet(dt);
+    } else if (!springs_.empty()) {
+      step_with_springs(dt);
+    } else {
+      step_exact(dt);
+    }
+  }
+  if (!pinned_.empty()) {
+    for (std::size_t i = 0; i < size(); ++i) {
+      if (!pinned_[i]) continue;
+      positions_[i] = previous_[i] = sub_positions_[i] = rest_[i];
+      velocities_[i] = sub_velocities_[i] = glm::vec3(0.0f);
+    }
+  }
+  return true;
+}
+
+const OscillatorStep& ElasticLattice::cached_step(double dt, OscillatorStep& cache, double& cache_dt) const {
+  if (dt != cache_dt) {  // a fixed frame rate computes the map once
+    cache = oscillator_step(settings_.oscillator, dt);
+    cache_dt = dt;
+  }
+  return cache;
+}
+
+void ElasticLattice::step_exact(double dt) {
+  const OscillatorStep& m = cached_step(dt, step_cache_, step_cache_dt_);
+  const float py = float(m.position_from_offset), pv = float(m.position_from_velocity);
+  const float vy = float(m.velocity_from_offset), vv = float(m.velocity_from_velocity);
+  const std::size_t n = size();
+  glm::vec3* p = positions_.data();
+  glm::vec3* v = velocities_.data();
+  const glm::vec3* r = rest_.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec3 y = p[i] - r[i];
+    const glm::vec3 u = v[i];
+    p[i] = r[i] + py * y + pv * u;
+    v[i] = vy * y + vv * u;
+  }
+}
+
+void ElasticLattice::step_verlet(float dt) {
+  // The seed (§8.4.2): unit-time Verlet with the implicit velocity p - p_old scaled by (1 - Kd) every frame.
+  const float k_over_m = settings_.oscillator.stiffness / settings_.oscillator.mass;
+  const float keep = 1.0f - settings_.verlet_kd;
+  for (std::size_t i = 0; i < size(); ++i) {
+    const glm::vec3 p = positions_[i];
+    const glm::vec3 a = -k_over_m * (p - rest_[i]);
+    positions_[i] = p + (p - previous_[i]) * keep + a * (dt * dt);
+    previous_[i] = p;
+    velocities_[i] = (positions_[i] - p) / dt;
+  }
+}
+
+}  // namespace deform

@@ -1,0 +1,154 @@
+#pragma once
+// Private to libdeform: what the three IK solvers share — chain forward kinematics on rigid frames, the shortest-arc
+// rotation, joint clamping and the stall escape (random perturbation within the limits, keeping the best pose).
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "deform/runtime/ik.hpp"
+namespace deform::detail {
+
+// A rigid world transform: p_world = rotation * p + translation.
+struct Frame {
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 translation{0.0f};
+};
+
+inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// The small helpers below are defined here so that they inline into the solvers' per-solve code (a two-bone solve
+// is ~200 ns: a call each would show).
+
+// True when `pose` has an entry per bone of `skeleton`.
+inline bool pose_fits(const Skeleton& skeleton, const Pose& pose) noexcept {
+  return pose.rotations.size() == skeleton.bone_count() && pose.translations.size() == skeleton.bone_count();
+}
+
+// World frame of the root's parent (identity for the skeleton root). O(ancestors).
+inline Frame base_frame(const IkChain& chain, const Pose& pose) noexcept {
+  Frame frame;
+  for (const std::int32_t id : chain.ancestors) {
+    const auto b = static_cast<std::size_t>(id);
+    frame.translation += frame.rotation * pose.translations[b];
+    frame.rotation = frame.rotation * pose.rotations[b];
+  }
+  return frame;
+}
+
+// World rotation and head of every chain bone, from the base frame. Spans have chain.bones.size() entries.
+void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
+              std::span<glm::vec3> heads) noexcept;
+
+// A cap on the angle of one rotation, prepared so that applying it needs no trigonometry. The default caps nothing.
+struct StepCap {
+  float cos_angle = -1.0f;     // cos of the largest angle
+  glm::vec2 half{0.0f, 1.0f};  // (cos, sin) of half of it
+};
+StepCap cap_for(float max_radians) noexcept;  // max_radians <= 0 or >= π: no cap
+
+// The shortest-arc unit rotation turning direction `from` onto direction `to` (angle from the dot product, axis from
+// the cross product), its angle capped by `cap`; identity when either is (nearly) zero; a half turn (or the cap)
+// about a perpendicular axis when opposite.
+inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}) noexcept {
+  // With |from| |to| = r: (r + from · to, from × to) normalised is the rotation by the angle between them about
+  // their normal: two square roots, no trigonometry. In double so that r² neither underflows nor overflows.
+  const glm::dvec3 a(from), b(to);
+  const double aa = glm::dot(a, a), bb = glm::dot(b, b);
+  if (!(aa > 1e-24) || !(bb > 1e-24)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const double r = std::sqrt(aa * bb), cosine = glm::dot(a, b);  // cosine and axis are scaled by r
+  const glm::dvec3 axis = glm::cross(a, b);
+  const double sine2 = glm::dot(axis, axis);
+  if (sine2 < 1e-14 * aa * bb) {
+    if (cosine > 0.0) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    // Opposite: any axis perpendicular to `from` does; take the one from the coordinate axis least aligned with it.
+    const glm::dvec3 helper = std::abs(a.x) < 0.6 * std::sqrt(aa) ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+    const glm::vec3 normal(glm::normalize(glm::cross(a, helper)) * static_cast<double>(cap.half.y));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
+  }
+  if (cosine < static_cast<double>(cap.cos_angle) * r) {
+    const glm::vec3 normal(axis * (static_cast<double>(cap.half.y) / std::sqrt(sine2)));
+    return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
+  }
+  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);
+  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
+}
+
+// A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its unit direction (cos, sin).
+struct EulerAngles {
+  glm::dvec3 angle{0.0};
+  glm::dvec2 dir[3]{};
+};
+
+// The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
+// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it.
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept;
+
+// Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
+// direction, the others a polynomial (cos, sin) within 1e-12.
+EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept;
+
+// (cos, sin) of half the angle of the non-zero direction `d` of the given length, times a positive factor, the
+// half angle in (-90°, 90°]: the quaternion (h.x, h.y · axis) of a turn whose cosine and sine are known, without
+// trigonometry, normalised by whoever uses it.
+inline glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
+  // (r + cos, sin), or near ±180°, where that cancels, the parallel (|sin|, ±(r − cos)).
+  return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
+}
+
+// The unit quaternion qx · qy · qz of the directions of `euler` (its angles are not read).
+glm::quat to_quat(const EulerAngles& euler) noexcept;
+
+// Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
+// limits, a 1-D problem with a closed form) so that `carried` — a point in the joint's own frame relative to its
+// head, such as the effector — comes as close to `wanted` — in the parent's frame, relative to the head — as the
+// limits allow. `euler` must be within the limits and stays so.
+void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept;
+
+// Normalises a joint's local rotation and clamps it into its limits; when it was outside and `reaim` is set, the
+// clamped rotation is re-aimed (reaim_euler) with `carried` and `wanted`. Returns true when it was outside.
+bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried, glm::vec3 wanted) noexcept;
+
+// Each joint's prepared limits, in chain order (joint_count() entries).
+std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain);
+
+// Points every segment at `target`, root first (each joint the smallest turn of its segment, clamped and re-aimed):
+// for an out-of-reach target this is the straight chain, the answer an unconstrained chain minimises the distance
+// with, which CCD only approaches slowly (the distance is second order in the joints' deviation from it).
+// `frames` and `heads` hold the chain's FK for `pose` on entry and are updated.
+void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+                       std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept;
+
+// One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
+// pseudoinverse and damped least squares methods") on the joints' Euler angles: Δθ = Jᵀ (J Jᵀ + λ² I)⁻¹ (target −
+// effector), a 3×3 solve, then each joint is clamped into its limits. `heads` and `frames` hold the chain's FK for
+// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles; with
+// `angles_current` it holds their current ones on entry (the previous step was this one), which saves reading them
+// from the pose. `columns` (3 × joint_count()) is scratch.
+void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+                               std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
+                               float lambda, bool angles_current, std::span<glm::dvec3> angles,
+                               std::span<glm::vec3> columns) noexcept;
+
+// Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
+void save_joints(const IkChain& chain, const Pose& pose, std::span<glm::quat> saved) noexcept;
+void load_joints(const IkChain& chain, std::span<const glm::quat> saved, Pose& pose) noexcept;
+
+// Rotates every joint by up to `degrees` per Euler axis at random (xorshift32 on `state`), then clamps it.
+void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, std::uint32_t& state,
+                    float degrees) noexcept;
+
+// A solve's settings check: finite target, max_iterations >= 1, finite non-negative tolerance and step.
+bool settings_valid(glm::vec3 target, const IkSettings& settings) noexcept;
+
+// A CCD sweep or FABRIK pass that fails to shorten the distance above the out-of-reach floor by this fraction has
+// slowed to a crawl: damped least-squares steps take over (chosen by measurement, docs/ik.md).
+inline constexpr float handover_gain = 0.7f;
+// Least-squares steps that shorten it by less than this fraction have stalled: a random kick follows.
+inline constexpr float stall_gain = 0.1f;
+// Damping of the stall escape's least-squares steps, as a fraction of the chain length.
+inline constexpr float damping_fraction = 0.05f;
+// How far a stall escape perturbs each joint axis, degrees.
+inline constexpr float escape_degrees = 180.0f;
+
+}  // namespace deform::detail

@@ -1,0 +1,204 @@
+// Skeleton: hierarchy validation, bind matrices, pose setters and forward kinematics (shared/spec/sk-format.md).
+#include "deform/runtime/skeleton.hpp"
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include "deform/runtime/error.hpp"
+#include "skeleton_rules.hpp"
+
+namespace deform {
+namespace detail {
+namespace {
+
+bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+}  // namespace
+
+std::optional<BoneProblem> find_bone_problem(std::span<const Bone> bones, std::span<std::int32_t> order) {
+  using Field = BoneProblem::Field;
+  const std::size_t count = bones.size();
+  if (count == 0) return BoneProblem{-1, Field::none, "a skeleton needs at least one bone"};
+  if (count > max_bones)
+    return BoneProblem{-1, Field::none, std::to_string(count) + " bones; at most 65535 are allowed"};
+  const auto n = static_cast<std::int32_t>(count);
+
+  for (std::int32_t id = 0; id < n; ++id) {
+    const Bone& b = bones[static_cast<std::size_t>(id)];
+    if (!finite(b.bind_translation)) return BoneProblem{id, Field::translation, "translation is not finite"};
+    if (!finite(b.bind_rotation)) return BoneProblem{id, Field::rotation, "rotation is not finite"};
+    if (!finite(b.limits.min) || !finite(b.limits.max)) return BoneProblem{id, Field::limits, "limit is not finite"};
+    for (int axis = 0; axis < 3; ++axis)
+      if (b.limits.min[axis] > b.limits.max[axis])
+        return BoneProblem{id, Field::limits,
+                           std::string("limit min > max on axis ") + "xyz"[axis] + " (" +
+                               std::to_string(b.limits.min[axis]) + " > " + std::to_string(b.limits.max[axis]) + ")"};
+    if (b.parent < -1 || b.parent >= n)
+      return BoneProblem{id, Field::parent, "parent " + std::to_string(b.parent) + " is out of range"};
+    if (b.parent == id) return BoneProblem{id, Field::parent, "bone is its own parent"};
+    if (id == 0 && b.parent != -1)
+      return BoneProblem{0, Field::parent,
+                         "bone 0 must be the root (parent -1), has parent " + std::to_string(b.parent)};
+    if (id != 0 && b.parent == -1) return BoneProblem{id, Field::parent, "a second root (only bone 0 has parent -1)"};
+    for (std::int32_t child : b.children)
+      if (child < 0 || child >= n)
+        return BoneProblem{id, Field::children, "child " + std::to_string(child) + " is out of range"};
+  }
+
+  // Child lists must agree with parent ids: every non-root bone listed exactly once, by its parent.
+  std::vector<bool> listed(count, false);
+  for (std::int32_t id = 0; id < n; ++id)
+    for (std::int32_t child : bones[static_cast<std::size_t>(id)].children) {
+      const Bone& c = bones[static_cast<std::size_t>(child)];
+      if (c.parent != id)
+        return BoneProblem{id, Field::children,
+                           "lists child " + std::to_string(child) + " whose parent is " + std::to_string(c.parent)};
+      if (listed[static_cast<std::size_t>(child)])
+        return BoneProblem{id, Field::children, "lists child " + std::to_string(child) + " twice"};
+      listed[static_cast<std::size_t>(child)] = true;
+    }
+  for (std::int32_t id = 1; id < n; ++id)
+    if (!listed[static_cast<std::size_t>(id)])
+      return BoneProblem{
+          id, Field::parent,
+          "parent " + std::to_string(bones[static_cast<std::size_t>(id)].parent) + " does not list it as a child"};
+
+  // With one root and agreeing lists, the hierarchy is a tree exactly when every bone is reachable from bone 0.
+  std::vector<std::int32_t> queue;
+  queue.reserve(count);
+  queue.push_back(0);
+  for (std::size_t head = 0; head < queue.size(); ++head)
+    for (std::int32_t child : bones[static_cast<std::size_t>(queue[head])].children) queue.push_back(child);
+  if (queue.size() != count) {
+    std::vector<bool> reached(count, false);
+    for (std::int32_t id : queue) reached[static_cast<std::size_t>(id)] = true;
+    const auto it = std::find(reached.begin(), reached.end(), false);
+    const auto id = static_cast<std::int32_t>(it - reached.begin());
+    return BoneProblem{id, Field::parent, "is on a parent cycle (not reachable from the root)"};
+  }
+  if (order.size() == count) std::copy(queue.begin(), queue.end(), order.begin());
+  return std::nullopt;
+}
+
+}  // namespace detail
+
+namespace {
+
+// Inverse of a rigid transform (rotation + translation): transpose the rotation, rotate the negated translation.
+glm::mat4 rigid_inverse(const glm::mat4& m) {
+  const glm::mat3 rt = glm::transpose(glm::mat3(m));
+  glm::mat4 inv(rt);
+  inv[3] = glm::vec4(-(rt * glm::vec3(m[3])), 1.0f);
+  return inv;
+}
+
+// The two Euler triples (X·Y·Z) of one rotation: (x, y, z) and (x + 180, 180 - y, z + 180), wrapped to (-180, 180].
+glm::vec3 other_euler(glm::vec3 e) {
+  auto wrap = [](float a) { return a > 180.0f ? a - 360.0f : (a <= -180.0f ? a + 360.0f : a); };
+  return {wrap(e.x + 180.0f), wrap(180.0f - e.y), wrap(e.z + 180.0f)};
+}
+
+float clamp_distance(glm::vec3 e, const DofLimits& limits) {
+  const glm::vec3 d = e - clamp_euler(e, limits);
+  return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+}
+
+}  // namespace
+
+Skeleton::Skeleton(std::vector<Bone> bones, const std::string& source) : bones_(std::move(bones)) {
+  order_.resize(bones_.size());
+  if (auto problem = detail::find_bone_problem(bones_, order_))
+    throw Error::in_file(source, problem->bone >= 0 ? "bone " + std::to_string(problem->bone) : "", problem->message);
+  const Pose bind = bind_pose();
+  bind_world_.resize(bones_.size());
+  compute_world_matrices(*this, bind, bind_world_);
+  inverse_bind_world_.resize(bones_.size());
+  std::transform(bind_world_.begin(), bind_world_.end(), inverse_bind_world_.begin(), rigid_inverse);
+}
+
+std::int32_t Skeleton::find(std::string_view name) const noexcept {
+  if (!name.empty() && name.front() == '#') {
+    std::int32_t id = -1;
+    const char* end = name.data() + name.size();
+    const auto [ptr, ec] = std::from_chars(name.data() + 1, end, id);
+    if (ec != std::errc() || ptr != end || name.size() < 2 || id < 0 || static_cast<std::size_t>(id) >= bones_.size())
+      return -1;
+    return id;
+  }
+  for (std::size_t i = 0; i < bones_.size(); ++i)
+    if (bones_[i].name == name) return static_cast<std::int32_t>(i);
+  return -1;
+}
+
+std::string Skeleton::key(std::int32_t id) const {
+  const std::string& name = bone(id).name;
+  bool shared = name.empty() || name.front() == '#' || find(name) != id;
+  for (std::size_t i = static_cast<std::size_t>(id) + 1; i < bones_.size() && !shared; ++i)
+    shared = bones_[i].name == name;
+  if (!shared) return name;
+  std::string id_key(1, '#');
+  return id_key.append(std::to_string(id));
+}
+
+bool Skeleton::is_ancestor(std::int32_t ancestor, std::int32_t bone_id) const noexcept {
+  const auto n = static_cast<std::int32_t>(bones_.size());
+  if (ancestor < 0 || ancestor >= n || bone_id < 0 || bone_id >= n) return false;
+  for (std::int32_t id = bone_id; id >= 0; id = bones_[static_cast<std::size_t>(id)].parent)
+    if (id == ancestor) return true;
+  return false;
+}
+
+Pose Skeleton::bind_pose() const {
+  Pose pose;
+  pose.rotations.reserve(bones_.size());
+  pose.translations.reserve(bones_.size());
+  for (const Bone& b : bones_) {
+    pose.rotations.push_back(quat_from_euler(b.bind_rotation));
+    pose.translations.push_back(b.bind_translation);
+  }
+  return pose;
+}
+
+glm::vec3 Skeleton::set_euler(Pose& pose, std::int32_t bone_id, glm::vec3 degrees, bool clamp) const {
+  const glm::vec3 used = clamp ? clamp_euler(degrees, bone(bone_id).limits) : degrees;
+  pose.rotations.at(static_cast<std::size_t>(bone_id)) = quat_from_euler(used);
+  return used;
+}
+
+void Skeleton::clamp_to_limits(Pose& pose, std::int32_t bone_id) const {
+  const DofLimits& limits = bone(bone_id).limits;
+  glm::quat& rotation = pose.rotations.at(static_cast<std::size_t>(bone_id));
+  const glm::vec3 first = euler_from_quat(rotation);
+  const glm::vec3 second = other_euler(first);
+  const glm::vec3 nearer = clamp_distance(second, limits) < clamp_distance(first, limits) ? second : first;
+  if (clamp_distance(nearer, limits) == 0.0f) return;  // already inside: keep the exact quaternion
+  rotation = quat_from_euler(clamp_euler(nearer, limits));
+}
+
+glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept {
+  glm::mat4 m = glm::mat4_cast(rotation);
+  m[3] = glm::vec4(translation, 1.0f);
+  return m;
+}
+
+bool compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out) {
+  const std::size_t n = skeleton.bone_count();
+  if (pose.rotations.size() != n || pose.translations.size() != n || out.size() != n) return false;
+  const std::span<const Bone> bones = skeleton.bones();
+  for (const std::int32_t id : skeleton.order()) {
+    const auto i = static_cast<std::size_t>(id);
+    const glm::mat4 local = local_matrix(pose.rotations[i], pose.translations[i]);
+    const std::int32_t parent = bones[i].parent;
+    out[i] = parent < 0 ? local : out[static_cast<std::size_t>(parent)] * local;
+  }
+  return true;
+}
+
+bool compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world, std::span<glm::mat4> out) {
+  const std::span<const glm::mat4> inverse_bind = skeleton.inverse_bind_world();
+  if (world.size() != inverse_bind.size() || out.size() != inverse_bind.size()) return false;
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = world[i] * inverse_bind[i];
+  return true;
+}
+
+}  // namespace deform

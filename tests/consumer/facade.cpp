@@ -1,0 +1,15 @@
+// An engine that links deform::deform and drives the facade: the built-in character reaches and stretches.
+#include <cstdio>
+
+#include <deform/deform.hpp>
+#include <deform/extras/builtin.hpp>
+
+int main() {
+  deform::Character hero = deform::make_builtin_character();
+  const std::int32_t hand = hero.skeleton().find("hand_l");
+  const deform::ReachResult reach = hero.reach(hand, glm::vec3(1.6f, 1.5f, 0.3f));
+  for (int frame = 0; frame < 120; ++frame)
+    if (!hero.update(1.0f / 60.0f)) return 1;
+  std::printf("facade: reach valid %d, stretch %.3f\n", int(reach.valid), hero.stretch());
+  return reach.valid && hero.stretch() > 0.0f ? 0 : 1;
+}

@@ -1,0 +1,186 @@
+// Rig files: round trip (text and file), every field, and bad files rejected with the key that is wrong.
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+const deform::Model& model() {
+  static const deform::Model m = deform::builtin_character();
+  return m;
+}
+
+deform::Rig parse(const std::string& text) {
+  return deform::parse_rig_json(text, model().skeleton, model().mesh.point_count(), "test.rig.json");
+}
+
+// A rig using every field away from its default.
+deform::Rig everything() {
+  deform::Rig rig = deform::builtin_rig(model());
+  rig.model = {false, "arm.obj", "arm.sk", "arm.skw"};
+  rig.max_stretch = 1.25f;
+  deform::LatticeSpec& upper = rig.lattices[0];
+  upper.degree = glm::ivec3(2, 4, 1);
+  upper.weight_threshold = 0.35f;
+  upper.margin = 0.1f;
+  upper.carry_descendants = false;
+  upper.elastic.integrator = deform::Integrator::verlet;
+  upper.elastic.verlet_kd = 0.07f;
+  upper.elastic.oscillator = {123.456f, 1.7f, 0.3f};
+  deform::LatticeSpec& fore = rig.lattices[1];
+  fore.selection = deform::VertexSelection::list;
+  fore.vertices = {3, 17, 400, 2000};
+  fore.elastic.springs = {true, false, true, 12.5f, 0.1f, 1.0f / 480.0f};
+  return rig;
+}
+
+}  // namespace
+
+TEST_CASE("rig JSON round trip: text, file, every field") {
+  for (const deform::Rig& rig : {deform::builtin_rig(model()), everything()}) {
+    const std::string text = deform::format_rig_json(rig, model().skeleton);
+    CHECK(parse(text) == rig);
+    CHECK(deform::format_rig_json(parse(text), model().skeleton) == text);
+  }
+  const std::filesystem::path path = std::filesystem::temp_directory_path() / "deform_rig_test.rig.json";
+  deform::write_rig_json(path.string(), everything(), model().skeleton);
+  CHECK(deform::read_rig_json(path.string(), model().skeleton, model().mesh.point_count()) == everything());
+  CHECK(deform::parse_rig_model(deform::read_file_text(path.string())) == everything().model);
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("the written form: hierarchy, names, model") {
+  const nlohmann::json doc =
+      nlohmann::json::parse(deform::format_rig_json(deform::builtin_rig(model()), model().skeleton));
+  CHECK(doc["rig"] == 1);
+  CHECK(doc["model"] == "builtin");
+  CHECK(doc["reach"]["effector"] == "hand_l");
+  CHECK(doc["reach"]["root"] == "clavicle_l");
+  REQUIRE(doc["lattices"].size() == 3);
+  CHECK(doc["lattices"][0]["parent"].is_null());
+  CHECK(doc["lattices"][1]["parent"] == "upperarm_l");
+  CHECK(doc["lattices"][2]["parent"] == "forearm_l");
+  CHECK(doc["lattices"][1]["bone"] == "forearm_l");
+  CHECK(doc["lattices"][1]["elastic"]["stiffness"] == 150.0);
+  CHECK(doc["lattices"][1]["elastic"]["damping_ratio"] == 0.2);  // shortest form of 0.2f, not 0.20000000298...
+  CHECK(doc["lattices"][1]["select"]["by"] == "weight");
+}
+
+TEST_CASE("a minimal rig takes the defaults") {
+  const deform::Rig rig = parse(R"({"rig": 1, "lattices": [{"name": "a", "bone": "forearm_l"}]})");
+  REQUIRE(rig.lattices.size() == 1);
+  deform::LatticeSpec expected;
+  expected.name = "a";
+  expected.bone = model().skeleton.find("forearm_l");
+  CHECK(rig.lattices[0] == expected);
+  CHECK(rig.reach_effector == -1);
+  CHECK(rig.model == deform::RigModel{});
+}
+
+TEST_CASE("bad rig files: the error names the file and the key") {
+  const std::string lattice = R"({"name": "a", "bone": "forearm_l")";
+  struct Case {
+    std::string text;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {"{\"rig\": 1, \"lattices\": [", "byte"},
+      {"[]", "must be an object"},
+      {R"({"lattices": []})", "key 'rig'"},
+      {R"({"rig": 2, "lattices": []})", "key 'rig'"},
+      {R"({"rig": 1})", "key 'lattices': is missing"},
+      {R"({"rig": 1, "lattices": [], "extra": 1})", "key 'extra': unknown key"},
+      {R"({"rig": 1, "lattices": [{"bone": "forearm_l"}]})", "key 'lattices[0].name'"},
+      {R"({"rig": 1, "lattices": [{"name": "a", "bone": "elbow"}]})", "unknown bone 'elbow'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "degree": [3, 0, 3]}]})", "key 'lattices[0].degree[1]'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "degree": [3, 3]}]})", "key 'lattices[0].degree'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "degree": [3, 3.5, 3]}]})", "must be an integer"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "margin": "wide"}]})", "key 'lattices[0].margin'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "margin": 1e300}]})", "key 'lattices[0].margin'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "list", "vertices": [1, 999999]}}]})",
+       "key 'lattices[0].select.vertices[1]'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "list", "vertices": [4, 4]}}]})",
+       "listed twice"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "nearest"}}]})", "key 'lattices[0].select.by'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "weight", "threshold": 1}}]})",
+       "key 'lattices[0].select.threshold'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"stiffness": 0}}]})",
+       "key 'lattices[0].elastic.stiffness'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"integrator": "rk4"}}]})",
+       "key 'lattices[0].elastic.integrator'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"springs": {"substep": -1}}}]})",
+       "key 'lattices[0].elastic.springs.substep'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"dampening": 1}}]})",
+       "key 'lattices[0].elastic.dampening': unknown key"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(}, )" + lattice + R"(}]})", "used twice"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "parent": "someone"}]})", "key 'lattices[0].parent'"},
+      {R"({"rig": 1, "lattices": [{"name": "u", "bone": "upperarm_l"}, )" + lattice + R"(, "parent": null}]})",
+       "the bones make the parent 'u'"},
+      {R"({"rig": 1, "reach": {"effector": "hand_l", "root": "thigh_l"}, "lattices": []})", "key 'reach.root'"},
+      {R"({"rig": 1, "model": "hero.fbx", "lattices": []})", "key 'model'"},
+      {R"({"rig": 1, "model": {"obj": "a.obj"}, "lattices": []})", "key 'model.skeleton'"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.text);
+    CHECK_THROWS_WITH_AS(parse(c.text), doctest::Contains(c.expected), deform::Error);
+    CHECK_THROWS_WITH_AS(parse(c.text), doctest::Contains("test.rig.json"), deform::Error);
+  }
+  CHECK_THROWS_AS(deform::read_rig_json("/nonexistent/rig.json", model().skeleton, 10), deform::Error);
+}
+
+// default_rig: any model gets lattices on the limb its names or its depth point to, and binds.
+TEST_CASE("default_rig finds a limb by name, then by depth, and binds") {
+  deform::Model renamed = model();
+  renamed.name = "imported";
+  const deform::Rig by_name = deform::default_rig(renamed);
+  const deform::Rig builtin = deform::builtin_rig(model());
+  REQUIRE(by_name.lattices.size() == 3);
+  for (std::size_t i = 0; i < 3; ++i) CHECK(by_name.lattices[i].bone == builtin.lattices[i].bone);
+  CHECK(by_name.reach_effector == builtin.reach_effector);
+  CHECK(by_name.reach_root == builtin.reach_root);
+
+  // Without telling names the deepest weighted bone is the effector and its weighted ancestors carry the lattices.
+  std::vector<deform::Bone> bones(renamed.skeleton.bones().begin(), renamed.skeleton.bones().end());
+  for (std::size_t b = 0; b < bones.size(); ++b) bones[b].name = "b" + std::to_string(b);
+  renamed.skeleton = deform::Skeleton(bones);
+  const deform::Rig by_depth = deform::default_rig(renamed);
+  const auto depth = [&](std::int32_t b) {
+    int d = 0;
+    while ((b = renamed.skeleton.bone(b).parent) >= 0) ++d;
+    return d;
+  };
+  REQUIRE(by_depth.reach_effector >= 0);
+  std::vector<bool> weighted(bones.size(), false);
+  for (std::size_t p = 0; p < renamed.weights.size(); ++p)
+    for (int i = 0; i < deform::max_influences; ++i)
+      if (renamed.weights.weights[p][i] > 0.0f) weighted[renamed.weights.bones[p][i]] = true;
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (weighted[b]) CHECK(depth(std::int32_t(b)) <= depth(by_depth.reach_effector));
+  REQUIRE(!by_depth.lattices.empty());
+  for (const deform::LatticeSpec& spec : by_depth.lattices) {
+    CHECK(weighted[std::size_t(spec.bone)]);
+    CHECK(renamed.skeleton.is_ancestor(spec.bone, by_depth.reach_effector));
+  }
+  CHECK(renamed.skeleton.is_ancestor(by_depth.reach_root, by_depth.lattices.front().bone));
+
+  // The rig binds, and a far target stretches the limb.
+  deform::Character character(renamed, by_depth);
+  const glm::vec3 tip = character.bone_position(by_depth.reach_effector);
+  const deform::ReachResult reach = character.reach(by_depth.reach_effector, tip + glm::vec3(0.0f, -0.5f, 0.3f));
+  CHECK(reach.valid);
+  CHECK(reach.stretch > 0.0f);
+
+  CHECK_THROWS_AS(deform::default_rig(renamed, 1000), deform::Error);
+}

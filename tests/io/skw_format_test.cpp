@@ -1,0 +1,134 @@
+// .skw files: parsing, strongest-4 renormalisation, round trips, every malformed case with its line and vertex.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/io/pose_json.hpp"
+namespace {
+
+struct Failure {
+  std::int64_t line = -1;
+  std::string element;
+  std::string message;
+};
+
+Failure failure_of(std::string_view text, std::size_t points = 3, std::size_t bones = 5) {
+  try {
+    deform::parse_skw(text, points, bones, "case.skw");
+  } catch (const deform::Error& e) {
+    CHECK(e.file() == "case.skw");
+    CHECK(e.where() == deform::Error::Where::line);
+    return {e.position(), e.element(), e.message()};
+  }
+  FAIL("accepted malformed text: " << text);
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("parse_skw: comments, blank lines, CRLF, sorting and renormalising") {
+  const std::string text =
+      "# weights for a 3-vertex mesh\n"
+      "\n"
+      "skw 1   # header\r\n"
+      "vertices 3\n"
+      "0  3 0.75  4 0.25\n"
+      "  # a comment between vertices\n"
+      "1\t2 1.0\n"
+      "2 0 1 1 2 2 3 3 4 4 0.5  # six pairs, the strongest four kept\n";
+  const deform::SkinWeights w = deform::parse_skw(text, 3, 5);
+  REQUIRE(w.size() == 3);
+  CHECK(w.bones[0] == glm::u16vec4(3, 4, 0, 0));
+  CHECK(w.weights[0] == glm::vec4(0.75f, 0.25f, 0.0f, 0.0f));
+  CHECK(w.bones[1] == glm::u16vec4(2, 0, 0, 0));
+  CHECK(w.weights[1] == glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+  // Pairs (0,1) (1,2) (2,3) (3,4) (4,0.5): the four strongest are bones 3, 2, 1, 0, sum 10.
+  CHECK(w.bones[2] == glm::u16vec4(3, 2, 1, 0));
+  CHECK(w.weights[2].x == doctest::Approx(0.4f));
+  CHECK(w.weights[2].y == doctest::Approx(0.3f));
+  CHECK(w.weights[2].z == doctest::Approx(0.2f));
+  CHECK(w.weights[2].w == doctest::Approx(0.1f));
+}
+
+TEST_CASE("parse_skw: unnormalised weights, zero weights, ties") {
+  const deform::SkinWeights w = deform::parse_skw("skw 1\nvertices 3\n0 1 2 2 6\n1 4 0 3 5\n2 2 1 1 1\n", 3, 5);
+  CHECK(w.bones[0] == glm::u16vec4(2, 1, 0, 0));
+  CHECK(w.weights[0] == glm::vec4(0.75f, 0.25f, 0, 0));
+  CHECK(w.bones[1] == glm::u16vec4(3, 0, 0, 0));  // a zero weight is no influence
+  CHECK(w.weights[1] == glm::vec4(1, 0, 0, 0));
+  CHECK(w.bones[2] == glm::u16vec4(1, 2, 0, 0));  // equal weights: lower bone first
+  CHECK(deform::parse_skw("skw 1\nvertices 0\n", 0, 1).size() == 0);
+}
+
+TEST_CASE("format_skw / parse_skw round trip, and through files") {
+  deform::SkinWeights w;
+  w.bones = {glm::u16vec4(1, 0, 0, 0), glm::u16vec4(4, 2, 3, 1), glm::u16vec4(0, 3, 0, 0)};
+  w.weights = {glm::vec4(1, 0, 0, 0), glm::vec4(0.4f, 0.3f, 0.2f, 0.1f), glm::vec4(2.0f / 3.0f, 1.0f / 3.0f, 0, 0)};
+  const std::string text = deform::format_skw(w);
+  CHECK(text.rfind("skw 1\nvertices 3\n0 1 1\n1 4 0.4 2 0.3 3 0.2 1 0.1\n", 0) == 0);
+  const deform::SkinWeights back = deform::parse_skw(text, 3, 5);
+  CHECK(back.bones == w.bones);
+  for (std::size_t v = 0; v < 3; ++v)
+    for (int k = 0; k < 4; ++k) CHECK(back.weights[v][k] == doctest::Approx(w.weights[v][k]).epsilon(1e-6));
+  CHECK(deform::format_skw(back) == deform::format_skw(deform::parse_skw(deform::format_skw(back), 3, 5)));
+  const std::string path = (std::filesystem::temp_directory_path() / "deform_skw_format_test.skw").string();
+  deform::write_skw(path, w);
+  CHECK(deform::read_skw(path, 3, 5).bones == w.bones);
+  std::filesystem::remove(path);
+  CHECK_THROWS_AS(deform::read_skw(path, 3, 5), deform::Error);
+  deform::SkinWeights empty_vertex = w;
+  empty_vertex.weights[1] = glm::vec4(0.0f);
+  CHECK_THROWS_AS(deform::format_skw(empty_vertex), deform::Error);
+}
+
+TEST_CASE("malformed .skw: each an error with the line and the vertex") {
+  const std::string head = "skw 1\nvertices 3\n";
+  Failure f = failure_of("");
+  CHECK(f.message.find("header") != std::string::npos);
+  f = failure_of("# only a comment\n\nvertices 3\n");
+  CHECK(f.line == 3);
+  CHECK(failure_of("skw 2\nvertices 3\n").line == 1);
+  CHECK(failure_of("skw\n").line == 1);
+  CHECK(failure_of("skw 1 extra\n").line == 1);
+  CHECK(failure_of("skw 1\n").message.find("vertices") != std::string::npos);
+  CHECK(failure_of("skw 1\nvertex 3\n").line == 2);
+  CHECK(failure_of("skw 1\nvertices -3\n").line == 2);
+  CHECK(failure_of("skw 1\nvertices 3x\n").line == 2);
+  // A huge count is refused before anything is allocated from it.
+  f = failure_of("skw 1\nvertices 4000000000000\n0 1 1\n");
+  CHECK(f.line == 2);
+  CHECK(f.message.find("does not match") != std::string::npos);
+  CHECK(failure_of("skw 1\nvertices 99999999999999999999999\n").line == 2);
+  CHECK(failure_of("skw 1\nvertices 2\n").line == 2);
+
+  // Vertices: missing at the end, missing in the middle, repeated, out of order, one too many.
+  f = failure_of(head + "0 1 1\n1 1 1\n");
+  CHECK(f.element == "vertex 2");
+  f = failure_of(head + "0 1 1\n2 1 1\n");
+  CHECK(f.line == 4);
+  CHECK(f.element == "vertex 1");
+  f = failure_of(head + "0 1 1\n0 1 1\n");
+  CHECK(f.line == 4);
+  CHECK(f.element == "vertex 0");
+  f = failure_of(head + "0 1 1\n1 1 1\n2 1 1\n3 1 1\n");
+  CHECK(f.line == 6);
+  CHECK(f.element == "vertex 3");
+  CHECK(failure_of(head + "x 1 1\n").line == 3);
+  CHECK(failure_of(head + "-1 1 1\n").line == 3);
+
+  // Pairs.
+  const auto second = [&](const std::string& line) { return failure_of(head + "0 1 1\n" + line + "\n2 1 1\n"); };
+  for (const char* bad :
+       {"1", "1 2", "1 2 0.5 3", "1 5 1", "1 99999999999 1", "1 -1 1", "1 a 1", "1 2 x", "1 2 -0.5", "1 2 nan",
+        "1 2 inf", "1 2 1e39", "1 2 0", "1 2 0 3 0", "1 2 0.5 2 0.5", "1 2 0.5,", "1 2.0 1"}) {
+    f = second(bad);
+    CHECK_MESSAGE(f.line == 4, bad);
+    CHECK_MESSAGE(f.element == "vertex 1", bad);
+  }
+  CHECK(second("1 2 0.5 2 0.5").message.find("twice") != std::string::npos);
+  CHECK(second("1 2 0 3 0").message.find("no positive weight") != std::string::npos);
+  CHECK(second("1 5 1").message.find("out of range") != std::string::npos);
+}

@@ -1,0 +1,235 @@
+// BezierLattice and the evaluation kernel against hand-computed values, invariants and the pow/binomial reference.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/io/lattice_json.hpp"
+#include "runtime/lattice_reference.hpp"
+#include "runtime/lattice_test_util.hpp"
+
+using namespace lattice_test;
+using deform::BezierLattice;
+using deform::LatticeFrame;
+
+TEST_CASE("degree 1: moving one corner is trilinear interpolation (hand-computed)") {
+  BezierLattice lattice(LatticeFrame::axis_aligned({0, 0, 0}, {2, 4, 8}), glm::ivec3(1));
+  CHECK(lattice.point_count() == 8);
+  CHECK(lattice.rest_point(1, 1, 1) == glm::vec3(2, 4, 8));
+  lattice.control_points()[lattice.index(1, 1, 1)] += glm::vec3(1.0f, 0.0f, 0.0f);
+  // (1, 2, 4) has (u, v, w) = (0.5, 0.5, 0.5): the corner's weight is 0.5³ = 0.125.
+  const std::vector<glm::vec3> in = {{1, 2, 4}, {2, 4, 8}, {0, 0, 0}, {2, 2, 8}};
+  const auto binding = deform::bind_lattice(lattice, in);
+  REQUIRE(binding.vertex_count == 4);
+  const auto out = evaluate(binding, lattice.control_points(), in);
+  CHECK(out[0].x == doctest::Approx(1.125f).epsilon(1e-6));
+  CHECK(out[0].y == doctest::Approx(2.0f).epsilon(1e-6));
+  CHECK(out[1].x == doctest::Approx(3.0f).epsilon(1e-6));  // the corner itself moves by the whole offset
+  CHECK(out[2] == glm::vec3(0, 0, 0));                      // the opposite corner does not move
+  CHECK(out[3].x == doctest::Approx(2.5f).epsilon(1e-6));  // (1, 0.5, 1): weight 0.5
+}
+
+TEST_CASE("tricubic: an interior point moves the centre by B_1,3(1/2)³ = 27/512 of its offset") {
+  BezierLattice lattice(LatticeFrame::axis_aligned({-1, -1, -1}, {2, 2, 2}));
+  CHECK(lattice.degree() == glm::ivec3(3));
+  lattice.control_points()[lattice.index(1, 1, 1)] += glm::vec3(0.0f, 0.0f, 512.0f);
+  const std::vector<glm::vec3> in = {{0, 0, 0}};
+  const auto out = evaluate(deform::bind_lattice(lattice, in), lattice.control_points(), in);
+  CHECK(out[0].z == doctest::Approx(27.0f).epsilon(1e-6));
+  CHECK(lattice.evaluate({0.5f, 0.5f, 0.5f}).z == doctest::Approx(27.0f).epsilon(1e-6));
+}
+
+TEST_CASE("a rest lattice is the identity to 1e-6 for every degree") {
+  std::mt19937 rng(11);
+  for (int d = 1; d <= deform::max_bezier_degree; ++d) {
+    for (const glm::ivec3 degree : {glm::ivec3(d), glm::ivec3(d, 1 + d % 3, 1 + (d * 7) % 16)}) {
+      const LatticeFrame frame = random_frame(rng);
+      const BezierLattice lattice(frame, degree);
+      const std::vector<glm::vec3> in = points_inside(frame, rng, 200);
+      std::vector<glm::vec3> normals(in.size());
+      for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 1e-3f));
+      const std::vector<glm::vec3> normals_in = normals;
+      const auto out = evaluate(deform::bind_lattice(lattice, in), lattice.control_points(), in, &normals);
+      double worst = 0.0, worst_normal = 0.0;
+      for (std::size_t i = 0; i < in.size(); ++i) {
+        worst = std::max(worst, dist(out[i], in[i]));
+        worst = std::max(worst, dist(lattice.evaluate(frame.to_lattice(in[i])), in[i]));
+        worst_normal = std::max(worst_normal, dist(normals[i], normals_in[i]));
+      }
+      INFO("degree " << degree.x << "," << degree.y << "," << degree.z);
+      CHECK(worst < 1e-6 * 8);  // coordinates up to ~8: 1e-6 relative
+      CHECK(worst_normal < 1e-5);
+    }
+  }
+}
+
+TEST_CASE("affine precision: an affine map of the control points maps the vertices the same way, every degree") {
+  std::mt19937 rng(12);
+  for (int d = 1; d <= deform::max_bezier_degree; ++d) {
+    const LatticeFrame frame = random_frame(rng);
+    BezierLattice lattice(frame, glm::ivec3(d, 1 + (d + 1) % 4, d));
+    glm::mat4 affine(1.0f);
+    for (int c = 0; c < 3; ++c) affine[c] = glm::vec4(uniform3(rng, -1.5f, 1.5f), 0.0f);
+    affine[3] = glm::vec4(uniform3(rng, -3.0f, 3.0f), 1.0f);
+    for (glm::vec3& p : lattice.control_points()) p = glm::vec3(affine * glm::vec4(p, 1.0f));
+    const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
+    const auto out = evaluate(deform::bind_lattice(BezierLattice(frame, lattice.degree()), in), lattice.control_points(), in);
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const glm::vec3 expected(affine * glm::vec4(in[i], 1.0f));
+      INFO("degree " << d << " vertex " << i);
+      CHECK(dist(out[i], expected) < 1e-5 * (1.0 + glm::length(expected)));
+    }
+  }
+}
+
+TEST_CASE("optimised kernel = pow/binomial reference to 1e-5 over thousands of random lattices and points") {
+  std::mt19937 rng(13);
+  int compared = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    const bool high = trial % 10 == 0;
+    const glm::ivec3 degree(1 + static_cast<int>(rng() % (high ? 16 : 6)), 1 + static_cast<int>(rng() % 6),
+                            1 + static_cast<int>(rng() % (high ? 12 : 6)));
+    const LatticeFrame frame = random_frame(rng);
+    BezierLattice lattice(frame, degree);
+    for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.3f, 0.3f);
+    // 1..40 vertices so that partial blocks are covered; some exactly on the border.
+    std::vector<glm::vec3> uvws;
+    const std::size_t count = 1 + rng() % 40;
+    for (std::size_t i = 0; i < count; ++i) {
+      glm::vec3 uvw = uniform3(rng, 0.0f, 1.0f);
+      if (rng() % 8 == 0) uvw[static_cast<int>(rng() % 3)] = static_cast<float>(rng() % 2);
+      uvws.push_back(uvw);
+    }
+    std::vector<glm::vec3> in;
+    for (const glm::vec3& uvw : uvws) in.push_back(frame.to_world(uvw));
+    const auto binding = deform::bind_lattice(lattice, in);
+    std::vector<glm::vec3> normals(in.size());
+    for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(1e-3f, 0.0f, 0.0f));
+    const std::vector<glm::vec3> normals_in = normals;
+    const auto out = evaluate(binding, lattice.control_points(), in, &normals);
+    const auto positions_only = evaluate(binding, lattice.control_points(), in);
+    const glm::dmat3 axes(glm::dvec3(frame.u_axis), glm::dvec3(frame.v_axis), glm::dvec3(frame.w_axis));
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      if (!glm::all(glm::greaterThanEqual(frame.to_lattice(in[i]), glm::vec3(0.0f))) ||
+          !glm::all(glm::lessThanEqual(frame.to_lattice(in[i]), glm::vec3(1.0f))))
+        continue;  // rounding put a border vertex just outside: it is (correctly) not bound
+      const glm::dvec3 uvw(frame.to_lattice(in[i]));
+      const glm::dvec3 ref = lattice_reference::bezier(lattice.control_points(), degree, uvw);
+      // The world Jacobian is ∂Q/∂(u,v,w) · M⁻¹.
+      const glm::dmat3 jac = lattice_reference::bezier_jacobian(lattice.control_points(), degree, uvw) *
+                             glm::inverse(axes);
+      const glm::dvec3 ref_normal = lattice_reference::transform_normal(jac, glm::dvec3(normals_in[i]));
+      INFO("trial " << trial << " degree " << degree.x << "," << degree.y << "," << degree.z << " vertex " << i);
+      CHECK(dist(out[i], ref) < 1e-5 * (1.0 + glm::length(ref)));
+      CHECK(positions_only[i] == out[i]);
+      CHECK(dist(lattice.evaluate(glm::vec3(uvw)), ref) < 1e-5 * (1.0 + glm::length(ref)));
+      CHECK(dist(normals[i], ref_normal) < 1e-4);
+      ++compared;
+    }
+  }
+  CHECK(compared > 20000);
+}
+
+TEST_CASE("the Jacobian agrees with finite differences, and so do the deformed normals") {
+  std::mt19937 rng(14);
+  for (int trial = 0; trial < 200; ++trial) {
+    const glm::ivec3 degree(1 + static_cast<int>(rng() % 5), 1 + static_cast<int>(rng() % 5),
+                            1 + static_cast<int>(rng() % 5));
+    const LatticeFrame frame = random_frame(rng);
+    BezierLattice lattice(frame, degree);
+    for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.2f, 0.2f);
+    const glm::vec3 uvw = uniform3(rng, 0.1f, 0.9f);
+    const float h = 1e-2f;
+    const glm::mat3 jac = lattice.jacobian(uvw);
+    for (int a = 0; a < 3; ++a) {
+      glm::vec3 step(0.0f);
+      step[a] = h;
+      const glm::vec3 fd = (lattice.evaluate(uvw + step) - lattice.evaluate(uvw - step)) / (2.0f * h);
+      CHECK(dist(jac[a], fd) < 2e-3 * (1.0 + glm::length(fd)));
+    }
+    // A surface through the point with normal n: deform two tangents by finite differences of the whole map.
+    const glm::vec3 x = frame.to_world(uvw);
+    const glm::vec3 n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 1e-3f, 0.0f));
+    const glm::vec3 t1 = glm::normalize(glm::cross(n, glm::vec3(0.3f, 0.5f, 0.81f)));
+    const glm::vec3 t2 = glm::cross(n, t1);
+    const float e = 1e-3f;
+    auto map = [&](glm::vec3 p) { return lattice.evaluate(frame.to_lattice(p)); };
+    const glm::vec3 d1 = map(x + e * t1) - map(x - e * t1), d2 = map(x + e * t2) - map(x - e * t2);
+    const glm::vec3 fd_normal = glm::normalize(glm::cross(d1, d2));
+    std::vector<glm::vec3> normals = {n};
+    const std::vector<glm::vec3> in = {x};
+    evaluate(deform::bind_lattice(BezierLattice(frame, degree), in), lattice.control_points(), in, &normals);
+    INFO("trial " << trial);
+    CHECK(dist(normals[0], fd_normal) < 2e-3);
+  }
+}
+
+TEST_CASE("invalid Bézier lattices are errors with context") {
+  const LatticeFrame unit = LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1});
+  CHECK_THROWS_AS(BezierLattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, 0, 1})), deform::Error);
+  CHECK_THROWS_AS(BezierLattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, -1, 1})), deform::Error);
+  CHECK_THROWS_AS(BezierLattice(LatticeFrame::axis_aligned({0, NAN, 0}, {1, 1, 1})), deform::Error);
+  CHECK_THROWS_AS(BezierLattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, INFINITY, 1})), deform::Error);
+  LatticeFrame flat = unit;
+  flat.w_axis = flat.u_axis + flat.v_axis;
+  CHECK_THROWS_AS(BezierLattice{flat}, deform::Error);
+  LatticeFrame left_handed = unit;
+  left_handed.w_axis = -left_handed.w_axis;
+  CHECK_THROWS_AS(BezierLattice{left_handed}, deform::Error);
+  try {
+    BezierLattice bad(unit, glm::ivec3(3, 0, 3), "arm.json");
+    FAIL("degree 0 accepted");
+  } catch (const deform::Error& e) {
+    CHECK(e.file() == "arm.json");
+    CHECK(e.element() == "degree m");
+  }
+  CHECK_THROWS_AS(BezierLattice(unit, glm::ivec3(3, 3, deform::max_bezier_degree + 1)), deform::Error);
+  CHECK_NOTHROW(BezierLattice(unit, glm::ivec3(deform::max_bezier_degree, 1, 2)));
+  // A candidate index out of range and a non-finite position are bind-time errors.
+  const BezierLattice lattice(unit);
+  const std::vector<glm::vec3> points = {{0.5f, 0.5f, 0.5f}, {NAN, 0, 0}};
+  const std::vector<std::uint32_t> out_of_range = {0, 2};
+  CHECK_THROWS_AS(deform::bind_lattice(lattice, points, out_of_range), deform::Error);
+  CHECK_THROWS_AS(deform::bind_lattice(lattice, points), deform::Error);
+}
+
+TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run and writes nothing") {
+  const BezierLattice lattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1}));
+  const std::vector<glm::vec3> in = {{0.5f, 0.5f, 0.5f}, {0.1f, 0.2f, 0.3f}};
+  const auto binding = deform::bind_lattice(lattice, in);
+  std::vector<glm::vec3> out(2, glm::vec3(7.0f)), normals(2, glm::vec3(0, 0, 1)), small(1);
+  deform::LatticeEvaluateJob job;
+  CHECK_FALSE(job.validate());  // no binding
+  job.binding = &binding;
+  job.control_points = lattice.control_points();
+  job.positions = out;
+  CHECK(job.validate());
+  job.positions = small;
+  CHECK_FALSE(job.run());
+  CHECK(small[0] == glm::vec3(0.0f));
+  job.positions = out;
+  const std::vector<glm::vec3> too_few(lattice.control_points().begin(), lattice.control_points().end() - 1);
+  job.control_points = too_few;
+  CHECK_FALSE(job.validate());
+  job.control_points = lattice.control_points();
+  job.normals_in = normals;  // normals in without normals out
+  CHECK_FALSE(job.validate());
+  job.normals_out = normals;
+  CHECK(job.validate());
+  job.normals_out = small;
+  CHECK_FALSE(job.validate());
+  CHECK(out[0] == glm::vec3(7.0f));
+  // A B-spline binding needs B-spline-sized control points.
+  const deform::BsplineLattice bspline(LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1}), glm::ivec3(5));
+  const auto bspline_binding = deform::bind_lattice(bspline, in);
+  job.binding = &bspline_binding;
+  job.normals_in = {};
+  job.normals_out = {};
+  CHECK_FALSE(job.validate());
+  job.control_points = bspline.control_points();
+  CHECK(job.run());
+}

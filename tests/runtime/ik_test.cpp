@@ -1,0 +1,490 @@
+// IK solvers: seeded random chains and targets, limits, unreachable targets, degenerate limbs, invalid input.
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <new>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/ik.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "runtime/ik_test_rig.hpp"
+
+// Counts heap allocations, to show that a solve allocates nothing. (GCC cannot see that this operator new is the
+// malloc behind the matching delete's free.)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+namespace {
+std::atomic<long> allocations{0};
+}
+void* operator new(std::size_t size) {
+  ++allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace deform;
+using ik_test::RandomChain;
+
+namespace {
+
+constexpr float not_a_number = std::numeric_limits<float>::quiet_NaN();
+constexpr float inf = std::numeric_limits<float>::infinity();
+
+// Effector head by the skeleton module's full FK (compute_world_matrices), independent of the solvers' chain FK.
+glm::vec3 reference_effector(const Skeleton& skeleton, const Pose& pose, std::int32_t effector) {
+  std::vector<glm::mat4> world(skeleton.bone_count());
+  REQUIRE(compute_world_matrices(skeleton, pose, world));
+  return glm::vec3(world[static_cast<std::size_t>(effector)][3]);
+}
+
+// Every bone other than the chain's joints keeps its rotation; every joint is within its limits.
+void check_pose(const RandomChain& rig, const Pose& before, const Pose& after) {
+  for (std::size_t b = 0; b < rig.skeleton.bone_count(); ++b) {
+    CHECK(after.translations[b] == before.translations[b]);
+    const bool joint = b >= 1 && b <= rig.joints;
+    if (!joint) CHECK(after.rotations[b] == before.rotations[b]);
+    else CHECK(ik_test::rotation_within_limits(after.rotations[b], rig.skeleton.bones()[b].limits));
+  }
+}
+
+struct Rates {
+  int reached = 0, cases = 0;
+  long iterations = 0;
+  double rate() const { return double(reached) / cases; }
+  double mean_iterations() const { return double(iterations) / cases; }
+};
+
+// Random chains of 2–6 joints, targets from random in-limit poses, tolerance 1e-4 of the chain length.
+template <class Solver>
+Rates reachable_targets(bool escape_stalls, int cases, std::uint32_t seed, bool check_every_pose) {
+  std::mt19937 random(seed);
+  Rates rates;
+  for (int c = 0; c < cases; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    Solver solver(rig.skeleton, rig.root, rig.effector);
+    Pose pose = rig.skeleton.bind_pose();
+    const Pose before = pose;
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    settings.escape_stalls = escape_stalls;
+    IkResult result;
+    REQUIRE(solver.solve(pose, target, settings, result));
+    const glm::vec3 effector = reference_effector(rig.skeleton, pose, rig.effector);
+    // The result describes the pose it leaves.
+    CHECK(result.distance == doctest::Approx(glm::length(effector - target)).epsilon(1e-3).scale(rig.length));
+    CHECK(result.reached == (result.distance <= settings.tolerance));
+    CHECK(result.iterations <= settings.max_iterations);
+    if (check_every_pose) check_pose(rig, before, pose);
+    rates.reached += result.reached;
+    rates.iterations += result.iterations;
+    ++rates.cases;
+  }
+  return rates;
+}
+
+// Per-axis limits of every kind: free, locked, any range within [-180, 180] (y beyond ±90 too, so that either Euler
+// triple can be the one within the limits). y bounds keep 1° from ±90: there a float quaternion cannot hold x and z
+// apart to the tests' 0.01°, whichever clamp made it.
+DofLimits general_limits(std::mt19937& random) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  auto near_gimbal = [](float y) { return std::abs(std::abs(y) - 90.0f) < 1.0f; };
+  DofLimits limits;
+  for (int axis = 0; axis < 3; ++axis) {
+    do {
+      const float kind = unit(random);
+      limits.min[axis] = -180.0f, limits.max[axis] = 180.0f;
+      if (kind < 0.3f) {
+        limits.min[axis] = limits.max[axis] = -180.0f + 360.0f * unit(random);
+      } else if (kind >= 0.45f) {
+        limits.min[axis] = -180.0f + 360.0f * unit(random);
+        limits.max[axis] = limits.min[axis] + (180.0f - limits.min[axis]) * unit(random);
+      }
+    } while (axis == 1 && (near_gimbal(limits.min.y) || near_gimbal(limits.max.y)));
+  }
+  return limits;
+}
+
+// Skeleton::clamp_to_limits picks the nearer of a rotation's two Euler triples; when both are equally far (common:
+// moving x and z by 180° moves one axis' excess up and the other's down by 180°) rounding decides, and the other
+// triple clamped is as correct an answer. That answer, when the two distances tie within 1e-3°, else none.
+std::optional<glm::quat> tied_answer(glm::quat rotation, const DofLimits& limits) {
+  auto wrap = [](float a) { return a > 180.0f ? a - 360.0f : (a <= -180.0f ? a + 360.0f : a); };
+  auto excess = [&](glm::vec3 e) {
+    const glm::vec3 d = e - clamp_euler(e, limits);
+    return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  };
+  const glm::vec3 first = euler_from_quat(rotation);
+  const glm::vec3 second(wrap(first.x + 180.0f), wrap(180.0f - first.y), wrap(first.z + 180.0f));
+  if (std::abs(excess(first) - excess(second)) > 1e-3f) return std::nullopt;
+  return quat_from_euler(clamp_euler(excess(second) < excess(first) ? first : second, limits));
+}
+
+// The angle between two rotations, radians (small angles exact to rounding).
+double rotation_difference(glm::quat a, glm::quat b) {
+  const glm::dquat p(a), q(glm::dot(a, b) < 0.0f ? -b : b);
+  return 2.0 * glm::length(glm::dvec4(p.x - q.x, p.y - q.y, p.z - q.z, p.w - q.w));
+}
+
+}  // namespace
+
+TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_limits") {
+  std::mt19937 random(606);
+  std::normal_distribution<float> normal;
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  int changed = 0, ties = 0;
+  double worst = 0.0;
+  for (int c = 0; c < 20000; ++c) {
+    // The solvers' random limits and limits of every kind; uniform rotations, and every tenth near gimbal lock.
+    const DofLimits limits = c % 2 ? general_limits(random) : ik_test::random_limits(random);
+    glm::quat rotation = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    if (c % 10 == 0) {
+      const float y = (c % 20 ? 90.0f : -90.0f) - 1e-3f * unit(random);
+      rotation = quat_from_euler(glm::vec3(360.0f * unit(random) - 180.0f, y, 360.0f * unit(random) - 180.0f));
+    }
+    std::vector<Bone> bones(1);
+    bones[0].limits = limits;
+    const Skeleton skeleton(bones);
+    Pose reference{{rotation}, {glm::vec3(0.0f)}};
+    skeleton.clamp_to_limits(reference, 0);
+    glm::quat fast = rotation;
+    const bool clamped = clamp_rotation(prepare_limits(limits), fast);
+    REQUIRE(clamped == (reference.rotations[0] != rotation));
+    CHECK(ik_test::rotation_within_limits(fast, limits));
+    double difference = rotation_difference(fast, reference.rotations[0]);
+    if (difference > 4e-6) {
+      const std::optional<glm::quat> other = tied_answer(rotation, limits);
+      REQUIRE(other);
+      difference = rotation_difference(fast, *other);
+      ++ties;
+    }
+    CHECK(difference <= 4e-6);
+    worst = std::max(worst, difference);
+    changed += clamped;
+  }
+  MESSAGE("clamp_rotation vs clamp_to_limits: 20000 rotations, ", changed, " clamped, ", ties,
+          " ties resolved the other way, largest difference ", worst, " rad");
+  CHECK(changed > 15000);
+
+  // Strictly within the limits nothing changes, to the bit (after normalisation); free limits change nothing at all.
+  // (A rotation made from angles on a bound, a locked axis say, reads back a hair outside and is clamped onto it.)
+  for (int c = 0; c < 2000; ++c) {
+    DofLimits limits = ik_test::random_limits(random);
+    glm::vec3 angles;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (limits.min[axis] == limits.max[axis]) limits.min[axis] -= 10.0f, limits.max[axis] += 10.0f;
+      angles[axis] = limits.min[axis] + (0.01f + 0.98f * unit(random)) * (limits.max[axis] - limits.min[axis]);
+    }
+    const glm::quat inside = quat_from_euler(angles);
+    glm::quat rotation = inside;
+    CHECK_FALSE(clamp_rotation(prepare_limits(limits), rotation));
+    CHECK(rotation == glm::normalize(inside));
+    const glm::quat any = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    rotation = any;
+    CHECK_FALSE(clamp_rotation(prepare_limits(DofLimits{}), rotation));
+    CHECK(rotation == glm::normalize(any));
+  }
+  CHECK(prepare_limits(DofLimits{}).free);
+  CHECK(EulerLimits{}.free);
+}
+
+TEST_CASE("make_chain finds root..effector and rejects anything else") {
+  std::mt19937 random(1);
+  const RandomChain rig = ik_test::random_chain(random, 3);
+  const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+  CHECK(chain.bones == std::vector<std::int32_t>{1, 2, 3, 4});
+  CHECK(chain.ancestors == std::vector<std::int32_t>{0});
+  CHECK(chain.joint_count() == 3);
+  CHECK(chain_length(chain, rig.skeleton.bind_pose()) == doctest::Approx(rig.length));
+  // The sibling (last bone) is not below the chain root's chain; the effector is not an ancestor of the root.
+  const auto sibling = static_cast<std::int32_t>(rig.skeleton.bone_count() - 1);
+  CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, sibling), Error);
+  CHECK_THROWS_AS(make_chain(rig.skeleton, rig.effector, rig.root), Error);
+  CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, rig.root), Error);
+  CHECK_THROWS_AS(make_chain(rig.skeleton, -1, rig.effector), Error);
+  CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, 99), Error);
+  CHECK_THROWS_AS(CcdSolver(rig.skeleton, rig.effector, rig.root), Error);
+  CHECK_THROWS_AS(TwoBoneSolver(rig.skeleton, rig.root, rig.effector), Error);  // three joints, not two
+  // effector_position agrees with the skeleton module's FK.
+  const Pose pose = ik_test::random_in_limit_pose(random, rig);
+  const glm::vec3 e = effector_position(rig.skeleton, chain, pose);
+  CHECK(glm::length(e - reference_effector(rig.skeleton, pose, rig.effector)) < 1e-5f * rig.length);
+}
+
+TEST_CASE("CCD reaches >= 99.5% of reachable targets within limits; the stall escape is measured against plain CCD") {
+  const Rates improved = reachable_targets<CcdSolver>(true, 3000, 2024, true);
+  const Rates plain = reachable_targets<CcdSolver>(false, 3000, 2024, false);
+  MESSAGE("CCD, 3000 chains of 2-6 joints, tolerance 1e-4 x length, cap 200: improved ", improved.rate() * 100,
+          "% reached, ", improved.mean_iterations(), " mean iterations; plain ", plain.rate() * 100, "% reached, ",
+          plain.mean_iterations(), " mean iterations");
+  CHECK(improved.rate() >= 0.995);
+  CHECK(improved.rate() > plain.rate());
+}
+
+TEST_CASE("FABRIK reaches >= 99.5% of reachable targets within limits") {
+  const Rates improved = reachable_targets<FabrikSolver>(true, 3000, 7, true);
+  const Rates plain = reachable_targets<FabrikSolver>(false, 3000, 7, false);
+  MESSAGE("FABRIK, 3000 chains of 2-6 joints, tolerance 1e-4 x length, cap 200: improved ", improved.rate() * 100,
+          "% reached, ", improved.mean_iterations(), " mean iterations; plain ", plain.rate() * 100, "% reached, ",
+          plain.mean_iterations(), " mean iterations");
+  CHECK(improved.rate() >= 0.995);
+}
+
+TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable target") {
+  std::mt19937 random(99);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int c = 0; c < 500; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5, /*free_joints=*/true);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    const Pose bind = rig.skeleton.bind_pose();
+    const glm::vec3 root = ik_test::chain_root_head(bind);
+    glm::vec3 direction(unit(random), unit(random), unit(random));
+    if (glm::length(direction) < 0.1f) direction = glm::vec3(1, 0, 0);
+    const glm::vec3 target = root + glm::normalize(direction) * rig.length * (1.05f + 2.0f * (unit(random) + 1.0f));
+    const float best = glm::length(target - root) - rig.length;
+    // The solver stops within its tolerance of its own floor, which it computes through another float path:
+    // allow the rounding of |target - root| (a few ulp) on top.
+    const float slack = 1e-4f * rig.length + 4.0f * std::numeric_limits<float>::epsilon() * glm::length(target - root);
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    IkResult ccd, fabrik;
+    Pose ccd_pose = bind, fabrik_pose = bind;
+    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(ccd_pose, target, settings, ccd));
+    REQUIRE(FabrikSolver(rig.skeleton, rig.root, rig.effector).solve(fabrik_pose, target, settings, fabrik));
+    CHECK_FALSE(ccd.reached);
+    CHECK_FALSE(fabrik.reached);
+    CHECK(std::abs(ccd.distance - best) <= slack);
+    CHECK(std::abs(fabrik.distance - best) <= slack);
+    CHECK(std::abs(glm::length(effector_position(rig.skeleton, chain, ccd_pose) - target) - best) <= slack);
+  }
+}
+
+TEST_CASE("with limits, an unreachable target leaves the pose in limits and no farther than the start") {
+  std::mt19937 random(5);
+  for (int c = 0; c < 300; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const Pose bind = rig.skeleton.bind_pose();
+    const glm::vec3 root = ik_test::chain_root_head(bind);
+    const glm::vec3 target = root + glm::vec3(0.6f, -0.8f, 0.0f) * (3.0f * rig.length);
+    const float start = glm::length(reference_effector(rig.skeleton, bind, rig.effector) - target);
+    for (int which = 0; which < 2; ++which) {
+      Pose pose = bind;
+      IkResult result;
+      IkSettings settings;
+      REQUIRE((which == 0 ? CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result)
+                          : FabrikSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result)));
+      CHECK_FALSE(result.reached);
+      CHECK(result.distance <= start + 1e-5f * rig.length);
+      CHECK(result.distance >= glm::length(target - root) - rig.length - 1e-5f * rig.length);
+      check_pose(rig, bind, pose);
+    }
+  }
+}
+
+TEST_CASE("a starting pose outside the limits is clamped; a solve allocates nothing") {
+  std::mt19937 random(11);
+  const RandomChain rig = ik_test::random_chain(random, 4);
+  Pose pose = rig.skeleton.bind_pose();
+  for (std::size_t b = 1; b <= rig.joints; ++b) pose.rotations[b] = glm::angleAxis(3.0f, glm::vec3(0.6f, 0.0f, 0.8f));
+  CcdSolver ccd(rig.skeleton, rig.root, rig.effector);
+  FabrikSolver fabrik(rig.skeleton, rig.root, rig.effector);
+  IkSettings settings;
+  IkResult result;
+  const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+  const long allocations_before = allocations.load();
+  REQUIRE(ccd.solve(pose, target, settings, result));
+  REQUIRE(fabrik.solve(pose, target, settings, result));
+  CHECK(allocations.load() == allocations_before);
+  for (std::size_t b = 1; b <= rig.joints; ++b)
+    CHECK(ik_test::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
+}
+
+TEST_CASE("max_step_degrees caps each CCD update and still converges") {
+  std::mt19937 random(3);
+  int reached = 0;
+  for (int c = 0; c < 200; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 3, /*free_joints=*/true);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose();
+    const Pose before = pose;
+    IkSettings settings;
+    settings.max_step_degrees = 2.0f;
+    settings.max_iterations = 1;
+    settings.escape_stalls = false;
+    IkResult result;
+    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result));
+    // One sweep turns each joint by at most 2 degrees.
+    for (std::size_t b = 1; b <= rig.joints; ++b) {
+      const float angle = glm::degrees(glm::angle(glm::normalize(glm::conjugate(before.rotations[b]) * pose.rotations[b])));
+      CHECK(std::min(angle, 360.0f - angle) <= 2.0f + 1e-2f);
+    }
+    settings.max_iterations = 400;
+    settings.tolerance = 1e-3f * rig.length;
+    settings.escape_stalls = true;
+    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result));
+    reached += result.reached;
+  }
+  CHECK(reached >= 198);
+}
+
+TEST_CASE("non-finite targets and bad settings or poses are rejected and change nothing") {
+  std::mt19937 random(4);
+  const RandomChain rig = ik_test::random_chain(random, 2);
+  CcdSolver ccd(rig.skeleton, rig.root, rig.effector);
+  FabrikSolver fabrik(rig.skeleton, rig.root, rig.effector);
+  TwoBoneSolver two_bone(rig.skeleton, rig.root, rig.effector);
+  Pose pose = rig.skeleton.bind_pose();
+  const Pose before = pose;
+  IkResult result{true, 42.0f, 7};
+  const IkSettings settings;
+  for (const glm::vec3 bad : {glm::vec3(not_a_number, 0, 0), glm::vec3(0, inf, 0), glm::vec3(0, 0, -inf)}) {
+    CHECK_FALSE(ccd.solve(pose, bad, settings, result));
+    CHECK_FALSE(fabrik.solve(pose, bad, settings, result));
+    CHECK_FALSE(two_bone.solve(pose, bad, glm::vec3(0, 0, 1), 1e-3f, result));
+    CHECK_FALSE(two_bone.solve(pose, glm::vec3(1, 0, 0), bad, 1e-3f, result));
+  }
+  IkSettings bad_settings;
+  bad_settings.tolerance = not_a_number;
+  CHECK_FALSE(ccd.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
+  bad_settings = IkSettings{};
+  bad_settings.max_iterations = 0;
+  CHECK_FALSE(fabrik.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
+  bad_settings = IkSettings{};
+  bad_settings.max_step_degrees = -1.0f;
+  CHECK_FALSE(ccd.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
+  CHECK_FALSE(two_bone.solve(pose, glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), -1.0f, result));
+  Pose short_pose = pose;
+  short_pose.rotations.pop_back();
+  CHECK_FALSE(ccd.solve(short_pose, glm::vec3(1, 0, 0), settings, result));
+  CHECK_FALSE(two_bone.solve(short_pose, glm::vec3(1, 0, 0), glm::vec3(0), 1e-3f, result));
+  for (std::size_t b = 0; b < pose.rotations.size(); ++b) CHECK(pose.rotations[b] == before.rotations[b]);
+  CHECK(result.iterations == 7);
+  CHECK(result.distance == 42.0f);
+}
+
+TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straight when out of reach") {
+  std::mt19937 random(21);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int c = 0; c < 2000; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2, /*free_joints=*/true);
+    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain& chain = solver.chain();
+    Pose pose = ik_test::random_in_limit_pose(random, rig);
+    const Pose before = pose;
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 pole(unit(random), unit(random), unit(random));
+    IkResult result;
+    REQUIRE(solver.solve(pose, target, pole, 1e-5f * rig.length, result));
+    CHECK(result.iterations == 1);
+    const glm::vec3 effector = reference_effector(rig.skeleton, pose, rig.effector);
+    CHECK(glm::length(effector - target) <= 2e-5f * rig.length);
+    CHECK(result.distance == doctest::Approx(glm::length(effector - target)).scale(rig.length).epsilon(1e-4));
+    check_pose(rig, before, pose);
+    // The middle joint is on the pole's side of the line root→target.
+    std::vector<glm::mat4> world(rig.skeleton.bone_count());
+    REQUIRE(compute_world_matrices(rig.skeleton, pose, world));
+    const glm::vec3 root(world[1][3]), mid(world[2][3]);
+    const glm::vec3 d = glm::normalize(target - root);
+    const glm::vec3 mid_across = (mid - root) - d * glm::dot(mid - root, d);
+    const glm::vec3 pole_across = pole - d * glm::dot(pole, d);
+    if (glm::length(mid_across) > 1e-3f * rig.length && glm::length(pole_across) > 1e-3f)
+      CHECK(glm::dot(glm::normalize(mid_across), glm::normalize(pole_across)) > 0.999f);
+
+    // Out of reach: the straight limb pointing at the target.
+    Pose far_pose = before;
+    const glm::vec3 far_target = root + glm::normalize(target - root + glm::vec3(1e-3f)) * (rig.length * 1.5f);
+    REQUIRE(solver.solve(far_pose, far_target, pole, 1e-5f * rig.length, result));
+    CHECK_FALSE(result.reached);
+    CHECK(std::abs(result.distance - 0.5f * rig.length) <= 1e-5f * rig.length);
+    CHECK(glm::length(effector_position(rig.skeleton, chain, far_pose) - (root + glm::normalize(far_target - root) * rig.length)) <=
+          2e-5f * rig.length);
+  }
+}
+
+TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole on the line, straight start") {
+  std::mt19937 random(8);
+  SUBCASE("zero-length upper bone: the limb only turns") {
+    const RandomChain rig = ik_test::random_chain(random, 2, true, /*zero_bone=*/1);
+    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    Pose pose = rig.skeleton.bind_pose();
+    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const float b = glm::length(pose.translations[3]);
+    IkResult result;
+    REQUIRE(solver.solve(pose, root + glm::vec3(0, 0, 2.0f * b), glm::vec3(1, 0, 0), 1e-4f, result));
+    CHECK(result.distance == doctest::Approx(b).epsilon(1e-4));
+    REQUIRE(solver.solve(pose, root + glm::vec3(0, 0.5f * b, 0), glm::vec3(1, 0, 0), 1e-4f, result));
+    CHECK(result.distance == doctest::Approx(0.5f * b).epsilon(1e-4));
+    CHECK(ik_test::finite_pose(pose));
+  }
+  SUBCASE("target on the root: folded as far as the bones allow") {
+    const RandomChain rig = ik_test::random_chain(random, 2, true);
+    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    Pose pose = rig.skeleton.bind_pose();
+    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const float a = glm::length(pose.translations[2]), b = glm::length(pose.translations[3]);
+    IkResult result;
+    REQUIRE(solver.solve(pose, root, glm::vec3(0, 1, 0), 1e-4f, result));
+    CHECK(result.distance == doctest::Approx(std::abs(a - b)).scale(a + b).epsilon(1e-4));
+    CHECK(ik_test::finite_pose(pose));
+  }
+  SUBCASE("pole along root→target or zero keeps the bend plane; a straight start bends toward the pole") {
+    const RandomChain rig = ik_test::random_chain(random, 2, true);
+    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    Pose pose = rig.skeleton.bind_pose();
+    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const glm::vec3 target = root + glm::vec3(0.3f, 0.4f, 0.2f) * rig.length;
+    IkResult result;
+    for (const glm::vec3 pole : {target - root, glm::vec3(0.0f), root - target}) {
+      REQUIRE(solver.solve(pose, target, pole, 1e-5f * rig.length, result));
+      CHECK(result.reached);
+      CHECK(ik_test::finite_pose(pose));
+    }
+    // Straight limb (every joint at identity, bones along one line) and a pole: bends toward it.
+    std::vector<Bone> bones(3);
+    bones[0].name = "upper";
+    bones[0].children = {1};
+    bones[1].name = "lower";
+    bones[1].parent = 0;
+    bones[1].children = {2};
+    bones[1].bind_translation = glm::vec3(0, 1, 0);
+    bones[2].name = "hand";
+    bones[2].parent = 1;
+    bones[2].bind_translation = glm::vec3(0, 1, 0);
+    const Skeleton straight(bones);
+    const TwoBoneSolver limb(straight, 0, 2);
+    Pose straight_pose = straight.bind_pose();
+    REQUIRE(limb.solve(straight_pose, glm::vec3(0, 1.2f, 0), glm::vec3(0, 0, 1), 1e-5f, result));
+    CHECK(result.reached);
+    std::vector<glm::mat4> world(3);
+    REQUIRE(compute_world_matrices(straight, straight_pose, world));
+    CHECK(world[1][3].z > 0.5f);  // the elbow went toward +z
+    CHECK(std::abs(world[1][3].x) < 1e-5f);
+  }
+}
+
+TEST_CASE("two-bone with limits never leaves them; exact whenever the closed form is inside them") {
+  std::mt19937 random(31);
+  int exact = 0;
+  for (int c = 0; c < 2000; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2);
+    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    Pose pose = rig.skeleton.bind_pose();
+    const Pose before = pose;
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    IkResult result;
+    REQUIRE(solver.solve(pose, target, glm::vec3(0, 0, 1), 1e-4f * rig.length, result));
+    check_pose(rig, before, pose);
+    exact += result.reached;
+  }
+  MESSAGE("two-bone with random limits: ", exact / 20.0, "% of reachable targets met exactly after clamping");
+  CHECK(exact > 0);
+}

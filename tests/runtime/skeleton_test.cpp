@@ -1,0 +1,212 @@
+// Skeleton: hierarchy validation, order, forward kinematics against hand-computed values, pose setters, palette.
+#include "deform/runtime/skeleton.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/io/pose_json.hpp"
+#include <doctest/doctest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "deform/runtime/error.hpp"
+#include "runtime/skeleton_test_util.hpp"
+
+using deform::Bone;
+using deform::Skeleton;
+using skeleton_test::head;
+using skeleton_test::make_bone;
+
+namespace {
+
+bool near(glm::vec3 a, glm::vec3 b, float eps = 1e-5f) {
+  return glm::all(glm::lessThanEqual(glm::abs(a - b), glm::vec3(eps)));
+}
+
+std::vector<glm::mat4> world_of(const Skeleton& s, const deform::Pose& pose) {
+  std::vector<glm::mat4> world(s.bone_count());
+  REQUIRE(deform::compute_world_matrices(s, pose, world));
+  return world;
+}
+
+// Head of a child at `offset` under a root rotated by `degrees` (X·Y·Z).
+glm::vec3 child_head(glm::vec3 degrees, glm::vec3 offset) {
+  const Skeleton s({make_bone("root", -1, {1}, {0, 0, 0}, degrees), make_bone("child", 0, {}, offset)});
+  return head(s.bind_world()[1]);
+}
+
+std::string element_of(std::vector<Bone> bones) {
+  try {
+    Skeleton s(std::move(bones), "test");
+  } catch (const deform::Error& e) {
+    CHECK(e.file() == "test");
+    return e.element();
+  }
+  FAIL("no error");
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("FK: 90 degrees about each axis") {
+  CHECK(near(child_head({90, 0, 0}, {0, 1, 0}), {0, 0, 1}));
+  CHECK(near(child_head({0, 90, 0}, {1, 0, 0}), {0, 0, -1}));
+  CHECK(near(child_head({0, 0, 90}, {1, 0, 0}), {0, 1, 0}));
+  CHECK(near(child_head({0, 0, -90}, {0, 1, 0}), {1, 0, 0}));
+}
+
+TEST_CASE("FK: X·Y·Z order, not Z·Y·X") {
+  // Rx(90)·Rz(90)·(1,0,0) = Rx(90)·(0,1,0) = (0,0,1); Z·Y·X would give (0,1,0).
+  CHECK(near(child_head({90, 0, 90}, {1, 0, 0}), {0, 0, 1}));
+  // Rx(90)·Ry(90)·(0,0,1) = Rx(90)·(1,0,0) = (1,0,0); Z·Y·X would give (0,-1,0).
+  CHECK(near(child_head({90, 90, 0}, {0, 0, 1}), {1, 0, 0}));
+  // Matches the glTranslate-then-glRotate X, Y, Z product of the spec for an arbitrary triple.
+  const glm::vec3 e(31.0f, -47.0f, 112.0f);
+  glm::mat4 m = glm::translate(glm::mat4(1.0f), {1, 2, 3});
+  m = glm::rotate(m, glm::radians(e.x), {1, 0, 0});
+  m = glm::rotate(m, glm::radians(e.y), {0, 1, 0});
+  m = glm::rotate(m, glm::radians(e.z), {0, 0, 1});
+  const glm::mat4 l = deform::local_matrix(deform::quat_from_euler(e), {1, 2, 3});
+  for (int c = 0; c < 4; ++c) CHECK(near(glm::vec3(l[c]), glm::vec3(m[c])));
+}
+
+TEST_CASE("FK: three-bone chain with translations") {
+  const Skeleton s({make_bone("a", -1, {1}, {1, 2, 3}), make_bone("b", 0, {2}, {0, 2, 0}, {0, 0, 90}),
+                    make_bone("c", 1, {}, {0, 3, 0})});
+  const auto world = world_of(s, s.bind_pose());
+  CHECK(near(head(world[0]), {1, 2, 3}));
+  CHECK(near(head(world[1]), {1, 4, 3}));
+  CHECK(near(head(world[2]), {-2, 4, 3}));         // (1,4,3) + Rz(90)·(0,3,0)
+  CHECK(near(glm::vec3(world[2][0]), {0, 1, 0}));  // c's x axis, rotated by b
+  // A pose: turn a by -90 about z; everything below follows.
+  deform::Pose pose = s.bind_pose();
+  CHECK(s.set_euler(pose, 0, {0, 0, -90}) == glm::vec3(0, 0, -90));
+  const auto posed = world_of(s, pose);
+  CHECK(near(head(posed[1]), glm::vec3(1, 2, 3) + glm::vec3(2, 0, 0)));
+  CHECK(near(head(posed[2]), glm::vec3(3, 2, 3) + glm::vec3(0, 3, 0)));
+}
+
+TEST_CASE("parents may come later in the file; order() is parent-before-child") {
+  const Skeleton s({make_bone("root", -1, {2}), make_bone("leaf", 2, {}, {0, 1, 0}),
+                    make_bone("mid", 0, {1}, {1, 0, 0}, {0, 0, 90})});
+  REQUIRE(s.order().size() == 3);
+  CHECK(s.order()[0] == 0);
+  CHECK(s.order()[1] == 2);
+  CHECK(s.order()[2] == 1);
+  CHECK(near(head(s.bind_world()[1]), {0, 0, 0}));  // (1,0,0) + Rz(90)·(0,1,0)
+  CHECK(s.is_ancestor(2, 1));
+  CHECK(s.is_ancestor(0, 1));
+  CHECK(s.is_ancestor(1, 1));
+  CHECK_FALSE(s.is_ancestor(1, 2));
+  CHECK_FALSE(s.is_ancestor(5, 1));
+}
+
+TEST_CASE("bind matrices, their inverses and the skinning palette") {
+  const Skeleton s(skeleton_test::arm_bones());
+  const auto bind = world_of(s, s.bind_pose());
+  for (std::size_t i = 0; i < s.bone_count(); ++i) {
+    CHECK(bind[i] == s.bind_world()[i]);
+    const glm::mat4 product = s.bind_world()[i] * s.inverse_bind_world()[i];
+    for (int c = 0; c < 4; ++c) CHECK(near(glm::vec3(product[c]), glm::vec3(glm::mat4(1.0f)[c])));
+  }
+  std::vector<glm::mat4> palette(s.bone_count());
+  REQUIRE(deform::compute_skinning_palette(s, bind, palette));
+  for (const glm::mat4& m : palette)
+    for (int c = 0; c < 4; ++c) CHECK(near(glm::vec3(m[c]), glm::vec3(glm::mat4(1.0f)[c])));
+  // Posed: the palette carries a bind-space point attached to the wrist to where the posed wrist carries it.
+  deform::Pose pose = s.bind_pose();
+  s.set_euler(pose, 1, {20, 30, 40});
+  s.set_euler(pose, 2, {0, 0, 100});
+  const auto world = world_of(s, pose);
+  REQUIRE(deform::compute_skinning_palette(s, world, palette));
+  const glm::vec3 local(0.1f, 0.2f, -0.3f);
+  const glm::vec3 bind_point = glm::vec3(s.bind_world()[3] * glm::vec4(local, 1.0f));
+  CHECK(near(glm::vec3(palette[3] * glm::vec4(bind_point, 1.0f)), glm::vec3(world[3] * glm::vec4(local, 1.0f))));
+  // Wrong sizes are refused, nothing written.
+  std::vector<glm::mat4> short_out(2);
+  CHECK_FALSE(deform::compute_skinning_palette(s, world, short_out));
+  CHECK_FALSE(deform::compute_world_matrices(s, pose, short_out));
+  deform::Pose short_pose;
+  CHECK_FALSE(deform::compute_world_matrices(s, short_pose, palette));
+}
+
+TEST_CASE("set_euler clamps into the limits; clamp_to_limits converts, clamps and converts back") {
+  const Skeleton s(skeleton_test::arm_bones());
+  deform::Pose pose = s.bind_pose();
+  CHECK(s.set_euler(pose, 2, {30, 5, 200}) == glm::vec3(10, 0, 150));
+  CHECK(glm::abs(glm::dot(pose.rotations[2], deform::quat_from_euler({10, 0, 150}))) > 1 - 1e-6f);
+  CHECK(s.set_euler(pose, 2, {30, 5, 200}, false) == glm::vec3(30, 5, 200));
+
+  pose.rotations[2] = deform::quat_from_euler({25, 0, 60});
+  s.clamp_to_limits(pose, 2);
+  CHECK(glm::abs(glm::dot(pose.rotations[2], deform::quat_from_euler({10, 0, 60}))) > 1 - 1e-6f);
+
+  const glm::quat inside = deform::quat_from_euler({-4, 0, 120});
+  pose.rotations[2] = inside;
+  s.clamp_to_limits(pose, 2);
+  CHECK(pose.rotations[2] == inside);
+
+  // y beyond 90: the canonical triple (180, 80, 180) breaks x's limits, the equivalent (0, 100, 0) does not.
+  std::vector<Bone> bones = {make_bone("r", -1, {})};
+  bones[0].limits.min = {-10, 95, -10};
+  bones[0].limits.max = {10, 120, 10};
+  const Skeleton t(bones);
+  deform::Pose tp = t.bind_pose();
+  const glm::quat beyond = deform::quat_from_euler({0, 100, 0});
+  tp.rotations[0] = beyond;
+  t.clamp_to_limits(tp, 0);
+  CHECK(glm::abs(glm::dot(tp.rotations[0], beyond)) > 1 - 1e-6f);
+  tp.rotations[0] = deform::quat_from_euler({0, 60, 0});
+  t.clamp_to_limits(tp, 0);
+  CHECK(glm::abs(glm::dot(tp.rotations[0], deform::quat_from_euler({0, 95, 0}))) > 1 - 1e-6f);
+}
+
+TEST_CASE("find and key: names, #ID, empty and shared names") {
+  const Skeleton s({make_bone("root", -1, {1, 2, 3, 4}), make_bone("arm", 0, {}), make_bone("arm", 0, {}),
+                    make_bone("", 0, {}), make_bone("#1", 0, {})});
+  CHECK(s.find("root") == 0);
+  CHECK(s.find("arm") == 1);
+  CHECK(s.find("#2") == 2);
+  CHECK(s.find("#0") == 0);
+  CHECK(s.find("#5") == -1);
+  CHECK(s.find("#") == -1);
+  CHECK(s.find("#1x") == -1);
+  CHECK(s.find("#-1") == -1);
+  CHECK(s.find("leg") == -1);
+  CHECK(s.key(0) == "root");
+  CHECK(s.key(1) == "#1");
+  CHECK(s.key(2) == "#2");
+  CHECK(s.key(3) == "#3");
+  CHECK(s.key(4) == "#4");
+  for (std::int32_t id = 0; id < 5; ++id) CHECK(s.find(s.key(id)) == id);
+}
+
+TEST_CASE("validation: every rule of the spec, naming the bone") {
+  using V = std::vector<Bone>;
+  CHECK(element_of(V{}) == "");
+  CHECK(element_of(V{make_bone("a", 1, {}), make_bone("b", -1, {0})}) == "bone 0");  // root not bone 0
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", -1, {})}) == "bone 1");  // two roots
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", 7, {})}) == "bone 1");   // parent out of range
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", -2, {})}) == "bone 1");
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", 1, {1})}) == "bone 1");  // own parent
+  CHECK(element_of(V{make_bone("a", -1, {5})}) == "bone 0");                         // child out of range
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", 2, {2}), make_bone("c", 1, {1})}) == "bone 1");  // cycle
+  CHECK(element_of(V{make_bone("a", -1, {}), make_bone("b", 0, {})}) == "bone 1");      // parent does not list it
+  CHECK(element_of(V{make_bone("a", -1, {1, 1}), make_bone("b", 0, {})}) == "bone 0");  // listed twice
+  CHECK(element_of(V{make_bone("a", -1, {1, 2}), make_bone("b", 0, {2}), make_bone("c", 1, {})}) == "bone 0");
+  V limits{make_bone("a", -1, {})};
+  limits[0].limits.min.y = 10;
+  limits[0].limits.max.y = 5;
+  CHECK(element_of(limits) == "bone 0");
+  for (int field = 0; field < 4; ++field) {
+    V bad{make_bone("a", -1, {1}), make_bone("b", 0, {})};
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    if (field == 0) bad[1].bind_translation.x = nan;
+    if (field == 1) bad[1].bind_rotation.z = inf;
+    if (field == 2) bad[1].limits.min.x = -inf;
+    if (field == 3) bad[1].limits.max.z = nan;
+    CHECK(element_of(bad) == "bone 1");
+  }
+  // min == max locks an axis and is valid; a bind pose outside the limits is valid too.
+  V locked{make_bone("a", -1, {}, {0, 0, 0}, {45, 0, 0})};
+  locked[0].limits.min = locked[0].limits.max = glm::vec3(0.0f);
+  CHECK_NOTHROW(Skeleton{locked});
+}
