@@ -304,7 +304,9 @@ TEST_CASE("export writes OBJ + MTL + .sk + .skw that reload to the same skinned 
     const deform::ImportedModel imported = deform::import_model(path);
     const fs::path folder = fs::temp_directory_path() / "deform_export_test" / fs::path(path).stem();
     fs::remove_all(folder);
-    const deform::ExportedFiles files = deform::export_native(imported.model, folder.string());
+    deform::ExportOptions options;
+    options.texture_root = fs::path(path).parent_path().string();
+    const deform::ExportedFiles files = deform::export_native(imported.model, folder.string(), options);
     for (const std::string& file : {files.obj, files.mtl, files.sk, files.skw}) CHECK(fs::is_regular_file(file));
     const deform::Model reloaded = deform::load_model(files.obj, files.sk, files.skw);
     REQUIRE(reloaded.mesh.point_count() == imported.model.mesh.point_count());
@@ -331,25 +333,57 @@ TEST_CASE("export writes OBJ + MTL + .sk + .skw that reload to the same skinned 
   }
 }
 
-TEST_CASE("export copies textures and names the copies in the MTL") {
+TEST_CASE("export copies the model's own image textures, names the copies in the MTL and leaks nothing else") {
   const std::string path = test_model("X/BCN_Epileptic.X");
   if (path.empty()) return;
   deform::ImportedModel imported = deform::import_model(path);
   const fs::path folder = fs::temp_directory_path() / "deform_export_texture_test";
   fs::remove_all(folder);
-  fs::create_directories(folder / "source");
-  const fs::path texture = folder / "source" / "skin.png";
-  std::ofstream(texture) << "not really a png";
-  REQUIRE(!imported.model.mesh.materials.empty());
-  imported.model.mesh.materials[0].diffuse_map = texture.string();
-  const deform::ExportedFiles files = deform::export_native(imported.model, (folder / "out").string());
+  fs::create_directories(folder / "source" / "maps");
+  const fs::path texture = folder / "source" / "maps" / "skin.png";
+  std::ofstream(texture, std::ios::binary) << "\x89PNG\r\n\x1a\n and the rest of a PNG";
+  const fs::path not_image = folder / "source" / "notes.png";
+  std::ofstream(not_image) << "user:x:0:0:secret";
+  const fs::path outside = folder / "secret.png";
+  std::ofstream(outside, std::ios::binary) << "\x89PNG\r\n\x1a\n outside the model's folder";
+  const fs::path link = folder / "source" / "link.png";
+  fs::create_symlink(outside, link);
+  REQUIRE(imported.model.mesh.materials.size() >= 1);
+  while (imported.model.mesh.materials.size() < 5) {
+    imported.model.mesh.materials.push_back(imported.model.mesh.materials[0]);
+    imported.model.mesh.materials.back().name += std::to_string(imported.model.mesh.materials.size());
+  }
+  std::vector<deform::Material>& materials = imported.model.mesh.materials;
+  materials[0].diffuse_map = texture.string();
+  materials[1].diffuse_map = not_image.string();                                   // not an image
+  materials[2].diffuse_map = (folder / "source" / ".." / "secret.png").string();  // outside, by ..
+  materials[3].diffuse_map = link.string();                                        // outside, by a link
+  materials[4].diffuse_map = "/etc/passwd";
+  deform::ExportOptions options;
+  options.texture_root = (folder / "source").string();
+  const deform::ExportedFiles files = deform::export_native(imported.model, (folder / "out").string(), options);
   REQUIRE(files.textures.size() == 1);
   CHECK(fs::path(files.textures[0]).filename() == "skin.png");
   CHECK(fs::file_size(files.textures[0]) == fs::file_size(texture));
+  REQUIRE(files.warnings.size() == 4);
+  CHECK(files.warnings[0].find("not an image") != std::string::npos);
+  for (std::size_t i = 1; i < 4; ++i) CHECK(files.warnings[i].find("outside the model's folder") != std::string::npos);
+  CHECK(std::distance(fs::directory_iterator(folder / "out"), fs::directory_iterator()) == 5);  // 4 files + skin.png
   deform::Warnings warnings;
   const deform::Model reloaded = deform::load_model(files.obj, files.sk, files.skw, &warnings);
   CHECK(warnings.messages.empty());
   CHECK(fs::path(reloaded.mesh.materials[0].diffuse_map).filename() == "skin.png");
+  CHECK(reloaded.mesh.materials[1].diffuse_map.empty());
+
+  // Without a texture folder nothing is copied; an export into an existing folder replaces the set and leaves no
+  // staging folder behind.
+  const deform::ExportedFiles again = deform::export_native(imported.model, (folder / "out").string());
+  CHECK(again.textures.empty());
+  std::size_t staging = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder))
+    staging += entry.path().filename().string().find("deform-tmp") != std::string::npos;
+  CHECK(staging == 0);
+  fs::remove_all(folder);
 }
 
 TEST_CASE("an unrigged model imports as a static mesh with a one-bone skeleton") {

@@ -46,7 +46,12 @@ int run(const std::vector<std::string>& argv) {
     model = std::move(imported.model);
   }
 
-  const deform::ExportedFiles files = deform::export_native(model, out);
+  // Textures are copied only from the model's own folder (deform::ExportOptions).
+  deform::ExportOptions options;
+  if (!args.positionals().empty())
+    options.texture_root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
+  if (options.texture_root.empty()) options.texture_root = ".";
+  const deform::ExportedFiles files = deform::export_native(model, out, options);
   for (const std::string& w : files.warnings) note(w);
   print_json(Json{{"obj", files.obj},
                   {"mtl", files.mtl},

@@ -1,29 +1,90 @@
-// Native export of a Model (import.hpp): OBJ + MTL + .sk + .skw, textures copied beside them.
+// Native export of a Model (import.hpp): OBJ + MTL + .sk + .skw, textures copied beside them, landing as a set.
+#include <algorithm>
+#include <array>
 #include <cctype>
 #include <filesystem>
 #include <map>
+#include <random>
+#include <string_view>
 
-#include "deform/io/atomic_file.hpp"
-#include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
+#include "deform/io/atomic_file.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
-namespace deform {
+#include "deform/runtime/error.hpp"
 
-ExportedFiles export_native(const Model& model, const std::string& folder) {
-  namespace fs = std::filesystem;
+namespace deform {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// True when the bytes start as an image file does (TGA has no signature: its extension decides).
+bool is_image(const std::vector<std::uint8_t>& bytes, const fs::path& path) {
+  const auto starts = [&](std::string_view magic, std::size_t at = 0) {
+    return bytes.size() >= at + magic.size() &&
+           std::equal(magic.begin(), magic.end(), bytes.begin() + static_cast<std::ptrdiff_t>(at),
+                      [](char m, std::uint8_t b) { return static_cast<std::uint8_t>(m) == b; });
+  };
+  static constexpr std::array<std::string_view, 11> signatures = {
+      "\x89PNG\r\n\x1a\n", "\xff\xd8\xff", "BM", "GIF87a", "GIF89a", "DDS ", "\xabKTX", "II*", "MM\0*",
+      "#?RADIANCE", "8BPS"};
+  for (std::string_view magic : signatures)
+    if (starts(magic)) return true;
+  if (starts("RIFF") && starts("WEBP", 8)) return true;
+  return lower(path.extension().string()) == ".tga" && bytes.size() >= 18;
+}
+
+// Where a texture may be copied from: inside `root` once links are resolved, and an image. Empty `why` = allowed.
+std::string refusal(const std::string& texture, const std::string& root, std::vector<std::uint8_t>& bytes) {
+  std::error_code error;
+  if (root.empty()) return "no texture folder was given";
+  const fs::path real = fs::canonical(texture, error);
+  if (error || !fs::is_regular_file(real, error)) return "not found";
+  const fs::path real_root = fs::canonical(root, error);
+  if (error) return "the texture folder '" + root + "' does not exist";
+  const fs::path inside = real.lexically_relative(real_root);
+  if (inside.empty() || *inside.begin() == "..") return "it lies outside the model's folder '" + root + "'";
+  bytes = read_file_bytes(real.string());
+  if (!is_image(bytes, real)) return "it is not an image file";
+  return {};
+}
+
+// Removes the staging folder on every path out, unless it was moved into place.
+struct Staging {
+  fs::path path;
+  ~Staging() {
+    std::error_code ignored;
+    if (!path.empty()) fs::remove_all(path, ignored);
+  }
+};
+
+}  // namespace
+
+ExportedFiles export_native(const Model& model, const std::string& folder, const ExportOptions& options) {
   std::string stem = model.name.empty() ? std::string("model") : model.name;
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
   std::error_code error;
-  fs::create_directories(folder, error);
-  if (error) throw Error::in_file(folder, "", "cannot create the folder: " + error.message());
-  const fs::path base(folder);
+  const fs::path base = fs::path(folder).lexically_normal();
+  const fs::path target = base.filename().empty() ? base.parent_path() : base;  // without a trailing separator
+  const std::string leaf = target.filename().string();
+  const fs::path parent = target.parent_path();
+  Staging staging;
+  std::random_device entropy;
+  for (int attempt = 0; attempt < 16 && staging.path.empty(); ++attempt) {
+    const fs::path candidate =
+        (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".deform-tmp-" + std::to_string(entropy()));
+    if (fs::create_directories(candidate, error)) staging.path = candidate;
+  }
+  if (staging.path.empty()) throw Error::in_file(folder, "", "cannot create a folder beside it: " + error.message());
+
   ExportedFiles files;
-  files.obj = (base / (stem + ".obj")).string();
-  files.mtl = (base / (stem + ".mtl")).string();
-  files.sk = (base / (stem + ".sk")).string();
-  files.skw = (base / (stem + ".skw")).string();
+  std::vector<std::string> names = {stem + ".obj", stem + ".mtl", stem + ".sk", stem + ".skw"};
 
   // Textures: one copy per distinct source; a name already taken by another source gets an index prefix.
   std::vector<Material> materials = model.mesh.materials;
@@ -32,31 +93,50 @@ ExportedFiles export_native(const Model& model, const std::string& folder) {
     if (material.diffuse_map.empty()) continue;
     auto found = copy_of.find(material.diffuse_map);
     if (found == copy_of.end()) {
-      if (!fs::is_regular_file(material.diffuse_map, error)) {
+      std::vector<std::uint8_t> bytes;
+      const std::string why = refusal(material.diffuse_map, options.texture_root, bytes);
+      if (!why.empty()) {
         files.warnings.push_back("material '" + material.name + "': texture '" + material.diffuse_map +
-                                 "' not found, map_Kd left out");
+                                 "' not copied (" + why + "), map_Kd left out");
         material.diffuse_map.clear();
         continue;
       }
       std::string name = fs::path(material.diffuse_map).filename().string();
-      for (const auto& [source, taken] : copy_of)
-        if (taken == name) name = std::to_string(copy_of.size()) + "_" + name;
-      const std::string target = (base / name).string();
-      write_file_atomic(target, read_file_bytes(material.diffuse_map));
-      files.textures.push_back(target);
+      while (std::find(names.begin(), names.end(), name) != names.end())
+        name = std::to_string(copy_of.size()) + "_" + name;
+      write_file_atomic((staging.path / name).string(), bytes);
+      names.push_back(name);
       found = copy_of.emplace(material.diffuse_map, name).first;
     }
     material.diffuse_map = found->second;
   }
 
-  write_file_atomic(files.mtl, format_mtl(materials));
-  write_skw(files.skw, model.weights);
-  write_sk(files.sk, model.skeleton);
-  ObjWriteOptions options;
-  options.mtllib = stem + ".mtl";
+  write_file_atomic((staging.path / names[1]).string(), format_mtl(materials));
+  write_skw((staging.path / names[3]).string(), model.weights);
+  write_sk((staging.path / names[2]).string(), model.skeleton);
+  ObjWriteOptions obj_options;
+  obj_options.mtllib = names[1];
   Mesh mesh_with_copies = model.mesh;
   mesh_with_copies.materials = std::move(materials);
-  write_obj(files.obj, mesh_with_copies, model.mesh.positions, {}, options);
+  write_obj((staging.path / names[0]).string(), mesh_with_copies, model.mesh.positions, {}, obj_options);
+
+  // Every file is written: move the set into place (a new folder in one rename, else file by file, the OBJ last).
+  if (!fs::exists(target, error)) {
+    fs::rename(staging.path, target, error);
+    if (error) throw Error::in_file(folder, "", "cannot move the exported files into place: " + error.message());
+    staging.path.clear();
+  } else {
+    if (!fs::is_directory(target, error)) throw Error::in_file(folder, "", "exists and is not a folder");
+    for (std::size_t i = names.size(); i-- > 0;) {  // textures, .skw, .sk, .mtl, then the OBJ
+      fs::rename(staging.path / names[i], base / names[i], error);
+      if (error) throw Error::in_file((base / names[i]).string(), "", "cannot move into place: " + error.message());
+    }
+  }
+  files.obj = (base / names[0]).string();
+  files.mtl = (base / names[1]).string();
+  files.sk = (base / names[2]).string();
+  files.skw = (base / names[3]).string();
+  for (std::size_t i = 4; i < names.size(); ++i) files.textures.push_back((base / names[i]).string());
   return files;
 }
 

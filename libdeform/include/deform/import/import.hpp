@@ -59,15 +59,25 @@ DEFORM_IMPORT_API ImportedModel import_model(const std::string& path, const Impo
 struct ExportedFiles {
   std::string obj, mtl, sk, skw;
   std::vector<std::string> textures;  // copies, one per distinct source texture
-  std::vector<std::string> warnings;  // textures missing at their source (their map_Kd is left out)
+  std::vector<std::string> warnings;  // textures left out (missing, outside texture_root, not an image), one line each
 };
 
-// Writes `model` into `folder` (created if needed) as STEM.obj + STEM.mtl + STEM.sk + STEM.skw, STEM = model.name
-// with anything outside [A-Za-z0-9._-] replaced by '_' ("model" if empty), and copies each material's diffuse
-// texture beside them (map_Kd then names the copy). The OBJ holds the mesh in the bind pose the .sk describes, so
-// load_model(obj, sk, skw) skins exactly as `model` does. Every file is written atomically (textures first, the OBJ
-// last). Throws deform::Error when a file cannot be written or the skeleton does not fit .sk.
-DEFORM_IMPORT_API ExportedFiles export_native(const Model& model, const std::string& folder);
+struct ExportOptions {
+  // The only folder textures are copied from: a material's texture is copied when, with every symbolic link
+  // resolved, it lies inside this folder and is an image file (PNG, JPEG, BMP, GIF, TGA, DDS, KTX, WebP, TIFF, HDR
+  // or PSD, by its first bytes; TGA by its extension). Anything else is left out with a warning naming it, so a
+  // model that names /etc/passwd or ../../secret as its texture leaks nothing. Empty: no texture is copied.
+  std::string texture_root;
+};
+
+// Writes `model` into `folder` as STEM.obj + STEM.mtl + STEM.sk + STEM.skw, STEM = model.name with anything outside
+// [A-Za-z0-9._-] replaced by '_' ("model" if empty), and copies each material's diffuse texture beside them as
+// `options` allows (map_Kd then names the copy). The OBJ holds the mesh in the bind pose the .sk describes, so
+// load_model(obj, sk, skw) skins exactly as `model` does. The files land as a set: they are written into a fresh
+// folder beside `folder` first (.NAME.deform-tmp-N), then moved into place, so a failure (a full disk) leaves
+// `folder` as it was. Throws deform::Error when a file cannot be written or the skeleton does not fit .sk.
+DEFORM_IMPORT_API ExportedFiles export_native(const Model& model, const std::string& folder,
+                                              const ExportOptions& options = {});
 
 // True when `path`'s extension is one Assimp can read (case-insensitive). Cheap: no file access.
 DEFORM_IMPORT_API bool is_importable(const std::string& path);
