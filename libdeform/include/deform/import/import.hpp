@@ -14,6 +14,7 @@
 //  - a Skeleton has no scale: uniform scale is folded into child translations (exact for skinning while the scale
 //    is not animated); non-uniform or animated scale is approximated and reported in `warnings`.
 //  - weights: the strongest 4 per vertex, renormalised; a vertex with no weight is bound rigidly to its mesh's node.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -49,11 +50,33 @@ struct ImportedModel {
   glm::vec3 up{0.0f, 1.0f, 0.0f};
 };
 
-// Imports the model at `path`. Throws deform::Error naming the file for a file Assimp cannot read (missing,
-// truncated, malformed: Assimp's message is included), a scene with no triangles, non-finite data, more than 65535
-// bones or more than 2^32 - 1 vertices. Never crashes on bad input (Assimp's own validation runs first).
+// Imports the model at `path` in this process. Throws deform::Error naming the file for a file Assimp cannot read
+// (missing, truncated, malformed: Assimp's message is included), a scene with no triangles, non-finite data, more than
+// 65535 bones or more than 2^32 - 1 vertices. Assimp's own validation runs first, but Assimp itself can crash, hang
+// or exhaust memory on hostile files (docs/reliability.md): for files from elsewhere use import_model_isolated.
 // Cost: Assimp's import plus O(vertices · influences + bones + keys).
 DEFORM_IMPORT_API ImportedModel import_model(const std::string& path, const ImportOptions& options = {});
+
+// Limits of an isolated import (import_model_isolated): what the importer process may use before it is stopped.
+struct IsolationLimits {
+  std::uint64_t max_memory_bytes = 4ull << 30;   // its address space (not applied in sanitizer builds, whose shadow
+                                                 // memory needs more)
+  std::uint64_t max_stack_bytes = 64ull << 20;   // deep node hierarchies recurse inside Assimp
+  double max_seconds = 60.0;                     // wall-clock time, then it is killed
+  std::uint64_t max_output_bytes = 4ull << 30;   // the model it sends back
+  // The importer executable (deform-import-worker). Empty: $DEFORM_IMPORT_WORKER, then the one this build made, then
+  // the installed one (LIBEXECDIR/deform-import-worker).
+  std::string worker;
+};
+
+// import_model in a separate process with memory, stack and time limits: the default for files libdeform did not
+// write. A file that makes Assimp crash (a stack overflow on a 20,000-deep node chain), hang or allocate without
+// bound becomes a deform::Error naming the file and what happened ("the importer crashed (signal 11) reading it",
+// "... took more than 60 s", "... needed more than 4294967296 bytes"); the parent never sees the bad memory.
+// The result is the same as import_model's, checked again on arrival. Cost: import_model's plus a process start
+// (about 10 ms) and one copy of the model. Throws deform::Error of kind argument when the worker is not found.
+DEFORM_IMPORT_API ImportedModel import_model_isolated(const std::string& path, const ImportOptions& options = {},
+                                                      const IsolationLimits& limits = {});
 
 // The native files export_native wrote (full paths) and what it could not copy.
 struct ExportedFiles {

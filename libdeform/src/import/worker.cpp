@@ -1,0 +1,94 @@
+// deform-import-worker: the process import_model_isolated starts. Limits itself (memory, stack), imports one file with
+// Assimp (import_model) and writes the model to stdout in the private wire layout (wire.hpp).
+//   deform-import-worker --max-memory BYTES --max-stack BYTES --ticks-per-second T --loop 0|1 -- PATH
+// Exit status: 0 with the model on stdout; 2 with deform::Error's message on stderr; 3 out of memory; 1 otherwise.
+// A crash or a hang is what the parent is there for.
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <new>
+#include <string>
+#include <string_view>
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include "deform/import/import.hpp"
+#include "deform/runtime/error.hpp"
+#include "wire.hpp"
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool sanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool sanitized = true;
+#else
+constexpr bool sanitized = false;
+#endif
+#else
+constexpr bool sanitized = false;
+#endif
+
+void limit(int resource, unsigned long long bytes) {
+  rlimit value{static_cast<rlim_t>(bytes), static_cast<rlim_t>(bytes)};
+  rlimit current{};
+  if (::getrlimit(resource, &current) == 0 && current.rlim_max != RLIM_INFINITY && value.rlim_max > current.rlim_max)
+    value.rlim_max = value.rlim_cur = current.rlim_max;
+  ::setrlimit(resource, &value);
+}
+
+bool write_all(const std::vector<std::uint8_t>& bytes) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(STDOUT_FILENO, bytes.data() + done, bytes.size() - done);
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  unsigned long long memory = 0, stack = 0;
+  deform::ImportOptions options;
+  std::string path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    if (a == "--" && i + 1 < argc) {
+      path = argv[++i];
+    } else if (i + 1 < argc && a == "--max-memory") {
+      memory = std::strtoull(argv[++i], nullptr, 10);
+    } else if (i + 1 < argc && a == "--max-stack") {
+      stack = std::strtoull(argv[++i], nullptr, 10);
+    } else if (i + 1 < argc && a == "--ticks-per-second") {
+      options.default_ticks_per_second = std::strtod(argv[++i], nullptr);
+    } else if (i + 1 < argc && a == "--loop") {
+      options.loop_clips = std::string_view(argv[++i]) == "1";
+    } else {
+      std::fprintf(stderr, "deform-import-worker: unexpected argument '%s' (it is started by libdeform)\n", argv[i]);
+      return 1;
+    }
+  }
+  if (path.empty()) {
+    std::fprintf(stderr, "deform-import-worker: no file\n");
+    return 1;
+  }
+  if (memory > 0 && !sanitized) limit(RLIMIT_AS, memory);
+  if (stack > 0) limit(RLIMIT_STACK, stack);
+  try {
+    const std::vector<std::uint8_t> bytes = deform::wire::encode(deform::import_model(path, options));
+    return write_all(bytes) ? 0 : 1;
+  } catch (const deform::Error& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "the import needed more than %llu bytes of memory\n", memory);
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,120 @@
+// import_model_isolated: the same model as import_model, and a crash, hang or garbage in the importer process becomes
+// a deform::Error naming the file, never a crash of the caller.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <sys/stat.h>
+
+#include "deform/import/import.hpp"
+#include "deform/runtime/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const models = "/usr/share/assimp/models";
+
+std::string model(const char* relative) {
+  const fs::path path = fs::path(models) / relative;
+  return fs::exists(path) ? path.string() : std::string();
+}
+
+// A stand-in worker: a shell script doing what a misbehaving importer does.
+std::string fake_worker(const std::string& name, const std::string& body) {
+  const fs::path path = fs::temp_directory_path() / ("deform_fake_worker_" + name);
+  std::ofstream(path) << "#!/bin/sh\n" << body << "\n";
+  fs::permissions(path, fs::perms::owner_all);
+  return path.string();
+}
+
+std::string failure(const std::string& path, const deform::IsolationLimits& limits) {
+  try {
+    (void)deform::import_model_isolated(path, {}, limits);
+  } catch (const deform::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST_CASE("an isolated import gives what an import in this process gives") {
+  for (const char* relative : {"X/Testwuson.X", "glTF2/simple_skin/simple_skin.gltf", "FBX/huesitos.fbx"}) {
+    const std::string path = model(relative);
+    if (path.empty()) continue;
+    CAPTURE(path);
+    const deform::ImportedModel here = deform::import_model(path);
+    const deform::ImportedModel isolated = deform::import_model_isolated(path);
+    CHECK(isolated.model.name == here.model.name);
+    CHECK(isolated.model.mesh.positions == here.model.mesh.positions);
+    CHECK(isolated.model.mesh.triangles == here.model.mesh.triangles);
+    CHECK(isolated.model.mesh.vertex_normals == here.model.mesh.vertex_normals);
+    CHECK(isolated.model.mesh.materials.size() == here.model.mesh.materials.size());
+    CHECK(isolated.model.weights == here.model.weights);
+    REQUIRE(isolated.model.skeleton.bone_count() == here.model.skeleton.bone_count());
+    for (std::size_t b = 0; b < here.model.skeleton.bone_count(); ++b)
+      CHECK(isolated.model.skeleton.bones()[b] == here.model.skeleton.bones()[b]);
+    REQUIRE(isolated.clips.size() == here.clips.size());
+    for (std::size_t c = 0; c < here.clips.size(); ++c) {
+      CHECK(isolated.clips[c].name == here.clips[c].name);
+      CHECK(isolated.clips[c].channels.size() == here.clips[c].channels.size());
+    }
+    CHECK(isolated.warnings == here.warnings);
+    CHECK(isolated.rigged == here.rigged);
+    CHECK(isolated.file_bind_world == here.file_bind_world);
+  }
+}
+
+TEST_CASE("a file the importer refuses is an error naming it, as in this process") {
+  const fs::path bad = fs::temp_directory_path() / "deform_isolated_bad.gltf";
+  std::ofstream(bad) << "{ this is not glTF";
+  const std::string message = failure(bad.string(), {});
+  CHECK(message.find(bad.string()) == 0);
+  CHECK(message.find("crashed") == std::string::npos);
+  CHECK(failure("/nonexistent/model.fbx", {}).find("/nonexistent/model.fbx") == 0);
+}
+
+TEST_CASE("a deep node chain that overflows Assimp's stack is an error, not a crash") {
+  // 20,000 nested nodes with the mesh at the bottom: Assimp's glTF reader recurses once per level.
+  const fs::path deep = fs::temp_directory_path() / "deform_isolated_deep.gltf";
+  {
+    std::ofstream out(deep);
+    out << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [)";
+    constexpr int depth = 20000;
+    for (int i = 0; i < depth; ++i) out << (i ? "," : "") << R"({"children": [)" << i + 1 << "]}";
+    out << R"(, {"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],)"
+        << R"("accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",)"
+        << R"("min": [0, 0, 0], "max": [1, 1, 0]}], "bufferViews": [{"buffer": 0, "byteLength": 36}],)"
+        << R"("buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,)"
+        << R"(AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]})";
+  }
+  deform::IsolationLimits limits;
+  limits.max_stack_bytes = 1 << 20;  // 1 MiB: the recursion does not fit
+  const std::string message = failure(deep.string(), limits);
+  CHECK(message.find(deep.string()) == 0);
+  CHECK(message != "no error");
+}
+
+TEST_CASE("an importer that crashes, hangs, floods or answers garbage is stopped and reported") {
+  const std::string path = "/some/model.glb";
+  deform::IsolationLimits limits;
+  limits.worker = fake_worker("crash", "kill -SEGV $$");
+  CHECK(failure(path, limits).find("crashed (signal 11") != std::string::npos);
+  limits.worker = fake_worker("hang", "exec sleep 30");
+  limits.max_seconds = 0.5;
+  CHECK(failure(path, limits).find("took more than") != std::string::npos);
+  limits.max_seconds = 60.0;
+  limits.worker = fake_worker("flood", "exec head -c 3000000 /dev/zero");
+  limits.max_output_bytes = 1 << 20;
+  CHECK(failure(path, limits).find("sent back more than") != std::string::npos);
+  limits.max_output_bytes = 4ull << 30;
+  limits.worker = fake_worker("garbage", "echo 'not a model'");
+  CHECK(failure(path, limits).find("malformed") != std::string::npos);
+  limits.worker = fake_worker("refuse", "echo \"${10}: line 3: bad thing\" >&2; exit 2");
+  CHECK(failure(path, limits) == path + ": line 3: bad thing");
+  limits.worker = "/nonexistent/worker";
+  CHECK_THROWS_AS(deform::import_model_isolated(path, {}, limits), deform::Error);
+}
