@@ -21,6 +21,20 @@ TEST_CASE("Error formats file, position and element") {
   CHECK(e.position() == 7);
 }
 
+TEST_CASE("Error keeps what() one short line whatever the input quotes") {
+  const std::string huge(10 * 1024 * 1024, 'k');
+  const deform::Error e = deform::Error::at_line("rig.json", 3, "key '" + huge + "'", "unknown key");
+  CHECK(std::string(e.what()).size() < 300);
+  CHECK(std::string(e.what()).find("(10485766 bytes)") != std::string::npos);
+  const deform::Error injected = deform::Error::in_file("a.obj", "object 'x\nv 1 2 3'", "bad");
+  CHECK(std::string(injected.what()) == "a.obj: object 'x\\x0av 1 2 3': bad");
+  // A cut never splits a UTF-8 character.
+  std::string accents;
+  for (int i = 0; i < 150; ++i) accents += "\xc3\xa9";
+  const std::string cut = deform::Error::in_file("f", accents, "m").element();
+  CHECK(cut.find("...") == 200);
+}
+
 TEST_CASE("ThreadPool covers every index exactly once") {
   for (unsigned threads : {1u, 2u, 3u, 8u}) {
     deform::ThreadPool pool(threads);
