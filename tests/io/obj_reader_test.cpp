@@ -1,6 +1,8 @@
 // OBJ reader: every face form, relative indices, polygons, submeshes, materials, warnings and every malformed case.
 #include <doctest/doctest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <string_view>
 
@@ -203,12 +205,44 @@ TEST_CASE("obj: a missing MTL is a warning naming file and line; the mesh still 
   CHECK(mesh.submeshes[0].material == 0);
 }
 
-TEST_CASE("obj: a material defined twice keeps the first definition, with a warning") {
+TEST_CASE("obj: a material defined twice keeps the first definition, with a warning; an MTL named twice is read once") {
   deform::Warnings warnings;
-  const Mesh mesh = parse("mtllib cube.mtl\nmtllib cube.mtl\n", &warnings);
-  CHECK(mesh.materials.size() == 2);
-  CHECK(warnings.messages.size() == 2);
+  const Mesh once = parse("mtllib cube.mtl\nmtllib cube.mtl cube.mtl\n", &warnings);
+  CHECK(once.materials.size() == 2);
+  CHECK(once.material_libraries.size() == 1);
+  CHECK(warnings.messages.empty());
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "deform_obj_two_mtl";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "a.mtl") << "newmtl red\nKd 1 0 0\n";
+  std::ofstream(dir / "b.mtl") << "newmtl red\nKd 0 1 0\nnewmtl blue\nKd 0 0 1\n";
+  const Mesh twice = deform::parse_obj("mtllib a.mtl\nmtllib b.mtl\n", "t.obj", dir.string(), &warnings);
+  CHECK(twice.materials.size() == 2);
+  CHECK(twice.materials[0].diffuse == glm::vec3(1.0f, 0.0f, 0.0f));
+  REQUIRE(warnings.messages.size() == 1);
   CHECK(contains(warnings, "t.obj: line 2: material 'red' defined again"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("obj: a byte order mark is skipped, and one point used with many texture coordinates reads in linear time") {
+  const Mesh bom = parse("\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  CHECK(bom.point_count() == 3);
+  CHECK(bom.triangle_count() == 1);
+
+  // 100,000 faces on the same three points, each corner with its own `vt`: 300,000 render vertices, each found or
+  // made in O(1) (the chain search alone would take minutes).
+  std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  constexpr int faces = 100000;
+  for (int i = 0; i < 3 * faces; ++i) text += "vt 0.5 0.5\n";
+  for (int i = 0; i < faces; ++i) {
+    const int t = 3 * i + 1;
+    text += "f 1/" + std::to_string(t) + " 2/" + std::to_string(t + 1) + " 3/" + std::to_string(t + 2) + "\n";
+  }
+  text += "f 1/1 2/2 3/3\n";  // the first vertices again: found, not made
+  const Mesh many = parse(text);
+  CHECK(many.vertex_count() == 3 * faces);
+  CHECK(many.triangles[3 * faces] == many.triangles[0]);
+  CHECK(many.triangles[3 * faces + 2] == many.triangles[2]);
 }
 
 TEST_CASE("obj: unsupported statements are skipped with one warning per keyword") {

@@ -91,6 +91,7 @@ class ObjParser {
     if (mesh_.positions.size() == none) place.fail("v", "too many vertices");
     mesh_.positions.emplace_back(xyzw_rgb[0], xyzw_rgb[1], xyzw_rgb[2]);
     first_vertex_of_point_.push_back(none);
+    chain_length_.push_back(0);
   }
 
   // A 1-based or negative (relative) OBJ index into `count` elements, as a 0-based index.
@@ -155,16 +156,29 @@ class ObjParser {
   }
 
   // The render vertex of a (v, vt, vn) triple, created at first use. The vertices of one point are chained, and a
-  // point rarely has more than a few, so the search is short.
+  // point rarely has more than a few, so the search is short; a point with more than `long_chain` (a hostile file:
+  // one point used with 200,000 different `vt`) is looked up in a hash map instead, so reading stays linear.
   std::uint32_t render_vertex(std::uint32_t point, std::uint32_t uv, std::uint32_t normal) {
-    for (std::uint32_t r = first_vertex_of_point_[point]; r != none; r = next_vertex_of_point_[r])
-      if (vertex_uv_[r] == uv && vertex_normal_[r] == normal) return r;
+    constexpr std::uint8_t long_chain = 16;
+    const Triple key{point, uv, normal};
+    if (chain_length_[point] < long_chain) {
+      for (std::uint32_t r = first_vertex_of_point_[point]; r != none; r = next_vertex_of_point_[r])
+        if (vertex_uv_[r] == uv && vertex_normal_[r] == normal) return r;
+    } else if (const auto found = long_chains_.find(key); found != long_chains_.end()) {
+      return found->second;
+    }
     const auto r = static_cast<std::uint32_t>(mesh_.vertex_point.size());
     mesh_.vertex_point.push_back(point);
     vertex_uv_.push_back(uv);
     vertex_normal_.push_back(normal);
     next_vertex_of_point_.push_back(first_vertex_of_point_[point]);
     first_vertex_of_point_[point] = r;
+    if (chain_length_[point] < long_chain && ++chain_length_[point] == long_chain) {
+      for (std::uint32_t v = r; v != none; v = next_vertex_of_point_[v])
+        long_chains_.emplace(Triple{point, vertex_uv_[v], vertex_normal_[v]}, v);
+    } else if (chain_length_[point] == long_chain) {
+      long_chains_.emplace(key, r);
+    }
     return r;
   }
 
@@ -208,9 +222,11 @@ class ObjParser {
                      "MTL file " + obj_text::quoted(file) + " not found (looked for '" + path + "')");
       return;
     }
-    if (std::find(mesh_.material_libraries.begin(), mesh_.material_libraries.end(), path) ==
+    // Each MTL file is read once, however often the OBJ names it (a hostile file names one 20,000 times).
+    if (std::find(mesh_.material_libraries.begin(), mesh_.material_libraries.end(), path) !=
         mesh_.material_libraries.end())
-      mesh_.material_libraries.push_back(path);
+      return;
+    mesh_.material_libraries.push_back(path);
     const std::string folder = std::filesystem::path(path).parent_path().generic_string();
     for (Material& material : parse_mtl(read_file_text(path), path, folder.empty() ? "." : folder, warnings_)) {
       if (material_index_.contains(material.name)) {
@@ -267,6 +283,17 @@ class ObjParser {
   // Per render vertex: its vt and vn (`none` if the corner had none) and the next render vertex of the same point.
   std::vector<std::uint32_t> vertex_uv_, vertex_normal_, next_vertex_of_point_;
   std::vector<std::uint32_t> first_vertex_of_point_;  // per point, `none` until a face uses it
+  std::vector<std::uint8_t> chain_length_;            // per point, its render vertex count up to `long_chain`
+  struct Triple {
+    std::uint32_t point, uv, normal;
+    bool operator==(const Triple&) const = default;
+  };
+  struct TripleHash {
+    std::size_t operator()(const Triple& t) const noexcept {
+      return std::hash<std::uint64_t>()((std::uint64_t(t.point) << 32 | t.uv) ^ (std::uint64_t(t.normal) * 0x9e3779b97f4a7c15ull));
+    }
+  };
+  std::unordered_map<Triple, std::uint32_t, TripleHash> long_chains_;  // render vertices of points with long chains
   std::vector<std::uint32_t> face_;                   // render vertices of the face being read
 
   SubmeshState state_;

@@ -29,7 +29,8 @@ inline std::string_view trim(std::string_view s) {
 // next one, CR before LF is dropped. line() is the 1-based line where the current statement starts.
 class LineReader {
  public:
-  explicit LineReader(std::string_view text) : text_(text) {}
+  // A UTF-8 byte order mark before the first line is skipped (editors on Windows write one).
+  explicit LineReader(std::string_view text) : text_(text.starts_with("\xEF\xBB\xBF") ? text.substr(3) : text) {}
 
   bool next(std::string_view& statement) {
     if (position_ >= text_.size()) return false;
