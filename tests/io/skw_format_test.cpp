@@ -132,3 +132,12 @@ TEST_CASE("malformed .skw: each an error with the line and the vertex") {
   CHECK(second("1 2 0 3 0").message.find("no positive weight") != std::string::npos);
   CHECK(second("1 5 1").message.find("out of range") != std::string::npos);
 }
+
+TEST_CASE("skw: a line of 65,535 pairs reads in linear time, and a repeat among them is still found") {
+  std::string line = "0";
+  for (int bone = 0; bone < 65535; ++bone) line += " " + std::to_string(bone) + " 1";
+  const deform::SkinWeights weights = deform::parse_skw("skw 1\nvertices 1\n" + line + "\n", 1, 65535, "wide.skw");
+  CHECK(weights.weights[0].x == doctest::Approx(0.25f));
+  CHECK_THROWS_WITH_AS(deform::parse_skw("skw 1\nvertices 1\n" + line + " 40000 2\n", 1, 65535, "wide.skw"),
+                       doctest::Contains("bone 40000 listed twice"), deform::Error);
+}

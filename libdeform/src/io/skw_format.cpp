@@ -88,6 +88,7 @@ class SkwParser {
       // Only now, with the count known to be the mesh's own, is it safe to allocate from it.
       weights_.bones.assign(point_count_, glm::u16vec4(0));
       weights_.weights.assign(point_count_, glm::vec4(0.0f));
+      listed_on_.assign(std::min<std::size_t>(bone_count_, 0x10000), 0);  // ids above 0xFFFF are refused
       state_ = State::vertices;
       return;
     }
@@ -117,8 +118,9 @@ class SkwParser {
       if (!parse_number(tokens[t + 1], weight) || !std::isfinite(weight))
         fail(element, "bad weight '" + std::string(tokens[t + 1]) + "' (a finite number >= 0)");
       if (weight < 0.0f) fail(element, "weight " + std::string(tokens[t + 1]) + " is negative");
-      for (const Influence& other : influences_)
-        if (other.bone == bone) fail(element, "bone " + std::to_string(bone) + " listed twice");
+      // A stamp per bone instead of a search of the line's pairs: a line of 65,535 pairs stays linear.
+      if (listed_on_[bone] == next_vertex_ + 1) fail(element, "bone " + std::to_string(bone) + " listed twice");
+      listed_on_[bone] = next_vertex_ + 1;
       influences_.push_back({static_cast<std::uint32_t>(bone), weight});
       sum += weight;
     }
@@ -146,6 +148,7 @@ class SkwParser {
   std::int64_t line_ = 0;
   std::size_t next_vertex_ = 0;
   std::vector<Influence> influences_;
+  std::vector<std::size_t> listed_on_;  // per bone: 1 + the vertex whose line last listed it, 0 for none
   SkinWeights weights_;
 };
 
