@@ -312,3 +312,13 @@ TEST_CASE("obj: read_obj of a missing file throws naming the file") {
   CHECK_THROWS_WITH_AS(deform::read_obj("/nonexistent/x.obj"), doctest::Contains("/nonexistent/x.obj"),
                        deform::Error);
 }
+
+TEST_CASE("obj: an unsupported statement of garbage is reported in one bounded, printable line") {
+  deform::Warnings warnings;
+  const std::string garbage = "\x01\x02" + std::string(100000, '\0');
+  const Mesh mesh = parse("v 0 0 0\n" + garbage + " 1 2\n", &warnings);
+  CHECK(mesh.point_count() == 1);
+  REQUIRE(warnings.messages.size() == 1);
+  CHECK(warnings.messages[0].size() < 300);
+  CHECK(warnings.messages[0].find("'\\x01\\x02\\x00") != std::string::npos);
+}

@@ -115,7 +115,15 @@ struct Place {
 inline std::string quoted(std::string_view token) {
   constexpr std::size_t shown = 40;
   std::string text = "'";
-  text.append(token.substr(0, shown));
+  for (const char c : token.substr(0, shown)) {  // control characters as \xNN: a message stays one printable line
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte != 0x7f) {
+      text += c;
+    } else {
+      constexpr char hex[] = "0123456789abcdef";
+      text += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
+    }
+  }
   if (token.size() > shown) text.append("...");
   return text.append("'");
 }
@@ -183,6 +191,7 @@ inline void warn(Warnings* warnings, const std::string& file, std::int64_t line,
 class SkippedStatements {
  public:
   void add(std::string_view keyword, std::int64_t line) {
+    keyword = keyword.substr(0, max_keyword_bytes);  // a "keyword" can be a gigabyte of garbage: keep a bounded copy
     for (auto& kind : kinds_)
       if (kind.keyword == keyword) {
         ++kind.count;
@@ -203,6 +212,7 @@ class SkippedStatements {
 
  private:
   static constexpr std::size_t max_kinds = 16;
+  static constexpr std::size_t max_keyword_bytes = 64;
   struct Kind {
     std::string keyword;
     std::int64_t first_line;
