@@ -149,3 +149,23 @@ TEST_CASE("obj writer: wrong span sizes are rejected") {
   CHECK_THROWS_AS(deform::format_obj(mesh, mesh.positions, four), std::invalid_argument);
   CHECK_THROWS_AS(deform::write_obj("/nonexistent-folder/x.obj", mesh, mesh.positions), deform::Error);
 }
+
+TEST_CASE("names written into OBJ and MTL lines cannot inject statements") {
+  deform::Mesh mesh = deform::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj");
+  mesh.submeshes[0].object = "x\nv 9 9 9\nf 1 2 3";
+  mesh.submeshes[0].group = "tail\\";
+  mesh.materials.push_back(deform::Material{});
+  mesh.materials[0].name = "red # not a comment\r";
+  mesh.materials[0].diffuse_map = "skin.png\nmap_Kd /etc/passwd";
+  mesh.submeshes[0].material = 0;
+  deform::ObjWriteOptions options;
+  options.mtllib = "a.mtl\nmtllib b.mtl";
+  const deform::Mesh again = deform::parse_obj(deform::format_obj(mesh, mesh.positions, {}, options), "again.obj");
+  CHECK(again.point_count() == 3);
+  CHECK(again.triangle_count() == 1);
+  CHECK(again.submeshes[0].object == "x_v 9 9 9_f 1 2 3");
+  CHECK(again.submeshes[0].group == "tail_");
+  const std::vector<deform::Material> materials = deform::parse_mtl(deform::format_mtl(mesh.materials), "m.mtl", "/");
+  REQUIRE(materials.size() == 1);
+  CHECK(materials[0].name == "red _ not a comment_");
+}

@@ -31,6 +31,21 @@ void append_line(std::string& out, const char* keyword, const glm::vec<N, float>
   out.push_back('\n');
 }
 
+// A name or path as the rest of an OBJ/MTL line: a line break would end the statement and start another (an imported
+// node named "x\nv 1 2 3" injects a vertex), '#' would start a comment and a trailing backslash would swallow the
+// next line, so control characters, '#' and a final backslash become '_'. A name read from an OBJ never holds them,
+// so OBJ in, OBJ out is unchanged.
+void append_statement(std::string& out, std::string_view keyword, std::string_view name) {
+  out.append(keyword).push_back(' ');
+  const std::size_t start = out.size();
+  for (const char c : name) {
+    const auto byte = static_cast<unsigned char>(c);
+    out.push_back(byte < 0x20 || byte == 0x7f || c == '#' ? '_' : c);
+  }
+  if (out.size() > start && out.back() == '\\') out.back() = '_';
+  out.push_back('\n');
+}
+
 }  // namespace
 
 std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
@@ -48,7 +63,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
     throw std::invalid_argument("format_obj: vertex_uvs does not have one entry per render vertex");
 
   std::string out;
-  if (!options.mtllib.empty()) out.append("mtllib ").append(options.mtllib).push_back('\n');
+  if (!options.mtllib.empty()) append_statement(out, "mtllib", options.mtllib);
   for (const glm::vec3& p : positions) append_line(out, "v", p);
   if (write_uvs)
     for (const glm::vec2& uv : mesh.vertex_uvs) append_line(out, "vt", uv);
@@ -62,13 +77,13 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
       const Submesh& submesh = mesh.submeshes[next_submesh++];
       if (submesh.triangle_count == 0) continue;
       if (current ? submesh.object != current->object : !submesh.object.empty())
-        out.append("o ").append(submesh.object).push_back('\n');
+        append_statement(out, "o", submesh.object);
       if (current ? submesh.group != current->group : !submesh.group.empty())
-        out.append("g ").append(submesh.group).push_back('\n');
+        append_statement(out, "g", submesh.group);
       if (!options.mtllib.empty() && (current ? submesh.material != current->material : submesh.material >= 0)) {
         const bool named = submesh.material >= 0 && std::size_t(submesh.material) < mesh.materials.size();
-        out.append("usemtl ").append(named ? mesh.materials[std::size_t(submesh.material)].name : "default");
-        out.push_back('\n');
+        append_statement(out, "usemtl",
+                         named ? std::string_view(mesh.materials[std::size_t(submesh.material)].name) : "default");
       }
       current = &submesh;
     }
@@ -118,7 +133,7 @@ std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path
 std::string format_mtl(std::span<const Material> materials) {
   std::string out;
   for (const Material& material : materials) {
-    out.append("newmtl ").append(material.name).push_back('\n');
+    append_statement(out, "newmtl", material.name);
     append_line(out, "Ka", material.ambient);
     append_line(out, "Kd", material.diffuse);
     append_line(out, "Ks", material.specular);
@@ -127,7 +142,7 @@ std::string format_mtl(std::span<const Material> materials) {
     out.append("\nNs");
     append_number(out, material.shininess);
     out.append("\nillum ").append(std::to_string(material.illum)).push_back('\n');
-    if (!material.diffuse_map.empty()) out.append("map_Kd ").append(material.diffuse_map).push_back('\n');
+    if (!material.diffuse_map.empty()) append_statement(out, "map_Kd", material.diffuse_map);
     out.push_back('\n');
   }
   return out;
