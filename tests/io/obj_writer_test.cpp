@@ -145,9 +145,25 @@ TEST_CASE("obj writer: seeded random meshes survive read(format(mesh)) exactly")
 TEST_CASE("obj writer: wrong span sizes are rejected") {
   const Mesh mesh = deform::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   const std::vector<glm::vec3> two(2), four(4);
-  CHECK_THROWS_AS(deform::format_obj(mesh, two), std::invalid_argument);
-  CHECK_THROWS_AS(deform::format_obj(mesh, mesh.positions, four), std::invalid_argument);
+  CHECK_THROWS_AS(deform::format_obj(mesh, two), deform::Error);
+  CHECK_THROWS_AS(deform::format_obj(mesh, mesh.positions, four), deform::Error);
   CHECK_THROWS_AS(deform::write_obj("/nonexistent-folder/x.obj", mesh, mesh.positions), deform::Error);
+}
+
+TEST_CASE("obj writer: a non-finite position or normal is refused, naming it, and nothing is written") {
+  const Mesh mesh = deform::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  std::vector<glm::vec3> positions = mesh.positions;
+  positions[1].y = std::nanf("");
+  CHECK_THROWS_WITH_AS(deform::format_obj(mesh, positions), doctest::Contains("vertex 1"), deform::Error);
+  positions[1].y = INFINITY;
+  const std::string path = (std::filesystem::temp_directory_path() / "deform_nan_test.obj").string();
+  std::filesystem::remove(path);
+  CHECK_THROWS_AS(deform::write_obj(path, mesh, positions), deform::Error);
+  CHECK_FALSE(std::filesystem::exists(path));
+  std::vector<glm::vec3> normals(mesh.vertex_count(), glm::vec3(0.0f, 0.0f, 1.0f));
+  normals[2].x = std::nanf("");
+  CHECK_THROWS_WITH_AS(deform::format_obj(mesh, mesh.positions, normals), doctest::Contains("render vertex 2"),
+                       deform::Error);
 }
 
 TEST_CASE("names written into OBJ and MTL lines cannot inject statements") {

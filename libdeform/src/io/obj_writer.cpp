@@ -1,9 +1,10 @@
 // Wavefront OBJ and MTL writers: the input's points and faces in their order, numbers in shortest round-trip form.
 #include <charconv>
+#include <cmath>
 #include <filesystem>
-#include <stdexcept>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
@@ -51,16 +52,24 @@ void append_statement(std::string& out, std::string_view keyword, std::string_vi
 std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                        const ObjWriteOptions& options) {
   if (positions.size() != mesh.point_count())
-    throw std::invalid_argument("format_obj: " + std::to_string(positions.size()) + " positions for " +
-                                std::to_string(mesh.point_count()) + " points");
+    throw Error::invalid_argument("positions", std::to_string(positions.size()) + " positions for " +
+                                                         std::to_string(mesh.point_count()) + " points");
+  // Nothing non-finite is ever written: a NaN in an output file is a silent corruption downstream.
+  for (std::size_t p = 0; p < positions.size(); ++p)
+    if (!std::isfinite(positions[p].x) || !std::isfinite(positions[p].y) || !std::isfinite(positions[p].z))
+      throw Error::invalid_argument("vertex " + std::to_string(p), "position is not finite (not written)");
   if (normals.empty()) normals = mesh.vertex_normals;
   const bool write_normals = options.write_normals && mesh.vertex_count() > 0;
   const bool write_uvs = options.write_uvs && !mesh.vertex_uvs.empty();
   if (write_normals && normals.size() != mesh.vertex_count())
-    throw std::invalid_argument("format_obj: " + std::to_string(normals.size()) + " normals for " +
-                                std::to_string(mesh.vertex_count()) + " render vertices");
+    throw Error::invalid_argument("normals", std::to_string(normals.size()) + " normals for " +
+                                                       std::to_string(mesh.vertex_count()) + " render vertices");
+  if (write_normals)
+    for (std::size_t r = 0; r < normals.size(); ++r)
+      if (!std::isfinite(normals[r].x) || !std::isfinite(normals[r].y) || !std::isfinite(normals[r].z))
+        throw Error::invalid_argument("render vertex " + std::to_string(r), "normal is not finite (not written)");
   if (write_uvs && mesh.vertex_uvs.size() != mesh.vertex_count())
-    throw std::invalid_argument("format_obj: vertex_uvs does not have one entry per render vertex");
+    throw Error::invalid_argument("mesh", "vertex_uvs does not have one entry per render vertex");
 
   std::string out;
   if (!options.mtllib.empty()) append_statement(out, "mtllib", options.mtllib);
@@ -88,12 +97,12 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
       current = &submesh;
     }
     if (corner + size > mesh.face_corners.size())
-      throw std::invalid_argument("format_obj: face_sizes needs more corners than face_corners holds");
+      throw Error::invalid_argument("mesh", "face_sizes needs more corners than face_corners holds");
     out.push_back('f');
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t vertex = mesh.face_corners[corner + i];
       if (vertex >= mesh.vertex_count() || mesh.vertex_point[vertex] >= mesh.point_count())
-        throw std::invalid_argument("format_obj: face corner index out of range");
+        throw Error::invalid_argument("mesh", "face corner index out of range");
       out.push_back(' ');
       append_index(out, std::uint64_t(mesh.vertex_point[vertex]) + 1);
       if (write_uvs || write_normals) out.push_back('/');

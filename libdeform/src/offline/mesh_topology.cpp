@@ -2,8 +2,8 @@
 // equal keys give the boundary (edges used by exactly one triangle), and the distinct edges in both directions,
 // sorted, give the one-rings (CSR). Works on any triangle soup, manifold or not.
 #include <algorithm>
-#include <stdexcept>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
@@ -21,7 +21,7 @@ PointTopology build_point_topology(const Mesh& mesh) {
   const std::size_t point_count = mesh.point_count();
   const auto point_of = [&](std::uint32_t vertex) {
     if (vertex >= mesh.vertex_count() || mesh.vertex_point[vertex] >= point_count)
-      throw std::invalid_argument("build_point_topology: triangle or vertex_point index out of range");
+      throw Error::invalid_argument("mesh", "triangle or vertex_point index out of range");
     return mesh.vertex_point[vertex];
   };
 

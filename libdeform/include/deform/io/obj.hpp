@@ -40,8 +40,9 @@ struct ObjWriteOptions {
 // Formats the mesh as OBJ text: one `v` per point (in order, from `positions`, which must have point_count()
 // entries), then `vt`/`vn` per render vertex (normals from `normals` if not empty, else mesh.vertex_normals), then
 // the faces as the file had them, with `o`/`g`/`usemtl` where the submesh changes. Vertex i in means vertex i out;
-// numbers are written in the shortest form that reads back to the same float. Throws std::invalid_argument when a
-// span has the wrong size.
+// numbers are written in the shortest form that reads back to the same float; names and paths with line breaks, '#'
+// or a final backslash written with '_' there, so that no name can inject a statement. Throws deform::Error (kind
+// argument) when a span has the wrong size or a position or normal is not finite: nothing non-finite is written.
 DEFORM_IO_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions,
                                   std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
 // Writes format_obj() to `path` atomically. Throws deform::Error on failure.

@@ -24,7 +24,7 @@ struct PointTopology {
 };
 
 // Builds the point topology of a mesh's triangles. Triangles with a repeated point contribute only their real edges.
-// Throws std::invalid_argument when a triangle or vertex_point index is out of range.
+// Throws deform::Error (kind argument) when a triangle or vertex_point index is out of range.
 DEFORM_OFFLINE_API PointTopology build_point_topology(const Mesh& mesh);
 
 }  // namespace deform
