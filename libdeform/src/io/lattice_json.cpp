@@ -12,6 +12,7 @@
 #include "deform/runtime/lattice.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/io/lattice_json.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
 
@@ -112,7 +113,7 @@ LatticeDocument parse_lattice_json(std::string_view text, std::size_t point_coun
       if (!moved.insert(flat).second) r.fail(key + ".index", "control point listed twice");
       glm::vec3& p = out.lattice.control_points()[flat];
       p += offset;
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      if (!finite(p))
         r.fail(key + ".offset", "moves the control point out of the finite range");
     }
     out.displacement_count = list.size();
