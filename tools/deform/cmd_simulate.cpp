@@ -1,5 +1,4 @@
 // deform simulate (--builtin | RIG): reach for a target, hold, release, settle; the effector and stretch over time.
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -10,6 +9,7 @@
 #include "deform/io/atomic_file.hpp"
 #include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
+#include "deform/io/text.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
@@ -38,15 +38,8 @@ constexpr const char* usage =
     "  --effector BONE      effector bone (default: the rig's reach effector)\n"
     "  --integrator NAME    override every lattice's integrator: exact (default) or verlet (the thesis' Verlet)\n";
 
-// A float as its shortest decimal form.
-double shortest(double value) {
-  if (value == 0.0 || !std::isfinite(value)) return 0.0;
-  char text[32];
-  const auto end = std::to_chars(text, text + sizeof text, float(value)).ptr;
-  double out = 0.0;
-  std::from_chars(text, end, out);
-  return out;
-}
+// A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
+double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 // The model a rig file names, its paths taken relative to the rig file's folder.
 deform::Model load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
