@@ -4,10 +4,9 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "model_loading.hpp"
 #include "deform/character/character.hpp"
-#include "deform/extras/builtin.hpp"
 #include "deform/io/atomic_file.hpp"
-#include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/io/text.hpp"
 #include "deform/offline/rig.hpp"
@@ -42,12 +41,18 @@ constexpr const char* usage =
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 // The model a rig file names, its paths taken relative to the rig file's folder.
-deform::Model load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
-  if (named.builtin) return deform::builtin_character();
-  if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
-  const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
-  const auto resolve = [&](const std::string& p) { return (folder / p).string(); };
-  return deform::load_model(resolve(named.obj), resolve(named.skeleton), resolve(named.weights));
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
+  model_loading::ModelRequest request;
+  if (!named.builtin) {
+    if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
+    const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
+    request.path = (folder / named.obj).string();
+    request.skeleton = (folder / named.skeleton).string();
+    request.weights = (folder / named.weights).string();
+  }
+  model_loading::LoadedModel loaded = model_loading::load_model(request);
+  for (const std::string& message : loaded.warnings) note(message);
+  return loaded;
 }
 
 int run(const std::vector<std::string>& argv) {
@@ -72,12 +77,13 @@ int run(const std::vector<std::string>& argv) {
   deform::Model model;
   deform::Rig rig;
   if (builtin) {
-    model = deform::builtin_character();
-    rig = deform::builtin_rig(model);
+    model_loading::LoadedModel loaded = model_loading::load_model({});
+    rig = model_loading::starting_rig(loaded);
+    model = std::move(loaded.model);
   } else {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
-    model = load_rig_model(deform::parse_rig_model(text, path), path);
+    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
   }
   if (const auto name = args.value("--integrator")) {
