@@ -6,7 +6,7 @@
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F]
 //
 // GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
-// (Character::lattice_fields = false) and sample::GpuLatticeFields adds them in the vertex buffer. --up z stands a
+// (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 #include <algorithm>
 #include <chrono>
@@ -27,6 +27,7 @@
 #include "deform/character/character.hpp"
 #include "deform/deform.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/gpu/lattice.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/offline/picking.hpp"
@@ -39,7 +40,6 @@
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
-#include "gpu_lattice.hpp"
 #include "model_loading.hpp"
 #include "scene.hpp"
 #include "shapes.hpp"
@@ -167,7 +167,7 @@ class Viewer {
   Viewer(const Options& options, sample::Window& window)
       : options_(options),
         window_(window),
-        gpu_available_(window.has_compute() && sample::GpuBezierLattice::supported()) {
+        gpu_available_(window.has_compute() && deform::GpuBezierLattice::supported()) {
     model_loading::LoadedModel loaded = load(options);
     clips_ = std::move(loaded.clips);
     base_model_ = loaded.model;
@@ -549,7 +549,7 @@ class Viewer {
   glm::vec3 up_{0.0f, 1.0f, 0.0f};  // the model's up direction, turned onto +Y by the model node
   const bool gpu_available_;
   bool gpu_ = false;  // lattice fields on the GPU
-  sample::GpuLatticeFields gpu_fields_;
+  deform::GpuLatticeFields gpu_fields_;
   std::vector<std::uint32_t> triangle_points_;
   std::vector<glm::vec3> render_positions_;
   deform::TriangleBvh bvh_;
