@@ -2,6 +2,7 @@
 #   find_package(libdeform CONFIG REQUIRED)                      # runtime, offline, io, character, extras
 #   target_link_libraries(engine PRIVATE deform::runtime)        # or any layer, or deform::deform for all of them
 #   find_package(libdeform CONFIG REQUIRED COMPONENTS import)    # also deform::import: only then is Assimp looked for
+#   find_package(libdeform CONFIG REQUIRED COMPONENTS gpu)       # also deform::gpu (OpenGL 4.3 compute lattices)
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -24,6 +25,17 @@ if(TARGET deform_import)
   install(TARGETS deform_import_worker RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR})
   install(EXPORT libdeformImportTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform/import DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/deform)
+endif()
+set(DEFORM_HAVE_GPU_COMPONENT 0)
+set(DEFORM_GPU_LINKS_EPOXY 0)
+if(TARGET deform_gpu)
+  set(DEFORM_HAVE_GPU_COMPONENT 1)
+  if(NOT BUILD_SHARED_LIBS)
+    set(DEFORM_GPU_LINKS_EPOXY 1)  # a static deform_gpu leaves libepoxy to the consumer's link
+  endif()
+  install(TARGETS deform_gpu EXPORT libdeformGpuTargets ${deform_install_args})
+  install(EXPORT libdeformGpuTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform/gpu DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/deform)
 endif()
 if(TARGET deform_cli)
   install(TARGETS deform_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

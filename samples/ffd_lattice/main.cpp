@@ -3,7 +3,7 @@
 // wave through the top layers) and only the evaluation runs over the bound vertices, with Jacobian normals.
 //
 // The evaluation runs on the CPU (LatticeEvaluateJob) or, with `--gpu` or the G key, in a compute shader that writes
-// straight into the vertex buffer that draws (GpuBezierLattice, OpenGL 4.3): then the CPU evaluates nothing and
+// straight into the vertex buffer that draws (deform::GpuBezierLattice, OpenGL 4.3): then the CPU evaluates nothing and
 // uploads only the 64 control points. The lattice is bound over the render vertices (each point gathered by
 // vertex_point) so that both paths write the buffer's vertices directly.
 #include <cmath>
@@ -17,8 +17,8 @@
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
-#include "gpu_lattice.hpp"  // epoxy first
-#include "sample_app.hpp"
+#include "deform/gpu/lattice.hpp"
+#include "sample_app.hpp"  // epoxy before any other GL header
 
 #include <GLFW/glfw3.h>
 
@@ -39,13 +39,17 @@ int main(int argc, char** argv) {
   const deform::LatticeBinding binding = deform::bind_lattice(lattice, rest_positions);  // once: each vertex's (u, v, w)
   std::vector<glm::vec3> positions = rest_positions, normals = mesh.vertex_normals;
   sample::MeshRenderer renderer;
-  sample::GpuBezierLattice gpu;
+  deform::GpuBezierLattice gpu;
   bool gpu_created = false, g_was_down = false;
 
   const auto set_mode = [&](bool want_gpu) {
-    if (want_gpu && !gpu_created && !(gpu_created = gpu.create(binding, mesh.vertex_normals))) {
-      std::fprintf(stderr, "ffd_lattice: no OpenGL 4.3 compute shaders here, evaluating on the CPU\n");
-      want_gpu = false;
+    if (want_gpu && !gpu_created) {
+      const deform::Status created = gpu.create(binding, mesh.vertex_normals);
+      gpu_created = created.ok();
+      if (!gpu_created) {
+        std::fprintf(stderr, "ffd_lattice: no GPU lattice: %s; evaluating on the CPU\n", created.reason());
+        want_gpu = false;
+      }
     }
     // The buffer must hold every vertex's current state: the GPU path rewrites only the bound ones.
     if (want_gpu) renderer.upload(positions, normals);
@@ -98,5 +102,6 @@ int main(int argc, char** argv) {
               if (j + 1 < n.y) f.overlay->line(p, lattice.control_points()[lattice.index(i, j + 1, k)], glm::vec3(0.3f, 0.6f, 0.9f));
               if (k + 1 < n.z) f.overlay->line(p, lattice.control_points()[lattice.index(i, j, k + 1)], glm::vec3(0.3f, 0.6f, 0.9f));
             }
-      });
+      },
+      [&] { gpu.release(); });  // while the context lives
 }

@@ -274,7 +274,6 @@ GLuint build_program(const char* vertex_source, const char* fragment_source) {
   return link({compile(GL_VERTEX_SHADER, vertex_source), compile(GL_FRAGMENT_SHADER, fragment_source)});
 }
 
-GLuint build_compute_program(const char* compute_source) { return link({compile(GL_COMPUTE_SHADER, compute_source)}); }
 
 // ---------------------------------------------------------------------------------------------------------------
 // MeshRenderer

@@ -2,7 +2,7 @@
 // The thin framework every libdeform sample shares: a GLFW window with an OpenGL 3.3 core context (4.3 when the
 // driver offers it, for compute shaders), Dear ImGui, an orbit camera, a renderer for a deforming mesh streamed as one
 // interleaved buffer (position, normal, UV), line/point overlays, and offscreen PNG screenshots for headless runs.
-// All OpenGL of the project lives under samples/.
+// All OpenGL of the project lives here and in deform::gpu (libdeform/src/gpu), which the GPU paths use.
 #include <cstdint>
 #include <span>
 #include <string>
@@ -129,6 +129,5 @@ class OverlayRenderer {
 
 // Compiles and links a program from sources; aborts with the GL log on failure (samples only).
 GLuint build_program(const char* vertex_source, const char* fragment_source);
-GLuint build_compute_program(const char* compute_source);
 
 }  // namespace sample

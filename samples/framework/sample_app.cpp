@@ -8,7 +8,7 @@
 namespace sample {
 
 int run_sample(int argc, char** argv, const char* title, const std::function<void()>& setup,
-               const std::function<void(const Frame&)>& frame) {
+               const std::function<void(const Frame&)>& frame, const std::function<void()>& teardown) {
   std::string screenshot;
   int frames = 90;
   for (int i = 1; i < argc; ++i) {
@@ -50,9 +50,14 @@ int run_sample(int argc, char** argv, const char* title, const std::function<voi
     fr.overlay = &overlay;
     frame(fr);
     overlay.flush(fr.projection * fr.view, true);
-    if (headless && f + 1 == frames && !window.save_png(screenshot)) return 1;
+    const bool saved = !(headless && f + 1 == frames) || window.save_png(screenshot);
     window.end_frame();
+    if (!saved) {
+      if (teardown) teardown();
+      return 1;
+    }
   }
+  if (teardown) teardown();
   if (headless) std::printf("%s\n", screenshot.c_str());
   return 0;
 }

@@ -17,9 +17,11 @@ struct Frame {
   OverlayRenderer* overlay = nullptr;  // add lines/points; flushed on top after the callback
 };
 
-// Runs `frame` until the window closes (or N frames headless). `setup` runs once after the GL context exists.
+// Runs `frame` until the window closes (or N frames headless). `setup` runs once after the GL context exists;
+// `teardown`, when given, once after the last frame while the context is still current (to release GL objects that
+// outlive run_sample, such as a deform::GpuBezierLattice).
 int run_sample(int argc, char** argv, const char* title, const std::function<void()>& setup,
-               const std::function<void(const Frame&)>& frame);
+               const std::function<void(const Frame&)>& frame, const std::function<void()>& teardown = {});
 
 // Draws a deforming deform::Mesh given per-point positions: gathers them to render vertices and recomputes normals.
 class PointMeshRenderer {

@@ -3,9 +3,9 @@
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
 # (non-bare) screenshot; the frame after the reach again with the lattices on the GPU (--gpu), which must be the same
 # picture (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are
-# there).  usage: viewer_smoke.sh VIEWER PNG_CHECK SAME_PICTURE_CHECK WORKDIR
+# there).  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
-viewer=$1 check=$2 same=$3 work=$4
+viewer=$1 check=$2 work=$3
 mkdir -p "$work"
 run() { xvfb-run -a -s "-screen 0 640x480x24" "$viewer" --width 640 --height 480 "$@"; }
 run --bare --screenshot "$work/before.png" --frames 20
@@ -16,7 +16,7 @@ test -s "$work/full.png"
 
 run --bare --gpu --screenshot "$work/after_gpu.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 > "$work/gpu.json"
 if grep -q '"gpu_lattices": true' "$work/gpu.json"; then
-  "$same" --same-picture "$work/after.png" "$work/after_gpu.png"
+  "$check" --same-picture "$work/after.png" "$work/after_gpu.png"
 else
   echo "GPU lattices skipped: no OpenGL 4.3"
 fi

@@ -6,7 +6,7 @@
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F]
 //
 // GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
-// (Character::lattice_fields = false) and sample::GpuLatticeFields adds them in the vertex buffer. --up z stands a
+// (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 #include <algorithm>
 #include <chrono>
@@ -27,14 +27,11 @@
 #include "deform/character/character.hpp"
 #include "deform/deform.hpp"
 #include "deform/extras/builtin.hpp"
-#include "deform/import/import.hpp"
-#include "deform/io/model_files.hpp"
+#include "deform/gpu/lattice.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/rig_json.hpp"
-#include "deform/io/sk.hpp"
 #include "deform/offline/picking.hpp"
 #include "deform/offline/rig.hpp"
-#include "deform/offline/weights.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
@@ -43,11 +40,9 @@
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
-#include "gpu_lattice.hpp"
+#include "model_loading.hpp"
 #include "scene.hpp"
 #include "shapes.hpp"
-#ifdef DEFORM_HAVE_IMPORT
-#endif
 
 namespace {
 
@@ -130,12 +125,6 @@ Options parse_options(int argc, char** argv) {
   return o;
 }
 
-struct LoadedCharacter {
-  deform::Model model;
-  std::vector<deform::Animation> clips;
-  glm::vec3 up{0.0f, 1.0f, 0.0f};  // the model's up direction, in its own space
-};
-
 // The rotation that stands a model whose up direction is `up` (a unit basis vector) upright, +Y.
 glm::quat upright(glm::vec3 up) {
   const glm::vec3 y(0.0f, 1.0f, 0.0f);
@@ -144,33 +133,15 @@ glm::quat upright(glm::vec3 up) {
   return glm::angleAxis(glm::half_pi<float>(), glm::normalize(glm::cross(up, y)));
 }
 
-LoadedCharacter load(const Options& o) {
-  LoadedCharacter loaded;
+// The model the options name (model_loading: the CLI loads the same way); an OBJ without --weights gets automatic
+// weights. Exits with a message when the options name no loadable model.
+model_loading::LoadedModel load(const Options& o) {
   const bool is_obj = o.model.size() > 4 && (o.model.substr(o.model.size() - 4) == ".obj" ||
                                              o.model.substr(o.model.size() - 4) == ".OBJ");
-  if (o.model.empty()) {
-    loaded.model = deform::builtin_character();
-  } else if (is_obj) {
-    if (o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
-    if (!o.weights.empty()) {
-      loaded.model = deform::load_model(o.model, o.skeleton, o.weights);
-    } else {
-      loaded.model.mesh = deform::read_obj(o.model);
-      loaded.model.skeleton = deform::read_sk(o.skeleton);
-      loaded.model.weights = deform::compute_automatic_weights(loaded.model.mesh, loaded.model.skeleton);
-      loaded.model.name = o.model;
-    }
-  } else {
-#ifdef DEFORM_HAVE_IMPORT
-    deform::ImportedModel imported = deform::import_model(o.model);
-    for (const std::string& w : imported.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    loaded.model = std::move(imported.model);
-    loaded.clips = std::move(imported.clips);
-    if (o.up == 0) loaded.up = imported.up;
-#else
-    fail(o.model + ": this build has no importer (deform::import); give an OBJ with --skeleton");
-#endif
-  }
+  if (is_obj && o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
+  model_loading::LoadedModel loaded = model_loading::load_model({o.model, o.skeleton, o.weights, true});
+  for (const std::string& w : loaded.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (o.up == 'y') loaded.up = glm::vec3(0.0f, 1.0f, 0.0f);
   if (o.up == 'z') loaded.up = glm::vec3(0.0f, 0.0f, 1.0f);
   return loaded;
 }
@@ -196,13 +167,13 @@ class Viewer {
   Viewer(const Options& options, sample::Window& window)
       : options_(options),
         window_(window),
-        gpu_available_(window.has_compute() && sample::GpuBezierLattice::supported()) {
-    LoadedCharacter loaded = load(options);
+        gpu_available_(window.has_compute() && deform::GpuBezierLattice::supported()) {
+    model_loading::LoadedModel loaded = load(options);
     clips_ = std::move(loaded.clips);
     base_model_ = loaded.model;
-    rig_ = !options.rig.empty()              ? deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count())
-           : base_model_.name == "builtin" ? deform::builtin_rig(base_model_)
-                                           : deform::default_rig(base_model_);
+    rig_ = options.rig.empty()
+               ? model_loading::starting_rig(loaded)
+               : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
     rebuild_character();
     if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
       clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
@@ -578,7 +549,7 @@ class Viewer {
   glm::vec3 up_{0.0f, 1.0f, 0.0f};  // the model's up direction, turned onto +Y by the model node
   const bool gpu_available_;
   bool gpu_ = false;  // lattice fields on the GPU
-  sample::GpuLatticeFields gpu_fields_;
+  deform::GpuLatticeFields gpu_fields_;
   std::vector<std::uint32_t> triangle_points_;
   std::vector<glm::vec3> render_positions_;
   deform::TriangleBvh bvh_;

@@ -1,6 +1,7 @@
 # Installs the already-built libdeform into a scratch prefix, then configures, builds and runs a tiny consumer
 # project against it with find_package(libdeform CONFIG): what an engine integrating the SDK does. Twice: once
-# without components (Assimp must not be looked for), once with COMPONENTS import when the build has it.
+# without components (Assimp must not be looked for, deform::gpu not defined), once with the components the build
+# has (import, gpu).
 file(REMOVE_RECURSE ${WORK_DIR})
 if(NOT BUILD_TYPE)
   set(BUILD_TYPE Release)
@@ -11,10 +12,11 @@ if(rc)
   message(FATAL_ERROR "install failed (${rc})")
 endif()
 
-function(consume name with_import)
+function(consume name with_import with_gpu)
   set(build ${WORK_DIR}/${name})
   execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${build} -G ${GENERATOR}
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DWITH_IMPORT=${with_import}
+    -DWITH_GPU=${with_gpu}
     RESULT_VARIABLE rc)
   if(rc)
     message(FATAL_ERROR "configuring the consumer (${name}) failed (${rc})")
@@ -27,6 +29,9 @@ function(consume name with_import)
   if(with_import)
     list(APPEND programs importer)
   endif()
+  if(with_gpu)
+    list(APPEND programs gpu)
+  endif()
   foreach(program ${programs})
     execute_process(COMMAND ${build}/${program} RESULT_VARIABLE rc OUTPUT_VARIABLE out)
     message(STATUS "${out}")
@@ -36,7 +41,10 @@ function(consume name with_import)
   endforeach()
 endfunction()
 
-consume(plain OFF)
-if(HAVE_IMPORT)
-  consume(with-import ON)
+if(NOT HAVE_GPU)
+  set(HAVE_GPU OFF)
+endif()
+consume(plain OFF OFF)
+if(HAVE_IMPORT OR HAVE_GPU)
+  consume(with-components ${HAVE_IMPORT} ${HAVE_GPU})
 endif()

@@ -61,8 +61,8 @@ TEST_CASE("pose JSON errors name the key") {
   CHECK(error_key(R"({"bones": {"": {}}})", s) == "key 'bones.'");
   CHECK(error_key(R"({"bones": {"elbow": {"rotation": [0, 0]}}})", s) == "key 'bones.elbow.rotation'");
   CHECK(error_key(R"({"bones": {"elbow": {"rotation": [0, 0, 0, 0]}}})", s) == "key 'bones.elbow.rotation'");
-  CHECK(error_key(R"({"bones": {"elbow": {"rotation": [0, "1", 0]}}})", s) == "key 'bones.elbow.rotation'");
-  CHECK(error_key(R"({"bones": {"elbow": {"translation": [0, 1e39, 0]}}})", s) == "key 'bones.elbow.translation'");
+  CHECK(error_key(R"({"bones": {"elbow": {"rotation": [0, "1", 0]}}})", s) == "key 'bones.elbow.rotation[1]'");
+  CHECK(error_key(R"({"bones": {"elbow": {"translation": [0, 1e39, 0]}}})", s) == "key 'bones.elbow.translation[1]'");
   CHECK(error_key(R"({"bones": {"elbow": {"translation": 3}}})", s) == "key 'bones.elbow.translation'");
   CHECK(error_key(R"({"bones": {"elbow": {"rotaton": [0, 0, 0]}}})", s) == "key 'bones.elbow.rotaton'");
   CHECK(error_key(R"({"bones": {"elbow": [0, 0, 0]}})", s) == "key 'bones.elbow'");

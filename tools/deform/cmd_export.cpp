@@ -1,13 +1,10 @@
 // deform export MODEL --out DIR: a model as the native OBJ + MTL + .sk + .skw, textures copied (docs/cli.md).
-#include <algorithm>
-#include <cctype>
 #include <filesystem>
 
 #include "cli.hpp"
 #include "model_loader.hpp"
 #ifdef DEFORM_HAVE_IMPORT
 #include "deform/import/import.hpp"
-#include "deform/io/model_files.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
 #endif
@@ -18,34 +15,16 @@ namespace {
 #ifdef DEFORM_HAVE_IMPORT
 using Json = nlohmann::ordered_json;
 
-bool is_obj(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".obj";
-}
-
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
   value_flags.push_back("--out");
   const Args args(argv, value_flags, model_switch_flags);
   const std::string out = args.required("--out");
 
-  deform::Model model;
+  const LoadedModel loaded = load_model(args);
+  const deform::Model& model = loaded.model;
   Json clips = Json::array();
-  bool rigged = true;
-  const bool native = args.has("--builtin") || args.positionals().empty() || is_obj(args.positionals()[0]);
-  if (native) {
-    model = load_model(args).model;
-  } else {
-    if (args.positionals().size() != 1) throw UsageError("expected exactly one model");
-    deform::ImportedModel imported = deform::import_model(args.positionals()[0]);
-    for (const std::string& w : imported.warnings) note(args.positionals()[0] + ": " + w);
-    for (const deform::Animation& clip : imported.clips) clips.push_back(clip.name);
-    rigged = imported.rigged;
-    model = std::move(imported.model);
-  }
-
+  for (const deform::Animation& clip : loaded.clips) clips.push_back(clip.name);
   // Textures are copied only from the model's own folder (deform::ExportOptions).
   deform::ExportOptions options;
   if (!args.positionals().empty())
@@ -60,7 +39,7 @@ int run(const std::vector<std::string>& argv) {
                   {"textures", files.textures},
                   {"vertices", model.mesh.point_count()},
                   {"triangles", model.mesh.triangle_count()},
-                  {"bones", rigged ? model.skeleton.bone_count() : 0},
+                  {"bones", loaded.rigged ? model.skeleton.bone_count() : 0},
                   {"clips", std::move(clips)}});
   return exit_ok;
 }

@@ -1,8 +1,6 @@
 // deform info PATH: what a .sk skeleton or a mesh holds, as JSON (shared/spec/cli.md).
 #include <algorithm>
 #include <cctype>
-#include <charconv>
-#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -11,6 +9,7 @@
 #include "deform/io/obj.hpp"
 #include "deform/io/pose_json.hpp"
 #include "deform/io/sk.hpp"
+#include "deform/io/text.hpp"
 #include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
@@ -25,16 +24,9 @@ namespace {
 
 using Json = nlohmann::ordered_json;  // keeps the spec's key order: "kind" first
 
-// A float as its shortest decimal form, so that 0.1f prints as 0.1 and not 0.10000000149011612.
-double shortest(float value) {
-  if (value == 0.0f) return 0.0;
-  char text[32];
-  const auto result = std::to_chars(text, text + sizeof text - 1, value);
-  *result.ptr = '\0';
-  return std::strtod(text, nullptr);
+Json vec3(glm::vec3 v) {
+  return Json::array({deform::shortest_double(v.x), deform::shortest_double(v.y), deform::shortest_double(v.z)});
 }
-
-Json vec3(glm::vec3 v) { return Json::array({shortest(v.x), shortest(v.y), shortest(v.z)}); }
 
 Json skeleton_info(const deform::Skeleton& skeleton) {
   Json bones = Json::array();
@@ -102,7 +94,7 @@ int run(const std::vector<std::string>& argv) {
       info["bones"] = imported.model.skeleton.bone_count();
       Json clips = Json::array();
       for (const deform::Animation& clip : imported.clips)
-        clips.push_back({{"name", clip.name}, {"duration", shortest(clip.duration)}, {"channels", clip.channels.size()}});
+        clips.push_back({{"name", clip.name}, {"duration", deform::shortest_double(clip.duration)}, {"channels", clip.channels.size()}});
       info["clips"] = std::move(clips);
     }
 #endif

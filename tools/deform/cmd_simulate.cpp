@@ -1,15 +1,14 @@
 // deform simulate (--builtin | RIG): reach for a target, hold, release, settle; the effector and stretch over time.
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 
 #include "cli.hpp"
+#include "model_loading.hpp"
 #include "deform/character/character.hpp"
-#include "deform/extras/builtin.hpp"
 #include "deform/io/atomic_file.hpp"
-#include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
+#include "deform/io/text.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
@@ -38,23 +37,22 @@ constexpr const char* usage =
     "  --effector BONE      effector bone (default: the rig's reach effector)\n"
     "  --integrator NAME    override every lattice's integrator: exact (default) or verlet (the thesis' Verlet)\n";
 
-// A float as its shortest decimal form.
-double shortest(double value) {
-  if (value == 0.0 || !std::isfinite(value)) return 0.0;
-  char text[32];
-  const auto end = std::to_chars(text, text + sizeof text, float(value)).ptr;
-  double out = 0.0;
-  std::from_chars(text, end, out);
-  return out;
-}
+// A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
+double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 // The model a rig file names, its paths taken relative to the rig file's folder.
-deform::Model load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
-  if (named.builtin) return deform::builtin_character();
-  if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
-  const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
-  const auto resolve = [&](const std::string& p) { return (folder / p).string(); };
-  return deform::load_model(resolve(named.obj), resolve(named.skeleton), resolve(named.weights));
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
+  model_loading::ModelRequest request;
+  if (!named.builtin) {
+    if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
+    const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
+    request.path = (folder / named.obj).string();
+    request.skeleton = (folder / named.skeleton).string();
+    request.weights = (folder / named.weights).string();
+  }
+  model_loading::LoadedModel loaded = model_loading::load_model(request);
+  for (const std::string& message : loaded.warnings) note(message);
+  return loaded;
 }
 
 int run(const std::vector<std::string>& argv) {
@@ -79,12 +77,13 @@ int run(const std::vector<std::string>& argv) {
   deform::Model model;
   deform::Rig rig;
   if (builtin) {
-    model = deform::builtin_character();
-    rig = deform::builtin_rig(model);
+    model_loading::LoadedModel loaded = model_loading::load_model({});
+    rig = model_loading::starting_rig(loaded);
+    model = std::move(loaded.model);
   } else {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
-    model = load_rig_model(deform::parse_rig_model(text, path), path);
+    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
   }
   if (const auto name = args.value("--integrator")) {

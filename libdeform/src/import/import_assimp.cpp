@@ -18,6 +18,7 @@
 #include "deform/io/atomic_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
 
@@ -30,14 +31,6 @@ glm::mat4 to_glm(const aiMatrix4x4& m) {
 }
 glm::vec3 to_glm(const aiVector3D& v) { return {v.x, v.y, v.z}; }
 glm::quat to_glm(const aiQuaternion& q) { return glm::quat(q.w, q.x, q.y, q.z); }
-
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool finite(glm::quat q) {
-  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
-bool finite(const glm::mat4& m) {
-  return finite(glm::vec3(m[0])) && finite(glm::vec3(m[1])) && finite(glm::vec3(m[2])) && finite(glm::vec3(m[3]));
-}
 
 // A transform split into its rigid part (rotation, translation) and a uniform scale. `similarity` is false when
 // the matrix has non-uniform scale, shear or a mirror, which a Skeleton cannot hold (the rigid part is then the

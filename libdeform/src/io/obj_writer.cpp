@@ -9,14 +9,13 @@
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
+#include "float_text.hpp"
 namespace deform {
 namespace {
 
 void append_number(std::string& out, float value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
   out.push_back(' ');
-  out.append(buffer, result.ptr);
+  detail::append_shortest(out, value);
 }
 
 void append_index(std::string& out, std::uint64_t one_based) {

@@ -1,7 +1,5 @@
 // Rig files (JSON): read, validate with context, write. Format: docs/formats.md, "Rig files".
 #include <algorithm>
-#include <charconv>
-#include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -10,7 +8,9 @@
 #include "deform/runtime/error.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/io/rig_json.hpp"
+#include "deform/io/text.hpp"
 #include "deform/extras/builtin.hpp"
+#include "json_reader.hpp"
 namespace deform {
 namespace {
 
@@ -19,90 +19,14 @@ using ojson = nlohmann::ordered_json;  // written keys keep the documented order
 
 constexpr int rig_format_version = 1;
 
-// Reads one JSON value, naming its key path in every error.
-class Reader {
- public:
-  Reader(const std::string& file, const json& value, std::string path)
-      : file_(file), value_(value), path_(std::move(path)) {}
+using detail::JsonReader;
 
-  [[noreturn]] void fail(const std::string& message) const {
-    throw Error::in_file(file_, path_.empty() ? std::string() : "key '" + path_ + "'", message);
-  }
-  // The object's members, after checking it is an object with only `allowed` keys.
-  void expect_object(std::initializer_list<const char*> allowed) const {
-    if (!value_.is_object()) fail("must be an object");
-    for (const auto& item : value_.items()) {
-      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* key) { return item.key() == key; })) {
-        Reader(file_, item.value(), join(item.key())).fail("unknown key");
-      }
-    }
-  }
-  bool has(const char* key) const { return value_.contains(key); }
-  Reader at(const char* key) const {
-    if (!value_.contains(key)) Reader(file_, value_, join(key)).fail("is missing");
-    return Reader(file_, value_.at(key), join(key));
-  }
-  Reader at(std::size_t index) const {
-    return Reader(file_, value_.at(index), path_ + "[" + std::to_string(index) + "]");
-  }
-  std::size_t array_size() const {
-    if (!value_.is_array()) fail("must be an array");
-    return value_.size();
-  }
-  bool is_null() const { return value_.is_null(); }
-  bool is_string() const { return value_.is_string(); }
-  std::string text() const {
-    if (!value_.is_string()) fail("must be a string");
-    return value_.get<std::string>();
-  }
-  bool boolean() const {
-    if (!value_.is_boolean()) fail("must be true or false");
-    return value_.get<bool>();
-  }
-  float number(float min, float max, bool min_open = false) const {
-    if (!value_.is_number()) fail("must be a number");
-    const double x = value_.get<double>();
-    if (!std::isfinite(x) || std::abs(x) > double(std::numeric_limits<float>::max())) fail("must be a finite number");
-    if (x < double(min) || (min_open && x == double(min)) || x > double(max)) {
-      fail("must be in " + std::string(min_open ? "(" : "[") + format(min) + ", " + format(max) + "]");
-    }
-    return float(x);
-  }
-  std::int64_t integer(std::int64_t min, std::int64_t max) const {
-    if (!value_.is_number_integer()) fail("must be an integer");
-    const std::int64_t x = value_.is_number_unsigned() && value_.get<std::uint64_t>() > std::uint64_t(max)
-                               ? max + 1
-                               : value_.get<std::int64_t>();
-    if (x < min || x > max) fail("must be in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
-    return x;
-  }
-  std::int32_t bone(const Skeleton& skeleton) const {
-    const std::string name = text();
-    const std::int32_t id = skeleton.find(name);
-    if (id < 0) fail("unknown bone '" + name + "'");
-    return id;
-  }
-
- private:
-  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  static std::string format(float x) {
-    char buffer[32];
-    const auto end = std::to_chars(buffer, buffer + sizeof buffer, x).ptr;
-    return std::string(buffer, end);
-  }
-
-  const std::string& file_;
-  const json& value_;
-  std::string path_;
-};
-
-// A float as the double that prints shortest and reads back as the same float.
-double exact(float x) {
-  char buffer[32];
-  const auto end = std::to_chars(buffer, buffer + sizeof buffer, x).ptr;
-  double value = 0.0;
-  std::from_chars(buffer, end, value);
-  return value;
+// A bone named by a string value (Skeleton::key: the name, or "#ID").
+std::int32_t read_bone(const JsonReader& r, const Skeleton& skeleton) {
+  const std::string name = r.text();
+  const std::int32_t id = skeleton.find(name);
+  if (id < 0) r.fail("unknown bone '" + name + "'");
+  return id;
 }
 
 // The lattice whose bone is the nearest proper ancestor of lattice i's bone (as DeformerHierarchy defines it).
@@ -115,7 +39,7 @@ std::int32_t implied_parent(const std::vector<LatticeSpec>& lattices, const Skel
   return -1;
 }
 
-ElasticSettings read_elastic(const Reader& r) {
+ElasticSettings read_elastic(const JsonReader& r) {
   r.expect_object({"stiffness", "damping_ratio", "mass", "integrator", "verlet_kd", "springs"});
   ElasticSettings e;
   const float big = std::numeric_limits<float>::max();
@@ -133,7 +57,7 @@ ElasticSettings read_elastic(const Reader& r) {
   }
   if (r.has("verlet_kd")) e.verlet_kd = r.at("verlet_kd").number(0.0f, 1.0f);
   if (r.has("springs")) {
-    const Reader s = r.at("springs");
+    const JsonReader s = r.at("springs");
     s.expect_object({"structural", "shear", "bend", "stiffness", "damping", "substep"});
     if (s.has("structural")) e.springs.structural = s.at("structural").boolean();
     if (s.has("shear")) e.springs.shear = s.at("shear").boolean();
@@ -145,18 +69,10 @@ ElasticSettings read_elastic(const Reader& r) {
   return e;
 }
 
-json parse_document(std::string_view text, const std::string& name) {
-  try {
-    return json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw Error::at_byte(name, std::int64_t(e.byte == 0 ? 0 : e.byte - 1), "", "malformed JSON");
-  }
-}
-
-RigModel read_model(const Reader& root) {
+RigModel read_model(const JsonReader& root) {
   RigModel model;
   if (!root.has("model") || root.at("model").is_null()) return model;
-  const Reader r = root.at("model");
+  const JsonReader r = root.at("model");
   if (r.is_string()) {
     if (r.text() != "builtin") r.fail("must be \"builtin\" or an object with obj, skeleton and weights");
     model.builtin = true;
@@ -172,36 +88,36 @@ RigModel read_model(const Reader& root) {
 }  // namespace
 
 RigModel parse_rig_model(std::string_view text, const std::string& name) {
-  const json document = parse_document(text, name);
-  const Reader root(name, document, "");
+  const json document = detail::parse_json(text, name);
+  const JsonReader root(name, document, "");
   if (!document.is_object()) root.fail("must be an object");
   return read_model(root);
 }
 
 Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t point_count, const std::string& name) {
-  const json document = parse_document(text, name);
-  const Reader root(name, document, "");
+  const json document = detail::parse_json(text, name);
+  const JsonReader root(name, document, "");
   root.expect_object({"rig", "model", "reach", "lattices"});
   if (root.at("rig").integer(1, 1) != rig_format_version) root.at("rig").fail("unsupported version");
   Rig rig;
   rig.model = read_model(root);
   if (root.has("reach")) {
-    const Reader reach = root.at("reach");
+    const JsonReader reach = root.at("reach");
     reach.expect_object({"effector", "root", "max_stretch"});
     if (reach.has("effector") && !reach.at("effector").is_null())
-      rig.reach_effector = reach.at("effector").bone(skeleton);
-    if (reach.has("root") && !reach.at("root").is_null()) rig.reach_root = reach.at("root").bone(skeleton);
+      rig.reach_effector = read_bone(reach.at("effector"), skeleton);
+    if (reach.has("root") && !reach.at("root").is_null()) rig.reach_root = read_bone(reach.at("root"), skeleton);
     if (reach.has("max_stretch")) rig.max_stretch = reach.at("max_stretch").number(0.0f, 1000.0f);
     if (rig.reach_root >= 0 && (rig.reach_effector < 0 || rig.reach_root == rig.reach_effector ||
                                 !skeleton.is_ancestor(rig.reach_root, rig.reach_effector))) {
       reach.at("root").fail("must be a proper ancestor of the effector");
     }
   }
-  const Reader lattices = root.at("lattices");
+  const JsonReader lattices = root.at("lattices");
   const std::size_t count = lattices.array_size();
   std::vector<std::string> parents(count);
   for (std::size_t i = 0; i < count; ++i) {
-    const Reader r = lattices.at(i);
+    const JsonReader r = lattices.at(i);
     r.expect_object({"name", "bone", "parent", "degree", "select", "margin", "carry", "elastic"});
     LatticeSpec spec;
     spec.name = r.at("name").text();
@@ -209,17 +125,13 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
     for (const LatticeSpec& other : rig.lattices) {
       if (other.name == spec.name) r.at("name").fail("lattice name '" + spec.name + "' is used twice");
     }
-    spec.bone = r.at("bone").bone(skeleton);
+    spec.bone = read_bone(r.at("bone"), skeleton);
     if (r.has("parent")) parents[i] = r.at("parent").is_null() ? "" : r.at("parent").text();
     if (r.has("degree")) {
-      const Reader degree = r.at("degree");
-      if (degree.array_size() != 3) degree.fail("must have 3 entries");
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        spec.degree[int(axis)] = int(degree.at(axis).integer(1, max_bezier_degree));
-      }
+      spec.degree = r.at("degree").ivec3(glm::ivec3(1), glm::ivec3(max_bezier_degree));
     }
     if (r.has("select")) {
-      const Reader select = r.at("select");
+      const JsonReader select = r.at("select");
       select.expect_object({"by", "threshold", "vertices"});
       const std::string by = select.at("by").text();
       if (by == "weight") {
@@ -229,7 +141,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
       } else if (by == "list") {
         spec.selection = VertexSelection::list;
         if (select.has("threshold")) select.at("threshold").fail("only with \"by\": \"weight\"");
-        const Reader vertices = select.at("vertices");
+        const JsonReader vertices = select.at("vertices");
         const std::size_t n = vertices.array_size();
         if (n > point_count) vertices.fail("lists more vertices than the mesh has");
         std::vector<std::uint8_t> seen(point_count, 0);
@@ -275,33 +187,33 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
   }
   document["reach"] = {{"effector", rig.reach_effector < 0 ? ojson(nullptr) : ojson(skeleton.key(rig.reach_effector))},
                        {"root", rig.reach_root < 0 ? ojson(nullptr) : ojson(skeleton.key(rig.reach_root))},
-                       {"max_stretch", exact(rig.max_stretch)}};
+                       {"max_stretch", shortest_double(rig.max_stretch)}};
   ojson lattices = ojson::array();
   for (std::size_t i = 0; i < rig.lattices.size(); ++i) {
     const LatticeSpec& spec = rig.lattices[i];
     const std::int32_t parent = implied_parent(rig.lattices, skeleton, i);
     ojson select = spec.selection == VertexSelection::list
                        ? ojson{{"by", "list"}, {"vertices", spec.vertices}}
-                       : ojson{{"by", "weight"}, {"threshold", exact(spec.weight_threshold)}};
+                       : ojson{{"by", "weight"}, {"threshold", shortest_double(spec.weight_threshold)}};
     const ElasticSettings& e = spec.elastic;
-    ojson elastic = {{"stiffness", exact(e.oscillator.stiffness)},
-                     {"damping_ratio", exact(e.oscillator.damping_ratio)},
-                     {"mass", exact(e.oscillator.mass)},
+    ojson elastic = {{"stiffness", shortest_double(e.oscillator.stiffness)},
+                     {"damping_ratio", shortest_double(e.oscillator.damping_ratio)},
+                     {"mass", shortest_double(e.oscillator.mass)},
                      {"integrator", e.integrator == Integrator::exact ? "exact" : "verlet"},
-                     {"verlet_kd", exact(e.verlet_kd)},
+                     {"verlet_kd", shortest_double(e.verlet_kd)},
                      {"springs",
                       {{"structural", e.springs.structural},
                        {"shear", e.springs.shear},
                        {"bend", e.springs.bend},
-                       {"stiffness", exact(e.springs.stiffness)},
-                       {"damping", exact(e.springs.damping)},
-                       {"substep", exact(e.springs.substep)}}}};
+                       {"stiffness", shortest_double(e.springs.stiffness)},
+                       {"damping", shortest_double(e.springs.damping)},
+                       {"substep", shortest_double(e.springs.substep)}}}};
     lattices.push_back({{"name", spec.name},
                         {"bone", skeleton.key(spec.bone)},
                         {"parent", parent < 0 ? ojson(nullptr) : ojson(rig.lattices[std::size_t(parent)].name)},
                         {"degree", {spec.degree.x, spec.degree.y, spec.degree.z}},
                         {"select", select},
-                        {"margin", exact(spec.margin)},
+                        {"margin", shortest_double(spec.margin)},
                         {"carry", spec.carry_descendants},
                         {"elastic", elastic}});
   }

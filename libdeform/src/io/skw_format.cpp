@@ -8,6 +8,7 @@
 #include "deform/runtime/skeleton.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/io/pose_json.hpp"
+#include "float_text.hpp"
 namespace deform {
 namespace {
 
@@ -166,7 +167,6 @@ std::string format_skw(const SkinWeights& weights) {
   if (weights.weights.size() != weights.bones.size())
     throw Error::invalid_argument("", "bones and weights differ in size");
   std::string text = "skw 1\nvertices " + std::to_string(weights.size()) + "\n";
-  char number[32];
   for (std::size_t v = 0; v < weights.size(); ++v) {
     text += std::to_string(v);
     bool any = false;
@@ -179,8 +179,7 @@ std::string format_skw(const SkinWeights& weights) {
       text += ' ';
       text += std::to_string(weights.bones[v][k]);
       text += ' ';
-      const auto result = std::to_chars(number, number + sizeof number, w);
-      text.append(number, result.ptr);
+      detail::append_shortest(text, w);
     }
     if (!any) throw Error::invalid_argument("vertex " + std::to_string(v), "no positive weight");
     text += '\n';

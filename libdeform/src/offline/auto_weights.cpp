@@ -7,6 +7,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/weights.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
 
@@ -105,7 +106,7 @@ SkinWeights unsmoothed_weights(std::span<const glm::vec3> points, const Skeleton
   std::vector<Influence> list;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const glm::vec3 p = points[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+    if (!finite(p))
       throw Error::in_file("automatic weights", "vertex " + std::to_string(i), "position is not finite");
     std::size_t nearest = 0;
     for (std::size_t b = 0; b < bone_count; ++b) {

@@ -7,6 +7,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
 #include "deform/offline/lattice_binding.hpp"
+#include "runtime/finite.hpp"
 #include "runtime/lattice_kernel.hpp"
 
 namespace deform {

@@ -6,6 +6,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/picking.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
 
@@ -42,8 +43,6 @@ inline float hit_box(glm::vec3 origin, glm::vec3 inverse_direction, glm::vec3 mi
   const float leave = std::min(std::min(far.x, far.y), std::min(far.z, limit));
   return enter <= leave ? enter : miss;
 }
-
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 bool unit_direction(const Ray& ray, glm::vec3& direction) {
   const float length = glm::length(ray.direction);

@@ -4,7 +4,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
-#include "lattice_kernel.hpp"
+#include "finite.hpp"
 
 namespace deform {
 
@@ -27,7 +27,7 @@ glm::vec3 LatticeFrame::to_world(glm::vec3 uvw) const noexcept {
 }
 
 void LatticeFrame::validate(const std::string& source, const std::string& element) const {
-  if (!detail::finite(origin) || !detail::finite(u_axis) || !detail::finite(v_axis) || !detail::finite(w_axis))
+  if (!finite(origin) || !finite(u_axis) || !finite(v_axis) || !finite(w_axis))
     throw Error::in_file(source, element, "origin or axes are not finite");
   const double lu = glm::length(glm::dvec3(u_axis)), lv = glm::length(glm::dvec3(v_axis)),
                lw = glm::length(glm::dvec3(w_axis));

@@ -1,29 +1,57 @@
-// Checks the viewer's GPU lattice path (sample::GpuLatticeFields) against the CPU: the built-in character reaches for
-// an out-of-reach target and stretches; one deform::Character deforms completely on the CPU, a twin with lattice_fields
-// = false is skinned on the CPU, uploaded into a MeshRenderer's vertex buffer, and gets its lattice fields added there
-// by the GPU. At several frames (stretching, overshooting, springing back after a release), for lattice degrees 3 and
+// Checks deform::GpuLatticeFields (deform/gpu/lattice.hpp, the viewer's GPU lattices) against the CPU: the built-in
+// character reaches for an out-of-reach target and stretches; one deform::Character deforms completely on the CPU, a
+// twin with lattice_fields = false is skinned on the CPU, uploaded into an interleaved vertex buffer as an application
+// would, and gets its lattice fields added there by the GPU. At several frames (stretching, overshooting, springing back after a release), for lattice degrees 3 and
 // 1, and 5 with neighbour springs (which make the fields non-affine), the buffer's positions must match the CPU's to
 // 1e-4 of the model's size, its UVs and normals must be what was uploaded to the bit, and the fields must really move
 // the arm (else the check proves nothing). Exits 1 on a failure, 0 with "skipped" when the context lacks OpenGL 4.3.
-#include "gpu_lattice.hpp"  // epoxy first
+#include "hidden_context.hpp"  // epoxy first
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <span>
 #include <vector>
 
 #include "deform/character/character.hpp"
 #include "deform/deform.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/gpu/lattice.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
-#include "framework.hpp"
 
 namespace {
 
 constexpr float tolerance = 1e-4f;  // of the model's size (its bounding box diagonal)
+constexpr int floats_per_vertex = deform::GpuVertexLayout{}.floats_per_vertex;  // u v, nx ny nz, x y z
+
+// The vertex buffer an application draws the character from (GpuVertexLayout's default), rewritten on upload().
+class VertexBuffer {
+ public:
+  explicit VertexBuffer(const deform::Mesh& mesh) : mesh_(mesh) { glGenBuffers(1, &name_); }
+  ~VertexBuffer() { glDeleteBuffers(1, &name_); }
+  VertexBuffer(const VertexBuffer&) = delete;
+  VertexBuffer& operator=(const VertexBuffer&) = delete;
+
+  void upload(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals) {
+    std::vector<float> data(positions.size() * floats_per_vertex);
+    for (std::size_t r = 0; r < positions.size(); ++r) {
+      const glm::vec2 uv = mesh_.vertex_uvs.empty() ? glm::vec2(0.0f) : mesh_.vertex_uvs[r];
+      const float vertex[floats_per_vertex] = {uv.x,         uv.y,         normals[r].x, normals[r].y,
+                                               normals[r].z, positions[r].x, positions[r].y, positions[r].z};
+      std::memcpy(data.data() + r * floats_per_vertex, vertex, sizeof vertex);
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, name_);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_STREAM_DRAW);
+  }
+  GLuint name() const { return name_; }
+
+ private:
+  const deform::Mesh& mesh_;
+  GLuint name_ = 0;
+};
 
 bool check_degree(int degree, bool springs) {
   deform::Model model = deform::builtin_character();
@@ -39,9 +67,8 @@ bool check_degree(int degree, bool springs) {
   const deform::Bounds bounds = deform::compute_bounds(mesh.positions);
   const float size = glm::length(bounds.max - bounds.min);
 
-  sample::MeshRenderer renderer;
-  renderer.create(mesh);
-  sample::GpuLatticeFields fields;
+  VertexBuffer vertex_buffer(mesh);
+  deform::GpuLatticeFields fields;
   if (!fields.create(gpu.deformers(), mesh.vertex_point)) {
     std::printf("FAIL degree %d: GpuLatticeFields::create refused the character's lattices\n", degree);
     return false;
@@ -56,7 +83,7 @@ bool check_degree(int degree, bool springs) {
   const int checkpoints[] = {3, 12, 30, 50};
   const int release_at = 30;
   std::vector<glm::vec3> positions(mesh.vertex_count());
-  std::vector<float> buffer(mesh.vertex_count() * sample::MeshRenderer::floats_per_vertex);
+  std::vector<float> buffer(mesh.vertex_count() * floats_per_vertex);
   bool ok = true;
   float largest_field = 0.0f;
   for (int frame = 1, next = 0; next < 4; ++frame) {
@@ -71,18 +98,18 @@ bool check_degree(int degree, bool springs) {
 
     for (std::size_t r = 0; r < positions.size(); ++r) positions[r] = gpu.positions()[mesh.vertex_point[r]];
     const auto normals = gpu.normals();
-    renderer.upload(positions, normals);
-    if (!fields.add_into(gpu.deformers(), renderer.vertex_buffer())) {
+    vertex_buffer.upload(positions, normals);
+    if (!fields.add_into(gpu.deformers(), vertex_buffer.name())) {
       std::printf("FAIL degree %d frame %d: add_into refused\n", degree, frame);
       return false;
     }
-    glBindBuffer(GL_ARRAY_BUFFER, renderer.vertex_buffer());
+    glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer.name());
     glGetBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(buffer.size() * sizeof(float)), buffer.data());
 
     float worst = 0.0f, field = 0.0f;
     std::size_t changed = 0;
     for (std::size_t r = 0; r < positions.size(); ++r) {
-      const float* v = buffer.data() + r * sample::MeshRenderer::floats_per_vertex;
+      const float* v = buffer.data() + r * floats_per_vertex;
       const glm::vec3 expected = cpu.positions()[mesh.vertex_point[r]];
       worst = std::max(worst, glm::length(glm::vec3(v[5], v[6], v[7]) - expected));
       field = std::max(field, glm::length(expected - positions[r]));
@@ -112,14 +139,14 @@ bool check_refusals() {
   const deform::Character character = deform::make_builtin_character();
   const deform::DeformerHierarchy& h = character.deformers();
   const deform::Mesh& mesh = character.model().mesh;
-  sample::GpuBezierLattice lattice;
+  deform::GpuBezierLattice lattice;
   bool ok = true;
   const std::vector<float> short_weights(h.bound_weights(0).size() - 1, 1.0f);
   ok = ok && !lattice.create_additive(h.binding(0), short_weights, mesh.vertex_point);
   ok = ok && lattice.create_additive(h.binding(0), h.bound_weights(0), mesh.vertex_point) && lattice.additive();
   std::vector<glm::vec3> out(mesh.vertex_count());
   ok = ok && !lattice.evaluate(h.displacements(0)) && !lattice.read_back(out);  // additive: only into a buffer
-  sample::GpuLatticeFields fields;
+  deform::GpuLatticeFields fields;
   const deform::Character bare(deform::builtin_character(), deform::Rig{});
   ok = ok && fields.create(bare.deformers(), mesh.vertex_point) && !fields.add_into(h, 1);  // lattice count differs
   std::printf("%s refusals\n", ok ? "ok  " : "FAIL");
@@ -129,20 +156,11 @@ bool check_refusals() {
 }  // namespace
 
 int main() {
-  sample::Window window;
-  if (!window.open({"gpu_character_check", 64, 64, true})) {
-    std::fprintf(stderr, "gpu_character_check: cannot open an OpenGL window (no display? try xvfb-run)\n");
-    return 1;
-  }
-  if (!window.has_compute() || !sample::GpuBezierLattice::supported()) {
-    std::printf("skipped: no OpenGL 4.3 (compute shaders) in this context (%s)\n", window.renderer_name().c_str());
-    return 0;
-  }
-  std::printf("renderer: %s\n", window.renderer_name().c_str());
-  bool ok = check_refusals();
-  ok = check_degree(3, false) && ok;
-  ok = check_degree(1, false) && ok;
-  ok = check_degree(5, true) && ok;
-  std::printf("%s\n", ok ? "all passed" : "FAILED");
-  return ok ? 0 : 1;
+  return gpu_test::run_in_context("gpu_character_check", [] {
+    bool ok = check_refusals();
+    ok = check_degree(3, false) && ok;
+    ok = check_degree(1, false) && ok;
+    ok = check_degree(5, true) && ok;
+    return ok ? 0 : 1;
+  });
 }

@@ -1,13 +1,11 @@
-// Checks the GPU Bézier lattice (samples/framework/gpu_lattice.hpp) against the CPU kernel (LatticeEvaluateJob):
+// Checks deform::GpuBezierLattice (deform/gpu/lattice.hpp) against the CPU kernel (LatticeEvaluateJob):
 // seeded random frames and control point displacements for several degrees, a few thousand random points inside and
 // outside the box, positions and Jacobian normals through both outputs (read back, and written into an interleaved
 // vertex buffer). Prints the largest differences; exits 1 when one exceeds 1e-4 (positions relative to the lattice's
 // size) or anything outside the bound vertices changed, 0 with "skipped" when the context lacks OpenGL 4.3.
 //
 // gpu_lattice_check --bench prints indicative per-frame times of both paths instead (not a test: docs/gpu.md).
-// gpu_lattice_check --same-picture A.png B.png compares the ffd_lattice sample's CPU and GPU screenshots: exits 1 when
-// more than 0.1% of the pixels differ by more than 24 (sum over RGB) or the images are blank.
-#include "gpu_lattice.hpp"  // epoxy first
+#include "hidden_context.hpp"  // epoxy first
 
 #include <algorithm>
 #include <chrono>
@@ -17,16 +15,16 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
-#include <stb/stb_image.h>
 
 #include "deform/extras/builtin.hpp"
+#include "deform/gpu/lattice.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/model.hpp"
-#include "framework.hpp"
 
 namespace {
 
@@ -104,7 +102,7 @@ bool check(const Case& c) {
     return false;
   }
 
-  sample::GpuBezierLattice gpu;
+  deform::GpuBezierLattice gpu;
   if (!gpu.create(binding, normals) || !gpu.evaluate(lattice.control_points())) {
     std::printf("FAIL: the GPU lattice refused a valid binding\n");
     return false;
@@ -115,7 +113,7 @@ bool check(const Case& c) {
     return false;
   }
 
-  // The draw path: an interleaved buffer (MeshRenderer's layout) filled with a pattern that must survive outside the
+  // The draw path: an interleaved buffer (GpuVertexLayout's default: u v, nx ny nz, x y z) filled with a pattern that must survive outside the
   // written slots.
   constexpr int stride = 8;
   std::vector<float> pattern(positions.size() * stride);
@@ -124,7 +122,7 @@ bool check(const Case& c) {
   glGenBuffers(1, &buffer);
   glBindBuffer(GL_ARRAY_BUFFER, buffer);
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(pattern.size() * sizeof(float)), pattern.data(), GL_STREAM_DRAW);
-  const bool into = gpu.evaluate_into(lattice.control_points(), buffer);
+  const bool into = gpu.evaluate_into(lattice.control_points(), buffer).ok();
   std::vector<float> interleaved(pattern.size());
   glBindBuffer(GL_ARRAY_BUFFER, buffer);
   glGetBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data());
@@ -162,14 +160,15 @@ bool check(const Case& c) {
   return ok;
 }
 
-// The contract's refusals: a B-spline binding, short normals, a wrong control point count, a short vertex buffer.
+// The contract's refusals: a B-spline binding, short normals, a wrong control point count, a short vertex buffer, a
+// layout that does not fit its stride; and a moved lattice keeps working while the one moved from holds nothing.
 bool check_refusals() {
   const deform::LatticeFrame frame = deform::LatticeFrame::axis_aligned(glm::vec3(0.0f), glm::vec3(1.0f));
   const std::vector<glm::vec3> points = {glm::vec3(0.5f), glm::vec3(0.25f), glm::vec3(2.0f)};
   const deform::BsplineLattice bspline(frame, glm::ivec3(5));
   const deform::BezierLattice bezier(frame, glm::ivec3(2));
   const deform::LatticeBinding bezier_binding = deform::bind_lattice(bezier, points);
-  sample::GpuBezierLattice gpu;
+  deform::GpuBezierLattice gpu;
   bool ok = !gpu.create(deform::bind_lattice(bspline, points)) && !gpu.create(bezier_binding, std::span(points).first(1));
   ok = ok && gpu.create(bezier_binding) && !gpu.evaluate(std::span(bezier.control_points()).first(26));
   GLuint buffer = 0;
@@ -177,8 +176,14 @@ bool check_refusals() {
   glBindBuffer(GL_ARRAY_BUFFER, buffer);
   glBufferData(GL_ARRAY_BUFFER, 8 * sizeof(float), nullptr, GL_STREAM_DRAW);  // one vertex; index 1 is bound
   ok = ok && !gpu.evaluate_into(bezier.control_points(), buffer);
+  glBufferData(GL_ARRAY_BUFFER, 3 * 8 * sizeof(float), nullptr, GL_STREAM_DRAW);
+  ok = ok && !gpu.evaluate_into(bezier.control_points(), buffer, deform::GpuVertexLayout{8, 6, 2}) &&
+       gpu.evaluate_into(bezier.control_points(), buffer);
+  deform::GpuBezierLattice moved = std::move(gpu);
+  ok = ok && !gpu.created() && !gpu.evaluate_into(bezier.control_points(), buffer) && moved.created() &&
+       moved.evaluate_into(bezier.control_points(), buffer);
   glDeleteBuffers(1, &buffer);
-  std::printf("%s refusals (B-spline binding, short normals, wrong point count, short vertex buffer)\n",
+  std::printf("%s refusals (B-spline binding, short normals, wrong point count, short vertex buffer, layout); move\n",
               ok ? "ok  " : "FAIL");
   return ok;
 }
@@ -209,7 +214,7 @@ void bench_one(const char* name, const deform::BezierLattice& lattice, const def
   job.normals_in = normals;
   job.normals_out = normals_out;
   const double cpu = seconds_per_call([&] { job.run(); });
-  sample::GpuBezierLattice gpu;
+  deform::GpuBezierLattice gpu;
   gpu.create(binding, normals);
   GLuint buffer = 0;
   glGenBuffers(1, &buffer);
@@ -252,57 +257,26 @@ void bench() {
   bench_one("100k points (tricubic)", cube, deform::bind_lattice(cube, points), normals);
 }
 
-int same_picture(const char* path_a, const char* path_b) {
-  int w[2] = {0, 0}, h[2] = {0, 0}, channels = 0;
-  unsigned char* a = stbi_load(path_a, &w[0], &h[0], &channels, 3);
-  unsigned char* b = stbi_load(path_b, &w[1], &h[1], &channels, 3);
-  if (!a || !b || w[0] != w[1] || h[0] != h[1]) {
-    std::printf("FAIL: cannot read both images, or their sizes differ\n");
-    return 1;
-  }
-  const long pixels = long(w[0]) * h[0];
-  long differing = 0, covered = 0;
-  for (long i = 0; i < pixels; ++i) {
-    const unsigned char *pa = a + 3 * i, *pb = b + 3 * i;
-    differing += std::abs(pa[0] - pb[0]) + std::abs(pa[1] - pb[1]) + std::abs(pa[2] - pb[2]) > 24;
-    covered += std::abs(pa[0] - a[0]) + std::abs(pa[1] - a[1]) + std::abs(pa[2] - a[2]) > 24;  // vs the corner
-  }
-  stbi_image_free(a);
-  stbi_image_free(b);
-  const double share = double(differing) / double(pixels);
-  const bool ok = share <= 1e-3 && covered > pixels / 100;
-  std::printf("%s %ld of %ld pixels differ (%.4f%%); %.1f%% of the first image is not background\n",
-              ok ? "ok  " : "FAIL", differing, pixels, 100.0 * share, 100.0 * double(covered) / double(pixels));
-  return ok ? 0 : 1;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::string(argv[1]) == "--same-picture") return same_picture(argv[2], argv[3]);
   const bool benchmark = argc == 2 && std::string(argv[1]) == "--bench";
   if (argc > 1 && !benchmark) {
-    std::fprintf(stderr, "usage: gpu_lattice_check [--bench | --same-picture A.png B.png]\n");
+    std::fprintf(stderr, "usage: gpu_lattice_check [--bench]\n");
     return 2;
   }
-  sample::Window window;
-  if (!window.open({"gpu_lattice_check", 64, 64, true})) {
-    std::fprintf(stderr, "gpu_lattice_check: cannot open an OpenGL window (no display? try xvfb-run)\n");
-    return 1;
-  }
-  if (!window.has_compute() || !sample::GpuBezierLattice::supported()) {
-    std::printf("skipped: no OpenGL 4.3 (compute shaders) in this context (%s)\n", window.renderer_name().c_str());
-    return 0;
-  }
-  std::printf("renderer: %s\n", window.renderer_name().c_str());
   if (benchmark) {
-    bench();
-    return 0;
+    const auto timings = [] {
+      bench();
+      return 0;
+    };
+    return gpu_test::run_in_context("gpu_lattice_check", timings, false);
   }
-  const Case cases[] = {{{1, 1, 1}, 1}, {{1, 1, 1}, 2}, {{3, 3, 3}, 3}, {{3, 3, 3}, 4}, {{2, 4, 5}, 5},
-                        {{2, 4, 5}, 6}, {{6, 6, 6}, 7}, {{6, 6, 6}, 8}, {{16, 2, 1}, 9}};
-  bool ok = check_refusals();
-  for (const Case& c : cases) ok = check(c) && ok;
-  std::printf("%s\n", ok ? "all passed" : "FAILED");
-  return ok ? 0 : 1;
+  return gpu_test::run_in_context("gpu_lattice_check", [] {
+    const Case cases[] = {{{1, 1, 1}, 1}, {{1, 1, 1}, 2}, {{3, 3, 3}, 3}, {{3, 3, 3}, 4}, {{2, 4, 5}, 5},
+                          {{2, 4, 5}, 6}, {{6, 6, 6}, 7}, {{6, 6, 6}, 8}, {{16, 2, 1}, 9}};
+    bool ok = check_refusals();
+    for (const Case& c : cases) ok = check(c) && ok;
+    return ok ? 0 : 1;
+  });
 }

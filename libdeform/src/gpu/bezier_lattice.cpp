@@ -1,0 +1,404 @@
+// GpuBezierLattice (deform/gpu/lattice.hpp): the CPU kernel's arithmetic as an OpenGL 4.3 compute shader.
+#include <epoxy/gl.h>  // first: epoxy must precede every other GL header
+
+#include "deform/gpu/lattice.hpp"
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+#include <glm/gtc/type_ptr.hpp>
+
+namespace deform {
+namespace {
+
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "control points are uploaded as packed float triples");
+static_assert(sizeof(GLuint) == sizeof(unsigned int), "GL object names are held as unsigned int");
+
+constexpr GLuint group_size = 64;
+
+// The CPU kernel's arithmetic (libdeform/src/runtime/lattice_kernel.inl) in GLSL: Bernstein bases by de Casteljau's
+// triangle, derivatives from the degree n − 1 basis, the contraction over u inside v inside w, and
+// n' = cofactor(J)·(G·n) normalised, the input normal kept where the Jacobian is degenerate. upload() prepends the
+// version and the degree as a constant, so each lattice gets its own program with loops of known length (unrolled,
+// arrays in registers: several times faster on llvmpipe than a runtime degree).
+constexpr const char* shader_body = R"(
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) readonly buffer Targets { uint target[]; };        // per vertex: index in the output
+layout(std430, binding = 1) readonly buffer Params { float param[]; };         // per vertex: u v w
+layout(std430, binding = 2) readonly buffer RestNormals { float normal_in[]; }; // per vertex: nx ny nz
+layout(std430, binding = 3) readonly buffer Points { float point[]; };         // control points, i-fastest, x y z
+layout(std430, binding = 4) buffer Output { float result[]; };
+layout(std430, binding = 5) readonly buffer Weights { float weight[]; };       // per vertex (additive only)
+
+uniform uint first_vertex;
+uniform uint vertex_count;
+uniform mat3 normal_basis;
+uniform bool with_normals;
+uniform bool scatter;  // write at target[] (an interleaved vertex buffer) or at the vertex's own slot (read back)
+uniform bool additive;  // add weight[] · Q to the position there instead of writing Q (control points = displacements)
+uniform uint stride, position_offset, normal_offset;
+
+const int max_points = 17;  // deform::max_bezier_degree + 1
+
+void basis(int n, float t, out float b[max_points], out float d[max_points]) {
+  float lower[max_points];
+  float s = 1.0 - t;
+  b[0] = 1.0;
+  for (int r = 1; r <= n; ++r) {
+    if (r == n)
+      for (int i = 0; i < n; ++i) lower[i] = b[i];
+    float saved = 0.0;
+    for (int i = 0; i < r; ++i) {
+      float tmp = b[i];
+      b[i] = saved + s * tmp;
+      saved = t * tmp;
+    }
+    b[r] = saved;
+  }
+  float fn = float(n);
+  d[0] = lower[0] * -fn;
+  for (int i = 1; i < n; ++i) d[i] = (lower[i - 1] - lower[i]) * fn;
+  d[n] = lower[n - 1] * fn;
+}
+
+vec3 control_point(int index) {
+  return vec3(point[3 * index], point[3 * index + 1], point[3 * index + 2]);
+}
+
+void main() {
+  uint e = first_vertex + gl_GlobalInvocationID.x;
+  if (e >= vertex_count) return;
+  float bu[max_points], bv[max_points], bw[max_points], du[max_points], dv[max_points], dw[max_points];
+  basis(degree.x, param[3 * e], bu, du);
+  basis(degree.y, param[3 * e + 1], bv, dv);
+  basis(degree.z, param[3 * e + 2], bw, dw);
+
+  int nu = degree.x + 1, nv = degree.y + 1;
+  vec3 q = vec3(0.0), qu = vec3(0.0), qv = vec3(0.0), qw = vec3(0.0);
+  for (int k = 0; k <= degree.z; ++k) {
+    vec3 s = vec3(0.0), su = vec3(0.0), sv = vec3(0.0);
+    for (int j = 0; j <= degree.y; ++j) {
+      int row = nu * (j + nv * k);
+      vec3 r = vec3(0.0), rd = vec3(0.0);
+      for (int i = 0; i <= degree.x; ++i) {
+        vec3 p = control_point(row + i);
+        r += bu[i] * p;
+        if (with_normals) rd += du[i] * p;
+      }
+      s += bv[j] * r;
+      if (with_normals) {
+        sv += dv[j] * r;
+        su += bv[j] * rd;
+      }
+    }
+    q += bw[k] * s;
+    if (with_normals) {
+      qw += dw[k] * s;
+      qv += bw[k] * sv;
+      qu += bw[k] * su;
+    }
+  }
+
+  uint base = (scatter ? target[e] : e) * stride;
+  if (additive) {
+    q *= weight[e];
+    result[base + position_offset] += q.x;
+    result[base + position_offset + 1u] += q.y;
+    result[base + position_offset + 2u] += q.z;
+    return;
+  }
+  result[base + position_offset] = q.x;
+  result[base + position_offset + 1u] = q.y;
+  result[base + position_offset + 2u] = q.z;
+  if (with_normals) {
+    vec3 n_in = vec3(normal_in[3 * e], normal_in[3 * e + 1], normal_in[3 * e + 2]);
+    vec3 m = normal_basis * n_in;
+    vec3 n = m.x * cross(qv, qw) + m.y * cross(qw, qu) + m.z * cross(qu, qv);
+    float len2 = dot(n, n);
+    // A degenerate Jacobian (a collapsed lattice) has no normal to give: the input normal is kept.
+    n = len2 > 0.0 && len2 <= 3.0e38 ? n * (1.0 / sqrt(len2)) : n_in;
+    result[base + normal_offset] = n.x;
+    result[base + normal_offset + 1u] = n.y;
+    result[base + normal_offset + 2u] = n.z;
+  }
+}
+)";
+GLuint storage_buffer(const void* data, std::size_t bytes, GLenum usage) {
+  GLuint buffer = 0;
+  glGenBuffers(1, &buffer);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
+  // Never zero bytes: an empty binding still binds valid storage.
+  glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(std::max<std::size_t>(bytes, 16)), nullptr, usage);
+  if (data && bytes) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
+  return buffer;
+}
+
+// The driver's message about a shader or a program (get_parameter: glGetShaderiv or glGetProgramiv; get_log: the
+// matching glGet...InfoLog).
+template <class GetParameter, class GetLog>
+std::string info_log(GLuint object, GetParameter get_parameter, GetLog get_log) {
+  GLint length = 0;
+  get_parameter(object, GL_INFO_LOG_LENGTH, &length);
+  std::string log(std::size_t(std::max(length, 1)), '\0');
+  get_log(object, GLsizei(log.size()), nullptr, log.data());
+  log.resize(std::min(log.find('\0'), log.size()));
+  return log;
+}
+
+// The compute program for `source`, or 0 with the driver's message in `log`.
+GLuint build_compute_program(const std::string& source, std::string& log) {
+  const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
+  const char* text = source.c_str();
+  glShaderSource(shader, 1, &text, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    log = info_log(shader, glGetShaderiv, glGetShaderInfoLog);
+    glDeleteShader(shader);
+    return 0;
+  }
+  const GLuint program = glCreateProgram();
+  glAttachShader(program, shader);
+  glLinkProgram(program);
+  glDetachShader(program, shader);
+  glDeleteShader(shader);
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    log = info_log(program, glGetProgramiv, glGetProgramInfoLog);
+    glDeleteProgram(program);
+    return 0;
+  }
+  return program;
+}
+
+Status check_binding(const LatticeBinding& binding) {
+  if (!GpuBezierLattice::supported()) return Status::failure("the current context is not OpenGL 4.3");
+  if (binding.kind != LatticeKind::bezier) return Status::failure("only Bezier bindings are evaluated on the GPU");
+  if (glm::any(glm::lessThan(binding.point_counts, glm::ivec3(2))) ||
+      glm::any(glm::greaterThan(binding.point_counts, glm::ivec3(max_bezier_degree + 1))))
+    return Status::failure("the binding's degree is outside 1..max_bezier_degree");
+  return {};
+}
+
+}  // namespace
+
+GpuBezierLattice::GpuBezierLattice(GpuBezierLattice&& other) noexcept { *this = std::move(other); }
+
+GpuBezierLattice& GpuBezierLattice::operator=(GpuBezierLattice&& other) noexcept {
+  if (this == &other) return *this;
+  release();
+  program_ = std::exchange(other.program_, 0);
+  targets_ = std::exchange(other.targets_, 0);
+  params_ = std::exchange(other.params_, 0);
+  normals_ = std::exchange(other.normals_, 0);
+  points_ = std::exchange(other.points_, 0);
+  results_ = std::exchange(other.results_, 0);
+  weights_ = std::exchange(other.weights_, 0);
+  uniforms_ = std::exchange(other.uniforms_, Uniforms{});
+  count_ = std::exchange(other.count_, 0);
+  max_target_ = std::exchange(other.max_target_, 0);
+  point_counts_ = std::exchange(other.point_counts_, glm::ivec3(0));
+  normal_basis_ = std::exchange(other.normal_basis_, glm::mat3(1.0f));
+  has_normals_ = std::exchange(other.has_normals_, false);
+  additive_ = std::exchange(other.additive_, false);
+  target_list_ = std::move(other.target_list_);
+  staging_ = std::move(other.staging_);
+  shader_log_ = std::move(other.shader_log_);
+  other.target_list_.clear();
+  other.staging_.clear();
+  other.shader_log_.clear();
+  return *this;
+}
+
+GpuBezierLattice::~GpuBezierLattice() { release(); }
+
+void GpuBezierLattice::release() noexcept {
+  const GLuint buffers[] = {targets_, params_, normals_, points_, results_, weights_};
+  for (GLuint b : buffers)
+    if (b) glDeleteBuffers(1, &b);
+  if (program_) glDeleteProgram(program_);
+  program_ = targets_ = params_ = normals_ = points_ = results_ = weights_ = 0;
+  uniforms_ = Uniforms{};
+  count_ = 0;
+  max_target_ = 0;
+  point_counts_ = glm::ivec3(0);
+  has_normals_ = additive_ = false;
+  target_list_.clear();
+  staging_.clear();
+}
+
+bool GpuBezierLattice::supported() { return epoxy_is_desktop_gl() && epoxy_gl_version() >= 43; }
+
+Status GpuBezierLattice::create(const LatticeBinding& binding, std::span<const glm::vec3> rest_normals) {
+  release();
+  shader_log_.clear();
+  if (const Status status = check_binding(binding); !status) return status;
+  const bool normals = !rest_normals.empty();
+  if (normals && binding.vertex_count > 0 && rest_normals.size() <= binding.max_vertex)
+    return Status::failure("the rest normals do not cover every bound vertex");
+
+  std::vector<float> params, normal_list;
+  for (std::size_t lane = 0; lane < binding.vertices.size(); ++lane) {
+    const std::uint32_t vertex = binding.vertices[lane];
+    if (vertex == LatticeBinding::no_vertex) continue;
+    target_list_.push_back(vertex);
+    params.insert(params.end(), {binding.u[lane], binding.v[lane], binding.w[lane]});
+    if (normals) {
+      const glm::vec3 n = rest_normals[vertex];
+      normal_list.insert(normal_list.end(), {n.x, n.y, n.z});
+    }
+  }
+  return upload(binding.point_counts, binding.normal_basis, params, normal_list, {});
+}
+
+Status GpuBezierLattice::create_additive(const LatticeBinding& binding, std::span<const float> weights,
+                                         std::span<const std::uint32_t> vertex_point) {
+  release();
+  shader_log_.clear();
+  if (const Status status = check_binding(binding); !status) return status;
+  if (weights.size() != binding.vertices.size()) return Status::failure("one weight per binding lane is needed");
+  // Each bound point's lane, then one entry per render vertex of a bound point (a point split at a UV or normal
+  // seam is evaluated once per render vertex, as in create()).
+  std::vector<std::uint32_t> lane_of_point(binding.vertex_count ? std::size_t{binding.max_vertex} + 1 : 0,
+                                           LatticeBinding::no_vertex);
+  for (std::size_t lane = 0; lane < binding.vertices.size(); ++lane) {
+    const std::uint32_t point = binding.vertices[lane];
+    if (point != LatticeBinding::no_vertex) lane_of_point[point] = std::uint32_t(lane);
+  }
+  std::vector<float> params, weight_list;
+  for (std::size_t r = 0; r < vertex_point.size(); ++r) {
+    const std::uint32_t point = vertex_point[r];
+    if (point >= lane_of_point.size() || lane_of_point[point] == LatticeBinding::no_vertex) continue;
+    const std::size_t lane = lane_of_point[point];
+    target_list_.push_back(std::uint32_t(r));
+    params.insert(params.end(), {binding.u[lane], binding.v[lane], binding.w[lane]});
+    weight_list.push_back(weights[lane]);
+  }
+  const Status status = upload(binding.point_counts, binding.normal_basis, params, {}, weight_list);
+  additive_ = status.ok();
+  return status;
+}
+
+Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal_basis, std::span<const float> params,
+                                std::span<const float> normals, std::span<const float> weights) {
+  const glm::ivec3 d = point_counts - 1;
+  const std::string source = "#version 430\nconst ivec3 degree = ivec3(" + std::to_string(d.x) + ", " +
+                             std::to_string(d.y) + ", " + std::to_string(d.z) + ");\n" + shader_body;
+  program_ = build_compute_program(source, shader_log_);
+  if (!program_) {
+    release();
+    return Status::failure("the driver rejected the compute shader (shader_log() has its message)");
+  }
+  const auto location = [&](const char* name) { return glGetUniformLocation(program_, name); };
+  uniforms_ = {location("first_vertex"), location("vertex_count"), location("normal_basis"),
+               location("with_normals"), location("scatter"),      location("additive"),
+               location("stride"),       location("position_offset"), location("normal_offset")};
+
+  count_ = target_list_.size();
+  max_target_ = count_ ? *std::max_element(target_list_.begin(), target_list_.end()) : 0;
+  point_counts_ = point_counts;
+  normal_basis_ = normal_basis;
+  has_normals_ = !normals.empty();
+  targets_ = storage_buffer(target_list_.data(), target_list_.size() * sizeof(std::uint32_t), GL_STATIC_DRAW);
+  params_ = storage_buffer(params.data(), params.size() * sizeof(float), GL_STATIC_DRAW);
+  normals_ = storage_buffer(normals.data(), normals.size() * sizeof(float), GL_STATIC_DRAW);
+  weights_ = storage_buffer(weights.data(), weights.size() * sizeof(float), GL_STATIC_DRAW);
+  const std::size_t point_count =
+      std::size_t(point_counts.x) * std::size_t(point_counts.y) * std::size_t(point_counts.z);
+  points_ = storage_buffer(nullptr, point_count * sizeof(glm::vec3), GL_STREAM_DRAW);
+  staging_.assign(count_ * 6, 0.0f);
+  results_ = storage_buffer(nullptr, staging_.size() * sizeof(float), GL_STREAM_READ);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  return {};
+}
+
+void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsigned int output, bool scatter,
+                                const GpuVertexLayout& layout) {
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, points_);
+  glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(control_points.size() * sizeof(glm::vec3)),
+                  control_points.data());
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  if (count_ == 0) return;
+
+  glUseProgram(program_);
+  glUniform1ui(uniforms_.vertex_count, GLuint(count_));
+  glUniformMatrix3fv(uniforms_.normal_basis, 1, GL_FALSE, glm::value_ptr(normal_basis_));
+  glUniform1i(uniforms_.with_normals, has_normals_ ? 1 : 0);
+  glUniform1i(uniforms_.scatter, scatter ? 1 : 0);
+  glUniform1i(uniforms_.additive, additive_ ? 1 : 0);
+  glUniform1ui(uniforms_.stride, GLuint(layout.floats_per_vertex));
+  glUniform1ui(uniforms_.position_offset, GLuint(layout.position_offset));
+  glUniform1ui(uniforms_.normal_offset, GLuint(layout.normal_offset));
+  const GLuint buffers[] = {targets_, params_, normals_, points_, output, weights_};
+  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);
+
+  // Dispatches of at most 65,535 groups (the least every 4.3 driver allows), 4 million vertices each.
+  const std::size_t per_dispatch = std::size_t{65535} * group_size;
+  for (std::size_t first = 0; first < count_; first += per_dispatch) {
+    const std::size_t n = std::min(per_dispatch, count_ - first);
+    glUniform1ui(uniforms_.first_vertex, GLuint(first));
+    glDispatchCompute(GLuint((n + group_size - 1) / group_size), 1, 1);
+  }
+  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  glUseProgram(0);
+}
+
+Status GpuBezierLattice::evaluate(std::span<const glm::vec3> control_points) {
+  if (!program_) return Status::failure("nothing was created");
+  if (additive_) return Status::failure("an additive lattice only adds into a vertex buffer");
+  if (control_points.size() != std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
+    return Status::failure("the control point count differs from the binding's");
+  dispatch(control_points, results_, false, GpuVertexLayout{6, 0, 3});
+  return {};
+}
+
+Status GpuBezierLattice::read_back(std::span<glm::vec3> positions, std::span<glm::vec3> normals) {
+  if (!program_) return Status::failure("nothing was created");
+  if (additive_) return Status::failure("an additive lattice only adds into a vertex buffer");
+  if (count_ == 0) return {};
+  if (positions.size() <= max_target_ || (!normals.empty() && normals.size() <= max_target_))
+    return Status::failure("the spans do not cover every bound vertex");
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, results_);
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(staging_.size() * sizeof(float)), staging_.data());
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  const bool with_normals = has_normals_ && !normals.empty();
+  for (std::size_t e = 0; e < count_; ++e) {
+    const float* r = staging_.data() + 6 * e;
+    positions[target_list_[e]] = glm::vec3(r[0], r[1], r[2]);
+    if (with_normals) normals[target_list_[e]] = glm::vec3(r[3], r[4], r[5]);
+  }
+  return {};
+}
+
+Status GpuBezierLattice::validate_into(std::span<const glm::vec3> control_points, unsigned int vertex_buffer,
+                                       const GpuVertexLayout& layout) const {
+  if (!program_) return Status::failure("nothing was created");
+  if (control_points.size() != std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
+    return Status::failure("the control point count differs from the binding's");
+  if (layout.floats_per_vertex <= 0 || layout.position_offset < 0 || layout.normal_offset < 0 ||
+      layout.position_offset + 3 > layout.floats_per_vertex || layout.normal_offset + 3 > layout.floats_per_vertex)
+    return Status::failure("the vertex layout does not fit its stride");
+  if (vertex_buffer == 0) return Status::failure("no vertex buffer");
+  if (count_ > 0) {  // the buffer must hold every vertex written
+    GLint64 bytes = 0;
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, vertex_buffer);
+    glGetBufferParameteri64v(GL_SHADER_STORAGE_BUFFER, GL_BUFFER_SIZE, &bytes);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    const std::size_t needed = (std::size_t{max_target_} + 1) * std::size_t(layout.floats_per_vertex) * sizeof(float);
+    if (bytes < 0 || std::size_t(bytes) < needed) return Status::failure("the vertex buffer is too small");
+  }
+  return {};
+}
+
+Status GpuBezierLattice::evaluate_into(std::span<const glm::vec3> control_points, unsigned int vertex_buffer,
+                                       const GpuVertexLayout& layout) {
+  if (const Status status = validate_into(control_points, vertex_buffer, layout); !status) return status;
+  dispatch(control_points, vertex_buffer, true, layout);
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  return {};
+}
+
+}  // namespace deform

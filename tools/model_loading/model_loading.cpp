@@ -1,0 +1,98 @@
+// The programs' model loading (model_loading.hpp).
+#include "model_loading.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <utility>
+
+#include "deform/extras/builtin.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/sk.hpp"
+#include "deform/offline/weights.hpp"
+#include "deform/runtime/error.hpp"
+#ifdef DEFORM_HAVE_IMPORT
+#include "deform/import/import.hpp"
+#endif
+
+namespace model_loading {
+namespace {
+
+bool is_obj(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".obj";
+}
+
+LoadedModel load_native(const ModelRequest& request) {
+  if (request.skeleton.empty())
+    throw deform::Error::invalid_argument(request.path, "the native files need a skeleton (.sk)");
+  LoadedModel loaded;
+  loaded.source = request.path;
+  if (!request.weights.empty()) {
+    deform::Warnings warnings;
+    loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings);
+    loaded.warnings = std::move(warnings.messages);
+    return loaded;
+  }
+  if (!request.automatic_weights)
+    throw deform::Error::invalid_argument(request.path, "the native files need weights (.skw)");
+  deform::Warnings warnings;
+  loaded.model.name = std::filesystem::path(request.path).stem().string();
+  loaded.model.mesh = deform::read_obj(request.path, &warnings);
+  loaded.model.skeleton = deform::read_sk(request.skeleton);
+  loaded.model.weights = deform::compute_automatic_weights(loaded.model.mesh, loaded.model.skeleton);
+  loaded.warnings = std::move(warnings.messages);
+  return loaded;
+}
+
+}  // namespace
+
+bool importable(const std::string& path) {
+#ifdef DEFORM_HAVE_IMPORT
+  return deform::is_importable(path) && !is_obj(path);
+#else
+  (void)path;
+  return false;
+#endif
+}
+
+LoadedModel load_model(const ModelRequest& request) {
+  if (request.path.empty()) {
+    LoadedModel loaded;
+    loaded.model = deform::builtin_character();
+    loaded.source = "builtin";
+    loaded.builtin = true;
+    return loaded;
+  }
+  if (!request.skeleton.empty() || !request.weights.empty()) return load_native(request);
+#ifdef DEFORM_HAVE_IMPORT
+  if (importable(request.path)) {
+    deform::ImportedModel imported = deform::import_model(request.path);
+    LoadedModel loaded;
+    loaded.model = std::move(imported.model);
+    loaded.source = request.path;
+    loaded.imported = true;
+    loaded.rigged = imported.rigged;
+    loaded.clips = std::move(imported.clips);
+    loaded.up = imported.up;
+    for (const std::string& message : imported.warnings) loaded.warnings.push_back(request.path + ": " + message);
+    return loaded;
+  }
+  throw deform::Error::invalid_argument(request.path, is_obj(request.path)
+                                                          ? "an OBJ needs its skeleton (.sk)"
+                                                          : "not a format the importer reads, nor an OBJ");
+#else
+  throw deform::Error::invalid_argument(
+      request.path, is_obj(request.path) ? "an OBJ needs its skeleton (.sk)"
+                                         : "this build has no importer (deform::import): give an OBJ and its skeleton");
+#endif
+}
+
+deform::Rig starting_rig(const LoadedModel& loaded) {
+  return loaded.builtin ? deform::builtin_rig(loaded.model) : deform::default_rig(loaded.model);
+}
+
+}  // namespace model_loading
