@@ -87,7 +87,7 @@ int run(const std::vector<std::string>& argv) {
     for (const std::string& w : warnings.messages) note(w);
 #ifdef DEFORM_HAVE_IMPORT  // imported models: bones and clips
   } else if (deform::is_importable(path)) {
-    const deform::ImportedModel imported = deform::import_model(path);
+    const deform::ImportedModel imported = deform::import_model_isolated(path);
     for (const std::string& w : imported.warnings) note(path + ": " + w);
     info = mesh_info(imported.model.mesh);  // "vertices": the distinct points (docs/import.md)
     if (imported.rigged) {

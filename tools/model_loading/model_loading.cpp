@@ -70,7 +70,7 @@ LoadedModel load_model(const ModelRequest& request) {
   if (!request.skeleton.empty() || !request.weights.empty()) return load_native(request);
 #ifdef DEFORM_HAVE_IMPORT
   if (importable(request.path)) {
-    deform::ImportedModel imported = deform::import_model(request.path);
+    deform::ImportedModel imported = deform::import_model_isolated(request.path);
     LoadedModel loaded;
     loaded.model = std::move(imported.model);
     loaded.source = request.path;
