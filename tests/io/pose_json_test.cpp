@@ -106,3 +106,13 @@ TEST_CASE("format_pose_bones_json reads back as the same pose") {
   CHECK(one.size() == 1);
   CHECK(one.contains("elbow"));
 }
+
+TEST_CASE("pose JSON nested a million levels deep is refused in one pass, naming where") {
+  const std::string deep = "{\"bones\": " + std::string(1000000, '[') + std::string(1000000, ']') + "}";
+  CHECK_THROWS_WITH_AS(deform::parse_pose_json(deep, deform::Skeleton(skeleton_test::arm_bones()), true, "deep.json"),
+                       doctest::Contains("deep.json: byte 73: JSON nested deeper than 64 levels"), deform::Error);
+  // Brackets inside strings do not count.
+  const std::string quoted = "{\"bones\": {\"" + std::string(100, '[') + "\": {}}}";
+  CHECK_THROWS_WITH_AS(deform::parse_pose_json(quoted, deform::Skeleton(skeleton_test::arm_bones()), true, "q.json"), doctest::Contains("no such bone"),
+                       deform::Error);
+}

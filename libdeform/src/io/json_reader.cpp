@@ -10,7 +10,38 @@
 
 namespace deform::detail {
 
+namespace {
+
+// Deepest nesting of arrays and objects a document may have: no format of libdeform needs more than 5, and a
+// million-level document must be refused before a parser or a destructor walks it.
+constexpr int max_json_depth = 64;
+
+// One linear pass over the text, outside strings, before anything is built.
+void check_depth(std::string_view text, const std::string& file) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_json_depth)
+        throw Error::at_byte(file, static_cast<std::int64_t>(i), "",
+                             "JSON nested deeper than " + std::to_string(max_json_depth) + " levels");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+}  // namespace
+
 nlohmann::json parse_json(std::string_view text, const std::string& file) {
+  check_depth(text, file);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {  // e.byte: 1-based index of the last byte read
