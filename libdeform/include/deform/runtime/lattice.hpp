@@ -37,7 +37,7 @@ inline constexpr int max_bspline_points = 1024;
 // The box a lattice spans: origin X0 and edge vectors U, V, W (not necessarily orthogonal). A point X has lattice
 // parameters (u, v, w) with X = X0 + u·U + v·V + w·W; the box is (u, v, w) ∈ [0, 1]³. The frame must be finite and
 // right-handed with positive volume, (U × V)·W > 0.
-struct LatticeFrame {
+struct DEFORM_RUNTIME_API LatticeFrame {
   glm::vec3 origin{0.0f};
   glm::vec3 u_axis{1.0f, 0.0f, 0.0f};
   glm::vec3 v_axis{0.0f, 1.0f, 0.0f};
