@@ -126,6 +126,14 @@ for args, mention in bad_cases:
 rc, stdout, stderr = run("--builtin", "--pose", bind)
 check(rc == 2 and "--out" in stderr, f"missing --out: exit {rc}")
 
+# An output path that is not UTF-8: written, and the summary still printed (exit 0), the path shown with U+FFFD.
+odd = os.path.join(work.encode(), b"\xff\xfe.obj")
+p = subprocess.run([deform.encode(), b"skin", b"--builtin", b"--pose", bind.encode(), b"--out", odd], capture_output=True,
+                   timeout=120)
+check(p.returncode == 0, f"non-UTF-8 output path: exit {p.returncode} ({p.stderr!r})")
+check(os.path.exists(odd), "non-UTF-8 output path: no file written")
+check("\ufffd" in p.stdout.decode("utf-8", "replace"), "non-UTF-8 output path: not in the summary")
+
 for failure in failures:
     print("FAIL:", failure)
 print(f"{0 if failures else 1} passed, {len(failures)} failed")

@@ -94,7 +94,14 @@ glm::vec3 parse_vec3(const std::string& text, std::string_view what) {
   return v;
 }
 
-void print_json(const nlohmann::json& document) { std::cout << document.dump(2) << '\n'; }
+// Invalid UTF-8 (a non-UTF-8 output path, a name from a file) is printed as U+FFFD instead of failing the dump after
+// the outputs were written.
+void print_json(const nlohmann::json& document) {
+  std::cout << document.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
+}
+void print_json_in_order(const nlohmann::ordered_json& document) {
+  std::cout << document.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
+}
 
 void note(const std::string& message) { std::cerr << "deform: " << message << '\n'; }
 

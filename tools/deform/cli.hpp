@@ -47,7 +47,9 @@ double parse_number(const std::string& text, std::string_view what);
 long long parse_integer(const std::string& text, std::string_view what, long long min, long long max);
 
 // Prints one JSON document on stdout (the command's machine-readable result).
+// One JSON document on stdout: keys sorted (print_json) or in the order built (print_json_in_order).
 void print_json(const nlohmann::json& document);
+void print_json_in_order(const nlohmann::ordered_json& document);
 // Prints a warning or note on stderr.
 void note(const std::string& message);
 

@@ -13,7 +13,7 @@ namespace cli {
 namespace {
 
 #ifdef DEFORM_HAVE_IMPORT
-using Json = nlohmann::ordered_json;
+using Json = nlohmann::json;  // keys in alphabetical order, as docs/cli.md shows
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;

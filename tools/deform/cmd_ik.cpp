@@ -67,7 +67,7 @@ int run(const std::vector<std::string>& argv) {
   out["iterations"] = result.iterations;
   out["effector"] = to_json(reached_point);
   out["bones"] = nlohmann::ordered_json::parse(bones);
-  std::cout << out.dump(2) << '\n';
+  print_json_in_order(out);
   return exit_ok;
 }
 

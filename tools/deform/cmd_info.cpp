@@ -101,7 +101,7 @@ int run(const std::vector<std::string>& argv) {
   } else {
     throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
   }
-  std::cout << info.dump(2, ' ', false, Json::error_handler_t::replace) << '\n';
+  print_json_in_order(info);
   return exit_ok;
 }
 

@@ -127,7 +127,7 @@ int run(const std::vector<std::string>& argv) {
   out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
   out["kernel"] = deform::skinning_isa_name(deform::skinning_isa_best());
   out["out"] = out_path;
-  std::cout << out.dump(2) << '\n';
+  print_json_in_order(out);
   return exit_ok;
 }
 
