@@ -322,3 +322,14 @@ TEST_CASE("obj: an unsupported statement of garbage is reported in one bounded, 
   CHECK(warnings.messages[0].size() < 300);
   CHECK(warnings.messages[0].find("'\\x01\\x02\\x00") != std::string::npos);
 }
+
+TEST_CASE("obj: a long name copied into many submeshes is refused before memory runs away") {
+  // A 1 MB object name, then the material alternating under it: every submesh would copy the name.
+  std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\no " + std::string(1 << 20, 'n') + "\n";
+  for (int i = 0; i < 200; ++i) text += (i % 2 ? "usemtl a\n" : "usemtl b\n") + std::string("f 1 2 3\n");
+  CHECK_THROWS_WITH_AS(parse(text), doctest::Contains("more submeshes than the file's size allows"), deform::Error);
+  // The same with a short name reads.
+  std::string fine = "v 0 0 0\nv 1 0 0\nv 0 1 0\no body\n";
+  for (int i = 0; i < 200; ++i) fine += (i % 2 ? "usemtl a\n" : "usemtl b\n") + std::string("f 1 2 3\n");
+  CHECK(parse(fine).submeshes.size() == 200);
+}

@@ -47,6 +47,7 @@ class ObjParser {
       : name_(name), base_folder_(base_folder), warnings_(warnings) {}
 
   Mesh parse(std::string_view text) {
+    max_name_bytes_ = (std::size_t{64} << 20) + 4 * text.size();
     obj_text::LineReader lines(text);
     std::string_view statement;
     while (lines.next(statement)) {
@@ -147,7 +148,7 @@ class ObjParser {
     if (face_.size() > none / 3 || mesh_.face_corners.size() > none - face_.size())
       place.fail("f", "too many face corners");
 
-    if (state_changed_ || mesh_.submeshes.empty()) start_submesh();
+    if (state_changed_ || mesh_.submeshes.empty()) start_submesh(place);
     mesh_.face_sizes.push_back(static_cast<std::uint32_t>(face_.size()));
     mesh_.face_corners.insert(mesh_.face_corners.end(), face_.begin(), face_.end());
     for (std::size_t i = 1; i + 1 < face_.size(); ++i)
@@ -188,12 +189,18 @@ class ObjParser {
     state_changed_ = true;
   }
 
-  void start_submesh() {
+  void start_submesh(const Place& place) {
     state_changed_ = false;
     if (!mesh_.submeshes.empty()) {
       const SubmeshState& last = submesh_states_.back();
       if (last.object == state_.object && last.group == state_.group && last.material == state_.material) return;
     }
+    // Each submesh copies the names in effect: a long name kept while the material alternates would copy it for every
+    // face (a 4 MB file asking for gigabytes). The copies are bounded by a multiple of the file's size.
+    name_bytes_ += 2 * (state_.object.size() + state_.group.size()) + state_.material.size();
+    if (name_bytes_ > max_name_bytes_)
+      place.fail("f", "the names in effect are copied into more submeshes than the file's size allows (" +
+                          std::to_string(max_name_bytes_) + " bytes of names)");
     Submesh& submesh = mesh_.submeshes.emplace_back();
     submesh.first_triangle = static_cast<std::uint32_t>(mesh_.triangle_count());
     submesh.object = state_.object;
@@ -298,6 +305,8 @@ class ObjParser {
 
   SubmeshState state_;
   bool state_changed_ = false;
+  std::size_t name_bytes_ = 0;      // bytes of names copied into submeshes so far
+  std::size_t max_name_bytes_ = 0;  // 64 MiB + 4 × the file's size
   std::vector<SubmeshState> submesh_states_;  // one per submesh
   std::unordered_map<std::string, std::int32_t> material_index_;
   obj_text::SkippedStatements skipped_;
