@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -106,7 +107,9 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   while (out.read >= 0 || err.read >= 0) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
-      stopped = "took more than " + std::to_string(limits.max_seconds) + " s";
+      char seconds[32];
+      std::snprintf(seconds, sizeof seconds, "%g", limits.max_seconds);
+      stopped = std::string("took more than ") + seconds + " s";
       break;
     }
     pollfd fds[2] = {{out.read, POLLIN, 0}, {err.read, POLLIN, 0}};
