@@ -87,7 +87,10 @@ double reference_distance(glm::dvec3 p, glm::dvec3 head, glm::dvec3 tail, double
 }
 
 // Dense weights per bone for one point.
-std::vector<double> reference_weights(glm::vec3 point, const Skeleton& s, const AutoWeightsOptions& o) {
+// `ambiguous` (when given) is set when float rounding may choose otherwise: two bones within 1e-5 (relative) of the
+// nearest distance, or the max_influences-th and the next weight within 1e-4 of each other.
+std::vector<double> reference_weights(glm::vec3 point, const Skeleton& s, const AutoWeightsOptions& o,
+                                      bool* ambiguous = nullptr) {
   const auto segments = deform::bone_segments(s, o.leaf_length);
   std::vector<double> d(s.bone_count());
   std::size_t nearest = 0;
@@ -107,6 +110,13 @@ std::vector<double> reference_weights(glm::vec3 point, const Skeleton& s, const 
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return w[a] > w[b]; });
   const std::size_t keep = std::min(static_cast<std::size_t>(o.max_influences), w.size());
+  if (ambiguous != nullptr) {
+    *ambiguous = false;
+    for (std::size_t b = 0; b < d.size(); ++b)
+      if (b != nearest && d[b] <= d[nearest] * (1.0 + 1e-5)) *ambiguous = true;
+    if (keep < w.size() && w[order[keep]] > 0.0 && w[order[keep - 1]] - w[order[keep]] <= 1e-4 * w[order[keep - 1]])
+      *ambiguous = true;
+  }
   double kept = 0.0;
   for (std::size_t k = 0; k < keep; ++k) kept += w[order[k]];
   std::vector<double> out(w.size(), 0.0);
@@ -232,7 +242,9 @@ TEST_CASE("random skeletons and points agree with the reference method") {
     const SkinWeights w = deform::compute_automatic_weights(points, s, o);
     check_normalised(w, points.size(), s.bone_count(), o.max_influences);
     for (std::size_t i = 0; i < points.size(); ++i) {
-      const std::vector<double> expected = reference_weights(points[i], s, o);
+      bool ambiguous = false;
+      const std::vector<double> expected = reference_weights(points[i], s, o, &ambiguous);
+      if (ambiguous) continue;  // a near tie: float and double may rightly choose differently
       for (std::size_t b = 0; b < expected.size(); ++b) {
         // Near the 0.1% cut-off or a tie of the k-th place the float and double versions may keep different
         // sets; the difference is then below 0.2%.
