@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <utility>
 #include <fstream>
+#include <iterator>
 #include <map>
 
 namespace fs = std::filesystem;
@@ -465,4 +466,37 @@ TEST_CASE("is_importable knows Assimp's extensions") {
   CHECK(deform::is_importable("x.x"));
   CHECK_FALSE(deform::is_importable("notes.txt"));
   CHECK_FALSE(deform::is_importable("noextension"));
+}
+
+TEST_CASE("bone names from a file are made fit for a .sk: printable, valid UTF-8, at most 79 bytes") {
+  const std::string source = test_model("glTF2/simple_skin/simple_skin.gltf");
+  if (source.empty()) return;
+  std::ifstream in(source);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string accents;
+  for (int i = 0; i < 60; ++i) accents += "\xc3\xa9";
+  // Nodes 1 and 2 are the joints: give them a name with a line break and a control character, and a long one.
+  const std::string needle = "\"translation\"";
+  const auto at = text.find(needle);
+  REQUIRE(at != std::string::npos);
+  text.insert(at, "\"name\": \"bad\\nv 1 2 3\\u0001\", ");
+  const auto rotation = text.find("\"rotation\"");
+  REQUIRE(rotation != std::string::npos);
+  text.insert(rotation, "\"name\": \"" + accents + "\", ");
+  const fs::path path = fs::temp_directory_path() / "deform_odd_names.gltf";
+  std::ofstream(path) << text;
+  const deform::ImportedModel imported = deform::import_model(path.string());
+  bool found_bad = false, found_long = false;
+  for (const deform::Bone& bone : imported.model.skeleton.bones()) {
+    CHECK(bone.name.size() <= 79);
+    for (const char c : bone.name) CHECK(static_cast<unsigned char>(c) >= 0x20);
+    found_bad = found_bad || bone.name == "bad_v 1 2 3_";
+    found_long = found_long || bone.name.size() == 78;  // 39 two-byte characters: the 40th would pass 79 bytes
+  }
+  CHECK(found_bad);
+  CHECK(found_long);
+  // And they write and read back as a .sk.
+  const deform::ExportedFiles files =
+      deform::export_native(imported.model, (fs::temp_directory_path() / "deform_odd_names_out").string());
+  CHECK(deform::load_model(files.obj, files.sk, files.skw).skeleton.bone_count() == imported.model.skeleton.bone_count());
 }

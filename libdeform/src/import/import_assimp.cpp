@@ -82,8 +82,32 @@ void flatten(const aiNode* node, std::int32_t parent, std::vector<Node>& out, st
   for (unsigned i = 0; i < node->mNumChildren; ++i) flatten(node->mChildren[i], self, out, depth + 1);
 }
 
-// A bone name that fits a .sk record (79 bytes), cut at a UTF-8 character boundary.
-std::string fit_name(std::string name, std::size_t& shortened) {
+// Length of the valid UTF-8 sequence starting at `i` (1 to 4), or 0 when the bytes there are not one.
+std::size_t utf8_length(const std::string& s, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char lead = byte(i);
+  const std::size_t n = lead < 0x80 ? 1 : (lead >> 5) == 0x6 ? 2 : (lead >> 4) == 0xE ? 3 : (lead >> 3) == 0x1E ? 4 : 0;
+  if (n == 0 || i + n > s.size()) return 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if ((byte(i + k) & 0xC0) != 0x80) return 0;
+  return n;
+}
+
+// A bone name that fits a .sk record: valid UTF-8 without control characters (each invalid byte or control character
+// becomes '_'), at most 79 bytes, cut at a character boundary.
+std::string fit_name(const std::string& raw, std::size_t& shortened) {
+  std::string name;
+  for (std::size_t i = 0; i < raw.size();) {
+    const std::size_t n = utf8_length(raw, i);
+    const auto lead = static_cast<unsigned char>(raw[i]);
+    if (n == 0 || lead < 0x20 || lead == 0x7f) {
+      name.push_back('_');
+      ++i;
+    } else {
+      name.append(raw, i, n);
+      i += n;
+    }
+  }
   if (name.size() <= 79) return name;
   std::size_t end = 79;
   while (end > 0 && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) --end;
