@@ -28,8 +28,13 @@ int main(int argc, char** argv) {
         deform::IkResult result;
         solver.solve(pose, target, settings, result);
 
-        deform::compute_world_matrices(skeleton, pose, world);
-        deform::compute_skinning_palette(skeleton, world, palette);
+        deform::LocalToWorldJob fk;
+        fk.skeleton = &skeleton;
+        fk.rotations = pose.rotations;
+        fk.translations = pose.translations;
+        fk.world = world;
+        fk.palette = palette;
+        fk.run();
         deform::SkinningJob job;
         job.matrices = palette;
         job.bone_indices = model.weights.bones;

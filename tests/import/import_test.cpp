@@ -46,8 +46,13 @@ float model_size(const deform::Model& model) {
 std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
   const std::size_t bones = model.skeleton.bone_count();
   std::vector<glm::mat4> world(bones), palette(bones);
-  REQUIRE(deform::compute_world_matrices(model.skeleton, pose, world));
-  REQUIRE(deform::compute_skinning_palette(model.skeleton, world, palette));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &model.skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  REQUIRE(fk.run());
   std::vector<glm::vec3> out(model.mesh.point_count());
   deform::SkinningJob job;
   job.matrices = palette;

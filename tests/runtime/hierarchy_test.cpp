@@ -91,7 +91,7 @@ LatticeSpec spec_on(const char* name, std::int32_t bone, float zeta = 1.0f) {
 // Plain LBS, the reference the hierarchy is applied after.
 std::vector<glm::vec3> skin(const Limb& limb, std::span<const glm::mat4> world) {
   std::vector<glm::mat4> palette(world.size());
-  REQUIRE(deform::compute_skinning_palette(limb.skeleton, world, palette));
+  for (std::size_t b = 0; b < world.size(); ++b) palette[b] = world[b] * limb.skeleton.inverse_bind_world()[b];
   std::vector<glm::vec3> out(limb.points.size());
   for (std::size_t p = 0; p < out.size(); ++p) {
     glm::vec3 sum(0.0f);
@@ -106,7 +106,12 @@ std::vector<glm::vec3> skin(const Limb& limb, std::span<const glm::mat4> world) 
 
 std::vector<glm::mat4> world_of(const deform::Skeleton& skeleton, const deform::Pose& pose) {
   std::vector<glm::mat4> world(skeleton.bone_count());
-  REQUIRE(deform::compute_world_matrices(skeleton, pose, world));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  REQUIRE(fk.run());
   return world;
 }
 

@@ -37,10 +37,20 @@ namespace {
 constexpr float not_a_number = std::numeric_limits<float>::quiet_NaN();
 constexpr float inf = std::numeric_limits<float>::infinity();
 
-// Effector head by the skeleton module's full FK (compute_world_matrices), independent of the solvers' chain FK.
+// World matrices of every bone by the skeleton module's FK (LocalToWorldJob).
+Status world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> world) {
+  LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  return fk.run();
+}
+
+// Effector head by the skeleton module's full FK, independent of the solvers' chain FK.
 glm::vec3 reference_effector(const Skeleton& skeleton, const Pose& pose, std::int32_t effector) {
   std::vector<glm::mat4> world(skeleton.bone_count());
-  REQUIRE(compute_world_matrices(skeleton, pose, world));
+  REQUIRE(world_matrices(skeleton, pose, world));
   return glm::vec3(world[static_cast<std::size_t>(effector)][3]);
 }
 
@@ -391,7 +401,7 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     check_pose(rig, before, pose);
     // The middle joint is on the pole's side of the line root→target.
     std::vector<glm::mat4> world(rig.skeleton.bone_count());
-    REQUIRE(compute_world_matrices(rig.skeleton, pose, world));
+    REQUIRE(world_matrices(rig.skeleton, pose, world));
     const glm::vec3 root(world[1][3]), mid(world[2][3]);
     const glm::vec3 d = glm::normalize(target - root);
     const glm::vec3 mid_across = (mid - root) - d * glm::dot(mid - root, d);
@@ -465,7 +475,7 @@ TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole
     REQUIRE(limb.solve(straight_pose, glm::vec3(0, 1.2f, 0), glm::vec3(0, 0, 1), 1e-5f, result));
     CHECK(result.reached);
     std::vector<glm::mat4> world(3);
-    REQUIRE(compute_world_matrices(straight, straight_pose, world));
+    REQUIRE(world_matrices(straight, straight_pose, world));
     CHECK(world[1][3].z > 0.5f);  // the elbow went toward +z
     CHECK(std::abs(world[1][3].x) < 1e-5f);
   }

@@ -66,9 +66,13 @@ int run(const std::vector<std::string>& argv) {
 
   const std::size_t bone_count = skeleton.bone_count();
   std::vector<glm::mat4> world(bone_count), palette(bone_count);
-  if (!deform::compute_world_matrices(skeleton, pose, world) ||
-      !deform::compute_skinning_palette(skeleton, world, palette))
-    throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  if (!fk.run()) throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
 
   deform::SkinningJob job;
   job.method = method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;

@@ -128,7 +128,12 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   for (int round = 0;
        round < 16 && !chain_lattices.empty() && distance > 1e-3f * result.residual && distance > settings.tolerance;
        ++round) {
-    compute_world_matrices(skel, work, world);
+    LocalToWorldJob fk;
+    fk.skeleton = &skel;
+    fk.rotations = work.rotations;
+    fk.translations = work.translations;
+    fk.world = world;
+    if (!fk.run()) break;
     glm::vec3 growth(0.0f);  // effector motion per unit λ
     for (const Stretched& s : chain_lattices) {
       growth +=
@@ -176,8 +181,13 @@ bool Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return false;
   hierarchy_.step(dt);
   const Skeleton& skel = skeleton();
-  compute_world_matrices(skel, pose_, world_);
-  compute_skinning_palette(skel, world_, palette_);
+  LocalToWorldJob fk;
+  fk.skeleton = &skel;
+  fk.rotations = pose_.rotations;
+  fk.translations = pose_.translations;
+  fk.world = world_;
+  fk.palette = palette_;
+  fk.run();
   SkinningJob job;
   job.method = skinning;
   job.matrices = palette_;

@@ -102,7 +102,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   void reset();
 
   // Per frame, after step(): carries the lattices into world space with the bones' current matrices (`world`, one per
-  // bone, from compute_world_matrices of the pose the points were skinned with). Returns false (changing nothing)
+  // bone, from LocalToWorldJob for the pose the points were skinned with). Returns false (changing nothing)
   // on a size mismatch. O(lattices × control points), no allocation.
   bool update(std::span<const glm::mat4> world);
   // Adds every lattice's displacement to `positions` (the skinned points, mesh.point_count() entries). Returns false
