@@ -2,7 +2,7 @@
 #include "deform/character/character.hpp"
 #include <algorithm>
 #include <cmath>
-#include <optional>
+#include <cstddef>
 #include <utility>
 
 #include "deform/offline/hierarchy_binding.hpp"
@@ -104,19 +104,25 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     chain_lattices.push_back({l, child, rest.frame().u_axis / hierarchy_.length(l)});
   }
 
-  std::optional<CcdSolver> made;
-  try {
-    made.emplace(skel, root, effector);
-  } catch (const Error&) {
-    return result;  // a chain longer than the solver takes
-  }
-  CcdSolver& solver = *made;
+  IkChain chain;
+  if (!assign_chain(chain, skel, root, effector)) return result;  // a chain longer than a solve takes
   Pose work = pose_;
-  const float reach_length = chain_length(solver.chain(), work);
+  const float reach_length = chain_length(chain, work.translations);
   IkSettings settings = ik;
   settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+  std::uint32_t random_state = ik_random_seed;
   IkResult ik_result;
-  if (!solver.solve(work, target, settings, ik_result)) return result;
+  IkJob solve;
+  solve.chain = &chain;
+  solve.rotations = work.rotations;
+  solve.translations = work.translations;
+  solve.target = target;
+  solve.settings = settings;
+  solve.scratch = scratch;
+  solve.random_state = &random_state;
+  solve.result = &ik_result;
+  if (!chain_base(chain, work.rotations, work.translations, solve.base) || !solve.run()) return result;
   result.valid = true;
   result.residual = ik_result.distance;
   result.iterations = 1;
@@ -141,7 +147,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     }
     const float growth2 = glm::dot(growth, growth);
     if (!(growth2 > 0.0f)) break;
-    const glm::vec3 gap = target - effector_position(skel, solver.chain(), work);
+    const glm::vec3 gap = target - effector_position(chain, work.rotations, work.translations);
     const float next = std::clamp(lambda + glm::dot(gap, growth) / growth2, 0.0f, rig_.max_stretch);
     if (next == lambda && round > 0) break;
     lambda = next;
@@ -151,7 +157,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     for (const Stretched& s : chain_lattices) {  // (two lattices on one bone both push its child)
       work.translations[std::size_t(s.child)] += s.axis * (lambda * hierarchy_.length(s.lattice));
     }
-    if (!solver.solve(work, target, settings, ik_result)) break;
+    if (!solve.run()) break;
     distance = ik_result.distance;
     ++result.iterations;
   }
