@@ -265,7 +265,12 @@ class Viewer {
     if (playing_ && clip_ >= 0) {
       clip_time_ += dt;
       deform::Pose pose = character_->skeleton().bind_pose();
-      clips_[std::size_t(clip_)].sample(clip_time_, pose);
+      deform::SamplingJob sampling;
+      sampling.animation = &clips_[std::size_t(clip_)];
+      sampling.time = clip_time_;
+      sampling.rotations = pose.rotations;
+      sampling.translations = pose.translations;
+      sampling.run();
       character_->set_pose(pose);
       if (reaching_) character_->reach(effector_, target_);
     }

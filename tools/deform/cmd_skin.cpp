@@ -41,7 +41,13 @@ deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
   const std::int32_t clip = deform::find_clip(loaded.clips, name);
   if (clip < 0) throw deform::Error::in_file(loaded.source, "clip '" + name + "'", "no clip of that name");
   deform::Pose pose = loaded.model.skeleton.bind_pose();
-  loaded.clips[static_cast<std::size_t>(clip)].sample(seconds, pose);
+  deform::SamplingJob sampling;
+  sampling.animation = &loaded.clips[static_cast<std::size_t>(clip)];
+  sampling.time = seconds;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  if (const deform::Status status = sampling.run(); !status)
+    throw deform::Error::in_file(loaded.source, "clip '" + name + "'", status.reason());
   return pose;
 }
 
