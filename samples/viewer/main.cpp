@@ -488,11 +488,11 @@ class Viewer {
     effector_ = best;
     target_ = local;
     last_reach_ = character_->reach(effector_, target_);
-    if (!last_reach_.valid && character_->rig().reach_effector >= 0) {
+    if (!last_reach_.status.ok() && character_->rig().reach_effector >= 0) {
       effector_ = character_->rig().reach_effector;
       last_reach_ = character_->reach(effector_, target_);
     }
-    reaching_ = last_reach_.valid;
+    reaching_ = last_reach_.status.ok();
   }
 
   void handle_mouse(const sample::Input& in) {

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 
@@ -90,7 +91,7 @@ TEST_CASE("reach: IK within the limits, then the stretch meets the target within
     rest(c);
     const glm::vec3 target = far_target(c, rng);
     const deform::ReachResult result = c.reach(arm.hand, target);
-    REQUIRE(result.valid);
+    REQUIRE(result.status);
     CHECK(result.residual > 0.05f);  // out of reach: IK alone cannot get there
     CHECK(result.stretch > 0.0f);
     CHECK(result.distance <= 0.01f * result.residual);
@@ -112,7 +113,7 @@ TEST_CASE("a reachable target needs no stretch") {
   const glm::vec3 hand = c.bone_position(arm.hand);
   const glm::vec3 target = shoulder + 0.8f * (hand - shoulder) + glm::vec3(0.0f, 0.05f, 0.1f);
   const deform::ReachResult result = c.reach(arm.hand, target);
-  REQUIRE(result.valid);
+  REQUIRE(result.status);
   CHECK(result.residual < 1e-3f);
   CHECK(result.stretch == 0.0f);
   run_for(c, 0.5, 1.0f / 60.0f);
@@ -230,8 +231,8 @@ TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them g
   for (int trial = 0; trial < 3; ++trial) {
     CAPTURE(trial);
     const glm::vec3 target = far_target(whole, rng);
-    REQUIRE(whole.reach(arm.hand, target).valid);
-    REQUIRE(split.reach(arm.hand, target).valid);
+    REQUIRE(whole.reach(arm.hand, target).status);
+    REQUIRE(split.reach(arm.hand, target).status);
     for (int frame = 0; frame < 20; ++frame) {  // mid-stretch, still oscillating
       REQUIRE(whole.update(1.0f / 60.0f));
       REQUIRE(split.update(1.0f / 60.0f));
@@ -287,12 +288,24 @@ TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {
   wrong = pose;
   wrong.translations[3].x = NAN;
   CHECK_FALSE(c.set_pose(wrong));
-  CHECK_FALSE(c.update(-0.1f));
+  wrong = pose;
+  wrong.rotations[3] = glm::quat(0.0f, 0.0f, 0.0f, 0.0f);
+  CHECK(std::string(c.set_pose(wrong).reason()) == "pose has a zero rotation");
+  CHECK(std::string(c.update(-0.1f).reason()) == "dt is negative or not finite");
   CHECK_FALSE(c.update(NAN));
-  CHECK_FALSE(c.reach(-1, glm::vec3(1.0f)).valid);
-  CHECK_FALSE(c.reach(9999, glm::vec3(1.0f)).valid);
-  CHECK_FALSE(c.reach(arm.hand, glm::vec3(NAN, 0.0f, 0.0f)).valid);
+  CHECK(std::string(c.reach(-1, glm::vec3(1.0f)).status.reason()) == "effector out of range or the root");
+  CHECK_FALSE(c.reach(0, glm::vec3(1.0f)).status);
+  CHECK_FALSE(c.reach(9999, glm::vec3(1.0f)).status);
+  CHECK(std::string(c.reach(arm.hand, glm::vec3(NAN, 0.0f, 0.0f)).status.reason()) == "target is not finite");
   CHECK(c.stretch() == 0.0f);
+  // Nothing above changed the character: its pose is the clamped one set first, its points those of the last update.
+  Character fresh = deform::make_builtin_character();
+  REQUIRE(fresh.set_pose(pose));
+  CHECK(c.pose().rotations == fresh.pose().rotations);
+  CHECK(c.pose().translations == fresh.pose().translations);
+  const std::vector<glm::vec3> positions(c.positions().begin(), c.positions().end());
+  CHECK_FALSE(c.update(INFINITY));
+  CHECK(std::equal(positions.begin(), positions.end(), c.positions().begin()));
 }
 
 TEST_CASE("a Character made without a rig has no lattices, whatever its model") {
@@ -302,7 +315,7 @@ TEST_CASE("a Character made without a rig has no lattices, whatever its model") 
   CHECK(c.deformers().lattice_count() == 0);
   const std::int32_t hand = c.skeleton().find("hand_l");
   const deform::ReachResult result = c.reach(hand, glm::vec3(3.0f, 1.5f, 0.0f));
-  CHECK(result.valid);
+  CHECK(result.status);
   CHECK(result.stretch == 0.0f);
   REQUIRE(c.update(1.0f / 60.0f));
 }
