@@ -14,6 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <type_traits>
 #include <random>
 #include <string>
 #include <vector>
@@ -318,4 +320,58 @@ TEST_CASE("a Character made without a rig has no lattices, whatever its model") 
   CHECK(result.status);
   CHECK(result.stretch == 0.0f);
   REQUIRE(c.update(1.0f / 60.0f));
+}
+
+TEST_CASE("characters moved into a std::vector deform bit for bit as unmoved ones") {
+  static_assert(std::is_nothrow_move_constructible_v<Character> && std::is_nothrow_move_assignable_v<Character>);
+  static_assert(!std::is_copy_constructible_v<Character>);
+  constexpr std::size_t count = 3;
+  // The unmoved references, and the same characters moved into a vector that reallocates as it grows (each
+  // reallocation moves every element again), then one of them moved out and back by assignment.
+  std::vector<std::unique_ptr<Character>> unmoved;
+  std::vector<Character> moved;
+  for (std::size_t n = 0; n < count; ++n) {
+    unmoved.push_back(std::make_unique<Character>(deform::make_builtin_character()));
+    Character c = deform::make_builtin_character();
+    moved.push_back(std::move(c));
+  }
+  Character spare = std::move(moved[1]);
+  moved[1] = std::move(spare);
+  moved[2].skinning = unmoved[2]->skinning = deform::SkinningMethod::dqs;
+
+  const auto frame = [](Character& c, std::size_t n, int f) {
+    const Arm arm = left_arm(c);
+    const glm::vec3 shoulder = c.bone_position(arm.clavicle);
+    if (f == 5) REQUIRE(c.reach(arm.hand, shoulder + glm::vec3(0.8f + 0.1f * float(n), 0.3f, 0.2f)).status);
+    if (f == 40) REQUIRE(c.reach(c.skeleton().find("hand_r"), glm::vec3(-0.5f, 1.2f, 0.3f)).status);
+    if (f == 60) c.release();
+    REQUIRE(c.update(1.0f / 60.0f));
+  };
+  for (int f = 0; f < 90; ++f) {
+    for (std::size_t n = 0; n < count; ++n) {
+      frame(*unmoved[n], n, f);
+      frame(moved[n], n, f);
+    }
+    if (f % 10 != 9) continue;
+    for (std::size_t n = 0; n < count; ++n) {
+      CAPTURE(n);
+      Character& a = *unmoved[n];
+      Character& b = moved[n];
+      REQUIRE(a.positions().size() == b.positions().size());
+      CHECK(std::equal(a.positions().begin(), a.positions().end(), b.positions().begin()));
+      const auto na = a.normals(), nb = b.normals();
+      CHECK(std::equal(na.begin(), na.end(), nb.begin()));
+      CHECK(a.pose().rotations == b.pose().rotations);
+      CHECK(a.stretch() == b.stretch());
+      for (std::size_t l = 0; l < a.deformers().lattice_count(); ++l)
+        CHECK(std::equal(a.control_points(l).begin(), a.control_points(l).end(), b.control_points(l).begin()));
+      for (std::int32_t bone = 0; bone < std::int32_t(a.skeleton().bone_count()); ++bone)
+        CHECK(a.bone_position(bone) == b.bone_position(bone));
+    }
+  }
+  // The frames above did stretch the left arm's lattices, which are still springing back.
+  float springing = 0.0f;
+  for (std::size_t l = 0; l < moved[0].deformers().lattice_count(); ++l)
+    springing += std::abs(moved[0].deformers().stretch(l));
+  CHECK(springing > 1e-3f);
 }

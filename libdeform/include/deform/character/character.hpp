@@ -16,7 +16,7 @@
 // A frame: pose (set_pose, e.g. from a SamplingJob) → IK (reach, on the chain alone) → update(dt): forward kinematics
 // once (LocalToWorldJob: world matrices and skinning palette), the springs' step, skinning, the lattices' carried
 // points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
-// construction.
+// construction. Characters are movable values (a std::vector of them is fine).
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -50,8 +50,15 @@ class DEFORM_CHARACTER_API Character {
   Character(Model model, const Rig& rig);
   // No lattices: skinning and IK only.
   explicit Character(Model model);
+  // Movable: nothing in a Character points into itself (its jobs are made per call), so a move is member-wise, keeps
+  // the storage reserved for the per-frame path and allocates nothing; an engine keeps its characters in a
+  // std::vector. A moved-from Character may only be assigned to or destroyed. Not copyable: a copied vector keeps
+  // its elements but not its reserved capacity, which reach() relies on.
+  Character(Character&&) noexcept = default;
+  Character& operator=(Character&&) noexcept = default;
   Character(const Character&) = delete;
   Character& operator=(const Character&) = delete;
+  ~Character() = default;
 
   const Model& model() const noexcept { return model_; }
   const Skeleton& skeleton() const noexcept { return model_.skeleton; }
