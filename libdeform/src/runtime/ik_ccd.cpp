@@ -31,7 +31,8 @@ void sweep(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec
 }  // namespace
 
 IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
-                   const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept {
+                   const IkSettings& settings, float length, const Scratch& scratch,
+                   std::uint32_t& random_state) noexcept {
   const std::size_t joints = chain.joint_count();
   const std::span<const EulerLimits> limits = chain.limits;
   const std::span<glm::quat> frames = scratch.frames;
@@ -40,7 +41,6 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
     clamp_rotation(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
   const float max_step = glm::radians(settings.max_step_degrees);
 
-  const float length = chain_length(chain, pose.translations);
   chain_fk(chain, pose, base, frames, heads);
   float distance = glm::length(heads.back() - target);
   // No pose gets nearer than this; progress is measured on the distance above it.

@@ -26,14 +26,23 @@ bool spans_fit(const IkChain& chain, std::size_t rotations, std::size_t translat
   return chain.max_bone >= 0 && rotations >= needed && translations >= needed;
 }
 
-// The checks every solve shares: the chain's pose entries finite, its length finite. Spans already fit.
+// The sum of the chain's segment lengths; the spans hold every chain bone.
+float segment_sum(const IkChain& chain, std::span<const glm::vec3> translations) noexcept {
+  float length = 0.0f;
+  for (std::size_t k = 1; k < chain.bones.size(); ++k)
+    length += glm::length(translations[static_cast<std::size_t>(chain.bones[k])]);
+  return length;
+}
+
+// The checks every solve shares: the chain's pose entries finite, its length (returned) finite. Spans already fit.
 Status check_chain_pose(const IkChain& chain, std::span<const glm::quat> rotations,
-                        std::span<const glm::vec3> translations) noexcept {
+                        std::span<const glm::vec3> translations, float& length) noexcept {
   for (const std::int32_t id : chain.bones) {
     const auto b = static_cast<std::size_t>(id);
     if (!finite(rotations[b]) || !detail::finite(translations[b])) return Status::failure("chain pose is not finite");
   }
-  if (!std::isfinite(chain_length(chain, translations))) return Status::failure("chain length overflows");
+  length = segment_sum(chain, translations);
+  if (!std::isfinite(length)) return Status::failure("chain length overflows");
   return {};
 }
 
@@ -91,11 +100,7 @@ IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t eff
 }
 
 float chain_length(const IkChain& chain, std::span<const glm::vec3> translations) noexcept {
-  if (!spans_fit(chain, translations.size(), translations.size())) return 0.0f;
-  float length = 0.0f;
-  for (std::size_t k = 1; k < chain.bones.size(); ++k)
-    length += glm::length(translations[static_cast<std::size_t>(chain.bones[k])]);
-  return length;
+  return spans_fit(chain, translations.size(), translations.size()) ? segment_sum(chain, translations) : 0.0f;
 }
 
 RigidTransform RigidTransform::from_matrix(const glm::mat4& matrix) noexcept {
@@ -137,21 +142,33 @@ glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rot
 
 std::size_t IkJob::scratch_size() const noexcept { return chain == nullptr ? 0 : scratch_size(chain->joint_count()); }
 
-Status IkJob::validate() const noexcept {
+namespace {
+
+// IkJob::validate, returning the chain's length as well.
+Status check(const IkJob& job, float& length) noexcept {
+  const IkChain* chain = job.chain;
+  const IkSettings& settings = job.settings;
   if (chain == nullptr || chain->joint_count() == 0) return Status::failure("no chain");
-  if (!spans_fit(*chain, rotations.size(), translations.size()))
+  if (!spans_fit(*chain, job.rotations.size(), job.translations.size()))
     return Status::failure("pose spans do not hold every chain bone");
   if (settings.max_iterations < 1) return Status::failure("max_iterations below 1");
   if (!std::isfinite(settings.tolerance) || settings.tolerance < 0.0f)
     return Status::failure("tolerance not finite and >= 0");
   if (!std::isfinite(settings.max_step_degrees) || settings.max_step_degrees < 0.0f)
     return Status::failure("max_step_degrees not finite and >= 0");
-  if (scratch.size() < scratch_size()) return Status::failure("scratch smaller than scratch_size()");
-  if (reinterpret_cast<std::uintptr_t>(scratch.data()) % scratch_alignment != 0)
+  if (job.scratch.size() < job.scratch_size()) return Status::failure("scratch smaller than scratch_size()");
+  if (reinterpret_cast<std::uintptr_t>(job.scratch.data()) % IkJob::scratch_alignment != 0)
     return Status::failure("scratch misaligned");
-  if (!detail::finite(target)) return Status::failure("target is not finite");
-  if (!finite(base)) return Status::failure("base is not finite");
-  return check_chain_pose(*chain, rotations, translations);
+  if (!detail::finite(job.target)) return Status::failure("target is not finite");
+  if (!finite(job.base)) return Status::failure("base is not finite");
+  return check_chain_pose(*chain, job.rotations, job.translations, length);
+}
+
+}  // namespace
+
+Status IkJob::validate() const noexcept {
+  float length = 0.0f;
+  return check(*this, length);
 }
 
 Status IkJob::run(std::size_t begin, std::size_t end) const noexcept {
@@ -160,7 +177,8 @@ Status IkJob::run(std::size_t begin, std::size_t end) const noexcept {
 }
 
 Status IkJob::run() const noexcept {
-  if (const Status status = validate(); !status) return status;
+  float length = 0.0f;
+  if (const Status status = check(*this, length); !status) return status;
   const std::size_t joints = chain->joint_count(), bones = joints + 1;
   // The scratch's parts, doubles first (scratch_alignment), then floats.
   std::byte* bytes = scratch.data();
@@ -176,7 +194,7 @@ Status IkJob::run() const noexcept {
   const detail::PoseView pose{rotations, translations};
   const IkResult solved = method == IkMethod::fabrik
                               ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
-                              : detail::solve_ccd(*chain, pose, base, target, settings, parts, state);
+                              : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
   if (random_state != nullptr) *random_state = state;
   if (result != nullptr) *result = solved;
   return {};
@@ -190,7 +208,8 @@ Status TwoBoneIkJob::validate() const noexcept {
   if (!detail::finite(target)) return Status::failure("target is not finite");
   if (!detail::finite(pole)) return Status::failure("pole is not finite");
   if (!finite(base)) return Status::failure("base is not finite");
-  return check_chain_pose(*chain, rotations, translations);
+  float length = 0.0f;
+  return check_chain_pose(*chain, rotations, translations, length);
 }
 
 Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {

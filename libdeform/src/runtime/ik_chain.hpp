@@ -27,9 +27,11 @@ struct Scratch {
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
 };
 
-// The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state.
+// The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
+// `length` is chain_length of the pose.
 IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
-                   const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
+                   const IkSettings& settings, float length, const Scratch& scratch,
+                   std::uint32_t& random_state) noexcept;
 IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
                       const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
 // The closed-form two-bone solve (TwoBoneIkJob), inputs checked.
