@@ -3,7 +3,6 @@
 // The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
 #include <benchmark/benchmark.h>
 
-#include <memory>
 #include <random>
 
 #include "deform/character/character.hpp"
@@ -31,34 +30,34 @@ deform::Model scaled_model(std::size_t points) {
 }
 
 // A character mid-reach: its arm stretched toward a point 1 m beyond the shoulder and springing.
-std::unique_ptr<deform::Character> reaching_character(std::size_t points) {
+deform::Character reaching_character(std::size_t points) {
   deform::Model model = scaled_model(points);
   const deform::Rig rig = deform::builtin_rig(model);
-  auto c = std::make_unique<deform::Character>(std::move(model), rig);
-  const std::int32_t hand = c->skeleton().find("hand_l");
-  c->reach(hand, c->bone_position(c->skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
+  deform::Character c(std::move(model), rig);
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  c.reach(hand, c.bone_position(c.skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
   return c;
 }
 
 void frame(benchmark::State& state) {
-  const auto c = reaching_character(std::size_t(state.range(0)));
+  deform::Character c = reaching_character(std::size_t(state.range(0)));
   std::size_t bound = 0;
-  for (std::size_t l = 0; l < c->deformers().lattice_count(); ++l) bound += c->deformers().bound_count(l);
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) bound += c.deformers().bound_count(l);
   for (auto _ : state) {
-    c->update(1.0f / 60.0f);
-    benchmark::DoNotOptimize(c->positions().data());
+    c.update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c.positions().data());
   }
-  state.SetItemsProcessed(state.iterations() * std::int64_t(c->positions().size()));
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
   state.counters["bound"] = double(bound);
 }
 
 void frame_with_normals(benchmark::State& state) {
-  const auto c = reaching_character(0);
+  deform::Character c = reaching_character(0);
   for (auto _ : state) {
-    c->update(1.0f / 60.0f);
-    benchmark::DoNotOptimize(c->normals().data());
+    c.update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c.normals().data());
   }
-  state.SetItemsProcessed(state.iterations() * std::int64_t(c->positions().size()));
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
 }
 
 BENCHMARK(frame)->Name("frame/builtin_3_lattices")->Arg(0)->Unit(benchmark::kMicrosecond);

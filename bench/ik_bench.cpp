@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -36,12 +38,15 @@ std::vector<Case> make_cases(std::size_t joints, std::uint32_t seed, bool free_j
   return cases;
 }
 
-template <class Solver>
-void solve_loop(benchmark::State& state, bool escape_stalls) {
+// Each rig has its chain (made once) and the stall escape's generator state, carried from solve to solve as a
+// solver object would; one scratch serves every solve. The timed solve includes its base (chain_base).
+void solve_loop(benchmark::State& state, deform::IkMethod method, bool escape_stalls) {
   const auto joints = static_cast<std::size_t>(state.range(0));
   const std::vector<Case> cases = make_cases(joints, 1234);
-  std::vector<Solver> solvers;
-  for (const Case& c : cases) solvers.emplace_back(c.rig.skeleton, c.rig.root, c.rig.effector);
+  std::vector<deform::IkChain> chains;
+  for (const Case& c : cases) chains.push_back(deform::make_chain(c.rig.skeleton, c.rig.root, c.rig.effector));
+  std::vector<std::uint32_t> random_states(cases.size(), deform::ik_random_seed);
+  std::vector<std::byte> scratch(deform::IkJob::scratch_size(joints));
   deform::Pose pose = cases[0].bind;
   std::vector<double> times;
   times.reserve(1 << 22);
@@ -52,13 +57,22 @@ void solve_loop(benchmark::State& state, bool escape_stalls) {
     const Case& c = cases[i];
     pose.rotations.assign(c.bind.rotations.begin(), c.bind.rotations.end());  // capacity kept: no allocation
     pose.translations.assign(c.bind.translations.begin(), c.bind.translations.end());
-    deform::IkSettings settings;
-    settings.tolerance = 1e-4f * c.rig.length;
-    settings.max_iterations = 200;
-    settings.escape_stalls = escape_stalls;
     deform::IkResult result;
+    deform::IkJob job;
+    job.method = method;
+    job.chain = &chains[i];
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    job.target = c.targets[t];
+    job.settings.tolerance = 1e-4f * c.rig.length;
+    job.settings.max_iterations = 200;
+    job.settings.escape_stalls = escape_stalls;
+    job.scratch = scratch;
+    job.random_state = &random_states[i];
+    job.result = &result;
     const auto start = std::chrono::steady_clock::now();
-    solvers[i].solve(pose, c.targets[t], settings, result);
+    deform::chain_base(chains[i], pose.rotations, pose.translations, job.base);
+    job.run();
     const auto stop = std::chrono::steady_clock::now();
     if (times.size() < times.capacity()) times.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
     benchmark::DoNotOptimize(pose.rotations.data());
@@ -73,17 +87,17 @@ void solve_loop(benchmark::State& state, bool escape_stalls) {
   state.counters["median_us"] = times.empty() ? 0.0 : times[times.size() / 2];
 }
 
-void ccd(benchmark::State& state) { solve_loop<deform::CcdSolver>(state, true); }
-void ccd_plain(benchmark::State& state) { solve_loop<deform::CcdSolver>(state, false); }
-void fabrik(benchmark::State& state) { solve_loop<deform::FabrikSolver>(state, true); }
+void ccd(benchmark::State& state) { solve_loop(state, deform::IkMethod::ccd, true); }
+void ccd_plain(benchmark::State& state) { solve_loop(state, deform::IkMethod::ccd, false); }
+void fabrik(benchmark::State& state) { solve_loop(state, deform::IkMethod::fabrik, true); }
 
 // state.range(0): 1 = random DOF limits (the closed form, then clamps), 0 = free joints (the closed form alone).
 void two_bone(benchmark::State& state) {
   const std::vector<Case> cases = make_cases(2, 99, state.range(0) == 0);
-  std::vector<deform::TwoBoneSolver> solvers;
+  std::vector<deform::IkChain> chains;
   std::vector<deform::Pose> poses;  // one per rig; each solve starts from its bind pose again
   for (const Case& c : cases) {
-    solvers.emplace_back(c.rig.skeleton, c.rig.root, c.rig.effector);
+    chains.push_back(deform::make_chain(c.rig.skeleton, c.rig.root, c.rig.effector));
     poses.push_back(c.bind);
   }
   long solves = 0, reached = 0;
@@ -92,14 +106,23 @@ void two_bone(benchmark::State& state) {
     const auto t = static_cast<std::size_t>((solves / rig_count) % targets_per_rig);
     const Case& c = cases[i];
     deform::Pose& pose = poses[i];
-    // The solver writes only the two joints' rotations: put those back (not the whole pose, whose copy would be
+    // The solve writes only the two joints' rotations: put those back (not the whole pose, whose copy would be
     // timed as well: ~15 ns of vector assignment).
     for (const std::int32_t joint : {c.rig.root, c.rig.root + 1}) {
       const auto b = static_cast<std::size_t>(joint);
       pose.rotations[b] = c.bind.rotations[b];
     }
     deform::IkResult result;
-    solvers[i].solve(pose, c.targets[t], glm::vec3(0, 0, 1), 1e-4f * c.rig.length, result);
+    deform::TwoBoneIkJob job;
+    job.chain = &chains[i];
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    job.target = c.targets[t];
+    job.pole = glm::vec3(0, 0, 1);
+    job.tolerance = 1e-4f * c.rig.length;
+    job.result = &result;
+    deform::chain_base(chains[i], pose.rotations, pose.translations, job.base);
+    job.run();
     benchmark::DoNotOptimize(pose.rotations.data());
     reached += result.reached;
     ++solves;

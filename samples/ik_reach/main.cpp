@@ -2,6 +2,9 @@
 // chain (clavicle to hand) is solved toward it from the current pose, within every joint's DOF limits, and the mesh
 // is skinned with the result. The orange point is the target, the skeleton is drawn on top.
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/ik.hpp"
@@ -13,9 +16,9 @@
 int main(int argc, char** argv) {
   const deform::Model model = deform::builtin_character();
   const deform::Skeleton& skeleton = model.skeleton;
-  deform::CcdSolver solver(skeleton, skeleton.find("clavicle_l"), skeleton.find("hand_l"));
-  deform::IkSettings settings;
-  settings.tolerance = 1e-3f;
+  const deform::IkChain chain = deform::make_chain(skeleton, skeleton.find("clavicle_l"), skeleton.find("hand_l"));
+  std::vector<std::byte> scratch(deform::IkJob::scratch_size(chain.joint_count()));
+  std::uint32_t random_state = deform::ik_random_seed;
   deform::Pose pose = skeleton.bind_pose();
   std::vector<glm::mat4> world(skeleton.bone_count()), palette(skeleton.bone_count());
   std::vector<glm::vec3> points(model.mesh.point_count());
@@ -26,10 +29,25 @@ int main(int argc, char** argv) {
       [&](const sample::Frame& f) {
         const glm::vec3 target(0.45f + 0.25f * std::cos(f.time), 1.35f + 0.3f * std::sin(f.time), 0.35f);
         deform::IkResult result;
-        solver.solve(pose, target, settings, result);
+        deform::IkJob ik;
+        ik.chain = &chain;
+        deform::chain_base(chain, pose.rotations, pose.translations, ik.base);
+        ik.rotations = pose.rotations;
+        ik.translations = pose.translations;
+        ik.target = target;
+        ik.settings.tolerance = 1e-3f;
+        ik.scratch = scratch;
+        ik.random_state = &random_state;
+        ik.result = &result;
+        ik.run();
 
-        deform::compute_world_matrices(skeleton, pose, world);
-        deform::compute_skinning_palette(skeleton, world, palette);
+        deform::LocalToWorldJob fk;
+        fk.skeleton = &skeleton;
+        fk.rotations = pose.rotations;
+        fk.translations = pose.translations;
+        fk.world = world;
+        fk.palette = palette;
+        fk.run();
         deform::SkinningJob job;
         job.matrices = palette;
         job.bone_indices = model.weights.bones;

@@ -30,8 +30,13 @@ int main(int argc, char** argv) {
         // Twist the forearm about its bone axis (+Y in the built-in character) by up to ±150°, unclamped.
         const glm::vec3 bind = skeleton.bone(forearm).bind_rotation;
         skeleton.set_euler(pose, forearm, bind + glm::vec3(0.0f, 150.0f * std::sin(f.time), 0.0f), false);
-        deform::compute_world_matrices(skeleton, pose, world);
-        deform::compute_skinning_palette(skeleton, world, palette);
+        deform::LocalToWorldJob fk;
+        fk.skeleton = &skeleton;
+        fk.rotations = pose.rotations;
+        fk.translations = pose.translations;
+        fk.world = world;
+        fk.palette = palette;
+        fk.run();
         bool scaled = false;
         deform::compute_dual_quat_palette(palette, dual_quats, scales, scaled);
 

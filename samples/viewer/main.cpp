@@ -236,7 +236,12 @@ class Viewer {
     if (playing_ && clip_ >= 0) {
       clip_time_ += dt;
       deform::Pose pose = character_->skeleton().bind_pose();
-      clips_[std::size_t(clip_)].sample(clip_time_, pose);
+      deform::SamplingJob sampling;
+      sampling.animation = &clips_[std::size_t(clip_)];
+      sampling.time = clip_time_;
+      sampling.rotations = pose.rotations;
+      sampling.translations = pose.translations;
+      sampling.run();
       character_->set_pose(pose);
       if (reaching_) character_->reach(effector_, target_);
     }
@@ -454,11 +459,11 @@ class Viewer {
     effector_ = best;
     target_ = local;
     last_reach_ = character_->reach(effector_, target_);
-    if (!last_reach_.valid && character_->rig().reach_effector >= 0) {
+    if (!last_reach_.status.ok() && character_->rig().reach_effector >= 0) {
       effector_ = character_->rig().reach_effector;
       last_reach_ = character_->reach(effector_, target_);
     }
-    reaching_ = last_reach_.valid;
+    reaching_ = last_reach_.status.ok();
   }
 
   void handle_mouse(const sample::Input& in) {

@@ -10,6 +10,6 @@ int main() {
   const deform::ReachResult reach = hero.reach(hand, glm::vec3(1.6f, 1.5f, 0.3f));
   for (int frame = 0; frame < 120; ++frame)
     if (!hero.update(1.0f / 60.0f)) return 1;
-  std::printf("facade: reach valid %d, stretch %.3f\n", int(reach.valid), hero.stretch());
-  return reach.valid && hero.stretch() > 0.0f ? 0 : 1;
+  std::printf("facade: reach %s, stretch %.3f\n", reach.status.reason(), hero.stretch());
+  return reach.status && hero.stretch() > 0.0f ? 0 : 1;
 }

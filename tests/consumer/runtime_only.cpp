@@ -19,9 +19,13 @@ int main() {
   deform::Pose pose = skeleton.bind_pose();
   pose.rotations[0] = deform::quat_from_euler(glm::vec3(0.0f, 0.0f, 90.0f));  // Rz(90°): +Y goes to -X
   std::vector<glm::mat4> world(2), palette(2);
-  if (!deform::compute_world_matrices(skeleton, pose, world) ||
-      !deform::compute_skinning_palette(skeleton, world, palette))
-    return 1;
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  if (!fk.validate() || !fk.run()) return 1;
   const std::vector<glm::u16vec4> ids(1, glm::u16vec4(1, 0, 0, 0));
   const std::vector<glm::vec4> weights(1, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
   const std::vector<glm::vec3> in(1, glm::vec3(0.0f, 2.0f, 0.0f));

@@ -40,7 +40,12 @@ glm::vec3 head(const glm::mat4& world) { return glm::vec3(world[3]); }
 
 std::vector<glm::mat4> world_of(const deform::Pose& pose) {
   std::vector<glm::mat4> world(character().skeleton.bone_count());
-  REQUIRE(deform::compute_world_matrices(character().skeleton, pose, world));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &character().skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  REQUIRE(fk.run());
   return world;
 }
 

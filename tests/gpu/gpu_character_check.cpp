@@ -76,7 +76,7 @@ bool check_degree(int degree, bool springs) {
 
   const std::int32_t hand = cpu.skeleton().find("hand_l");
   const glm::vec3 target(1.3f, 1.6f, 0.4f);  // the smoke test's reach: out of the left arm's reach
-  if (!cpu.reach(hand, target).valid || !gpu.reach(hand, target).valid) {
+  if (!cpu.reach(hand, target).status || !gpu.reach(hand, target).status) {
     std::printf("FAIL degree %d: reach refused\n", degree);
     return false;
   }

@@ -44,11 +44,26 @@ float model_size(const deform::Model& model) {
 }
 
 // LBS of every point with `pose`, through the library's own FK, palette and skinning job.
+// The clip at `seconds` into `pose`, by the sampling job.
+deform::Status sample(const deform::Animation& clip, float seconds, deform::Pose& pose) {
+  deform::SamplingJob job;
+  job.animation = &clip;
+  job.time = seconds;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  return job.run();
+}
+
 std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
   const std::size_t bones = model.skeleton.bone_count();
   std::vector<glm::mat4> world(bones), palette(bones);
-  REQUIRE(deform::compute_world_matrices(model.skeleton, pose, world));
-  REQUIRE(deform::compute_skinning_palette(model.skeleton, world, palette));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &model.skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  REQUIRE(fk.run());
   std::vector<glm::vec3> out(model.mesh.point_count());
   deform::SkinningJob job;
   job.matrices = palette;
@@ -263,14 +278,14 @@ TEST_CASE("clips: keys sampled at their times, the mesh follows Assimp's animati
       for (const deform::Channel& channel : clip.channels)
         for (std::size_t k = 0; k < channel.translation.times.size(); ++k) {
           deform::Pose pose = model.skeleton.bind_pose();
-          REQUIRE(clip.sample(channel.translation.times[k], pose));
+          REQUIRE(sample(clip, channel.translation.times[k], pose));
           CHECK(glm::length(pose.translations[static_cast<std::size_t>(channel.bone)] -
                             channel.translation.values[k]) <= 1e-5f * size);
         }
       for (const deform::Channel& channel : clip.channels)
         for (std::size_t k = 0; k < channel.rotation.times.size(); ++k) {
           deform::Pose pose = model.skeleton.bind_pose();
-          REQUIRE(clip.sample(channel.rotation.times[k], pose));
+          REQUIRE(sample(clip, channel.rotation.times[k], pose));
           const glm::quat q = pose.rotations[static_cast<std::size_t>(channel.bone)], key = channel.rotation.values[k];
           CHECK(std::fabs(std::fabs(glm::dot(q, key)) - 1.0f) <= 1e-6f);
         }
@@ -281,7 +296,7 @@ TEST_CASE("clips: keys sampled at their times, the mesh follows Assimp's animati
       for (int s = 0; s <= steps; ++s) {
         const float t = clip.duration * static_cast<float>(s) / steps;
         deform::Pose pose = model.skeleton.bind_pose();
-        REQUIRE(clip.sample(t, pose));
+        REQUIRE(sample(clip, t, pose));
         const std::vector<glm::vec3> points = skin(model, pose);
         for (const glm::vec3& p : points) {
           REQUIRE(std::isfinite(p.x + p.y + p.z));
@@ -322,7 +337,7 @@ TEST_CASE("export writes OBJ + MTL + .sk + .skw that reload to the same skinned 
     std::vector<deform::Pose> poses = {imported.model.skeleton.bind_pose()};
     for (const deform::Animation& clip : imported.clips) {
       deform::Pose pose = imported.model.skeleton.bind_pose();
-      REQUIRE(clip.sample(clip.duration * 0.37f, pose));
+      REQUIRE(sample(clip, clip.duration * 0.37f, pose));
       poses.push_back(pose);
     }
     for (const deform::Pose& pose : poses) {

@@ -179,7 +179,7 @@ TEST_CASE("default_rig finds a limb by name, then by depth, and binds") {
   deform::Character character(renamed, by_depth);
   const glm::vec3 tip = character.bone_position(by_depth.reach_effector);
   const deform::ReachResult reach = character.reach(by_depth.reach_effector, tip + glm::vec3(0.0f, -0.5f, 0.3f));
-  CHECK(reach.valid);
+  CHECK(reach.status);
   CHECK(reach.stretch > 0.0f);
 
   CHECK_THROWS_AS(deform::default_rig(renamed, 1000), deform::Error);

@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <random>
+#include <span>
+#include <string>
 
 using deform::Animation;
 using deform::Channel;
@@ -27,6 +29,16 @@ bool near(glm::quat a, glm::quat b, float tolerance = 1e-5f) {
 
 deform::Pose identity_pose(std::size_t bones) {
   return {std::vector<glm::quat>(bones, glm::quat(1, 0, 0, 0)), std::vector<glm::vec3>(bones, glm::vec3(0.0f))};
+}
+
+// The clip at `seconds` into `pose`, by the sampling job.
+deform::Status sample(const Animation& clip, float seconds, deform::Pose& pose) {
+  deform::SamplingJob job;
+  job.animation = &clip;
+  job.time = seconds;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  return job.run();
 }
 
 // A two-key clip on bone 1: translation (0,0,0) -> (2,4,-6), rotation 0° -> 90° about Z, over two seconds.
@@ -80,10 +92,10 @@ TEST_CASE("sampling at key times gives the keys, for random tracks of every inte
 TEST_CASE("linear translation and slerp rotation between keys, hand-checked") {
   const Animation clip = two_key_clip(Interpolation::linear);
   deform::Pose pose = identity_pose(3);
-  REQUIRE(clip.sample(0.5f, pose));
+  REQUIRE(sample(clip, 0.5f, pose));
   CHECK(near(pose.translations[1], {0.5f, 1.0f, -1.5f}));
   CHECK(near(pose.rotations[1], axis_angle(22.5f, {0, 0, 1})));
-  REQUIRE(clip.sample(1.0f, pose));
+  REQUIRE(sample(clip, 1.0f, pose));
   CHECK(near(pose.rotations[1], axis_angle(45.0f, {0, 0, 1})));
   // Bones without a channel are untouched.
   CHECK(pose.translations[0] == glm::vec3(0.0f));
@@ -108,7 +120,7 @@ TEST_CASE("step holds each key until the next") {
   CHECK(deform::sample_track(track, 3.5f, {}) == glm::vec3(3));
   const Animation clip = two_key_clip(Interpolation::step);
   deform::Pose pose = identity_pose(2);
-  REQUIRE(clip.sample(1.9f, pose));
+  REQUIRE(sample(clip, 1.9f, pose));
   CHECK(pose.translations[1] == glm::vec3(0.0f));
   CHECK(near(pose.rotations[1], glm::quat(1, 0, 0, 0)));
 }
@@ -145,9 +157,9 @@ TEST_CASE("looping wraps time, a one-shot clip clamps") {
   Animation clip = two_key_clip(Interpolation::linear);
   deform::Pose a = identity_pose(2), b = identity_pose(2);
   for (const float t : {0.25f, 0.5f, 1.75f}) {
-    REQUIRE(clip.sample(t, a));
+    REQUIRE(sample(clip, t, a));
     for (const float shift : {2.0f, 4.0f, -2.0f, 20.0f}) {
-      REQUIRE(clip.sample(t + shift, b));
+      REQUIRE(sample(clip, t + shift, b));
       CHECK(near(a.translations[1], b.translations[1], 1e-4f));
       CHECK(near(a.rotations[1], b.rotations[1], 1e-4f));
     }
@@ -155,23 +167,80 @@ TEST_CASE("looping wraps time, a one-shot clip clamps") {
   CHECK(clip.local_time(2.0f) == 0.0f);
   CHECK(clip.local_time(-0.5f) == doctest::Approx(1.5f));
   clip.loop = false;
-  REQUIRE(clip.sample(7.0f, a));
+  REQUIRE(sample(clip, 7.0f, a));
   CHECK(near(a.translations[1], {2, 4, -6}));
-  REQUIRE(clip.sample(-1.0f, a));
+  REQUIRE(sample(clip, -1.0f, a));
   CHECK(near(a.translations[1], {0, 0, 0}));
   Animation still;  // zero length: always time 0
   CHECK(still.local_time(3.0f) == 0.0f);
 }
 
-TEST_CASE("sample refuses a pose too small or a non-finite time, writing nothing") {
+TEST_CASE("SamplingJob refuses a pose too small, a non-finite time or malformed tracks, writing nothing") {
   const Animation clip = two_key_clip(Interpolation::linear);
   deform::Pose pose = identity_pose(1);  // bone 1 is out of range
-  CHECK_FALSE(clip.sample(0.5f, pose));
+  deform::SamplingJob job;
+  job.animation = &clip;
+  job.time = 0.5f;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  CHECK(std::string(job.validate().reason()) == "channel bone out of the pose");
+  CHECK(std::string(job.run().reason()) == "channel bone out of the pose");
   CHECK(pose.translations[0] == glm::vec3(0.0f));
   deform::Pose big = identity_pose(2);
-  CHECK_FALSE(clip.sample(NAN, big));
-  CHECK_FALSE(clip.sample(INFINITY, big));
+  job.rotations = big.rotations;
+  job.translations = big.translations;
+  CHECK(job.validate());
+  for (const float bad : {NAN, INFINITY}) {
+    job.time = bad;
+    CHECK(std::string(job.validate().reason()) == "time is not finite");
+    CHECK(std::string(job.run().reason()) == "time is not finite");
+  }
+  job.time = 0.5f;
+  job.translations = std::span<glm::vec3>(big.translations).first(1);
+  CHECK_FALSE(job.run());
   CHECK(big.translations[1] == glm::vec3(0.0f));
+  CHECK(big.rotations[1] == glm::quat(1, 0, 0, 0));
+  job.translations = big.translations;
+  job.animation = nullptr;
+  CHECK(std::string(job.run().reason()) == "no animation");
+  CHECK(job.count() == 0);
+  // Track sizes are validate()'s to check (Animation::validate names them at bind time).
+  Animation broken = clip;
+  broken.channels[0].rotation.values.pop_back();
+  job.animation = &broken;
+  CHECK(std::string(job.validate().reason()) == "track values or tangents do not match its times");
+  broken = clip;
+  broken.channels[0].translation.interpolation = Interpolation::cubic_spline;
+  CHECK_FALSE(job.validate());
+}
+
+TEST_CASE("SamplingJob: ranges of channels give the whole run") {
+  Animation clip = two_key_clip(Interpolation::linear);
+  Channel other = clip.channels[0];
+  other.bone = 3;
+  other.translation.values[1] = glm::vec3(-1, 0, 5);
+  clip.channels.push_back(other);
+  other.bone = 0;
+  clip.channels.push_back(other);
+  REQUIRE_NOTHROW(clip.validate(4));
+  deform::Pose whole = identity_pose(4), split = identity_pose(4);
+  deform::SamplingJob job;
+  job.animation = &clip;
+  job.time = 1.3f;
+  job.rotations = whole.rotations;
+  job.translations = whole.translations;
+  CHECK(job.count() == 3);
+  REQUIRE(job.run());
+  job.rotations = split.rotations;
+  job.translations = split.translations;
+  REQUIRE(job.run(2, 3));
+  CHECK(split.translations[0] == whole.translations[0]);
+  CHECK(split.translations[1] == glm::vec3(0.0f));
+  REQUIRE(job.run(0, 2));
+  CHECK(split.translations == whole.translations);
+  CHECK(split.rotations == whole.rotations);
+  CHECK_FALSE(job.run(2, 1));
+  CHECK_FALSE(job.run(0, 4));
 }
 
 TEST_CASE("validate rejects malformed clips with the clip and the bone named") {

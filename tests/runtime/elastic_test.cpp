@@ -3,9 +3,11 @@
 #include "deform/runtime/elastic.hpp"
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -352,14 +354,30 @@ TEST_CASE("pinned points stay on their rest") {
   CHECK_FALSE(lattice.set_pinned(wrong));
 }
 
+TEST_CASE("a refused step changes nothing") {
+  const std::vector<glm::vec3> rest = {glm::vec3(0.0f), glm::vec3(1.0f, 0.0f, 0.0f)};
+  const std::vector<glm::vec3> moved = {glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(1.0f, 2.0f, 0.0f)};
+  ElasticLattice lattice(rest, settings_with(100.0f, 0.2f));
+  REQUIRE(lattice.step(1.0f / 60.0f, moved));
+  const std::vector<glm::vec3> positions(lattice.positions().begin(), lattice.positions().end());
+  const std::vector<glm::vec3> velocities(lattice.velocities().begin(), lattice.velocities().end());
+  const std::vector<glm::vec3> rests(lattice.rest().begin(), lattice.rest().end());
+  CHECK_FALSE(lattice.step(-1.0f, rest));
+  CHECK_FALSE(lattice.step(0.1f, std::span(rest).first(1)));
+  CHECK(std::equal(positions.begin(), positions.end(), lattice.positions().begin()));
+  CHECK(std::equal(velocities.begin(), velocities.end(), lattice.velocities().begin()));
+  CHECK(std::equal(rests.begin(), rests.end(), lattice.rest().begin()));
+}
+
 TEST_CASE("bad arguments: step refuses, settings throw with the field") {
   const glm::vec3 rest[2] = {};
   ElasticLattice lattice(rest, {});
-  CHECK_FALSE(lattice.step(-0.01f, rest));
-  CHECK_FALSE(lattice.step(NAN, rest));
-  CHECK_FALSE(lattice.step(INFINITY, rest));
-  CHECK_FALSE(lattice.step(0.01f, std::span(rest, 1)));
-  CHECK_FALSE(lattice.reset(std::span(rest, 1)));
+  for (const float dt : {-0.01f, NAN, INFINITY})
+    CHECK(std::string(lattice.step(dt, rest).reason()) == "dt is negative or not finite");
+  CHECK(std::string(lattice.step(0.01f, std::span(rest, 1)).reason()) == "rest does not have one entry per point");
+  CHECK(std::string(lattice.reset(std::span(rest, 1)).reason()) == "rest does not have one entry per point");
+  const std::uint8_t wrong_pins[3] = {};
+  CHECK(std::string(lattice.set_pinned(wrong_pins).reason()) == "pinned is neither empty nor one per point");
   ElasticSettings bad;
   bad.oscillator.stiffness = 0.0f;
   CHECK_THROWS_AS(lattice.set_settings(bad), deform::Error);

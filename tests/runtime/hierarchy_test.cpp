@@ -8,6 +8,8 @@
 #include "deform/runtime/skeleton.hpp"
 #include <doctest/doctest.h>
 
+#include <string>
+
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
@@ -91,7 +93,7 @@ LatticeSpec spec_on(const char* name, std::int32_t bone, float zeta = 1.0f) {
 // Plain LBS, the reference the hierarchy is applied after.
 std::vector<glm::vec3> skin(const Limb& limb, std::span<const glm::mat4> world) {
   std::vector<glm::mat4> palette(world.size());
-  REQUIRE(deform::compute_skinning_palette(limb.skeleton, world, palette));
+  for (std::size_t b = 0; b < world.size(); ++b) palette[b] = world[b] * limb.skeleton.inverse_bind_world()[b];
   std::vector<glm::vec3> out(limb.points.size());
   for (std::size_t p = 0; p < out.size(); ++p) {
     glm::vec3 sum(0.0f);
@@ -106,7 +108,12 @@ std::vector<glm::vec3> skin(const Limb& limb, std::span<const glm::mat4> world) 
 
 std::vector<glm::mat4> world_of(const deform::Skeleton& skeleton, const deform::Pose& pose) {
   std::vector<glm::mat4> world(skeleton.bone_count());
-  REQUIRE(deform::compute_world_matrices(skeleton, pose, world));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  REQUIRE(fk.run());
   return world;
 }
 
@@ -432,11 +439,32 @@ TEST_CASE("bad set-ups throw naming the lattice; bad per-frame calls return fals
                        doctest::Contains("twice"), deform::Error);
 
   DeformerHierarchy h = deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec_on("fore", 2)});
-  CHECK_FALSE(h.set_stretch_target(0, -1.0f));
+  CHECK(std::string(h.set_stretch_target(0, -1.0f).reason()) == "stretch not finite and > -length");
   CHECK_FALSE(h.set_stretch_target(0, NAN));
-  CHECK_FALSE(h.step(-1.0f));
+  CHECK(std::string(h.set_stretch_target(1, 0.1f).reason()) == "lattice index out of range");
+  CHECK(h.stretch_target(0) == 0.0f);
+  CHECK(std::string(h.step(-1.0f).reason()) == "dt is negative or not finite");
+  CHECK_FALSE(h.step(INFINITY));
   std::vector<glm::mat4> short_world(2);
-  CHECK_FALSE(h.update(short_world));
+  CHECK(std::string(h.update(short_world).reason()) == "world does not have one entry per bone");
   std::vector<glm::vec3> short_points(3);
-  CHECK_FALSE(h.apply(short_points));
+  CHECK(std::string(h.apply(short_points).reason()) == "positions do not have one entry per point");
+  CHECK(std::string(h.apply_carried(short_points).reason()) == "positions do not have one entry per point");
+
+  // A refused step, update or apply changes nothing.
+  REQUIRE(h.set_stretch_target(0, 0.4f));
+  for (int frame = 0; frame < 5; ++frame) REQUIRE(h.step(1.0f / 60.0f));
+  const std::vector<glm::mat4> world = world_of(limb.skeleton, limb.skeleton.bind_pose());
+  REQUIRE(h.update(world));
+  const float stretch = h.stretch(0);
+  const std::vector<glm::vec3> points(h.control_points(0).begin(), h.control_points(0).end());
+  CHECK_FALSE(h.step(NAN));
+  CHECK_FALSE(h.update(short_world));
+  CHECK(h.stretch(0) == stretch);
+  CHECK(std::equal(points.begin(), points.end(), h.control_points(0).begin()));
+  std::vector<glm::vec3> out = limb.points;
+  out.pop_back();
+  const std::vector<glm::vec3> before = out;
+  CHECK_FALSE(h.apply(out));
+  CHECK(out == before);
 }

@@ -3,11 +3,13 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdlib>
 #include <limits>
 #include <new>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "deform/runtime/error.hpp"
@@ -37,11 +39,54 @@ namespace {
 constexpr float not_a_number = std::numeric_limits<float>::quiet_NaN();
 constexpr float inf = std::numeric_limits<float>::infinity();
 
-// Effector head by the skeleton module's full FK (compute_world_matrices), independent of the solvers' chain FK.
+// World matrices of every bone by the skeleton module's FK (LocalToWorldJob).
+Status world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> world) {
+  LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  return fk.run();
+}
+
+// Effector head by the skeleton module's full FK, independent of the solvers' chain FK.
 glm::vec3 reference_effector(const Skeleton& skeleton, const Pose& pose, std::int32_t effector) {
   std::vector<glm::mat4> world(skeleton.bone_count());
-  REQUIRE(compute_world_matrices(skeleton, pose, world));
+  REQUIRE(world_matrices(skeleton, pose, world));
   return glm::vec3(world[static_cast<std::size_t>(effector)][3]);
+}
+
+// One CCD or FABRIK solve by the job: its base from chain_base, a scratch of the size the job states.
+Status solve(IkMethod method, const IkChain& chain, Pose& pose, glm::vec3 target, const IkSettings& settings,
+             IkResult& result) {
+  RigidTransform base;
+  if (const Status status = chain_base(chain, pose.rotations, pose.translations, base); !status) return status;
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+  IkJob job;
+  job.method = method;
+  job.chain = &chain;
+  job.base = base;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = target;
+  job.settings = settings;
+  job.scratch = scratch;
+  job.result = &result;
+  return job.run();
+}
+
+Status solve_two_bone(const IkChain& chain, Pose& pose, glm::vec3 target, glm::vec3 pole, float tolerance,
+                      IkResult& result) {
+  TwoBoneIkJob job;
+  job.chain = &chain;
+  if (const Status status = chain_base(chain, pose.rotations, pose.translations, job.base); !status) return status;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = target;
+  job.pole = pole;
+  job.tolerance = tolerance;
+  job.result = &result;
+  return job.run();
 }
 
 // Every bone other than the chain's joints keeps its rotation; every joint is within its limits.
@@ -62,14 +107,13 @@ struct Rates {
 };
 
 // Random chains of 2–6 joints, targets from random in-limit poses, tolerance 1e-4 of the chain length.
-template <class Solver>
-Rates reachable_targets(bool escape_stalls, int cases, std::uint32_t seed, bool check_every_pose) {
+Rates reachable_targets(IkMethod method, bool escape_stalls, int cases, std::uint32_t seed, bool check_every_pose) {
   std::mt19937 random(seed);
   Rates rates;
   for (int c = 0; c < cases; ++c) {
     const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
     const glm::vec3 target = ik_test::random_reachable_target(random, rig);
-    Solver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
     IkSettings settings;
@@ -77,7 +121,7 @@ Rates reachable_targets(bool escape_stalls, int cases, std::uint32_t seed, bool 
     settings.max_iterations = 200;
     settings.escape_stalls = escape_stalls;
     IkResult result;
-    REQUIRE(solver.solve(pose, target, settings, result));
+    REQUIRE(solve(method, chain, pose, target, settings, result));
     const glm::vec3 effector = reference_effector(rig.skeleton, pose, rig.effector);
     // The result describes the pose it leaves.
     CHECK(result.distance == doctest::Approx(glm::length(effector - target)).epsilon(1e-3).scale(rig.length));
@@ -203,7 +247,15 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
   CHECK(chain.bones == std::vector<std::int32_t>{1, 2, 3, 4});
   CHECK(chain.ancestors == std::vector<std::int32_t>{0});
   CHECK(chain.joint_count() == 3);
-  CHECK(chain_length(chain, rig.skeleton.bind_pose()) == doctest::Approx(rig.length));
+  CHECK(chain.limits.size() == 3);
+  CHECK(chain.max_bone == 4);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const EulerLimits expected = prepare_limits(rig.skeleton.bones()[k + 1].limits);
+    CHECK(chain.limits[k].min == expected.min);
+    CHECK(chain.limits[k].max == expected.max);
+    CHECK(chain.limits[k].free == expected.free);
+  }
+  CHECK(chain_length(chain, rig.skeleton.bind_pose().translations) == doctest::Approx(rig.length));
   // The sibling (last bone) is not below the chain root's chain; the effector is not an ancestor of the root.
   const auto sibling = static_cast<std::int32_t>(rig.skeleton.bone_count() - 1);
   CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, sibling), Error);
@@ -211,17 +263,74 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
   CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, rig.root), Error);
   CHECK_THROWS_AS(make_chain(rig.skeleton, -1, rig.effector), Error);
   CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, 99), Error);
-  CHECK_THROWS_AS(CcdSolver(rig.skeleton, rig.effector, rig.root), Error);
-  CHECK_THROWS_AS(TwoBoneSolver(rig.skeleton, rig.root, rig.effector), Error);  // three joints, not two
-  // effector_position agrees with the skeleton module's FK.
+  // effector_position and chain_base agree with the skeleton module's FK.
   const Pose pose = ik_test::random_in_limit_pose(random, rig);
-  const glm::vec3 e = effector_position(rig.skeleton, chain, pose);
+  const glm::vec3 e = effector_position(chain, pose.rotations, pose.translations);
   CHECK(glm::length(e - reference_effector(rig.skeleton, pose, rig.effector)) < 1e-5f * rig.length);
+  std::vector<glm::mat4> world(rig.skeleton.bone_count());
+  REQUIRE(world_matrices(rig.skeleton, pose, world));
+  RigidTransform base;
+  REQUIRE(chain_base(chain, pose.rotations, pose.translations, base));
+  const RigidTransform from_fk = RigidTransform::from_matrix(world[0]);
+  CHECK(glm::length(base.translation - from_fk.translation) < 1e-6f);
+  CHECK(std::abs(glm::dot(base.rotation, from_fk.rotation)) == doctest::Approx(1.0f).epsilon(1e-6));
+  for (int c = 0; c < 4; ++c) CHECK(glm::length(base.matrix()[c] - world[0][c]) < 1e-6f);
+  // Spans too short: nothing computed.
+  const std::span<const glm::quat> short_rotations = std::span<const glm::quat>(pose.rotations).first(4);
+  CHECK_FALSE(chain_base(chain, short_rotations, pose.translations, base));
+  CHECK(effector_position(chain, short_rotations, pose.translations) == glm::vec3(0.0f));
+  CHECK(chain_length(chain, std::span<const glm::vec3>(pose.translations).first(4)) == 0.0f);
+}
+
+TEST_CASE("assign_chain rebuilds a chain in its own storage: no allocation once reserved, reasons for bad chains") {
+  std::mt19937 random(2);
+  const RandomChain rig = ik_test::random_chain(random, 5);
+  IkChain chain;
+  chain.bones.reserve(max_chain_bones);
+  chain.ancestors.reserve(rig.skeleton.bone_count());
+  chain.limits.reserve(max_chain_bones);
+  std::vector<IkChain> made;
+  for (std::int32_t effector = 2; effector <= rig.effector; ++effector)
+    for (std::int32_t root = 0; root < effector; ++root) made.push_back(make_chain(rig.skeleton, root, effector));
+  std::size_t n = 0;
+  const long before = allocations.load();
+  for (std::int32_t effector = 2; effector <= rig.effector; ++effector) {
+    for (std::int32_t root = 0; root < effector; ++root, ++n) {
+      REQUIRE(assign_chain(chain, rig.skeleton, root, effector));
+      CHECK(chain.bones == made[n].bones);
+      CHECK(chain.ancestors == made[n].ancestors);
+      CHECK(chain.max_bone == made[n].max_bone);
+      REQUIRE(chain.limits.size() == made[n].limits.size());
+      for (std::size_t k = 0; k < chain.limits.size(); ++k) CHECK(chain.limits[k].min == made[n].limits[k].min);
+    }
+  }
+  CHECK(allocations.load() == before);
+  const auto sibling = static_cast<std::int32_t>(rig.skeleton.bone_count() - 1);
+  CHECK(std::string(assign_chain(chain, rig.skeleton, rig.root, sibling).reason()) ==
+        "root is not an ancestor of the effector");
+  CHECK(chain.bones.empty());
+  CHECK(chain.max_bone == -1);
+  CHECK(std::string(assign_chain(chain, rig.skeleton, -1, 2).reason()) == "root bone out of range");
+  CHECK(std::string(assign_chain(chain, rig.skeleton, 0, 99).reason()) == "effector out of range");
+  CHECK_FALSE(assign_chain(chain, rig.skeleton, 2, 2));
+
+  // A chain of 256 bones is the longest.
+  std::vector<Bone> bones(300);
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    bones[b].parent = static_cast<std::int32_t>(b) - 1;
+    if (b + 1 < bones.size()) bones[b].children = {static_cast<std::int32_t>(b + 1)};
+    bones[b].bind_translation = glm::vec3(0.0f, b == 0 ? 0.0f : 0.01f, 0.0f);
+  }
+  const Skeleton rope(bones);
+  CHECK(assign_chain(chain, rope, 10, 10 + 255));
+  CHECK(chain.bones.size() == max_chain_bones);
+  CHECK(std::string(assign_chain(chain, rope, 10, 10 + 256).reason()) == "chain longer than 256 bones");
+  CHECK_THROWS_AS(make_chain(rope, 10, 10 + 256), Error);
 }
 
 TEST_CASE("CCD reaches >= 99.5% of reachable targets within limits; the stall escape is measured against plain CCD") {
-  const Rates improved = reachable_targets<CcdSolver>(true, 3000, 2024, true);
-  const Rates plain = reachable_targets<CcdSolver>(false, 3000, 2024, false);
+  const Rates improved = reachable_targets(IkMethod::ccd, true, 3000, 2024, true);
+  const Rates plain = reachable_targets(IkMethod::ccd, false, 3000, 2024, false);
   MESSAGE("CCD, 3000 chains of 2-6 joints, tolerance 1e-4 x length, cap 200: improved ", improved.rate() * 100,
           "% reached, ", improved.mean_iterations(), " mean iterations; plain ", plain.rate() * 100, "% reached, ",
           plain.mean_iterations(), " mean iterations");
@@ -230,8 +339,8 @@ TEST_CASE("CCD reaches >= 99.5% of reachable targets within limits; the stall es
 }
 
 TEST_CASE("FABRIK reaches >= 99.5% of reachable targets within limits") {
-  const Rates improved = reachable_targets<FabrikSolver>(true, 3000, 7, true);
-  const Rates plain = reachable_targets<FabrikSolver>(false, 3000, 7, false);
+  const Rates improved = reachable_targets(IkMethod::fabrik, true, 3000, 7, true);
+  const Rates plain = reachable_targets(IkMethod::fabrik, false, 3000, 7, false);
   MESSAGE("FABRIK, 3000 chains of 2-6 joints, tolerance 1e-4 x length, cap 200: improved ", improved.rate() * 100,
           "% reached, ", improved.mean_iterations(), " mean iterations; plain ", plain.rate() * 100, "% reached, ",
           plain.mean_iterations(), " mean iterations");
@@ -258,13 +367,14 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
     settings.max_iterations = 200;
     IkResult ccd, fabrik;
     Pose ccd_pose = bind, fabrik_pose = bind;
-    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(ccd_pose, target, settings, ccd));
-    REQUIRE(FabrikSolver(rig.skeleton, rig.root, rig.effector).solve(fabrik_pose, target, settings, fabrik));
+    REQUIRE(solve(IkMethod::ccd, chain, ccd_pose, target, settings, ccd));
+    REQUIRE(solve(IkMethod::fabrik, chain, fabrik_pose, target, settings, fabrik));
     CHECK_FALSE(ccd.reached);
     CHECK_FALSE(fabrik.reached);
     CHECK(std::abs(ccd.distance - best) <= slack);
     CHECK(std::abs(fabrik.distance - best) <= slack);
-    CHECK(std::abs(glm::length(effector_position(rig.skeleton, chain, ccd_pose) - target) - best) <= slack);
+    CHECK(std::abs(glm::length(effector_position(chain, ccd_pose.rotations, ccd_pose.translations) - target) - best) <=
+          slack);
   }
 }
 
@@ -272,6 +382,7 @@ TEST_CASE("with limits, an unreachable target leaves the pose in limits and no f
   std::mt19937 random(5);
   for (int c = 0; c < 300; ++c) {
     const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     const Pose bind = rig.skeleton.bind_pose();
     const glm::vec3 root = ik_test::chain_root_head(bind);
     const glm::vec3 target = root + glm::vec3(0.6f, -0.8f, 0.0f) * (3.0f * rig.length);
@@ -280,8 +391,7 @@ TEST_CASE("with limits, an unreachable target leaves the pose in limits and no f
       Pose pose = bind;
       IkResult result;
       IkSettings settings;
-      REQUIRE((which == 0 ? CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result)
-                          : FabrikSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result)));
+      REQUIRE(solve(which == 0 ? IkMethod::ccd : IkMethod::fabrik, chain, pose, target, settings, result));
       CHECK_FALSE(result.reached);
       CHECK(result.distance <= start + 1e-5f * rig.length);
       CHECK(result.distance >= glm::length(target - root) - rig.length - 1e-5f * rig.length);
@@ -295,17 +405,97 @@ TEST_CASE("a starting pose outside the limits is clamped; a solve allocates noth
   const RandomChain rig = ik_test::random_chain(random, 4);
   Pose pose = rig.skeleton.bind_pose();
   for (std::size_t b = 1; b <= rig.joints; ++b) pose.rotations[b] = glm::angleAxis(3.0f, glm::vec3(0.6f, 0.0f, 0.8f));
-  CcdSolver ccd(rig.skeleton, rig.root, rig.effector);
-  FabrikSolver fabrik(rig.skeleton, rig.root, rig.effector);
-  IkSettings settings;
+  const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
   IkResult result;
-  const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+  IkJob job;
+  job.chain = &chain;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = ik_test::random_reachable_target(random, rig);
+  job.scratch = scratch;
+  job.result = &result;
+  CHECK(job.scratch_size() == scratch.size());
+  const RandomChain limb = ik_test::random_chain(random, 2);
+  const IkChain limb_chain = make_chain(limb.skeleton, limb.root, limb.effector);
+  Pose limb_pose = limb.skeleton.bind_pose();
+  TwoBoneIkJob two_bone;
+  two_bone.chain = &limb_chain;
+  two_bone.rotations = limb_pose.rotations;
+  two_bone.translations = limb_pose.translations;
+  two_bone.target = ik_test::random_reachable_target(random, limb);
   const long allocations_before = allocations.load();
-  REQUIRE(ccd.solve(pose, target, settings, result));
-  REQUIRE(fabrik.solve(pose, target, settings, result));
+  REQUIRE(chain_base(chain, pose.rotations, pose.translations, job.base));
+  REQUIRE(job.run());
+  job.method = IkMethod::fabrik;
+  REQUIRE(job.run());
+  REQUIRE(chain_base(limb_chain, limb_pose.rotations, limb_pose.translations, two_bone.base));
+  REQUIRE(two_bone.run());
   CHECK(allocations.load() == allocations_before);
   for (std::size_t b = 1; b <= rig.joints; ++b)
     CHECK(ik_test::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
+}
+
+TEST_CASE("IK jobs: count() is 1, run(begin, end) solves for [0, 1), the same as run(); equal inputs, equal outputs") {
+  std::mt19937 random(12);
+  const RandomChain rig = ik_test::random_chain(random, 5);
+  const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+  for (const IkMethod method : {IkMethod::ccd, IkMethod::fabrik}) {
+    Pose first = rig.skeleton.bind_pose(), second = first;
+    IkResult a, b;
+    IkJob job;
+    job.method = method;
+    job.chain = &chain;
+    job.target = ik_test::random_reachable_target(random, rig);
+    job.settings.tolerance = 1e-5f * rig.length;
+    job.scratch = scratch;
+    REQUIRE(chain_base(chain, first.rotations, first.translations, job.base));
+    CHECK(job.count() == 1);
+    job.rotations = first.rotations, job.translations = first.translations, job.result = &a;
+    REQUIRE(job.run());
+    job.rotations = second.rotations, job.translations = second.translations, job.result = &b;
+    CHECK(job.run(0, 0));
+    CHECK(second.rotations == rig.skeleton.bind_pose().rotations);
+    REQUIRE(job.run(0, 1));
+    CHECK(first.rotations == second.rotations);
+    CHECK(a.distance == b.distance);
+    CHECK(a.iterations == b.iterations);
+    CHECK_FALSE(job.run(0, 2));
+    CHECK_FALSE(job.run(1, 0));
+  }
+}
+
+TEST_CASE("random_state carries the stall escape's generator from solve to solve") {
+  // Hard targets (limits that pin joints) send the solver into its random kicks; a carried state differs from the
+  // seed after the first kick, and a solve started from a given state repeats exactly.
+  std::mt19937 random(13);
+  int kicked = 0;
+  for (int c = 0; c < 200 && kicked < 5; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 4);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose(), again = pose;
+    std::uint32_t state = ik_random_seed;
+    IkJob job;
+    job.chain = &chain;
+    job.target = target;
+    job.settings.tolerance = 1e-6f * rig.length;
+    job.settings.max_iterations = 200;
+    job.scratch = scratch;
+    job.random_state = &state;
+    REQUIRE(chain_base(chain, pose.rotations, pose.translations, job.base));
+    job.rotations = pose.rotations, job.translations = pose.translations;
+    REQUIRE(job.run());
+    if (state == ik_random_seed) continue;
+    ++kicked;
+    job.random_state = nullptr;  // from the seed again: the same solve
+    job.rotations = again.rotations, job.translations = again.translations;
+    REQUIRE(job.run());
+    CHECK(again.rotations == pose.rotations);
+  }
+  CHECK(kicked > 0);
 }
 
 TEST_CASE("max_step_degrees caps each CCD update and still converges") {
@@ -321,7 +511,8 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
     settings.max_iterations = 1;
     settings.escape_stalls = false;
     IkResult result;
-    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result));
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    REQUIRE(solve(IkMethod::ccd, chain, pose, target, settings, result));
     // One sweep turns each joint by at most 2 degrees.
     for (std::size_t b = 1; b <= rig.joints; ++b) {
       const float angle = glm::degrees(glm::angle(glm::normalize(glm::conjugate(before.rotations[b]) * pose.rotations[b])));
@@ -330,45 +521,133 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
     settings.max_iterations = 400;
     settings.tolerance = 1e-3f * rig.length;
     settings.escape_stalls = true;
-    REQUIRE(CcdSolver(rig.skeleton, rig.root, rig.effector).solve(pose, target, settings, result));
+    REQUIRE(solve(IkMethod::ccd, chain, pose, target, settings, result));
     reached += result.reached;
   }
   CHECK(reached >= 198);
 }
 
-TEST_CASE("non-finite targets and bad settings or poses are rejected and change nothing") {
+TEST_CASE("non-finite targets, poses and bases, overflowing chains, bad settings and scratch are refused, writing nothing") {
   std::mt19937 random(4);
   const RandomChain rig = ik_test::random_chain(random, 2);
-  CcdSolver ccd(rig.skeleton, rig.root, rig.effector);
-  FabrikSolver fabrik(rig.skeleton, rig.root, rig.effector);
-  TwoBoneSolver two_bone(rig.skeleton, rig.root, rig.effector);
+  const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
   Pose pose = rig.skeleton.bind_pose();
   const Pose before = pose;
   IkResult result{true, 42.0f, 7};
-  const IkSettings settings;
+  std::uint32_t state = 5;
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()) + IkJob::scratch_alignment);
+  IkJob good;
+  good.chain = &chain;
+  good.rotations = pose.rotations;
+  good.translations = pose.translations;
+  good.target = glm::vec3(1, 0, 0);
+  good.scratch = std::span<std::byte>(scratch).first(good.scratch_size());
+  good.random_state = &state;
+  good.result = &result;
+  TwoBoneIkJob good_two;
+  good_two.chain = &chain;
+  good_two.rotations = pose.rotations;
+  good_two.translations = pose.translations;
+  good_two.target = glm::vec3(1, 0, 0);
+  good_two.pole = glm::vec3(0, 0, 1);
+  good_two.result = &result;
+  REQUIRE(good.validate());
+  REQUIRE(good_two.validate());
+
+  auto refused = [&](const auto& job, const char* why) {
+    const Status validated = job.validate(), ran = job.run();
+    CHECK_FALSE(validated);
+    CHECK_FALSE(ran);
+    CHECK(std::string(ran.reason()) == why);
+    CHECK(std::string(validated.reason()) == why);
+  };
   for (const glm::vec3 bad : {glm::vec3(not_a_number, 0, 0), glm::vec3(0, inf, 0), glm::vec3(0, 0, -inf)}) {
-    CHECK_FALSE(ccd.solve(pose, bad, settings, result));
-    CHECK_FALSE(fabrik.solve(pose, bad, settings, result));
-    CHECK_FALSE(two_bone.solve(pose, bad, glm::vec3(0, 0, 1), 1e-3f, result));
-    CHECK_FALSE(two_bone.solve(pose, glm::vec3(1, 0, 0), bad, 1e-3f, result));
+    IkJob job = good;
+    job.target = bad;
+    refused(job, "target is not finite");
+    job.method = IkMethod::fabrik;
+    refused(job, "target is not finite");
+    TwoBoneIkJob two = good_two;
+    two.target = bad;
+    refused(two, "target is not finite");
+    two = good_two;
+    two.pole = bad;
+    refused(two, "pole is not finite");
+    job = good;
+    job.base.translation = bad;
+    refused(job, "base is not finite");
+    two = good_two;
+    two.base.rotation.x = bad.x + bad.y + bad.z;
+    refused(two, "base is not finite");
   }
-  IkSettings bad_settings;
-  bad_settings.tolerance = not_a_number;
-  CHECK_FALSE(ccd.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
-  bad_settings = IkSettings{};
-  bad_settings.max_iterations = 0;
-  CHECK_FALSE(fabrik.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
-  bad_settings = IkSettings{};
-  bad_settings.max_step_degrees = -1.0f;
-  CHECK_FALSE(ccd.solve(pose, glm::vec3(1, 0, 0), bad_settings, result));
-  CHECK_FALSE(two_bone.solve(pose, glm::vec3(1, 0, 0), glm::vec3(0, 0, 1), -1.0f, result));
-  Pose short_pose = pose;
-  short_pose.rotations.pop_back();
-  CHECK_FALSE(ccd.solve(short_pose, glm::vec3(1, 0, 0), settings, result));
-  CHECK_FALSE(two_bone.solve(short_pose, glm::vec3(1, 0, 0), glm::vec3(0), 1e-3f, result));
+  // Non-finite entries of the chain's pose (other bones are not read), an overflowing chain length.
+  for (const std::size_t bone : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {
+    Pose broken = pose;
+    broken.rotations[bone].y = not_a_number;
+    IkJob job = good;
+    job.rotations = broken.rotations;
+    refused(job, "chain pose is not finite");
+    TwoBoneIkJob two = good_two;
+    two.rotations = broken.rotations;
+    refused(two, "chain pose is not finite");
+    broken = pose;
+    broken.translations[bone].z = inf;
+    job = good;
+    job.translations = broken.translations;
+    refused(job, "chain pose is not finite");
+  }
+  {
+    Pose huge = pose;
+    huge.translations[2] = glm::vec3(3e38f, 0, 0);
+    huge.translations[3] = glm::vec3(3e38f, 0, 0);
+    IkJob job = good;
+    job.translations = huge.translations;
+    refused(job, "chain length overflows");
+    TwoBoneIkJob two = good_two;
+    two.translations = huge.translations;
+    refused(two, "chain length overflows");
+    Pose sibling_nan = pose;  // a bone outside the chain and its ancestors is not read
+    sibling_nan.rotations.back() = glm::quat(not_a_number, 0, 0, 0);
+    job = good;
+    job.rotations = sibling_nan.rotations;
+    CHECK(job.validate());
+  }
+  IkJob job = good;
+  job.settings.tolerance = not_a_number;
+  refused(job, "tolerance not finite and >= 0");
+  job = good;
+  job.settings.max_iterations = 0;
+  refused(job, "max_iterations below 1");
+  job = good;
+  job.settings.max_step_degrees = -1.0f;
+  refused(job, "max_step_degrees not finite and >= 0");
+  job = good;
+  job.scratch = std::span<std::byte>(scratch).first(good.scratch_size() - 1);
+  refused(job, "scratch smaller than scratch_size()");
+  job = good;
+  job.scratch = std::span<std::byte>(scratch).subspan(1, good.scratch_size());
+  refused(job, "scratch misaligned");
+  job = good;
+  job.chain = nullptr;
+  refused(job, "no chain");
+  CHECK(job.scratch_size() == 0);
+  job = good;
+  job.rotations = std::span<glm::quat>(pose.rotations).first(3);
+  refused(job, "pose spans do not hold every chain bone");
+  TwoBoneIkJob two = good_two;
+  two.tolerance = -1.0f;
+  refused(two, "tolerance not finite and >= 0");
+  two = good_two;
+  two.translations = std::span<const glm::vec3>(pose.translations).first(2);
+  refused(two, "pose spans do not hold every chain bone");
+  const IkChain three = make_chain(rig.skeleton, 0, rig.effector);
+  two = good_two;
+  two.chain = &three;
+  refused(two, "chain does not have two joints");
   for (std::size_t b = 0; b < pose.rotations.size(); ++b) CHECK(pose.rotations[b] == before.rotations[b]);
   CHECK(result.iterations == 7);
   CHECK(result.distance == 42.0f);
+  CHECK(state == 5);
 }
 
 TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straight when out of reach") {
@@ -376,14 +655,13 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (int c = 0; c < 2000; ++c) {
     const RandomChain rig = ik_test::random_chain(random, 2, /*free_joints=*/true);
-    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
-    const IkChain& chain = solver.chain();
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = ik_test::random_in_limit_pose(random, rig);
     const Pose before = pose;
     const glm::vec3 target = ik_test::random_reachable_target(random, rig);
     const glm::vec3 pole(unit(random), unit(random), unit(random));
     IkResult result;
-    REQUIRE(solver.solve(pose, target, pole, 1e-5f * rig.length, result));
+    REQUIRE(solve_two_bone(chain, pose, target, pole, 1e-5f * rig.length, result));
     CHECK(result.iterations == 1);
     const glm::vec3 effector = reference_effector(rig.skeleton, pose, rig.effector);
     CHECK(glm::length(effector - target) <= 2e-5f * rig.length);
@@ -391,7 +669,7 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     check_pose(rig, before, pose);
     // The middle joint is on the pole's side of the line root→target.
     std::vector<glm::mat4> world(rig.skeleton.bone_count());
-    REQUIRE(compute_world_matrices(rig.skeleton, pose, world));
+    REQUIRE(world_matrices(rig.skeleton, pose, world));
     const glm::vec3 root(world[1][3]), mid(world[2][3]);
     const glm::vec3 d = glm::normalize(target - root);
     const glm::vec3 mid_across = (mid - root) - d * glm::dot(mid - root, d);
@@ -402,11 +680,11 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     // Out of reach: the straight limb pointing at the target.
     Pose far_pose = before;
     const glm::vec3 far_target = root + glm::normalize(target - root + glm::vec3(1e-3f)) * (rig.length * 1.5f);
-    REQUIRE(solver.solve(far_pose, far_target, pole, 1e-5f * rig.length, result));
+    REQUIRE(solve_two_bone(chain, far_pose, far_target, pole, 1e-5f * rig.length, result));
     CHECK_FALSE(result.reached);
     CHECK(std::abs(result.distance - 0.5f * rig.length) <= 1e-5f * rig.length);
-    CHECK(glm::length(effector_position(rig.skeleton, chain, far_pose) - (root + glm::normalize(far_target - root) * rig.length)) <=
-          2e-5f * rig.length);
+    CHECK(glm::length(effector_position(chain, far_pose.rotations, far_pose.translations) -
+                      (root + glm::normalize(far_target - root) * rig.length)) <= 2e-5f * rig.length);
   }
 }
 
@@ -414,37 +692,37 @@ TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole
   std::mt19937 random(8);
   SUBCASE("zero-length upper bone: the limb only turns") {
     const RandomChain rig = ik_test::random_chain(random, 2, true, /*zero_bone=*/1);
-    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const glm::vec3 root = ik_test::chain_root_head(pose);
     const float b = glm::length(pose.translations[3]);
     IkResult result;
-    REQUIRE(solver.solve(pose, root + glm::vec3(0, 0, 2.0f * b), glm::vec3(1, 0, 0), 1e-4f, result));
+    REQUIRE(solve_two_bone(chain, pose, root + glm::vec3(0, 0, 2.0f * b), glm::vec3(1, 0, 0), 1e-4f, result));
     CHECK(result.distance == doctest::Approx(b).epsilon(1e-4));
-    REQUIRE(solver.solve(pose, root + glm::vec3(0, 0.5f * b, 0), glm::vec3(1, 0, 0), 1e-4f, result));
+    REQUIRE(solve_two_bone(chain, pose, root + glm::vec3(0, 0.5f * b, 0), glm::vec3(1, 0, 0), 1e-4f, result));
     CHECK(result.distance == doctest::Approx(0.5f * b).epsilon(1e-4));
     CHECK(ik_test::finite_pose(pose));
   }
   SUBCASE("target on the root: folded as far as the bones allow") {
     const RandomChain rig = ik_test::random_chain(random, 2, true);
-    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const glm::vec3 root = ik_test::chain_root_head(pose);
     const float a = glm::length(pose.translations[2]), b = glm::length(pose.translations[3]);
     IkResult result;
-    REQUIRE(solver.solve(pose, root, glm::vec3(0, 1, 0), 1e-4f, result));
+    REQUIRE(solve_two_bone(chain, pose, root, glm::vec3(0, 1, 0), 1e-4f, result));
     CHECK(result.distance == doctest::Approx(std::abs(a - b)).scale(a + b).epsilon(1e-4));
     CHECK(ik_test::finite_pose(pose));
   }
   SUBCASE("pole along root→target or zero keeps the bend plane; a straight start bends toward the pole") {
     const RandomChain rig = ik_test::random_chain(random, 2, true);
-    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const glm::vec3 root = ik_test::chain_root_head(pose);
     const glm::vec3 target = root + glm::vec3(0.3f, 0.4f, 0.2f) * rig.length;
     IkResult result;
     for (const glm::vec3 pole : {target - root, glm::vec3(0.0f), root - target}) {
-      REQUIRE(solver.solve(pose, target, pole, 1e-5f * rig.length, result));
+      REQUIRE(solve_two_bone(chain, pose, target, pole, 1e-5f * rig.length, result));
       CHECK(result.reached);
       CHECK(ik_test::finite_pose(pose));
     }
@@ -460,12 +738,12 @@ TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole
     bones[2].parent = 1;
     bones[2].bind_translation = glm::vec3(0, 1, 0);
     const Skeleton straight(bones);
-    const TwoBoneSolver limb(straight, 0, 2);
+    const IkChain limb = make_chain(straight, 0, 2);
     Pose straight_pose = straight.bind_pose();
-    REQUIRE(limb.solve(straight_pose, glm::vec3(0, 1.2f, 0), glm::vec3(0, 0, 1), 1e-5f, result));
+    REQUIRE(solve_two_bone(limb, straight_pose, glm::vec3(0, 1.2f, 0), glm::vec3(0, 0, 1), 1e-5f, result));
     CHECK(result.reached);
     std::vector<glm::mat4> world(3);
-    REQUIRE(compute_world_matrices(straight, straight_pose, world));
+    REQUIRE(world_matrices(straight, straight_pose, world));
     CHECK(world[1][3].z > 0.5f);  // the elbow went toward +z
     CHECK(std::abs(world[1][3].x) < 1e-5f);
   }
@@ -476,12 +754,12 @@ TEST_CASE("two-bone with limits never leaves them; exact whenever the closed for
   int exact = 0;
   for (int c = 0; c < 2000; ++c) {
     const RandomChain rig = ik_test::random_chain(random, 2);
-    const TwoBoneSolver solver(rig.skeleton, rig.root, rig.effector);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
     const glm::vec3 target = ik_test::random_reachable_target(random, rig);
     IkResult result;
-    REQUIRE(solver.solve(pose, target, glm::vec3(0, 0, 1), 1e-4f * rig.length, result));
+    REQUIRE(solve_two_bone(chain, pose, target, glm::vec3(0, 0, 1), 1e-4f * rig.length, result));
     check_pose(rig, before, pose);
     exact += result.reached;
   }

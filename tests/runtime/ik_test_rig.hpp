@@ -91,7 +91,8 @@ inline deform::Pose random_in_limit_pose(std::mt19937& random, const RandomChain
 // A target the chain can reach: the effector of a random in-limit pose.
 inline glm::vec3 random_reachable_target(std::mt19937& random, const RandomChain& rig) {
   const deform::Pose pose = random_in_limit_pose(random, rig);
-  return deform::effector_position(rig.skeleton, deform::make_chain(rig.skeleton, rig.root, rig.effector), pose);
+  return deform::effector_position(deform::make_chain(rig.skeleton, rig.root, rig.effector), pose.rotations,
+                                   pose.translations);
 }
 
 inline glm::vec3 chain_root_head(const deform::Pose& pose) {

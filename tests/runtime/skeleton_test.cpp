@@ -4,6 +4,9 @@
 #include "deform/io/pose_json.hpp"
 #include <doctest/doctest.h>
 
+#include <limits>
+#include <string>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deform/runtime/error.hpp"
@@ -22,7 +25,13 @@ bool near(glm::vec3 a, glm::vec3 b, float eps = 1e-5f) {
 
 std::vector<glm::mat4> world_of(const Skeleton& s, const deform::Pose& pose) {
   std::vector<glm::mat4> world(s.bone_count());
-  REQUIRE(deform::compute_world_matrices(s, pose, world));
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &s;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  REQUIRE(fk.validate());
+  REQUIRE(fk.run());
   return world;
 }
 
@@ -106,25 +115,93 @@ TEST_CASE("bind matrices, their inverses and the skinning palette") {
     const glm::mat4 product = s.bind_world()[i] * s.inverse_bind_world()[i];
     for (int c = 0; c < 4; ++c) CHECK(near(glm::vec3(product[c]), glm::vec3(glm::mat4(1.0f)[c])));
   }
-  std::vector<glm::mat4> palette(s.bone_count());
-  REQUIRE(deform::compute_skinning_palette(s, bind, palette));
+  std::vector<glm::mat4> palette(s.bone_count()), world(s.bone_count());
+  const deform::Pose bind_pose = s.bind_pose();
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &s;
+  fk.rotations = bind_pose.rotations;
+  fk.translations = bind_pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  REQUIRE(fk.run());
   for (const glm::mat4& m : palette)
     for (int c = 0; c < 4; ++c) CHECK(near(glm::vec3(m[c]), glm::vec3(glm::mat4(1.0f)[c])));
   // Posed: the palette carries a bind-space point attached to the wrist to where the posed wrist carries it.
   deform::Pose pose = s.bind_pose();
   s.set_euler(pose, 1, {20, 30, 40});
   s.set_euler(pose, 2, {0, 0, 100});
-  const auto world = world_of(s, pose);
-  REQUIRE(deform::compute_skinning_palette(s, world, palette));
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  REQUIRE(fk.run());
+  CHECK(world == world_of(s, pose));
+  for (std::size_t b = 0; b < s.bone_count(); ++b) CHECK(palette[b] == world[b] * s.inverse_bind_world()[b]);
   const glm::vec3 local(0.1f, 0.2f, -0.3f);
   const glm::vec3 bind_point = glm::vec3(s.bind_world()[3] * glm::vec4(local, 1.0f));
   CHECK(near(glm::vec3(palette[3] * glm::vec4(bind_point, 1.0f)), glm::vec3(world[3] * glm::vec4(local, 1.0f))));
-  // Wrong sizes are refused, nothing written.
+}
+
+TEST_CASE("LocalToWorldJob: ranges in order() give the whole run; bad sizes and poses are refused, nothing written") {
+  const Skeleton s(skeleton_test::arm_bones());
+  deform::Pose pose = s.bind_pose();
+  s.set_euler(pose, 1, {20, 30, 40});
+  s.set_euler(pose, 2, {0, 0, 100});
+  const std::vector<glm::mat4> whole = world_of(s, pose);
+  std::vector<glm::mat4> world(s.bone_count()), palette(s.bone_count());
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &s;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  CHECK(fk.count() == s.bone_count());
+  for (std::size_t split = 0; split <= fk.count(); ++split) {
+    std::fill(world.begin(), world.end(), glm::mat4(0.0f));
+    REQUIRE(fk.run(0, split));
+    REQUIRE(fk.run(split, fk.count()));
+    CHECK(world == whole);
+  }
+  CHECK_FALSE(fk.run(2, 1));
+  CHECK_FALSE(fk.run(0, fk.count() + 1));
+
+  const std::vector<glm::mat4> before = world;
+  auto refused = [&](const deform::LocalToWorldJob& job, const char* why) {
+    const deform::Status validated = job.validate(), ran = job.run();
+    CHECK_FALSE(validated);
+    CHECK_FALSE(ran);
+    CHECK(std::string(ran.reason()) == why);
+    CHECK(world == before);
+  };
+  deform::LocalToWorldJob bad = fk;
+  bad.skeleton = nullptr;
+  refused(bad, "no skeleton");
+  CHECK(bad.count() == 0);
   std::vector<glm::mat4> short_out(2);
-  CHECK_FALSE(deform::compute_skinning_palette(s, world, short_out));
-  CHECK_FALSE(deform::compute_world_matrices(s, pose, short_out));
-  deform::Pose short_pose;
-  CHECK_FALSE(deform::compute_world_matrices(s, short_pose, palette));
+  bad = fk;
+  bad.world = short_out;
+  refused(bad, "world does not have one entry per bone");
+  bad = fk;
+  bad.palette = short_out;
+  refused(bad, "palette is neither empty nor one entry per bone");
+  bad = fk;
+  bad.rotations = std::span<const glm::quat>(pose.rotations).first(2);
+  refused(bad, "rotations or translations do not have one entry per bone");
+  for (const float nan_or_inf : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    deform::Pose broken = pose;
+    broken.translations.back().y = nan_or_inf;
+    bad = fk;
+    bad.translations = broken.translations;
+    refused(bad, "pose is not finite");
+    broken = pose;
+    broken.rotations[1].w = nan_or_inf;
+    bad = fk;
+    bad.rotations = broken.rotations;
+    refused(bad, "pose is not finite");
+  }
+  // Without a palette only the world matrices are written.
+  bad = fk;
+  bad.palette = {};
+  CHECK(bad.validate());
+  CHECK(bad.run());
 }
 
 TEST_CASE("set_euler clamps into the limits; clamp_to_limits converts, clamps and converts back") {

@@ -251,8 +251,14 @@ TEST_CASE("the bind pose reproduces the mesh to 1e-6") {
   bones[3] = Bone{"c", 1, {}, {0.5f, 0.0f, 0.0f}, {170.0f, -80.0f, 5.0f}, {}};
   const Skeleton skeleton(bones);
   std::vector<glm::mat4> world(4), palette(4);
-  REQUIRE(compute_world_matrices(skeleton, skeleton.bind_pose(), world));
-  REQUIRE(compute_skinning_palette(skeleton, world, palette));
+  const Pose bind = skeleton.bind_pose();
+  LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = bind.rotations;
+  fk.translations = bind.translations;
+  fk.world = world;
+  fk.palette = palette;
+  REQUIRE(fk.run());
   std::mt19937 rng(7);
   Vertices v = random_vertices(rng, 1001, 4);
   for (glm::vec3& p : v.positions) p *= 0.5f;  // unit-scale positions: the 1e-6 bound is absolute

@@ -1,9 +1,12 @@
 // deform ik: solve a bone chain toward a target point (shared/spec/cli.md, docs/cli.md).
+#include <cstddef>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "cli.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/io/sk.hpp"
@@ -39,25 +42,51 @@ int run(const std::vector<std::string>& argv) {
 
   deform::Pose pose = skeleton.bind_pose();
   const deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
-  settings.tolerance = 1e-4f * deform::chain_length(chain, pose);
+  settings.tolerance = 1e-4f * deform::chain_length(chain, pose.translations);
   if (auto t = args.value("--tolerance")) {
     const double tolerance = parse_number(*t, "--tolerance");
     if (tolerance < 0.0) throw UsageError("--tolerance: must not be negative");
     settings.tolerance = static_cast<float>(tolerance);
   }
+  if (solver == "two-bone" && chain.joint_count() != 2)
+    throw deform::Error::invalid_argument("bone " + std::to_string(effector),
+                                          "the two-bone solver needs a chain of exactly two joints, '" +
+                                              skeleton.key(root) + "' has " + std::to_string(chain.joint_count()) +
+                                              " above '" + skeleton.key(effector) + "'");
 
+  deform::RigidTransform base;
   deform::IkResult result;
-  bool solved = false;
-  if (solver == "ccd") solved = deform::CcdSolver(skeleton, root, effector).solve(pose, target, settings, result);
-  if (solver == "fabrik") solved = deform::FabrikSolver(skeleton, root, effector).solve(pose, target, settings, result);
-  if (solver == "two-bone")  // no pole: the limb keeps its bind-pose bend plane
-    solved = deform::TwoBoneSolver(skeleton, root, effector).solve(pose, target, glm::vec3(0.0f), settings.tolerance, result);
+  deform::Status solved = deform::chain_base(chain, pose.rotations, pose.translations, base);
+  if (solved && solver == "two-bone") {  // no pole: the limb keeps its bind-pose bend plane
+    deform::TwoBoneIkJob job;
+    job.chain = &chain;
+    job.base = base;
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    job.target = target;
+    job.tolerance = settings.tolerance;
+    job.result = &result;
+    solved = job.run();
+  } else if (solved) {
+    std::vector<std::byte> scratch(deform::IkJob::scratch_size(chain.joint_count()));
+    deform::IkJob job;
+    job.method = solver == "fabrik" ? deform::IkMethod::fabrik : deform::IkMethod::ccd;
+    job.chain = &chain;
+    job.base = base;
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    job.target = target;
+    job.settings = settings;
+    job.scratch = scratch;
+    job.result = &result;
+    solved = job.run();
+  }
   if (!solved) throw UsageError("the target or a setting is not valid");
 
   // Report what the printed angles give: read them back as `deform skin --pose` will, and measure that pose.
   const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones);
   const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton);
-  const glm::vec3 reached_point = deform::effector_position(skeleton, chain, printed);
+  const glm::vec3 reached_point = deform::effector_position(chain, printed.rotations, printed.translations);
   const float distance = glm::length(reached_point - target);
 
   nlohmann::ordered_json out;

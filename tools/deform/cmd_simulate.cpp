@@ -101,7 +101,7 @@ int run(const std::vector<std::string>& argv) {
 
   deform::Character character(std::move(model), rig);
   const deform::ReachResult reach = character.reach(effector, target);
-  if (!reach.valid)
+  if (!reach.status)
     throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
   character.update(0.0f);
 

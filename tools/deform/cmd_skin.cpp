@@ -41,7 +41,13 @@ deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
   const std::int32_t clip = deform::find_clip(loaded.clips, name);
   if (clip < 0) throw deform::Error::in_file(loaded.source, "clip '" + name + "'", "no clip of that name");
   deform::Pose pose = loaded.model.skeleton.bind_pose();
-  loaded.clips[static_cast<std::size_t>(clip)].sample(seconds, pose);
+  deform::SamplingJob sampling;
+  sampling.animation = &loaded.clips[static_cast<std::size_t>(clip)];
+  sampling.time = seconds;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  if (const deform::Status status = sampling.run(); !status)
+    throw deform::Error::in_file(loaded.source, "clip '" + name + "'", status.reason());
   return pose;
 }
 
@@ -66,9 +72,13 @@ int run(const std::vector<std::string>& argv) {
 
   const std::size_t bone_count = skeleton.bone_count();
   std::vector<glm::mat4> world(bone_count), palette(bone_count);
-  if (!deform::compute_world_matrices(skeleton, pose, world) ||
-      !deform::compute_skinning_palette(skeleton, world, palette))
-    throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  if (!fk.run()) throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
 
   deform::SkinningJob job;
   job.method = method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;

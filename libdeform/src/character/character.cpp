@@ -2,16 +2,27 @@
 #include "deform/character/character.hpp"
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <utility>
 
 #include "deform/offline/hierarchy_binding.hpp"
-#include "deform/runtime/error.hpp"
 
 namespace deform {
 namespace {
 
 bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Bones on the longest parent path, the root counted: 1 for a lone root.
+std::size_t skeleton_depth(const Skeleton& skeleton) {
+  std::vector<std::size_t> depth(skeleton.bone_count(), 1);
+  std::size_t deepest = 0;
+  for (const std::int32_t id : skeleton.order()) {
+    const auto b = std::size_t(id);
+    const std::int32_t parent = skeleton.bones()[b].parent;
+    if (parent >= 0) depth[b] = depth[std::size_t(parent)] + 1;
+    deepest = std::max(deepest, depth[b]);
+  }
+  return deepest;
+}
 
 }  // namespace
 
@@ -28,7 +39,8 @@ Character::Character(Model model, const Rig& rig)
       scales_(model_.skeleton.bone_count()),
       positions_(model_.mesh.positions),
       normals_(model_.mesh.vertex_count()),
-      vertex_normals_(model_.mesh) {
+      vertex_normals_(model_.mesh),
+      work_(pose_) {
   const auto bones = std::int32_t(model_.skeleton.bone_count());
   if (rig_.reach_effector >= bones || rig_.reach_root >= bones) {
     throw Error::in_file(model_.name, "rig", "reach bone out of range");
@@ -43,52 +55,77 @@ Character::Character(Model model, const Rig& rig)
   job.in_positions = as_floats(std::span<const glm::vec3>(model_.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (!job.validate()) throw Error::in_file(model_.name, "weights", "skin weights do not fit the mesh and skeleton");
-  update(0.0f);
+  // reach()'s storage for the deepest chain any effector can have.
+  const std::size_t depth = skeleton_depth(model_.skeleton);
+  const std::size_t chain_bones = std::min(depth, max_chain_bones);
+  chain_.bones.reserve(chain_bones);
+  chain_.limits.reserve(chain_bones - 1);
+  chain_.ancestors.reserve(depth - 1);
+  ik_scratch_.resize(IkJob::scratch_size(chain_bones - 1));
+  chain_world_.resize(chain_bones);
+  chain_lattices_.reserve(hierarchy_.lattice_count());
+  stretched_.reserve(hierarchy_.lattice_count());
+  if (const Status status = update(0.0f); !status) throw Error::in_file(model_.name, "bind pose", status.reason());
 }
 
-bool Character::set_pose(const Pose& pose) {
+Status Character::set_pose(const Pose& pose) {
   const std::size_t bones = skeleton().bone_count();
-  if (pose.rotations.size() != bones || pose.translations.size() != bones) return false;
+  if (pose.rotations.size() != bones || pose.translations.size() != bones)
+    return Status::failure("pose does not have one entry per bone");
   for (std::size_t b = 0; b < bones; ++b) {
     const glm::quat q = pose.rotations[b];
     if (!finite(pose.translations[b]) || !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
         !std::isfinite(q.w)) {
-      return false;
+      return Status::failure("pose is not finite");
     }
+    if (!(glm::dot(q, q) > 1e-12f)) return Status::failure("pose has a zero rotation");
   }
-  pose_ = pose;
+  std::copy(pose.rotations.begin(), pose.rotations.end(), pose_.rotations.begin());
+  std::copy(pose.translations.begin(), pose.translations.end(), pose_.translations.begin());
   for (std::size_t b = 0; b < bones; ++b) skeleton().clamp_to_limits(pose_, std::int32_t(b));
-  return true;
+  return {};
 }
 
 ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   ReachResult result;
   const Skeleton& skel = skeleton();
-  if (effector <= 0 || std::size_t(effector) >= skel.bone_count() || !finite(target)) return result;
-
-  // The chain root: the rig's, else the parent of the topmost lattice bone above the effector, else two bones up.
-  std::int32_t root = effector == rig_.reach_effector ? rig_.reach_root : -1;
-  if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
-    root = -1;
-    for (std::int32_t b = skel.bone(effector).parent; b >= 0; b = skel.bone(b).parent) {
-      for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
-        if (hierarchy_.spec(l).bone == b) root = b;
-      }
-    }
-    if (root > 0) root = skel.bone(root).parent;
-    if (root < 0) {
-      root = skel.bone(effector).parent;
-      if (skel.bone(root).parent >= 0) root = skel.bone(root).parent;
-    }
+  if (effector <= 0 || std::size_t(effector) >= skel.bone_count()) {
+    result.status = Status::failure("effector out of range or the root");
+    return result;
+  }
+  if (!finite(target)) {
+    result.status = Status::failure("target is not finite");
+    return result;
   }
 
+  // The chain, rebuilt only for another effector (its root depends on the effector alone): the rig's root, else the
+  // parent of the topmost lattice bone above the effector, else two bones up.
+  if (effector != chain_effector_) {
+    std::int32_t root = effector == rig_.reach_effector ? rig_.reach_root : -1;
+    if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
+      root = -1;
+      for (std::int32_t b = skel.bone(effector).parent; b >= 0; b = skel.bone(b).parent) {
+        for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
+          if (hierarchy_.spec(l).bone == b) root = b;
+        }
+      }
+      if (root > 0) root = skel.bone(root).parent;
+      if (root < 0) {
+        root = skel.bone(effector).parent;
+        if (skel.bone(root).parent >= 0) root = skel.bone(root).parent;
+      }
+    }
+    chain_effector_ = -1;
+    if (const Status status = assign_chain(chain_, skel, root, effector); !status) {
+      result.status = status;  // a chain longer than a solve takes
+      return result;
+    }
+    chain_effector_ = effector;
+  }
+  const std::int32_t root = chain_.bones.front();
+
   // The lattices that stretch: on the chain above the effector, carrying it (their far face is behind it).
-  struct Stretched {
-    std::size_t lattice;
-    std::int32_t child;  // the chain bone right below the lattice's bone
-    glm::vec3 axis;      // stretch per unit, in the lattice bone's frame
-  };
-  std::vector<Stretched> chain_lattices;
+  chain_lattices_.clear();
   const glm::vec3 effector_bind = glm::vec3(skel.bind_world()[std::size_t(effector)][3]);
   for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
     const LatticeSpec& spec = hierarchy_.spec(l);
@@ -101,65 +138,89 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     if (rest.frame().to_lattice(local).x < 1.0f - 1e-4f) continue;
     std::int32_t child = effector;
     while (skel.bone(child).parent != spec.bone) child = skel.bone(child).parent;
-    chain_lattices.push_back({l, child, rest.frame().u_axis / hierarchy_.length(l)});
+    chain_lattices_.push_back({l, child, rest.frame().u_axis / hierarchy_.length(l)});
   }
 
-  std::optional<CcdSolver> made;
-  try {
-    made.emplace(skel, root, effector);
-  } catch (const Error&) {
-    return result;  // a chain longer than the solver takes
-  }
-  CcdSolver& solver = *made;
-  Pose work = pose_;
-  const float reach_length = chain_length(solver.chain(), work);
-  IkSettings settings = ik;
-  settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
+  std::copy(pose_.rotations.begin(), pose_.rotations.end(), work_.rotations.begin());
+  std::copy(pose_.translations.begin(), pose_.translations.end(), work_.translations.begin());
+  const float reach_length = chain_length(chain_, work_.translations);
   IkResult ik_result;
-  if (!solver.solve(work, target, settings, ik_result)) return result;
-  result.valid = true;
+  std::uint32_t random_state = ik_random_seed;  // one generator over every solve of this reach
+  IkJob solve;
+  solve.chain = &chain_;
+  solve.rotations = work_.rotations;
+  solve.translations = work_.translations;
+  solve.target = target;
+  solve.settings = ik;
+  solve.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
+  solve.scratch = ik_scratch_;
+  solve.random_state = &random_state;
+  solve.result = &ik_result;
+  if (const Status status = chain_base(chain_, work_.rotations, work_.translations, solve.base); !status) {
+    result.status = status;
+    return result;
+  }
+  if (const Status status = solve.run(); !status) {
+    result.status = status;
+    return result;
+  }
   result.residual = ik_result.distance;
   result.iterations = 1;
 
   // Stretch λ·length_L on every chain lattice, λ fitted to the remaining gap, then IK again with the longer chain.
+  // The stretch moves only chain bones below the root, so the base stays.
   float lambda = 0.0f;
   float distance = ik_result.distance;
-  std::vector<glm::mat4> world(skel.bone_count());
-  for (int round = 0;
-       round < 16 && !chain_lattices.empty() && distance > 1e-3f * result.residual && distance > settings.tolerance;
+  for (int round = 0; round < 16 && !chain_lattices_.empty() && distance > 1e-3f * result.residual &&
+                      distance > solve.settings.tolerance;
        ++round) {
-    compute_world_matrices(skel, work, world);
-    glm::vec3 growth(0.0f);  // effector motion per unit λ
-    for (const Stretched& s : chain_lattices) {
-      growth +=
-          glm::mat3(world[std::size_t(hierarchy_.spec(s.lattice).bone)]) * (s.axis * hierarchy_.length(s.lattice));
+    // Effector motion per unit λ: each lattice's axis carried by its bone's model-space matrix, the product of the
+    // local matrices down the chain (as LocalToWorldJob multiplies them).
+    glm::mat4 model(1.0f);
+    bool first = true;
+    auto descend = [&](std::int32_t bone) {
+      const glm::mat4 local = local_matrix(work_.rotations[std::size_t(bone)], work_.translations[std::size_t(bone)]);
+      model = first ? local : model * local;
+      first = false;
+    };
+    for (const std::int32_t bone : chain_.ancestors) descend(bone);
+    for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
+      descend(chain_.bones[k]);
+      chain_world_[k] = model;
+    }
+    glm::vec3 growth(0.0f);
+    for (const Stretched& s : chain_lattices_) {
+      const std::int32_t bone = hierarchy_.spec(s.lattice).bone;
+      std::size_t k = 0;
+      while (chain_.bones[k] != bone) ++k;  // a joint: the root is an ancestor of the bone, the bone of the effector
+      growth += glm::mat3(chain_world_[k]) * (s.axis * hierarchy_.length(s.lattice));
     }
     const float growth2 = glm::dot(growth, growth);
     if (!(growth2 > 0.0f)) break;
-    const glm::vec3 gap = target - effector_position(skel, solver.chain(), work);
+    const glm::vec3 gap = target - effector_position(chain_, work_.rotations, work_.translations);
     const float next = std::clamp(lambda + glm::dot(gap, growth) / growth2, 0.0f, rig_.max_stretch);
     if (next == lambda && round > 0) break;
     lambda = next;
-    for (const Stretched& s : chain_lattices) {
-      work.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
+    for (const Stretched& s : chain_lattices_) {
+      work_.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
     }
-    for (const Stretched& s : chain_lattices) {  // (two lattices on one bone both push its child)
-      work.translations[std::size_t(s.child)] += s.axis * (lambda * hierarchy_.length(s.lattice));
+    for (const Stretched& s : chain_lattices_) {  // (two lattices on one bone both push its child)
+      work_.translations[std::size_t(s.child)] += s.axis * (lambda * hierarchy_.length(s.lattice));
     }
-    if (!solver.solve(work, target, settings, ik_result)) break;
+    if (!solve.run()) break;
     distance = ik_result.distance;
     ++result.iterations;
   }
   result.distance = distance;
 
   // The pose keeps the IK rotations; the lattices, not the bones, carry the stretch.
-  for (const Stretched& s : chain_lattices) {
-    work.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
+  for (const Stretched& s : chain_lattices_) {
+    work_.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
   }
-  pose_ = std::move(work);
+  std::swap(pose_, work_);
   release();
   stretched_.clear();
-  for (const Stretched& s : chain_lattices) {
+  for (const Stretched& s : chain_lattices_) {
     hierarchy_.set_stretch_target(s.lattice, lambda * hierarchy_.length(s.lattice));
     stretched_.push_back(s.lattice);
     result.stretch += lambda * hierarchy_.length(s.lattice);
@@ -172,12 +233,17 @@ void Character::release() {
   for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) hierarchy_.set_stretch_target(l, 0.0f);
 }
 
-bool Character::update(float dt) {
-  if (!(dt >= 0.0f) || !std::isfinite(dt)) return false;
-  hierarchy_.step(dt);
+Status Character::update(float dt) {
+  if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
   const Skeleton& skel = skeleton();
-  compute_world_matrices(skel, pose_, world_);
-  compute_skinning_palette(skel, world_, palette_);
+  LocalToWorldJob fk;
+  fk.skeleton = &skel;
+  fk.rotations = pose_.rotations;
+  fk.translations = pose_.translations;
+  fk.world = world_;
+  fk.palette = palette_;
+  if (const Status status = fk.run(); !status) return status;
+  if (const Status status = hierarchy_.step(dt); !status) return status;
   SkinningJob job;
   job.method = skinning;
   job.matrices = palette_;
@@ -187,19 +253,15 @@ bool Character::update(float dt) {
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (skinning == SkinningMethod::dqs) {
     bool has_scale = false;
-    compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale);
+    if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))
+      return Status::failure("skinning palette is singular or not finite");
     job.dual_quats = dual_quats_;
     if (has_scale) job.scales = scales_;
   }
-  job.run();
-  hierarchy_.update(world_);
-  if (lattice_fields) {
-    hierarchy_.apply(positions_);
-  } else {
-    hierarchy_.apply_carried(positions_);
-  }
+  if (!job.run()) return Status::failure("skinning refused");
   normals_current_ = false;
-  return true;
+  if (const Status status = hierarchy_.update(world_); !status) return status;
+  return lattice_fields ? hierarchy_.apply(positions_) : hierarchy_.apply_carried(positions_);
 }
 
 std::span<const glm::vec3> Character::normals() {

@@ -54,6 +54,27 @@ T hermite(T p0, T m0, T p1, T m1, float u, float dt) noexcept {
   return (2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * dt * m0 + (-2 * u3 + 3 * u2) * p1 + (u3 - u2) * dt * m1;
 }
 
+// The sizes a sampled track relies on: a value per time and, for a cubic spline, a tangent of each kind per time.
+template <class T>
+bool track_fits(const Track<T>& track) noexcept {
+  const std::size_t tangents = track.interpolation == Interpolation::cubic_spline ? track.times.size() : 0;
+  return track.values.size() == track.times.size() && track.in_tangents.size() >= tangents &&
+         track.out_tangents.size() >= tangents;
+}
+
+// What SamplingJob::run checks for channels [begin, end).
+Status run_checks(const SamplingJob& job, std::size_t begin, std::size_t end) noexcept {
+  if (job.animation == nullptr) return Status::failure("no animation");
+  if (!std::isfinite(job.time)) return Status::failure("time is not finite");
+  if (begin > end || end > job.animation->channels.size()) return Status::failure("channel range out of bounds");
+  const std::size_t bones = std::min(job.rotations.size(), job.translations.size());
+  for (std::size_t c = begin; c < end; ++c) {
+    const std::int32_t bone = job.animation->channels[c].bone;
+    if (bone < 0 || static_cast<std::size_t>(bone) >= bones) return Status::failure("channel bone out of the pose");
+  }
+  return {};
+}
+
 }  // namespace
 
 glm::vec3 sample_track(const Track<glm::vec3>& track, float seconds, glm::vec3 fallback) noexcept {
@@ -87,18 +108,28 @@ float Animation::local_time(float seconds) const noexcept {
   return t < duration ? t : 0.0f;  // t + duration can round up to duration for tiny negative t
 }
 
-bool Animation::sample(float seconds, Pose& pose) const noexcept {
-  if (!std::isfinite(seconds)) return false;
-  const std::size_t bones = std::min(pose.rotations.size(), pose.translations.size());
-  for (const Channel& channel : channels)
-    if (channel.bone < 0 || static_cast<std::size_t>(channel.bone) >= bones) return false;
-  const float t = local_time(seconds);
-  for (const Channel& channel : channels) {
+std::size_t SamplingJob::count() const noexcept { return animation == nullptr ? 0 : animation->channels.size(); }
+
+Status SamplingJob::validate() const noexcept {
+  if (const Status status = run_checks(*this, 0, count()); !status) return status;
+  for (const Channel& channel : animation->channels)
+    if (!track_fits(channel.translation) || !track_fits(channel.rotation) || !track_fits(channel.scale))
+      return Status::failure("track values or tangents do not match its times");
+  return {};
+}
+
+Status SamplingJob::run() const noexcept { return run(0, count()); }
+
+Status SamplingJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (const Status status = run_checks(*this, begin, end); !status) return status;
+  const float t = animation->local_time(time);
+  for (std::size_t c = begin; c < end; ++c) {
+    const Channel& channel = animation->channels[c];
     const auto b = static_cast<std::size_t>(channel.bone);
-    pose.translations[b] = sample_track(channel.translation, t, pose.translations[b]);
-    pose.rotations[b] = sample_track(channel.rotation, t, pose.rotations[b]);
+    translations[b] = sample_track(channel.translation, t, translations[b]);
+    rotations[b] = sample_track(channel.rotation, t, rotations[b]);
   }
-  return true;
+  return {};
 }
 
 void Animation::validate(std::size_t bone_count, const std::string& source) const {

@@ -99,12 +99,14 @@ void DeformerHierarchy::stretch_points(Lattice& lattice) const {
   }
 }
 
-bool DeformerHierarchy::set_stretch_target(std::size_t index, float stretch) {
-  Lattice& lattice = lattices_.at(index);
-  if (!std::isfinite(stretch) || !(stretch > -lattice.length)) return false;
+Status DeformerHierarchy::set_stretch_target(std::size_t index, float stretch) {
+  if (index >= lattices_.size()) return Status::failure("lattice index out of range");
+  Lattice& lattice = lattices_[index];
+  if (!std::isfinite(stretch) || !(stretch > -lattice.length))
+    return Status::failure("stretch not finite and > -length");
   lattice.target = stretch;
   stretch_points(lattice);
-  return true;
+  return {};
 }
 
 float DeformerHierarchy::stretch(std::size_t index) const {
@@ -122,10 +124,12 @@ void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& se
   lattice.spec.elastic = settings;
 }
 
-bool DeformerHierarchy::step(float dt) {
-  if (!(dt >= 0.0f) || !std::isfinite(dt)) return false;
-  for (Lattice& lattice : lattices_) lattice.elastic.step(dt, lattice.target_points);
-  return true;
+Status DeformerHierarchy::step(float dt) {
+  if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
+  // With dt checked, a lattice's step cannot refuse: its target points were sized with it at construction.
+  for (Lattice& lattice : lattices_)
+    if (const Status status = lattice.elastic.step(dt, lattice.target_points); !status) return status;
+  return {};
 }
 
 void DeformerHierarchy::reset() {
@@ -136,8 +140,8 @@ void DeformerHierarchy::reset() {
   }
 }
 
-bool DeformerHierarchy::update(std::span<const glm::mat4> world) {
-  if (world.size() != bone_parents_.size()) return false;
+Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
+  if (world.size() != bone_parents_.size()) return Status::failure("world does not have one entry per bone");
   for (Lattice& lattice : lattices_) {
     const std::span<const glm::vec3> rest = lattice.rest.control_points();
     const std::span<const glm::vec3> now = lattice.elastic.positions();
@@ -166,35 +170,44 @@ bool DeformerHierarchy::update(std::span<const glm::mat4> world) {
       lattice.world_points[n] = transform_point(world[bone], rest[n]) + lattice.world_displacements[n] + carried;
     }
   }
-  return true;
+  return {};
 }
 
-bool DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
-  if (positions.size() != scratch_.size()) return false;
+Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
+  if (positions.size() != scratch_.size()) return Status::failure("positions do not have one entry per point");
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
     for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
       positions[lattice.carried_points[n]] += lattice.carried_weights[n] * lattice.far_displacement;
     }
   }
-  return true;
+  return {};
 }
 
-bool DeformerHierarchy::apply(std::span<glm::vec3> positions) {
-  if (!apply_carried(positions)) return false;
+LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice) {
+  LatticeEvaluateJob job;
+  job.binding = &lattice.binding;
+  job.control_points = lattice.world_displacements;
+  job.positions = scratch_;
+  return job;
+}
+
+Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
+  if (positions.size() != scratch_.size()) return Status::failure("positions do not have one entry per point");
+  // The constructor checked every binding against its lattice and the points, so no field is refused; checked all
+  // the same before anything is written.
+  for (const Lattice& lattice : lattices_)
+    if (lattice.active && !field_job(lattice).validate()) return Status::failure("a lattice field does not fit");
+  apply_carried(positions);
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
-    LatticeEvaluateJob job;
-    job.binding = &lattice.binding;
-    job.control_points = lattice.world_displacements;
-    job.positions = scratch_;
-    job.run();  // cannot fail: the binding was made for these control points and scratch_ spans every point
+    field_job(lattice).run();
     const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
     }
   }
-  return true;
+  return {};
 }
 
 glm::vec3 DeformerHierarchy::point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept {

@@ -156,14 +156,14 @@ void ElasticLattice::set_settings(const ElasticSettings& settings) {
   owed_ = 0.0;
 }
 
-bool ElasticLattice::set_pinned(std::span<const std::uint8_t> pinned) {
-  if (!pinned.empty() && pinned.size() != size()) return false;
+Status ElasticLattice::set_pinned(std::span<const std::uint8_t> pinned) {
+  if (!pinned.empty() && pinned.size() != size()) return Status::failure("pinned is neither empty nor one per point");
   pinned_.assign(pinned.begin(), pinned.end());
-  return true;
+  return {};
 }
 
-bool ElasticLattice::reset(std::span<const glm::vec3> rest) {
-  if (rest.size() != size()) return false;
+Status ElasticLattice::reset(std::span<const glm::vec3> rest) {
+  if (rest.size() != size()) return Status::failure("rest does not have one entry per point");
   std::copy(rest.begin(), rest.end(), positions_.begin());
   std::copy(rest.begin(), rest.end(), previous_.begin());
   std::copy(rest.begin(), rest.end(), rest_.begin());
@@ -171,11 +171,12 @@ bool ElasticLattice::reset(std::span<const glm::vec3> rest) {
   std::fill(velocities_.begin(), velocities_.end(), glm::vec3(0.0f));
   std::fill(sub_velocities_.begin(), sub_velocities_.end(), glm::vec3(0.0f));
   owed_ = 0.0;
-  return true;
+  return {};
 }
 
-bool ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
-  if (!(dt >= 0.0f) || !finite(dt) || rest.size() != size()) return false;
+Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
+  if (!(dt >= 0.0f) || !finite(dt)) return Status::failure("dt is negative or not finite");
+  if (rest.size() != size()) return Status::failure("rest does not have one entry per point");
   std::copy(rest.begin(), rest.end(), rest_.begin());
   if (dt > 0.0f) {
     if (settings_.integrator == Integrator::verlet) {
@@ -193,7 +194,7 @@ bool ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
       velocities_[i] = sub_velocities_[i] = glm::vec3(0.0f);
     }
   }
-  return true;
+  return {};
 }
 
 const OscillatorStep& ElasticLattice::cached_step(double dt, OscillatorStep& cache, double& cache_dt) const {

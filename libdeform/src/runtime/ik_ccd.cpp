@@ -3,103 +3,98 @@
 
 #include "ik_chain.hpp"
 
-namespace deform {
+namespace deform::detail {
+namespace {
 
-CcdSolver::CcdSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector)
-    : skeleton_(&skeleton), chain_(make_chain(skeleton, root, effector)),
-      limits_(detail::prepare_chain_limits(skeleton, chain_)) {
-  frames_.resize(chain_.bones.size());
-  heads_.resize(chain_.bones.size());
-  best_.resize(chain_.joint_count());
-  angles_.resize(chain_.joint_count());
-  columns_.resize(3 * chain_.joint_count());
-}
-
-void CcdSolver::sweep(Pose& pose, glm::vec3 target, glm::quat base, float max_step_radians, bool reaim) {
-  // Effector side first. Joints nearer the root keep their frames while the ones below them turn, so only the
-  // effector position needs updating between joints; the caller ends the sweep with a full chain FK.
-  const detail::StepCap cap = detail::cap_for(max_step_radians);
-  glm::vec3 effector = heads_.back();
-  for (std::size_t k = chain_.joint_count(); k-- > 0;) {
-    const glm::vec3 head = heads_[k];
-    const glm::quat parent = k == 0 ? base : frames_[k - 1];
-    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain_.bones[k])];
+// One CCD sweep, effector side first. Joints nearer the root keep their frames while the ones below them turn, so
+// only the effector position needs updating between joints; the caller ends the sweep with a full chain FK.
+void sweep(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec3 target, glm::quat base,
+           float max_step_radians, bool reaim) {
+  const StepCap cap = cap_for(max_step_radians);
+  glm::vec3 effector = scratch.heads.back();
+  for (std::size_t k = chain.joint_count(); k-- > 0;) {
+    const glm::vec3 head = scratch.heads[k];
+    const glm::quat parent = k == 0 ? base : scratch.frames[k - 1];
+    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     // Relative to the joint's head: effector and target in the parent's frame, the effector in the joint's own
     // frame (which the joint's rotation does not change).
     const glm::vec3 reach = glm::conjugate(parent) * (effector - head);
     const glm::vec3 wanted = glm::conjugate(parent) * (target - head);
     const glm::vec3 carried = glm::conjugate(local) * reach;
-    local = detail::rotation_between(reach, wanted, cap) * local;
-    detail::clamp_joint(limits_[k], local, reaim, carried, wanted);
-    frames_[k] = parent * local;
-    effector = head + frames_[k] * carried;
+    local = rotation_between(reach, wanted, cap) * local;
+    clamp_joint(chain.limits[k], local, reaim, carried, wanted);
+    scratch.frames[k] = parent * local;
+    effector = head + scratch.frames[k] * carried;
   }
 }
 
-bool CcdSolver::solve(Pose& pose, glm::vec3 target, const IkSettings& settings, IkResult& result) {
-  if (!detail::pose_fits(*skeleton_, pose) || !detail::settings_valid(target, settings)) return false;
-  const std::size_t joints = chain_.joint_count();
+}  // namespace
+
+IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
+                   const IkSettings& settings, float length, const Scratch& scratch,
+                   std::uint32_t& random_state) noexcept {
+  const std::size_t joints = chain.joint_count();
+  const std::span<const EulerLimits> limits = chain.limits;
+  const std::span<glm::quat> frames = scratch.frames;
+  const std::span<glm::vec3> heads = scratch.heads;
   for (std::size_t k = 0; k < joints; ++k)
-    clamp_rotation(limits_[k], pose.rotations[static_cast<std::size_t>(chain_.bones[k])]);
-  const detail::Frame base = detail::base_frame(chain_, pose);
+    clamp_rotation(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
   const float max_step = glm::radians(settings.max_step_degrees);
 
-  const float length = chain_length(chain_, pose);
-  detail::chain_fk(chain_, pose, base, frames_, heads_);
-  float distance = glm::length(heads_.back() - target);
+  chain_fk(chain, pose, base, frames, heads);
+  float distance = glm::length(heads.back() - target);
   // No pose gets nearer than this; progress is measured on the distance above it.
-  const float floor = std::max(0.0f, glm::length(target - heads_[0]) - length);
+  const float floor = std::max(0.0f, glm::length(target - heads[0]) - length);
   float best_distance = distance;
-  detail::save_joints(chain_, pose, best_);
+  save_joints(chain, pose, scratch.best);
   int iterations = 0;
   // The stall escape's stages: 0 CCD sweeps while each gains enough; then 1 one straightening pass
   // (out-of-reach targets only), 2 damped least-squares steps while they gain; on their stall, a random kick and
   // back to 0.
   int stage = 0;
-  bool angles_current = false;  // angles_ hold the joints' Euler angles: the last step was a least-squares step
+  bool angles_current = false;  // scratch.angles hold the joints' Euler angles: the last step was a least-squares step
   // Within tolerance of the floor nothing better exists: an out-of-reach target stops there too.
   while (distance > floor + settings.tolerance && iterations < settings.max_iterations) {
     ++iterations;
     if (stage == 1) {
-      detail::point_segments_at(chain_, limits_, pose, base.rotation, frames_, heads_, target);
+      point_segments_at(chain, limits, pose, base.rotation, frames, heads, target);
     } else if (stage == 2) {
-      detail::damped_least_squares_step(chain_, limits_, pose, base.rotation, frames_, heads_, target,
-                                        detail::damping_fraction * length, angles_current, angles_, columns_);
+      damped_least_squares_step(chain, limits, pose, base.rotation, frames, heads, target, damping_fraction * length,
+                                angles_current, scratch.angles, scratch.columns);
     } else {
-      sweep(pose, target, base.rotation, max_step, settings.escape_stalls);
+      sweep(chain, pose, scratch, target, base.rotation, max_step, settings.escape_stalls);
     }
     angles_current = stage == 2;
-    detail::chain_fk(chain_, pose, base, frames_, heads_);
+    chain_fk(chain, pose, base, frames, heads);
     const float previous = distance;
-    distance = glm::length(heads_.back() - target);
+    distance = glm::length(heads.back() - target);
     if (distance < best_distance) {
       best_distance = distance;
-      detail::save_joints(chain_, pose, best_);
+      save_joints(chain, pose, scratch.best);
     }
     const float gain = previous - distance;
     if (!settings.escape_stalls || distance <= settings.tolerance) continue;
     // Clamped CCD crawls near the target (each joint moves the effector only across its own lever arm), creeps
     // toward the straight chain for a target out of reach, or sits in a local minimum with joints pinned at their
     // limits. Straightening, then least-squares steps that move all joints together, then a kick into another basin.
-    if (stage == 0 && gain < detail::handover_gain * (previous - floor)) {
+    if (stage == 0 && gain < handover_gain * (previous - floor)) {
       stage = floor > 0.0f ? 1 : 2;
     } else if (stage == 1) {
       stage = 2;
-    } else if (stage == 2 && gain < detail::stall_gain * (previous - floor)) {
-      detail::load_joints(chain_, best_, pose);
-      detail::perturb_joints(chain_, limits_, pose, random_state_, detail::escape_degrees);
-      detail::chain_fk(chain_, pose, base, frames_, heads_);
-      distance = glm::length(heads_.back() - target);
+    } else if (stage == 2 && gain < stall_gain * (previous - floor)) {
+      load_joints(chain, scratch.best, pose);
+      perturb_joints(chain, limits, pose, random_state, escape_degrees);
+      chain_fk(chain, pose, base, frames, heads);
+      distance = glm::length(heads.back() - target);
       stage = 0;
       angles_current = false;
     }
   }
   if (best_distance < distance) {
-    detail::load_joints(chain_, best_, pose);
+    load_joints(chain, scratch.best, pose);
     distance = best_distance;
   }
-  result = IkResult{distance <= settings.tolerance, distance, iterations};
-  return true;
+  return IkResult{distance <= settings.tolerance, distance, iterations};
 }
 
-}  // namespace deform
+}  // namespace deform::detail

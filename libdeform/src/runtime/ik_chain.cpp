@@ -1,8 +1,11 @@
 // IK chains: finding the bones from root to effector, and the helpers every solver shares (ik_chain.hpp).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <numbers>
 #include <string>
+#include <string_view>
 
 #include "deform/runtime/error.hpp"
 #include "ik_chain.hpp"
@@ -11,9 +14,76 @@ namespace deform {
 
 namespace {
 
-constexpr std::size_t max_chain_bones = 256;
+bool finite(glm::quat q) noexcept {
+  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
+}
+
+bool finite(const RigidTransform& t) noexcept { return finite(t.rotation) && detail::finite(t.translation); }
+
+// True when the spans hold every bone of the chain and its ancestors.
+bool spans_fit(const IkChain& chain, std::size_t rotations, std::size_t translations) noexcept {
+  const auto needed = static_cast<std::size_t>(chain.max_bone) + 1;
+  return chain.max_bone >= 0 && rotations >= needed && translations >= needed;
+}
+
+// The sum of the chain's segment lengths; the spans hold every chain bone.
+float segment_sum(const IkChain& chain, std::span<const glm::vec3> translations) noexcept {
+  float length = 0.0f;
+  for (std::size_t k = 1; k < chain.bones.size(); ++k)
+    length += glm::length(translations[static_cast<std::size_t>(chain.bones[k])]);
+  return length;
+}
+
+// The checks every solve shares: the chain's pose entries finite, its length (returned) finite. Spans already fit.
+Status check_chain_pose(const IkChain& chain, std::span<const glm::quat> rotations,
+                        std::span<const glm::vec3> translations, float& length) noexcept {
+  for (const std::int32_t id : chain.bones) {
+    const auto b = static_cast<std::size_t>(id);
+    if (!finite(rotations[b]) || !detail::finite(translations[b])) return Status::failure("chain pose is not finite");
+  }
+  length = segment_sum(chain, translations);
+  if (!std::isfinite(length)) return Status::failure("chain length overflows");
+  return {};
+}
+
+// `count` objects of type T at `bytes`, which then moves past them.
+template <class T>
+std::span<T> carve(std::byte*& bytes, std::size_t count) noexcept {
+  T* first = reinterpret_cast<T*>(bytes);
+  std::uninitialized_default_construct_n(first, count);
+  bytes += count * sizeof(T);
+  return std::span<T>(first, count);
+}
 
 }  // namespace
+
+Status assign_chain(IkChain& chain, const Skeleton& skeleton, std::int32_t root, std::int32_t effector) {
+  chain.bones.clear();
+  chain.ancestors.clear();
+  chain.limits.clear();
+  chain.max_bone = -1;
+  const auto count = static_cast<std::int32_t>(skeleton.bone_count());
+  if (root < 0 || root >= count) return Status::failure("root bone out of range");
+  if (effector < 0 || effector >= count) return Status::failure("effector out of range");
+  if (root == effector || !skeleton.is_ancestor(root, effector))
+    return Status::failure("root is not an ancestor of the effector");
+  std::size_t length = 1;
+  for (std::int32_t id = effector; id != root; id = skeleton.bone(id).parent)
+    if (++length > max_chain_bones) return Status::failure("chain longer than 256 bones");
+  chain.bones.resize(length);
+  std::int32_t id = effector;
+  for (std::size_t k = length; k-- > 0; id = skeleton.bone(id).parent) chain.bones[k] = id;
+  std::size_t depth = 0;
+  for (id = skeleton.bone(root).parent; id >= 0; id = skeleton.bone(id).parent) ++depth;
+  chain.ancestors.resize(depth);
+  id = skeleton.bone(root).parent;
+  for (std::size_t k = depth; k-- > 0; id = skeleton.bone(id).parent) chain.ancestors[k] = id;
+  chain.limits.resize(length - 1);
+  for (std::size_t k = 0; k + 1 < length; ++k) chain.limits[k] = prepare_limits(skeleton.bone(chain.bones[k]).limits);
+  for (const std::int32_t bone : chain.bones) chain.max_bone = std::max(chain.max_bone, bone);
+  for (const std::int32_t bone : chain.ancestors) chain.max_bone = std::max(chain.max_bone, bone);
+  return {};
+}
 
 IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t effector) {
   const auto count = static_cast<std::int32_t>(skeleton.bone_count());
@@ -21,42 +91,143 @@ IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t eff
   if (root < 0 || root >= count) throw Error::invalid_argument(bone_name(root), "root bone out of range");
   if (effector < 0 || effector >= count) throw Error::invalid_argument(bone_name(effector), "effector out of range");
   if (root == effector || !skeleton.is_ancestor(root, effector))
-    throw Error::invalid_argument(bone_name(effector),
-                         "root '" + skeleton.key(root) + "' is not an ancestor of effector '" + skeleton.key(effector) + "'");
+    throw Error::invalid_argument(bone_name(effector), "root '" + skeleton.key(root) +
+                                                           "' is not an ancestor of effector '" + skeleton.key(effector) + "'");
   IkChain chain;
-  for (std::int32_t id = effector; id != root; id = skeleton.bone(id).parent) {
-    chain.bones.push_back(id);
-    if (chain.bones.size() >= max_chain_bones)
-      throw Error::invalid_argument(bone_name(effector), "chain longer than 256 bones");
-  }
-  chain.bones.push_back(root);
-  std::reverse(chain.bones.begin(), chain.bones.end());
-  for (std::int32_t id = skeleton.bone(root).parent; id >= 0; id = skeleton.bone(id).parent) chain.ancestors.push_back(id);
-  std::reverse(chain.ancestors.begin(), chain.ancestors.end());
+  if (const Status status = assign_chain(chain, skeleton, root, effector); !status)
+    throw Error::invalid_argument(bone_name(effector), status.reason());
   return chain;
 }
 
-float chain_length(const IkChain& chain, const Pose& pose) noexcept {
-  float length = 0.0f;
-  for (std::size_t k = 1; k < chain.bones.size(); ++k)
-    length += glm::length(pose.translations[static_cast<std::size_t>(chain.bones[k])]);
-  return length;
+float chain_length(const IkChain& chain, std::span<const glm::vec3> translations) noexcept {
+  return spans_fit(chain, translations.size(), translations.size()) ? segment_sum(chain, translations) : 0.0f;
 }
 
-glm::vec3 effector_position(const Skeleton& skeleton, const IkChain& chain, const Pose& pose) noexcept {
-  if (!detail::pose_fits(skeleton, pose) || chain.bones.empty()) return glm::vec3(0.0f);
-  detail::Frame frame = detail::base_frame(chain, pose);
-  for (std::size_t k = 0; k < chain.bones.size(); ++k) {
-    const auto b = static_cast<std::size_t>(chain.bones[k]);
-    frame.translation += frame.rotation * pose.translations[b];
-    frame.rotation = frame.rotation * pose.rotations[b];
+RigidTransform RigidTransform::from_matrix(const glm::mat4& matrix) noexcept {
+  return {glm::normalize(glm::quat_cast(glm::mat3(matrix))), glm::vec3(matrix[3])};
+}
+
+glm::mat4 RigidTransform::matrix() const noexcept { return local_matrix(rotation, translation); }
+
+Status chain_base(const IkChain& chain, std::span<const glm::quat> rotations, std::span<const glm::vec3> translations,
+                  RigidTransform& base) noexcept {
+  if (!spans_fit(chain, rotations.size(), translations.size()))
+    return Status::failure("pose spans do not hold every chain bone");
+  RigidTransform frame;
+  for (const std::int32_t id : chain.ancestors) {
+    const auto b = static_cast<std::size_t>(id);
+    frame.translation += frame.rotation * translations[b];
+    frame.rotation = frame.rotation * rotations[b];
+  }
+  base = frame;
+  return {};
+}
+
+glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
+                            std::span<const glm::vec3> translations) noexcept {
+  if (!spans_fit(chain, rotations.size(), translations.size()) || chain.bones.empty()) return glm::vec3(0.0f);
+  detail::Frame frame;
+  for (const std::int32_t id : chain.ancestors) {
+    const auto b = static_cast<std::size_t>(id);
+    frame.translation += frame.rotation * translations[b];
+    frame.rotation = frame.rotation * rotations[b];
+  }
+  for (const std::int32_t id : chain.bones) {
+    const auto b = static_cast<std::size_t>(id);
+    frame.translation += frame.rotation * translations[b];
+    frame.rotation = frame.rotation * rotations[b];
   }
   return frame.translation;
 }
 
+std::size_t IkJob::scratch_size() const noexcept { return chain == nullptr ? 0 : scratch_size(chain->joint_count()); }
+
+namespace {
+
+// IkJob::validate, returning the chain's length as well.
+Status check(const IkJob& job, float& length) noexcept {
+  const IkChain* chain = job.chain;
+  const IkSettings& settings = job.settings;
+  if (chain == nullptr || chain->joint_count() == 0) return Status::failure("no chain");
+  if (!spans_fit(*chain, job.rotations.size(), job.translations.size()))
+    return Status::failure("pose spans do not hold every chain bone");
+  if (settings.max_iterations < 1) return Status::failure("max_iterations below 1");
+  if (!std::isfinite(settings.tolerance) || settings.tolerance < 0.0f)
+    return Status::failure("tolerance not finite and >= 0");
+  if (!std::isfinite(settings.max_step_degrees) || settings.max_step_degrees < 0.0f)
+    return Status::failure("max_step_degrees not finite and >= 0");
+  if (job.scratch.size() < job.scratch_size()) return Status::failure("scratch smaller than scratch_size()");
+  if (reinterpret_cast<std::uintptr_t>(job.scratch.data()) % IkJob::scratch_alignment != 0)
+    return Status::failure("scratch misaligned");
+  if (!detail::finite(job.target)) return Status::failure("target is not finite");
+  if (!finite(job.base)) return Status::failure("base is not finite");
+  return check_chain_pose(*chain, job.rotations, job.translations, length);
+}
+
+}  // namespace
+
+Status IkJob::validate() const noexcept {
+  float length = 0.0f;
+  return check(*this, length);
+}
+
+Status IkJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (begin > end || end > count()) return Status::failure("range out of bounds");
+  return begin == end ? Status() : run();
+}
+
+Status IkJob::run() const noexcept {
+  float length = 0.0f;
+  if (const Status status = check(*this, length); !status) return status;
+  const std::size_t joints = chain->joint_count(), bones = joints + 1;
+  // The scratch's parts, doubles first (scratch_alignment), then floats.
+  std::byte* bytes = scratch.data();
+  detail::Scratch parts;
+  parts.angles = carve<glm::dvec3>(bytes, joints);
+  parts.frames = carve<glm::quat>(bytes, bones);
+  parts.best = carve<glm::quat>(bytes, joints);
+  parts.heads = carve<glm::vec3>(bytes, bones);
+  parts.columns = carve<glm::vec3>(bytes, 3 * joints);
+  parts.goals = carve<glm::vec3>(bytes, bones);
+  parts.lengths = carve<float>(bytes, joints);
+  std::uint32_t state = random_state != nullptr ? *random_state : ik_random_seed;
+  const detail::PoseView pose{rotations, translations};
+  const IkResult solved = method == IkMethod::fabrik
+                              ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
+                              : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+  if (random_state != nullptr) *random_state = state;
+  if (result != nullptr) *result = solved;
+  return {};
+}
+
+Status TwoBoneIkJob::validate() const noexcept {
+  if (chain == nullptr || chain->joint_count() != 2) return Status::failure("chain does not have two joints");
+  if (!spans_fit(*chain, rotations.size(), translations.size()))
+    return Status::failure("pose spans do not hold every chain bone");
+  if (!std::isfinite(tolerance) || tolerance < 0.0f) return Status::failure("tolerance not finite and >= 0");
+  if (!detail::finite(target)) return Status::failure("target is not finite");
+  if (!detail::finite(pole)) return Status::failure("pole is not finite");
+  if (!finite(base)) return Status::failure("base is not finite");
+  float length = 0.0f;
+  return check_chain_pose(*chain, rotations, translations, length);
+}
+
+Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (begin > end || end > count()) return Status::failure("range out of bounds");
+  return begin == end ? Status() : run();
+}
+
+Status TwoBoneIkJob::run() const noexcept {
+  if (const Status status = validate(); !status) return status;
+  const IkResult solved =
+      detail::solve_two_bone(*chain, {rotations, translations}, base, target, pole, tolerance);
+  if (result != nullptr) *result = solved;
+  return {};
+}
+
 namespace detail {
 
-void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
+void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<glm::quat> rotations,
               std::span<glm::vec3> heads) noexcept {
   glm::quat rotation = base.rotation;
   glm::vec3 head = base.translation;
@@ -74,14 +245,7 @@ StepCap cap_for(float max_radians) noexcept {
   return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
 }
 
-std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain) {
-  std::vector<EulerLimits> limits(chain.joint_count());
-  for (std::size_t k = 0; k < limits.size(); ++k)
-    limits[k] = prepare_limits(skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits);
-  return limits;
-}
-
-void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept {
   for (std::size_t k = 0; k < chain.joint_count(); ++k) {
     const glm::quat parent = k == 0 ? base : frames[k - 1];
@@ -103,7 +267,7 @@ constexpr double at_limit = 1e-6;  // radians
 
 }  // namespace
 
-void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
                                float lambda, bool angles_current, std::span<glm::dvec3> angles,
                                std::span<glm::vec3> columns) noexcept {
@@ -151,17 +315,17 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
   }
 }
 
-void save_joints(const IkChain& chain, const Pose& pose, std::span<glm::quat> saved) noexcept {
+void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved) noexcept {
   for (std::size_t k = 0; k + 1 < chain.bones.size(); ++k)
     saved[k] = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
 }
 
-void load_joints(const IkChain& chain, std::span<const glm::quat> saved, Pose& pose) noexcept {
+void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseView pose) noexcept {
   for (std::size_t k = 0; k + 1 < chain.bones.size(); ++k)
     pose.rotations[static_cast<std::size_t>(chain.bones[k])] = saved[k];
 }
 
-void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, std::uint32_t& state,
                     float degrees) noexcept {
   auto uniform = [&state]() {  // xorshift32, in [-1, 1)
     state ^= state << 13;
@@ -175,11 +339,6 @@ void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, P
     rotation = rotation * quat_from_euler(delta);
     clamp_rotation(limits[k], rotation);
   }
-}
-
-bool settings_valid(glm::vec3 target, const IkSettings& settings) noexcept {
-  return detail::finite(target) && settings.max_iterations >= 1 && std::isfinite(settings.tolerance) &&
-         settings.tolerance >= 0.0f && std::isfinite(settings.max_step_degrees) && settings.max_step_degrees >= 0.0f;
 }
 
 }  // namespace detail

@@ -4,40 +4,47 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
-#include <vector>
 
 #include "deform/runtime/ik.hpp"
 namespace deform::detail {
 
-// A rigid world transform: p_world = rotation * p + translation.
-struct Frame {
-  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
-  glm::vec3 translation{0.0f};
+using Frame = RigidTransform;
+
+// The pose a solve reads and writes: a Pose's spans, indexed by bone id, checked to hold every chain bone.
+struct PoseView {
+  std::span<glm::quat> rotations;
+  std::span<const glm::vec3> translations;
 };
+
+// The scratch of one iterative solve, carved from the job's bytes (IkJob::scratch_size).
+struct Scratch {
+  std::span<glm::dvec3> angles;   // Euler angles per joint (stall escape)
+  std::span<glm::quat> frames;    // model-space rotation per chain bone
+  std::span<glm::quat> best;      // best joint rotations seen
+  std::span<glm::vec3> heads;     // model-space head per chain bone
+  std::span<glm::vec3> columns;   // Jacobian columns, 3 per joint (stall escape)
+  std::span<glm::vec3> goals;     // FABRIK's joint positions, per chain bone
+  std::span<float> lengths;       // FABRIK's segment lengths, per joint
+};
+
+// The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
+// `length` is chain_length of the pose.
+IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
+                   const IkSettings& settings, float length, const Scratch& scratch,
+                   std::uint32_t& random_state) noexcept;
+IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
+                      const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
+// The closed-form two-bone solve (TwoBoneIkJob), inputs checked.
+IkResult solve_two_bone(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                        float tolerance) noexcept;
 
 inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // The small helpers below are defined here so that they inline into the solvers' per-solve code (a two-bone solve
 // is ~200 ns: a call each would show).
 
-// True when `pose` has an entry per bone of `skeleton`.
-inline bool pose_fits(const Skeleton& skeleton, const Pose& pose) noexcept {
-  return pose.rotations.size() == skeleton.bone_count() && pose.translations.size() == skeleton.bone_count();
-}
-
-// World frame of the root's parent (identity for the skeleton root). O(ancestors).
-inline Frame base_frame(const IkChain& chain, const Pose& pose) noexcept {
-  Frame frame;
-  for (const std::int32_t id : chain.ancestors) {
-    const auto b = static_cast<std::size_t>(id);
-    frame.translation += frame.rotation * pose.translations[b];
-    frame.rotation = frame.rotation * pose.rotations[b];
-  }
-  return frame;
-}
-
-// World rotation and head of every chain bone, from the base frame. Spans have chain.bones.size() entries.
-void chain_fk(const IkChain& chain, const Pose& pose, const Frame& base, std::span<glm::quat> rotations,
+// Model-space rotation and head of every chain bone, from the base frame. Spans have chain.bones.size() entries.
+void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<glm::quat> rotations,
               std::span<glm::vec3> heads) noexcept;
 
 // A cap on the angle of one rotation, prepared so that applying it needs no trigonometry. The default caps nothing.
@@ -109,14 +116,11 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 // clamped rotation is re-aimed (reaim_euler) with `carried` and `wanted`. Returns true when it was outside.
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried, glm::vec3 wanted) noexcept;
 
-// Each joint's prepared limits, in chain order (joint_count() entries).
-std::vector<EulerLimits> prepare_chain_limits(const Skeleton& skeleton, const IkChain& chain);
-
 // Points every segment at `target`, root first (each joint the smallest turn of its segment, clamped and re-aimed):
 // for an out-of-reach target this is the straight chain, the answer an unconstrained chain minimises the distance
 // with, which CCD only approaches slowly (the distance is second order in the joints' deviation from it).
 // `frames` and `heads` hold the chain's FK for `pose` on entry and are updated.
-void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept;
 
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
@@ -125,21 +129,19 @@ void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits
 // `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles; with
 // `angles_current` it holds their current ones on entry (the previous step was this one), which saves reading them
 // from the pose. `columns` (3 × joint_count()) is scratch.
-void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, glm::quat base,
+void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
                                float lambda, bool angles_current, std::span<glm::dvec3> angles,
                                std::span<glm::vec3> columns) noexcept;
 
 // Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
-void save_joints(const IkChain& chain, const Pose& pose, std::span<glm::quat> saved) noexcept;
-void load_joints(const IkChain& chain, std::span<const glm::quat> saved, Pose& pose) noexcept;
+void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved) noexcept;
+void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseView pose) noexcept;
 
 // Rotates every joint by up to `degrees` per Euler axis at random (xorshift32 on `state`), then clamps it.
-void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, Pose& pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, std::uint32_t& state,
                     float degrees) noexcept;
 
-// A solve's settings check: finite target, max_iterations >= 1, finite non-negative tolerance and step.
-bool settings_valid(glm::vec3 target, const IkSettings& settings) noexcept;
 
 // A CCD sweep or FABRIK pass that fails to shorten the distance above the out-of-reach floor by this fraction has
 // slowed to a crawl: damped least-squares steps take over (chosen by measurement, docs/ik.md).

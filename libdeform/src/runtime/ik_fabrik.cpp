@@ -3,7 +3,7 @@
 
 #include "ik_chain.hpp"
 
-namespace deform {
+namespace deform::detail {
 namespace {
 
 // `to - from` scaled to `length`; when the two points coincide, `fallback` (a direction) scaled instead.
@@ -15,105 +15,99 @@ glm::vec3 reach(glm::vec3 from, glm::vec3 to, float length, glm::vec3 fallback) 
   return f > 1e-12f ? from + fallback * (length / f) : from;
 }
 
-}  // namespace
-
-FabrikSolver::FabrikSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector)
-    : skeleton_(&skeleton), chain_(make_chain(skeleton, root, effector)),
-      limits_(detail::prepare_chain_limits(skeleton, chain_)) {
-  frames_.resize(chain_.bones.size());
-  heads_.resize(chain_.bones.size());
-  goals_.resize(chain_.bones.size());
-  lengths_.resize(chain_.joint_count());
-  best_.resize(chain_.joint_count());
-  angles_.resize(chain_.joint_count());
-  columns_.resize(3 * chain_.joint_count());
+// One FABRIK pass and its conversion back to clamped rotations; leaves scratch.frames and scratch.heads as the new
+// pose's FK.
+void pass(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec3 target, glm::quat base,
+          float reach_length, bool reaim) {
+  const std::size_t joints = chain.joint_count();
+  const std::span<glm::vec3> goals = scratch.goals, heads = scratch.heads;
+  const std::span<const float> lengths = scratch.lengths;
+  // The positions pass: backward from the target, forward from the fixed root; out of reach, the straight line.
+  for (std::size_t k = 0; k <= joints; ++k) goals[k] = heads[k];
+  if (glm::length(target - heads[0]) >= reach_length) {
+    for (std::size_t k = 0; k < joints; ++k)
+      goals[k + 1] = reach(goals[k], target, lengths[k], heads[k + 1] - heads[k]);
+  } else {
+    goals[joints] = target;
+    for (std::size_t k = joints; k-- > 0;)
+      goals[k] = reach(goals[k + 1], goals[k], lengths[k], heads[k] - heads[k + 1]);
+    goals[0] = heads[0];
+    for (std::size_t k = 0; k < joints; ++k)
+      goals[k + 1] = reach(goals[k], goals[k + 1], lengths[k], heads[k + 1] - heads[k]);
+  }
+  // Back to rotations from the root down: each joint turns its segment onto its goal from where its head really
+  // is (clamps above it may have moved it), then is clamped; FK follows joint by joint.
+  for (std::size_t k = 0; k < joints; ++k) {
+    const glm::quat parent = k == 0 ? base : scratch.frames[k - 1];
+    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
+    const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain.bones[k + 1])];
+    const glm::vec3 wanted = glm::conjugate(parent) * (goals[k + 1] - heads[k]);
+    local = rotation_between(local * offset, wanted) * local;
+    clamp_joint(chain.limits[k], local, reaim, offset, wanted);
+    scratch.frames[k] = parent * local;
+    heads[k + 1] = heads[k] + scratch.frames[k] * offset;
+  }
 }
 
-bool FabrikSolver::solve(Pose& pose, glm::vec3 target, const IkSettings& settings, IkResult& result) {
-  if (!detail::pose_fits(*skeleton_, pose) || !detail::settings_valid(target, settings)) return false;
-  const std::size_t joints = chain_.joint_count();
-  for (std::size_t k = 0; k < joints; ++k)
-    clamp_rotation(limits_[k], pose.rotations[static_cast<std::size_t>(chain_.bones[k])]);
-  const detail::Frame base = detail::base_frame(chain_, pose);
+}  // namespace
 
-  detail::chain_fk(chain_, pose, base, frames_, heads_);
+IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
+                      const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept {
+  const std::size_t joints = chain.joint_count();
+  const std::span<const EulerLimits> limits = chain.limits;
+  const std::span<glm::quat> frames = scratch.frames;
+  const std::span<glm::vec3> heads = scratch.heads;
+  for (std::size_t k = 0; k < joints; ++k)
+    clamp_rotation(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
+
+  chain_fk(chain, pose, base, frames, heads);
   float reach_length = 0.0f;
   for (std::size_t k = 0; k < joints; ++k) {
-    lengths_[k] = glm::length(heads_[k + 1] - heads_[k]);
-    reach_length += lengths_[k];
+    scratch.lengths[k] = glm::length(heads[k + 1] - heads[k]);
+    reach_length += scratch.lengths[k];
   }
-  float distance = glm::length(heads_.back() - target);
-  const float floor = std::max(0.0f, glm::length(target - heads_[0]) - reach_length);
+  float distance = glm::length(heads.back() - target);
+  const float floor = std::max(0.0f, glm::length(target - heads[0]) - reach_length);
   float best_distance = distance;
-  detail::save_joints(chain_, pose, best_);
+  save_joints(chain, pose, scratch.best);
   int iterations = 0;
   bool polishing = false;       // the stall escape's damped least-squares steps are running
-  bool angles_current = false;  // angles_ hold the joints' Euler angles: the last step was a least-squares step
+  bool angles_current = false;  // scratch.angles hold the joints' Euler angles: the last step was a least-squares step
   // Within tolerance of the floor nothing better exists: an out-of-reach target stops there too.
   while (distance > floor + settings.tolerance && iterations < settings.max_iterations) {
     ++iterations;
     if (polishing) {
-      detail::damped_least_squares_step(chain_, limits_, pose, base.rotation, frames_, heads_, target,
-                                        detail::damping_fraction * reach_length, angles_current, angles_, columns_);
-      detail::chain_fk(chain_, pose, base, frames_, heads_);
+      damped_least_squares_step(chain, limits, pose, base.rotation, frames, heads, target,
+                                damping_fraction * reach_length, angles_current, scratch.angles, scratch.columns);
+      chain_fk(chain, pose, base, frames, heads);
     } else {
-      pass(pose, target, base.rotation, reach_length, settings.escape_stalls);
+      pass(chain, pose, scratch, target, base.rotation, reach_length, settings.escape_stalls);
     }
     angles_current = polishing;
     const float previous = distance;
-    distance = glm::length(heads_.back() - target);
+    distance = glm::length(heads.back() - target);
     if (distance < best_distance) {
       best_distance = distance;
-      detail::save_joints(chain_, pose, best_);
+      save_joints(chain, pose, scratch.best);
     }
     if (settings.escape_stalls && distance > settings.tolerance &&
-        previous - distance < (polishing ? detail::stall_gain : detail::handover_gain) * (previous - floor)) {
-      // As in CcdSolver::solve: damped least-squares steps, then a random kick from the best pose.
+        previous - distance < (polishing ? stall_gain : handover_gain) * (previous - floor)) {
+      // As in solve_ccd: damped least-squares steps, then a random kick from the best pose.
       if (polishing) {
-        detail::load_joints(chain_, best_, pose);
-        detail::perturb_joints(chain_, limits_, pose, random_state_, detail::escape_degrees);
-        detail::chain_fk(chain_, pose, base, frames_, heads_);
-        distance = glm::length(heads_.back() - target);
+        load_joints(chain, scratch.best, pose);
+        perturb_joints(chain, limits, pose, random_state, escape_degrees);
+        chain_fk(chain, pose, base, frames, heads);
+        distance = glm::length(heads.back() - target);
         angles_current = false;
       }
       polishing = !polishing;
     }
   }
   if (best_distance < distance) {
-    detail::load_joints(chain_, best_, pose);
+    load_joints(chain, scratch.best, pose);
     distance = best_distance;
   }
-  result = IkResult{distance <= settings.tolerance, distance, iterations};
-  return true;
+  return IkResult{distance <= settings.tolerance, distance, iterations};
 }
 
-void FabrikSolver::pass(Pose& pose, glm::vec3 target, glm::quat base, float reach_length, bool reaim) {
-  const std::size_t joints = chain_.joint_count();
-  // The positions pass: backward from the target, forward from the fixed root; out of reach, the straight line.
-  for (std::size_t k = 0; k <= joints; ++k) goals_[k] = heads_[k];
-  if (glm::length(target - heads_[0]) >= reach_length) {
-    for (std::size_t k = 0; k < joints; ++k)
-      goals_[k + 1] = reach(goals_[k], target, lengths_[k], heads_[k + 1] - heads_[k]);
-  } else {
-    goals_[joints] = target;
-    for (std::size_t k = joints; k-- > 0;)
-      goals_[k] = reach(goals_[k + 1], goals_[k], lengths_[k], heads_[k] - heads_[k + 1]);
-    goals_[0] = heads_[0];
-    for (std::size_t k = 0; k < joints; ++k)
-      goals_[k + 1] = reach(goals_[k], goals_[k + 1], lengths_[k], heads_[k + 1] - heads_[k]);
-  }
-  // Back to rotations from the root down: each joint turns its segment onto its goal from where its head really
-  // is (clamps above it may have moved it), then is clamped; FK follows joint by joint.
-  for (std::size_t k = 0; k < joints; ++k) {
-    const glm::quat parent = k == 0 ? base : frames_[k - 1];
-    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain_.bones[k])];
-    const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain_.bones[k + 1])];
-    const glm::vec3 wanted = glm::conjugate(parent) * (goals_[k + 1] - heads_[k]);
-    local = detail::rotation_between(local * offset, wanted) * local;
-    detail::clamp_joint(limits_[k], local, reaim, offset, wanted);
-    frames_[k] = parent * local;
-    heads_[k + 1] = heads_[k] + frames_[k] * offset;
-  }
-}
-
-}  // namespace deform
+}  // namespace deform::detail

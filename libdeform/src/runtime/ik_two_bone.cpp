@@ -2,10 +2,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "deform/runtime/error.hpp"
 #include "ik_chain.hpp"
 
-namespace deform {
+namespace deform::detail {
 namespace {
 
 constexpr float tiny = 1e-12f;
@@ -18,23 +17,13 @@ glm::vec3 perpendicular(glm::vec3 v) {
 
 }  // namespace
 
-TwoBoneSolver::TwoBoneSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector)
-    : skeleton_(&skeleton), chain_(make_chain(skeleton, root, effector)) {
-  if (chain_.joint_count() != 2)
-    throw Error::invalid_argument("bone " + std::to_string(effector),
-                         "the two-bone solver needs a chain of exactly two joints, '" + skeleton.key(root) + "' has " +
-                             std::to_string(chain_.joint_count()) + " above '" + skeleton.key(effector) + "'");
-  for (std::size_t k = 0; k < 2; ++k) limits_[k] = prepare_limits(skeleton.bone(chain_.bones[k]).limits);
-}
-
-bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float tolerance, IkResult& result) const {
-  if (!detail::pose_fits(*skeleton_, pose) || !detail::finite(target) || !detail::finite(pole) ||
-      !std::isfinite(tolerance) || tolerance < 0.0f)
-    return false;
-  glm::quat& upper = pose.rotations[static_cast<std::size_t>(chain_.bones[0])];
-  glm::quat& lower = pose.rotations[static_cast<std::size_t>(chain_.bones[1])];
-  const glm::vec3 u = pose.translations[static_cast<std::size_t>(chain_.bones[1])];  // root → middle, upper's frame
-  const glm::vec3 lower_offset = pose.translations[static_cast<std::size_t>(chain_.bones[2])];
+IkResult solve_two_bone(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                        float tolerance) noexcept {
+  const EulerLimits* limits = chain.limits.data();  // root, middle
+  glm::quat& upper = pose.rotations[static_cast<std::size_t>(chain.bones[0])];
+  glm::quat& lower = pose.rotations[static_cast<std::size_t>(chain.bones[1])];
+  const glm::vec3 u = pose.translations[static_cast<std::size_t>(chain.bones[1])];  // root → middle, upper's frame
+  const glm::vec3 lower_offset = pose.translations[static_cast<std::size_t>(chain.bones[2])];
   // The start pose is only normalised: the answer's root rotation does not depend on it (the effector line and the
   // pole fix it) and the middle joint is clamped after its turn, so clamping the start as well would not change the
   // limits the answer keeps, only cost two more clamps.
@@ -42,10 +31,9 @@ bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float to
   lower = glm::normalize(lower);
   // Steps 2 and 3 work in the frame of the root's parent with the root's head at the origin, where the upper
   // bone's rotation turns the limb directly; the target and the pole are brought there once.
-  const detail::Frame base = detail::base_frame(chain_, pose);
   const glm::quat to_base = glm::conjugate(base.rotation);
   const glm::vec3 to_target =
-      to_base * (target - base.translation) - pose.translations[static_cast<std::size_t>(chain_.bones[0])];
+      to_base * (target - base.translation) - pose.translations[static_cast<std::size_t>(chain.bones[0])];
   const glm::vec3 base_pole = to_base * pole;
   const float target_distance = glm::length(to_target);
   const double a = glm::length(u), b = glm::length(lower_offset);
@@ -74,18 +62,18 @@ bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float to
     const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
     // The turn's quaternion from its half angle, normalised by the clamp; v turned with it (Rodrigues, v ⊥ axis),
     // or from the pose again when a limit moved the joint.
-    const glm::dvec2 half = detail::scaled_half_angle(turn, a * b);
+    const glm::dvec2 half = scaled_half_angle(turn, a * b);
     const glm::vec3 turn_axis = axis * static_cast<float>(half.y);
     lower = glm::quat(static_cast<float>(half.x), turn_axis.x, turn_axis.y, turn_axis.z) * lower;
     const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
                                static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
-    v = clamp_rotation(limits_[1], lower) ? lower * lower_offset : turned_v;
+    v = clamp_rotation(limits[1], lower) ? lower * lower_offset : turned_v;
   }
   // 2. The root turns the effector onto the line to the target, 3. then twists about that line so the middle joint
   //    lies on the pole's side. A target on the root leaves the direction as it is; a pole on the line, the plane.
   glm::vec3 effector = upper * (u + v);
   if (target_distance > tiny) {
-    const glm::quat turned = detail::rotation_between(effector, to_target) * upper;
+    const glm::quat turned = rotation_between(effector, to_target) * upper;
     const glm::vec3 d = to_target * (1.0f / target_distance);
     const glm::vec3 mid = turned * u;
     const glm::vec3 mid_across = mid - d * glm::dot(mid, d);
@@ -94,18 +82,17 @@ bool TwoBoneSolver::solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float to
     upper = turned;
     if (mid_across2 > 1e-12f * static_cast<float>(a * a) && pole_across2 > 1e-12f * glm::dot(base_pole, base_pole)) {
       // The twist from mid_across to pole_across: cosine and sine times |mid_across| |pole_across|.
-      const glm::dvec2 half = detail::scaled_half_angle(
+      const glm::dvec2 half = scaled_half_angle(
           glm::dvec2(glm::dot(mid_across, pole_across), glm::dot(glm::cross(mid_across, pole_across), d)),
           std::sqrt(static_cast<double>(mid_across2) * static_cast<double>(pole_across2)));
       const glm::vec3 twist_axis = d * static_cast<float>(half.y);
       upper = glm::quat(static_cast<float>(half.x), twist_axis.x, twist_axis.y, twist_axis.z) * turned;
     }
     // The limb now lies along the line to the target, unless a limit moved the root. (The clamp also normalises.)
-    effector = clamp_rotation(limits_[0], upper) ? upper * (u + v) : d * glm::length(effector);
+    effector = clamp_rotation(limits[0], upper) ? upper * (u + v) : d * glm::length(effector);
   }
   const float distance = glm::length(effector - to_target);
-  result = IkResult{distance <= tolerance, distance, 1};
-  return true;
+  return IkResult{distance <= tolerance, distance, 1};
 }
 
-}  // namespace deform
+}  // namespace deform::detail

@@ -111,8 +111,13 @@ Skeleton::Skeleton(std::vector<Bone> bones, const std::string& source) : bones_(
     throw Error::in_file(source, problem->bone >= 0 ? "bone " + std::to_string(problem->bone) : "", problem->message);
   const Pose bind = bind_pose();
   bind_world_.resize(bones_.size());
-  compute_world_matrices(*this, bind, bind_world_);
   inverse_bind_world_.resize(bones_.size());
+  LocalToWorldJob fk;  // cannot fail: the bind pose was checked finite above and has an entry per bone
+  fk.skeleton = this;
+  fk.rotations = bind.rotations;
+  fk.translations = bind.translations;
+  fk.world = bind_world_;
+  fk.run();
   std::transform(bind_world_.begin(), bind_world_.end(), inverse_bind_world_.begin(), rigid_inverse);
 }
 
@@ -181,24 +186,52 @@ glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept {
   return m;
 }
 
-bool compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out) {
-  const std::size_t n = skeleton.bone_count();
-  if (pose.rotations.size() != n || pose.translations.size() != n || out.size() != n) return false;
-  const std::span<const Bone> bones = skeleton.bones();
-  for (const std::int32_t id : skeleton.order()) {
-    const auto i = static_cast<std::size_t>(id);
-    const glm::mat4 local = local_matrix(pose.rotations[i], pose.translations[i]);
-    const std::int32_t parent = bones[i].parent;
-    out[i] = parent < 0 ? local : out[static_cast<std::size_t>(parent)] * local;
-  }
-  return true;
+namespace {
+
+bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(glm::quat q) noexcept {
+  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
 }
 
-bool compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world, std::span<glm::mat4> out) {
-  const std::span<const glm::mat4> inverse_bind = skeleton.inverse_bind_world();
-  if (world.size() != inverse_bind.size() || out.size() != inverse_bind.size()) return false;
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = world[i] * inverse_bind[i];
-  return true;
+// What LocalToWorldJob::run checks for the bones order()[begin, end).
+Status check(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noexcept {
+  if (job.skeleton == nullptr) return Status::failure("no skeleton");
+  const std::size_t n = job.skeleton->bone_count();
+  if (job.rotations.size() != n || job.translations.size() != n)
+    return Status::failure("rotations or translations do not have one entry per bone");
+  if (job.world.size() != n) return Status::failure("world does not have one entry per bone");
+  if (!job.palette.empty() && job.palette.size() != n)
+    return Status::failure("palette is neither empty nor one entry per bone");
+  if (begin > end || end > n) return Status::failure("bone range out of bounds");
+  const std::span<const std::int32_t> order = job.skeleton->order();
+  for (std::size_t k = begin; k < end; ++k) {
+    const auto i = static_cast<std::size_t>(order[k]);
+    if (!finite(job.rotations[i]) || !finite(job.translations[i])) return Status::failure("pose is not finite");
+  }
+  return {};
+}
+
+}  // namespace
+
+std::size_t LocalToWorldJob::count() const noexcept { return skeleton == nullptr ? 0 : skeleton->bone_count(); }
+
+Status LocalToWorldJob::validate() const noexcept { return check(*this, 0, count()); }
+
+Status LocalToWorldJob::run() const noexcept { return run(0, count()); }
+
+Status LocalToWorldJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (const Status status = check(*this, begin, end); !status) return status;
+  const std::span<const Bone> bones = skeleton->bones();
+  const std::span<const std::int32_t> order = skeleton->order();
+  const std::span<const glm::mat4> inverse_bind = skeleton->inverse_bind_world();
+  for (std::size_t n = begin; n < end; ++n) {
+    const auto i = static_cast<std::size_t>(order[n]);
+    const glm::mat4 local = local_matrix(rotations[i], translations[i]);
+    const std::int32_t parent = bones[i].parent;
+    world[i] = parent < 0 ? local : world[static_cast<std::size_t>(parent)] * local;
+    if (!palette.empty()) palette[i] = world[i] * inverse_bind[i];
+  }
+  return {};
 }
 
 }  // namespace deform

@@ -12,6 +12,12 @@
 // chain that straightens as it grows is accounted for). The stretch is a spring target: update() lets the lattices
 // spring toward it, so the effector arrives — within 1% of that remaining distance once settled — with the
 // overshoot and settling of the lattices' damping. release() sets the targets back to zero.
+//
+// A frame: pose (set_pose, e.g. from a SamplingJob) → IK (reach, on the chain alone) → update(dt): forward kinematics
+// once (LocalToWorldJob: world matrices and skinning palette), the springs' step, skinning, the lattices' carried
+// points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
+// construction. Characters are movable values (a std::vector of them is fine).
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <span>
@@ -19,6 +25,7 @@
 
 #include "deform/character/export.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/model.hpp"
@@ -28,7 +35,7 @@ namespace deform {
 
 // What reach() decided.
 struct ReachResult {
-  bool valid = false;     // false: bad effector or target, nothing changed
+  Status status;          // refused (bad effector or target, a chain longer than max_chain_bones): nothing changed
   float residual = 0.0f;  // |target - effector| after IK alone, before stretching (model units)
   float stretch = 0.0f;   // total stretch asked of the chain's lattices (model units)
   float distance = 0.0f;  // |target - effector| once the stretch has settled
@@ -38,13 +45,20 @@ struct ReachResult {
 class DEFORM_CHARACTER_API Character {
  public:
   // Binds the rig's lattices to the model (see DeformerHierarchy) and puts it in its bind pose. Throws
-  // deform::Error when the rig does not fit the model. Allocates everything the per-frame path needs.
+  // deform::Error when the rig does not fit the model. Allocates everything the per-frame path needs, reach()
+  // included (its chain storage and IK scratch are sized for the skeleton's deepest chain).
   Character(Model model, const Rig& rig);
   // No lattices: skinning and IK only.
   explicit Character(Model model);
-  // Bound to its own model (the lattices point into it): not copyable, not movable.
+  // Movable: nothing in a Character points into itself (its jobs are made per call), so a move is member-wise, keeps
+  // the storage reserved for the per-frame path and allocates nothing; an engine keeps its characters in a
+  // std::vector. A moved-from Character may only be assigned to or destroyed. Not copyable: a copied vector keeps
+  // its elements but not its reserved capacity, which reach() relies on.
+  Character(Character&&) noexcept = default;
+  Character& operator=(Character&&) noexcept = default;
   Character(const Character&) = delete;
   Character& operator=(const Character&) = delete;
+  ~Character() = default;
 
   const Model& model() const noexcept { return model_; }
   const Skeleton& skeleton() const noexcept { return model_.skeleton; }
@@ -53,8 +67,9 @@ class DEFORM_CHARACTER_API Character {
   const DeformerHierarchy& deformers() const noexcept { return hierarchy_; }
 
   // The held pose (every bone's local rotation and translation), clamped into the DOF limits. Cancels nothing: a
-  // stretch in progress goes on. Returns false (changing nothing) when the pose has the wrong size or is not finite.
-  bool set_pose(const Pose& pose);
+  // stretch in progress goes on. Refuses, changing nothing, a pose of the wrong size, not finite or with a zero
+  // rotation. No allocation; O(bones).
+  Status set_pose(const Pose& pose);
   const Pose& pose() const noexcept { return pose_; }
 
   SkinningMethod skinning = SkinningMethod::lbs;
@@ -65,15 +80,19 @@ class DEFORM_CHARACTER_API Character {
   bool lattice_fields = true;
   IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
 
-  // Reaches for `target` (world space) with `effector`'s head: IK, then the stretch target of the chain's lattices.
-  // Allocates (a solver per chain); not for every frame, but cheap enough for every mouse move (microseconds).
+  // Reaches for `target` (model space) with `effector`'s head: IK on the held pose, then the stretch target of the
+  // chain's lattices. Refuses (result.status), changing nothing, an effector out of range or the root, a non-finite
+  // target, a chain longer than max_chain_bones. No allocation: the chain is rebuilt in storage reserved at
+  // construction when the effector changes. Cost: up to 17 CCD solves of the chain (microseconds), no full FK.
   ReachResult reach(std::int32_t effector, glm::vec3 target);
   // Lets go: every stretch target back to zero; the pose reached stays.
   void release();
 
-  // Advances the springs by dt seconds and deforms: FK, skinning, lattices. Returns false (changing nothing) when dt
-  // is negative or not finite. No allocation; O(points + bound points · lattice cost).
-  bool update(float dt);
+  // Advances the springs by dt seconds and deforms the held pose: FK once, skinning, lattices (see the top of this
+  // file). Refuses, changing nothing, a dt that is negative or not finite. The later stages cannot refuse for a pose
+  // set by set_pose or reach; should one, update reports its reason, never success. No allocation;
+  // O(bones + points + bound points · lattice cost).
+  Status update(float dt);
 
   // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
@@ -90,6 +109,13 @@ class DEFORM_CHARACTER_API Character {
   std::int32_t effector() const noexcept { return effector_; }
 
  private:
+  // A lattice reach() stretches.
+  struct Stretched {
+    std::size_t lattice = 0;
+    std::int32_t child = -1;  // the chain bone right below the lattice's bone
+    glm::vec3 axis{0.0f};     // stretch per unit, in the lattice bone's frame
+  };
+
   Model model_;
   Rig rig_;
   DeformerHierarchy hierarchy_;
@@ -103,7 +129,15 @@ class DEFORM_CHARACTER_API Character {
   VertexNormals vertex_normals_;
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
-  std::vector<std::size_t> stretched_;  // lattices of the last reach
+  std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)
+  // reach()'s working storage, sized at construction: the chain (rebuilt when the effector changes), the pose being
+  // solved, the IK scratch and the joints' model-space matrices for the deepest chain, the chain's lattices.
+  IkChain chain_;
+  std::int32_t chain_effector_ = -1;
+  Pose work_;
+  std::vector<std::byte> ik_scratch_;
+  std::vector<glm::mat4> chain_world_;
+  std::vector<Stretched> chain_lattices_;
 };
 
 }  // namespace deform

@@ -3,13 +3,16 @@
 //
 // A clip drives the pose; IK and the elastic deformers then act on top of it. Tracks are in the skeleton's own
 // space: a bone's translation and rotation keys are the local values a Pose holds (relative to the parent bone).
-// Sampling is the per-frame path: a binary search per track, no allocation, no I/O.
+// Animation::validate checks a clip once, at bind time; SamplingJob is the per-frame path: a binary search per track,
+// no allocation, no I/O.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace deform {
@@ -35,7 +38,7 @@ struct Track {
 };
 
 // The tracks of one bone. `scale` is kept as the file gave it (relative to the bone's bind scale, 1 = unchanged) but
-// is not applied by Animation::sample, because a Pose has no scale.
+// is not applied by SamplingJob, because a Pose has no scale.
 struct Channel {
   std::int32_t bone = -1;  // skeleton bone id
   Track<glm::vec3> translation;
@@ -43,11 +46,11 @@ struct Channel {
   Track<glm::vec3> scale;
 };
 
-// A clip: named channels over [0, duration] seconds. Bones without a channel are not touched by sample().
+// A clip: named channels over [0, duration] seconds. Bones without a channel are not touched by SamplingJob.
 struct DEFORM_RUNTIME_API Animation {
   std::string name;
   float duration = 0.0f;  // seconds, >= 0
-  bool loop = true;       // sample() wraps time into [0, duration) when true, clamps into [0, duration] otherwise
+  bool loop = true;       // sampling wraps time into [0, duration) when true, clamps into [0, duration] otherwise
   std::vector<Channel> channels;
 
   // Checks the clip against a skeleton with `bone_count` bones: duration finite and >= 0, bones in range and at most
@@ -55,14 +58,30 @@ struct DEFORM_RUNTIME_API Animation {
   // above) finite. Throws deform::Error naming `source`, the clip and the bone.
   void validate(std::size_t bone_count, const std::string& source = "<memory>") const;
 
-  // Writes the local rotation and translation of every animated bone at time `seconds` into `pose` (other bones keep
-  // their values; start from Skeleton::bind_pose()). Returns false and writes nothing when a channel's bone is out of
-  // the pose's range or `seconds` is not finite. No allocation; O(channels · log keys). Assumes validate() passed.
-  bool sample(float seconds, Pose& pose) const noexcept;
-
   // The clip-local time `seconds` maps to: wrapped into [0, duration) when looping (negative times too), clamped
   // into [0, duration] otherwise; 0 for a zero-length clip.
   float local_time(float seconds) const noexcept;
+};
+
+// Samples a clip at one time into a pose's spans (the per-frame job): the local rotation and translation of every
+// animated bone; other bones keep their values (start from Skeleton::bind_pose()). The elements are the clip's
+// channels: run(begin, end) samples channels [begin, end), each writing only its own bone, so disjoint ranges run on
+// different threads. Assumes the clip passed Animation::validate for the skeleton (keys finite and increasing).
+struct DEFORM_RUNTIME_API SamplingJob {
+  const Animation* animation = nullptr;
+  float time = 0.0f;                  // seconds, any finite value: Animation::local_time maps it into the clip
+  std::span<glm::quat> rotations;     // out: local rotations, index = bone id
+  std::span<glm::vec3> translations;  // out: local translations, as many
+
+  // The clip is set, the time finite, every channel's bone within both spans and every track's values (and tangents)
+  // as many as its times. O(channels).
+  Status validate() const noexcept;
+  // The time and the bones of the channels it samples (one comparison per channel, a fraction of the binary
+  // searches); on failure writes nothing. O(channels · log keys), no allocation.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  // The clip's channel count, 0 without a clip.
+  std::size_t count() const noexcept;
 };
 
 // One track's value at clip-local time `seconds` (no wrapping). `fallback` is returned for an empty track.

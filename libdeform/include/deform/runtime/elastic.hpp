@@ -19,6 +19,7 @@
 #include <span>
 #include <vector>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 namespace deform {
 
@@ -118,17 +119,18 @@ class DEFORM_RUNTIME_API ElasticLattice {
   const ElasticSettings& settings() const noexcept { return settings_; }
 
   // Pinned points sit on their rest every step (a lattice face that must not move). `pinned` has size() entries,
-  // non-zero = pinned. An empty span unpins all. Returns false (and changes nothing) on a size mismatch.
-  bool set_pinned(std::span<const std::uint8_t> pinned);
+  // non-zero = pinned. An empty span unpins all. Refuses a size mismatch, changing nothing. Allocates on the first
+  // call (configuration, not per frame).
+  Status set_pinned(std::span<const std::uint8_t> pinned);
 
   // Advances the state by dt seconds toward `rest` (size() entries; the rest in effect for the whole step: a rest
-  // that moves is sampled once per step). dt = 0 only re-anchors pinned points. Returns false and changes nothing
-  // when dt is negative or not finite, or `rest` has the wrong size. Cost O(points (+ springs · sub-steps)), no
-  // allocation.
-  bool step(float dt, std::span<const glm::vec3> rest);
+  // that moves is sampled once per step). dt = 0 only re-anchors pinned points. Refuses, changing nothing, a dt that
+  // is negative or not finite, or a `rest` of the wrong size. Cost O(points (+ springs · sub-steps)), no allocation.
+  Status step(float dt, std::span<const glm::vec3> rest);
 
-  // Puts every point on `rest` with zero velocity (size() entries; returns false otherwise).
-  bool reset(std::span<const glm::vec3> rest);
+  // Puts every point on `rest` with zero velocity (size() entries; refused, changing nothing, otherwise). No
+  // allocation.
+  Status reset(std::span<const glm::vec3> rest);
 
   std::size_t size() const noexcept { return positions_.size(); }
   std::span<const glm::vec3> positions() const noexcept { return positions_; }

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "deform/runtime/elastic.hpp"
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/skeleton.hpp"
@@ -86,35 +87,36 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).binding.vertex_count; }
   std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).carried_points.size(); }
 
-  // The stretch the lattice springs toward, model units along its bone (negative squashes). Must be finite and
-  // > -length(); returns false otherwise.
-  bool set_stretch_target(std::size_t lattice, float stretch);
+  // The stretch the lattice springs toward, model units along its bone (negative squashes). Refuses, changing
+  // nothing, a lattice index out of range or a stretch that is not finite and > -length(). O(control points), no
+  // allocation.
+  Status set_stretch_target(std::size_t lattice, float stretch);
   float stretch_target(std::size_t lattice) const { return lattices_.at(lattice).target; }
   // The stretch it has now: the far face's displacement along the bone (model units).
   float stretch(std::size_t lattice) const;
   // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid.
   void set_elastic(std::size_t lattice, const ElasticSettings& settings);
 
-  // Advances every lattice's springs by dt seconds (see ElasticLattice::step). Returns false and changes nothing when
-  // dt is negative or not finite. No allocation.
-  bool step(float dt);
+  // Advances every lattice's springs by dt seconds (see ElasticLattice::step). Refuses, changing nothing, a dt that
+  // is negative or not finite. No allocation.
+  Status step(float dt);
   // Every control point back on the unstretched rest, at rest; stretch targets 0.
   void reset();
 
   // Per frame, after step(): carries the lattices into world space with the bones' current matrices (`world`, one per
-  // bone, from compute_world_matrices of the pose the points were skinned with). Returns false (changing nothing)
-  // on a size mismatch. O(lattices × control points), no allocation.
-  bool update(std::span<const glm::mat4> world);
-  // Adds every lattice's displacement to `positions` (the skinned points, mesh.point_count() entries). Returns false
-  // (changing nothing) on a size mismatch. O(bound points) Bézier evaluations (LatticeEvaluateJob) plus one add per
+  // bone, from LocalToWorldJob for the pose the points were skinned with). Refuses, changing nothing, a size
+  // mismatch. O(lattices × control points), no allocation.
+  Status update(std::span<const glm::mat4> world);
+  // Adds every lattice's displacement to `positions` (the skinned points, mesh.point_count() entries). Refuses,
+  // changing nothing, a size mismatch. O(bound points) Bézier evaluations (LatticeEvaluateJob) plus one add per
   // carried point; a lattice at rest is skipped. No allocation. Exactly apply_carried(), then for every active
   // lattice l, in index order, the field: positions[p] += bound_weights(l)[n] · D_l(n) for each lane n of
   // binding(l) with a point p (D_l(n): LatticeEvaluateJob's output for binding(l) with displacements(l)).
-  bool apply(std::span<glm::vec3> positions);
+  Status apply(std::span<glm::vec3> positions);
   // apply() without the Bézier fields: adds only the translations of the carried points (beyond the far faces), for
-  // a caller that evaluates the fields itself, e.g. on a GPU. Returns false (changing nothing) on a size mismatch.
+  // a caller that evaluates the fields itself, e.g. on a GPU. Refuses, changing nothing, a size mismatch.
   // O(carried points), no allocation.
-  bool apply_carried(std::span<glm::vec3> positions);
+  Status apply_carried(std::span<glm::vec3> positions);
 
   // What evaluating a lattice's field takes, for callers of apply_carried():
   // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
@@ -154,6 +156,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
+  // The evaluation of a lattice's displacement field into scratch_.
+  LatticeEvaluateJob field_job(const Lattice& lattice);
   bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
 
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone

@@ -3,46 +3,34 @@
 //
 // A chain runs from a root bone down to an effector bone (the root is an ancestor of the effector). Its *joints* are
 // the chain's bones except the effector (the effector's own rotation does not move its head), so a "k-bone chain"
-// has k joints and k + 1 bones; a two-bone limb is shoulder, elbow and wrist. Every solver
+// has k joints and k + 1 bones; a two-bone limb is shoulder, elbow and wrist. Two steps, as everywhere in libdeform:
+//  - bind (once, allocates): make_chain finds the bones and prepares the joints' DOF limits into an IkChain, a plain
+//    movable value that points at nothing;
+//  - solve (per frame): an IkJob (CCD or FABRIK) or a TwoBoneIkJob reads the chain, the model-space transform of the
+//    root's parent (its base), the pose's local rotations and translations and the target, and writes the joints'
+//    local rotations. No allocation, no exceptions, no I/O; scratch memory is the caller's.
+// Every solve
 //  - starts from the pose it is given and changes only the local rotations of the chain's joints;
 //  - leaves every joint inside its DOF limits (the starting pose is clamped first);
 //  - minimises the effector–target distance when the target is out of reach (an unconstrained chain ends straight,
-//    pointing at the target);
-//  - is constructed once (allocates) and solves per frame without allocating, throwing or doing I/O.
+//    pointing at the target).
 // docs/ik.md describes the algorithms, their guarantees and measured behaviour.
+#include <cstddef>
 #include <cstdint>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace deform {
 
-// The bones of a chain, found once. bones[0] is the root, bones.back() the effector, each the parent of the next;
-// `ancestors` are the bones above the root, from bone 0 down to the root's parent (their transforms place the chain).
-struct IkChain {
-  std::vector<std::int32_t> bones;
-  std::vector<std::int32_t> ancestors;
-  std::size_t joint_count() const noexcept { return bones.empty() ? 0 : bones.size() - 1; }
-};
-
-// The chain from `root` to `effector` (bone ids). Throws deform::Error when an id is out of range, when `root` is not
-// a proper ancestor of `effector`, or when the chain has more than 256 bones. Cost O(skeleton depth).
-DEFORM_RUNTIME_API IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t effector);
-
-// The chain's reach from the root's head: the sum of the joints' segment lengths (|translation| of each chain bone
-// after the root) in `pose`. A target farther than this from the root's head is out of reach. O(chain).
-DEFORM_RUNTIME_API float chain_length(const IkChain& chain, const Pose& pose) noexcept;
-
-// The world position of the effector's head in `pose` (forward kinematics of the ancestors and the chain only).
-// The pose must have skeleton.bone_count() entries. O(depth of the effector), no allocation.
-DEFORM_RUNTIME_API glm::vec3 effector_position(const Skeleton& skeleton, const IkChain& chain, const Pose& pose) noexcept;
-
 // A joint's DOF limits prepared once for clamping per frame (prepare_limits): the bounds in radians and as unit
-// (cos, sin) directions, so that clamp_rotation needs no sin, cos or atan2 call. The solvers hold one per joint.
+// (cos, sin) directions, so that clamp_rotation needs no sin, cos or atan2 call. An IkChain holds one per joint.
 // The default is free, as DofLimits{}.
 struct EulerLimits {
   glm::dvec3 min{-std::numbers::pi}, max{std::numbers::pi};  // radians, DofLimits' bounds
@@ -60,6 +48,58 @@ DEFORM_RUNTIME_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
 // rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. Returns
 // true when the rotation was outside the limits and was changed.
 DEFORM_RUNTIME_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept;
+
+// The bones of a chain and its joints' prepared limits, made once (make_chain). bones[0] is the root, bones.back() the
+// effector, each the parent of the next; `ancestors` are the bones above the root, from bone 0 down to the root's
+// parent (chain_base multiplies their transforms); `limits` has one entry per joint, in chain order.
+struct IkChain {
+  std::vector<std::int32_t> bones;
+  std::vector<std::int32_t> ancestors;
+  std::vector<EulerLimits> limits;
+  std::int32_t max_bone = -1;  // the largest id in bones and ancestors: pose spans need more entries than this
+  std::size_t joint_count() const noexcept { return bones.empty() ? 0 : bones.size() - 1; }
+};
+
+// Most bones a chain may have (255 joints and the effector).
+inline constexpr std::size_t max_chain_bones = 256;
+
+// The chain from `root` to `effector` (bone ids) with the skeleton's DOF limits prepared. Throws deform::Error naming
+// the effector when an id is out of range, when `root` is not a proper ancestor of `effector`, or when the chain has
+// more than max_chain_bones bones. Allocates; O(skeleton depth).
+DEFORM_RUNTIME_API IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t effector);
+// make_chain into `chain`'s own storage, for a caller that switches chains while it runs: no allocation when the
+// vectors' capacities hold the chain (reserve max_chain_bones bones and joints and the skeleton's depth in
+// ancestors to be sure). Returns a failure, leaving `chain` empty, where make_chain throws. O(skeleton depth).
+DEFORM_RUNTIME_API Status assign_chain(IkChain& chain, const Skeleton& skeleton, std::int32_t root,
+                                       std::int32_t effector);
+
+// The chain's reach from the root's head: the sum of the joints' segment lengths (|translation| of each chain bone
+// after the root). A target farther than this from the root's head is out of reach. `translations` is indexed by
+// bone id (a Pose's); 0 when it has max_bone or fewer entries. O(chain).
+DEFORM_RUNTIME_API float chain_length(const IkChain& chain, std::span<const glm::vec3> translations) noexcept;
+
+// A rigid model-space transform, p_model = rotation · p + translation: how an IK job places its chain (the transform
+// of the chain root's parent, the "base").
+struct DEFORM_RUNTIME_API RigidTransform {
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // unit
+  glm::vec3 translation{0.0f};
+  // The rotation (normalised) and translation of a rigid matrix, such as a bone's LocalToWorldJob output.
+  static RigidTransform from_matrix(const glm::mat4& matrix) noexcept;
+  glm::mat4 matrix() const noexcept;
+};
+
+// The model-space transform of the chain root's parent (the identity when the root is bone 0), by forward kinematics
+// of the ancestors alone on quaternions: the base for a caller without this frame's world matrices (one with them
+// passes RigidTransform::from_matrix(world[parent]), the same transform to float rounding). Spans indexed by bone id;
+// fails, writing nothing, when they have max_bone or fewer entries. O(ancestors), no allocation.
+DEFORM_RUNTIME_API Status chain_base(const IkChain& chain, std::span<const glm::quat> rotations,
+                                     std::span<const glm::vec3> translations, RigidTransform& base) noexcept;
+
+// The model-space position of the effector's head (forward kinematics of the ancestors and the chain only, on
+// quaternions, as chain_base). Spans indexed by bone id; (0, 0, 0) when they have max_bone or fewer entries.
+// O(depth of the effector), no allocation.
+DEFORM_RUNTIME_API glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
+                                               std::span<const glm::vec3> translations) noexcept;
 
 // How an iterative solve stops and steps.
 struct IkSettings {
@@ -79,91 +119,81 @@ struct IkResult {
   int iterations = 0;     // sweeps or passes run (1 for the two-bone solver)
 };
 
-// Cyclic coordinate descent (thesis §7.4.3): sweeps from the joint nearest the effector back to the root, rotating
-// each joint by the quaternion that turns joint→effector onto joint→target (angle from the dot product, axis from the
-// cross product), then clamping it into its Euler DOF limits (convert, clamp, convert back; §7.4.4).
-class DEFORM_RUNTIME_API CcdSolver {
- public:
-  // Finds the chain (throws deform::Error as make_chain does) and sizes the scratch buffers. `skeleton` must outlive
-  // the solver.
-  CcdSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector);
+// The stall escape's random kicks (xorshift32) start from this state unless a job carries its own (random_state).
+inline constexpr std::uint32_t ik_random_seed = 0x9e3779b9u;
 
-  // Moves the chain of `pose` toward `target` (world space). Returns false and leaves `pose` and `result` untouched
-  // when the target or a setting is not finite or out of range, or the pose does not have bone_count() entries.
-  // Cost: O(iterations × joints), no allocation.
-  bool solve(Pose& pose, glm::vec3 target, const IkSettings& settings, IkResult& result);
-
-  const IkChain& chain() const noexcept { return chain_; }
-
- private:
-  void sweep(Pose& pose, glm::vec3 target, glm::quat base, float max_step_radians, bool reaim);  // one CCD sweep
-
-  const Skeleton* skeleton_;
-  IkChain chain_;
-  std::vector<EulerLimits> limits_;  // per joint
-  std::vector<glm::quat> frames_;    // world rotation per chain bone
-  std::vector<glm::vec3> heads_;     // world head per chain bone
-  std::vector<glm::quat> best_;      // best joint rotations seen
-  std::vector<glm::dvec3> angles_;   // Euler angles per joint (stall escape)
-  std::vector<glm::vec3> columns_;   // Jacobian columns, 3 per joint (stall escape)
-  std::uint32_t random_state_ = 0x9e3779b9u;
+enum class IkMethod : std::uint8_t {
+  // Cyclic coordinate descent (thesis §7.4.3): sweeps from the joint nearest the effector back to the root, rotating
+  // each joint by the quaternion that turns joint→effector onto joint→target (angle from the dot product, axis from
+  // the cross product), then clamping it into its Euler DOF limits (convert, clamp, convert back; §7.4.4).
+  ccd,
+  // FABRIK (Aristidou & Lasenby 2011, "FABRIK: a fast, iterative solver for the inverse kinematics problem"): a
+  // backward and a forward pass over the joint positions, then the positions are turned back into local rotations
+  // joint by joint from the root (each the smallest rotation that points its segment at the new position), clamped
+  // into the DOF limits, and the chain is re-evaluated, so every pass starts from a pose within the limits.
+  fabrik,
 };
 
-// FABRIK (Aristidou & Lasenby 2011, "FABRIK: a fast, iterative solver for the inverse kinematics problem"): a
-// backward and a forward pass over the joint positions, then the positions are turned back into local rotations joint
-// by joint from the root (each the smallest rotation that points its segment at the new position), clamped into the
-// DOF limits, and the chain is re-evaluated, so every pass starts from a pose within the limits.
-class DEFORM_RUNTIME_API FabrikSolver {
- public:
-  // As CcdSolver's constructor.
-  FabrikSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector);
+// One iterative solve of a chain (the per-frame job). Poses are a Pose's spans (index = bone id); only the chain's
+// joints' rotations are written. The solve is one sequential iteration: count() is 1 and run(begin, end) solves when
+// the range holds element 0 (an engine runs many chains or characters side by side instead).
+struct DEFORM_RUNTIME_API IkJob {
+  IkMethod method = IkMethod::ccd;
+  const IkChain* chain = nullptr;           // at least one joint
+  RigidTransform base;                      // model-space transform of the root's parent (chain_base), finite
+  std::span<glm::quat> rotations;           // in/out: local rotations, more than chain->max_bone entries
+  std::span<const glm::vec3> translations;  // local translations, as many
+  glm::vec3 target{0.0f};                   // model space
+  IkSettings settings;
+  std::span<std::byte> scratch;             // scratch_size() bytes or more, aligned to scratch_alignment
+  // In/out, optional: the stall escape's generator state, carried from solve to solve. Null: every solve starts from
+  // ik_random_seed, so equal inputs give equal outputs.
+  std::uint32_t* random_state = nullptr;
+  IkResult* result = nullptr;               // out, optional
 
-  // As CcdSolver::solve (max_step_degrees is ignored). Cost: O(iterations × joints), no allocation.
-  bool solve(Pose& pose, glm::vec3 target, const IkSettings& settings, IkResult& result);
+  static constexpr std::size_t scratch_alignment = alignof(double);
+  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 120 per joint + 40.
+  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 120 * joint_count + 40; }
+  // scratch_size for this job's chain (0 without one).
+  std::size_t scratch_size() const noexcept;
 
-  const IkChain& chain() const noexcept { return chain_; }
-
- private:
-  // One FABRIK pass and its conversion back to clamped rotations; leaves frames_ and heads_ as the new pose's FK.
-  void pass(Pose& pose, glm::vec3 target, glm::quat base, float reach_length, bool reaim);
-
-  const Skeleton* skeleton_;
-  IkChain chain_;
-  std::vector<EulerLimits> limits_;
-  std::vector<glm::quat> frames_;
-  std::vector<glm::vec3> heads_;
-  std::vector<glm::vec3> goals_;   // FABRIK's joint positions
-  std::vector<float> lengths_;     // segment lengths
-  std::vector<glm::quat> best_;
-  std::vector<glm::dvec3> angles_;
-  std::vector<glm::vec3> columns_;
-  std::uint32_t random_state_ = 0x9e3779b9u;
+  // Why run() would refuse: no chain or one without joints, spans too short, a setting out of range (see IkSettings),
+  // the scratch too small or misaligned, a non-finite target, base, chain rotation or translation, or a chain whose
+  // length overflows. O(chain).
+  Status validate() const noexcept;
+  // validate(), then the solve. On failure writes nothing (neither the pose nor result nor random_state). Cost:
+  // O(iterations × joints), no allocation.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  std::size_t count() const noexcept { return 1; }
 };
 
-// The closed-form two-bone solver (thesis eqs. 14–28, generalised to 3D): the law of cosines gives the angle at the
+// The closed-form two-bone solve (thesis eqs. 14–28, generalised to 3D): the law of cosines gives the angle at the
 // middle joint, the root turns the effector onto the target, and a twist about root→target puts the middle joint on
 // the side of `pole`. Exact (to float rounding) for an unconstrained limb and a reachable target; an out-of-reach
-// target gives the straight limb pointing at it (or, when the bones differ in length, the limb folded toward it).
-// The DOF limits are applied after the closed form, so a limb whose limits cut the closed-form answer off gets the
-// clamped pose, which is then not exact: `reached` says whether it still is within tolerance.
-class DEFORM_RUNTIME_API TwoBoneSolver {
- public:
-  // The chain root → middle → effector, each the parent of the next. Throws deform::Error as make_chain does, or when
-  // the chain does not have exactly two joints.
-  TwoBoneSolver(const Skeleton& skeleton, std::int32_t root, std::int32_t effector);
+// target gives the straight limb pointing at it (or, when the bones differ in length, the limb folded toward it). The
+// DOF limits are applied after the closed form, so a limb whose limits cut the closed-form answer off gets the
+// clamped pose, which is then not exact: `reached` says whether it still is within tolerance. A target on the root
+// folds the limb as far as it goes. count() is 1, as IkJob's.
+struct DEFORM_RUNTIME_API TwoBoneIkJob {
+  const IkChain* chain = nullptr;           // exactly two joints: root → middle → effector
+  RigidTransform base;                      // model-space transform of the root's parent (chain_base), finite
+  std::span<glm::quat> rotations;           // in/out: local rotations, more than chain->max_bone entries
+  std::span<const glm::vec3> translations;  // local translations, as many
+  glm::vec3 target{0.0f};                   // model space
+  // A model-space direction the middle joint should bend toward (its part across the line root→target counts); a
+  // zero pole, or one along that line, keeps the limb's current bend plane.
+  glm::vec3 pole{0.0f};
+  float tolerance = 1e-3f;                  // reached when |effector - target| <= tolerance; >= 0
+  IkResult* result = nullptr;               // out, optional (iterations = 1)
 
-  // Solves in one step. `pole` is a world-space direction the middle joint should bend toward (its part across the
-  // line root→target counts); a zero pole, or one along that line, keeps the limb's current bend plane. A target on
-  // the root folds the limb as far as it goes. Returns false and changes nothing when `target` or `pole` is not finite,
-  // `tolerance` < 0, or the pose does not have bone_count() entries. O(1), no allocation.
-  bool solve(Pose& pose, glm::vec3 target, glm::vec3 pole, float tolerance, IkResult& result) const;
-
-  const IkChain& chain() const noexcept { return chain_; }
-
- private:
-  const Skeleton* skeleton_;
-  IkChain chain_;
-  EulerLimits limits_[2];  // root, middle
+  // Why run() would refuse: no chain or not two joints, spans too short, a non-finite target, pole, base, chain
+  // rotation or translation, a negative or non-finite tolerance. O(1).
+  Status validate() const noexcept;
+  // validate(), then the solve; on failure writes nothing. O(1), no allocation.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  std::size_t count() const noexcept { return 1; }
 };
 
 }  // namespace deform

@@ -16,6 +16,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 
 namespace deform {
@@ -101,13 +102,30 @@ DEFORM_RUNTIME_API bool within_limits(glm::vec3 degrees, const DofLimits& limits
 
 // Local matrix L = T · R of one bone of a pose.
 DEFORM_RUNTIME_API glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept;
-// World matrices of every bone, one pass over skeleton.order(). The pose and `out` must have bone_count() entries;
-// returns false (and writes nothing) otherwise. No allocation, O(bones).
-DEFORM_RUNTIME_API bool compute_world_matrices(const Skeleton& skeleton, const Pose& pose, std::span<glm::mat4> out);
-// The skinning palette T_C = T_W · T_B⁻¹ (thesis eq. 13) per bone. `world` and `out` must have bone_count()
-// entries; returns false (and writes nothing) otherwise. No allocation.
-DEFORM_RUNTIME_API bool compute_skinning_palette(const Skeleton& skeleton, std::span<const glm::mat4> world,
-                                         std::span<glm::mat4> out);
+
+// Forward kinematics (the per-frame job): every bone's model-space ("world") matrix W = W_parent · L, and optionally
+// its skinning matrix T_C = W · T_B⁻¹ (thesis eq. 13), the palette SkinningJob reads. The elements are the bones in
+// skeleton->order() (parents first): run(begin, end) computes order()[begin, end), reading the world matrices of
+// parents outside the range from `world` as an earlier run left them. Rotations are unit quaternions (as a Pose
+// holds them); no allocation, no exceptions; O(bones).
+struct DEFORM_RUNTIME_API LocalToWorldJob {
+  const Skeleton* skeleton = nullptr;
+  std::span<const glm::quat> rotations;     // local, bone_count() entries, index = bone id
+  std::span<const glm::vec3> translations;  // local, bone_count() entries
+  std::span<glm::mat4> world;               // out: bone_count() entries
+  std::span<glm::mat4> palette;             // out, optional: empty, or bone_count() entries
+
+  // The skeleton is set, every span has bone_count() entries (the palette may be empty) and every rotation and
+  // translation is finite. O(bones).
+  Status validate() const noexcept;
+  // The size checks of validate() (O(1)) and the finiteness of the pose entries it reads (O(bones), a fraction of the
+  // matrix products); on failure writes nothing.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  // bone_count(), 0 without a skeleton.
+  std::size_t count() const noexcept;
+};
+
 // Up to four influences per point, strongest first, weights normalised to sum 1; unused slots have weight 0 and
 // bone 0. Index = point (OBJ `v`) index.
 inline constexpr int max_influences = 4;

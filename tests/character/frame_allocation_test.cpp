@@ -1,0 +1,219 @@
+// The per-frame path allocates nothing: 1,000 frames of pose, reach, update and normals on the built-in character
+// and on an imported one, with a global operator new that counts (this executable's own, so no other test sees it).
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <new>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/skeleton.hpp"
+#if defined(DEFORM_HAVE_IMPORT)
+#include "deform/import/import.hpp"
+#endif
+
+// Every allocation through the global operators new counts, sized or aligned, throwing or not. (GCC cannot see that
+// these operators new are the malloc behind the matching deletes' free.)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+namespace {
+std::atomic<long> allocations{0};
+
+void* allocate(std::size_t size, std::size_t alignment) {
+  ++allocations;
+  size = size == 0 ? 1 : size;
+  if (alignment <= alignof(std::max_align_t)) return std::malloc(size);
+  return std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+}
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (void* p = allocate(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  if (void* p = allocate(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t alignment) {
+  if (void* p = allocate(size, static_cast<std::size_t>(alignment))) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t alignment) {
+  if (void* p = allocate(size, static_cast<std::size_t>(alignment))) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept { return allocate(size, 0); }
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept { return allocate(size, 0); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+using deform::Character;
+
+namespace {
+
+constexpr int frames = 1000;
+constexpr float dt = 1.0f / 60.0f;
+
+// What a frame loop saw, counted without allocating (doctest's assertions stay out of the loop).
+struct Tally {
+  long allocations = 0;
+  int refused = 0;           // calls that returned a failure Status
+  const char* reason = "";   // the first one's reason
+  int reaches = 0;
+  float largest_stretch = 0.0f;
+  float normals_checksum = 0.0f;
+  void note(const deform::Status& status) {
+    if (status) return;
+    if (refused++ == 0) reason = status.reason();
+  }
+};
+
+void check(const Tally& tally) {
+  MESSAGE(tally.reaches << " reaches, largest stretch " << tally.largest_stretch << ", " << tally.allocations
+                        << " allocations, " << tally.refused << " refusals");
+  CAPTURE(tally.reason);
+  CHECK(tally.allocations == 0);
+  CHECK(tally.refused == 0);
+  CHECK(tally.reaches >= 5);
+  CHECK(tally.largest_stretch > 0.01f);  // the lattices did stretch
+  CHECK(std::isfinite(tally.normals_checksum));
+}
+
+std::vector<int> escaped;  // the control allocation below lands here, so no optimiser can drop it
+
+}  // namespace
+
+TEST_CASE("the counting operator new sees the library's allocations") {
+  const long before = allocations.load();
+  escaped.assign(1000, 1);
+  const Character c = deform::make_builtin_character();
+  CHECK(allocations.load() - before > 100);
+  CHECK(c.positions().size() > 1000);
+}
+
+TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach, release, update, normals") {
+  // Held in a vector, moved there after construction: a move keeps the storage the frame relies on.
+  std::vector<Character> characters;
+  characters.push_back(deform::make_builtin_character());
+  Character& c = characters.front();
+  const deform::Skeleton& skeleton = c.skeleton();
+  const std::int32_t hand_l = skeleton.find("hand_l"), hand_r = skeleton.find("hand_r");
+  const std::int32_t foot_l = skeleton.find("foot_l"), spine = skeleton.find("spine"), neck = skeleton.find("neck");
+  REQUIRE(hand_l > 0);
+  REQUIRE(hand_r > 0);
+  REQUIRE(foot_l > 0);
+  const glm::vec3 shoulder = c.bone_position(skeleton.find("clavicle_l"));
+  deform::Pose pose = skeleton.bind_pose();  // rewritten in place every frame
+  const deform::Pose bind = pose;
+
+  Tally tally;
+  const long before = allocations.load();
+  for (int frame = 0; frame < frames; ++frame) {
+    const float t = float(frame) * dt;
+    // The pose: the bind pose with the spine and the neck swaying (Euler angles within their limits).
+    std::copy(bind.rotations.begin(), bind.rotations.end(), pose.rotations.begin());
+    skeleton.set_euler(pose, spine, skeleton.bone(spine).bind_rotation + glm::vec3(5.0f * std::sin(t), 0.0f, 0.0f));
+    skeleton.set_euler(pose, neck, glm::vec3(0.0f, 20.0f * std::sin(0.7f * t), 0.0f));
+    tally.note(c.set_pose(pose));
+    // Reach far at 100 (the arm stretches), elsewhere in between (the chain changes with the effector), let go at
+    // 500; from 100 to 500 the reach follows the moving pose every frame, as a viewer playing a clip does.
+    const bool reaching = frame >= 100 && frame < 500;
+    if (reaching) {
+      const int phase = (frame - 100) / 60;
+      const std::int32_t effector = phase == 2 ? hand_r : phase == 4 ? foot_l : hand_l;
+      const glm::vec3 target = effector == hand_l ? shoulder + glm::vec3(0.9f + 0.1f * float(phase), 0.2f, 0.3f)
+                               : effector == hand_r ? glm::vec3(-0.4f, 1.3f, 0.4f)
+                                                    : glm::vec3(0.2f, 0.3f, 0.3f);
+      const deform::ReachResult result = c.reach(effector, target);
+      tally.note(result.status);
+      ++tally.reaches;
+    }
+    if (frame == 500) c.release();
+    tally.note(c.update(dt));
+    const auto normals = c.normals();
+    tally.normals_checksum += normals[std::size_t(frame) % normals.size()].x;
+    tally.largest_stretch = std::max(tally.largest_stretch, c.stretch());
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+  CHECK(std::abs(c.stretch()) < 0.05f * tally.largest_stretch);  // 500 frames after the release: settled back
+}
+
+#if defined(DEFORM_HAVE_IMPORT)
+TEST_CASE("1,000 frames of an imported character allocate nothing: clip, reach, release, update, normals") {
+  const std::string path = "/usr/share/assimp/models/X/Testwuson.X";  // Debian's assimp-testmodels
+  if (!std::filesystem::exists(path)) {
+    MESSAGE(path << " is not installed: skipped");
+    return;
+  }
+  deform::ImportedModel imported = deform::import_model(path);
+  REQUIRE(imported.rigged);
+  REQUIRE_FALSE(imported.clips.empty());
+  const deform::Rig rig = deform::default_rig(imported.model);
+  REQUIRE(rig.reach_effector > 0);
+  REQUIRE_FALSE(rig.lattices.empty());
+  std::vector<Character> characters;
+  characters.emplace_back(std::move(imported.model), rig);
+  Character& c = characters.front();
+  const deform::Skeleton& skeleton = c.skeleton();
+  const deform::Animation& clip = imported.clips.front();
+  // A second effector: the deepest bone that is not the rig's, so the chain is rebuilt now and then.
+  std::int32_t other = -1;
+  std::size_t deepest = 0;
+  for (std::size_t b = 1; b < skeleton.bone_count(); ++b) {
+    std::size_t depth = 0;
+    for (std::int32_t id = std::int32_t(b); id > 0; id = skeleton.bone(id).parent) ++depth;
+    if (std::int32_t(b) != rig.reach_effector && depth > deepest) deepest = depth, other = std::int32_t(b);
+  }
+  REQUIRE(other > 0);
+  // Targets scaled to the model: beyond the effector's reach along the model's diagonal.
+  const deform::Bounds bounds = deform::compute_bounds(c.model().mesh.positions);
+  const float size = glm::length(bounds.max - bounds.min);
+  const glm::vec3 start = c.bone_position(rig.reach_effector);
+  deform::Pose pose = skeleton.bind_pose();
+  const deform::Pose bind = pose;
+  deform::SamplingJob sampling;
+  sampling.animation = &clip;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  REQUIRE(sampling.validate());
+
+  Tally tally;
+  const long before = allocations.load();
+  for (int frame = 0; frame < frames; ++frame) {
+    std::copy(bind.rotations.begin(), bind.rotations.end(), pose.rotations.begin());
+    std::copy(bind.translations.begin(), bind.translations.end(), pose.translations.begin());
+    sampling.time = float(frame) * dt;
+    tally.note(sampling.run());
+    tally.note(c.set_pose(pose));
+    if (frame >= 100 && frame < 500) {
+      const int phase = (frame - 100) / 50;
+      const std::int32_t effector = phase % 3 == 2 ? other : rig.reach_effector;
+      const glm::vec3 target = start + size * glm::vec3(0.3f + 0.05f * float(phase), 0.1f, 0.2f);
+      tally.note(c.reach(effector, target).status);
+      ++tally.reaches;
+    }
+    if (frame == 500) c.release();
+    tally.note(c.update(dt));
+    const auto normals = c.normals();
+    tally.normals_checksum += normals[std::size_t(frame) % normals.size()].y;
+    tally.largest_stretch = std::max(tally.largest_stretch, c.stretch() / size * 10.0f);
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+}
+#endif
