@@ -116,3 +116,17 @@ TEST_CASE("pose JSON nested a million levels deep is refused in one pass, naming
   CHECK_THROWS_WITH_AS(deform::parse_pose_json(quoted, deform::Skeleton(skeleton_test::arm_bones()), true, "q.json"), doctest::Contains("no such bone"),
                        deform::Error);
 }
+
+TEST_CASE("a pose of 65,535 bones reads in O(bones log bones)") {
+  std::vector<deform::Bone> bones(65535);
+  std::string json = "{\"bones\": {";
+  for (std::size_t i = 0; i < bones.size(); ++i) {
+    bones[i].name = "b" + std::to_string(i);
+    if (i > 0) bones[i].parent = 0, bones[0].children.push_back(std::int32_t(i));
+    json += (i ? ", \"" : "\"") + bones[i].name + "\": {\"translation\": [0, " + std::to_string(i % 7) + ", 0]}";
+  }
+  json += "}}";
+  const deform::Skeleton skeleton(bones);
+  const deform::Pose pose = deform::parse_pose_json(json, skeleton, true, "wide.json");
+  CHECK(pose.translations[65534].y == 65534 % 7);
+}

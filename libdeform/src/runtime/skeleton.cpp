@@ -5,15 +5,11 @@
 #include <cmath>
 
 #include "deform/runtime/error.hpp"
+#include "runtime/finite.hpp"
 #include "skeleton_rules.hpp"
 
 namespace deform {
 namespace detail {
-namespace {
-
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-}  // namespace
 
 std::optional<BoneProblem> find_bone_problem(std::span<const Bone> bones, std::span<std::int32_t> order) {
   using Field = BoneProblem::Field;
@@ -118,7 +114,29 @@ Skeleton::Skeleton(std::vector<Bone> bones, const std::string& source) : bones_(
   fk.translations = bind.translations;
   fk.world = bind_world_;
   fk.run();
+  // Finite numbers can still overflow along a chain (translations near 3e38 add up to infinity): such a skeleton
+  // would skin every vertex to NaN, so it is refused here, naming the first bone whose head is not finite.
+  for (const std::int32_t id : order_)
+    if (!finite(bind_world_[std::size_t(id)]))
+      throw Error::in_file(source, "bone " + std::to_string(id), "bind transform overflows (not finite)");
   std::transform(bind_world_.begin(), bind_world_.end(), inverse_bind_world_.begin(), rigid_inverse);
+
+  // Names, looked up by find() and key() in O(log bones) rather than by a scan (a pose of 65,535 bones would be
+  // quadratic): bone ids sorted by (name, id), and whether each bone's name is its alone.
+  by_name_.resize(bones_.size());
+  for (std::size_t i = 0; i < bones_.size(); ++i) by_name_[i] = static_cast<std::int32_t>(i);
+  std::sort(by_name_.begin(), by_name_.end(), [&](std::int32_t a, std::int32_t b) {
+    const std::string& na = bones_[std::size_t(a)].name;
+    const std::string& nb = bones_[std::size_t(b)].name;
+    return na != nb ? na < nb : a < b;
+  });
+  unique_name_.assign(bones_.size(), 0);
+  for (std::size_t i = 0; i < by_name_.size(); ++i) {
+    const std::string& name = bones_[std::size_t(by_name_[i])].name;
+    const bool same_before = i > 0 && bones_[std::size_t(by_name_[i - 1])].name == name;
+    const bool same_after = i + 1 < by_name_.size() && bones_[std::size_t(by_name_[i + 1])].name == name;
+    unique_name_[std::size_t(by_name_[i])] = !same_before && !same_after && !name.empty() && name.front() != '#';
+  }
 }
 
 std::int32_t Skeleton::find(std::string_view name) const noexcept {
@@ -130,17 +148,16 @@ std::int32_t Skeleton::find(std::string_view name) const noexcept {
       return -1;
     return id;
   }
-  for (std::size_t i = 0; i < bones_.size(); ++i)
-    if (bones_[i].name == name) return static_cast<std::int32_t>(i);
-  return -1;
+  const auto first = std::lower_bound(by_name_.begin(), by_name_.end(), name, [&](std::int32_t id, std::string_view n) {
+    return std::string_view(bones_[std::size_t(id)].name) < n;
+  });
+  if (first == by_name_.end() || bones_[std::size_t(*first)].name != name) return -1;
+  return *first;  // the lowest id of that name: ids are sorted within a name
 }
 
 std::string Skeleton::key(std::int32_t id) const {
   const std::string& name = bone(id).name;
-  bool shared = name.empty() || name.front() == '#' || find(name) != id;
-  for (std::size_t i = static_cast<std::size_t>(id) + 1; i < bones_.size() && !shared; ++i)
-    shared = bones_[i].name == name;
-  if (!shared) return name;
+  if (unique_name_[std::size_t(id)]) return name;
   std::string id_key(1, '#');
   return id_key.append(std::to_string(id));
 }
@@ -187,11 +204,6 @@ glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept {
 }
 
 namespace {
-
-bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool finite(glm::quat q) noexcept {
-  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
 
 // What LocalToWorldJob::run checks for the bones order()[begin, end).
 Status check(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noexcept {

@@ -49,7 +49,8 @@ class DEFORM_RUNTIME_API Skeleton {
   Skeleton() = default;
   // Takes the bones as given and validates them: 1 to 65535 bones, exactly one root and it is bone 0 (parent -1),
   // parents in range, no cycles, child lists that agree with the parent ids (each non-root bone listed exactly once,
-  // by its parent), limits with min <= max, every number finite. Throws deform::Error naming `source` and the bone.
+  // by its parent), limits with min <= max, every number finite, and bind transforms that stay finite along every
+  // chain (translations near 3e38 overflow). Throws deform::Error naming `source` and the bone.
   // Cost: O(bones + children); computes order() and the bind matrices once.
   explicit Skeleton(std::vector<Bone> bones, const std::string& source = "<memory>");
 
@@ -84,6 +85,8 @@ class DEFORM_RUNTIME_API Skeleton {
   std::vector<std::int32_t> order_;
   std::vector<glm::mat4> bind_world_;
   std::vector<glm::mat4> inverse_bind_world_;
+  std::vector<std::int32_t> by_name_;       // bone ids sorted by (name, id), for find()
+  std::vector<std::uint8_t> unique_name_;  // per bone: 1 when key() is its name, 0 when it is "#ID"
 };
 
 // --- Euler angles (X·Y·Z, degrees) ---
