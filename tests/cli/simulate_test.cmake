@@ -92,6 +92,8 @@ file(WRITE "${WORK}/bad.rig.json" [=[{"rig": 1, "model": "builtin", "lattices": 
 expect_invalid("lattices[0].degree[1]" "${WORK}/bad.rig.json" --target 1,2,3)
 file(WRITE "${WORK}/no-effector.rig.json" [=[{"rig": 1, "model": "builtin", "lattices": []}]=])
 expect_invalid("--effector" "${WORK}/no-effector.rig.json" --target 1,2,3)
+# The seed's Verlet is only conditionally stable: a step beyond its bound is refused, not printed as a diverging curve.
+expect_invalid("stable for --dt below 0.16" --builtin --target 1.3,1.6,0.4 --integrator verlet --dt 0.5 --seconds 5)
 
 deform(simulate --help)
 expect_equal("exit status of --help" "${rc}" 0)

@@ -121,7 +121,14 @@ int run(const std::vector<std::string>& argv) {
       character.release();
       released = true;
     }
-    character.update(float(dt));
+    if (const deform::Status status = character.update(float(dt)); !status) {
+      std::string detail = status.reason();
+      for (const deform::LatticeSpec& spec : rig.lattices)
+        if (spec.elastic.integrator == deform::Integrator::verlet)
+          detail += "; lattice '" + spec.name + "' is stable for --dt below " +
+                    std::to_string(deform::verlet_max_step(spec.elastic.oscillator, spec.elastic.verlet_kd));
+      throw UsageError("step at t = " + std::to_string(t) + " refused: " + detail);
+    }
     sample(t);
   }
   // One sample per line: a long curve stays readable and greppable.

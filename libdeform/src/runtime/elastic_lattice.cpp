@@ -42,6 +42,10 @@ double verlet_kd(const ElasticParams& params, double frame_dt) noexcept {
   return 1.0 - std::exp(-damping_coefficient(params) / double(params.mass) * frame_dt);
 }
 
+double verlet_max_step(const ElasticParams& params, double kd) noexcept {
+  return std::sqrt(2.0 * (2.0 - kd)) / angular_frequency(params);
+}
+
 OscillatorStep oscillator_step(const ElasticParams& params, double t) noexcept {
   // y(t) = e^(-a t) [(C + a S) y0 + S v0],  v(t) = e^(-a t) [-ω² S y0 + (C - a S) v0], with a = ζω and
   // (C, S) = (cos st, sin st / s) under-damped, (1, t) critical, (cosh st, sinh st / s) over-damped, s = ω√|1 - ζ²|.
@@ -177,6 +181,9 @@ Status ElasticLattice::reset(std::span<const glm::vec3> rest) {
 Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
   if (!(dt >= 0.0f) || !finite(dt)) return Status::failure("dt is negative or not finite");
   if (rest.size() != size()) return Status::failure("rest does not have one entry per point");
+  if (settings_.integrator == Integrator::verlet &&
+      !(double(dt) < verlet_max_step(settings_.oscillator, double(settings_.verlet_kd))))
+    return Status::failure("dt is beyond the Verlet integrator's stable step (verlet_max_step)");
   std::copy(rest.begin(), rest.end(), rest_.begin());
   if (dt > 0.0f) {
     if (settings_.integrator == Integrator::verlet) {

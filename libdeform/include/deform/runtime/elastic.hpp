@@ -45,6 +45,10 @@ DEFORM_RUNTIME_API DampingRegime damping_regime(const ElasticParams& params) noe
 // The seed's Kd that matches ζ at one frame step: the velocity lost per frame, Kd = 1 - exp(-(b/m)·frame_dt).
 // Valid only at that frame step: the same Kd at another frame rate is another damping (hence frame-rate dependence).
 DEFORM_RUNTIME_API double verlet_kd(const ElasticParams& params, double frame_dt) noexcept;
+// The longest step the seed's Verlet integrator stays stable at: x' = x + (1 - Kd)(x - x_old) - (ωh)²x is stable for
+// ωh < √(2(2 - Kd)) (2/ω undamped, √2/ω at Kd = 1). ElasticLattice::step refuses a longer Verlet step instead of
+// diverging; the exact integrator has no bound.
+DEFORM_RUNTIME_API double verlet_max_step(const ElasticParams& params, double kd) noexcept;
 // Time for a point released at rest-offset A with zero velocity to stay within `tolerance`·A for good (0 < tolerance
 // < 1). Under-damped: the envelope bound ln(1/(tolerance·√(1-ζ²)))/(ζω) (infinite when ζ = 0); critical and over:
 // the exact crossing of the monotonic response, found by bisection.
