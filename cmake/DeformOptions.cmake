@@ -9,3 +9,18 @@ if(DEFORM_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
 endif()
+
+# Coverage-guided fuzzing (tests/fuzz): with Clang and the sanitizers, every target is compiled with libFuzzer's
+# coverage instrumentation and the harnesses are linked with its driver.
+include(CheckCXXSourceCompiles)
+set(deform_fuzz_default OFF)
+if(DEFORM_SANITIZE AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  set(deform_fuzz_default ON)
+endif()
+option(DEFORM_FUZZ "Build the libFuzzer harnesses of the readers (Clang)" ${deform_fuzz_default})
+if(DEFORM_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "DEFORM_FUZZ needs Clang (libFuzzer)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link)
+endif()

@@ -25,6 +25,7 @@ import sys
 NOT_RUN = {
     "./scripts/test": "it is the suite that runs this test",
     "./scripts/demo": "the viewer under Xvfb is the viewer_smoke_xvfb test, the CLI half the commands below",
+    "./scripts/fuzz": "the suite runs every fuzzer for a fixed number of inputs (the fuzz_* tests)",
     "cmake ": "the build itself: scripts/test builds, consumer_links_installed_library installs and links",
 }
 
