@@ -1,8 +1,9 @@
 // normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,554 points, 3,036
 // render vertices, 5,056 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
 // UV seams), with the points warped so that no two frames are alike to the caches' eyes. Items are render vertices.
-//   normals/builtin, normals/100k                    VertexNormals::compute, the kernel the CPU gets (AVX-512 here)
-//   normals/builtin_portable, normals/100k_portable  the baseline kernel forced (what a CPU without AVX-512 runs)
+//   normals/builtin, normals/100k                    VertexNormals::compute, the kernel copy the CPU gets (isa_best)
+//   normals/builtin_portable, normals/100k_portable  the portable copy forced (what a CPU without AVX2 runs)
+//   normals/builtin_avx2, normals/100k_avx2          the AVX2 copy forced
 //   normals/builtin_function, normals/100k_function  compute_vertex_normals, one triangle at a time
 //   normals/builtin_atan2                            the former code (std::atan2 per corner), for the speed-up
 //   normals/bind/builtin, normals/bind/100k          building a VertexNormals (once per mesh)
@@ -61,14 +62,18 @@ void set_counters(benchmark::State& state, const deform::Mesh& m) {
   state.counters["triangles"] = double(m.triangle_count());
 }
 
-void bound(benchmark::State& state, bool builtin, deform::VertexNormals::Kernel kernel) {
+void bound(benchmark::State& state, bool builtin, deform::Isa isa) {
+  if (!deform::isa_available(isa)) {
+    state.SkipWithError("instruction set not available");
+    return;
+  }
   const deform::Mesh& m = mesh(builtin);
   deform::VertexNormals normals(m);
   const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
   std::vector<glm::vec3> out(m.vertex_count());
   int frame = 0;
   for (auto _ : state) {
-    normals.compute(poses[frame++ & 1], out, kernel);
+    normals.compute(poses[frame++ & 1], out, isa);
     benchmark::DoNotOptimize(out.data());
   }
   set_counters(state, m);
@@ -108,15 +113,17 @@ void bind(benchmark::State& state, bool builtin) {
   set_counters(state, m);
 }
 
-using Kernel = deform::VertexNormals::Kernel;
-BENCHMARK_CAPTURE(bound, builtin, true, Kernel::automatic)->Name("normals/builtin")->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, 100k, false, Kernel::automatic)->Name("normals/100k")->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, builtin_portable, true, Kernel::portable)
+using deform::Isa;
+BENCHMARK_CAPTURE(bound, builtin, true, Isa::automatic)->Name("normals/builtin")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k, false, Isa::automatic)->Name("normals/100k")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_portable, true, Isa::portable)
     ->Name("normals/builtin_portable")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, 100k_portable, false, Kernel::portable)
+BENCHMARK_CAPTURE(bound, 100k_portable, false, Isa::portable)
     ->Name("normals/100k_portable")
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_avx2, true, Isa::avx2)->Name("normals/builtin_avx2")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k_avx2, false, Isa::avx2)->Name("normals/100k_avx2")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, builtin, true)->Name("normals/builtin_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, 100k, false)->Name("normals/100k_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK(atan2_former)->Name("normals/builtin_atan2")->Unit(benchmark::kMicrosecond);

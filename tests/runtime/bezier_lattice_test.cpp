@@ -222,6 +222,15 @@ TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run and writes no
   CHECK(job.validate());
   job.normals_out = small;
   CHECK_FALSE(job.validate());
+  job.normals_in = {};
+  job.normals_out = {};
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
+    if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused, never run
+      job.isa = isa;
+      CHECK_FALSE(job.validate());
+      CHECK_FALSE(job.run());
+      job.isa = deform::Isa::automatic;
+    }
   CHECK(out[0] == glm::vec3(7.0f));
   // A B-spline binding needs B-spline-sized control points.
   const deform::BsplineLattice bspline(LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1}), glm::ivec3(5));

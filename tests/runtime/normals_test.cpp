@@ -1,7 +1,7 @@
 // Vertex normals, bounds and point topology: hand-computed cases, invariances, plain reference implementations (the
 // library's former atan2 code and a double-precision acos one), and OpenMesh as an independent reference for the
-// angle-weighted normals, one-rings and boundary edges. Every normals case runs on the three paths: the one-shot
-// compute_vertex_normals and VertexNormals' automatic (AVX-512 where the CPU has it) and portable kernels.
+// angle-weighted normals, one-rings and boundary edges. Every normals case runs on every path: the one-shot
+// compute_vertex_normals and VertexNormals with each kernel copy (isa.hpp) this CPU runs.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -37,12 +37,27 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
   return mesh;
 }
 
-// The three ways to get normals.
-enum class Path { function, bound_automatic, bound_portable };
-constexpr Path all_paths[] = {Path::function, Path::bound_automatic, Path::bound_portable};
+// The ways to get normals: the one-shot function and VertexNormals with each kernel copy this CPU runs.
+enum class Path { function, bound_portable, bound_avx2, bound_avx512 };
+deform::Isa isa_of(Path path) {
+  return path == Path::bound_avx512 ? deform::Isa::avx512
+         : path == Path::bound_avx2 ? deform::Isa::avx2
+                                    : deform::Isa::portable;
+}
+const std::vector<Path> all_paths = [] {
+  std::vector<Path> paths;
+  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512})
+    if (path == Path::function || deform::isa_available(isa_of(path))) paths.push_back(path);
+  return paths;
+}();
 const char* path_name(Path path) {
-  return path == Path::function ? "compute_vertex_normals"
-                                : path == Path::bound_automatic ? "VertexNormals automatic" : "VertexNormals portable";
+  switch (path) {
+    case Path::function: return "compute_vertex_normals";
+    case Path::bound_portable: return "VertexNormals portable";
+    case Path::bound_avx2: return "VertexNormals avx2";
+    case Path::bound_avx512: return "VertexNormals avx512";
+  }
+  return "?";
 }
 
 std::vector<glm::vec3> normals_of(const Mesh& mesh, std::span<const glm::vec3> positions, Path path) {
@@ -52,9 +67,7 @@ std::vector<glm::vec3> normals_of(const Mesh& mesh, std::span<const glm::vec3> p
     REQUIRE(deform::compute_vertex_normals(mesh, positions, scratch, out));
   } else {
     deform::VertexNormals normals(mesh);
-    const auto kernel = path == Path::bound_portable ? deform::VertexNormals::Kernel::portable
-                                                     : deform::VertexNormals::Kernel::automatic;
-    REQUIRE(normals.compute(positions, out, kernel));
+    REQUIRE(normals.compute(positions, out, isa_of(path)));
   }
   return out;
 }
@@ -366,22 +379,21 @@ TEST_CASE("normals: rotating, scaling and moving the points rotates the normals 
   }
 }
 
-TEST_CASE("normals: the AVX-512 and portable kernels and the one-shot function agree to float rounding") {
+TEST_CASE("normals: every kernel copy and the one-shot function agree to float rounding") {
   // Float rounding in the weights moves a normal by about 1e-7 times its point's condition; 2e-6 leaves room for
   // the rounding of the edges themselves on thin triangles.
-  INFO("AVX-512 on this CPU: ", deform::VertexNormals::has_avx512());
+  INFO("best kernel copy on this CPU: ", deform::isa_name(deform::isa_best()));
   std::mt19937 random(29);
   for (int round = 0; round < 100; ++round) {
     Mesh mesh = torus(3 + int(random() % 50), 3 + int(random() % 50), random);
     for (glm::vec3& p : mesh.positions) p = warp(p);
     std::vector<double> condition;
     reference_normals(mesh, &condition);
-    const auto automatic = normals_of(mesh, Path::bound_automatic);
-    const auto portable = normals_of(mesh, Path::bound_portable);
     const auto function = normals_of(mesh, Path::function);
-    for (std::size_t r = 0; r < automatic.size(); ++r) {
-      check_near(automatic[r], portable[r], float(2e-6 * condition[r]));
-      check_near(automatic[r], function[r], float(2e-6 * condition[r]));
+    for (const Path path : all_paths) {
+      INFO(path_name(path));
+      const auto ours = normals_of(mesh, path);
+      for (std::size_t r = 0; r < ours.size(); ++r) check_near(ours[r], function[r], float(2e-6 * condition[r]));
     }
   }
 }
@@ -435,6 +447,12 @@ TEST_CASE("normals: wrong sizes and out-of-range indices return false (or throw 
   CHECK_FALSE(normals.compute(short_span, out));
   CHECK_FALSE(normals.compute(mesh.positions, untouched));
   CHECK(untouched == std::vector<glm::vec3>(2, glm::vec3(7.0f)));  // "writing nothing"
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
+    if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused
+      std::vector<glm::vec3> kept(3, glm::vec3(7.0f));
+      CHECK_FALSE(normals.compute(mesh.positions, kept, isa));
+      CHECK(kept == std::vector<glm::vec3>(3, glm::vec3(7.0f)));
+    }
 
   Mesh bad = mesh;
   bad.triangles[2] = 3;

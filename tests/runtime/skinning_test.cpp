@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -71,10 +72,10 @@ void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3>
 
 // ---------------------------------------------------------------------------------------------------------------
 
-std::vector<SkinningIsa> available_isas() {
-  std::vector<SkinningIsa> isas;
-  for (SkinningIsa isa : {SkinningIsa::scalar, SkinningIsa::avx2, SkinningIsa::avx512})
-    if (skinning_isa_available(isa)) isas.push_back(isa);
+std::vector<Isa> available_isas() {
+  std::vector<Isa> isas;
+  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512})
+    if (isa_available(isa)) isas.push_back(isa);
   return isas;
 }
 
@@ -206,14 +207,14 @@ DqsPalette dqs_palette(std::span<const glm::mat4> matrices) {
 TEST_CASE("every kernel equals the reference to 1e-5: random palettes, weights, tails and layouts") {
   std::mt19937 rng(20240611);
   const std::size_t counts[] = {1, 5, 15, 16, 17, 33, 1000, 4099};
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs})
       for (bool scaled : {false, true})
         for (Layout layout : {Layout::separate, Layout::interleaved})
           for (bool normals : {true, false})
             for (std::size_t count : counts)
             for (bool large_palette : {false, true}) {  // the AVX-512 kernel has a path for <= 32 bones
-              CAPTURE(skinning_isa_name(isa));
+              CAPTURE(isa_name(isa));
               CAPTURE(int(method));
               CAPTURE(scaled);
               CAPTURE(int(layout));
@@ -235,11 +236,26 @@ TEST_CASE("every kernel equals the reference to 1e-5: random palettes, weights, 
             }
 }
 
-TEST_CASE("the automatic path is the best available one and forced paths report availability") {
-  CHECK(skinning_isa_available(SkinningIsa::scalar));
-  CHECK(skinning_isa_available(skinning_isa_best()));
-  if (skinning_isa_available(SkinningIsa::avx512)) CHECK(skinning_isa_best() == SkinningIsa::avx512);
-  MESSAGE("best skinning path here: " << skinning_isa_name(skinning_isa_best()));
+TEST_CASE("isa: the automatic path is the best available one; names; forced paths report availability") {
+  CHECK(isa_available(Isa::automatic));
+  CHECK(isa_available(Isa::portable));
+  CHECK(isa_available(isa_best()));
+  CHECK(isa_best() != Isa::automatic);
+  if (isa_available(Isa::avx512)) {
+    CHECK(isa_best() == Isa::avx512);
+    CHECK(isa_available(Isa::avx2));  // the AVX-512 copies use AVX2 and FMA too
+  } else if (isa_available(Isa::avx2)) {
+    CHECK(isa_best() == Isa::avx2);
+  } else {
+    CHECK(isa_best() == Isa::portable);
+  }
+  CHECK(std::string(isa_name(Isa::automatic)) == "automatic");
+  CHECK(std::string(isa_name(Isa::portable)) == "portable");
+  CHECK(std::string(isa_name(Isa::avx2)) == "avx2");
+  CHECK(std::string(isa_name(Isa::avx512)) == "avx512");
+  CHECK(std::string(isa_name(static_cast<Isa>(9))) == "unknown");
+  CHECK_FALSE(isa_available(static_cast<Isa>(9)));
+  MESSAGE("best kernel copy here: " << isa_name(isa_best()));
 }
 
 TEST_CASE("the bind pose reproduces the mesh to 1e-6") {
@@ -258,9 +274,9 @@ TEST_CASE("the bind pose reproduces the mesh to 1e-6") {
   for (glm::vec3& p : v.positions) p *= 0.5f;  // unit-scale positions: the 1e-6 bound is absolute
   const DqsPalette dq = dqs_palette(palette);
   CHECK_FALSE(dq.has_scale);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs}) {
-      CAPTURE(skinning_isa_name(isa));
+      CAPTURE(isa_name(isa));
       CAPTURE(int(method));
       std::vector<glm::vec3> out_p(v.positions.size()), out_n(v.positions.size());
       SkinningJob job;
@@ -288,8 +304,8 @@ TEST_CASE("a single-bone rigid rotation is exact, and DQS equals LBS when all in
     const std::uint16_t b = v.bones[i][0];
     v.bones[i] = glm::u16vec4(b);  // four slots, one bone, arbitrary positive weights
   }
-  for (SkinningIsa isa : available_isas()) {
-    CAPTURE(skinning_isa_name(isa));
+  for (Isa isa : available_isas()) {
+    CAPTURE(isa_name(isa));
     std::vector<glm::vec3> lbs_p(v.positions.size()), lbs_n(lbs_p.size()), dqs_p(lbs_p.size()), dqs_n(lbs_p.size());
     SkinningJob job;
     job.isa = isa, job.matrices = palette, job.dual_quats = dq.dual_quats;
@@ -321,7 +337,7 @@ TEST_CASE("weights that do not sum to one are renormalised") {
   Vertices v = random_vertices(rng, 64, 3);
   std::vector<glm::vec4> scaled_weights = v.weights;
   for (std::size_t i = 0; i < scaled_weights.size(); ++i) scaled_weights[i] *= 0.25f + 0.1f * float(i % 30);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs}) {
       std::vector<glm::vec3> a(64), b(64);
       SkinningJob job;
@@ -353,8 +369,8 @@ TEST_CASE("candy-wrapper: a twist collapses an LBS cylinder, DQS keeps its radiu
     const std::vector<glm::mat4> palette = {glm::mat4(1.0f),
                                             glm::rotate(glm::mat4(1.0f), glm::radians(twist), glm::vec3(1, 0, 0))};
     const DqsPalette dq = dqs_palette(palette);
-    for (SkinningIsa isa : available_isas()) {
-      CAPTURE(skinning_isa_name(isa));
+    for (Isa isa : available_isas()) {
+      CAPTURE(isa_name(isa));
       std::vector<glm::vec3> lbs(v.positions.size()), dqs(v.positions.size());
       SkinningJob job;
       job.isa = isa, job.matrices = palette, job.dual_quats = dq.dual_quats;
@@ -447,10 +463,10 @@ TEST_CASE("a vertex's result does not depend on where its range begins, nor on s
   // stores with the outputs at every 4-byte offset of a 64-byte line (the head up to the first aligned vertex is a
   // partial block too) and in place.
   std::mt19937 rng(77);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs})
       for (int bones : {20, 40}) {
-        CAPTURE(skinning_isa_name(isa));
+        CAPTURE(isa_name(isa));
         CAPTURE(int(method));
         CAPTURE(bones);
         const std::vector<glm::mat4> palette = random_palette(rng, bones, 170.0f, false);
@@ -574,8 +590,8 @@ TEST_CASE("validate() rejects malformed jobs; run() refuses the O(1) ones and wr
   REQUIRE(good.validate());
 
   // A forced path this CPU lacks is refused, never run.
-  for (SkinningIsa isa : {SkinningIsa::avx2, SkinningIsa::avx512})
-    if (!skinning_isa_available(isa)) {
+  for (Isa isa : {Isa::avx2, Isa::avx512})
+    if (!isa_available(isa)) {
       job = good, job.isa = isa;
       rejected(job, true);
     }

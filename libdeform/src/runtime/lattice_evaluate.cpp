@@ -1,11 +1,11 @@
-// LatticeEvaluateJob: validation, the baseline kernel and the runtime choice of the AVX-512 one.
+// LatticeEvaluateJob: validation, the portable kernel and the choice of the copy the job's Isa names.
 #include <algorithm>
 
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/parallel.hpp"
 #include "lattice_kernel.hpp"
 
-#define DEFORM_KERNEL_ENTRY evaluate_lattice_baseline
+#define DEFORM_KERNEL_ENTRY evaluate_lattice_portable
 #include "lattice_kernel.inl"
 
 namespace deform {
@@ -13,14 +13,15 @@ namespace {
 
 using Kernel = void (*)(const detail::KernelArgs&);
 
-Kernel pick_kernel() noexcept {
+// The copy for `isa`, which isa_available() has accepted.
+Kernel kernel_for(Isa isa) noexcept {
+  if (isa == Isa::automatic) isa = isa_best();
 #if defined(DEFORM_X86_KERNELS)
-  if (__builtin_cpu_supports("avx512f")) return detail::evaluate_lattice_avx512;
+  if (isa == Isa::avx512) return detail::evaluate_lattice_avx512;
+  if (isa == Isa::avx2) return detail::evaluate_lattice_avx2;
 #endif
-  return detail::evaluate_lattice_baseline;
+  return detail::evaluate_lattice_portable;
 }
-
-const Kernel kernel = pick_kernel();
 
 }  // namespace
 
@@ -34,6 +35,7 @@ bool LatticeEvaluateJob::validate() const noexcept {
   if (positions.size() < needed) return false;
   if (normals_in.empty() != normals_out.empty()) return false;
   if (!normals_out.empty() && (normals_in.size() < needed || normals_out.size() < needed)) return false;
+  if (!isa_available(isa)) return false;
   return begin_block <= std::min(end_block, binding->block_count());
 }
 
@@ -47,7 +49,7 @@ bool LatticeEvaluateJob::run() const noexcept {
                                 normals ? normals_out.data() : nullptr,
                                 begin_block,
                                 std::min(end_block, binding->block_count())};
-  if (args.begin_block < args.end_block) kernel(args);
+  if (args.begin_block < args.end_block) kernel_for(isa)(args);
   return true;
 }
 

@@ -19,8 +19,11 @@ struct KernelArgs {
   std::size_t end_block;
 };
 
-void evaluate_lattice_baseline(const KernelArgs& args);
+// One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate.cpp (portable),
+// lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags).
+void evaluate_lattice_portable(const KernelArgs& args);
 #if defined(DEFORM_X86_KERNELS)
+void evaluate_lattice_avx2(const KernelArgs& args);
 void evaluate_lattice_avx512(const KernelArgs& args);
 #endif
 

@@ -1,6 +1,6 @@
 // Angle-weighted vertex normals (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998) and
 // bounds: per-frame safe (no allocation, no exceptions). VertexNormals runs the block kernel of
-// mesh_normals_kernel.inl, this file's baseline copy or the AVX-512 one, chosen once at run time.
+// mesh_normals_kernel.inl: this file's portable copy or the AVX2 or AVX-512 one, as its Isa says (isa.hpp).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -10,7 +10,7 @@
 #include "deform/runtime/normals.hpp"
 #include "mesh_normals_kernel.hpp"
 
-#define DEFORM_NORMALS_ENTRY vertex_normals_baseline
+#define DEFORM_NORMALS_ENTRY vertex_normals_portable
 #include "mesh_normals_kernel.inl"
 
 namespace deform {
@@ -18,13 +18,14 @@ namespace {
 
 using KernelEntry = void (*)(const detail::NormalsKernelArgs&) noexcept;
 
-// AVX-512 where the CPU has it. Asked on every call (a bit of libgcc's CPUID table), so that no static initialisation
-// order is involved; before libgcc has read the CPU the answer is the baseline, which is as correct.
-KernelEntry automatic_kernel() noexcept {
+// The copy for `isa`, which isa_available() has accepted.
+KernelEntry kernel_for(Isa isa) noexcept {
+  if (isa == Isa::automatic) isa = isa_best();
 #if defined(DEFORM_X86_KERNELS)
-  if (__builtin_cpu_supports("avx512f")) return detail::vertex_normals_avx512;
+  if (isa == Isa::avx512) return detail::vertex_normals_avx512;
+  if (isa == Isa::avx2) return detail::vertex_normals_avx2;
 #endif
-  return detail::vertex_normals_baseline;
+  return detail::vertex_normals_portable;
 }
 
 constexpr std::size_t block = detail::triangles_per_block;
@@ -98,17 +99,16 @@ VertexNormals::VertexNormals(const Mesh& mesh) : vertex_point_(mesh.vertex_point
 }
 
 bool VertexNormals::compute(std::span<const glm::vec3> positions, std::span<glm::vec3> out_vertex_normals,
-                            Kernel kernel) {
-  if (positions.size() != point_count() || out_vertex_normals.size() != vertex_count()) return false;
+                            Isa isa) {
+  if (positions.size() != point_count() || out_vertex_normals.size() != vertex_count() || !isa_available(isa))
+    return false;
   const detail::NormalsKernelArgs args{block_points_.data(), triangle_count_, positions.data(), point_sums_.data(),
                                        point_sums_.size()};
-  (kernel == Kernel::portable ? detail::vertex_normals_baseline : automatic_kernel())(args);
+  kernel_for(isa)(args);
   for (std::size_t r = 0; r < vertex_point_.size(); ++r)
     out_vertex_normals[r] = glm::vec3(point_sums_[vertex_point_[r]]);
   return true;
 }
-
-bool VertexNormals::has_avx512() noexcept { return automatic_kernel() != detail::vertex_normals_baseline; }
 
 Bounds compute_bounds(std::span<const glm::vec3> points) {
   if (points.empty()) return {};

@@ -46,8 +46,11 @@ struct NormalsKernelArgs {
 };
 
 // Every triangle's angle-weighted unit normal added at its three points, then each point's sum normalised.
-void vertex_normals_baseline(const NormalsKernelArgs& args) noexcept;
+// One copy per instruction set (isa.hpp): mesh_normals.cpp (portable), mesh_normals_avx2.cpp and
+// mesh_normals_avx512.cpp (x86-64 builds, each compiled with its own flags).
+void vertex_normals_portable(const NormalsKernelArgs& args) noexcept;
 #if defined(DEFORM_X86_KERNELS)
+void vertex_normals_avx2(const NormalsKernelArgs& args) noexcept;
 void vertex_normals_avx512(const NormalsKernelArgs& args) noexcept;
 #endif
 

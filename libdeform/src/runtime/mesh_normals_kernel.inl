@@ -1,9 +1,9 @@
-// The vertex-normal block kernel, included once per instruction set (mesh_normals.cpp: the baseline,
-// mesh_normals_avx512.cpp: compiled with -mavx512f). Everything here has internal linkage but the one entry point the
-// includer names with DEFORM_NORMALS_ENTRY, so the two copies never meet at link time.
+// The vertex-normal block kernel, included once per instruction set (mesh_normals.cpp: the portable copy;
+// mesh_normals_avx2.cpp, mesh_normals_avx512.cpp: compiled with their own flags). Everything here has internal linkage
+// but the one entry point the includer names with DEFORM_NORMALS_ENTRY, so the copies never meet at link time.
 //
 // A block of 16 triangles as lane vectors of GCC's vector extensions, structure of arrays: one zmm register of 16
-// lanes under AVX-512, else four passes of one 4-lane register (SSE2; NEON elsewhere). Per block: gather the corners,
+// lanes under AVX-512, two passes of 8 under AVX2, else four passes of one 4-lane register (SSE2; NEON elsewhere). Per block: gather the corners,
 // cross product, corner angles; then each corner's weighted normal is added to its point's sum (one 16-byte add per
 // corner under AVX-512). Last, a register's worth of points at a time, the sums are normalised.
 #include <algorithm>
@@ -19,6 +19,8 @@ namespace {
 
 #if defined(__AVX512F__)
 constexpr int width = 16;
+#elif defined(__AVX2__)
+constexpr int width = 8;
 #else
 constexpr int width = 4;
 #endif

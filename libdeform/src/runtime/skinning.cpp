@@ -11,21 +11,6 @@
 namespace deform {
 namespace {
 
-#if defined(DEFORM_X86_KERNELS)
-bool cpu_has_avx2() noexcept {
-  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return has;
-}
-bool cpu_has_avx512() noexcept {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                          __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
-  return has;
-}
-#else
-bool cpu_has_avx2() noexcept { return false; }
-bool cpu_has_avx512() noexcept { return false; }
-#endif
-
 constexpr std::size_t max_palette_size = 65536;
 
 bool stride_ok(std::size_t stride) noexcept {
@@ -50,7 +35,7 @@ bool layout_ok(const SkinningJob& job) noexcept {
   if (bones == 0 || bones > max_palette_size) return false;
   if (job.method != SkinningMethod::lbs && job.method != SkinningMethod::dqs) return false;
   if (job.method == SkinningMethod::dqs && !job.scales.empty() && job.scales.size() != bones) return false;
-  if (!skinning_isa_available(job.isa)) return false;
+  if (!isa_available(job.isa)) return false;
   const std::size_t count = job.bone_indices.size();
   if (job.bone_weights.size() != count) return false;
   if (!stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count) ||
@@ -66,44 +51,18 @@ bool layout_ok(const SkinningJob& job) noexcept {
 
 detail::SkinKernel select_kernel(const SkinningJob& job) noexcept {
   const bool lbs = job.method == SkinningMethod::lbs;
-  const SkinningIsa isa = job.isa == SkinningIsa::automatic ? skinning_isa_best() : job.isa;
+  const Isa isa = job.isa == Isa::automatic ? isa_best() : job.isa;
   // Scaled DQS palettes (a rare, non-rigid rig) take the portable kernel on every instruction set.
-  if (!lbs && !job.scales.empty()) return detail::skin_dqs_scalar;
+  if (!lbs && !job.scales.empty()) return detail::skin_dqs_portable;
 #if defined(DEFORM_X86_KERNELS)
-  if (isa == SkinningIsa::avx512) return lbs ? detail::skin_lbs_avx512 : detail::skin_dqs_avx512;
-  if (isa == SkinningIsa::avx2) return lbs ? detail::skin_lbs_avx2 : detail::skin_dqs_avx2;
+  if (isa == Isa::avx512) return lbs ? detail::skin_lbs_avx512 : detail::skin_dqs_avx512;
+  if (isa == Isa::avx2) return lbs ? detail::skin_lbs_avx2 : detail::skin_dqs_avx2;
 #endif
   (void)isa;
-  return lbs ? detail::skin_lbs_scalar : detail::skin_dqs_scalar;
+  return lbs ? detail::skin_lbs_portable : detail::skin_dqs_portable;
 }
 
 }  // namespace
-
-bool skinning_isa_available(SkinningIsa isa) noexcept {
-  switch (isa) {
-    case SkinningIsa::automatic:
-    case SkinningIsa::scalar: return true;
-    case SkinningIsa::avx2: return cpu_has_avx2();
-    case SkinningIsa::avx512: return cpu_has_avx512();
-  }
-  return false;
-}
-
-SkinningIsa skinning_isa_best() noexcept {
-  if (cpu_has_avx512()) return SkinningIsa::avx512;
-  if (cpu_has_avx2()) return SkinningIsa::avx2;
-  return SkinningIsa::scalar;
-}
-
-const char* skinning_isa_name(SkinningIsa isa) noexcept {
-  switch (isa) {
-    case SkinningIsa::automatic: return "automatic";
-    case SkinningIsa::scalar: return "scalar";
-    case SkinningIsa::avx2: return "avx2";
-    case SkinningIsa::avx512: return "avx512";
-  }
-  return "unknown";
-}
 
 bool SkinningJob::validate() const noexcept {
   if (!layout_ok(*this)) return false;

@@ -22,6 +22,7 @@
 #include <glm/glm.hpp>
 
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/skeleton.hpp"
 
 namespace deform {
@@ -163,7 +164,7 @@ class DEFORM_RUNTIME_API BsplineLattice {
 // space of the control points: pass them as they are for a free lattice, or carried by a matrix for a bone-bound
 // one (transform_points; Bézier and B-spline maps commute with affine maps). Blocks [begin_block, end_block) of the
 // binding are evaluated, so disjoint block ranges run on different threads. Cost per vertex: 3·(l+1)(m+1)(n+1) fused
-// multiply-adds (tricubic: ~250), about twice that with normals; AVX-512 when the CPU has it.
+// multiply-adds (tricubic: ~250), about twice that with normals; the widest copy the CPU runs (isa.hpp).
 struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   const LatticeBinding* binding = nullptr;
   std::span<const glm::vec3> control_points;  // binding->control_point_count() points, i-fastest
@@ -174,9 +175,10 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   std::span<glm::vec3> normals_out;
   std::size_t begin_block = 0;
   std::size_t end_block = std::numeric_limits<std::size_t>::max();  // clamped to binding->block_count()
+  Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
-  // True when the binding is set, the control point count matches it, the spans are large enough and the normal
-  // spans are both empty or both large enough.
+  // True when the binding is set, the control point count matches it, the spans are large enough, the normal
+  // spans are both empty or both large enough and the instruction set is available.
   bool validate() const noexcept;
   // validate(), then evaluates. Returns false (writing nothing) when invalid.
   bool run() const noexcept;

@@ -7,6 +7,7 @@
 #include <glm/glm.hpp>
 
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/mesh.hpp"
 
 namespace deform {
@@ -25,34 +26,28 @@ DEFORM_RUNTIME_API bool compute_vertex_normals(const Mesh& mesh, std::span<const
                                        std::span<glm::vec3> scratch, std::span<glm::vec3> out_vertex_normals);
 
 // compute_vertex_normals for one mesh topology, recomputed every frame: the triangles' points are looked up once at
-// bind time and packed 16 triangles per block, so compute() is flat loops over 16 triangles at once (AVX-512 where
-// the CPU has it, chosen at run time, else the same code 4 lanes wide). Same weighting, degenerate rule, finiteness
+// bind time and packed 16 triangles per block, so compute() is flat loops over 16 triangles at once (the
+// widest copy the CPU runs, isa.hpp). Same weighting, degenerate rule, finiteness
 // and error bound as compute_vertex_normals, with which it agrees to float rounding. Per frame on the built-in
 // character (5,056 triangles): 32 µs with AVX-512, 68 µs without, 103 µs with compute_vertex_normals (AMD EPYC).
 class DEFORM_RUNTIME_API VertexNormals {
  public:
-  // Which code compute() runs: `automatic` is AVX-512 where the CPU has it, `portable` the baseline copy everywhere
-  // (tests compare the two; the benchmark measures both).
-  enum class Kernel : std::uint8_t { automatic, portable };
-
   VertexNormals() = default;
   // Binds to `mesh`'s triangles and vertex_point (positions are not kept). Triangles with a repeated point are dropped
   // here (they are degenerate in every pose). Throws std::invalid_argument when a triangle or vertex_point index is
   // out of range or the triangle indices are not a multiple of 3. Allocates; O(triangles + render vertices).
   explicit VertexNormals(const Mesh& mesh);
 
-  // Per frame: `positions` has point_count() entries (deformed points), `out_vertex_normals` vertex_count(). Returns
-  // false, writing nothing, on a size mismatch. No allocation, no locks; O(triangles + render vertices). Uses the
+  // Per frame: `positions` has point_count() entries (deformed points), `out_vertex_normals` vertex_count(); `isa`
+  // picks the kernel copy (isa.hpp). Returns false, writing nothing, on a size mismatch or an unavailable `isa`. No allocation, no locks; O(triangles + render vertices). Uses the
   // object's own scratch, so one object serves one thread at a time.
   bool compute(std::span<const glm::vec3> positions, std::span<glm::vec3> out_vertex_normals,
-               Kernel kernel = Kernel::automatic);
+               Isa isa = Isa::automatic);
 
   std::size_t point_count() const noexcept { return point_sums_.size(); }
   std::size_t vertex_count() const noexcept { return vertex_point_.size(); }
   // Triangles kept at bind time (those without a repeated point).
   std::size_t triangle_count() const noexcept { return triangle_count_; }
-  // True when Kernel::automatic runs the AVX-512 code on this CPU.
-  static bool has_avx512() noexcept;
 
  private:
   std::size_t triangle_count_ = 0;

@@ -24,6 +24,7 @@
 #include <glm/gtc/type_precision.hpp>
 
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 namespace deform {
 
 class ThreadPool;
@@ -32,18 +33,6 @@ enum class SkinningMethod : std::uint8_t {
   lbs,  // linear blend skinning: Σ wᵢ Mᵢ applied to the vertex (fast; candy-wrapper collapse under twist)
   dqs,  // dual quaternion skinning: normalised Σ ±wᵢ q̂ᵢ (keeps volume under twist)
 };
-
-// Instruction set of the kernels. `automatic` picks the widest one this CPU supports (checked once at run time with
-// __builtin_cpu_supports); the others force a path, for tests and benchmarks (run() returns false when the forced
-// path is not available on this CPU or in this build).
-enum class SkinningIsa : std::uint8_t { automatic, scalar, avx2, avx512 };
-
-// True when `isa` can run here (scalar and automatic always can). Cost: a cached CPUID check.
-DEFORM_RUNTIME_API bool skinning_isa_available(SkinningIsa isa) noexcept;
-// The path `automatic` resolves to on this CPU.
-DEFORM_RUNTIME_API SkinningIsa skinning_isa_best() noexcept;
-// "scalar", "avx2", "avx512" (or "automatic").
-DEFORM_RUNTIME_API const char* skinning_isa_name(SkinningIsa isa) noexcept;
 
 // One bone of a DQS palette: the palette matrix M = [R | t] · S split into a unit dual quaternion for the rigid part
 // [R | t] (`real` = R, `dual` = ½ (0, t) · real; glm::quat stores x, y, z, w) and the scale/shear S applied before
@@ -67,7 +56,7 @@ DEFORM_RUNTIME_API bool compute_dual_quat_palette(std::span<const glm::mat4> mat
 // of each output span. The vertex count is bone_indices.size().
 struct DEFORM_RUNTIME_API SkinningJob {
   SkinningMethod method = SkinningMethod::lbs;
-  SkinningIsa isa = SkinningIsa::automatic;
+  Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
   // LBS palette: one affine matrix per bone, T_C = T_W · T_B⁻¹ (compute_skinning_palette). Used when method == lbs.
   std::span<const glm::mat4> matrices;

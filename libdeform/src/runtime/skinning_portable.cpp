@@ -1,5 +1,5 @@
-// Portable skinning kernels: one vertex at a time, plain C++. The fallback on CPUs without AVX2, the path for
-// scaled DQS palettes, and the tail of every SIMD kernel. The SIMD kernels compute exactly this.
+// Portable skinning kernels: one vertex at a time, plain C++. The fallback on CPUs without AVX2 and the path
+// for scaled DQS palettes. The SIMD kernels compute exactly this, to float rounding.
 #include <cmath>
 
 #include "skinning_kernels.hpp"
@@ -30,7 +30,7 @@ glm::vec4 as_vec4(glm::quat q) noexcept { return {q.x, q.y, q.z, q.w}; }
 
 }  // namespace
 
-void skin_lbs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+void skin_lbs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
   const bool normals = !job.in_normals.empty();
   for (std::size_t i = begin; i < end; ++i) {
     const glm::u16vec4 b = job.bone_indices[i];
@@ -51,7 +51,7 @@ void skin_lbs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end)
   }
 }
 
-void skin_dqs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+void skin_dqs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
   const bool normals = !job.in_normals.empty();
   const bool scaled = !job.scales.empty();
   for (std::size_t i = begin; i < end; ++i) {
