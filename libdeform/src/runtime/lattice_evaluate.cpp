@@ -1,12 +1,9 @@
-// LatticeEvaluateJob: validation, the portable kernel and the choice of the copy the job's Isa names.
+// LatticeEvaluateJob: validation and the choice of the kernel copy the job's Isa names.
 #include <algorithm>
 
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/parallel.hpp"
 #include "lattice_kernel.hpp"
-
-#define DEFORM_KERNEL_ENTRY evaluate_lattice_portable
-#include "lattice_kernel.inl"
 
 namespace deform {
 namespace {

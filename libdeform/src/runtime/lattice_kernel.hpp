@@ -19,7 +19,7 @@ struct KernelArgs {
   std::size_t end_block;
 };
 
-// One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate.cpp (portable),
+// One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,
 // lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags).
 void evaluate_lattice_portable(const KernelArgs& args);
 #if defined(DEFORM_X86_KERNELS)

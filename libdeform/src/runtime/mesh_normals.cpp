@@ -1,6 +1,6 @@
 // Angle-weighted vertex normals (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998) and
 // bounds: per-frame safe (no allocation, no exceptions). VertexNormals runs the block kernel of
-// mesh_normals_kernel.inl: this file's portable copy or the AVX2 or AVX-512 one, as its Isa says (isa.hpp).
+// mesh_normals_kernel.inl: the portable, AVX2 or AVX-512 copy, as its Isa says (isa.hpp).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -9,9 +9,6 @@
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "mesh_normals_kernel.hpp"
-
-#define DEFORM_NORMALS_ENTRY vertex_normals_portable
-#include "mesh_normals_kernel.inl"
 
 namespace deform {
 namespace {

@@ -127,7 +127,7 @@ bool compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<Du
   }
   bool any_scale = false;
   for (std::size_t i = 0; i < matrices.size(); ++i) {
-    const glm::dmat3 a(glm::mat3(matrices[i]));
+    const glm::dmat3 a{glm::mat3(matrices[i])};
     // Polar decomposition by Higham's iteration Q ← ½ (Q + Q⁻ᵀ), which converges quadratically to the orthogonal
     // factor of a matrix with positive determinant; a mirroring matrix is negated first (det(-A) = -det(A) in 3D).
     const double sign = determinant(a) < 0.0 ? -1.0 : 1.0;
