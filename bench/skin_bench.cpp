@@ -86,7 +86,7 @@ void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::Is
   }
   const bool all_threads = state.range(1) == 0;
   for (auto _ : state) {
-    if (all_threads) job.run(pool(), 4096);
+    if (all_threads) deform::run_parallel(job, pool(), 4096);
     else job.run();
     benchmark::DoNotOptimize(d.out_positions.data());
     benchmark::ClobberMemory();

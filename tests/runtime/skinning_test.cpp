@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -419,9 +420,16 @@ TEST_CASE("compute_dual_quat_palette: rigid, scaled and mirrored matrices recomp
   std::vector<glm::mat3> scales(2, glm::mat3(7.0f));
   bool has_scale = true;
   const std::vector<glm::mat4> singular = {glm::mat4(1.0f), glm::scale(glm::mat4(1.0f), glm::vec3(1, 0, 1))};
-  CHECK_FALSE(compute_dual_quat_palette(singular, out, scales, has_scale));
+  CHECK(std::string(compute_dual_quat_palette(singular, out, scales, has_scale).reason()) ==
+        "palette matrix is singular");
   CHECK(scales[0] == glm::mat3(7.0f));
-  CHECK_FALSE(compute_dual_quat_palette(std::span<const glm::mat4>(singular).first(1), out, scales, has_scale));
+  CHECK(std::string(compute_dual_quat_palette(std::span<const glm::mat4>(singular).first(1), out, scales, has_scale)
+                        .reason()) == "palette sizes differ");
+  std::vector<glm::mat4> not_finite = {glm::mat4(1.0f), glm::mat4(1.0f)};
+  not_finite[1][3][0] = std::numeric_limits<float>::infinity();
+  CHECK(std::string(compute_dual_quat_palette(not_finite, out, scales, has_scale).reason()) ==
+        "palette matrix is not finite");
+  CHECK(scales[0] == glm::mat3(7.0f));
   const std::vector<glm::mat4> rigid = {glm::mat4(1.0f), glm::rotate(glm::mat4(1.0f), 1.0f, glm::vec3(0, 1, 0))};
   CHECK(compute_dual_quat_palette(rigid, out, scales, has_scale));
   CHECK_FALSE(has_scale);
@@ -445,13 +453,13 @@ TEST_CASE("the thread-pool split and in-place skinning give the single-thread re
     job.out_positions = as_floats(serial_p), job.out_normals = as_floats(serial_n);
     REQUIRE(job.run());
     job.out_positions = as_floats(parallel_p), job.out_normals = as_floats(parallel_n);
-    REQUIRE(job.run(pool, 1000));
+    REQUIRE(run_parallel(job, pool, 1000));
     CHECK(parallel_p == serial_p);
     CHECK(parallel_n == serial_n);
     job.in_positions = as_floats((inplace_p)), job.out_positions = as_floats(inplace_p);
     job.in_normals = as_floats((inplace_n)), job.out_normals = as_floats(inplace_n);
     REQUIRE(job.validate());
-    REQUIRE(job.run(pool, 1000));
+    REQUIRE(run_parallel(job, pool, 1000));
     CHECK(inplace_p == serial_p);
     CHECK(inplace_n == serial_n);
   }
@@ -521,7 +529,7 @@ TEST_CASE("a vertex's result does not depend on where its range begins, nor on s
       }
 }
 
-TEST_CASE("validate() rejects malformed jobs; run() refuses the O(1) ones and writes nothing") {
+TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1) ones and writes nothing") {
   const std::vector<glm::mat4> palette(3, glm::mat4(1.0f));
   std::vector<DualQuat> dual_quats(3);
   const std::vector<glm::mat3> scales(3, glm::mat3(1.0f));
@@ -534,74 +542,142 @@ TEST_CASE("validate() rejects malformed jobs; run() refuses the O(1) ones and wr
   good.bone_indices = bones, good.bone_weights = weights;
   good.in_positions = as_floats((in)), good.out_positions = as_floats(out);
   REQUIRE(good.validate());
+  CHECK(good.count() == 10);
   SkinningJob dqs = good;
   dqs.method = SkinningMethod::dqs;
   REQUIRE(dqs.validate());
   dqs.scales = scales;
   REQUIRE(dqs.validate());
 
-  auto rejected = [&](const SkinningJob& job, bool o1) {
-    CHECK_FALSE(job.validate());
-    if (o1) {
-      CHECK_FALSE(job.run());
-      CHECK(out[0] == glm::vec3(-1.0f));
-    }
+  const auto reason = [](Status status) { return std::string(status.reason()); };
+  // O(1) failures: validate() and run() give the same reason, and run() writes nothing.
+  auto rejected = [&](const SkinningJob& job, const char* why) {
+    CHECK(reason(job.validate()) == why);
+    CHECK(reason(job.run()) == why);
+    CHECK(reason(job.run(0, 1)) == why);
+    CHECK(out[0] == glm::vec3(-1.0f));
   };
   SkinningJob job = good;
   job.matrices = {};
-  rejected(job, true);  // empty palette
+  rejected(job, "palette is empty");
   job = dqs, job.dual_quats = {};
-  rejected(job, true);  // empty DQS palette
+  rejected(job, "palette is empty");
   job = dqs, job.scales = std::span<const glm::mat3>(scales).first(2);
-  rejected(job, true);  // scales of the wrong size
+  rejected(job, "scales and dual quaternions differ in count");
   job = good, job.bone_weights = std::span<const glm::vec4>(weights).first(9);
-  rejected(job, true);  // index and weight counts differ
+  rejected(job, "bone weights and bone indices differ in count");
   job = good, job.in_positions = job.in_positions.first(29);
-  rejected(job, true);  // input span one float short
+  rejected(job, "in_positions too short");
   job = good, job.out_positions = job.out_positions.first(27);
-  rejected(job, true);  // output span short
+  rejected(job, "out_positions too short");
   job = good, job.in_positions_stride = 14;
-  rejected(job, true);  // stride not a multiple of 4
+  rejected(job, "in_positions stride invalid");  // not a multiple of 4
   job = good, job.out_positions_stride = 8;
-  rejected(job, true);  // stride below 12
+  rejected(job, "out_positions stride invalid");  // below 12
   job = good, job.in_positions_stride = max_skinning_stride + 4;
-  rejected(job, true);  // stride too large
+  rejected(job, "in_positions stride invalid");  // too large
   job = good, job.in_normals = job.in_positions;
-  rejected(job, true);  // normals in without normals out
+  rejected(job, "in_normals and out_normals: both or neither");
+  job = good, job.in_normals = job.in_positions, job.out_normals = as_floats(out_n), job.out_normals_stride = 13;
+  rejected(job, "out_normals stride invalid");
+  job = good, job.in_normals = job.in_positions.first(12), job.out_normals = as_floats(out_n);
+  rejected(job, "in_normals too short");
   job = good, job.method = static_cast<SkinningMethod>(7);
-  rejected(job, true);  // unknown method
+  rejected(job, "unknown skinning method");
   const std::vector<glm::mat4> huge(65537, glm::mat4(1.0f));
   job = good, job.matrices = huge;
-  rejected(job, true);  // more bones than a u16 index reaches
-
-  // Per-vertex data: validate() only (run() trusts it).
-  bones[4][2] = 3;
-  CHECK_FALSE(good.validate());  // bone index out of range
-  CHECK_FALSE(dqs.validate());
-  bones[4][2] = 2;
-  REQUIRE(good.validate());
-  weights[9].w = -0.1f;
-  CHECK_FALSE(good.validate());  // negative weight
-  weights[9].w = std::nanf("");
-  CHECK_FALSE(good.validate());  // NaN weight
-  weights[9] = glm::vec4(0.0f);
-  CHECK_FALSE(good.validate());  // zero sum
-  weights[9] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
-  REQUIRE(good.validate());
-
+  rejected(job, "palette has more than 65536 bones");
   // A forced path this CPU lacks is refused, never run.
   for (Isa isa : {Isa::avx2, Isa::avx512})
     if (!isa_available(isa)) {
       job = good, job.isa = isa;
-      rejected(job, true);
+      rejected(job, "instruction set not available");
     }
+
+  // Per-vertex and per-bone data: validate() only (run() trusts it).
+  bones[4][2] = 3;
+  CHECK(reason(good.validate()) == "bone index out of range");
+  CHECK(reason(dqs.validate()) == "bone index out of range");
+  bones[4][2] = 2;
+  REQUIRE(good.validate());
+  const float nan = std::nanf(""), inf = std::numeric_limits<float>::infinity();
+  const std::pair<glm::vec4, const char*> bad_weights[] = {
+      {glm::vec4(0.5f, 0.5f, 0.0f, -0.1f), "weight is negative"},
+      {glm::vec4(0.5f, 0.5f, 0.0f, nan), "weight is not finite"},
+      {glm::vec4(inf, 0.0f, 0.0f, 0.0f), "weight is not finite"},
+      {glm::vec4(0.0f), "weight sum out of range"},
+      // A denormal weight alone gave NaN positions: its sum's reciprocal overflows.
+      {glm::vec4(1e-45f, 0.0f, 0.0f, 0.0f), "weight is denormal"},
+      {glm::vec4(1.0f, 1e-40f, 0.0f, 0.0f), "weight is denormal"},
+      {glm::vec4(1e-6f, 0.0f, 0.0f, 0.0f), "weight sum out of range"},
+      {glm::vec4(3e38f, 3e38f, 0.0f, 0.0f), "weight sum out of range"},
+      {glm::vec4(70000.0f, 0.0f, 0.0f, 0.0f), "weight sum out of range"}};
+  for (const auto& bad : bad_weights) {
+    const std::string why = bad.second;
+    CAPTURE(why);
+    weights[9] = bad.first;
+    CHECK(reason(good.validate()) == why);
+    CHECK(reason(dqs.validate()) == why);
+  }
+  // The ends of the accepted sums, and a tiny but normal weight beside a large one.
+  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(0.0f, max_skin_weight_sum, 0.0f, 0.0f), glm::vec4(1.0f, 1e-30f, 0.0f, 0.0f),
+                            glm::vec4(255.0f, 0.0f, 0.0f, 0.0f)}) {
+    weights[9] = w;
+    CHECK(good.validate());
+    CHECK(dqs.validate());
+  }
+  weights[9] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+  REQUIRE(good.validate());
+  // Each accepted extreme gives finite positions and unit normals on every path.
+  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(max_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(0.0f, min_skin_weight_sum, 0.0f, 0.0f)}) {
+    std::vector<glm::vec4> extreme(10, w);
+    const std::vector<glm::vec3> normals_in(10, glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)));
+    for (Isa isa : available_isas())
+      for (const SkinningJob* base : {&good, &dqs}) {
+        CAPTURE(isa_name(isa));
+        std::vector<glm::vec3> p(10), n(10);
+        job = *base, job.isa = isa, job.bone_weights = extreme;
+        job.out_positions = as_floats(p), job.in_normals = as_floats(normals_in), job.out_normals = as_floats(n);
+        REQUIRE(job.validate());
+        REQUIRE(job.run());
+        for (std::size_t i = 0; i < 10; ++i) {
+          CHECK(glm::length(p[i] - in[i]) < 1e-4f);  // identity palette
+          CHECK(std::abs(glm::length(n[i]) - 1.0f) < 1e-5f);
+        }
+      }
+  }
+
+  // Palettes: every entry finite.
+  std::vector<glm::mat4> bad_palette = palette;
+  bad_palette[1][3][2] = nan;
+  job = good, job.matrices = bad_palette;
+  CHECK(reason(job.validate()) == "palette matrix is not finite");
+  bad_palette[1][3][2] = inf;
+  CHECK(reason(job.validate()) == "palette matrix is not finite");
+  std::vector<glm::vec3> scratch_out(10);
+  job.out_positions = as_floats(scratch_out);
+  CHECK(job.run());  // run() does not read the palette to check it
+  std::vector<DualQuat> bad_dual_quats = dual_quats;
+  bad_dual_quats[2].dual.y = nan;
+  job = dqs, job.dual_quats = bad_dual_quats;
+  CHECK(reason(job.validate()) == "dual quaternion is not finite");
+  bad_dual_quats[2].dual.y = 0.0f, bad_dual_quats[0].real.w = inf;
+  CHECK(reason(job.validate()) == "dual quaternion is not finite");
+  std::vector<glm::mat3> bad_scales = scales;
+  bad_scales[0][2][2] = nan;
+  job = dqs, job.scales = bad_scales;
+  CHECK(reason(job.validate()) == "scale matrix is not finite");
 
   // An empty mesh is valid and does nothing; run(begin, end) checks its range.
   job = good, job.bone_indices = {}, job.bone_weights = {}, job.in_positions = {}, job.out_positions = {};
   CHECK(job.validate());
   CHECK(job.run());
-  CHECK_FALSE(good.run(5, 11));
-  CHECK_FALSE(good.run(6, 5));
+  CHECK(job.count() == 0);
+  CHECK(reason(good.run(5, 11)) == "range outside the job");
+  CHECK(reason(good.run(6, 5)) == "range outside the job");
   CHECK(good.run(2, 5));
   CHECK(out[1] == glm::vec3(-1.0f));
   CHECK(out[2] == glm::vec3(1.0f));

@@ -8,7 +8,8 @@
 #include "deform/runtime/lattice.hpp"
 namespace deform::detail {
 
-// A validated LatticeEvaluateJob, blocks clamped; normals_in/normals_out both null or both set.
+// A LatticeEvaluateJob that passed its checks, over blocks [begin_block, end_block) of the binding; normals_in and
+// normals_out both null or both set.
 struct KernelArgs {
   const LatticeBinding* binding;
   const glm::vec3* control_points;

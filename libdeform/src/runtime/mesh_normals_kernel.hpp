@@ -1,12 +1,13 @@
 #pragma once
-// Internal: the corner angle shared by the vertex-normal code, and the per-instruction-set entry points of the block
-// kernel (mesh_normals_kernel.inl; see VertexNormals in mesh.hpp).
+// Internal: the corner angle shared by the vertex-normal code, and the per-instruction-set entry points of the
+// VertexNormalsJob kernel (mesh_normals_kernel.inl; see normals.hpp).
 #include <cstddef>
 #include <cstdint>
 #include <numbers>
 
 #include <glm/glm.hpp>
 
+#include "deform/runtime/normals.hpp"
 #include "lanes.hpp"
 
 namespace deform::detail {
@@ -35,19 +36,18 @@ static inline float corner_angle(float y, float x) noexcept {
   return x < 0.0f ? pi - from_axis : from_axis;
 }
 
-// VertexNormals packs its triangles in blocks of this many, one lane each (padding lanes at the end of the last).
-inline constexpr std::size_t triangles_per_block = 16;
-
-// The triangles of a VertexNormals and the arrays one compute() works on.
+// A VertexNormalsJob that passed its checks, over points [begin, end).
 struct NormalsKernelArgs {
-  const std::uint32_t* block_points;  // per block, 48 points: corner k of lane j at [16 k + j]; padding lanes 0
-  std::size_t triangle_count;
+  const VertexNormalsBinding* binding;
   const glm::vec3* positions;
-  glm::vec4* point_sums;  // per point, written: the unit normal (x, y, z, 0), or zero
-  std::size_t point_count;
+  glm::vec3* normals;
+  glm::vec4* scratch;  // per point, then per corner
+  std::size_t begin;
+  std::size_t end;
 };
 
-// Every triangle's angle-weighted unit normal added at its three points, then each point's sum normalised.
+// The normals of points [begin, end): the triangles at them (angle-weighted unit normals per corner, into the
+// corners' scratch slots), then each point's corners summed, normalised and written to its render vertices.
 // One copy per instruction set (isa.hpp): mesh_normals_portable.cpp, mesh_normals_avx2.cpp and
 // mesh_normals_avx512.cpp (x86-64 builds, each compiled with its own flags).
 void vertex_normals_portable(const NormalsKernelArgs& args) noexcept;

@@ -45,7 +45,8 @@ void skin_lbs_portable(const SkinningJob& job, std::size_t begin, std::size_t en
     const glm::vec3 p = load3(stream_at(job.in_positions, job.in_positions_stride, i));
     glm::vec3 n(0.0f);
     if (normals) n = load3(stream_at(job.in_normals, job.in_normals_stride, i));
-    store3(stream_at(job.out_positions, job.out_positions_stride, i), (a0 * p.x + a1 * p.y + a2 * p.z + t) * inverse_sum);
+    store3(stream_at(job.out_positions, job.out_positions_stride, i),
+           (a0 * p.x + a1 * p.y + a2 * p.z + t) * inverse_sum);
     if (normals)
       store3(stream_at(job.out_normals, job.out_normals_stride, i), normalize_or_zero(cofactor_times(a0, a1, a2, n)));
   }
