@@ -2,6 +2,7 @@
 //   ffd/bezier333/VERTICES/THREADS/NORMALS   tricubic Bézier, THREADS 1 or 0 (= all), NORMALS 0 or 1
 //   ffd/bspline/VERTICES/THREADS/NORMALS     uniform cubic B-spline, 10×10×10 control points (7³ cells)
 //   ffd/bspline_random_order/...             the same with the vertices in random order (cache misses)
+//   ffd/bezier333_portable, ffd/bspline_portable, ffd/*_avx2   a kernel copy forced (isa.hpp), 100k, one thread
 //   ffd/bezier_degree/DEGREE                 degree sweep (d, d, d), 100k vertices, one thread, positions only
 //   ffd/reference333/VERTICES                the equations as written (pow, binomials), one thread
 #include <benchmark/benchmark.h>
@@ -58,7 +59,12 @@ deform::ThreadPool& pool() {
 }
 
 template <class Lattice>
-void run_lattice(benchmark::State& state, Lattice& lattice, const Scene& scene) {
+void run_lattice(benchmark::State& state, Lattice& lattice, const Scene& scene,
+                 deform::Isa isa = deform::Isa::automatic) {
+  if (!deform::isa_available(isa)) {
+    state.SkipWithError("instruction set not available");
+    return;
+  }
   const auto binding = deform::bind_lattice(lattice, scene.positions);
   jitter(lattice.control_points());
   std::vector<glm::vec3> positions = scene.positions, normals = scene.normals;
@@ -66,6 +72,7 @@ void run_lattice(benchmark::State& state, Lattice& lattice, const Scene& scene) 
   job.binding = &binding;
   job.control_points = lattice.control_points();
   job.positions = positions;
+  job.isa = isa;
   if (state.range(2)) {
     job.normals_in = scene.normals;
     job.normals_out = normals;
@@ -82,16 +89,16 @@ void run_lattice(benchmark::State& state, Lattice& lattice, const Scene& scene) 
   state.counters["threads"] = threaded ? static_cast<double>(pool().size()) : 1.0;
 }
 
-void bezier333(benchmark::State& state) {
+void bezier333(benchmark::State& state, deform::Isa isa) {
   const Scene scene(static_cast<std::size_t>(state.range(0)));
   deform::BezierLattice lattice(scene.frame);
-  run_lattice(state, lattice, scene);
+  run_lattice(state, lattice, scene, isa);
 }
 
-void bspline(benchmark::State& state) {
+void bspline(benchmark::State& state, deform::Isa isa) {
   const Scene scene(static_cast<std::size_t>(state.range(0)));
   deform::BsplineLattice lattice(scene.frame, glm::ivec3(10));
-  run_lattice(state, lattice, scene);
+  run_lattice(state, lattice, scene, isa);
 }
 
 void bspline_random_order(benchmark::State& state) {
@@ -160,8 +167,18 @@ void sizes(benchmark::internal::Benchmark* b) {
   b->ArgNames({"vertices", "threads", "normals"})->UseRealTime()->Unit(benchmark::kMicrosecond);
 }
 
-BENCHMARK(bezier333)->Name("ffd/bezier333")->Apply(sizes);
-BENCHMARK(bspline)->Name("ffd/bspline")->Apply(sizes);
+void one_thread(benchmark::internal::Benchmark* b) {
+  b->Args({100000, 1, 0})->Args({100000, 1, 1});
+  b->ArgNames({"vertices", "threads", "normals"})->UseRealTime()->Unit(benchmark::kMicrosecond);
+}
+
+using deform::Isa;
+BENCHMARK_CAPTURE(bezier333, automatic, Isa::automatic)->Name("ffd/bezier333")->Apply(sizes);
+BENCHMARK_CAPTURE(bspline, automatic, Isa::automatic)->Name("ffd/bspline")->Apply(sizes);
+BENCHMARK_CAPTURE(bezier333, portable, Isa::portable)->Name("ffd/bezier333_portable")->Apply(one_thread);
+BENCHMARK_CAPTURE(bspline, portable, Isa::portable)->Name("ffd/bspline_portable")->Apply(one_thread);
+BENCHMARK_CAPTURE(bezier333, avx2, Isa::avx2)->Name("ffd/bezier333_avx2")->Apply(one_thread);
+BENCHMARK_CAPTURE(bspline, avx2, Isa::avx2)->Name("ffd/bspline_avx2")->Apply(one_thread);
 BENCHMARK(bspline_random_order)->Name("ffd/bspline_random_order")->Args({1000000, 1, 0})->Args({1000000, 1, 1})
     ->ArgNames({"vertices", "threads", "normals"})->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(bezier_degree)->Name("ffd/bezier_degree")->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);

@@ -1,11 +1,13 @@
 // normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,554 points, 3,036
 // render vertices, 5,056 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
 // UV seams), with the points warped so that no two frames are alike to the caches' eyes. Items are render vertices.
-//   normals/builtin, normals/100k                    VertexNormals::compute, the kernel the CPU gets (AVX-512 here)
-//   normals/builtin_portable, normals/100k_portable  the baseline kernel forced (what a CPU without AVX-512 runs)
+//   normals/builtin, normals/100k                    VertexNormalsJob::run, the kernel copy the CPU gets (isa_best)
+//   normals/builtin_threads, normals/100k_threads    the same split over all threads (run_parallel)
+//   normals/builtin_portable, normals/100k_portable  the portable copy forced (what a CPU without AVX2 runs)
+//   normals/builtin_avx2, normals/100k_avx2          the AVX2 copy forced
 //   normals/builtin_function, normals/100k_function  compute_vertex_normals, one triangle at a time
 //   normals/builtin_atan2                            the former code (std::atan2 per corner), for the speed-up
-//   normals/bind/builtin, normals/bind/100k          building a VertexNormals (once per mesh)
+//   normals/bind/builtin, normals/bind/100k          bind_vertex_normals (once per mesh)
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -17,6 +19,7 @@
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
+#include "deform/runtime/parallel.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
 namespace {
@@ -61,17 +64,35 @@ void set_counters(benchmark::State& state, const deform::Mesh& m) {
   state.counters["triangles"] = double(m.triangle_count());
 }
 
-void bound(benchmark::State& state, bool builtin, deform::VertexNormals::Kernel kernel) {
+deform::ThreadPool& pool() {
+  static deform::ThreadPool all(0);
+  return all;
+}
+
+void bound(benchmark::State& state, bool builtin, deform::Isa isa, bool threads = false) {
+  if (!deform::isa_available(isa)) {
+    state.SkipWithError("instruction set not available");
+    return;
+  }
   const deform::Mesh& m = mesh(builtin);
-  deform::VertexNormals normals(m);
+  const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(m);
   const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
   std::vector<glm::vec3> out(m.vertex_count());
+  std::vector<glm::vec4> scratch(binding.scratch_size());
+  deform::VertexNormalsJob job;
+  job.binding = &binding;
+  job.normals = out;
+  job.scratch = scratch;
+  job.isa = isa;
   int frame = 0;
   for (auto _ : state) {
-    normals.compute(poses[frame++ & 1], out, kernel);
+    job.positions = poses[frame++ & 1];
+    if (threads) deform::run_parallel(job, pool());
+    else job.run();
     benchmark::DoNotOptimize(out.data());
   }
   set_counters(state, m);
+  state.counters["threads"] = threads ? double(pool().size()) : 1.0;
 }
 
 void function(benchmark::State& state, bool builtin) {
@@ -102,21 +123,31 @@ void atan2_former(benchmark::State& state) {
 void bind(benchmark::State& state, bool builtin) {
   const deform::Mesh& m = mesh(builtin);
   for (auto _ : state) {
-    deform::VertexNormals normals(m);
-    benchmark::DoNotOptimize(&normals);
+    const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(m);
+    benchmark::DoNotOptimize(&binding);
   }
   set_counters(state, m);
 }
 
-using Kernel = deform::VertexNormals::Kernel;
-BENCHMARK_CAPTURE(bound, builtin, true, Kernel::automatic)->Name("normals/builtin")->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, 100k, false, Kernel::automatic)->Name("normals/100k")->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, builtin_portable, true, Kernel::portable)
+using deform::Isa;
+BENCHMARK_CAPTURE(bound, builtin, true, Isa::automatic)->Name("normals/builtin")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k, false, Isa::automatic)->Name("normals/100k")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_threads, true, Isa::automatic, true)
+    ->Name("normals/builtin_threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k_threads, false, Isa::automatic, true)
+    ->Name("normals/100k_threads")
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_portable, true, Isa::portable)
     ->Name("normals/builtin_portable")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(bound, 100k_portable, false, Kernel::portable)
+BENCHMARK_CAPTURE(bound, 100k_portable, false, Isa::portable)
     ->Name("normals/100k_portable")
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_avx2, true, Isa::avx2)->Name("normals/builtin_avx2")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k_avx2, false, Isa::avx2)->Name("normals/100k_avx2")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, builtin, true)->Name("normals/builtin_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, 100k, false)->Name("normals/100k_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK(atan2_former)->Name("normals/builtin_atan2")->Unit(benchmark::kMicrosecond);

@@ -65,7 +65,7 @@ deform::ThreadPool& pool() {
 
 // state.range(0) = vertices, state.range(1) = threads (0: all).
 // stream: SkinningJob::stream_outputs (non-temporal stores).
-void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::SkinningIsa isa, bool stream = false) {
+void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::Isa isa, bool stream = false) {
   const auto vertices = static_cast<std::size_t>(state.range(0));
   SkinData& d = const_cast<SkinData&>(data(vertices));
   deform::SkinningJob job;
@@ -86,7 +86,7 @@ void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::Sk
   }
   const bool all_threads = state.range(1) == 0;
   for (auto _ : state) {
-    if (all_threads) job.run(pool(), 4096);
+    if (all_threads) deform::run_parallel(job, pool(), 4096);
     else job.run();
     benchmark::DoNotOptimize(d.out_positions.data());
     benchmark::ClobberMemory();
@@ -119,16 +119,16 @@ void sizes_one_thread(benchmark::internal::Benchmark* b) {
   b->ArgNames({"vertices", "threads"})->ArgsProduct({{2552, 100'000, 1'000'000}, {1}});
 }
 
-using deform::SkinningIsa;
+using deform::Isa;
 using deform::SkinningMethod;
-BENCHMARK_CAPTURE(run_skin, lbs, SkinningMethod::lbs, SkinningIsa::automatic)->Name("skin/lbs")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, dqs, SkinningMethod::dqs, SkinningIsa::automatic)->Name("skin/dqs")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, lbs_stream, SkinningMethod::lbs, SkinningIsa::automatic, true)->Name("skin/lbs_stream")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, dqs_stream, SkinningMethod::dqs, SkinningIsa::automatic, true)->Name("skin/dqs_stream")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, lbs_avx2, SkinningMethod::lbs, SkinningIsa::avx2)->Name("skin/lbs_avx2")->Apply(sizes_one_thread);
-BENCHMARK_CAPTURE(run_skin, dqs_avx2, SkinningMethod::dqs, SkinningIsa::avx2)->Name("skin/dqs_avx2")->Apply(sizes_one_thread);
-BENCHMARK_CAPTURE(run_skin, lbs_scalar, SkinningMethod::lbs, SkinningIsa::scalar)->Name("skin/lbs_scalar")->Apply(sizes_one_thread);
-BENCHMARK_CAPTURE(run_skin, dqs_scalar, SkinningMethod::dqs, SkinningIsa::scalar)->Name("skin/dqs_scalar")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, lbs, SkinningMethod::lbs, Isa::automatic)->Name("skin/lbs")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, dqs, SkinningMethod::dqs, Isa::automatic)->Name("skin/dqs")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, lbs_stream, SkinningMethod::lbs, Isa::automatic, true)->Name("skin/lbs_stream")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, dqs_stream, SkinningMethod::dqs, Isa::automatic, true)->Name("skin/dqs_stream")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, lbs_avx2, SkinningMethod::lbs, Isa::avx2)->Name("skin/lbs_avx2")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, dqs_avx2, SkinningMethod::dqs, Isa::avx2)->Name("skin/dqs_avx2")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, lbs_portable, SkinningMethod::lbs, Isa::portable)->Name("skin/lbs_portable")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, dqs_portable, SkinningMethod::dqs, Isa::portable)->Name("skin/dqs_portable")->Apply(sizes_one_thread);
 BENCHMARK(skin_lbs_reference)->Name("skin/lbs_reference")->Apply(sizes_one_thread);
 
 }  // namespace

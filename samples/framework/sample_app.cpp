@@ -67,12 +67,18 @@ void PointMeshRenderer::create(const deform::Mesh& mesh) {
   renderer_.create(mesh);
   positions_.resize(mesh.vertex_count());
   normals_.resize(mesh.vertex_count());
-  vertex_normals_ = deform::VertexNormals(mesh);
+  vertex_normals_ = deform::bind_vertex_normals(mesh);
+  normals_scratch_.resize(vertex_normals_.scratch_size());
 }
 
 void PointMeshRenderer::draw(std::span<const glm::vec3> points, const Frame& frame, glm::mat4 model, glm::vec3 tint) {
   for (std::size_t v = 0; v < positions_.size(); ++v) positions_[v] = points[mesh_->vertex_point[v]];
-  vertex_normals_.compute(points, normals_);
+  deform::VertexNormalsJob normals_job;
+  normals_job.binding = &vertex_normals_;
+  normals_job.positions = points;
+  normals_job.normals = normals_;
+  normals_job.scratch = normals_scratch_;
+  normals_job.run();
   renderer_.upload(positions_, normals_);
   renderer_.draw(model, frame.view, frame.projection, frame.eye, tint);
 }

@@ -34,7 +34,8 @@ class PointMeshRenderer {
   const deform::Mesh* mesh_ = nullptr;
   MeshRenderer renderer_;
   std::vector<glm::vec3> positions_, normals_;
-  deform::VertexNormals vertex_normals_;
+  std::vector<glm::vec4> normals_scratch_;
+  deform::VertexNormalsBinding vertex_normals_;
 };
 
 }  // namespace sample

@@ -1,8 +1,10 @@
 // Binding: vertex selection, untouched vertices, bone-bound lattices (thesis eq. 42), the seam with skinning, threads.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -199,7 +201,7 @@ TEST_CASE("lattice in bind space, then skinning: no seam at the lattice border")
   CHECK(largest_jump(pipeline(torn)) > 100.0 * eps);
 }
 
-TEST_CASE("run_parallel gives the single-threaded result") {
+TEST_CASE("run_parallel and any split into block ranges give the single-threaded result") {
   std::mt19937 rng(33);
   const LatticeFrame frame = random_frame(rng);
   BsplineLattice bspline(frame, glm::ivec3(9, 6, 7));
@@ -223,5 +225,24 @@ TEST_CASE("run_parallel gives the single-threaded result") {
     REQUIRE(deform::run_parallel(job, pool));
     CHECK(parallel_positions == serial);
     CHECK(parallel_normals == normals);
+    // Random block ranges, every block once, on every kernel copy: each gives that copy's run() bits.
+    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512}) {
+      if (!deform::isa_available(isa)) continue;
+      CAPTURE(std::string(deform::isa_name(isa)));
+      job.isa = isa;
+      std::vector<glm::vec3> whole_positions = in, whole_normals(in.size(), glm::vec3(1, 0, 0));
+      job.positions = whole_positions, job.normals_in = whole_normals, job.normals_out = whole_normals;
+      REQUIRE(job.run());
+      std::vector<glm::vec3> part_positions = in, part_normals(in.size(), glm::vec3(1, 0, 0));
+      job.positions = part_positions, job.normals_in = part_normals, job.normals_out = part_normals;
+      for (std::size_t begin = 0; begin < job.count();) {
+        const std::size_t end = std::min(job.count(), begin + 1 + rng() % 50);
+        REQUIRE(job.run(begin, end));
+        begin = end;
+      }
+      CHECK(part_positions == whole_positions);
+      CHECK(part_normals == whole_normals);
+      CHECK(std::string(job.run(job.count(), job.count() + 1).reason()) == "range outside the job");
+    }
   }
 }

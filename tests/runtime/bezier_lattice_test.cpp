@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "deform/runtime/error.hpp"
@@ -199,39 +200,69 @@ TEST_CASE("invalid Bézier lattices are errors with context") {
   CHECK_THROWS_AS(deform::bind_lattice(lattice, points), deform::Error);
 }
 
-TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run and writes nothing") {
+TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run, says why, and run() writes nothing") {
+  const auto reason = [](deform::Status status) { return std::string(status.reason()); };
   const BezierLattice lattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1}));
   const std::vector<glm::vec3> in = {{0.5f, 0.5f, 0.5f}, {0.1f, 0.2f, 0.3f}};
   const auto binding = deform::bind_lattice(lattice, in);
   std::vector<glm::vec3> out(2, glm::vec3(7.0f)), normals(2, glm::vec3(0, 0, 1)), small(1);
   deform::LatticeEvaluateJob job;
-  CHECK_FALSE(job.validate());  // no binding
+  CHECK(reason(job.validate()) == "no binding");
+  CHECK(job.count() == 0);
   job.binding = &binding;
   job.control_points = lattice.control_points();
   job.positions = out;
   CHECK(job.validate());
+  CHECK(job.count() == 1);  // one block of 16 lanes
   job.positions = small;
-  CHECK_FALSE(job.run());
+  CHECK(reason(job.run()) == "positions too short");
   CHECK(small[0] == glm::vec3(0.0f));
   job.positions = out;
   const std::vector<glm::vec3> too_few(lattice.control_points().begin(), lattice.control_points().end() - 1);
   job.control_points = too_few;
-  CHECK_FALSE(job.validate());
+  CHECK(reason(job.validate()) == "control point count differs from the binding");
   job.control_points = lattice.control_points();
   job.normals_in = normals;  // normals in without normals out
-  CHECK_FALSE(job.validate());
+  CHECK(reason(job.validate()) == "normals_in and normals_out: both or neither");
   job.normals_out = normals;
   CHECK(job.validate());
   job.normals_out = small;
-  CHECK_FALSE(job.validate());
+  CHECK(reason(job.validate()) == "normals too short");
+  job.normals_in = {};
+  job.normals_out = {};
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
+    if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused, never run
+      job.isa = isa;
+      CHECK(reason(job.validate()) == "instruction set not available");
+      CHECK_FALSE(job.run());
+      job.isa = deform::Isa::automatic;
+    }
+  CHECK(reason(job.run(0, 2)) == "range outside the job");
+  CHECK(reason(job.run(1, 0)) == "range outside the job");
+  CHECK(job.run(1, 1));
   CHECK(out[0] == glm::vec3(7.0f));
-  // A B-spline binding needs B-spline-sized control points.
+
+  // A binding altered after bind_lattice: run() checks its sizes and point counts (O(1)), validate() its contents.
+  deform::LatticeBinding broken = binding;
+  job.binding = &broken;
+  broken.u.pop_back();
+  CHECK(reason(job.run()) == "binding arrays differ in size");
+  broken = binding, broken.point_counts = glm::ivec3(deform::max_bezier_degree + 2, 2, 2);
+  CHECK(reason(job.run()) == "binding point counts invalid");
+  broken = binding, broken.vertices[0] = 5;
+  CHECK(reason(job.validate()) == "binding vertex out of range");
+  broken = binding, broken.w[1] = NAN;
+  CHECK(reason(job.validate()) == "binding parameter is not finite");
+  CHECK(out[0] == glm::vec3(7.0f));
+
+  // A B-spline binding needs B-spline-sized control points, and cells inside the lattice.
   const deform::BsplineLattice bspline(LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1}), glm::ivec3(5));
   const auto bspline_binding = deform::bind_lattice(bspline, in);
   job.binding = &bspline_binding;
-  job.normals_in = {};
-  job.normals_out = {};
-  CHECK_FALSE(job.validate());
+  CHECK(reason(job.validate()) == "control point count differs from the binding");
   job.control_points = bspline.control_points();
   CHECK(job.run());
+  broken = bspline_binding, broken.block_first_point[0] = 2;  // i = 2: the cell's 4 points would run past i = 4
+  job.binding = &broken;
+  CHECK(reason(job.validate()) == "binding cell out of range");
 }

@@ -31,7 +31,10 @@ TEST_CASE("B-spline rest lattice: one cell of overhang on each side, identity to
     const auto out = evaluate(deform::bind_lattice(b, in), b.control_points(), in, &normals);
     for (std::size_t i = 0; i < in.size(); ++i) {
       CHECK(dist(out[i], in[i]) < 8e-6);
-      CHECK(dist(normals[i], glm::normalize(glm::vec3(1, 2, 3))) < 2e-5);  // float rounding of either compiler
+      // The normal goes through two cofactor maps (the frame's, the Jacobian's), each a sum of products of sheared
+      // axes: float rounding reaches 1.1e-5 on some of these seeded frames (those Clang's rounding of the test's own
+      // glm math draws), hence 2e-5.
+      CHECK(dist(normals[i], glm::normalize(glm::vec3(1, 2, 3))) < 2e-5);
     }
   }
 }

@@ -2,7 +2,9 @@
 // Shared helpers of the lattice tests: seeded random frames, lattices and points; running the evaluation job.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -37,19 +39,47 @@ inline std::vector<glm::vec3> points_inside(const deform::LatticeFrame& f, std::
   return out;
 }
 
-// Evaluates a binding over every block; returns the positions (and normals when `normals` is not empty).
+// Evaluates a binding over every block with every kernel copy this CPU runs (isa.hpp) and returns the positions (and
+// the normals when `normals` is not null, in place) of the best one, the copy `automatic` runs. The copies differ only
+// in float rounding (fused multiply-adds): each is checked here against the portable copy within the tolerances the
+// tests hold the kernel to against its references (positions 1e-5 · (1 + |p|), unit normals 1e-4), so every lattice
+// test holds every copy to those references.
 inline std::vector<glm::vec3> evaluate(const deform::LatticeBinding& binding, std::span<const glm::vec3> control_points,
                                        std::vector<glm::vec3> positions, std::vector<glm::vec3>* normals = nullptr) {
-  deform::LatticeEvaluateJob job;
-  job.binding = &binding;
-  job.control_points = control_points;
-  job.positions = positions;
-  if (normals) {
-    job.normals_in = *normals;
-    job.normals_out = *normals;
+  const auto run = [&](deform::Isa isa, std::vector<glm::vec3>& out_positions, std::vector<glm::vec3>& out_normals) {
+    out_positions = positions;
+    if (normals) out_normals = *normals;
+    deform::LatticeEvaluateJob job;
+    job.binding = &binding;
+    job.control_points = control_points;
+    job.positions = out_positions;
+    job.isa = isa;
+    if (normals) {
+      job.normals_in = out_normals;
+      job.normals_out = out_normals;
+    }
+    REQUIRE(job.run());
+  };
+  std::vector<glm::vec3> portable_positions, portable_normals;
+  run(deform::Isa::portable, portable_positions, portable_normals);
+  std::vector<glm::vec3> best_positions = portable_positions, best_normals = portable_normals;
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512}) {
+    if (!deform::isa_available(isa)) continue;
+    std::vector<glm::vec3> p, n;
+    run(isa, p, n);
+    double worst_position = 0.0, worst_normal = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double size = 1.0 + double(glm::length(portable_positions[i]));
+      worst_position = std::max(worst_position, double(glm::length(p[i] - portable_positions[i])) / size);
+      if (normals) worst_normal = std::max(worst_normal, double(glm::length(n[i] - portable_normals[i])));
+    }
+    INFO("kernel copy " << std::string(deform::isa_name(isa)) << " against the portable one");
+    CHECK(worst_position <= 1e-5);
+    CHECK(worst_normal <= 1e-4);
+    if (isa == deform::isa_best()) best_positions = std::move(p), best_normals = std::move(n);
   }
-  REQUIRE(job.run());
-  return positions;
+  if (normals) *normals = best_normals;
+  return best_positions;
 }
 
 inline double dist(glm::dvec3 a, glm::dvec3 b) { return glm::length(a - b); }

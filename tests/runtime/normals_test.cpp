@@ -1,7 +1,7 @@
 // Vertex normals, bounds and point topology: hand-computed cases, invariances, plain reference implementations (the
 // library's former atan2 code and a double-precision acos one), and OpenMesh as an independent reference for the
-// angle-weighted normals, one-rings and boundary edges. Every normals case runs on the three paths: the one-shot
-// compute_vertex_normals and VertexNormals' automatic (AVX-512 where the CPU has it) and portable kernels.
+// angle-weighted normals, one-rings and boundary edges. Every normals case runs on every path: the one-shot
+// compute_vertex_normals and VertexNormalsJob with each kernel copy (isa.hpp) this CPU runs.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -11,6 +11,7 @@
 #include <random>
 #include <span>
 #include <stdexcept>
+#include <string>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <glm/gtc/matrix_transform.hpp>
@@ -21,6 +22,7 @@
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
+#include "deform/runtime/parallel.hpp"
 #include "runtime/normals_reference.hpp"
 
 namespace {
@@ -37,12 +39,27 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
   return mesh;
 }
 
-// The three ways to get normals.
-enum class Path { function, bound_automatic, bound_portable };
-constexpr Path all_paths[] = {Path::function, Path::bound_automatic, Path::bound_portable};
-const char* path_name(Path path) {
-  return path == Path::function ? "compute_vertex_normals"
-                                : path == Path::bound_automatic ? "VertexNormals automatic" : "VertexNormals portable";
+// The ways to get normals: the one-shot function and VertexNormalsJob with each kernel copy this CPU runs.
+enum class Path { function, bound_portable, bound_avx2, bound_avx512 };
+deform::Isa isa_of(Path path) {
+  return path == Path::bound_avx512 ? deform::Isa::avx512
+         : path == Path::bound_avx2 ? deform::Isa::avx2
+                                    : deform::Isa::portable;
+}
+const std::vector<Path> all_paths = [] {
+  std::vector<Path> paths;
+  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512})
+    if (path == Path::function || deform::isa_available(isa_of(path))) paths.push_back(path);
+  return paths;
+}();
+std::string path_name(Path path) {
+  switch (path) {
+    case Path::function: return "compute_vertex_normals";
+    case Path::bound_portable: return "VertexNormalsJob portable";
+    case Path::bound_avx2: return "VertexNormalsJob avx2";
+    case Path::bound_avx512: return "VertexNormalsJob avx512";
+  }
+  return "?";
 }
 
 std::vector<glm::vec3> normals_of(const Mesh& mesh, std::span<const glm::vec3> positions, Path path) {
@@ -51,10 +68,17 @@ std::vector<glm::vec3> normals_of(const Mesh& mesh, std::span<const glm::vec3> p
     std::vector<glm::vec3> scratch(mesh.point_count());
     REQUIRE(deform::compute_vertex_normals(mesh, positions, scratch, out));
   } else {
-    deform::VertexNormals normals(mesh);
-    const auto kernel = path == Path::bound_portable ? deform::VertexNormals::Kernel::portable
-                                                     : deform::VertexNormals::Kernel::automatic;
-    REQUIRE(normals.compute(positions, out, kernel));
+    const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(mesh);
+    std::vector<glm::vec4> scratch(binding.scratch_size(), glm::vec4(-7.0f));
+    deform::VertexNormalsJob job;
+    job.binding = &binding;
+    job.positions = positions;
+    job.normals = out;
+    job.scratch = scratch;
+    job.isa = isa_of(path);
+    REQUIRE(job.scratch_size() == scratch.size());
+    REQUIRE(job.validate());
+    REQUIRE(job.run());
   }
   return out;
 }
@@ -260,8 +284,8 @@ TEST_CASE("normals: seams split by UV share the point's normal; degenerate trian
     check_near(normals2[0], glm::vec3(0, 0, 1));
     CHECK(normals2[3] == glm::vec3(0.0f));  // touched only by a degenerate triangle
   }
-  CHECK(deform::VertexNormals(make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3}))
-            .triangle_count() == 1);  // the two with a repeated point are dropped at bind time
+  const Mesh repeated = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {0, 1, 2, 0, 1, 1, 3, 3, 3});
+  CHECK(deform::bind_vertex_normals(repeated).triangle_count == 1);  // the two with a repeated point are dropped
 }
 
 TEST_CASE("normals: degenerate triangles, cancelling faces and non-finite points give finite results as documented") {
@@ -366,22 +390,23 @@ TEST_CASE("normals: rotating, scaling and moving the points rotates the normals 
   }
 }
 
-TEST_CASE("normals: the AVX-512 and portable kernels and the one-shot function agree to float rounding") {
-  // Float rounding in the weights moves a normal by about 1e-7 times its point's condition; 2e-6 leaves room for
-  // the rounding of the edges themselves on thin triangles.
-  INFO("AVX-512 on this CPU: ", deform::VertexNormals::has_avx512());
+TEST_CASE("normals: every kernel copy and the one-shot function agree to float rounding") {
+  // Float rounding in the weights moves a normal by about 1e-7 times its point's condition, more on thin triangles
+  // (the rounding of the edges). The job computes a triangle from its lowest point and the function from its first
+  // vertex, so the third corner's angle (π minus the other two, within 1e-6 rad) is a different corner in each:
+  // measured up to 3.3e-6 times the condition (Clang 14), hence 5e-6, the bound against the double reference.
+  INFO("best kernel copy on this CPU: ", std::string(deform::isa_name(deform::isa_best())));
   std::mt19937 random(29);
   for (int round = 0; round < 100; ++round) {
     Mesh mesh = torus(3 + int(random() % 50), 3 + int(random() % 50), random);
     for (glm::vec3& p : mesh.positions) p = warp(p);
     std::vector<double> condition;
     reference_normals(mesh, &condition);
-    const auto automatic = normals_of(mesh, Path::bound_automatic);
-    const auto portable = normals_of(mesh, Path::bound_portable);
     const auto function = normals_of(mesh, Path::function);
-    for (std::size_t r = 0; r < automatic.size(); ++r) {
-      check_near(automatic[r], portable[r], float(2e-6 * condition[r]));
-      check_near(automatic[r], function[r], float(2e-6 * condition[r]));
+    for (const Path path : all_paths) {
+      INFO(path_name(path));
+      const auto ours = normals_of(mesh, path);
+      for (std::size_t r = 0; r < ours.size(); ++r) check_near(ours[r], function[r], float(5e-6 * condition[r]));
     }
   }
 }
@@ -420,44 +445,127 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
   }
 }
 
-TEST_CASE("normals: wrong sizes and out-of-range indices return false (or throw when binding)") {
+TEST_CASE("normals: wrong sizes and out-of-range indices are refused with a reason (or throw when binding)") {
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2});
   std::vector<glm::vec3> scratch(3), out(3), short_span(2);
+  const auto reason = [](deform::Status status) { return std::string(status.reason()); };
   CHECK(deform::compute_vertex_normals(mesh, mesh.positions, scratch, out));
-  CHECK_FALSE(deform::compute_vertex_normals(mesh, short_span, scratch, out));
-  CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, short_span, out));
-  CHECK_FALSE(deform::compute_vertex_normals(mesh, mesh.positions, scratch, short_span));
-  deform::VertexNormals normals(mesh);
-  CHECK(normals.point_count() == 3);
-  CHECK(normals.vertex_count() == 3);
-  CHECK(normals.compute(mesh.positions, out));
+  CHECK(reason(deform::compute_vertex_normals(mesh, short_span, scratch, out)) == "positions: one per point");
+  CHECK(reason(deform::compute_vertex_normals(mesh, mesh.positions, short_span, out)) == "scratch: one per point");
+  CHECK(reason(deform::compute_vertex_normals(mesh, mesh.positions, scratch, short_span)) ==
+        "normals: one per render vertex");
+  const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(mesh);
+  CHECK(binding.point_count == 3);
+  CHECK(binding.vertex_count == 3);
+  std::vector<glm::vec4> corner_scratch(6);  // 3 points, 3 corners
+  deform::VertexNormalsJob job;
+  CHECK(reason(job.validate()) == "no binding");
+  CHECK(job.count() == 0);
+  CHECK(job.scratch_size() == 0);
+  job.binding = &binding;
+  job.positions = mesh.positions;
+  job.normals = out;
+  CHECK(reason(job.validate()) == "scratch: one per point and corner");
+  CHECK(job.scratch_size() == 6);
+  job.scratch = corner_scratch;
+  CHECK(job.validate());
+  CHECK(job.count() == 3);
+  CHECK(job.run());
   std::vector<glm::vec3> untouched(2, glm::vec3(7.0f));
-  CHECK_FALSE(normals.compute(short_span, out));
-  CHECK_FALSE(normals.compute(mesh.positions, untouched));
+  deform::VertexNormalsJob bad_job = job;
+  bad_job.positions = short_span;
+  CHECK(reason(bad_job.run()) == "positions: one per point");
+  bad_job = job, bad_job.normals = untouched;
+  CHECK(reason(bad_job.run()) == "normals: one per render vertex");
   CHECK(untouched == std::vector<glm::vec3>(2, glm::vec3(7.0f)));  // "writing nothing"
+  CHECK(reason(job.run(2, 4)) == "range outside the job");
+  CHECK(reason(job.run(2, 1)) == "range outside the job");
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
+    if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused
+      std::vector<glm::vec3> kept(3, glm::vec3(7.0f));
+      bad_job = job, bad_job.normals = kept, bad_job.isa = isa;
+      CHECK(reason(bad_job.validate()) == "instruction set not available");
+      CHECK_FALSE(bad_job.run());
+      CHECK(kept == std::vector<glm::vec3>(3, glm::vec3(7.0f)));
+    }
+  // A binding altered after bind_vertex_normals: validate() finds what run() would not look at.
+  deform::VertexNormalsBinding broken = binding;
+  broken.triangle_points[1] = 3;
+  bad_job = job, bad_job.binding = &broken;
+  CHECK(reason(bad_job.validate()) == "binding triangle invalid");
+  broken = binding, broken.triangle_corners[2] = 1;  // the triangle's corner at point 2 is corner 2
+  CHECK(reason(bad_job.validate()) == "binding triangle invalid");
+  broken = binding, std::swap(broken.triangle_points[1], broken.triangle_points[0]);  // not from its lowest point
+  CHECK(reason(bad_job.validate()) == "binding triangle invalid");
+  broken = binding, broken.point_vertices[0] = 9;
+  CHECK(reason(bad_job.validate()) == "binding vertex out of range");
+  broken = binding, broken.corner_offsets[1] = 3, broken.corner_offsets[2] = 2;
+  CHECK(reason(bad_job.validate()) == "binding offsets invalid");
+  broken = binding, broken.corner_triangle.pop_back();
+  CHECK(reason(bad_job.validate()) == "binding arrays differ in size");
+  CHECK(reason(bad_job.run()) == "binding arrays differ in size");
 
   Mesh bad = mesh;
   bad.triangles[2] = 3;
-  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
-  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
+  CHECK(reason(deform::compute_vertex_normals(bad, bad.positions, scratch, out)) == "triangle vertex out of range");
+  CHECK_THROWS_AS(deform::bind_vertex_normals(bad), deform::Error);
   bad = mesh;
   bad.vertex_point[1] = 7;
-  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
-  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
+  CHECK(reason(deform::compute_vertex_normals(bad, bad.positions, scratch, out)) == "vertex point out of range");
+  CHECK_THROWS_AS(deform::bind_vertex_normals(bad), deform::Error);
   bad = mesh;
   bad.triangles.pop_back();
-  CHECK_FALSE(deform::compute_vertex_normals(bad, bad.positions, scratch, out));
-  CHECK_THROWS_AS(deform::VertexNormals{bad}, std::invalid_argument);
+  CHECK(reason(deform::compute_vertex_normals(bad, bad.positions, scratch, out)) ==
+        "triangle index count not a multiple of 3");
+  CHECK_THROWS_AS(deform::bind_vertex_normals(bad), deform::Error);
 
-  // No triangles: every normal is zero. An unbound object takes empty spans.
+  // No triangles: every normal is zero. An empty mesh binds to an empty job.
   Mesh bare = mesh;
   bare.triangles.clear();
-  deform::VertexNormals none(bare);
+  const deform::VertexNormalsBinding none = deform::bind_vertex_normals(bare);
   out.assign(3, glm::vec3(1.0f));
-  CHECK(none.compute(bare.positions, out));
+  job.binding = &none, job.scratch = std::span<glm::vec4>(corner_scratch).first(3);  // 3 points, no corners
+  CHECK(job.run());
   CHECK(out == std::vector<glm::vec3>(3, glm::vec3(0.0f)));
-  deform::VertexNormals unbound;
-  CHECK(unbound.compute({}, {}));
+  const deform::VertexNormalsBinding empty = deform::bind_vertex_normals(Mesh{});
+  job.binding = &empty, job.positions = {}, job.normals = {}, job.scratch = {};
+  CHECK(job.validate());
+  CHECK(job.run());
+}
+
+TEST_CASE("normals: any split of the points, and run_parallel, give run()'s bits") {
+  std::mt19937 random(31);
+  deform::ThreadPool pool(3);
+  for (int round = 0; round < 20; ++round) {
+    Mesh mesh = torus(3 + int(random() % 60), 3 + int(random() % 60), random);
+    for (glm::vec3& p : mesh.positions) p = warp(p);
+    const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(mesh);
+    for (const Path path : all_paths) {
+      if (path == Path::function) continue;
+      INFO(path_name(path), " round ", round);
+      std::vector<glm::vec3> whole(mesh.vertex_count()), parts(mesh.vertex_count()), threaded(mesh.vertex_count());
+      std::vector<glm::vec4> scratch(binding.scratch_size());
+      deform::VertexNormalsJob job;
+      job.binding = &binding;
+      job.positions = mesh.positions;
+      job.scratch = scratch;
+      job.isa = isa_of(path);
+      job.normals = whole;
+      REQUIRE(job.run());
+      // Random cuts, covering every point once.
+      job.normals = parts;
+      std::size_t begin = 0;
+      while (begin < job.count()) {
+        const std::size_t end = std::min(job.count(), begin + 1 + random() % 40);
+        REQUIRE(job.run(begin, end));
+        begin = end;
+      }
+      CHECK(parts == whole);
+      job.normals = threaded;
+      REQUIRE(deform::run_parallel(job, pool, 16));
+      CHECK(threaded == whole);
+    }
+  }
 }
 
 TEST_CASE("bounds") {

@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -71,10 +73,10 @@ void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3>
 
 // ---------------------------------------------------------------------------------------------------------------
 
-std::vector<SkinningIsa> available_isas() {
-  std::vector<SkinningIsa> isas;
-  for (SkinningIsa isa : {SkinningIsa::scalar, SkinningIsa::avx2, SkinningIsa::avx512})
-    if (skinning_isa_available(isa)) isas.push_back(isa);
+std::vector<Isa> available_isas() {
+  std::vector<Isa> isas;
+  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512})
+    if (isa_available(isa)) isas.push_back(isa);
   return isas;
 }
 
@@ -206,14 +208,14 @@ DqsPalette dqs_palette(std::span<const glm::mat4> matrices) {
 TEST_CASE("every kernel equals the reference to 1e-5: random palettes, weights, tails and layouts") {
   std::mt19937 rng(20240611);
   const std::size_t counts[] = {1, 5, 15, 16, 17, 33, 1000, 4099};
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs})
       for (bool scaled : {false, true})
         for (Layout layout : {Layout::separate, Layout::interleaved})
           for (bool normals : {true, false})
             for (std::size_t count : counts)
             for (bool large_palette : {false, true}) {  // the AVX-512 kernel has a path for <= 32 bones
-              CAPTURE(skinning_isa_name(isa));
+              CAPTURE(isa_name(isa));
               CAPTURE(int(method));
               CAPTURE(scaled);
               CAPTURE(int(layout));
@@ -235,11 +237,26 @@ TEST_CASE("every kernel equals the reference to 1e-5: random palettes, weights, 
             }
 }
 
-TEST_CASE("the automatic path is the best available one and forced paths report availability") {
-  CHECK(skinning_isa_available(SkinningIsa::scalar));
-  CHECK(skinning_isa_available(skinning_isa_best()));
-  if (skinning_isa_available(SkinningIsa::avx512)) CHECK(skinning_isa_best() == SkinningIsa::avx512);
-  MESSAGE("best skinning path here: " << skinning_isa_name(skinning_isa_best()));
+TEST_CASE("isa: the automatic path is the best available one; names; forced paths report availability") {
+  CHECK(isa_available(Isa::automatic));
+  CHECK(isa_available(Isa::portable));
+  CHECK(isa_available(isa_best()));
+  CHECK(isa_best() != Isa::automatic);
+  if (isa_available(Isa::avx512)) {
+    CHECK(isa_best() == Isa::avx512);
+    CHECK(isa_available(Isa::avx2));  // the AVX-512 copies use AVX2 and FMA too
+  } else if (isa_available(Isa::avx2)) {
+    CHECK(isa_best() == Isa::avx2);
+  } else {
+    CHECK(isa_best() == Isa::portable);
+  }
+  CHECK(std::string(isa_name(Isa::automatic)) == "automatic");
+  CHECK(std::string(isa_name(Isa::portable)) == "portable");
+  CHECK(std::string(isa_name(Isa::avx2)) == "avx2");
+  CHECK(std::string(isa_name(Isa::avx512)) == "avx512");
+  CHECK(std::string(isa_name(static_cast<Isa>(9))) == "unknown");
+  CHECK_FALSE(isa_available(static_cast<Isa>(9)));
+  MESSAGE("best kernel copy here: " << isa_name(isa_best()));
 }
 
 TEST_CASE("the bind pose reproduces the mesh to 1e-6") {
@@ -264,9 +281,9 @@ TEST_CASE("the bind pose reproduces the mesh to 1e-6") {
   for (glm::vec3& p : v.positions) p *= 0.5f;  // unit-scale positions: the 1e-6 bound is absolute
   const DqsPalette dq = dqs_palette(palette);
   CHECK_FALSE(dq.has_scale);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs}) {
-      CAPTURE(skinning_isa_name(isa));
+      CAPTURE(isa_name(isa));
       CAPTURE(int(method));
       std::vector<glm::vec3> out_p(v.positions.size()), out_n(v.positions.size());
       SkinningJob job;
@@ -294,8 +311,8 @@ TEST_CASE("a single-bone rigid rotation is exact, and DQS equals LBS when all in
     const std::uint16_t b = v.bones[i][0];
     v.bones[i] = glm::u16vec4(b);  // four slots, one bone, arbitrary positive weights
   }
-  for (SkinningIsa isa : available_isas()) {
-    CAPTURE(skinning_isa_name(isa));
+  for (Isa isa : available_isas()) {
+    CAPTURE(isa_name(isa));
     std::vector<glm::vec3> lbs_p(v.positions.size()), lbs_n(lbs_p.size()), dqs_p(lbs_p.size()), dqs_n(lbs_p.size());
     SkinningJob job;
     job.isa = isa, job.matrices = palette, job.dual_quats = dq.dual_quats;
@@ -327,7 +344,7 @@ TEST_CASE("weights that do not sum to one are renormalised") {
   Vertices v = random_vertices(rng, 64, 3);
   std::vector<glm::vec4> scaled_weights = v.weights;
   for (std::size_t i = 0; i < scaled_weights.size(); ++i) scaled_weights[i] *= 0.25f + 0.1f * float(i % 30);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs}) {
       std::vector<glm::vec3> a(64), b(64);
       SkinningJob job;
@@ -359,8 +376,8 @@ TEST_CASE("candy-wrapper: a twist collapses an LBS cylinder, DQS keeps its radiu
     const std::vector<glm::mat4> palette = {glm::mat4(1.0f),
                                             glm::rotate(glm::mat4(1.0f), glm::radians(twist), glm::vec3(1, 0, 0))};
     const DqsPalette dq = dqs_palette(palette);
-    for (SkinningIsa isa : available_isas()) {
-      CAPTURE(skinning_isa_name(isa));
+    for (Isa isa : available_isas()) {
+      CAPTURE(isa_name(isa));
       std::vector<glm::vec3> lbs(v.positions.size()), dqs(v.positions.size());
       SkinningJob job;
       job.isa = isa, job.matrices = palette, job.dual_quats = dq.dual_quats;
@@ -409,9 +426,16 @@ TEST_CASE("compute_dual_quat_palette: rigid, scaled and mirrored matrices recomp
   std::vector<glm::mat3> scales(2, glm::mat3(7.0f));
   bool has_scale = true;
   const std::vector<glm::mat4> singular = {glm::mat4(1.0f), glm::scale(glm::mat4(1.0f), glm::vec3(1, 0, 1))};
-  CHECK_FALSE(compute_dual_quat_palette(singular, out, scales, has_scale));
+  CHECK(std::string(compute_dual_quat_palette(singular, out, scales, has_scale).reason()) ==
+        "palette matrix is singular");
   CHECK(scales[0] == glm::mat3(7.0f));
-  CHECK_FALSE(compute_dual_quat_palette(std::span<const glm::mat4>(singular).first(1), out, scales, has_scale));
+  CHECK(std::string(compute_dual_quat_palette(std::span<const glm::mat4>(singular).first(1), out, scales, has_scale)
+                        .reason()) == "palette sizes differ");
+  std::vector<glm::mat4> not_finite = {glm::mat4(1.0f), glm::mat4(1.0f)};
+  not_finite[1][3][0] = std::numeric_limits<float>::infinity();
+  CHECK(std::string(compute_dual_quat_palette(not_finite, out, scales, has_scale).reason()) ==
+        "palette matrix is not finite");
+  CHECK(scales[0] == glm::mat3(7.0f));
   const std::vector<glm::mat4> rigid = {glm::mat4(1.0f), glm::rotate(glm::mat4(1.0f), 1.0f, glm::vec3(0, 1, 0))};
   CHECK(compute_dual_quat_palette(rigid, out, scales, has_scale));
   CHECK_FALSE(has_scale);
@@ -435,13 +459,13 @@ TEST_CASE("the thread-pool split and in-place skinning give the single-thread re
     job.out_positions = as_floats(serial_p), job.out_normals = as_floats(serial_n);
     REQUIRE(job.run());
     job.out_positions = as_floats(parallel_p), job.out_normals = as_floats(parallel_n);
-    REQUIRE(job.run(pool, 1000));
+    REQUIRE(run_parallel(job, pool, 1000));
     CHECK(parallel_p == serial_p);
     CHECK(parallel_n == serial_n);
     job.in_positions = as_floats((inplace_p)), job.out_positions = as_floats(inplace_p);
     job.in_normals = as_floats((inplace_n)), job.out_normals = as_floats(inplace_n);
     REQUIRE(job.validate());
-    REQUIRE(job.run(pool, 1000));
+    REQUIRE(run_parallel(job, pool, 1000));
     CHECK(inplace_p == serial_p);
     CHECK(inplace_n == serial_n);
   }
@@ -453,10 +477,10 @@ TEST_CASE("a vertex's result does not depend on where its range begins, nor on s
   // stores with the outputs at every 4-byte offset of a 64-byte line (the head up to the first aligned vertex is a
   // partial block too) and in place.
   std::mt19937 rng(77);
-  for (SkinningIsa isa : available_isas())
+  for (Isa isa : available_isas())
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs})
       for (int bones : {20, 40}) {
-        CAPTURE(skinning_isa_name(isa));
+        CAPTURE(isa_name(isa));
         CAPTURE(int(method));
         CAPTURE(bones);
         const std::vector<glm::mat4> palette = random_palette(rng, bones, 170.0f, false);
@@ -511,7 +535,7 @@ TEST_CASE("a vertex's result does not depend on where its range begins, nor on s
       }
 }
 
-TEST_CASE("validate() rejects malformed jobs; run() refuses the O(1) ones and writes nothing") {
+TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1) ones and writes nothing") {
   const std::vector<glm::mat4> palette(3, glm::mat4(1.0f));
   std::vector<DualQuat> dual_quats(3);
   const std::vector<glm::mat3> scales(3, glm::mat3(1.0f));
@@ -524,74 +548,142 @@ TEST_CASE("validate() rejects malformed jobs; run() refuses the O(1) ones and wr
   good.bone_indices = bones, good.bone_weights = weights;
   good.in_positions = as_floats((in)), good.out_positions = as_floats(out);
   REQUIRE(good.validate());
+  CHECK(good.count() == 10);
   SkinningJob dqs = good;
   dqs.method = SkinningMethod::dqs;
   REQUIRE(dqs.validate());
   dqs.scales = scales;
   REQUIRE(dqs.validate());
 
-  auto rejected = [&](const SkinningJob& job, bool o1) {
-    CHECK_FALSE(job.validate());
-    if (o1) {
-      CHECK_FALSE(job.run());
-      CHECK(out[0] == glm::vec3(-1.0f));
-    }
+  const auto reason = [](Status status) { return std::string(status.reason()); };
+  // O(1) failures: validate() and run() give the same reason, and run() writes nothing.
+  auto rejected = [&](const SkinningJob& job, const char* why) {
+    CHECK(reason(job.validate()) == why);
+    CHECK(reason(job.run()) == why);
+    CHECK(reason(job.run(0, 1)) == why);
+    CHECK(out[0] == glm::vec3(-1.0f));
   };
   SkinningJob job = good;
   job.matrices = {};
-  rejected(job, true);  // empty palette
+  rejected(job, "palette is empty");
   job = dqs, job.dual_quats = {};
-  rejected(job, true);  // empty DQS palette
+  rejected(job, "palette is empty");
   job = dqs, job.scales = std::span<const glm::mat3>(scales).first(2);
-  rejected(job, true);  // scales of the wrong size
+  rejected(job, "scales and dual quaternions differ in count");
   job = good, job.bone_weights = std::span<const glm::vec4>(weights).first(9);
-  rejected(job, true);  // index and weight counts differ
+  rejected(job, "bone weights and bone indices differ in count");
   job = good, job.in_positions = job.in_positions.first(29);
-  rejected(job, true);  // input span one float short
+  rejected(job, "in_positions too short");
   job = good, job.out_positions = job.out_positions.first(27);
-  rejected(job, true);  // output span short
+  rejected(job, "out_positions too short");
   job = good, job.in_positions_stride = 14;
-  rejected(job, true);  // stride not a multiple of 4
+  rejected(job, "in_positions stride invalid");  // not a multiple of 4
   job = good, job.out_positions_stride = 8;
-  rejected(job, true);  // stride below 12
+  rejected(job, "out_positions stride invalid");  // below 12
   job = good, job.in_positions_stride = max_skinning_stride + 4;
-  rejected(job, true);  // stride too large
+  rejected(job, "in_positions stride invalid");  // too large
   job = good, job.in_normals = job.in_positions;
-  rejected(job, true);  // normals in without normals out
+  rejected(job, "in_normals and out_normals: both or neither");
+  job = good, job.in_normals = job.in_positions, job.out_normals = as_floats(out_n), job.out_normals_stride = 13;
+  rejected(job, "out_normals stride invalid");
+  job = good, job.in_normals = job.in_positions.first(12), job.out_normals = as_floats(out_n);
+  rejected(job, "in_normals too short");
   job = good, job.method = static_cast<SkinningMethod>(7);
-  rejected(job, true);  // unknown method
+  rejected(job, "unknown skinning method");
   const std::vector<glm::mat4> huge(65537, glm::mat4(1.0f));
   job = good, job.matrices = huge;
-  rejected(job, true);  // more bones than a u16 index reaches
+  rejected(job, "palette has more than 65536 bones");
+  // A forced path this CPU lacks is refused, never run.
+  for (Isa isa : {Isa::avx2, Isa::avx512})
+    if (!isa_available(isa)) {
+      job = good, job.isa = isa;
+      rejected(job, "instruction set not available");
+    }
 
-  // Per-vertex data: validate() only (run() trusts it).
+  // Per-vertex and per-bone data: validate() only (run() trusts it).
   bones[4][2] = 3;
-  CHECK_FALSE(good.validate());  // bone index out of range
-  CHECK_FALSE(dqs.validate());
+  CHECK(reason(good.validate()) == "bone index out of range");
+  CHECK(reason(dqs.validate()) == "bone index out of range");
   bones[4][2] = 2;
   REQUIRE(good.validate());
-  weights[9].w = -0.1f;
-  CHECK_FALSE(good.validate());  // negative weight
-  weights[9].w = std::nanf("");
-  CHECK_FALSE(good.validate());  // NaN weight
-  weights[9] = glm::vec4(0.0f);
-  CHECK_FALSE(good.validate());  // zero sum
+  const float nan = std::nanf(""), inf = std::numeric_limits<float>::infinity();
+  const std::pair<glm::vec4, const char*> bad_weights[] = {
+      {glm::vec4(0.5f, 0.5f, 0.0f, -0.1f), "weight is negative"},
+      {glm::vec4(0.5f, 0.5f, 0.0f, nan), "weight is not finite"},
+      {glm::vec4(inf, 0.0f, 0.0f, 0.0f), "weight is not finite"},
+      {glm::vec4(0.0f), "weight sum out of range"},
+      // A denormal weight alone gave NaN positions: its sum's reciprocal overflows.
+      {glm::vec4(1e-45f, 0.0f, 0.0f, 0.0f), "weight is denormal"},
+      {glm::vec4(1.0f, 1e-40f, 0.0f, 0.0f), "weight is denormal"},
+      {glm::vec4(1e-6f, 0.0f, 0.0f, 0.0f), "weight sum out of range"},
+      {glm::vec4(3e38f, 3e38f, 0.0f, 0.0f), "weight sum out of range"},
+      {glm::vec4(70000.0f, 0.0f, 0.0f, 0.0f), "weight sum out of range"}};
+  for (const auto& bad : bad_weights) {
+    const std::string why = bad.second;
+    CAPTURE(why);
+    weights[9] = bad.first;
+    CHECK(reason(good.validate()) == why);
+    CHECK(reason(dqs.validate()) == why);
+  }
+  // The ends of the accepted sums, and a tiny but normal weight beside a large one.
+  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(0.0f, max_skin_weight_sum, 0.0f, 0.0f), glm::vec4(1.0f, 1e-30f, 0.0f, 0.0f),
+                            glm::vec4(255.0f, 0.0f, 0.0f, 0.0f)}) {
+    weights[9] = w;
+    CHECK(good.validate());
+    CHECK(dqs.validate());
+  }
   weights[9] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
   REQUIRE(good.validate());
+  // Each accepted extreme gives finite positions and unit normals on every path.
+  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(max_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+                            glm::vec4(0.0f, min_skin_weight_sum, 0.0f, 0.0f)}) {
+    std::vector<glm::vec4> extreme(10, w);
+    const std::vector<glm::vec3> normals_in(10, glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)));
+    for (Isa isa : available_isas())
+      for (const SkinningJob* base : {&good, &dqs}) {
+        CAPTURE(isa_name(isa));
+        std::vector<glm::vec3> p(10), n(10);
+        job = *base, job.isa = isa, job.bone_weights = extreme;
+        job.out_positions = as_floats(p), job.in_normals = as_floats(normals_in), job.out_normals = as_floats(n);
+        REQUIRE(job.validate());
+        REQUIRE(job.run());
+        for (std::size_t i = 0; i < 10; ++i) {
+          CHECK(glm::length(p[i] - in[i]) < 1e-4f);  // identity palette
+          CHECK(std::abs(glm::length(n[i]) - 1.0f) < 1e-5f);
+        }
+      }
+  }
 
-  // A forced path this CPU lacks is refused, never run.
-  for (SkinningIsa isa : {SkinningIsa::avx2, SkinningIsa::avx512})
-    if (!skinning_isa_available(isa)) {
-      job = good, job.isa = isa;
-      rejected(job, true);
-    }
+  // Palettes: every entry finite.
+  std::vector<glm::mat4> bad_palette = palette;
+  bad_palette[1][3][2] = nan;
+  job = good, job.matrices = bad_palette;
+  CHECK(reason(job.validate()) == "palette matrix is not finite");
+  bad_palette[1][3][2] = inf;
+  CHECK(reason(job.validate()) == "palette matrix is not finite");
+  std::vector<glm::vec3> scratch_out(10);
+  job.out_positions = as_floats(scratch_out);
+  CHECK(job.run());  // run() does not read the palette to check it
+  std::vector<DualQuat> bad_dual_quats = dual_quats;
+  bad_dual_quats[2].dual.y = nan;
+  job = dqs, job.dual_quats = bad_dual_quats;
+  CHECK(reason(job.validate()) == "dual quaternion is not finite");
+  bad_dual_quats[2].dual.y = 0.0f, bad_dual_quats[0].real.w = inf;
+  CHECK(reason(job.validate()) == "dual quaternion is not finite");
+  std::vector<glm::mat3> bad_scales = scales;
+  bad_scales[0][2][2] = nan;
+  job = dqs, job.scales = bad_scales;
+  CHECK(reason(job.validate()) == "scale matrix is not finite");
 
   // An empty mesh is valid and does nothing; run(begin, end) checks its range.
   job = good, job.bone_indices = {}, job.bone_weights = {}, job.in_positions = {}, job.out_positions = {};
   CHECK(job.validate());
   CHECK(job.run());
-  CHECK_FALSE(good.run(5, 11));
-  CHECK_FALSE(good.run(6, 5));
+  CHECK(job.count() == 0);
+  CHECK(reason(good.run(5, 11)) == "range outside the job");
+  CHECK(reason(good.run(6, 5)) == "range outside the job");
   CHECK(good.run(2, 5));
   CHECK(out[1] == glm::vec3(-1.0f));
   CHECK(out[2] == glm::vec3(1.0f));

@@ -135,7 +135,7 @@ int run(const std::vector<std::string>& argv) {
   out["limits"] = limits;
   out["max_displacement"] = max_displacement;
   out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
-  out["kernel"] = deform::skinning_isa_name(deform::skinning_isa_best());
+  out["kernel"] = deform::isa_name(deform::isa_best());
   out["out"] = out_path;
   print_json_in_order(out);
   return exit_ok;

@@ -39,7 +39,8 @@ Character::Character(Model model, const Rig& rig)
       scales_(model_.skeleton.bone_count()),
       positions_(model_.mesh.positions),
       normals_(model_.mesh.vertex_count()),
-      vertex_normals_(model_.mesh),
+      vertex_normals_(bind_vertex_normals(model_.mesh)),
+      normals_scratch_(vertex_normals_.scratch_size()),
       work_(pose_) {
   const auto bones = std::int32_t(model_.skeleton.bone_count());
   if (rig_.reach_effector >= bones || rig_.reach_root >= bones) {
@@ -266,7 +267,12 @@ Status Character::update(float dt) {
 
 std::span<const glm::vec3> Character::normals() {
   if (!normals_current_) {
-    vertex_normals_.compute(positions_, normals_);
+    VertexNormalsJob job;
+    job.binding = &vertex_normals_;
+    job.positions = positions_;
+    job.normals = normals_;
+    job.scratch = normals_scratch_;
+    job.run();
     normals_current_ = true;
   }
   return normals_;

@@ -8,7 +8,8 @@
 #include "deform/runtime/lattice.hpp"
 namespace deform::detail {
 
-// A validated LatticeEvaluateJob, blocks clamped; normals_in/normals_out both null or both set.
+// A LatticeEvaluateJob that passed its checks, over blocks [begin_block, end_block) of the binding; normals_in and
+// normals_out both null or both set.
 struct KernelArgs {
   const LatticeBinding* binding;
   const glm::vec3* control_points;
@@ -19,8 +20,11 @@ struct KernelArgs {
   std::size_t end_block;
 };
 
-void evaluate_lattice_baseline(const KernelArgs& args);
+// One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,
+// lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags).
+void evaluate_lattice_portable(const KernelArgs& args);
 #if defined(DEFORM_X86_KERNELS)
+void evaluate_lattice_avx2(const KernelArgs& args);
 void evaluate_lattice_avx512(const KernelArgs& args);
 #endif
 

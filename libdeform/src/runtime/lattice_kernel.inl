@@ -1,68 +1,256 @@
-// The lattice evaluation kernel, included once per instruction set (lattice_evaluate.cpp: the baseline,
-// lattice_evaluate_avx512.cpp: compiled with -mavx512f). Everything here has internal linkage, so the two copies never
-// meet at link time; the includer defines DEFORM_KERNEL_ENTRY, the name of its one exported entry point.
+// The lattice evaluation kernel, included once per instruction set (lattice_evaluate_portable.cpp, _avx2.cpp and
+// _avx512.cpp, each compiled with its own flags). Everything here has internal linkage, so the copies never meet at
+// link time; the includer defines DEFORM_KERNEL_ENTRY, the name of its one exported entry point.
 //
-// 16 vertices at once (one block of the binding), structure of arrays, GCC vector extensions (one zmm register per
-// 16-float vector under AVX-512, four xmm otherwise). Per block: the Bernstein basis of each axis from (u, v, w),
-// then the contraction Σ_k B_k(w) Σ_j B_j(v) Σ_i B_i(u) P_ijk, each control point broadcast once per block.
+// 16 vertices at once (one block of the binding), structure of arrays: loops over the 16 lanes around scalar code,
+// which the compiler vectorises (lanes.hpp; four xmm registers per lane vector for the portable copy on x86-64, two
+// ymm under AVX2, one zmm under AVX-512). Per block: the Bernstein basis of each axis from (u, v, w), then the
+// contraction Σ_k B_k(w) Σ_j B_j(v) Σ_i B_i(u) P_ijk, each control point broadcast once per lane loop. The degrees
+// are template parameters where they are equal and at most 6 (and for every B-spline): then the lane loops enclose
+// fixed-length loops over the points, unrolled, and the sums stay in registers. Other degrees loop over the points
+// outside and over the lanes inside, with the sums in memory: the same arithmetic, slower.
 // B-spline blocks first convert their cell's 4×4×4 B-spline points into the equivalent tricubic Bézier points
 // (uniform cubic B-spline → Bézier, per axis), then run the same Bézier contraction.
 #include <cmath>
-#include <cstring>
 
+#include "lanes.hpp"
 #include "lattice_kernel.hpp"
-
-// The vectors never cross a non-inlined boundary between differently compiled code (internal linkage only), so GCC's
-// note that a 64-byte vector argument changes the ABI without AVX-512 does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace {
 
-typedef float Lanes __attribute__((vector_size(64)));
 constexpr int lanes = 16;
+using Lane16 = Lanes<lanes>;
 static_assert(deform::LatticeBinding::block_size == lanes);
+constexpr int max_n = deform::max_bezier_degree + 1;
 
-inline Lanes load(const float* p) {
-  Lanes r;
-  std::memcpy(&r, p, sizeof r);
-  return r;
-}
+// The bases of a block, per axis and per lane: values B_i,n(t) and, with normals, derivatives dB_i,n/dt.
+struct BlockBasis {
+  Lane16 bu[max_n], bv[max_n], bw[max_n];
+  Lane16 du[max_n], dv[max_n], dw[max_n];
+};
 
-// B_0..n,n(t) in b[0..n] by the triangle of de Casteljau's recurrence; when `lower` is not null it receives the
-// degree n − 1 basis first (for the derivative B'_i,n = n·(B_i−1,n−1 − B_i,n−1)).
-template <int N>
-inline void bernstein(int runtime_n, const Lanes& t, Lanes* b, Lanes* lower) {
-  const int n = N > 0 ? N : runtime_n;
-  const Lanes s = 1.0f - t;
-  b[0] = s - s + 1.0f;
-  for (int r = 1; r <= n; ++r) {
-    if (r == n && lower)
-      for (int i = 0; i < n; ++i) lower[i] = b[i];
-    Lanes saved = s - s;
+// B_0..N,N(t) in b[0..N] by the triangle of de Casteljau's recurrence and, with Normals, the derivatives in d[0..N]
+// from the degree N − 1 basis (B'_i,N = N·(B_i−1,N−1 − B_i,N−1)). One lane's worth, for the lane loops of basis().
+template <int N, bool Normals>
+inline void bernstein(float t, float* b, float* d) {
+  const float s = 1.0f - t;
+  float lower[N];
+  b[0] = 1.0f;
+  DEFORM_UNROLL
+  for (int r = 1; r <= N; ++r) {
+    if (r == N && Normals)
+      for (int i = 0; i < N; ++i) lower[i] = b[i];
+    float saved = 0.0f;
+    DEFORM_UNROLL
     for (int i = 0; i < r; ++i) {
-      const Lanes tmp = b[i];
-      b[i] = saved + s * tmp;
+      const float tmp = b[i];
+      b[i] = mul_add(s, tmp, saved);
       saved = t * tmp;
     }
     b[r] = saved;
   }
-}
-
-template <int N>
-inline void derivative(int runtime_n, const Lanes* lower, Lanes* d) {
-  const int n = N > 0 ? N : runtime_n;
-  const float fn = static_cast<float>(n);
-  if (n == 1) {  // lower = {1}
+  if constexpr (Normals) {
+    const float fn = static_cast<float>(N);
     d[0] = lower[0] * -fn;
-    d[1] = lower[0] * fn;
-    return;
+    for (int i = 1; i < N; ++i) d[i] = (lower[i - 1] - lower[i]) * fn;
+    d[N] = lower[N - 1] * fn;
   }
-  d[0] = lower[0] * -fn;
-  for (int i = 1; i < n; ++i) d[i] = (lower[i - 1] - lower[i]) * fn;
-  d[n] = lower[n - 1] * fn;
 }
 
-constexpr int max_n = deform::max_bezier_degree + 1;
+// The basis of one axis for the block: b[i] lane l = B_i,n(t lane l), and with Normals its derivative in d. N = 0:
+// the degree is `runtime_n`; the same recurrence with the lane loops innermost.
+template <int N, bool Normals>
+inline void basis(int runtime_n, const Lane16& t, Lane16* b, Lane16* d) {
+  if constexpr (N > 0) {
+    (void)runtime_n;
+    for (int lane = 0; lane < lanes; ++lane) {
+      float bl[N + 1], dl[N + 1];
+      bernstein<N, Normals>(t[lane], bl, dl);
+      for (int i = 0; i <= N; ++i) b[i][lane] = bl[i];
+      if constexpr (Normals)
+        for (int i = 0; i <= N; ++i) d[i][lane] = dl[i];
+    }
+  } else {
+    const int n = runtime_n;  // >= 1
+    Lane16 s, saved, lower[max_n];
+    for (int lane = 0; lane < lanes; ++lane) s[lane] = 1.0f - t[lane], b[0][lane] = 1.0f;
+    for (int r = 1; r <= n; ++r) {
+      if (r == n && Normals)
+        for (int i = 0; i < n; ++i) lower[i] = b[i];
+      saved = Lane16::filled(0.0f);
+      for (int i = 0; i < r; ++i)
+        for (int lane = 0; lane < lanes; ++lane) {
+          const float tmp = b[i][lane];
+          b[i][lane] = mul_add(s[lane], tmp, saved[lane]);
+          saved[lane] = t[lane] * tmp;
+        }
+      b[r] = saved;
+    }
+    if constexpr (Normals) {
+      const float fn = static_cast<float>(n);
+      for (int lane = 0; lane < lanes; ++lane) d[0][lane] = lower[0][lane] * -fn, d[n][lane] = lower[n - 1][lane] * fn;
+      for (int i = 1; i < n; ++i)
+        for (int lane = 0; lane < lanes; ++lane) d[i][lane] = (lower[i - 1][lane] - lower[i][lane]) * fn;
+    }
+  }
+}
+
+// Per lane: Q = Σ_k B_k(w) Σ_j B_j(v) Σ_i B_i(u) P_ijk and, with normals, its derivatives ∂Q/∂u, ∂Q/∂v, ∂Q/∂w.
+template <bool Normals>
+struct BlockSums {
+  Lane16 q[3];
+  Lane16 du[Normals ? 3 : 1], dv[Normals ? 3 : 1], dw[Normals ? 3 : 1];
+};
+
+// How add_slice loops over the lanes with the degrees known at compile time, chosen per copy by measurement (AMD EPYC,
+// GCC 12). Per slice: one lane loop around all of the slice's points (fixed-length loops, unrolled), the sums in
+// registers. Per row: one lane loop per row of the slice, the row's sums in registers and the slice's in memory. When
+// a lane vector is several registers, the compiler loads and broadcasts every point a lane loop reads once, before
+// it: a tricubic slice's 48 broadcasts no longer fit in the AVX2 registers and are spilled, which made the per-slice
+// loop 15% slower than the per-row one there; the portable copy (SSE2) measured the other way round, 10% faster per
+// slice. Under AVX-512 a lane vector is one register, the lane loop a single pass.
+#if defined(__AVX2__) && !defined(__AVX512F__)
+constexpr bool lane_loop_per_row = true;
+#else
+constexpr bool lane_loop_per_row = false;
+#endif
+
+// Adds slice k, the (l + 1) × (m + 1) points from `slice` (i-fastest), to the sums: Σ_j B_j(v) Σ_i B_i(u) P_ijk times
+// B_k(w) (and the derivatives). L, M: the degrees when known at compile time, else 0 (then l, m).
+template <int L, int M, bool Normals>
+inline void add_slice(const glm::vec3* slice, int l, int m, int k, const BlockBasis& basis, BlockSums<Normals>& sums) {
+  if constexpr (L > 0 && M > 0 && !lane_loop_per_row) {
+    (void)l, (void)m;
+    for (int lane = 0; lane < lanes; ++lane) {
+      float x = 0.0f, y = 0.0f, z = 0.0f, vx = 0.0f, vy = 0.0f, vz = 0.0f, ux = 0.0f, uy = 0.0f, uz = 0.0f;
+      DEFORM_UNROLL
+      for (int j = 0; j <= M; ++j) {
+        const glm::vec3* row = slice + (L + 1) * j;
+        float rx = 0.0f, ry = 0.0f, rz = 0.0f, rdx = 0.0f, rdy = 0.0f, rdz = 0.0f;
+        DEFORM_UNROLL
+        for (int i = 0; i <= L; ++i) {
+          const float bu = basis.bu[i][lane];
+          rx = mul_add(bu, row[i].x, rx);
+          ry = mul_add(bu, row[i].y, ry);
+          rz = mul_add(bu, row[i].z, rz);
+          if constexpr (Normals) {
+            const float du = basis.du[i][lane];
+            rdx = mul_add(du, row[i].x, rdx);
+            rdy = mul_add(du, row[i].y, rdy);
+            rdz = mul_add(du, row[i].z, rdz);
+          }
+        }
+        const float bv = basis.bv[j][lane];
+        x = mul_add(bv, rx, x);
+        y = mul_add(bv, ry, y);
+        z = mul_add(bv, rz, z);
+        if constexpr (Normals) {
+          const float dv = basis.dv[j][lane];
+          vx = mul_add(dv, rx, vx);
+          vy = mul_add(dv, ry, vy);
+          vz = mul_add(dv, rz, vz);
+          ux = mul_add(bv, rdx, ux);
+          uy = mul_add(bv, rdy, uy);
+          uz = mul_add(bv, rdz, uz);
+        }
+      }
+      const float bw = basis.bw[k][lane];
+      sums.q[0][lane] = mul_add(bw, x, sums.q[0][lane]);
+      sums.q[1][lane] = mul_add(bw, y, sums.q[1][lane]);
+      sums.q[2][lane] = mul_add(bw, z, sums.q[2][lane]);
+      if constexpr (Normals) {
+        const float dw = basis.dw[k][lane];
+        sums.dw[0][lane] = mul_add(dw, x, sums.dw[0][lane]);
+        sums.dw[1][lane] = mul_add(dw, y, sums.dw[1][lane]);
+        sums.dw[2][lane] = mul_add(dw, z, sums.dw[2][lane]);
+        sums.dv[0][lane] = mul_add(bw, vx, sums.dv[0][lane]);
+        sums.dv[1][lane] = mul_add(bw, vy, sums.dv[1][lane]);
+        sums.dv[2][lane] = mul_add(bw, vz, sums.dv[2][lane]);
+        sums.du[0][lane] = mul_add(bw, ux, sums.du[0][lane]);
+        sums.du[1][lane] = mul_add(bw, uy, sums.du[1][lane]);
+        sums.du[2][lane] = mul_add(bw, uz, sums.du[2][lane]);
+      }
+    }
+  } else {
+    // Σ_j B_j(v) · row sum (x, y, z), and with normals Σ_j B'_j(v) · row sum and Σ_j B_j(v) · row derivative sum.
+    const int l1 = L > 0 ? L + 1 : l + 1, m1 = M > 0 ? M + 1 : m + 1;
+    alignas(64) float s[3][lanes] = {}, sv[3][lanes] = {}, su[3][lanes] = {};
+    for (int j = 0; j < m1; ++j) {
+      const glm::vec3* row = slice + l1 * j;
+      if constexpr (L > 0) {
+        // One lane loop around the row's points, its sums in registers.
+        for (int lane = 0; lane < lanes; ++lane) {
+          float rx = 0.0f, ry = 0.0f, rz = 0.0f, rdx = 0.0f, rdy = 0.0f, rdz = 0.0f;
+          DEFORM_UNROLL
+          for (int i = 0; i <= L; ++i) {
+            const float bu = basis.bu[i][lane];
+            rx = mul_add(bu, row[i].x, rx);
+            ry = mul_add(bu, row[i].y, ry);
+            rz = mul_add(bu, row[i].z, rz);
+            if constexpr (Normals) {
+              const float du = basis.du[i][lane];
+              rdx = mul_add(du, row[i].x, rdx);
+              rdy = mul_add(du, row[i].y, rdy);
+              rdz = mul_add(du, row[i].z, rdz);
+            }
+          }
+          const float bv = basis.bv[j][lane];
+          s[0][lane] = mul_add(bv, rx, s[0][lane]);
+          s[1][lane] = mul_add(bv, ry, s[1][lane]);
+          s[2][lane] = mul_add(bv, rz, s[2][lane]);
+          if constexpr (Normals) {
+            const float dv = basis.dv[j][lane];
+            sv[0][lane] = mul_add(dv, rx, sv[0][lane]);
+            sv[1][lane] = mul_add(dv, ry, sv[1][lane]);
+            sv[2][lane] = mul_add(dv, rz, sv[2][lane]);
+            su[0][lane] = mul_add(bv, rdx, su[0][lane]);
+            su[1][lane] = mul_add(bv, rdy, su[1][lane]);
+            su[2][lane] = mul_add(bv, rdz, su[2][lane]);
+          }
+        }
+      } else {
+        // A lane loop per point, the row's sums in memory.
+        alignas(64) float r[3][lanes] = {}, rd[3][lanes] = {};
+        for (int i = 0; i < l1; ++i) {
+          const float x = row[i].x, y = row[i].y, z = row[i].z;
+          for (int lane = 0; lane < lanes; ++lane) {
+            const float bu = basis.bu[i][lane];
+            r[0][lane] = mul_add(bu, x, r[0][lane]);
+            r[1][lane] = mul_add(bu, y, r[1][lane]);
+            r[2][lane] = mul_add(bu, z, r[2][lane]);
+            if constexpr (Normals) {
+              const float du = basis.du[i][lane];
+              rd[0][lane] = mul_add(du, x, rd[0][lane]);
+              rd[1][lane] = mul_add(du, y, rd[1][lane]);
+              rd[2][lane] = mul_add(du, z, rd[2][lane]);
+            }
+          }
+        }
+        for (int lane = 0; lane < lanes; ++lane) {
+          const float bv = basis.bv[j][lane];
+          for (int c = 0; c < 3; ++c) {
+            s[c][lane] = mul_add(bv, r[c][lane], s[c][lane]);
+            if constexpr (Normals) {
+              sv[c][lane] = mul_add(basis.dv[j][lane], r[c][lane], sv[c][lane]);
+              su[c][lane] = mul_add(bv, rd[c][lane], su[c][lane]);
+            }
+          }
+        }
+      }
+    }
+    for (int lane = 0; lane < lanes; ++lane) {
+      const float bw = basis.bw[k][lane];
+      for (int c = 0; c < 3; ++c) {
+        sums.q[c][lane] = mul_add(bw, s[c][lane], sums.q[c][lane]);
+        if constexpr (Normals) {
+          sums.dw[c][lane] = mul_add(basis.dw[k][lane], s[c][lane], sums.dw[c][lane]);
+          sums.dv[c][lane] = mul_add(bw, sv[c][lane], sums.dv[c][lane]);
+          sums.du[c][lane] = mul_add(bw, su[c][lane], sums.du[c][lane]);
+        }
+      }
+    }
+  }
+}
 
 // One block of a Bézier volume with (L+1, M+1, N+1) points (0 = runtime degree from `degree`), points i-fastest.
 // `base` is added to the positions (the B-spline path evaluates relative to its cell, for precision).
@@ -70,97 +258,46 @@ template <int L, int M, int N, bool Normals>
 inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block, const glm::vec3* points,
                          glm::ivec3 degree, glm::vec3 base) {
   const int l = L > 0 ? L : degree.x, m = M > 0 ? M : degree.y, n = N > 0 ? N : degree.z;
-  const int nu = l + 1, nv = m + 1;
   const std::size_t first = block * lanes;
   const deform::LatticeBinding& bind = *a.binding;
-  const Lanes u = load(bind.u.data() + first), v = load(bind.v.data() + first), w = load(bind.w.data() + first);
+  BlockBasis b;
+  basis<L, Normals>(l, Lane16::load(bind.u.data() + first), b.bu, b.du);
+  basis<M, Normals>(m, Lane16::load(bind.v.data() + first), b.bv, b.dv);
+  basis<N, Normals>(n, Lane16::load(bind.w.data() + first), b.bw, b.dw);
 
-  Lanes bu[max_n], bv[max_n], bw[max_n];
-  Lanes lu[max_n], lv[max_n], lw[max_n];
-  Lanes du[max_n], dv[max_n], dw[max_n];
-  bernstein<L>(l, u, bu, Normals ? lu : nullptr);
-  bernstein<M>(m, v, bv, Normals ? lv : nullptr);
-  bernstein<N>(n, w, bw, Normals ? lw : nullptr);
-  if constexpr (Normals) {
-    derivative<L>(l, lu, du);
-    derivative<M>(m, lv, dv);
-    derivative<N>(n, lw, dw);
-  }
-
-  const Lanes zero = u - u;
-  Lanes qx = zero, qy = zero, qz = zero;
-  Lanes ux = zero, uy = zero, uz = zero, vx = zero, vy = zero, vz = zero, wx = zero, wy = zero, wz = zero;
-  for (int k = 0; k <= n; ++k) {
-    Lanes sx = zero, sy = zero, sz = zero;
-    Lanes svx = zero, svy = zero, svz = zero, sux = zero, suy = zero, suz = zero;
-    for (int j = 0; j <= m; ++j) {
-      const glm::vec3* row = points + nu * (j + nv * k);
-      Lanes rx = zero, ry = zero, rz = zero, rdx = zero, rdy = zero, rdz = zero;
-      for (int i = 0; i <= l; ++i) {
-        rx += bu[i] * row[i].x;
-        ry += bu[i] * row[i].y;
-        rz += bu[i] * row[i].z;
-        if constexpr (Normals) {
-          rdx += du[i] * row[i].x;
-          rdy += du[i] * row[i].y;
-          rdz += du[i] * row[i].z;
-        }
-      }
-      sx += bv[j] * rx;
-      sy += bv[j] * ry;
-      sz += bv[j] * rz;
-      if constexpr (Normals) {
-        svx += dv[j] * rx;
-        svy += dv[j] * ry;
-        svz += dv[j] * rz;
-        sux += bv[j] * rdx;
-        suy += bv[j] * rdy;
-        suz += bv[j] * rdz;
-      }
-    }
-    qx += bw[k] * sx;
-    qy += bw[k] * sy;
-    qz += bw[k] * sz;
-    if constexpr (Normals) {
-      wx += dw[k] * sx;
-      wy += dw[k] * sy;
-      wz += dw[k] * sz;
-      vx += bw[k] * svx;
-      vy += bw[k] * svy;
-      vz += bw[k] * svz;
-      ux += bw[k] * sux;
-      uy += bw[k] * suy;
-      uz += bw[k] * suz;
-    }
-  }
+  BlockSums<Normals> sums;
+  for (Lane16& q : sums.q) q = Lane16::filled(0.0f);
+  if constexpr (Normals)
+    for (int c = 0; c < 3; ++c) sums.du[c] = sums.dv[c] = sums.dw[c] = Lane16::filled(0.0f);
+  for (int k = 0; k <= n; ++k) add_slice<L, M, Normals>(points + (l + 1) * (m + 1) * k, l, m, k, b, sums);
 
   const std::uint32_t* vertex = bind.vertices.data() + first;
   if constexpr (Normals) {
     // m = G·n (G = binding.normal_basis), then n' = m.x (Qv × Qw) + m.y (Qw × Qu) + m.z (Qu × Qv): cofactor(J)·m,
     // the inverse transpose up to the positive factor det(J); normalised. Padding lanes read a harmless (0, 0, 1).
-    alignas(64) float in[3][lanes];
+    alignas(64) float in[3][lanes], out[4][lanes];
     for (int lane = 0; lane < lanes; ++lane) {
       const glm::vec3 nrm = vertex[lane] != deform::LatticeBinding::no_vertex ? a.normals_in[vertex[lane]]
                                                                              : glm::vec3(0.0f, 0.0f, 1.0f);
       in[0][lane] = nrm.x, in[1][lane] = nrm.y, in[2][lane] = nrm.z;
     }
     const glm::mat3& g = bind.normal_basis;
-    const Lanes ix = load(in[0]), iy = load(in[1]), iz = load(in[2]);
-    const Lanes mx = ix * g[0][0] + iy * g[1][0] + iz * g[2][0];
-    const Lanes my = ix * g[0][1] + iy * g[1][1] + iz * g[2][1];
-    const Lanes mz = ix * g[0][2] + iy * g[1][2] + iz * g[2][2];
-    const Lanes nx = mx * (vy * wz - vz * wy) + my * (wy * uz - wz * uy) + mz * (uy * vz - uz * vy);
-    const Lanes ny = mx * (vz * wx - vx * wz) + my * (wz * ux - wx * uz) + mz * (uz * vx - ux * vz);
-    const Lanes nz = mx * (vx * wy - vy * wx) + my * (wx * uy - wy * ux) + mz * (ux * vy - uy * vx);
-    const Lanes len2 = nx * nx + ny * ny + nz * nz;
-    alignas(64) float out[4][lanes];
-    std::memcpy(out[3], &len2, sizeof len2);
-    for (int lane = 0; lane < lanes; ++lane) out[3][lane] = 1.0f / std::sqrt(out[3][lane]);  // vectorised
-    const Lanes inv = load(out[3]);
-    const Lanes ox = nx * inv, oy = ny * inv, oz = nz * inv;
-    std::memcpy(out[0], &ox, sizeof ox);
-    std::memcpy(out[1], &oy, sizeof oy);
-    std::memcpy(out[2], &oz, sizeof oz);
+    const Lane16 *qu = sums.du, *qv = sums.dv, *qw = sums.dw;
+    for (int lane = 0; lane < lanes; ++lane) {
+      const float ix = in[0][lane], iy = in[1][lane], iz = in[2][lane];
+      const float mx = ix * g[0][0] + iy * g[1][0] + iz * g[2][0];
+      const float my = ix * g[0][1] + iy * g[1][1] + iz * g[2][1];
+      const float mz = ix * g[0][2] + iy * g[1][2] + iz * g[2][2];
+      const float ux = qu[0][lane], uy = qu[1][lane], uz = qu[2][lane];
+      const float vx = qv[0][lane], vy = qv[1][lane], vz = qv[2][lane];
+      const float wx = qw[0][lane], wy = qw[1][lane], wz = qw[2][lane];
+      const float nx = mx * (vy * wz - vz * wy) + my * (wy * uz - wz * uy) + mz * (uy * vz - uz * vy);
+      const float ny = mx * (vz * wx - vx * wz) + my * (wz * ux - wx * uz) + mz * (uz * vx - ux * vz);
+      const float nz = mx * (vx * wy - vy * wx) + my * (wx * uy - wy * ux) + mz * (ux * vy - uy * vx);
+      const float inverse_length = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
+      out[0][lane] = nx * inverse_length, out[1][lane] = ny * inverse_length, out[2][lane] = nz * inverse_length;
+      out[3][lane] = inverse_length;
+    }
     for (int lane = 0; lane < lanes; ++lane) {
       if (vertex[lane] == deform::LatticeBinding::no_vertex) continue;
       const glm::vec3 result(out[0][lane], out[1][lane], out[2][lane]);
@@ -171,16 +308,10 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
         a.normals_out[vertex[lane]] = glm::vec3(in[0][lane], in[1][lane], in[2][lane]);
     }
   }
-  qx += base.x;
-  qy += base.y;
-  qz += base.z;
-  alignas(64) float out[3][lanes];
-  std::memcpy(out[0], &qx, sizeof qx);
-  std::memcpy(out[1], &qy, sizeof qy);
-  std::memcpy(out[2], &qz, sizeof qz);
   for (int lane = 0; lane < lanes; ++lane)
     if (vertex[lane] != deform::LatticeBinding::no_vertex)
-      a.positions[vertex[lane]] = glm::vec3(out[0][lane], out[1][lane], out[2][lane]);
+      a.positions[vertex[lane]] =
+          glm::vec3(sums.q[0][lane] + base.x, sums.q[1][lane] + base.y, sums.q[2][lane] + base.z);
 }
 
 template <int L, int M, int N, bool Normals>

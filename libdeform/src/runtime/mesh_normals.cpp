@@ -1,52 +1,71 @@
 // Angle-weighted vertex normals (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998) and
-// bounds: per-frame safe (no allocation, no exceptions). VertexNormals runs the block kernel of
-// mesh_normals_kernel.inl, this file's baseline copy or the AVX-512 one, chosen once at run time.
+// bounds: per-frame safe (no allocation, no exceptions) but for bind_vertex_normals. VertexNormalsJob runs the kernel
+// of mesh_normals_kernel.inl: the portable, AVX2 or AVX-512 copy, as its Isa says (isa.hpp).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
-#include <stdexcept>
 
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "mesh_normals_kernel.hpp"
-
-#define DEFORM_NORMALS_ENTRY vertex_normals_baseline
-#include "mesh_normals_kernel.inl"
 
 namespace deform {
 namespace {
 
 using KernelEntry = void (*)(const detail::NormalsKernelArgs&) noexcept;
 
-// AVX-512 where the CPU has it. Asked on every call (a bit of libgcc's CPUID table), so that no static initialisation
-// order is involved; before libgcc has read the CPU the answer is the baseline, which is as correct.
-KernelEntry automatic_kernel() noexcept {
+// The copy for `isa`, which isa_available() has accepted.
+KernelEntry kernel_for(Isa isa) noexcept {
+  if (isa == Isa::automatic) isa = isa_best();
 #if defined(DEFORM_X86_KERNELS)
-  if (__builtin_cpu_supports("avx512f")) return detail::vertex_normals_avx512;
+  if (isa == Isa::avx512) return detail::vertex_normals_avx512;
+  if (isa == Isa::avx2) return detail::vertex_normals_avx2;
 #endif
-  return detail::vertex_normals_baseline;
+  return detail::vertex_normals_portable;
 }
 
-constexpr std::size_t block = detail::triangles_per_block;
+// Everything validate() checks that costs O(1).
+Status layout_ok(const VertexNormalsJob& job) noexcept {
+  const VertexNormalsBinding* b = job.binding;
+  if (!b) return Status::failure("no binding");
+  const std::size_t corners = 3 * b->triangle_count;
+  if (b->triangle_points.size() != corners || b->triangle_corners.size() != corners ||
+      b->corner_triangle.size() != corners || b->triangle_offsets.size() != b->point_count + 1 ||
+      b->corner_offsets.size() != b->point_count + 1 || b->vertex_offsets.size() != b->point_count + 1 ||
+      b->point_vertices.size() != b->vertex_count)
+    return Status::failure("binding arrays differ in size");
+  if (b->triangle_offsets.front() != 0 || b->triangle_offsets.back() != b->triangle_count ||
+      b->corner_offsets.front() != 0 || b->corner_offsets.back() != corners || b->vertex_offsets.front() != 0 ||
+      b->vertex_offsets.back() != b->vertex_count)
+    return Status::failure("binding offsets invalid");
+  if (job.positions.size() != b->point_count) return Status::failure("positions: one per point");
+  if (job.normals.size() != b->vertex_count) return Status::failure("normals: one per render vertex");
+  if (job.scratch.size() != b->point_count + corners) return Status::failure("scratch: one per point and corner");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
+  return {};
+}
 
 }  // namespace
 
-bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<glm::vec3> scratch,
-                            std::span<glm::vec3> out_vertex_normals) {
+Status compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<glm::vec3> scratch,
+                              std::span<glm::vec3> out_vertex_normals) noexcept {
   const std::size_t point_count = mesh.point_count();
   const std::size_t vertex_count = mesh.vertex_count();
-  if (positions.size() != point_count || scratch.size() != point_count || out_vertex_normals.size() != vertex_count ||
-      mesh.triangles.size() % 3 != 0)
-    return false;
+  if (positions.size() != point_count) return Status::failure("positions: one per point");
+  if (scratch.size() != point_count) return Status::failure("scratch: one per point");
+  if (out_vertex_normals.size() != vertex_count) return Status::failure("normals: one per render vertex");
+  if (mesh.triangles.size() % 3 != 0) return Status::failure("triangle index count not a multiple of 3");
 
   for (glm::vec3& n : scratch) n = glm::vec3(0.0f);
   const std::uint32_t* triangle = mesh.triangles.data();
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t, triangle += 3) {
-    if (triangle[0] >= vertex_count || triangle[1] >= vertex_count || triangle[2] >= vertex_count) return false;
+    if (triangle[0] >= vertex_count || triangle[1] >= vertex_count || triangle[2] >= vertex_count)
+      return Status::failure("triangle vertex out of range");
     const std::uint32_t a = mesh.vertex_point[triangle[0]];
     const std::uint32_t b = mesh.vertex_point[triangle[1]];
     const std::uint32_t c = mesh.vertex_point[triangle[2]];
-    if (a >= point_count || b >= point_count || c >= point_count) return false;
+    if (a >= point_count || b >= point_count || c >= point_count) return Status::failure("vertex point out of range");
     const glm::vec3 ab = positions[b] - positions[a];
     const glm::vec3 ac = positions[c] - positions[a];
     const glm::vec3 bc = positions[c] - positions[b];
@@ -67,48 +86,110 @@ bool compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> positio
   }
   for (std::size_t r = 0; r < vertex_count; ++r) {
     const std::uint32_t point = mesh.vertex_point[r];
-    if (point >= point_count) return false;
+    if (point >= point_count) return Status::failure("vertex point out of range");
     out_vertex_normals[r] = scratch[point];
   }
-  return true;
+  return {};
 }
 
-VertexNormals::VertexNormals(const Mesh& mesh) : vertex_point_(mesh.vertex_point), point_sums_(mesh.point_count()) {
-  const std::size_t point_count = mesh.point_count();
+VertexNormalsBinding bind_vertex_normals(const Mesh& mesh) {
+  const std::size_t point_count = mesh.point_count(), vertex_count = mesh.vertex_count();
   if (mesh.triangles.size() % 3 != 0)
-    throw std::invalid_argument("VertexNormals: triangle index count not a multiple of 3");
-  for (const std::uint32_t point : vertex_point_)
-    if (point >= point_count) throw std::invalid_argument("VertexNormals: vertex_point index out of range");
+    throw Error::invalid_argument("mesh", "triangle index count not a multiple of 3");
+  for (const std::uint32_t point : mesh.vertex_point)
+    if (point >= point_count) throw Error::invalid_argument("mesh", "vertex_point index out of range");
+  if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw Error::invalid_argument("mesh", "2^32 triangle corners or more");
+  if (point_count >= std::numeric_limits<std::uint32_t>::max() ||
+      vertex_count >= std::numeric_limits<std::uint32_t>::max())
+    throw Error::invalid_argument("mesh", "2^32 points or render vertices or more");
+
+  VertexNormalsBinding binding;
+  binding.point_count = point_count;
+  binding.vertex_count = vertex_count;
   std::vector<std::uint32_t> kept;  // 3 points per triangle without a repeated point
   kept.reserve(mesh.triangles.size());
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     std::uint32_t p[3];
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t vertex = mesh.triangles[3 * t + k];
-      if (vertex >= vertex_point_.size()) throw std::invalid_argument("VertexNormals: triangle index out of range");
-      p[k] = vertex_point_[vertex];
+      if (vertex >= vertex_count) throw Error::invalid_argument("mesh", "triangle index out of range");
+      p[k] = mesh.vertex_point[vertex];
     }
     if (p[0] != p[1] && p[1] != p[2] && p[0] != p[2]) kept.insert(kept.end(), {p[0], p[1], p[2]});
   }
-  triangle_count_ = kept.size() / 3;
-  block_points_.assign(3 * block * ((triangle_count_ + block - 1) / block), 0);
-  for (std::size_t t = 0; t < triangle_count_; ++t)
-    for (std::size_t k = 0; k < 3; ++k)
-      block_points_[3 * block * (t / block) + block * k + t % block] = kept[3 * t + k];
+  binding.triangle_count = kept.size() / 3;
+
+  // Each triangle from its lowest point, the winding kept, the triangles ordered by that point (stable).
+  const std::size_t triangles = binding.triangle_count;
+  for (std::size_t t = 0; t < triangles; ++t) {
+    std::uint32_t* p = kept.data() + 3 * t;
+    const std::size_t lowest = p[0] < p[1] ? (p[0] < p[2] ? 0 : 2) : (p[1] < p[2] ? 1 : 2);
+    std::rotate(p, p + lowest, p + 3);
+  }
+  binding.triangle_offsets.assign(point_count + 1, 0);
+  for (std::size_t t = 0; t < triangles; ++t) ++binding.triangle_offsets[kept[3 * t] + 1];
+  for (std::size_t p = 0; p < point_count; ++p) binding.triangle_offsets[p + 1] += binding.triangle_offsets[p];
+  std::vector<std::uint32_t> fill(binding.triangle_offsets.begin(), binding.triangle_offsets.end() - 1);
+  binding.triangle_points.resize(3 * triangles);
+  for (std::size_t t = 0; t < triangles; ++t) {
+    const std::size_t slot = fill[kept[3 * t]]++;
+    std::copy(kept.begin() + std::ptrdiff_t(3 * t), kept.begin() + std::ptrdiff_t(3 * t + 3),
+              binding.triangle_points.begin() + std::ptrdiff_t(3 * slot));
+  }
+  // The corners of each point, in the order of the sorted triangles.
+  binding.corner_offsets.assign(point_count + 1, 0);
+  for (const std::uint32_t p : binding.triangle_points) ++binding.corner_offsets[p + 1];
+  for (std::size_t p = 0; p < point_count; ++p) binding.corner_offsets[p + 1] += binding.corner_offsets[p];
+  fill.assign(binding.corner_offsets.begin(), binding.corner_offsets.end() - 1);
+  binding.triangle_corners.resize(3 * triangles);
+  binding.corner_triangle.resize(3 * triangles);
+  for (std::size_t i = 0; i < 3 * triangles; ++i) {
+    const std::uint32_t corner = fill[binding.triangle_points[i]]++;
+    binding.triangle_corners[i] = corner;
+    binding.corner_triangle[corner] = std::uint32_t(i / 3);
+  }
+
+  binding.vertex_offsets.assign(point_count + 1, 0);
+  for (const std::uint32_t p : mesh.vertex_point) ++binding.vertex_offsets[p + 1];
+  for (std::size_t p = 0; p < point_count; ++p) binding.vertex_offsets[p + 1] += binding.vertex_offsets[p];
+  binding.point_vertices.resize(vertex_count);
+  fill.assign(binding.vertex_offsets.begin(), binding.vertex_offsets.end() - 1);
+  for (std::size_t r = 0; r < vertex_count; ++r)
+    binding.point_vertices[fill[mesh.vertex_point[r]]++] = std::uint32_t(r);
+  return binding;
 }
 
-bool VertexNormals::compute(std::span<const glm::vec3> positions, std::span<glm::vec3> out_vertex_normals,
-                            Kernel kernel) {
-  if (positions.size() != point_count() || out_vertex_normals.size() != vertex_count()) return false;
-  const detail::NormalsKernelArgs args{block_points_.data(), triangle_count_, positions.data(), point_sums_.data(),
-                                       point_sums_.size()};
-  (kernel == Kernel::portable ? detail::vertex_normals_baseline : automatic_kernel())(args);
-  for (std::size_t r = 0; r < vertex_point_.size(); ++r)
-    out_vertex_normals[r] = glm::vec3(point_sums_[vertex_point_[r]]);
-  return true;
+Status VertexNormalsJob::validate() const noexcept {
+  if (Status s = layout_ok(*this); !s) return s;
+  const VertexNormalsBinding& b = *binding;
+  for (std::size_t p = 0; p < b.point_count; ++p)
+    if (b.triangle_offsets[p] > b.triangle_offsets[p + 1] || b.corner_offsets[p] > b.corner_offsets[p + 1] ||
+        b.vertex_offsets[p] > b.vertex_offsets[p + 1])
+      return Status::failure("binding offsets invalid");
+  // Triangle t lies in its lowest point's run, its points above that one, and its corners are corners of its points
+  // that name t back.
+  for (std::size_t p = 0; p < b.point_count; ++p)
+    for (std::size_t t = b.triangle_offsets[p]; t < b.triangle_offsets[p + 1]; ++t)
+      for (std::size_t k = 0; k < 3; ++k) {
+        const std::size_t point = b.triangle_points[3 * t + k], corner = b.triangle_corners[3 * t + k];
+        if (point >= b.point_count || (k == 0 ? point != p : point <= p) || corner < b.corner_offsets[point] ||
+            corner >= b.corner_offsets[point + 1] || b.corner_triangle[corner] != t)
+          return Status::failure("binding triangle invalid");
+      }
+  for (const std::uint32_t vertex : b.point_vertices)
+    if (vertex >= b.vertex_count) return Status::failure("binding vertex out of range");
+  return {};
 }
 
-bool VertexNormals::has_avx512() noexcept { return automatic_kernel() != detail::vertex_normals_baseline; }
+Status VertexNormalsJob::run() const noexcept { return run(0, count()); }
+
+Status VertexNormalsJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (Status s = layout_ok(*this); !s) return s;
+  if (begin > end || end > binding->point_count) return Status::failure("range outside the job");
+  if (begin < end) kernel_for(isa)({binding, positions.data(), normals.data(), scratch.data(), begin, end});
+  return {};
+}
 
 Bounds compute_bounds(std::span<const glm::vec3> points) {
   if (points.empty()) return {};

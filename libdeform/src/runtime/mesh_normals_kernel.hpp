@@ -1,11 +1,14 @@
 #pragma once
-// Internal: the corner angle shared by the vertex-normal code, and the per-instruction-set entry points of the block
-// kernel (mesh_normals_kernel.inl; see VertexNormals in mesh.hpp).
+// Internal: the corner angle shared by the vertex-normal code, and the per-instruction-set entry points of the
+// VertexNormalsJob kernel (mesh_normals_kernel.inl; see normals.hpp).
 #include <cstddef>
 #include <cstdint>
 #include <numbers>
 
 #include <glm/glm.hpp>
+
+#include "deform/runtime/normals.hpp"
+#include "lanes.hpp"
 
 namespace deform::detail {
 
@@ -17,37 +20,39 @@ inline constexpr float atan_coefficients[8] = {9.999993443e-01f, -3.332985938e-0
                                                2.186295763e-02f, -4.054567311e-03f};
 
 // atan2(y, x) for y > 0: the angle at a triangle corner whose edges e1, e2 give y = |e1 × e2| and x = e1 · e2, in
-// (0, π), within 5e-7 rad of the exact angle (polynomial, the rounding of the ratio and of π). T is float or a GCC
-// vector of floats (the comparisons then select per lane). Cost: one division and 9 multiply-adds, no branch.
-// Static: each instruction set's copy of the kernel keeps its own instance.
-template <class T>
-static inline T corner_angle(const T& y, const T& x) noexcept {
+// (0, π), within 5e-7 rad of the exact angle (polynomial, the rounding of the ratio and of π). Cost: one division and
+// 9 multiply-adds; its conditions are selects, so a loop of it over lanes vectorises. Static: each instruction set's
+// copy of the kernel keeps its own instance.
+static inline float corner_angle(float y, float x) noexcept {
   constexpr float pi = std::numbers::pi_v<float>;
-  const T abs_x = x < 0.0f ? -x : x;
-  const T t = (abs_x < y ? abs_x : y) / (abs_x < y ? y : abs_x);  // in [0, 1]
-  const T t2 = t * t;
-  T p = t2 * atan_coefficients[7] + atan_coefficients[6];
-  for (int k = 5; k >= 0; --k) p = p * t2 + atan_coefficients[k];
-  const T atan_t = p * t;
-  const T from_axis = abs_x < y ? pi / 2 - atan_t : atan_t;  // atan2(y, |x|)
+  const float abs_x = x < 0.0f ? -x : x;
+  const float t = (abs_x < y ? abs_x : y) / (abs_x < y ? y : abs_x);  // in [0, 1]
+  const float t2 = t * t;
+  float p = mul_add(t2, atan_coefficients[7], atan_coefficients[6]);
+  DEFORM_UNROLL
+  for (int k = 5; k >= 0; --k) p = mul_add(p, t2, atan_coefficients[k]);
+  const float atan_t = p * t;
+  const float from_axis = abs_x < y ? pi / 2 - atan_t : atan_t;  // atan2(y, |x|)
   return x < 0.0f ? pi - from_axis : from_axis;
 }
 
-// VertexNormals packs its triangles in blocks of this many, one lane each (padding lanes at the end of the last).
-inline constexpr std::size_t triangles_per_block = 16;
-
-// The triangles of a VertexNormals and the arrays one compute() works on.
+// A VertexNormalsJob that passed its checks, over points [begin, end).
 struct NormalsKernelArgs {
-  const std::uint32_t* block_points;  // per block, 48 points: corner k of lane j at [16 k + j]; padding lanes 0
-  std::size_t triangle_count;
+  const VertexNormalsBinding* binding;
   const glm::vec3* positions;
-  glm::vec4* point_sums;  // per point, written: the unit normal (x, y, z, 0), or zero
-  std::size_t point_count;
+  glm::vec3* normals;
+  glm::vec4* scratch;  // per point, then per corner
+  std::size_t begin;
+  std::size_t end;
 };
 
-// Every triangle's angle-weighted unit normal added at its three points, then each point's sum normalised.
-void vertex_normals_baseline(const NormalsKernelArgs& args) noexcept;
+// The normals of points [begin, end): the triangles at them (angle-weighted unit normals per corner, into the
+// corners' scratch slots), then each point's corners summed, normalised and written to its render vertices.
+// One copy per instruction set (isa.hpp): mesh_normals_portable.cpp, mesh_normals_avx2.cpp and
+// mesh_normals_avx512.cpp (x86-64 builds, each compiled with its own flags).
+void vertex_normals_portable(const NormalsKernelArgs& args) noexcept;
 #if defined(DEFORM_X86_KERNELS)
+void vertex_normals_avx2(const NormalsKernelArgs& args) noexcept;
 void vertex_normals_avx512(const NormalsKernelArgs& args) noexcept;
 #endif
 

@@ -1,43 +1,25 @@
-// SkinningJob: validation, instruction-set dispatch, the thread split, and the DQS palette.
+// SkinningJob: validation, instruction-set dispatch, and the DQS palette.
 #include "deform/runtime/skinning.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
-#include "deform/runtime/parallel.hpp"
 #include "skinning_kernels.hpp"
 
 namespace deform {
 namespace {
 
-#if defined(DEFORM_X86_KERNELS)
-bool cpu_has_avx2() noexcept {
-  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return has;
-}
-bool cpu_has_avx512() noexcept {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                          __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
-  return has;
-}
-#else
-bool cpu_has_avx2() noexcept { return false; }
-bool cpu_has_avx512() noexcept { return false; }
-#endif
-
 constexpr std::size_t max_palette_size = 65536;
 
-bool stride_ok(std::size_t stride) noexcept {
-  return stride % 4 == 0 && stride >= 12 && stride <= max_skinning_stride;
-}
-
-// The span holds `count` vertices of 3 floats at `stride` bytes.
-bool stream_ok(std::size_t size_bytes, std::size_t stride, std::size_t count) noexcept {
-  if (!stride_ok(stride)) return false;
-  if (count == 0) return true;
-  if (count - 1 > (std::numeric_limits<std::size_t>::max() - 12) / stride) return false;
-  return size_bytes >= (count - 1) * stride + 12;
+// Ok when the span holds `count` vertices of 3 floats at `stride` bytes (a multiple of 4 in [12, max]).
+Status stream_ok(std::size_t size_bytes, std::size_t stride, std::size_t count, const char* bad_stride,
+                 const char* too_short) noexcept {
+  if (stride % 4 != 0 || stride < 12 || stride > max_skinning_stride) return Status::failure(bad_stride);
+  if (count == 0) return {};
+  if (count - 1 > (std::numeric_limits<std::size_t>::max() - 12) / stride || size_bytes < (count - 1) * stride + 12)
+    return Status::failure(too_short);
+  return {};
 }
 
 std::size_t palette_size(const SkinningJob& job) noexcept {
@@ -45,108 +27,98 @@ std::size_t palette_size(const SkinningJob& job) noexcept {
 }
 
 // Everything validate() checks that costs O(1).
-bool layout_ok(const SkinningJob& job) noexcept {
+Status layout_ok(const SkinningJob& job) noexcept {
+  if (job.method != SkinningMethod::lbs && job.method != SkinningMethod::dqs)
+    return Status::failure("unknown skinning method");
   const std::size_t bones = palette_size(job);
-  if (bones == 0 || bones > max_palette_size) return false;
-  if (job.method != SkinningMethod::lbs && job.method != SkinningMethod::dqs) return false;
-  if (job.method == SkinningMethod::dqs && !job.scales.empty() && job.scales.size() != bones) return false;
-  if (!skinning_isa_available(job.isa)) return false;
+  if (bones == 0) return Status::failure("palette is empty");
+  if (bones > max_palette_size) return Status::failure("palette has more than 65536 bones");
+  if (job.method == SkinningMethod::dqs && !job.scales.empty() && job.scales.size() != bones)
+    return Status::failure("scales and dual quaternions differ in count");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   const std::size_t count = job.bone_indices.size();
-  if (job.bone_weights.size() != count) return false;
-  if (!stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count) ||
-      !stream_ok(job.out_positions.size_bytes(), job.out_positions_stride, count))
-    return false;
-  if (job.in_normals.empty() != job.out_normals.empty()) return false;
-  if (!job.in_normals.empty() && (!stream_ok(job.in_normals.size_bytes(), job.in_normals_stride, count) ||
-                                  !stream_ok(job.out_normals.size_bytes(), job.out_normals_stride, count)))
-    return false;
-  if (count > 0 && (job.in_positions.data() == nullptr || job.out_positions.data() == nullptr)) return false;
+  if (job.bone_weights.size() != count) return Status::failure("bone weights and bone indices differ in count");
+  if (Status s = stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count,
+                           "in_positions stride invalid", "in_positions too short");
+      !s)
+    return s;
+  if (Status s = stream_ok(job.out_positions.size_bytes(), job.out_positions_stride, count,
+                           "out_positions stride invalid", "out_positions too short");
+      !s)
+    return s;
+  if (job.in_normals.empty() != job.out_normals.empty())
+    return Status::failure("in_normals and out_normals: both or neither");
+  if (job.in_normals.empty()) return {};
+  if (Status s = stream_ok(job.in_normals.size_bytes(), job.in_normals_stride, count, "in_normals stride invalid",
+                           "in_normals too short");
+      !s)
+    return s;
+  return stream_ok(job.out_normals.size_bytes(), job.out_normals_stride, count, "out_normals stride invalid",
+                   "out_normals too short");
+}
+
+template <class T, int n>
+bool all_finite(const T& v) noexcept {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return false;
   return true;
 }
 
 detail::SkinKernel select_kernel(const SkinningJob& job) noexcept {
   const bool lbs = job.method == SkinningMethod::lbs;
-  const SkinningIsa isa = job.isa == SkinningIsa::automatic ? skinning_isa_best() : job.isa;
+  const Isa isa = job.isa == Isa::automatic ? isa_best() : job.isa;
   // Scaled DQS palettes (a rare, non-rigid rig) take the portable kernel on every instruction set.
-  if (!lbs && !job.scales.empty()) return detail::skin_dqs_scalar;
+  if (!lbs && !job.scales.empty()) return detail::skin_dqs_portable;
 #if defined(DEFORM_X86_KERNELS)
-  if (isa == SkinningIsa::avx512) return lbs ? detail::skin_lbs_avx512 : detail::skin_dqs_avx512;
-  if (isa == SkinningIsa::avx2) return lbs ? detail::skin_lbs_avx2 : detail::skin_dqs_avx2;
+  if (isa == Isa::avx512) return lbs ? detail::skin_lbs_avx512 : detail::skin_dqs_avx512;
+  if (isa == Isa::avx2) return lbs ? detail::skin_lbs_avx2 : detail::skin_dqs_avx2;
 #endif
   (void)isa;
-  return lbs ? detail::skin_lbs_scalar : detail::skin_dqs_scalar;
+  return lbs ? detail::skin_lbs_portable : detail::skin_dqs_portable;
 }
 
 }  // namespace
 
-bool skinning_isa_available(SkinningIsa isa) noexcept {
-  switch (isa) {
-    case SkinningIsa::automatic:
-    case SkinningIsa::scalar: return true;
-    case SkinningIsa::avx2: return cpu_has_avx2();
-    case SkinningIsa::avx512: return cpu_has_avx512();
+Status SkinningJob::validate() const noexcept {
+  if (Status s = layout_ok(*this); !s) return s;
+  if (method == SkinningMethod::lbs) {
+    for (const glm::mat4& m : matrices)
+      for (int c = 0; c < 4; ++c)
+        if (!all_finite<glm::vec4, 4>(m[c])) return Status::failure("palette matrix is not finite");
+  } else {
+    for (const DualQuat& q : dual_quats)
+      if (!all_finite<glm::quat, 4>(q.real) || !all_finite<glm::quat, 4>(q.dual))
+        return Status::failure("dual quaternion is not finite");
+    for (const glm::mat3& m : scales)
+      for (int c = 0; c < 3; ++c)
+        if (!all_finite<glm::vec3, 3>(m[c])) return Status::failure("scale matrix is not finite");
   }
-  return false;
-}
-
-SkinningIsa skinning_isa_best() noexcept {
-  if (cpu_has_avx512()) return SkinningIsa::avx512;
-  if (cpu_has_avx2()) return SkinningIsa::avx2;
-  return SkinningIsa::scalar;
-}
-
-const char* skinning_isa_name(SkinningIsa isa) noexcept {
-  switch (isa) {
-    case SkinningIsa::automatic: return "automatic";
-    case SkinningIsa::scalar: return "scalar";
-    case SkinningIsa::avx2: return "avx2";
-    case SkinningIsa::avx512: return "avx512";
-  }
-  return "unknown";
-}
-
-bool SkinningJob::validate() const noexcept {
-  if (!layout_ok(*this)) return false;
   const std::size_t bones = palette_size(*this);
   for (std::size_t i = 0; i < bone_indices.size(); ++i) {
     const glm::u16vec4 b = bone_indices[i];
     const glm::vec4 w = bone_weights[i];
     float sum = 0.0f;
     for (int k = 0; k < 4; ++k) {
-      if (b[k] >= bones || !std::isfinite(w[k]) || w[k] < 0.0f) return false;
+      if (b[k] >= bones) return Status::failure("bone index out of range");
+      if (!std::isfinite(w[k])) return Status::failure("weight is not finite");
+      if (w[k] < 0.0f) return Status::failure("weight is negative");
+      // A denormal weight alone sums to a denormal whose reciprocal overflows (1e-45 gave NaN positions).
+      if (w[k] > 0.0f && w[k] < std::numeric_limits<float>::min()) return Status::failure("weight is denormal");
       sum += w[k];
     }
-    if (!(sum > 0.0f) || !std::isfinite(sum)) return false;
+    if (!(sum >= min_skin_weight_sum && sum <= max_skin_weight_sum)) return Status::failure("weight sum out of range");
   }
-  return true;
+  return {};
 }
 
-bool SkinningJob::run() const noexcept { return run(0, bone_indices.size()); }
+Status SkinningJob::run() const noexcept { return run(0, bone_indices.size()); }
 
-bool SkinningJob::run(std::size_t begin, std::size_t end) const noexcept {
-  if (!layout_ok(*this) || begin > end || end > bone_indices.size()) return false;
+Status SkinningJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (Status s = layout_ok(*this); !s) return s;
+  if (begin > end || end > bone_indices.size()) return Status::failure("range outside the job");
+  // A vertex's result does not depend on where its range begins: partial blocks run the block code.
   if (begin < end) select_kernel(*this)(*this, begin, end);
-  return true;
-}
-
-bool SkinningJob::run(ThreadPool& pool, std::size_t min_chunk) const {
-  if (!layout_ok(*this)) return false;
-  const std::size_t count = bone_indices.size();
-  if (count == 0) return true;
-  struct Split {
-    const SkinningJob* job;
-    detail::SkinKernel kernel;
-  } split{this, select_kernel(*this)};
-  const Split* context = &split;  // one pointer: the std::function below stores it without allocating
-  // A vertex's result does not depend on where its range begins (partial blocks run the block code), so the result
-  // is bit-identical to run(); chunks of whole 16-vertex blocks keep each thread on its own cache lines.
-  constexpr std::size_t block = 16;
-  const std::size_t blocks = (count + block - 1) / block;
-  pool.parallel_for(blocks, std::max<std::size_t>(1, min_chunk / block),
-                    [context, count](std::size_t begin, std::size_t end) {
-                      context->kernel(*context->job, begin * block, std::min(end * block, count));
-                    });
-  return true;
+  return {};
 }
 
 namespace {
@@ -155,16 +127,16 @@ double determinant(const glm::dmat3& m) noexcept { return glm::determinant(m); }
 
 }  // namespace
 
-bool compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<DualQuat> out,
-                               std::span<glm::mat3> out_scales, bool& has_scale) noexcept {
-  if (out.size() != matrices.size() || out_scales.size() != matrices.size()) return false;
+Status compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<DualQuat> out,
+                                 std::span<glm::mat3> out_scales, bool& has_scale) noexcept {
+  if (out.size() != matrices.size() || out_scales.size() != matrices.size())
+    return Status::failure("palette sizes differ");
   // Validate everything first so that a failure writes nothing.
   for (const glm::mat4& m : matrices) {
     for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r)
-        if (!std::isfinite(m[c][r])) return false;
+      if (!all_finite<glm::vec4, 4>(m[c])) return Status::failure("palette matrix is not finite");
     const double det = determinant(glm::dmat3(glm::mat3(m)));
-    if (!(std::abs(det) > 1e-12)) return false;
+    if (!(std::abs(det) > 1e-12)) return Status::failure("palette matrix is singular");
   }
   bool any_scale = false;
   for (std::size_t i = 0; i < matrices.size(); ++i) {
@@ -191,7 +163,7 @@ bool compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<Du
         if (std::abs(s[c][r] - (c == r ? 1.0 : 0.0)) > 1e-5) any_scale = true;
   }
   has_scale = any_scale;
-  return true;
+  return {};
 }
 
 }  // namespace deform

@@ -9,11 +9,11 @@ namespace deform::detail {
 
 using SkinKernel = void (*)(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 
-// Portable C++ (skinning_scalar.cpp): every method, rigid and scaled DQS palettes.
-void skin_lbs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
-void skin_dqs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+// Portable C++ (skinning_portable.cpp): every method, rigid and scaled DQS palettes.
+void skin_lbs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+void skin_dqs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 
-// 8 vertices per step (skinning_avx2.cpp, compiled with -mavx2 -mfma); scaled DQS goes to the scalar kernel. A range
+// 8 vertices per step (skinning_avx2.cpp, compiled with -mavx2 -mfma); scaled DQS goes to the portable kernel. A range
 // that is not a whole number of blocks ends (and, streaming, may begin) with a partial block run through the same
 // block code, so every vertex gets the same bits wherever a range starts.
 void skin_lbs_avx2(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;

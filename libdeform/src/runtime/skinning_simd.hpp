@@ -17,7 +17,7 @@
 //   load3 / store3               a stream's x, y, z for vertices i .. i+width-1 (SoA), any valid stride; store3's
 //                                `stream` asks for non-temporal stores (the block's packed output 64-byte aligned)
 //   can_stream, fence()          whether store3 honours `stream`; fence() ends a streaming call (store ordering)
-// The math below is skin_lbs_scalar / skin_dqs_scalar on lanes, to float rounding (its reciprocals and square roots
+// The math below is skin_lbs_portable / skin_dqs_portable on lanes, to float rounding (its reciprocals and square roots
 // are refined estimates); the tests hold every path to the reference within 1e-5.
 #include <xmmintrin.h>
 

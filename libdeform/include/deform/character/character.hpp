@@ -97,7 +97,7 @@ class DEFORM_CHARACTER_API Character {
   // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
   // Deformed normals, one per render vertex, recomputed from positions() on the first call after update()
-  // (VertexNormals, bound at construction: O(triangles)).
+  // (VertexNormalsJob over a binding made at construction: O(triangles)).
   std::span<const glm::vec3> normals();
   // A lattice's control points in world space (for drawing), i-fastest.
   std::span<const glm::vec3> control_points(std::size_t lattice) const { return hierarchy_.control_points(lattice); }
@@ -126,7 +126,8 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::mat3> scales_;
   std::vector<glm::vec3> positions_;
   std::vector<glm::vec3> normals_;
-  VertexNormals vertex_normals_;
+  VertexNormalsBinding vertex_normals_;
+  std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
   std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)

@@ -21,12 +21,12 @@
 
 #include <glm/glm.hpp>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/skeleton.hpp"
 
 namespace deform {
-
-class ThreadPool;
 
 // Highest Bézier degree per axis. Evaluation costs (l+1)(m+1)(n+1) control points per vertex; the Bernstein basis
 // loses its locality as the degree grows, so beyond this a B-spline lattice is the better tool.
@@ -161,9 +161,10 @@ class DEFORM_RUNTIME_API BsplineLattice {
 // Per-frame evaluation of a bound lattice (ozz-style job). Writes positions[p] (and normals_out[p]) for each bound
 // point p and touches nothing else, so unbound points keep their values bit for bit. The outputs come out in the
 // space of the control points: pass them as they are for a free lattice, or carried by a matrix for a bone-bound
-// one (transform_points; Bézier and B-spline maps commute with affine maps). Blocks [begin_block, end_block) of the
-// binding are evaluated, so disjoint block ranges run on different threads. Cost per vertex: 3·(l+1)(m+1)(n+1) fused
-// multiply-adds (tricubic: ~250), about twice that with normals; AVX-512 when the CPU has it.
+// one (transform_points; Bézier and B-spline maps commute with affine maps). The job's elements are the binding's
+// blocks of 16 points: run(begin, end) evaluates blocks [begin, end), so disjoint block ranges run on different
+// threads (run_parallel in parallel.hpp). Cost per vertex: 3·(l+1)(m+1)(n+1) fused multiply-adds (tricubic: ~250),
+// about twice that with normals; the widest copy the CPU runs (isa.hpp).
 struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   const LatticeBinding* binding = nullptr;
   std::span<const glm::vec3> control_points;  // binding->control_point_count() points, i-fastest
@@ -172,18 +173,32 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   // transpose of the map's Jacobian up to a positive scale). May alias. Size > binding->max_vertex.
   std::span<const glm::vec3> normals_in;
   std::span<glm::vec3> normals_out;
-  std::size_t begin_block = 0;
-  std::size_t end_block = std::numeric_limits<std::size_t>::max();  // clamped to binding->block_count()
+  Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
-  // True when the binding is set, the control point count matches it, the spans are large enough and the normal
-  // spans are both empty or both large enough.
-  bool validate() const noexcept;
-  // validate(), then evaluates. Returns false (writing nothing) when invalid.
-  bool run() const noexcept;
+  // run_parallel cuts ranges anywhere (blocks write disjoint points), in chunks of at least 64 blocks (1,024 points)
+  // by default: below that a thread wake-up costs more than it saves.
+  static constexpr std::size_t split_multiple = 1;
+  static constexpr std::size_t min_parallel_chunk = 64;
+
+  // Ok when the job can run, else why not: a binding ("no binding") of a known kind with point counts the kernels
+  // take ("binding point counts invalid"), lanes of consistent sizes ("binding arrays differ in size"), every lane's
+  // point at most max_vertex or no_vertex ("binding vertex out of range"), every B-spline block's cell inside the
+  // lattice ("binding cell out of range"), finite parameters ("binding parameter is not finite"); the control point
+  // count of the binding ("control point count differs from the binding"); positions and normals spans covering
+  // max_vertex ("positions too short", "normals too short"; "normals_in and normals_out: both or neither"); the
+  // ISA available. Cost: O(bound points); the binding is read-only after bind, so once per binding and job layout.
+  Status validate() const noexcept;
+
+  // The number of blocks of the binding (0 without one).
+  std::size_t count() const noexcept { return binding ? binding->block_count() : 0; }
+
+  // Evaluates every block — or blocks [begin, end) — on this thread. Checks only what is O(1) (the sizes and point
+  // counts above, the ISA, the range: "range outside the job") and refuses, writing nothing, when that fails; the
+  // binding's contents are validate()'s to check. A point's result does not depend on the range it is run in. No
+  // allocation, no locks.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
 };
-
-// Runs the job's whole block range split over the pool's threads. Returns job.validate().
-DEFORM_RUNTIME_API bool run_parallel(const LatticeEvaluateJob& job, ThreadPool& pool);
 
 // out[i] = matrix · (in[i], 1): carries lattice-space control points into another space (a bone's world or bind
 // frame) once per frame, so the per-vertex work stays the same. `out` may alias `in`; sizes must match (else false).

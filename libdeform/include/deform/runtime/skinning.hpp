@@ -3,14 +3,15 @@
 // kernel of a rigged character (thesis §6, eq. 13; Kavan, Collins, Žára, O'Sullivan 2007).
 //
 // The shape is ozz-animation's SkinningJob: a SkinningJob points at the caller's buffers (spans with byte strides, so
-// AoS vertex structs and separate SoA arrays work alike), validate() says whether the call is well formed and run()
-// deforms. Nothing is allocated, nothing is locked, nothing is read outside the spans.
+// AoS vertex structs and separate SoA arrays work alike), validate() says whether the call is well formed and why
+// not, run() deforms, run(begin, end) deforms a range of vertices (run_parallel in parallel.hpp splits it across a
+// thread pool). Nothing is allocated, nothing is locked, nothing is read outside the spans.
 //
 // Per frame:  world matrices (compute_world_matrices) -> palette T_C = T_W · T_B⁻¹ (compute_skinning_palette)
 //             -> for DQS, compute_dual_quat_palette once -> SkinningJob::run.
 // Influences: four per vertex (bone index + weight). Models with more keep the four strongest and renormalise at
 // import (the importer and read_skw do). The kernels divide by each vertex's weight sum, so weights that do not sum to
-// one are renormalised on the fly; a weight sum of zero is invalid (validate() rejects it).
+// one are renormalised on the fly; validate() asks for sums within [min_skin_weight_sum, max_skin_weight_sum].
 // Normals: LBS maps each normal by the cofactor of the blended 3×3 matrix (det · M⁻ᵀ: the inverse-transpose rule,
 // exact for non-uniform scale and equal in direction to M itself for a rotation), DQS by the blended rotation (and
 // the inverse-transpose of the blended scale, see DualQuat); both renormalise the result (a zero normal stays zero).
@@ -23,27 +24,15 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_precision.hpp>
 
+#include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 namespace deform {
-
-class ThreadPool;
 
 enum class SkinningMethod : std::uint8_t {
   lbs,  // linear blend skinning: Σ wᵢ Mᵢ applied to the vertex (fast; candy-wrapper collapse under twist)
   dqs,  // dual quaternion skinning: normalised Σ ±wᵢ q̂ᵢ (keeps volume under twist)
 };
-
-// Instruction set of the kernels. `automatic` picks the widest one this CPU supports (checked once at run time with
-// __builtin_cpu_supports); the others force a path, for tests and benchmarks (run() returns false when the forced
-// path is not available on this CPU or in this build).
-enum class SkinningIsa : std::uint8_t { automatic, scalar, avx2, avx512 };
-
-// True when `isa` can run here (scalar and automatic always can). Cost: a cached CPUID check.
-DEFORM_RUNTIME_API bool skinning_isa_available(SkinningIsa isa) noexcept;
-// The path `automatic` resolves to on this CPU.
-DEFORM_RUNTIME_API SkinningIsa skinning_isa_best() noexcept;
-// "scalar", "avx2", "avx512" (or "automatic").
-DEFORM_RUNTIME_API const char* skinning_isa_name(SkinningIsa isa) noexcept;
 
 // One bone of a DQS palette: the palette matrix M = [R | t] · S split into a unit dual quaternion for the rigid part
 // [R | t] (`real` = R, `dual` = ½ (0, t) · real; glm::quat stores x, y, z, w) and the scale/shear S applied before
@@ -57,17 +46,26 @@ struct DualQuat {
 // Converts an LBS palette (affine matrices, bottom row 0 0 0 1) into a DQS palette, once per frame. Each 3×3 part A
 // is polar-decomposed A = R · S (R a rotation, S symmetric; a mirroring A gives R = -Q, S = -P so R stays proper);
 // `out_scales[i]` = S. `has_scale` is set true when any S differs from the identity by more than 1e-5 — pass
-// out_scales to SkinningJob::scales only then (the rigid path is the fast one). `matrices`, `out` and `out_scales`
-// must have the same size; returns false (writing nothing) when they differ or a matrix is singular or not finite.
-// Cost: O(bones), a few dozen flops per bone; no allocation.
-DEFORM_RUNTIME_API bool compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<DualQuat> out,
-                                          std::span<glm::mat3> out_scales, bool& has_scale) noexcept;
+// out_scales to SkinningJob::scales only then (the rigid path is the fast one). Refuses, writing nothing, when the
+// sizes differ ("palette sizes differ") or a matrix is not finite or singular ("palette matrix is not finite",
+// "palette matrix is singular"). Cost: O(bones), a few hundred flops per bone (double precision); no allocation.
+// A function rather than a job with ranges: its input changes every frame and is checked whole before anything is
+// written (a per-range check would leave other ranges written when one refuses), `has_scale` is a reduction over
+// all bones, and a palette (at most 65536 bones, usually under 200) costs a few microseconds, where a thread wake-up
+// would not pay.
+DEFORM_RUNTIME_API Status compute_dual_quat_palette(std::span<const glm::mat4> matrices, std::span<DualQuat> out,
+                                                    std::span<glm::mat3> out_scales, bool& has_scale) noexcept;
+
+// The weight sum SkinningJob::validate() accepts per vertex: wide around 1 (normalised weights; 255 for byte weights),
+// narrow enough that the blended matrices and quaternions, their cofactors and squared lengths stay normal floats.
+inline constexpr float min_skin_weight_sum = 1.0f / 65536.0f;
+inline constexpr float max_skin_weight_sum = 65536.0f;
 
 // The skinning job. Vertex i reads 3 floats at byte offset i·stride of each input span and writes 3 floats at i·stride
 // of each output span. The vertex count is bone_indices.size().
 struct DEFORM_RUNTIME_API SkinningJob {
   SkinningMethod method = SkinningMethod::lbs;
-  SkinningIsa isa = SkinningIsa::automatic;
+  Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
   // LBS palette: one affine matrix per bone, T_C = T_W · T_B⁻¹ (compute_skinning_palette). Used when method == lbs.
   std::span<const glm::mat4> matrices;
@@ -100,22 +98,33 @@ struct DEFORM_RUNTIME_API SkinningJob {
   // 64-byte lines (as two allocations of the same size do); ignored otherwise. The results are the same bits.
   bool stream_outputs = false;
 
-  // True when the call is well formed: a non-empty palette of at most 65536 bones for the chosen method (and scales
-  // empty or of the same size), matching index and weight counts, every index < palette size, every weight finite and
-  // >= 0 with a positive sum per vertex, strides valid, each span long enough ((count-1)·stride + 12 bytes), normals
-  // both present or both absent, the ISA available. Outputs may alias inputs only in place (an output stream equal to
-  // its input stream: same pointer and stride); any other overlap is not detected and gives unspecified results.
-  // Cost: O(vertices) (it reads every index and weight): call it when the mesh is bound, not every frame.
-  bool validate() const noexcept;
+  // Ranges are cut by run_parallel at multiples of 16 vertices (whole kernel blocks, no shared cache lines), in
+  // chunks of at least 16384 by default: below that a thread wake-up costs more than it saves.
+  static constexpr std::size_t split_multiple = 16;
+  static constexpr std::size_t min_parallel_chunk = 16384;
 
-  // Deforms vertices [0, count) — or [begin, end) — on this thread. Checks only what is O(1) (sizes, strides, spans,
-  // ISA) and returns false, writing nothing, when that fails: the per-vertex checks of validate() are the caller's to
-  // have made once, since indices and weights do not change per frame. No allocation, no locks.
-  bool run() const noexcept;
-  bool run(std::size_t begin, std::size_t end) const noexcept;
-  // Splits the vertex range across the pool's threads in chunks of at least `min_chunk` vertices (small meshes stay
-  // on the calling thread), cut at multiples of 16 vertices; the result is bit-identical to run(). Same checks.
-  bool run(ThreadPool& pool, std::size_t min_chunk = 16384) const;
+  // Ok when the call is well formed, else why not: a palette of 1 to 65536 bones for the chosen method ("palette is
+  // empty", "palette has more than 65536 bones"; scales empty or of the same size), every palette entry finite
+  // ("palette matrix is not finite", "dual quaternion is not finite", "scale matrix is not finite"), matching index and
+  // weight counts, every index < palette size ("bone index out of range"), every weight finite ("weight is not
+  // finite"), >= 0 ("weight is negative") and 0 or a normal float ("weight is denormal"), each vertex's sum within
+  // [min_skin_weight_sum, max_skin_weight_sum] ("weight sum out of range"), strides valid, each span long enough
+  // ((count-1)·stride + 12 bytes), normals both present or both absent, the ISA available ("instruction set not
+  // available"). Outputs may alias inputs only in place (an output stream equal to its input stream: same pointer and
+  // stride); any other overlap is not detected and gives unspecified results. Cost: O(vertices + bones) (it reads
+  // every index, weight and palette entry): call it when the mesh is bound, and again when a palette's source may
+  // have gone wrong, not every frame.
+  Status validate() const noexcept;
+
+  // The number of vertices, bone_indices.size().
+  std::size_t count() const noexcept { return bone_indices.size(); }
+
+  // Deforms vertices [0, count()) — or [begin, end) — on this thread. Checks only what is O(1) (sizes, strides, spans,
+  // ISA, the range: "range outside the job") and refuses, writing nothing, when that fails: the per-vertex and
+  // per-bone checks of validate() are the caller's to have made. A vertex's result does not depend on the range it is
+  // run in. No allocation, no locks.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
 };
 
 // Largest byte stride a skinning stream accepts (1 MiB): keeps 16 lanes of offsets inside 32-bit gather indices.

@@ -1,5 +1,5 @@
-// Portable skinning kernels: one vertex at a time, plain C++. The fallback on CPUs without AVX2, the path for
-// scaled DQS palettes, and the tail of every SIMD kernel. The SIMD kernels compute exactly this.
+// Portable skinning kernels: one vertex at a time, plain C++. The fallback on CPUs without AVX2 and the path
+// for scaled DQS palettes. The SIMD kernels compute exactly this, to float rounding.
 #include <cmath>
 
 #include "skinning_kernels.hpp"
@@ -30,7 +30,7 @@ glm::vec4 as_vec4(glm::quat q) noexcept { return {q.x, q.y, q.z, q.w}; }
 
 }  // namespace
 
-void skin_lbs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+void skin_lbs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
   const bool normals = !job.in_normals.empty();
   for (std::size_t i = begin; i < end; ++i) {
     const glm::u16vec4 b = job.bone_indices[i];
@@ -45,13 +45,14 @@ void skin_lbs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end)
     const glm::vec3 p = load3(stream_at(job.in_positions, job.in_positions_stride, i));
     glm::vec3 n(0.0f);
     if (normals) n = load3(stream_at(job.in_normals, job.in_normals_stride, i));
-    store3(stream_at(job.out_positions, job.out_positions_stride, i), (a0 * p.x + a1 * p.y + a2 * p.z + t) * inverse_sum);
+    store3(stream_at(job.out_positions, job.out_positions_stride, i),
+           (a0 * p.x + a1 * p.y + a2 * p.z + t) * inverse_sum);
     if (normals)
       store3(stream_at(job.out_normals, job.out_normals_stride, i), normalize_or_zero(cofactor_times(a0, a1, a2, n)));
   }
 }
 
-void skin_dqs_scalar(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
+void skin_dqs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept {
   const bool normals = !job.in_normals.empty();
   const bool scaled = !job.scales.empty();
   for (std::size_t i = begin; i < end; ++i) {

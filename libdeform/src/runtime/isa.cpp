@@ -1,0 +1,58 @@
+// The one CPU-feature query of the runtime kernels (isa.hpp).
+#include "deform/runtime/isa.hpp"
+
+namespace deform {
+namespace {
+
+struct CpuFeatures {
+  bool avx2 = false;
+  bool avx512 = false;
+};
+
+CpuFeatures read_cpu_features() noexcept {
+  CpuFeatures features;
+#if defined(DEFORM_X86_KERNELS)
+  // libgcc fills the table __builtin_cpu_supports reads from a constructor of its own; initialising it here makes the
+  // answer right even when the first query comes from another static initialiser.
+  __builtin_cpu_init();
+  features.avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  features.avx512 = features.avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                    __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+#endif
+  return features;
+}
+
+const CpuFeatures& cpu_features() noexcept {
+  static const CpuFeatures features = read_cpu_features();
+  return features;
+}
+
+}  // namespace
+
+bool isa_available(Isa isa) noexcept {
+  switch (isa) {
+    case Isa::automatic:
+    case Isa::portable: return true;
+    case Isa::avx2: return cpu_features().avx2;
+    case Isa::avx512: return cpu_features().avx512;
+  }
+  return false;
+}
+
+Isa isa_best() noexcept {
+  if (cpu_features().avx512) return Isa::avx512;
+  if (cpu_features().avx2) return Isa::avx2;
+  return Isa::portable;
+}
+
+const char* isa_name(Isa isa) noexcept {
+  switch (isa) {
+    case Isa::automatic: return "automatic";
+    case Isa::portable: return "portable";
+    case Isa::avx2: return "avx2";
+    case Isa::avx512: return "avx512";
+  }
+  return "unknown";
+}
+
+}  // namespace deform

@@ -1,0 +1,4 @@
+// The lattice kernel built for the compiler's baseline target (SSE2 on x86-64, NEON on ARM64), for every CPU: the
+// copy Isa::portable runs (lattice_evaluate.cpp chooses).
+#define DEFORM_KERNEL_ENTRY evaluate_lattice_portable
+#include "lattice_kernel.inl"
