@@ -7,7 +7,7 @@
 // not, run() deforms, run(begin, end) deforms a range of vertices (run_parallel in parallel.hpp splits it across a
 // thread pool). Nothing is allocated, nothing is locked, nothing is read outside the spans.
 //
-// Per frame:  world matrices (compute_world_matrices) -> palette T_C = T_W · T_B⁻¹ (compute_skinning_palette)
+// Per frame:  world matrices (LocalToWorldJob) -> palette T_C = T_W · T_B⁻¹ (LocalToWorldJob::palette)
 //             -> for DQS, compute_dual_quat_palette once -> SkinningJob::run.
 // Influences: four per vertex (bone index + weight). Models with more keep the four strongest and renormalise at
 // import (the importer and read_skw do). The kernels divide by each vertex's weight sum, so weights that do not sum to
@@ -67,7 +67,7 @@ struct DEFORM_RUNTIME_API SkinningJob {
   SkinningMethod method = SkinningMethod::lbs;
   Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
-  // LBS palette: one affine matrix per bone, T_C = T_W · T_B⁻¹ (compute_skinning_palette). Used when method == lbs.
+  // LBS palette: one affine matrix per bone, T_C = T_W · T_B⁻¹ (LocalToWorldJob::palette). Used when method == lbs.
   std::span<const glm::mat4> matrices;
   // DQS palette: one per bone (compute_dual_quat_palette). Used when method == dqs.
   std::span<const DualQuat> dual_quats;
