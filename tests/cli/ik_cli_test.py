@@ -2,7 +2,7 @@
 """deform ik end to end: solves, output contract, the reported effector equals FK of the reported angles, exit codes.
 
 usage: ik_cli_test.py DEFORM_EXE WORK_DIR
-FK here is written independently of libdeform from shared/spec/sk-format.md: L = T(t) · Rx · Ry · Rz, W = W_parent · L.
+FK here is written independently of libdeform from docs/formats.md: L = T(t) · Rx · Ry · Rz, W = W_parent · L.
 """
 import json, math, os, struct, subprocess, sys
 

@@ -1,5 +1,5 @@
 #pragma once
-// Shared plumbing of the `deform` subcommands: argument parsing, JSON output, exit codes (shared/spec/cli.md).
+// Shared plumbing of the `deform` subcommands: argument parsing, JSON output, exit codes (docs/cli.md).
 #include <cstdio>
 #include <optional>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-// deform ffd MESH --lattice L.json --out OUT.obj: a Bézier-volume free-form deformation (shared/spec/cli.md).
+// deform ffd MESH --lattice L.json --out OUT.obj: a Bézier-volume free-form deformation (docs/cli.md).
 #include <cmath>
 #include <stdexcept>
 #include <vector>

@@ -1,4 +1,4 @@
-// deform ik: solve a bone chain toward a target point (shared/spec/cli.md, docs/cli.md).
+// deform ik: solve a bone chain toward a target point (docs/cli.md, docs/cli.md).
 #include <cstddef>
 #include <iostream>
 #include <string>

@@ -1,4 +1,4 @@
-// deform info PATH: what a .sk skeleton or a mesh holds, as JSON (shared/spec/cli.md).
+// deform info PATH: what a .sk skeleton or a mesh holds, as JSON (docs/cli.md).
 #include <algorithm>
 #include <cctype>
 #include <filesystem>

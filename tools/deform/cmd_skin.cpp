@@ -1,4 +1,4 @@
-// deform skin: deform a rigged mesh by a pose, LBS or DQS (shared/spec/cli.md, docs/cli.md).
+// deform skin: deform a rigged mesh by a pose, LBS or DQS (docs/cli.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <iostream>

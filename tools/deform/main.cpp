@@ -1,4 +1,4 @@
-// deform: the command-line front end of libdeform (docs/cli.md; fixed parts in shared/spec/cli.md).
+// deform: the command-line front end of libdeform (docs/cli.md; fixed parts in docs/cli.md).
 #include <exception>
 #include <iostream>
 #include <new>

@@ -13,7 +13,7 @@ namespace deform {
 namespace {
 
 // ----------------------------------------------------------------------------------------------------------------
-// Skeleton. Translations are in the parent's frame, rotations are Euler X·Y·Z degrees (shared/spec/sk-format.md).
+// Skeleton. Translations are in the parent's frame, rotations are Euler X·Y·Z degrees (docs/formats.md).
 // Every chain child sits on its parent's local +Y axis, so a bone's direction is its local +Y.
 
 DofLimits limits(glm::vec3 min, glm::vec3 max) { return {min, max}; }

@@ -1,4 +1,4 @@
-// The CLI's lattice JSON (shared/spec/cli.md, docs/formats.md): an axis-aligned Bézier lattice, its displaced control
+// The CLI's lattice JSON (docs/cli.md, docs/formats.md): an axis-aligned Bézier lattice, its displaced control
 // points and an optional vertex list.
 #include <charconv>
 #include <set>

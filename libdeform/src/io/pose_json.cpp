@@ -1,4 +1,4 @@
-// Poses as JSON (shared/spec/cli.md): {"bones": {"NAME": {"rotation": [rx, ry, rz], "translation": [x, y, z]}}}.
+// Poses as JSON (docs/cli.md): {"bones": {"NAME": {"rotation": [rx, ry, rz], "translation": [x, y, z]}}}.
 #include <nlohmann/json.hpp>
 
 #include "deform/io/atomic_file.hpp"

@@ -1,4 +1,4 @@
-// .sk skeleton files: binary, little-endian (shared/spec/sk-format.md).
+// .sk skeleton files: binary, little-endian (docs/formats.md).
 //
 // Every length is checked against the bytes left before anything is allocated from it, so the reader's memory is
 // bounded by the file size; every malformed case names the file, the byte offset of the offending field and the bone.

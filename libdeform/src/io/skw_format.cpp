@@ -1,4 +1,4 @@
-// .skw skin weight files: text, one line per OBJ `v` (shared/spec/sk-format.md).
+// .skw skin weight files: text, one line per OBJ `v` (docs/formats.md).
 #include <algorithm>
 #include <charconv>
 #include <cmath>

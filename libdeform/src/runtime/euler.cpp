@@ -1,4 +1,4 @@
-// Euler angles (X·Y·Z, degrees) <-> quaternions, and DOF clamping (shared/spec/sk-format.md).
+// Euler angles (X·Y·Z, degrees) <-> quaternions, and DOF clamping (docs/formats.md).
 //
 // R = Rx(a) · Ry(b) · Rz(c) has, in row r / column k,
 //   R02 = sin b,  R12 = -sin a cos b,  R22 = cos a cos b,  R01 = -cos b sin c,  R00 = cos b cos c,

@@ -1,4 +1,4 @@
-// Skeleton: hierarchy validation, bind matrices, pose setters and forward kinematics (shared/spec/sk-format.md).
+// Skeleton: hierarchy validation, bind matrices, pose setters and forward kinematics (docs/formats.md).
 #include "deform/runtime/skeleton.hpp"
 #include <algorithm>
 #include <charconv>

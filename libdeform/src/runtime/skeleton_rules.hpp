@@ -1,5 +1,5 @@
 #pragma once
-// Private to libdeform: the hierarchy rules of shared/spec/sk-format.md, shared by the Skeleton constructor (which
+// Private to libdeform: the hierarchy rules of docs/formats.md, shared by the Skeleton constructor (which
 // names the bone) and the .sk reader (which also names the byte offset of the offending field).
 #include <cstdint>
 #include <optional>

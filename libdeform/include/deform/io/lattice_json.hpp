@@ -17,7 +17,7 @@ DEFORM_IO_API std::vector<std::uint32_t> parse_vertex_list(std::string_view text
                                                         const std::string& name = "<memory>");
 DEFORM_IO_API std::vector<std::uint32_t> read_vertex_list(const std::string& path, std::size_t point_count);
 
-// --- the CLI's lattice JSON (shared/spec/cli.md, docs/formats.md) ---
+// --- the CLI's lattice JSON (docs/cli.md, docs/formats.md) ---
 
 // {"origin": [x,y,z], "size": [sx,sy,sz], "degree": [l,m,n], "displacements": [{"index": [i,j,k], "offset":
 // [dx,dy,dz]}, ...], "vertices": [...]}: an axis-aligned Bézier lattice with the displacements applied.

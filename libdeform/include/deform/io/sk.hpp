@@ -11,7 +11,7 @@
 
 namespace deform {
 
-// --- .sk files (binary, shared/spec/sk-format.md) ---
+// --- .sk files (binary, docs/formats.md) ---
 
 // Reads a .sk file; throws deform::Error with file, byte offset and bone id on any malformed input (names must be
 // UTF-8, NUL-terminated within their 80 bytes and NUL-padded). Allocates at most O(file size).

@@ -39,7 +39,7 @@ struct EulerLimits {
   bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
 };
 
-// The prepared form of `limits` (degrees, X·Y·Z as in shared/spec/sk-format.md). O(1), a few sin/cos calls.
+// The prepared form of `limits` (degrees, X·Y·Z as in docs/formats.md). O(1), a few sin/cos calls.
 DEFORM_RUNTIME_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
 
 // Normalises `rotation` and clamps it into the limits as Skeleton::clamp_to_limits does (of its two Euler triples the

@@ -2,7 +2,7 @@
 // Skeleton: a bone hierarchy with bind transforms and DOF limits, poses, forward kinematics, skin weights.
 // io/sk.hpp reads and writes them as .sk and .skw files, io/pose_json.hpp poses as JSON.
 //
-// Conventions (fixed by shared/spec/sk-format.md, they decide every number downstream):
+// Conventions (stated in docs/formats.md; fixed, because they decide every number downstream):
 //  - a bone's local transform is L = T(t) · Rx(rx) · Ry(ry) · Rz(rz), column vectors, angles in degrees;
 //    as a quaternion, q = qx · qy · qz.
 //  - world W = W_parent · L; a bone's head is W · (0,0,0,1).
