@@ -98,6 +98,45 @@ TEST_CASE("a deep node chain that overflows Assimp's stack is an error, not a cr
   CHECK(message != "no error");
 }
 
+TEST_CASE("a 2 KB glTF that makes Assimp expand 2^24 nodes is stopped at the memory limit") {
+  // Two nodes per level, each the parent of both nodes of the next level: Assimp copies every path, 2^24 leaves.
+  const fs::path dag = fs::temp_directory_path() / "deform_isolated_dag.gltf";
+  {
+    std::ofstream out(dag);
+    out << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [)";
+    constexpr int levels = 24;
+    for (int i = 0; i < levels; ++i)
+      for (int twin = 0; twin < 2; ++twin)
+        out << R"({"children": [)" << 2 * (i + 1) << "," << 2 * (i + 1) + 1 << "]},";
+    out << R"({"mesh": 0}, {"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],)"
+        << R"("accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",)"
+        << R"("min": [0, 0, 0], "max": [1, 1, 0]}], "bufferViews": [{"buffer": 0, "byteLength": 36}],)"
+        << R"("buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,)"
+        << R"(AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]})";
+  }
+  deform::IsolationLimits limits;
+  limits.max_memory_bytes = 256ull << 20;
+  const std::string message = failure(dag.string(), limits);
+  CAPTURE(message);
+  CHECK(message.find(dag.string()) == 0);
+  CHECK((message.find("bad_alloc") != std::string::npos || message.find("memory") != std::string::npos));
+}
+
+TEST_CASE("a .glb whose header claims a 4 GB JSON chunk is refused without allocating it") {
+  const fs::path glb = fs::temp_directory_path() / "deform_isolated_huge_chunk.glb";
+  {
+    std::ofstream out(glb, std::ios::binary);
+    const std::uint32_t header[5] = {0x46546C67u, 2u, 0xFFFFFFF0u, 0xFFFFFFE0u, 0x4E4F534Au};  // glTF, v2, JSON
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out << R"({"asset": {"version": "2.0"}})" << std::string(600, ' ');
+  }
+  deform::IsolationLimits limits;
+  limits.max_memory_bytes = 256ull << 20;
+  const std::string message = failure(glb.string(), limits);
+  CAPTURE(message);
+  CHECK(message.find(glb.string()) == 0);
+}
+
 TEST_CASE("an importer that crashes, hangs, floods or answers garbage is stopped and reported") {
   const std::string path = "/some/model.glb";
   deform::IsolationLimits limits;

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fcntl.h>
@@ -65,6 +66,29 @@ struct Pipe {
   }
 };
 
+// The worker's environment: this process's, with the memory limit also told to AddressSanitizer. A sanitized worker
+// cannot limit its address space (the shadow memory needs terabytes of it), so there the limit is ASan's instead:
+// past it allocations fail (std::bad_alloc, the worker's exit 3) as they would under RLIMIT_AS. An unsanitized
+// worker ignores the variable.
+std::vector<std::string> worker_environment(std::uint64_t max_memory_bytes) {
+  std::vector<std::string> env;
+  std::string asan_options;
+  for (char** e = environ; e != nullptr && *e != nullptr; ++e) {
+    const std::string_view entry = *e;
+    if (entry.rfind("ASAN_OPTIONS=", 0) == 0)
+      asan_options = std::string(entry.substr(13)) + ":";
+    else
+      env.emplace_back(entry);
+  }
+  if (max_memory_bytes > 0) {
+    const std::uint64_t megabytes = std::max<std::uint64_t>(1, max_memory_bytes >> 20);
+    asan_options += "allocator_may_return_null=1:soft_rss_limit_mb=" + std::to_string(megabytes) +
+                    ":max_allocation_size_mb=" + std::to_string(megabytes);
+  }
+  if (!asan_options.empty()) env.push_back("ASAN_OPTIONS=" + asan_options);
+  return env;
+}
+
 std::string signal_name(int signal) {
   const char* name = ::strsignal(signal);
   return std::to_string(signal) + (name != nullptr ? std::string(", ") + name : std::string());
@@ -84,6 +108,10 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  std::vector<std::string> env = worker_environment(limits.max_memory_bytes);
+  std::vector<char*> envp;
+  for (std::string& e : env) envp.push_back(e.data());
+  envp.push_back(nullptr);
 
   Pipe out, err;
   posix_spawn_file_actions_t actions;
@@ -91,7 +119,7 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   posix_spawn_file_actions_adddup2(&actions, out.write, STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, err.write, STDERR_FILENO);
   pid_t pid = -1;
-  const int spawned = ::posix_spawn(&pid, worker.c_str(), &actions, nullptr, argv.data(), environ);
+  const int spawned = ::posix_spawn(&pid, worker.c_str(), &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) throw Error::in_file(path, "", "cannot start the importer process: " + std::string(std::strerror(spawned)));
   out.close_write();
@@ -151,6 +179,10 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
                                        ") reading it" + (messages.empty() ? "" : ": " + messages));
   }
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+  if (code != 0 && (messages.find("AddressSanitizer: soft rss limit exhausted") != std::string::npos ||
+                    messages.find("AddressSanitizer: allocator is out of memory") != std::string::npos ||
+                    messages.find("AddressSanitizer: requested allocation size") != std::string::npos))
+    messages = "the import needed more than " + std::to_string(limits.max_memory_bytes) + " bytes of memory";
   if (code != 0) {
     // The worker prints deform::Error's what(), which already names the file; anything else is passed on as is.
     const std::string prefix = path + ": ";
