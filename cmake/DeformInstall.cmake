@@ -1,6 +1,7 @@
 # install() rules and the exported package, so that an engine can do
 #   find_package(libdeform CONFIG REQUIRED)                      # runtime, offline, io, character, extras
 #   target_link_libraries(engine PRIVATE deform::runtime)        # or any layer, or deform::deform for all of them
+#   target_link_libraries(tool PRIVATE deform::c)                 # the C API (deform/c/deform.h)
 #   find_package(libdeform CONFIG REQUIRED COMPONENTS import)    # also deform::import: only then is Assimp looked for
 #   find_package(libdeform CONFIG REQUIRED COMPONENTS gpu)       # also deform::gpu (OpenGL 4.3 compute lattices)
 include(GNUInstallDirs)
@@ -13,7 +14,7 @@ set(deform_install_args
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 
-install(TARGETS deform_runtime deform_offline deform_io deform_character deform_extras deform
+install(TARGETS deform_runtime deform_offline deform_io deform_character deform_extras deform_c deform
   EXPORT libdeformTargets ${deform_install_args})
 install(EXPORT libdeformTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}

@@ -1,0 +1,127 @@
+/* libdeform's C API (target deform::c): a Character (load, pose, reach, release, update, read the deformed mesh),
+ * linear-blend skinning over caller arrays, and Bezier lattices (bind points once, move control points, evaluate),
+ * for any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md walks through it.
+ *
+ * Conventions:
+ *  - Objects are opaque handles made by a *_create / *_load function and freed by the matching *_destroy (NULL is
+ *    accepted there and ignored).
+ *  - Every function that can fail returns a deform_status; DEFORM_OK is 0. On failure nothing is changed and
+ *    deform_last_error() says why, with the file, line or byte and element for input errors, as the C++ API does.
+ *  - Vectors are float[3] (x, y, z); arrays of them are packed, 3 floats per element. Matrices are float[16],
+ *    column-major (as GLM and OpenGL). Quaternions are float[4] as (x, y, z, w).
+ *  - Nothing here keeps a caller's pointer after it returns, except where stated.
+ *  - A handle is used by one thread at a time; distinct handles are independent. deform_last_error is per thread.
+ *  - The per-frame functions (update, reach, release, skinning, lattice evaluation) allocate nothing. */
+#ifndef DEFORM_C_DEFORM_H
+#define DEFORM_C_DEFORM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "deform/c/export.hpp"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum deform_status {
+  DEFORM_OK = 0,
+  DEFORM_ERROR_INPUT = 1,    /* a file or data that is malformed (the message names it) */
+  DEFORM_ERROR_ARGUMENT = 2, /* a call that is not well formed: a NULL handle, a size that does not match, ... */
+  DEFORM_ERROR_REFUSED = 3,  /* a per-frame call that refused its inputs (a non-finite target, a bad dt) */
+  DEFORM_ERROR_INTERNAL = 4  /* anything else (out of memory) */
+} deform_status;
+
+/* Why the last call on this thread failed: a NUL-terminated UTF-8 message, valid until the next failing call on this
+ * thread. "" when no call has failed. */
+DEFORM_C_API const char* deform_last_error(void);
+
+/* The library's version, "MAJOR.MINOR.PATCH". */
+DEFORM_C_API const char* deform_version(void);
+
+/* ---- Character: a rigged mesh with its elastic lattices (deform/character/character.hpp) ---- */
+
+typedef struct deform_character deform_character;
+
+/* The built-in character with its rig (three elastic lattices on the left arm). */
+DEFORM_C_API deform_status deform_character_create_builtin(deform_character** out);
+/* A character from native files: OBJ mesh, .sk skeleton, .skw weights, and optionally a rig (JSON; NULL: no
+ * lattices, skinning and IK only). */
+DEFORM_C_API deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
+                                                 const char* rig_path, deform_character** out);
+DEFORM_C_API void deform_character_destroy(deform_character* character);
+
+/* Mesh points (OBJ `v`) and bones. */
+DEFORM_C_API size_t deform_character_point_count(const deform_character* character);
+DEFORM_C_API size_t deform_character_bone_count(const deform_character* character);
+/* The id of the first bone named `name`, or -1. */
+DEFORM_C_API int32_t deform_character_find_bone(const deform_character* character, const char* name);
+
+/* The held pose: each bone's local rotation (quaternions, bone_count * 4 floats) and translation (bone_count * 3
+ * floats), clamped into the joint limits. `bone_count` must equal the skeleton's. */
+DEFORM_C_API deform_status deform_character_set_pose(deform_character* character, const float* rotations_xyzw,
+                                                     const float* translations, size_t bone_count);
+
+typedef struct deform_reach_result {
+  float residual; /* |target - effector| after IK alone (model units) */
+  float stretch;  /* stretch asked of the chain's lattices (model units) */
+  float distance; /* |target - effector| once the stretch has settled */
+  int iterations; /* IK + stretch rounds */
+} deform_reach_result;
+
+/* Reaches for `target` (model space) with bone `effector`: IK, then elastic stretch for what remains. `result` may be
+ * NULL. DEFORM_ERROR_REFUSED for an effector out of range or the root, or a non-finite target. */
+DEFORM_C_API deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
+                                                  deform_reach_result* result);
+/* Lets go: the stretch springs back, a damped oscillation. */
+DEFORM_C_API void deform_character_release(deform_character* character);
+/* Advances the springs by `dt` seconds and deforms the held pose. DEFORM_ERROR_REFUSED for a negative or non-finite
+ * dt. */
+DEFORM_C_API deform_status deform_character_update(deform_character* character, float dt);
+
+/* The deformed positions (point_count * 3 floats) as of the last update: a view into the character, valid until
+ * the next update or destroy. */
+DEFORM_C_API const float* deform_character_positions(const deform_character* character);
+/* Copies them: `capacity` floats at `out`, at least point_count * 3. */
+DEFORM_C_API deform_status deform_character_copy_positions(const deform_character* character, float* out,
+                                                           size_t capacity);
+/* A bone's world head, including what the lattices carry it by. */
+DEFORM_C_API deform_status deform_character_bone_position(const deform_character* character, int32_t bone,
+                                                          float out[3]);
+/* The stretch the lattices have now (model units). */
+DEFORM_C_API float deform_character_stretch(const deform_character* character);
+
+/* ---- Skinning over caller arrays (deform/runtime/skinning.hpp, SkinningJob) ---- */
+
+/* Linear blend skinning: out[v] = sum_k weights[4v+k] * palette[bones[4v+k]] * positions[v]. `palette`: bone_count
+ * matrices (16 floats each, T_world * T_bind^-1); `bones`, `weights`: 4 per vertex (unused slots weight 0);
+ * `positions` and `out`: vertex_count * 3 floats. Refuses (DEFORM_ERROR_REFUSED, nothing written) a non-finite
+ * palette, an index out of range, or weights that are negative or do not sum to about 1. */
+DEFORM_C_API deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uint16_t* bones,
+                                           const float* weights, const float* positions, size_t vertex_count,
+                                           float* out);
+
+/* ---- Bezier lattices (deform/runtime/lattice.hpp; free-form deformation of any point cloud) ---- */
+
+typedef struct deform_lattice deform_lattice;
+
+/* A Bezier lattice over the box [origin, origin + size] of the given degree per axis (1..16), its control points
+ * at rest. */
+DEFORM_C_API deform_status deform_lattice_create(const float origin[3], const float size[3], int degree_u,
+                                                 int degree_v, int degree_w, deform_lattice** out);
+DEFORM_C_API void deform_lattice_destroy(deform_lattice* lattice);
+/* The control points, i-fastest ((degree_u+1) * (degree_v+1) * (degree_w+1) points, 3 floats each): a view into the
+ * lattice to read and write freely, valid until destroy. `count` (may be NULL) receives the number of points. */
+DEFORM_C_API float* deform_lattice_control_points(deform_lattice* lattice, size_t* count);
+/* Binds `count` points (3 floats each): those inside the box are deformed by later evaluations, the others are left
+ * as they are. Replaces an earlier binding. */
+DEFORM_C_API deform_status deform_lattice_bind(deform_lattice* lattice, const float* points, size_t count);
+/* Writes the deformed bound points into `out` (the count given to bind, 3 floats each); points outside the box are
+ * not written (copy the rest positions there first). */
+DEFORM_C_API deform_status deform_lattice_evaluate(const deform_lattice* lattice, float* out, size_t count);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,242 @@
+// The C API (deform/c/deform.h): each function turns deform::Error and Status into a deform_status plus a per-thread
+// message, and never lets a C++ exception cross into C.
+#include "deform/c/deform.h"
+
+#include <cmath>
+#include <exception>
+#include <new>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/io/model_files.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/skinning.hpp"
+#include "deform/version.hpp"
+
+struct deform_character {
+  deform::Character character;
+  deform::Pose pose;  // set_pose's staging, sized once so that the call allocates nothing
+};
+
+struct deform_lattice {
+  deform::BezierLattice lattice;
+  std::optional<deform::LatticeBinding> binding;
+  std::size_t bound_count = 0;
+};
+
+namespace {
+
+thread_local std::string last_error;
+
+deform_status fail(deform_status status, std::string message) {
+  try {
+    last_error = std::move(message);
+  } catch (...) {
+    last_error.clear();
+  }
+  return status;
+}
+
+deform_status fail_argument(const char* message) { return fail(DEFORM_ERROR_ARGUMENT, message); }
+
+// Runs `body` (returning deform_status), translating what C++ throws.
+template <class Body>
+deform_status guarded(Body&& body) noexcept {
+  try {
+    return body();
+  } catch (const deform::Error& e) {
+    return fail(e.kind() == deform::Error::Kind::input ? DEFORM_ERROR_INPUT : DEFORM_ERROR_ARGUMENT, e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(DEFORM_ERROR_INTERNAL, "out of memory");
+  } catch (const std::exception& e) {
+    return fail(DEFORM_ERROR_INTERNAL, e.what());
+  } catch (...) {
+    return fail(DEFORM_ERROR_INTERNAL, "unknown failure");
+  }
+}
+
+deform_status refused(const deform::Status& status) {
+  return status ? DEFORM_OK : fail(DEFORM_ERROR_REFUSED, status.reason());
+}
+
+deform_status adopt(deform::Character character, deform_character** out) {
+  auto* handle = new deform_character{std::move(character), {}};
+  const std::size_t bones = handle->character.skeleton().bone_count();
+  handle->pose.rotations.resize(bones);
+  handle->pose.translations.resize(bones);
+  *out = handle;
+  return DEFORM_OK;
+}
+
+bool finite3(const float* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+}  // namespace
+
+extern "C" {
+
+const char* deform_last_error(void) { return last_error.c_str(); }
+
+const char* deform_version(void) { return DEFORM_VERSION_STRING; }
+
+deform_status deform_character_create_builtin(deform_character** out) {
+  if (out == nullptr) return fail_argument("deform_character_create_builtin: out is NULL");
+  return guarded([&] { return adopt(deform::make_builtin_character(), out); });
+}
+
+deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
+                                    const char* rig_path, deform_character** out) {
+  if (out == nullptr || obj_path == nullptr || sk_path == nullptr || skw_path == nullptr)
+    return fail_argument("deform_character_load: a path or out is NULL");
+  return guarded([&] {
+    deform::Model model = deform::load_model(obj_path, sk_path, skw_path);
+    if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);
+    deform::Rig rig = deform::read_rig_json(rig_path, model.skeleton, model.mesh.point_count());
+    return adopt(deform::Character(std::move(model), rig), out);
+  });
+}
+
+void deform_character_destroy(deform_character* character) { delete character; }
+
+size_t deform_character_point_count(const deform_character* character) {
+  return character ? character->character.model().mesh.point_count() : 0;
+}
+
+size_t deform_character_bone_count(const deform_character* character) {
+  return character ? character->character.skeleton().bone_count() : 0;
+}
+
+int32_t deform_character_find_bone(const deform_character* character, const char* name) {
+  if (character == nullptr || name == nullptr) return -1;
+  return character->character.skeleton().find(name);
+}
+
+deform_status deform_character_set_pose(deform_character* character, const float* rotations_xyzw,
+                                        const float* translations, size_t bone_count) {
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr)
+    return fail_argument("deform_character_set_pose: a handle or array is NULL");
+  if (bone_count != character->pose.rotations.size())
+    return fail_argument("deform_character_set_pose: bone_count differs from the skeleton's");
+  for (std::size_t b = 0; b < bone_count; ++b) {
+    const float* q = rotations_xyzw + 4 * b;
+    character->pose.rotations[b] = glm::quat(q[3], q[0], q[1], q[2]);
+    const float* t = translations + 3 * b;
+    character->pose.translations[b] = glm::vec3(t[0], t[1], t[2]);
+  }
+  return refused(character->character.set_pose(character->pose));
+}
+
+deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
+                                     deform_reach_result* result) {
+  if (character == nullptr || target == nullptr) return fail_argument("deform_character_reach: a handle or target is NULL");
+  const deform::ReachResult reached = character->character.reach(effector, glm::vec3(target[0], target[1], target[2]));
+  if (!reached.status) return refused(reached.status);
+  if (result != nullptr) *result = {reached.residual, reached.stretch, reached.distance, reached.iterations};
+  return DEFORM_OK;
+}
+
+void deform_character_release(deform_character* character) {
+  if (character != nullptr) character->character.release();
+}
+
+deform_status deform_character_update(deform_character* character, float dt) {
+  if (character == nullptr) return fail_argument("deform_character_update: the handle is NULL");
+  return refused(character->character.update(dt));
+}
+
+const float* deform_character_positions(const deform_character* character) {
+  if (character == nullptr) return nullptr;
+  return &character->character.positions().data()->x;
+}
+
+deform_status deform_character_copy_positions(const deform_character* character, float* out, size_t capacity) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_copy_positions: NULL argument");
+  const std::span<const glm::vec3> positions = character->character.positions();
+  if (capacity < 3 * positions.size())
+    return fail_argument("deform_character_copy_positions: capacity is less than point_count * 3");
+  for (const glm::vec3& p : positions) *out++ = p.x, *out++ = p.y, *out++ = p.z;
+  return DEFORM_OK;
+}
+
+deform_status deform_character_bone_position(const deform_character* character, int32_t bone, float out[3]) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_bone_position: NULL argument");
+  if (bone < 0 || std::size_t(bone) >= character->character.skeleton().bone_count())
+    return fail_argument("deform_character_bone_position: bone out of range");
+  const glm::vec3 p = character->character.bone_position(bone);
+  out[0] = p.x, out[1] = p.y, out[2] = p.z;
+  return DEFORM_OK;
+}
+
+float deform_character_stretch(const deform_character* character) {
+  return character ? character->character.stretch() : 0.0f;
+}
+
+deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uint16_t* bones, const float* weights,
+                              const float* positions, size_t vertex_count, float* out) {
+  if (palette == nullptr || bones == nullptr || weights == nullptr || positions == nullptr || out == nullptr)
+    return fail_argument("deform_skin_lbs: an array is NULL");
+  // GLM's matrix and vector types are plain arrays of their components, as the header's layout promises.
+  deform::SkinningJob job;
+  job.method = deform::SkinningMethod::lbs;
+  job.matrices = {reinterpret_cast<const glm::mat4*>(palette), bone_count};
+  job.bone_indices = {reinterpret_cast<const glm::u16vec4*>(bones), vertex_count};
+  job.bone_weights = {reinterpret_cast<const glm::vec4*>(weights), vertex_count};
+  job.in_positions = {positions, 3 * vertex_count};
+  job.out_positions = {out, 3 * vertex_count};
+  if (const deform::Status valid = job.validate(); !valid) return refused(valid);
+  return refused(job.run());
+}
+
+deform_status deform_lattice_create(const float origin[3], const float size[3], int degree_u, int degree_v,
+                                    int degree_w, deform_lattice** out) {
+  if (origin == nullptr || size == nullptr || out == nullptr) return fail_argument("deform_lattice_create: NULL argument");
+  if (!finite3(origin) || !finite3(size)) return fail_argument("deform_lattice_create: origin or size is not finite");
+  if (!(size[0] > 0.0f && size[1] > 0.0f && size[2] > 0.0f))
+    return fail_argument("deform_lattice_create: size is not positive on every axis");
+  for (const int degree : {degree_u, degree_v, degree_w})
+    if (degree < 1 || degree > deform::max_bezier_degree)
+      return fail_argument("deform_lattice_create: a degree is outside [1, 16]");
+  return guarded([&] {
+    const deform::LatticeFrame frame =
+        deform::LatticeFrame::axis_aligned({origin[0], origin[1], origin[2]}, {size[0], size[1], size[2]});
+    *out = new deform_lattice{deform::BezierLattice(frame, glm::ivec3(degree_u, degree_v, degree_w)), {}, 0};
+    return DEFORM_OK;
+  });
+}
+
+void deform_lattice_destroy(deform_lattice* lattice) { delete lattice; }
+
+float* deform_lattice_control_points(deform_lattice* lattice, size_t* count) {
+  if (lattice == nullptr) return nullptr;
+  const std::span<glm::vec3> points = lattice->lattice.control_points();
+  if (count != nullptr) *count = points.size();
+  return &points.data()->x;
+}
+
+deform_status deform_lattice_bind(deform_lattice* lattice, const float* points, size_t count) {
+  if (lattice == nullptr || (points == nullptr && count > 0)) return fail_argument("deform_lattice_bind: NULL argument");
+  return guarded([&] {
+    lattice->binding = deform::bind_lattice(lattice->lattice, {reinterpret_cast<const glm::vec3*>(points), count});
+    lattice->bound_count = count;
+    return DEFORM_OK;
+  });
+}
+
+deform_status deform_lattice_evaluate(const deform_lattice* lattice, float* out, size_t count) {
+  if (lattice == nullptr || out == nullptr) return fail_argument("deform_lattice_evaluate: NULL argument");
+  if (!lattice->binding) return fail_argument("deform_lattice_evaluate: no points are bound (deform_lattice_bind)");
+  if (count != lattice->bound_count) return fail_argument("deform_lattice_evaluate: count differs from the bound count");
+  deform::LatticeEvaluateJob job;
+  job.binding = &*lattice->binding;
+  job.control_points = lattice->lattice.control_points();
+  job.positions = {reinterpret_cast<glm::vec3*>(out), count};
+  if (lattice->binding->vertex_count == 0) return DEFORM_OK;
+  return refused(job.run());
+}
+
+}  // extern "C"

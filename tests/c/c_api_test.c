@@ -1,0 +1,222 @@
+/* The C API (deform/c/deform.h) from C: a Character reaches, stretches and springs back; skinning and lattices agree
+ * with plain references computed here; errors come back as status codes with messages naming what failed. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "deform/c/deform.h"
+
+static int failures = 0;
+#define CHECK(cond)                                                                  \
+  do {                                                                               \
+    if (!(cond)) {                                                                   \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, \
+              #cond, deform_last_error());                                           \
+      ++failures;                                                                    \
+    }                                                                                \
+  } while (0)
+
+/* A small deterministic generator, so that the cases are the same on every run. */
+static uint64_t state = 0x9E3779B97F4A7C15ull;
+static double uniform(double lo, double hi) {
+  state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+  return lo + (hi - lo) * (double)(state >> 11) / 9007199254740992.0;
+}
+
+static double distance3(const float* a, const float* b) {
+  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+static void character_reaches_stretches_and_springs_back(void) {
+  deform_character* hero = NULL;
+  CHECK(deform_character_create_builtin(&hero) == DEFORM_OK);
+  if (hero == NULL) return;
+  const size_t points = deform_character_point_count(hero);
+  CHECK(points > 1000);
+  CHECK(deform_character_bone_count(hero) > 10);
+  const int32_t hand = deform_character_find_bone(hero, "hand_l");
+  CHECK(hand > 0);
+  CHECK(deform_character_find_bone(hero, "no such bone") == -1);
+
+  CHECK(deform_character_update(hero, 1.0f / 60.0f) == DEFORM_OK);
+  float* rest = malloc(3 * points * sizeof(float));
+  CHECK(deform_character_copy_positions(hero, rest, 3 * points) == DEFORM_OK);
+  CHECK(deform_character_copy_positions(hero, rest, 3 * points - 1) == DEFORM_ERROR_ARGUMENT);
+
+  /* Beyond the arm's reach: IK leaves a residual, the lattices stretch to cover it. */
+  const float target[3] = {1.6f, 1.5f, 0.3f};
+  deform_reach_result reached;
+  CHECK(deform_character_reach(hero, hand, target, &reached) == DEFORM_OK);
+  CHECK(reached.residual > 0.05f);
+  CHECK(reached.stretch > 0.05f);
+  for (int frame = 0; frame < 600; ++frame) CHECK(deform_character_update(hero, 1.0f / 60.0f) == DEFORM_OK);
+  float hand_at[3];
+  CHECK(deform_character_bone_position(hero, hand, hand_at) == DEFORM_OK);
+  CHECK(distance3(hand_at, target) < 0.01 * reached.residual + 1e-3);
+  CHECK(deform_character_stretch(hero) > 0.9f * reached.stretch);
+
+  /* The mesh moved, and the view is the copy. */
+  const float* now = deform_character_positions(hero);
+  double moved = 0.0;
+  for (size_t i = 0; i < points; ++i) moved = fmax(moved, distance3(now + 3 * i, rest + 3 * i));
+  CHECK(moved > 0.1);
+
+  /* Released, the stretch swings back and settles at zero. */
+  deform_character_release(hero);
+  float lowest = 0.0f;
+  for (int frame = 0; frame < 600; ++frame) {
+    CHECK(deform_character_update(hero, 1.0f / 60.0f) == DEFORM_OK);
+    lowest = fminf(lowest, deform_character_stretch(hero));
+  }
+  CHECK(lowest < 0.0f);
+  CHECK(fabsf(deform_character_stretch(hero)) < 1e-3f);
+
+  /* Refusals change nothing and say why. */
+  CHECK(deform_character_update(hero, -1.0f) == DEFORM_ERROR_REFUSED);
+  CHECK(strlen(deform_last_error()) > 0);
+  const float nowhere[3] = {NAN, 0.0f, 0.0f};
+  CHECK(deform_character_reach(hero, hand, nowhere, NULL) == DEFORM_ERROR_REFUSED);
+  CHECK(deform_character_reach(hero, 0, target, NULL) == DEFORM_ERROR_REFUSED);
+  CHECK(deform_character_bone_position(hero, -1, hand_at) == DEFORM_ERROR_ARGUMENT);
+
+  /* A pose: the bind pose given back as quaternions and translations of the right count. */
+  const size_t bones = deform_character_bone_count(hero);
+  float* rotations = calloc(4 * bones, sizeof(float));
+  float* translations = calloc(3 * bones, sizeof(float));
+  for (size_t b = 0; b < bones; ++b) rotations[4 * b + 3] = 1.0f;
+  CHECK(deform_character_set_pose(hero, rotations, translations, bones) == DEFORM_OK);
+  CHECK(deform_character_set_pose(hero, rotations, translations, bones - 1) == DEFORM_ERROR_ARGUMENT);
+  rotations[3] = 0.0f;
+  CHECK(deform_character_set_pose(hero, rotations, translations, bones) == DEFORM_ERROR_REFUSED);
+  free(rotations);
+  free(translations);
+  free(rest);
+  deform_character_destroy(hero);
+  deform_character_destroy(NULL);
+}
+
+static void loading_errors_name_the_file(void) {
+  deform_character* nobody = NULL;
+  CHECK(deform_character_load("/nonexistent/body.obj", "/nonexistent/body.sk", "/nonexistent/body.skw", NULL,
+                              &nobody) == DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), "/nonexistent/body") != NULL);
+  CHECK(nobody == NULL);
+  CHECK(deform_character_load(NULL, "a", "b", NULL, &nobody) == DEFORM_ERROR_ARGUMENT);
+}
+
+/* Rigid transforms: a rotation about a random axis, a translation, column-major. */
+static void random_rigid(float* m) {
+  double axis[3] = {uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
+  const double length = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]) + 1e-9;
+  const double angle = uniform(-3.14159, 3.14159), c = cos(angle), s = sin(angle), t = 1 - c;
+  const double x = axis[0] / length, y = axis[1] / length, z = axis[2] / length;
+  const double r[3][3] = {{t * x * x + c, t * x * y - s * z, t * x * z + s * y},
+                          {t * x * y + s * z, t * y * y + c, t * y * z - s * x},
+                          {t * x * z - s * y, t * y * z + s * x, t * z * z + c}};
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) m[4 * col + row] = (float)r[row][col];
+    m[4 * col + 3] = 0.0f;
+  }
+  m[12] = (float)uniform(-2, 2), m[13] = (float)uniform(-2, 2), m[14] = (float)uniform(-2, 2), m[15] = 1.0f;
+}
+
+static void skinning_matches_a_plain_reference(void) {
+  enum { bones = 12, vertices = 1000 };
+  static float palette[16 * bones], positions[3 * vertices], weights[4 * vertices], out[3 * vertices];
+  static uint16_t ids[4 * vertices];
+  for (int trial = 0; trial < 20; ++trial) {
+    for (int b = 0; b < bones; ++b) random_rigid(palette + 16 * b);
+    for (int v = 0; v < vertices; ++v) {
+      double sum = 0.0, w[4];
+      for (int k = 0; k < 4; ++k) sum += (w[k] = k < 1 + v % 4 ? uniform(0.01, 1.0) : 0.0);
+      for (int k = 0; k < 4; ++k) weights[4 * v + k] = (float)(w[k] / sum), ids[4 * v + k] = (uint16_t)(uniform(0, bones - 1e-9));
+      for (int a = 0; a < 3; ++a) positions[3 * v + a] = (float)uniform(-1, 1);
+    }
+    CHECK(deform_skin_lbs(palette, bones, ids, weights, positions, vertices, out) == DEFORM_OK);
+    double worst = 0.0;
+    for (int v = 0; v < vertices; ++v) {
+      double expected[3] = {0, 0, 0};
+      for (int k = 0; k < 4; ++k) {
+        const float* m = palette + 16 * ids[4 * v + k];
+        const float* p = positions + 3 * v;
+        for (int row = 0; row < 3; ++row)
+          expected[row] += weights[4 * v + k] * (m[row] * p[0] + m[4 + row] * p[1] + m[8 + row] * p[2] + m[12 + row]);
+      }
+      for (int a = 0; a < 3; ++a) worst = fmax(worst, fabs(expected[a] - out[3 * v + a]));
+    }
+    CHECK(worst < 1e-5);
+  }
+  out[0] = 12345.0f;
+  palette[5] = NAN;
+  CHECK(deform_skin_lbs(palette, bones, ids, weights, positions, vertices, out) == DEFORM_ERROR_REFUSED);
+  CHECK(out[0] == 12345.0f);
+  CHECK(strstr(deform_last_error(), "not finite") != NULL);
+  palette[5] = 0.0f;
+  ids[7] = bones;
+  CHECK(deform_skin_lbs(palette, bones, ids, weights, positions, vertices, out) == DEFORM_ERROR_REFUSED);
+}
+
+/* Degree 1 is trilinear interpolation of the 8 corners (the definition, computed here). */
+static void lattice_matches_trilinear_interpolation(void) {
+  const float origin[3] = {-1.0f, 0.0f, 2.0f}, size[3] = {2.0f, 4.0f, 1.0f};
+  deform_lattice* box = NULL;
+  CHECK(deform_lattice_create(origin, size, 1, 1, 1, &box) == DEFORM_OK);
+  if (box == NULL) return;
+  size_t count = 0;
+  float* corners = deform_lattice_control_points(box, &count);
+  CHECK(count == 8);
+  enum { n = 500 };
+  static float points[3 * n], out[3 * n];
+  for (int i = 0; i < 3 * n; ++i) points[i] = origin[i % 3] + (float)uniform(-0.2, 1.2) * size[i % 3];
+  CHECK(deform_lattice_bind(box, points, n) == DEFORM_OK);
+  for (int i = 0; i < 24; ++i) corners[i] += (float)uniform(-0.5, 0.5);
+  memcpy(out, points, sizeof points);
+  CHECK(deform_lattice_evaluate(box, out, n) == DEFORM_OK);
+  double worst = 0.0;
+  int inside = 0;
+  for (int p = 0; p < n; ++p) {
+    double uvw[3];
+    int in = 1;
+    for (int a = 0; a < 3; ++a) {
+      uvw[a] = (points[3 * p + a] - origin[a]) / size[a];
+      in &= uvw[a] >= 0.0 && uvw[a] <= 1.0;
+    }
+    if (!in) {
+      CHECK(memcmp(out + 3 * p, points + 3 * p, 3 * sizeof(float)) == 0);
+      continue;
+    }
+    ++inside;
+    double expected[3] = {0, 0, 0};
+    for (int k = 0; k < 2; ++k)
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const double w = (i ? uvw[0] : 1 - uvw[0]) * (j ? uvw[1] : 1 - uvw[1]) * (k ? uvw[2] : 1 - uvw[2]);
+          for (int a = 0; a < 3; ++a) expected[a] += w * corners[3 * (i + 2 * (j + 2 * k)) + a];
+        }
+    for (int a = 0; a < 3; ++a) worst = fmax(worst, fabs(expected[a] - out[3 * p + a]));
+  }
+  CHECK(inside > n / 4);
+  CHECK(worst < 1e-5);
+  CHECK(deform_lattice_evaluate(box, out, n - 1) == DEFORM_ERROR_ARGUMENT);
+  deform_lattice_destroy(box);
+  CHECK(deform_lattice_create(origin, size, 0, 1, 1, &box) == DEFORM_ERROR_ARGUMENT);
+  const float flat[3] = {1.0f, 0.0f, 1.0f};
+  CHECK(deform_lattice_create(origin, flat, 1, 1, 1, &box) == DEFORM_ERROR_ARGUMENT);
+}
+
+int main(void) {
+  CHECK(strlen(deform_version()) >= 5);
+  CHECK(strcmp(deform_last_error(), "") == 0);
+  character_reaches_stretches_and_springs_back();
+  loading_errors_name_the_file();
+  skinning_matches_a_plain_reference();
+  lattice_matches_trilinear_interpolation();
+  if (failures) {
+    fprintf(stderr, "%d checks failed\n", failures);
+    return 1;
+  }
+  printf("C API: every check passed\n");
+  return 0;
+}
