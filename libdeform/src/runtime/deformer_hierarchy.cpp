@@ -146,6 +146,11 @@ float DeformerHierarchy::stretch(std::size_t index) const {
 void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices) noexcept {
   const glm::ivec3 counts = lattice.rest.point_counts();
   const auto last = std::size_t(counts.x - 1);
+  if (lattice.spec.shape.min_length_fraction == 0.0f && lattice.spec.shape.volume == 0.0f) {  // the plain stretch
+    slices.shift.fill(0.0f);
+    slices.scale.fill(1.0f);
+    return;
+  }
   const float per_slice = float(counts.y * counts.z);
   const std::span<const glm::vec3> rest = lattice.rest.control_points();
   const std::span<const glm::vec3> now = lattice.elastic.positions();
