@@ -1,6 +1,7 @@
 // frame/builtin_3_lattices: one whole frame of the thesis' scene on one thread — the built-in character (2,554
 // points) reaching far, its three arm lattices stretched and springing: elastic step, FK, skinning, lattices.
 // The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
+// frame/builtin_lattices_step_update and frame/builtin_3_lattices_shape: the cost of the stretch shape.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -8,6 +9,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/model.hpp"
 namespace {
 
@@ -51,6 +53,32 @@ void frame(benchmark::State& state) {
   state.counters["bound"] = double(bound);
 }
 
+// The lattices' share of a frame: springs' step and DeformerHierarchy::update (carrying the control points into world
+// space, with the stretch shape: length floor and volume compensation) on the built-in character mid-reach.
+// Arg 0: the plain stretch (StretchShape{0, 0}, which skips the shape); Arg 1: the default shape {0.7, 1}.
+void hierarchy_update(benchmark::State& state) {
+  deform::Character c = reaching_character(0);
+  const deform::StretchShape shape = state.range(0) ? deform::StretchShape{} : deform::StretchShape{0.0f, 0.0f};
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) c.deformers().set_shape(l, shape);
+  const std::span<const glm::mat4> world = c.skeleton().bind_world();
+  for (auto _ : state) {
+    c.deformers().step(1.0f / 60.0f);
+    c.deformers().update(world);
+    benchmark::DoNotOptimize(c.deformers().displacements(0).data());
+  }
+}
+
+// frame/builtin_3_lattices with the plain stretch (Arg 0) and the default shape (Arg 1).
+void frame_shape(benchmark::State& state) {
+  deform::Character c = reaching_character(0);
+  const deform::StretchShape shape = state.range(0) ? deform::StretchShape{} : deform::StretchShape{0.0f, 0.0f};
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) c.deformers().set_shape(l, shape);
+  for (auto _ : state) {
+    c.update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c.positions().data());
+  }
+}
+
 void frame_with_normals(benchmark::State& state) {
   deform::Character c = reaching_character(0);
   for (auto _ : state) {
@@ -62,6 +90,8 @@ void frame_with_normals(benchmark::State& state) {
 
 BENCHMARK(frame)->Name("frame/builtin_3_lattices")->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame)->Name("frame/3_lattices")->Arg(100000)->Arg(1000000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(hierarchy_update)->Name("frame/builtin_lattices_step_update")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(frame_shape)->Name("frame/builtin_3_lattices_shape")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame_with_normals)->Name("frame/builtin_3_lattices_normals")->Unit(benchmark::kMicrosecond);
 
 }  // namespace

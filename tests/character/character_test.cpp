@@ -128,6 +128,8 @@ TEST_CASE("release: the stretch springs back as a damped oscillation and settles
   const Arm arm = left_arm(c);
   const glm::vec3 shoulder = c.bone_position(arm.clavicle);
   const glm::vec3 target = shoulder + glm::vec3(1.1f, 0.1f, 0.1f);
+  // The springs' own motion: no length floor (it would cut the undershoot, see the test below).
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) c.deformers().set_shape(l, {0.0f, 1.0f});
   const deform::ReachResult result = c.reach(arm.hand, target);
   REQUIRE(result.stretch > 0.2f);
   run_for(c, 4.0, 1.0f / 120.0f);
@@ -187,13 +189,85 @@ TEST_CASE("the reach-release curve does not depend on the frame rate") {
   }
 }
 
+namespace {
+
+// The built-in character reaching 1.1 m out from its shoulder, released at t = 1 s, stepped by `dt` until t = 3 s:
+// the shortest any lattice shows (its length over its rest length, every step), the peak summed stretch, and the
+// summed stretch and the hand every 1/6 s.
+struct Release {
+  float shortest = 1.0f;
+  float peak = 0.0f;
+  std::vector<float> stretch;
+  std::vector<glm::vec3> hand;
+};
+
+Release release_curve(float dt, float zeta, deform::StretchShape shape) {
+  Character c = deform::make_builtin_character();
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) {
+    deform::ElasticSettings elastic = c.deformers().spec(l).elastic;
+    elastic.oscillator.damping_ratio = zeta;
+    c.deformers().set_elastic(l, elastic);
+    c.deformers().set_shape(l, shape);
+  }
+  const Arm arm = left_arm(c);
+  const glm::vec3 target = c.bone_position(arm.clavicle) + glm::vec3(1.1f, 0.1f, 0.1f);
+  REQUIRE(c.reach(arm.hand, target).stretch > 0.2f);
+  Release out;
+  const int per_second = int(std::lround(1.0f / dt));
+  const int per_sample = per_second / 6;
+  for (int n = 1; n <= 3 * per_second; ++n) {
+    if (n == per_second + 1) c.release();
+    REQUIRE(c.update(dt));
+    for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) {
+      const float length = c.deformers().length(l);
+      out.shortest = std::min(out.shortest, (length + c.deformers().stretch(l)) / length);
+    }
+    out.peak = std::max(out.peak, c.stretch());
+    if (n % per_sample == 0) {
+      out.stretch.push_back(c.stretch());
+      out.hand.push_back(c.bone_position(arm.hand));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("released at damping 0.2 the arm never shortens below 70%, at any frame rate; at damping 1 as before") {
+  const Release reference = release_curve(1.0f / 240.0f, 0.2f, {});
+  MESSAGE("damping 0.2: shortest lattice ", reference.shortest, " of its length; peak stretch ", reference.peak);
+  CHECK(reference.shortest >= 0.7f);
+  CHECK(reference.shortest < 0.75f);  // it does get there: without the floor it would go well below
+  const Release floorless = release_curve(1.0f / 240.0f, 0.2f, {0.0f, 1.0f});
+  CHECK(floorless.shortest < 0.65f);
+  for (const float dt : {1.0f / 30.0f, 1.0f / 60.0f, 1.0f / 144.0f}) {
+    CAPTURE(dt);
+    const Release other = release_curve(dt, 0.2f, {});
+    CHECK(other.shortest >= 0.7f);
+    REQUIRE(other.stretch.size() == reference.stretch.size());
+    float largest = 0.0f;
+    for (std::size_t n = 0; n < other.stretch.size(); ++n) {
+      largest = std::max(largest, std::abs(other.stretch[n] - reference.stretch[n]));
+      largest = std::max(largest, glm::length(other.hand[n] - reference.hand[n]));
+    }
+    MESSAGE("largest difference from 240 Hz: ", largest, " m (", 100.0f * largest / reference.peak, "% of the peak)");
+    CHECK(largest <= 1e-4f * reference.peak);
+  }
+  // Critically damped, the arm never shortens: the floor changes nothing, and the hand does not see the volume.
+  const Release critical = release_curve(1.0f / 60.0f, 1.0f, {});
+  const Release before = release_curve(1.0f / 60.0f, 1.0f, {0.0f, 0.0f});
+  CHECK(critical.stretch == before.stretch);
+  CHECK(critical.hand == before.hand);
+}
+
 TEST_CASE("on the real mesh the stretched forearm has no seam; without the hierarchy the hand tears off") {
   // Largest change of the stretch displacement along a mesh edge, per unit of edge length, with the forearm lattice
   // stretched by 0.3 m (its length is 0.26 m).
-  const auto steepest = [](bool carry) {
+  const auto steepest = [](bool carry, float volume = 1.0f) {
     deform::Model model = deform::builtin_character();
     deform::Rig rig = deform::builtin_rig(model);
     for (deform::LatticeSpec& spec : rig.lattices) spec.carry_descendants = carry;
+    for (deform::LatticeSpec& spec : rig.lattices) spec.shape.volume = volume;
     Character c(std::move(model), rig);
     const std::vector<glm::vec3> unstretched(c.positions().begin(), c.positions().end());
     const std::int32_t forearm = c.deformers().find("forearm_l");
@@ -215,8 +289,11 @@ TEST_CASE("on the real mesh the stretched forearm has no seam; without the hiera
   };
   const float with_hierarchy = steepest(true);
   const float without = steepest(false);
+  const float plain = steepest(true, 0.0f);  // no volume compensation: the thinning wrist adds to the gradient
+  MESSAGE("steepest: ", with_hierarchy, " (volume 1), ", plain, " (volume 0), ", without, " (no hierarchy)");
   CAPTURE(with_hierarchy);
   CAPTURE(without);
+  CHECK(plain < 3.0f * 0.3f / 0.26f);
   // The stretch gradient is 0.3 / 0.26 per metre, steeper where skin weights blend; a tear is far steeper.
   CHECK(with_hierarchy < 3.0f * 0.3f / 0.26f);
   CHECK(without > 4.0f * with_hierarchy);

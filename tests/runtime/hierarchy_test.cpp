@@ -82,11 +82,14 @@ float subtree_weight(const Limb& limb, std::size_t p, int bone) {
   return sum;
 }
 
+// The plain stretch (no volume compensation), which the tests below compare with references; the stretch shape has
+// its own tests at the end.
 LatticeSpec spec_on(const char* name, std::int32_t bone, float zeta = 1.0f) {
   LatticeSpec spec;
   spec.name = name;
   spec.bone = bone;
   spec.elastic.oscillator = {400.0f, zeta, 1.0f};
+  spec.shape.volume = 0.0f;
   return spec;
 }
 
@@ -467,4 +470,190 @@ TEST_CASE("bad set-ups throw naming the lattice; bad per-frame calls return fals
   const std::vector<glm::vec3> before = out;
   CHECK_FALSE(h.apply(out));
   CHECK(out == before);
+}
+
+// --- the stretch shape: length floor and volume compensation ---
+
+TEST_CASE("soft_length_floor: identity above the knee, smooth, increasing, never below the floor") {
+  using deform::soft_length_floor;
+  CHECK(soft_length_floor(1.0f, 0.7f) == 1.0f);
+  CHECK(soft_length_floor(0.8f, 0.7f) == 0.8f);
+  CHECK(soft_length_floor(2.5f, 0.7f) == 2.5f);
+  CHECK(soft_length_floor(-3.0f, 0.0f) == -3.0f);  // no floor
+  const float bend = 0.8f;
+  const float h = 1e-3f;
+  CHECK(soft_length_floor(bend - h, 0.7f) == doctest::Approx(bend - h).epsilon(1e-4));  // slope 1 at the knee
+  CHECK(soft_length_floor(0.5f, 0.7f) > 0.7f);
+  float previous = soft_length_floor(-10.0f, 0.7f);  // the exponential underflows: the floor itself
+  for (float r = -10.0f; r <= 2.0f; r += 0.01f) {
+    const float shown = soft_length_floor(r, 0.7f);
+    CHECK(shown >= 0.7f);
+    CHECK(shown >= previous);
+    CHECK(shown <= std::max(r, 0.8f) + 1e-6f);
+    previous = shown;
+  }
+  CHECK_THROWS_AS(deform::validate_shape({1.0f, 1.0f}), deform::Error);
+  CHECK_THROWS_AS(deform::validate_shape({0.7f, 1.5f}), deform::Error);
+  CHECK_THROWS_AS(deform::validate_shape({0.7f, -0.1f}), deform::Error);
+  CHECK_THROWS_AS(deform::validate_shape({NAN, 1.0f}), deform::Error);
+  CHECK_NOTHROW(deform::validate_shape({0.0f, 0.0f}));
+}
+
+namespace {
+
+// A closed tube around bone 1 (head at y = 0.5, child at y = 1.5: the lattice spans y in [0.5, 1.5]): radius 0.2,
+// from y = 0.52 to 1.48, capped, wound outward, every point fully on bone 1.
+struct Tube {
+  deform::Skeleton skeleton;
+  std::vector<glm::vec3> points;
+  std::vector<glm::uvec3> triangles;
+  deform::SkinWeights weights;
+};
+
+Tube make_tube() {
+  std::vector<deform::Bone> bones(3);
+  bones[0] = {"root", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}};
+  bones[1] = {"limb", 0, {2}, glm::vec3(0, 0.5f, 0), glm::vec3(0.0f), {}};
+  bones[2] = {"tip", 1, {}, glm::vec3(0, 1, 0), glm::vec3(0.0f), {}};
+  Tube tube{deform::Skeleton(bones), {}, {}, {}};
+  constexpr int around = 24;
+  constexpr int along = 25;
+  for (int r = 0; r < along; ++r) {
+    const float y = 0.52f + 0.96f * float(r) / float(along - 1);
+    for (int a = 0; a < around; ++a) {
+      const float angle = 2.0f * float(M_PI) * float(a) / around;
+      tube.points.emplace_back(0.2f * std::cos(angle), y, 0.2f * std::sin(angle));
+    }
+  }
+  const auto ring = [](int r, int a) { return std::uint32_t(r * around + (a % around)); };
+  for (int r = 0; r + 1 < along; ++r) {
+    for (int a = 0; a < around; ++a) {
+      tube.triangles.emplace_back(ring(r, a), ring(r + 1, a), ring(r + 1, a + 1));
+      tube.triangles.emplace_back(ring(r, a), ring(r + 1, a + 1), ring(r, a + 1));
+    }
+  }
+  const auto bottom = std::uint32_t(tube.points.size());
+  tube.points.emplace_back(0.0f, 0.52f, 0.0f);
+  const auto top = std::uint32_t(tube.points.size());
+  tube.points.emplace_back(0.0f, 1.48f, 0.0f);
+  for (int a = 0; a < around; ++a) {
+    tube.triangles.emplace_back(bottom, ring(0, a), ring(0, a + 1));
+    tube.triangles.emplace_back(top, ring(along - 1, a + 1), ring(along - 1, a));
+  }
+  tube.weights.bones.assign(tube.points.size(), glm::u16vec4(1, 0, 0, 0));
+  tube.weights.weights.assign(tube.points.size(), glm::vec4(1, 0, 0, 0));
+  return tube;
+}
+
+// Enclosed volume by the divergence theorem, in double.
+double enclosed_volume(const std::vector<glm::vec3>& points, const std::vector<glm::uvec3>& triangles) {
+  double sum = 0.0;
+  for (const glm::uvec3& t : triangles) {
+    const glm::dvec3 a(points[t.x]), b(points[t.y]), c(points[t.z]);
+    sum += glm::dot(a, glm::cross(b, c));
+  }
+  return sum / 6.0;
+}
+
+// The tube's points with the lattice settled at a stretch target (model units), in the bind pose.
+std::vector<glm::vec3> settled_tube(const Tube& tube, deform::StretchShape shape, float target, float* shown) {
+  LatticeSpec spec = spec_on("limb", 1);
+  spec.shape = shape;
+  DeformerHierarchy h = deform::bind_hierarchy(tube.skeleton, tube.points, tube.weights, {spec});
+  REQUIRE(h.bound_count(0) == tube.points.size());
+  REQUIRE(h.length(0) == doctest::Approx(1.0f));
+  REQUIRE(h.set_stretch_target(0, target));
+  settle(h);
+  *shown = h.stretch(0);
+  std::vector<glm::vec3> out = tube.points;
+  REQUIRE(h.update(world_of(tube.skeleton, tube.skeleton.bind_pose())));
+  REQUIRE(h.apply(out));
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("volume 1 keeps a closed tube's volume within 2% for stretches 0.5 to 3; volume 0 is the plain stretch") {
+  const Tube tube = make_tube();
+  const double rest = enclosed_volume(tube.points, tube.triangles);
+  REQUIRE(rest > 0.0);
+  for (const float s : {0.5f, 0.7f, 1.0f, 1.5f, 2.0f, 3.0f}) {
+    CAPTURE(s);
+    float shown = 0.0f;
+    const auto rubber = settled_tube(tube, {0.0f, 1.0f}, s - 1.0f, &shown);
+    CHECK(shown == doctest::Approx(s - 1.0f).epsilon(1e-4));
+    const double kept = enclosed_volume(rubber, tube.triangles) / rest;
+    MESSAGE("stretch ", s, ": volume at volume 1 differs from rest by ", kept - 1.0);
+    CHECK(std::abs(kept - 1.0) < 0.02);
+    // Thinner when stretched, thicker when squashed: the middle ring's radius is 0.2 / sqrt(s).
+    const glm::vec3 middle = rubber[12 * 24];
+    CHECK(glm::length(glm::vec2(middle.x, middle.z)) == doctest::Approx(0.2f / std::sqrt(s)).epsilon(1e-3));
+    const auto plain = settled_tube(tube, {0.0f, 0.0f}, s - 1.0f, &shown);
+    CHECK(enclosed_volume(plain, tube.triangles) / rest == doctest::Approx(s).epsilon(1e-3));
+    // Half compensation: the cross-section scales by 1/sqrt(s).
+    const auto half = settled_tube(tube, {0.0f, 0.5f}, s - 1.0f, &shown);
+    CHECK(enclosed_volume(half, tube.triangles) / rest == doctest::Approx(std::sqrt(s)).epsilon(1e-3));
+  }
+}
+
+TEST_CASE("the length floor: a lattice squashed to half shows at least 70% of its length, and bulges") {
+  const Tube tube = make_tube();
+  const double rest = enclosed_volume(tube.points, tube.triangles);
+  float shown = 0.0f;
+  const auto squashed = settled_tube(tube, {}, -0.5f, &shown);  // default shape: floor 0.7, volume 1
+  CHECK(shown > -0.3f);
+  CHECK(shown < -0.29f);  // the floor is soft: just above it
+  CHECK(enclosed_volume(squashed, tube.triangles) / rest == doctest::Approx(1.0).epsilon(0.02));
+  const glm::vec3 middle = squashed[12 * 24];
+  CHECK(glm::length(glm::vec2(middle.x, middle.z)) > 0.2f / std::sqrt(0.71f));
+  // Every ring keeps at least 70% of its rest spacing.
+  for (int r = 0; r + 1 < 25; ++r) CHECK(squashed[std::size_t((r + 1) * 24)].y - squashed[std::size_t(r * 24)].y >= 0.7f * 0.04f);
+}
+
+TEST_CASE("the shape is a function of the springs' state: frame-rate independent through an under-damped release") {
+  const Tube tube = make_tube();
+  LatticeSpec spec = spec_on("limb", 1, 0.2f);
+  spec.shape = {};  // floor 0.7, volume 1
+  const auto world = world_of(tube.skeleton, tube.skeleton.bind_pose());
+  const auto run = [&](int hertz) {
+    DeformerHierarchy h = deform::bind_hierarchy(tube.skeleton, tube.points, tube.weights, {spec});
+    REQUIRE(h.set_stretch_target(0, 1.0f));
+    settle(h);
+    REQUIRE(h.set_stretch_target(0, 0.0f));
+    std::vector<float> curve;  // the shown stretch every 1/30 s over 1.5 s
+    float lowest = 1.0f;
+    for (int n = 1; n <= hertz * 3 / 2; ++n) {
+      REQUIRE(h.step(1.0f / float(hertz)));
+      lowest = std::min(lowest, h.stretch(0));
+      if (n % (hertz / 30) == 0) curve.push_back(h.stretch(0));
+    }
+    CHECK(lowest > -0.3f);
+    REQUIRE(h.update(world));
+    return curve;
+  };
+  const auto coarse = run(30);
+  const auto fine = run(240);
+  REQUIRE(coarse.size() == fine.size());
+  float largest = 0.0f;
+  for (std::size_t n = 0; n < coarse.size(); ++n) largest = std::max(largest, std::abs(coarse[n] - fine[n]));
+  MESSAGE("30 Hz vs 240 Hz: largest difference of the shown stretch ", largest);
+  CHECK(largest < 1e-4f);
+}
+
+TEST_CASE("set_shape changes the shape, refuses bad values and bad indices") {
+  const Tube tube = make_tube();
+  DeformerHierarchy h = deform::bind_hierarchy(tube.skeleton, tube.points, tube.weights, {spec_on("limb", 1)});
+  REQUIRE(h.set_stretch_target(0, -0.6f));
+  settle(h);
+  CHECK(h.stretch(0) > -0.3f);  // the default floor, 0.7
+  h.set_shape(0, {0.0f, 0.0f});
+  CHECK(h.stretch(0) == doctest::Approx(-0.6f).epsilon(1e-4));
+  CHECK(h.spec(0).shape == deform::StretchShape{0.0f, 0.0f});
+  h.set_shape(0, {0.5f, 0.0f});
+  CHECK(h.stretch(0) > -0.5f);
+  CHECK_THROWS_AS(h.set_shape(0, {0.7f, 2.0f}), deform::Error);
+  CHECK_THROWS_AS(h.set_shape(1, {}), std::out_of_range);
+  LatticeSpec bad = spec_on("limb", 1);
+  bad.shape.min_length_fraction = -0.5f;
+  CHECK_THROWS_AS(deform::bind_hierarchy(tube.skeleton, tube.points, tube.weights, {bad}), deform::Error);
 }

@@ -21,7 +21,7 @@ using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as docu
 
 constexpr const char* usage =
     "usage: deform simulate (--builtin | RIG) --target X,Y,Z [--release-at T] [--seconds S] [--dt DT]\n"
-    "                       [--effector BONE] [--integrator exact|verlet]\n"
+    "                       [--effector BONE] [--integrator exact|verlet] [--min-length F] [--volume F]\n"
     "\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
     "stretch to cover what remains), holds, releases at T and lets the stretch spring back. Prints\n"
@@ -31,11 +31,15 @@ constexpr const char* usage =
     "  --builtin            the built-in character with its default rig (three lattices on the left arm)\n"
     "  RIG                  a rig file (docs/formats.md) whose \"model\" names the model\n"
     "  --target X,Y,Z       world-space target of the effector (metres for the built-in character)\n"
-    "  --release-at T       seconds after the reach when the stretch is released (default 1.5)\n"
+    "  --release-at T       seconds after the reach when the stretch is released (default 1.5); a step that\n"
+    "                       crosses T is split there\n"
     "  --seconds S          length of the simulation (default 3)\n"
     "  --dt DT              step in seconds (default 1/60)\n"
     "  --effector BONE      effector bone (default: the rig's reach effector)\n"
-    "  --integrator NAME    override every lattice's integrator: exact (default) or verlet (the thesis' Verlet)\n";
+    "  --integrator NAME    override every lattice's integrator: exact (default) or verlet (the thesis' Verlet)\n"
+    "  --min-length F       every lattice shows at least F of its length, in [0, 1) (default 0.7; 0: no floor)\n"
+    "  --volume F           volume compensation in [0, 1]: a lattice stretched by s scales across its bone by\n"
+    "                       s^(-F/2) (default 1: keeps its volume; 0: the plain stretch)\n";
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
@@ -56,7 +60,8 @@ model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const s
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--release-at", "--seconds", "--dt", "--effector", "--integrator"}, {"--builtin"});
+  const Args args(argv, {"--target", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
+                                 "--min-length", "--volume"}, {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;
@@ -92,6 +97,16 @@ int run(const std::vector<std::string>& argv) {
       spec.elastic.integrator = *name == "exact" ? deform::Integrator::exact : deform::Integrator::verlet;
     }
   }
+  if (const auto text = args.value("--min-length")) {
+    const double fraction = parse_number(*text, "--min-length");
+    if (!(fraction >= 0.0 && fraction < 1.0)) throw UsageError("--min-length must be in [0, 1)");
+    for (deform::LatticeSpec& spec : rig.lattices) spec.shape.min_length_fraction = float(fraction);
+  }
+  if (const auto text = args.value("--volume")) {
+    const double volume = parse_number(*text, "--volume");
+    if (!(volume >= 0.0 && volume <= 1.0)) throw UsageError("--volume must be in [0, 1]");
+    for (deform::LatticeSpec& spec : rig.lattices) spec.shape.volume = float(volume);
+  }
   std::int32_t effector = rig.reach_effector;
   if (const auto name = args.value("--effector")) {
     effector = model.skeleton.find(*name);
@@ -114,20 +129,42 @@ int run(const std::vector<std::string>& argv) {
   };
   sample(0.0);
   const auto steps = static_cast<long long>(std::llround(seconds / dt));
-  bool released = false;
-  for (long long n = 1; n <= steps; ++n) {
-    const double t = double(n) * dt;
-    if (!released && t - dt >= release_at - 1e-9) {  // release at the first step that starts at or after T
-      character.release();
-      released = true;
-    }
-    if (const deform::Status status = character.update(float(dt)); !status) {
+  const auto advance = [&](double step, double t) {
+    if (const deform::Status status = character.update(float(step)); !status) {
       std::string detail = status.reason();
       for (const deform::LatticeSpec& spec : rig.lattices)
         if (spec.elastic.integrator == deform::Integrator::verlet)
           detail += "; lattice '" + spec.name + "' is stable for --dt below " +
                     std::to_string(deform::verlet_max_step(spec.elastic.oscillator, spec.elastic.verlet_kd));
       throw UsageError("step at t = " + std::to_string(t) + " refused: " + detail);
+    }
+  };
+  // The release happens at T whatever the step: the step that crosses T is split there (the exact integrator's state
+  // after h1 then h2 is its state after h1 + h2). A T within a billionth of a step of a step's end counts as that end
+  // (n·dt lands a rounding error away from T). The seed's Verlet assumes equal steps, so with a Verlet lattice the
+  // release waits for the first step that starts at or after T, as it always did.
+  bool split = true;
+  for (const deform::LatticeSpec& spec : rig.lattices) split = split && spec.elastic.integrator != deform::Integrator::verlet;
+  const double snap = 1e-9 * dt;
+  bool released = false;
+  if (release_at <= snap) {
+    character.release();
+    released = true;
+  }
+  for (long long n = 1; n <= steps; ++n) {
+    const double start = double(n - 1) * dt;
+    const double t = double(n) * dt;
+    if (!released && split && release_at < t - snap) {  // here release_at > start + snap: see the end of the loop
+      advance(release_at - start, release_at);
+      character.release();
+      released = true;
+      advance(t - release_at, t);
+    } else {
+      advance(dt, t);
+    }
+    if (!released && release_at <= t + (split ? snap : 1e-9)) {
+      character.release();
+      released = true;
     }
     sample(t);
   }

@@ -59,6 +59,11 @@ DeformerHierarchy bind_hierarchy(const Skeleton& skeleton, std::span<const glm::
     } catch (const Error& e) {
       throw spec_error(source, spec, "elastic " + e.element() + " " + e.message());
     }
+    try {
+      validate_shape(spec.shape);
+    } catch (const Error& e) {
+      throw spec_error(source, spec, e.message());
+    }
 
     // Selection weight of every point.
     std::vector<float> selection(point_count, 0.0f);

@@ -11,7 +11,25 @@ namespace {
 
 glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
 
+// The smallest length ratio volume compensation reads (a floorless lattice squashed past zero stays finite).
+constexpr float min_volume_ratio = 0.01f;
+
 }  // namespace
+
+float soft_length_floor(float ratio, float min_fraction) noexcept {
+  if (!(min_fraction > 0.0f)) return ratio;
+  const float knee = (1.0f - min_fraction) / 3.0f;
+  const float bend = min_fraction + knee;
+  if (ratio >= bend) return ratio;
+  return min_fraction + knee * std::exp((ratio - bend) / knee);
+}
+
+void validate_shape(const StretchShape& shape) {
+  if (!(shape.min_length_fraction >= 0.0f && shape.min_length_fraction < 1.0f))
+    throw Error::invalid_argument("<stretch shape>", "shape min_length_fraction must be in [0, 1)");
+  if (!(shape.volume >= 0.0f && shape.volume <= 1.0f))
+    throw Error::invalid_argument("<stretch shape>", "shape volume must be in [0, 1]");
+}
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
                                      std::size_t point_count)
@@ -23,6 +41,11 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     const std::string element = "lattice '" + bound.spec.name + "'";
     if (bound.spec.bone < 0 || std::size_t(bound.spec.bone) >= skeleton.bone_count()) {
       throw Error::invalid_argument(element, "bone is out of range");
+    }
+    try {
+      validate_shape(bound.spec.shape);
+    } catch (const Error& error) {
+      throw Error::invalid_argument(element, error.message());
     }
     const LatticeBinding& binding = bound.binding;
     if (binding.kind != LatticeKind::bezier || binding.point_counts != bound.rest.point_counts() ||
@@ -115,7 +138,54 @@ float DeformerHierarchy::stretch(std::size_t index) const {
   for (std::uint32_t n : lattice.far_face) {
     sum += glm::dot(lattice.elastic.positions()[n] - lattice.rest.control_points()[n], lattice.axis);
   }
-  return sum / float(lattice.far_face.size());
+  SliceShape slices;
+  shape_slices(lattice, slices);
+  return sum / float(lattice.far_face.size()) + slices.shift[std::size_t(lattice.rest.point_counts().x - 1)];
+}
+
+void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices) noexcept {
+  const glm::ivec3 counts = lattice.rest.point_counts();
+  const auto last = std::size_t(counts.x - 1);
+  if (lattice.spec.shape.min_length_fraction == 0.0f && lattice.spec.shape.volume == 0.0f) {  // the plain stretch
+    slices.shift.fill(0.0f);
+    slices.scale.fill(1.0f);
+    return;
+  }
+  const float per_slice = float(counts.y * counts.z);
+  const std::span<const glm::vec3> rest = lattice.rest.control_points();
+  const std::span<const glm::vec3> now = lattice.elastic.positions();
+  // Rest position and displacement along the bone, slice means; the far face's mean is its rigid translation's.
+  std::array<float, max_bezier_degree + 1> along{};
+  std::array<float, max_bezier_degree + 1> moved{};
+  for (int k = 0; k < counts.z; ++k) {
+    for (int j = 0; j < counts.y; ++j) {
+      for (std::size_t i = 0; i <= last; ++i) {
+        const std::size_t n = lattice.rest.index(int(i), j, k);
+        along[i] += glm::dot(rest[n], lattice.axis);
+        moved[i] += glm::dot(now[n] - rest[n], lattice.axis);
+      }
+    }
+  }
+  // A segment the floor leaves alone adds no shift, exactly: a lattice that never shortens that far moves as before.
+  std::array<float, max_bezier_degree + 1> ratio{};
+  slices.shift[0] = 0.0f;
+  for (std::size_t i = 1; i <= last; ++i) {
+    const float rest_length = (along[i] - along[i - 1]) / per_slice;
+    const float springs = (rest_length + (moved[i] - moved[i - 1]) / per_slice) / rest_length;
+    ratio[i] = soft_length_floor(springs, lattice.spec.shape.min_length_fraction);
+    slices.shift[i] = slices.shift[i - 1] + (ratio[i] == springs ? 0.0f : (ratio[i] - springs) * rest_length);
+  }
+  const float volume = lattice.spec.shape.volume;
+  for (std::size_t i = 0; i <= last; ++i) {
+    const float s = i == 0 ? ratio[1] : i == last ? ratio[last] : 0.5f * (ratio[i] + ratio[i + 1]);
+    slices.scale[i] = volume > 0.0f ? std::pow(std::max(s, min_volume_ratio), -0.5f * volume) : 1.0f;
+  }
+}
+
+void DeformerHierarchy::set_shape(std::size_t index, const StretchShape& shape) {
+  Lattice& lattice = lattices_.at(index);
+  validate_shape(shape);
+  lattice.spec.shape = shape;
 }
 
 void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& settings) {
@@ -142,24 +212,34 @@ void DeformerHierarchy::reset() {
 
 Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
   if (world.size() != bone_parents_.size()) return Status::failure("world does not have one entry per bone");
+  SliceShape slices;
   for (Lattice& lattice : lattices_) {
     const std::span<const glm::vec3> rest = lattice.rest.control_points();
     const std::span<const glm::vec3> now = lattice.elastic.positions();
+    const glm::ivec3 counts = lattice.rest.point_counts();
+    const auto last = std::size_t(counts.x - 1);
     glm::vec3 far(0.0f);
     for (std::uint32_t n : lattice.far_face) far += now[n] - rest[n];
     far /= float(lattice.far_face.size());
+    shape_slices(lattice, slices);
     const glm::mat3 linear(world[std::size_t(lattice.spec.bone)]);
     const float still = 1e-7f * lattice.length;
-    lattice.active = glm::length(far) > still;
-    std::span<glm::vec3> field = lattice.field.control_points();
-    for (std::size_t n = 0; n < rest.size(); ++n) {
-      const glm::vec3 local = now[n] - rest[n];
-      lattice.active = lattice.active || glm::length(local) > still;
-      lattice.world_displacements[n] = linear * local;
+    for (int k = 0; k < counts.z; ++k) {
+      for (int j = 0; j < counts.y; ++j) {
+        for (std::size_t i = 0; i <= last; ++i) {
+          const std::size_t n = lattice.rest.index(int(i), j, k);
+          const glm::vec3 radial = rest[n] - lattice.axis * glm::dot(rest[n], lattice.axis);
+          const glm::vec3 local = (i == last ? far : now[n] - rest[n]) + lattice.axis * slices.shift[i] +
+                                  radial * (slices.scale[i] - 1.0f);
+          lattice.world_displacements[n] = linear * local;
+        }
+      }
     }
-    for (std::uint32_t n : lattice.far_face) lattice.world_displacements[n] = linear * far;
+    lattice.far_displacement = linear * (far + lattice.axis * slices.shift[last]);
+    lattice.active = glm::length(lattice.far_displacement) > still;
+    for (const glm::vec3& d : lattice.world_displacements) lattice.active = lattice.active || glm::length(d) > still;
+    std::span<glm::vec3> field = lattice.field.control_points();
     std::copy(lattice.world_displacements.begin(), lattice.world_displacements.end(), field.begin());
-    lattice.far_displacement = linear * far;
   }
   // Drawing positions, once every lattice's field is known (a lattice is carried by those above it).
   for (Lattice& lattice : lattices_) {

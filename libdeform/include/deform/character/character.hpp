@@ -11,7 +11,9 @@
 // lattices along their bones (shares in proportion to their lengths; IK and stretch are solved together, so a bent
 // chain that straightens as it grows is accounted for). The stretch is a spring target: update() lets the lattices
 // spring toward it, so the effector arrives — within 1% of that remaining distance once settled — with the
-// overshoot and settling of the lattices' damping. release() sets the targets back to zero.
+// overshoot and settling of the lattices' damping. release() sets the targets back to zero. What the lattices show
+// goes through their StretchShape (rig.lattices[l].shape, or deformers().set_shape): a soft floor on their length
+// (default 70%) and volume compensation (default full), so a stretched arm thins and the spring-back bulges.
 //
 // A frame: pose (set_pose, e.g. from a SamplingJob) → IK (reach, on the chain alone) → update(dt): forward kinematics
 // once (LocalToWorldJob: world matrices and skinning palette), the springs' step, skinning, the lattices' carried

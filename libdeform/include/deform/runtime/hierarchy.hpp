@@ -13,9 +13,12 @@
 //  - a selected point beyond the far face (u >= 1, the hand below a forearm) is translated by weight · δ, δ the far
 //    face's displacement: exactly D at u = 1, so there is no seam at the border; points before the near face (u <= 0)
 //    do not move, exactly D at u = 0 = 0.
+// What update() shows of the springs' state is shaped like rubber (StretchShape): a length floor and volume
+// compensation, both memoryless functions of the state, so the motion stays as frame-rate independent as the springs.
 // Displacements of several lattices add up, applied after skinning (positions skinned with the unstretched pose), so
 // skin blending at the joints is kept. A lattice on a mid-chain bone thus carries the bones and points below it —
 // the hand follows a stretched forearm — and so does any lattice below it.
+#include <array>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <span>
@@ -36,6 +39,34 @@ enum class VertexSelection : std::uint8_t {
   list,            // an explicit list of points (thesis fig. 52), each moved fully
 };
 
+// How a stretched lattice keeps its body, like rubber. Both act per slice of control points across the bone (the
+// points with one index i along U), on the slices' mean displacement along the bone:
+//  - a length floor: each segment between two slices shows the length ratio soft_length_floor(r, min_length_fraction)
+//    of its spring state's r (identity for r >= floor + knee, then bending smoothly toward the floor, never
+//    below it), so an under-damped release bulges back to at least that fraction instead of collapsing;
+//  - volume compensation: each slice's rest points are scaled about the bone's line (its head, along U) by the
+//    factor s^(-volume/2), s the slice's shown length ratio (the mean of its segments'), so the cross-section scales
+//    by s^-volume: a stretched limb thins like a hose and a squashed one bulges. volume = 1 keeps the volume of a
+//    lattice stretched uniformly exactly (an affine map of determinant s · s^-1); 0 is the plain stretch.
+// The lattice's first face still does not move along the bone and the points beyond its far face are still carried
+// by the far face's move along the bone; with volume > 0 its first and last faces scale across the bone too, so
+// points just outside the lattice, not scaled, meet a scaled border: a step of |1 - s^(-volume/2)| times their
+// distance from the bone's line, softened where the selection weights blend.
+struct StretchShape {
+  float min_length_fraction = 0.7f;  // in [0, 1); 0 = no floor
+  float volume = 1.0f;               // in [0, 1]
+  bool operator==(const StretchShape&) const = default;
+};
+
+// The shown length ratio of a segment whose springs give `ratio` (its length over its rest length), for a floor
+// `min_fraction` in [0, 1): ratio itself when min_fraction is 0 or ratio >= min_fraction + knee, else
+// min_fraction + knee · exp((ratio - min_fraction - knee) / knee), with knee = (1 - min_fraction) / 3 — continuous
+// with its first derivative, increasing, never below min_fraction. A ratio of 1 or more is never changed.
+DEFORM_RUNTIME_API float soft_length_floor(float ratio, float min_fraction) noexcept;
+
+// Throws deform::Error ("<stretch shape>", naming the field) when a field is not finite or out of its range.
+DEFORM_RUNTIME_API void validate_shape(const StretchShape& shape);
+
 // The set-up of one lattice (what a rig file stores, docs/formats.md).
 struct LatticeSpec {
   std::string name;        // unique within a hierarchy
@@ -47,6 +78,7 @@ struct LatticeSpec {
   float margin = 0.05f;                 // sideways padding of the fitted box, fraction of its width, in [0, 1]
   ElasticSettings elastic;              // how its control points spring
   bool carry_descendants = true;        // points beyond the far face follow it (fig. 54); false = fig. 53
+  StretchShape shape;                   // length floor and volume compensation (not stored in rig files)
   bool operator==(const LatticeSpec&) const = default;
 };
 
@@ -92,10 +124,14 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // allocation.
   Status set_stretch_target(std::size_t lattice, float stretch);
   float stretch_target(std::size_t lattice) const { return lattices_.at(lattice).target; }
-  // The stretch it has now: the far face's displacement along the bone (model units).
+  // The stretch it shows now: the far face's displacement along the bone (model units), after the length floor of
+  // its StretchShape (so length() + stretch() >= min_length_fraction · length()). O(control points).
   float stretch(std::size_t lattice) const;
   // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid.
   void set_elastic(std::size_t lattice, const ElasticSettings& settings);
+  // Changes a lattice's length floor and volume compensation; shown from the next update(). Throws deform::Error
+  // when invalid (validate_shape) or the index is out of range.
+  void set_shape(std::size_t lattice, const StretchShape& shape);
 
   // Advances every lattice's springs by dt seconds (see ElasticLattice::step). Refuses, changing nothing, a dt that
   // is negative or not finite. No allocation.
@@ -156,6 +192,13 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
+  // Per slice along U (rest_lattice(l).point_counts().x of them): the shift along the bone the length floor adds to
+  // the slice's mean displacement and the slice's scale across the bone.
+  struct SliceShape {
+    std::array<float, max_bezier_degree + 1> shift{};
+    std::array<float, max_bezier_degree + 1> scale{};
+  };
+  static void shape_slices(const Lattice& lattice, SliceShape& slices) noexcept;
   // The evaluation of a lattice's displacement field into scratch_.
   LatticeEvaluateJob field_job(const Lattice& lattice);
   bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
