@@ -162,5 +162,62 @@ if code == 0:
     check(list(doc["bones"]) == ["upperarm_l", "forearm_l", "hand_l"], f"--builtin: bones {list(doc['bones'])}")
     check(doc["distance"] >= 0 and len(doc["effector"]) == 3, "--builtin: output")
 
+# The contract end to end: limits wider than ±90° about y (so that the in-limit Euler triple is often not the
+# canonical |y| <= 90° one) and narrow about x and z. Every printed angle is within its bone's limits, and
+# `deform skin --pose` of the printed bones puts a vertex bound rigidly to the effector exactly at the printed effector.
+import random
+WIDE = [  # name, parent, translation, rotation, limits
+    ("base", -1, (0, 0, 0), (0, 0, 0), FREE),
+    ("j1", 0, (0, 1, 0), (0, 0, 0), ((-30, 30), (-120, 120), (-25, 25))),
+    ("j2", 1, (1, 0, 0), (0, 0, 0), ((-20, 40), (-160, 150), (-30, 10))),
+    ("j3", 2, (0.8, 0, 0.2), (0, 0, 0), ((-180, -150), (-120, 180), (-15, 15))),
+    ("j4", 3, (0.6, 0.1, 0), (0, 0, 0), ((-10, 10), (-170, 170), (-10, 10))),
+    ("tip", 4, (0.4, 0, 0), (0, 0, 0), FREE),
+]
+saved = BONES
+BONES = WIDE
+wide_sk = os.path.join(work, "wide.sk")
+write_sk(wide_sk)
+tip_bind = head_of("tip", {})
+mesh = os.path.join(work, "tip.obj")
+with open(mesh, "w") as f:
+    f.write("v %r %r %r\nv 0 0 0\nv 0 1 0\nf 1 2 3\n" % tip_bind)
+with open(os.path.join(work, "tip.skw"), "w") as f:
+    f.write("skw 1\nvertices 3\n0 5 1\n1 0 1\n2 0 1\n")
+rng = random.Random(1123)
+limits_of = {b[0]: b[4] for b in WIDE}
+beyond_90 = 0
+for case in range(24):
+    solver = ("ccd", "fabrik")[case % 2]
+    # FK of random in-limit angles: reachable targets that need |y| > 90° somewhere.
+    angles = {b[0]: {"rotation": [rng.uniform(lo, hi) for lo, hi in b[4]]} for b in WIDE[1:5]}
+    target = head_of("tip", angles)
+    code, out, err = run(wide_sk, "--effector", "tip", "--root", "j1", "--solver", solver,
+                         "--target", ",".join("%.6f" % x for x in target))
+    check(code == 0, f"wide {case}: exit {code} ({err.strip()})")
+    if code != 0:
+        continue
+    doc = json.loads(out)
+    for name, entry in doc["bones"].items():
+        for axis, (value, (lo, hi)) in enumerate(zip(entry["rotation"], limits_of[name])):
+            check(lo <= value <= hi, f"wide {case} {solver}: {name} axis {axis} = {value} outside [{lo}, {hi}]")
+        beyond_90 += name != "tip" and abs(entry["rotation"][1]) > 90
+    check(dist(head_of("tip", doc["bones"]), doc["effector"]) <= 1e-4, f"wide {case} {solver}: FK of printed bones")
+    pose = os.path.join(work, "wide_pose.json")
+    with open(pose, "w") as f:
+        json.dump({"bones": doc["bones"]}, f)
+    skinned = os.path.join(work, "wide_out.obj")
+    proc = subprocess.run([exe, "skin", mesh, "--skeleton", wide_sk, "--weights", os.path.join(work, "tip.skw"),
+                           "--pose", pose, "--out", skinned], capture_output=True, text=True, timeout=60)
+    check(proc.returncode == 0, f"wide {case}: skin exit {proc.returncode} ({proc.stderr.strip()})")
+    if proc.returncode != 0:
+        continue
+    with open(skinned) as f:
+        vertex = [float(x) for x in next(line for line in f if line.startswith("v ")).split()[1:4]]
+    check(dist(vertex, doc["effector"]) <= 1e-4,
+          f"wide {case} {solver}: skin --pose puts the effector at {vertex}, ik printed {doc['effector']}")
+check(beyond_90 >= 5, f"wide: only {beyond_90} printed joints beyond ±90° about y: the test does not exercise them")
+BONES = saved
+
 print("ik CLI:", "FAILED" if failures else "ok", f"({len(failures)} failures)")
 sys.exit(1 if failures else 0)

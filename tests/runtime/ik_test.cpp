@@ -15,6 +15,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
+#include "deform/io/pose_json.hpp"
 #include "runtime/ik_test_rig.hpp"
 
 // Counts heap allocations, to show that a solve allocates nothing. (GCC cannot see that this operator new is the
@@ -166,8 +167,18 @@ std::optional<glm::quat> tied_answer(glm::quat rotation, const DofLimits& limits
     const glm::vec3 d = e - clamp_euler(e, limits);
     return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
   };
-  const glm::vec3 first = euler_from_quat(rotation);
-  const glm::vec3 second(wrap(first.x + 180.0f), wrap(180.0f - first.y), wrap(first.z + 180.0f));
+  auto nearest_turn = [&](glm::vec3 e) {  // each angle ± 360 to the value nearest its range
+    for (int axis = 0; axis < 3; ++axis)
+      for (const float shift : {-360.0f, 360.0f})
+        if (excess(glm::vec3(e[axis] + shift) * glm::vec3(axis == 0, axis == 1, axis == 2) +
+                   e * glm::vec3(axis != 0, axis != 1, axis != 2)) < excess(e))
+          e[axis] += shift;
+    return e;
+  };
+  const glm::vec3 canonical = euler_from_quat(rotation);
+  const glm::vec3 first = nearest_turn(canonical);
+  const glm::vec3 second = nearest_turn(
+      glm::vec3(wrap(canonical.x + 180.0f), wrap(180.0f - canonical.y), wrap(canonical.z + 180.0f)));
   if (std::abs(excess(first) - excess(second)) > 1e-3f) return std::nullopt;
   return quat_from_euler(clamp_euler(excess(second) < excess(first) ? first : second, limits));
 }
@@ -238,6 +249,93 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
   }
   CHECK(prepare_limits(DofLimits{}).free);
   CHECK(EulerLimits{}.free);
+}
+
+// Exactly within: an angle compared with its float limits, no slack (the contract the CLI's printed angles keep).
+bool angles_within(glm::vec3 degrees, const DofLimits& limits) { return within_limits(degrees, limits, 0.0f); }
+
+TEST_CASE("euler_within_limits: the triple the limits mean, within them; the rotation itself when it is within") {
+  std::mt19937 random(77);
+  std::normal_distribution<float> normal;
+  int second_triple = 0;
+  double worst = 0.0;
+  for (int c = 0; c < 20000; ++c) {
+    const DofLimits limits = ik_test::random_wide_limits(random);
+    // In-limit rotations (every 8th exactly on a bound, y at ±90° among them): the same rotation back, inside.
+    glm::vec3 angles = ik_test::random_in_limits(random, limits);
+    if (c % 8 == 0) angles[c % 3] = c % 16 ? limits.min[c % 3] : limits.max[c % 3];
+    const glm::quat inside = quat_from_euler(angles);
+    const glm::vec3 e = euler_within_limits(inside, limits);
+    CHECK(angles_within(e, limits));
+    const double difference = rotation_difference(quat_from_euler(e), inside);
+    CHECK(difference <= 1e-5);
+    worst = std::max(worst, difference);
+    second_triple += !within_limits(euler_from_quat(inside), limits, 1e-3f);
+    // Any rotation: within the limits, and a fixed point (what is printed reads back as itself).
+    const glm::quat any = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::vec3 clamped = euler_within_limits(any, limits);
+    CHECK(angles_within(clamped, limits));
+    const glm::quat back = quat_from_euler(clamped);
+    CHECK(rotation_difference(quat_from_euler(euler_within_limits(back, limits)), back) <= 1e-5);
+  }
+  MESSAGE("euler_within_limits: 20000 in-limit rotations, ", second_triple,
+          " of them only within in the non-canonical triple; largest difference ", worst, " rad");
+  CHECK(second_triple > 1000);
+  // Never NaN: a NaN or zero rotation reads as the identity, NaN angles clamp to the value nearest 0.
+  const DofLimits limits{glm::vec3(10.0f, -30.0f, -180.0f), glm::vec3(20.0f, 30.0f, 180.0f)};
+  const float nan = not_a_number;
+  CHECK(euler_within_limits(glm::quat(nan, 0.0f, 0.0f, 0.0f), limits) == glm::vec3(10.0f, 0.0f, 0.0f));
+  CHECK(euler_within_limits(glm::quat(0.0f, 0.0f, 0.0f, 0.0f), limits) == glm::vec3(10.0f, 0.0f, 0.0f));
+  CHECK(clamp_euler(glm::vec3(nan, nan, 5.0f), limits) == glm::vec3(10.0f, 0.0f, 5.0f));
+  glm::quat q(nan, nan, 0.0f, 1.0f);
+  CHECK(clamp_rotation(prepare_limits(limits), q));
+  CHECK(rotation_difference(q, quat_from_euler(glm::vec3(10.0f, 0.0f, 0.0f))) <= 1e-6);
+  q = glm::quat(inf, 0.0f, 0.0f, 0.0f);
+  CHECK(clamp_rotation(prepare_limits(DofLimits{}), q));
+  CHECK(q == glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+}
+
+// The issue's contract, over random chains with limits up to ±180° on every axis: what the CLI prints of a solve
+// (format_pose_bones_json: euler_within_limits of each joint) is within the limits, and reading it back as `deform
+// skin --pose` does (parse_pose_json, clamping) gives the solver's own effector.
+TEST_CASE("property: printed angles of CCD and FABRIK solves are within limits up to ±180° and give the solver's effector") {
+  std::mt19937 random(20261123);
+  int cases = 0, non_canonical = 0;
+  float worst = 0.0f;
+  for (int c = 0; c < 4000; ++c) {
+    const std::size_t joints = 2 + static_cast<std::size_t>(c % 5);
+    const RandomChain rig = ik_test::random_chain(random, joints, false, -1, true);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    // Reachable targets, and every fourth anywhere around (often out of reach: the clamps work hardest there).
+    const glm::vec3 target = c % 4 == 3 ? ik_test::chain_root_head(rig.skeleton.bind_pose()) +
+                                              rig.length * 1.3f * ik_test::random_direction(random)
+                                        : ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose();
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 100;
+    IkResult result;
+    REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
+    const glm::vec3 solved = effector_position(chain, pose.rotations, pose.translations);
+    const std::span<const std::int32_t> bones(chain.bones);
+    const Pose printed = parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}",
+                                         rig.skeleton);
+    for (std::size_t k = 0; k < joints; ++k) {
+      const auto b = static_cast<std::size_t>(chain.bones[k]);
+      const DofLimits& limits = rig.skeleton.bones()[b].limits;
+      const glm::vec3 e = euler_within_limits(pose.rotations[b], limits);
+      CHECK(angles_within(e, limits));
+      non_canonical += !within_limits(euler_from_quat(pose.rotations[b]), limits, 1e-3f);
+    }
+    const float moved = glm::length(effector_position(chain, printed.rotations, printed.translations) - solved);
+    CHECK(moved <= 2e-5f * rig.length);
+    worst = std::max(worst, moved / rig.length);
+    ++cases;
+  }
+  MESSAGE("printed solves: ", cases, " chains of 2-6 joints, ", non_canonical,
+          " joints within their limits only in the non-canonical triple; largest effector move ", worst,
+          " x chain length");
+  CHECK(non_canonical > 500);
 }
 
 TEST_CASE("make_chain finds root..effector and rejects anything else") {

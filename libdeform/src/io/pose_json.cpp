@@ -44,7 +44,7 @@ std::string format_pose_bones_json(const Skeleton& skeleton, const Pose& pose, s
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
   auto add = [&](std::int32_t id) {
     const auto i = static_cast<std::size_t>(id);
-    const glm::vec3 e = euler_from_quat(pose.rotations.at(i));
+    const glm::vec3 e = euler_within_limits(pose.rotations.at(i), skeleton.bone(id).limits);
     const glm::vec3 t = pose.translations.at(i);
     out[skeleton.key(id)] = {{"rotation", {shortest_double(e.x), shortest_double(e.y), shortest_double(e.z)}},
                              {"translation", {shortest_double(t.x), shortest_double(t.y), shortest_double(t.z)}}};

@@ -33,11 +33,18 @@ inline double polynomial_atan2(double y, double x) {
 
 inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
 
-// How far the angles lie outside the limits, summed over the axes (radians): 0 when within.
+// How far an angle in (-π, π] lies outside [min, max] (within [-π, π]) around the circle: 0 within, else the
+// distance to the nearer limit, one of them possibly across ±π.
+inline double outside(double angle, double min, double max) {
+  if (angle < min) return std::min(min - angle, angle + 2.0 * pi - max);
+  if (angle > max) return std::min(angle - max, min + 2.0 * pi - angle);
+  return 0.0;
+}
+
+// outside() summed over the axes (radians).
 inline double outside(const EulerLimits& limits, glm::dvec3 angle) {
   double sum = 0.0;
-  for (int axis = 0; axis < 3; ++axis)
-    sum += std::max(0.0, limits.min[axis] - angle[axis]) + std::max(0.0, angle[axis] - limits.max[axis]);
+  for (int axis = 0; axis < 3; ++axis) sum += outside(angle[axis], limits.min[axis], limits.max[axis]);
   return sum;
 }
 
@@ -85,6 +92,12 @@ EulerLimits prepare_limits(const DofLimits& limits) noexcept {
 }
 
 bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
+  const float norm2 = glm::dot(rotation, rotation);
+  if (!(norm2 > 1e-30f) || !std::isfinite(norm2)) {
+    rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    clamp_rotation(limits, rotation);
+    return true;
+  }
   rotation = glm::normalize(rotation);
   detail::EulerAngles euler;
   if (limits.free || !detail::limit_euler(limits, rotation, euler)) return false;
@@ -131,11 +144,16 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const double second_outside = outside(limits, second.angle);
   euler = second_outside < first_outside ? second : first;
   if (second_outside == 0.0) return false;
+  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
   for (int axis = 0; axis < 3; ++axis) {
-    if (euler.angle[axis] < limits.min[axis]) {
-      euler.angle[axis] = limits.min[axis], euler.dir[axis] = limits.min_dir[axis];
-    } else if (euler.angle[axis] > limits.max[axis]) {
-      euler.angle[axis] = limits.max[axis], euler.dir[axis] = limits.max_dir[axis];
+    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
+    if (angle >= min && angle <= max) continue;
+    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
+    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
+    if (to_min <= to_max) {
+      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    } else {
+      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
     }
   }
   return true;

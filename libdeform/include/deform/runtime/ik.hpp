@@ -45,8 +45,9 @@ DEFORM_RUNTIME_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
 // Normalises `rotation` and clamps it into the limits as Skeleton::clamp_to_limits does (of its two Euler triples the
 // one nearer the limits, angles in (-180°, 180°], clamped per axis, converted back), with square roots and a
 // polynomial arctangent instead of trigonometric calls: the same rotation to float rounding (the tests allow 4e-6
-// rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. Returns
-// true when the rotation was outside the limits and was changed.
+// rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. An axis
+// outside goes to its nearer limit around the circle. Returns true when the rotation was outside the limits and was
+// changed. A zero or non-finite rotation (NaN) becomes the identity clamped into the limits (true): never NaN.
 DEFORM_RUNTIME_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept;
 
 // The bones of a chain and its joints' prepared limits, made once (make_chain). bones[0] is the root, bones.back() the
