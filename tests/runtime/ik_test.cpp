@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <optional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "deform/runtime/error.hpp"
@@ -596,6 +598,113 @@ TEST_CASE("random_state carries the stall escape's generator from solve to solve
   CHECK(kicked > 0);
 }
 
+// One solve by the job with a pole and a weight.
+Status solve_with(IkMethod method, const IkChain& chain, Pose& pose, glm::vec3 target, const IkSettings& settings,
+                  std::optional<glm::vec3> pole, float weight, IkResult& result) {
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+  IkJob job;
+  job.method = method;
+  job.chain = &chain;
+  if (const Status status = chain_base(chain, pose.rotations, pose.translations, job.base); !status) return status;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = target;
+  job.settings = settings;
+  job.scratch = scratch;
+  job.use_pole = pole.has_value();
+  job.pole = pole.value_or(glm::vec3(0.0f));
+  job.weight = weight;
+  job.result = &result;
+  return job.run();
+}
+
+// The mean of the inner joints' heads, across the line root → effector (model space), and the pole's part across it.
+std::pair<glm::vec3, glm::vec3> across_line(const RandomChain& rig, const Pose& pose, glm::vec3 pole) {
+  std::vector<glm::mat4> world(rig.skeleton.bone_count());
+  REQUIRE(world_matrices(rig.skeleton, pose, world));
+  const glm::vec3 root(world[1][3]), axis = glm::normalize(glm::vec3(world[rig.joints + 1][3]) - root);
+  glm::vec3 middle(0.0f);
+  for (std::size_t b = 2; b <= rig.joints; ++b) middle += glm::vec3(world[b][3]) - root;
+  middle /= static_cast<float>(rig.joints - 1);
+  const glm::vec3 p = pole - root;
+  return {middle - glm::dot(middle, axis) * axis, p - glm::dot(p, axis) * axis};
+}
+
+TEST_CASE("a pole swivels CCD and FABRIK chains toward it, keeping the effector; free chains face it exactly") {
+  std::mt19937 random(515);
+  int faced = 0, cases = 0, kept = 0;
+  for (int c = 0; c < 400; ++c) {
+    const bool free_joints = c % 2 == 0;
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4, free_joints);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 pole = ik_test::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_test::random_direction(random);
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    const IkMethod method = c % 4 < 2 ? IkMethod::ccd : IkMethod::fabrik;
+    Pose plain = rig.skeleton.bind_pose(), poled = plain;
+    const Pose before = plain;
+    IkResult plain_result, poled_result;
+    REQUIRE(solve_with(method, chain, plain, target, settings, std::nullopt, 1.0f, plain_result));
+    REQUIRE(solve_with(method, chain, poled, target, settings, pole, 1.0f, poled_result));
+    check_pose(rig, before, poled);
+    const glm::vec3 effector = reference_effector(rig.skeleton, poled, rig.effector);
+    CHECK(poled_result.distance == doctest::Approx(glm::length(effector - target)).epsilon(1e-3).scale(rig.length));
+    // The swivel never loses the solve: reached stays reached, unreached gets no farther.
+    if (plain_result.reached) CHECK(poled_result.reached);
+    else CHECK(poled_result.distance <= plain_result.distance + 1e-5f * rig.length);
+    const auto [middle, wanted] = across_line(rig, poled, pole);
+    if (glm::length(middle) < 1e-3f * rig.length || glm::length(wanted) < 1e-3f) continue;
+    const float cosine = glm::dot(middle, wanted) / (glm::length(middle) * glm::length(wanted));
+    ++cases;
+    kept += plain_result.reached == poled_result.reached;
+    if (free_joints) CHECK(cosine >= 0.9999f);  // nothing limits the root: the middle faces the pole
+    faced += cosine > 0.0f;
+  }
+  MESSAGE("pole: ", faced, " of ", cases, " bent chains end with their middle on the pole's side");
+  CHECK(faced >= cases * 3 / 4);
+  CHECK(kept == cases);
+}
+
+TEST_CASE("weight blends the solve with the input pose: 0 leaves it bit-identical, 1 is the solve") {
+  std::mt19937 random(616);
+  for (int c = 0; c < 300; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    const IkMethod method = c % 2 ? IkMethod::ccd : IkMethod::fabrik;
+    // Start out of the limits too: weight 0 must not even clamp.
+    Pose start = ik_test::random_in_limit_pose(random, rig);
+    if (c % 3 == 0) start.rotations[1] = glm::normalize(glm::quat(0.3f, 0.9f, -0.2f, 0.4f));
+    Pose zero = start, full = start, half = start, plain = start;
+    IkResult zero_result, full_result, half_result, plain_result;
+    REQUIRE(solve(method, chain, plain, target, settings, plain_result));
+    REQUIRE(solve_with(method, chain, zero, target, settings, std::nullopt, 0.0f, zero_result));
+    REQUIRE(solve_with(method, chain, full, target, settings, std::nullopt, 1.0f, full_result));
+    REQUIRE(solve_with(method, chain, half, target, settings, std::nullopt, 0.5f, half_result));
+    CHECK(std::memcmp(zero.rotations.data(), start.rotations.data(), start.rotations.size() * sizeof(glm::quat)) == 0);
+    CHECK(zero_result.iterations == 0);
+    CHECK(zero_result.distance ==
+          doctest::Approx(glm::length(reference_effector(rig.skeleton, start, rig.effector) - target)).scale(rig.length));
+    CHECK(std::memcmp(full.rotations.data(), plain.rotations.data(), plain.rotations.size() * sizeof(glm::quat)) == 0);
+    CHECK(full_result.distance == plain_result.distance);
+    check_pose(rig, start, half);
+    CHECK(half_result.distance ==
+          doctest::Approx(glm::length(reference_effector(rig.skeleton, half, rig.effector) - target)).scale(rig.length));
+    // Halfway: each joint is the shortest-path slerp halfway from its input to the solve, clamped.
+    for (std::size_t k = 0; k < chain.joint_count(); ++k) {
+      const auto b = static_cast<std::size_t>(chain.bones[k]);
+      const glm::quat from = start.rotations[b], to = full.rotations[b];
+      glm::quat expected = glm::slerp(from, glm::dot(from, to) < 0.0f ? -to : to, 0.5f);
+      clamp_rotation(chain.limits[k], expected);
+      CHECK(rotation_difference(half.rotations[b], expected) <= 1e-6);
+    }
+  }
+}
+
 TEST_CASE("max_step_degrees caps each CCD update and still converges") {
   std::mt19937 random(3);
   int reached = 0;
@@ -677,6 +786,16 @@ TEST_CASE("non-finite targets, poses and bases, overflowing chains, bad settings
     two = good_two;
     two.base.rotation.x = bad.x + bad.y + bad.z;
     refused(two, "base is not finite");
+    job = good;
+    job.pole = bad;
+    CHECK(job.validate());  // an unused pole is not read
+    job.use_pole = true;
+    refused(job, "pole is not finite");
+  }
+  for (const float weight : {not_a_number, -0.01f, 1.01f, inf}) {
+    IkJob job = good;
+    job.weight = weight;
+    refused(job, "weight not within [0, 1]");
   }
   // Non-finite entries of the chain's pose (other bones are not read), an overflowing chain length.
   for (const std::size_t bone : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {

@@ -161,6 +161,8 @@ Status check(const IkJob& job, float& length) noexcept {
     return Status::failure("scratch misaligned");
   if (!detail::finite(job.target)) return Status::failure("target is not finite");
   if (!finite(job.base)) return Status::failure("base is not finite");
+  if (job.use_pole && !detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (!(job.weight >= 0.0f && job.weight <= 1.0f)) return Status::failure("weight not within [0, 1]");
   return check_chain_pose(*chain, job.rotations, job.translations, length);
 }
 
@@ -190,11 +192,36 @@ Status IkJob::run() const noexcept {
   parts.columns = carve<glm::vec3>(bytes, 3 * joints);
   parts.goals = carve<glm::vec3>(bytes, bones);
   parts.lengths = carve<float>(bytes, joints);
-  std::uint32_t state = random_state != nullptr ? *random_state : ik_random_seed;
+  parts.input = carve<glm::quat>(bytes, joints);
   const detail::PoseView pose{rotations, translations};
-  const IkResult solved = method == IkMethod::fabrik
-                              ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
-                              : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+  if (weight == 0.0f) {  // nothing to apply: the input pose as it is, measured
+    detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+    const float distance = glm::length(parts.heads[joints] - target);
+    if (result != nullptr) *result = IkResult{distance <= settings.tolerance, distance, 0};
+    return {};
+  }
+  if (weight < 1.0f) detail::save_joints(*chain, pose, parts.input);
+  std::uint32_t state = random_state != nullptr ? *random_state : ik_random_seed;
+  IkResult solved = method == IkMethod::fabrik
+                        ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
+                        : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+  if (use_pole || weight < 1.0f) {
+    detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+    if (use_pole)
+      solved.distance = detail::swivel_toward_pole(*chain, pose, base, target, pole, solved.distance,
+                                                   settings.tolerance, parts.frames, parts.heads);
+    if (weight < 1.0f) {
+      for (std::size_t k = 0; k < joints; ++k) {
+        glm::quat& rotation = rotations[static_cast<std::size_t>(chain->bones[k])];
+        const glm::quat from = parts.input[k];
+        rotation = glm::slerp(from, glm::dot(from, rotation) < 0.0f ? -rotation : rotation, weight);
+        clamp_rotation(chain->limits[k], rotation);
+      }
+      detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+      solved.distance = glm::length(parts.heads[joints] - target);
+    }
+    solved.reached = solved.distance <= settings.tolerance;
+  }
   if (random_state != nullptr) *random_state = state;
   if (result != nullptr) *result = solved;
   return {};
@@ -238,6 +265,43 @@ void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<
     rotations[k] = rotation;
     heads[k] = head;
   }
+}
+
+float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                         float distance, float tolerance, std::span<glm::quat> frames,
+                         std::span<glm::vec3> heads) noexcept {
+  const std::size_t joints = chain.joint_count();
+  if (joints < 2) return distance;
+  const glm::dvec3 root(heads[0]);
+  const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
+  const double line_length = glm::length(line);
+  if (!(line_length > 1e-12)) return distance;
+  const glm::dvec3 axis = line / line_length;
+  glm::dvec3 middle(0.0);
+  for (std::size_t k = 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
+  middle /= static_cast<double>(joints - 1);
+  // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
+  const glm::dvec3 from = middle - glm::dot(middle, axis) * axis;
+  const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, axis) * axis;
+  const double scale = line_length * line_length;
+  if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return distance;
+  const double angle = std::atan2(glm::dot(axis, glm::cross(from, to)), glm::dot(from, to));
+  glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[0])];
+  const glm::quat solved = local;
+  const glm::quat parent = base.rotation;
+  // Acceptable: reached stays reached; otherwise no farther than the solve (float rounding of the turn allowed).
+  const float allowed = distance <= tolerance ? tolerance : distance + 1e-6f * static_cast<float>(line_length);
+  for (double fraction = 1.0; fraction >= 0.125; fraction *= 0.5) {
+    const glm::quat turn(glm::angleAxis(static_cast<float>(angle * fraction), glm::vec3(axis)));
+    local = glm::normalize(glm::conjugate(parent) * turn * parent * solved);
+    clamp_rotation(chain.limits[0], local);
+    chain_fk(chain, pose, base, frames, heads);
+    const float swivelled = glm::length(heads[joints] - target);
+    if (swivelled <= allowed) return swivelled;
+  }
+  local = solved;
+  chain_fk(chain, pose, base, frames, heads);
+  return distance;
 }
 
 StepCap cap_for(float max_radians) noexcept {

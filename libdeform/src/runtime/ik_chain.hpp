@@ -25,7 +25,15 @@ struct Scratch {
   std::span<glm::vec3> columns;   // Jacobian columns, 3 per joint (stall escape)
   std::span<glm::vec3> goals;     // FABRIK's joint positions, per chain bone
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
+  std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
 };
+
+// The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
+// middle moves toward `pole`, as far as the root's limits allow without losing the solve's distance. `frames` and
+// `heads` hold the chain's FK for `pose` on entry and on return; returns the new effector–target distance.
+float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                         float distance, float tolerance, std::span<glm::quat> frames,
+                         std::span<glm::vec3> heads) noexcept;
 
 // The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
 // `length` is chain_length of the pose.
@@ -88,8 +96,9 @@ struct EulerAngles {
 };
 
 // The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
-// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it.
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept;
+// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it. Without
+// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent).
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true) noexcept;
 
 // Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
 // direction, the others a polynomial (cos, sin) within 1e-12.

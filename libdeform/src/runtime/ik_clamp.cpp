@@ -33,6 +33,23 @@ inline double polynomial_atan2(double y, double x) {
 
 inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
 
+// Whether the unit direction (cos a, sin a) of each axis lies within its limits, from dot and cross products with
+// the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at most the width;
+// for a wider one, the angle is outside when strictly within the complementary range from max to min. Agrees with
+// comparing the angles except within rounding (1e-7 rad) of a limit.
+inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)[3]) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const glm::dvec2 d = dir[axis], lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double c = limits.cos_width[axis];
+    if (!limits.wide[axis]) {
+      if (!(lo.x * d.y - lo.y * d.x >= 0.0 && glm::dot(lo, d) >= c)) return false;
+    } else if (hi.x * d.y - hi.y * d.x > 0.0 && glm::dot(hi, d) > c) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // How far an angle in (-π, π] lies outside [min, max] (within [-π, π]) around the circle: 0 within, else the
 // distance to the nearer limit, one of them possibly across ±π.
 inline double outside(double angle, double min, double max) {
@@ -85,6 +102,9 @@ EulerLimits prepare_limits(const DofLimits& limits) noexcept {
     prepared.max[axis] = static_cast<double>(limits.max[axis]) * (pi / 180.0);
     prepared.min_dir[axis] = glm::dvec2(std::cos(prepared.min[axis]), std::sin(prepared.min[axis]));
     prepared.max_dir[axis] = glm::dvec2(std::cos(prepared.max[axis]), std::sin(prepared.max[axis]));
+    const double width = prepared.max[axis] - prepared.min[axis];
+    prepared.cos_width[axis] = width >= 2.0 * pi ? -1.0 : std::cos(width);
+    prepared.wide[axis] = width > pi;
   }
   prepared.free = glm::all(glm::lessThanEqual(limits.min, glm::vec3(-180.0f))) &&
                   glm::all(glm::greaterThanEqual(limits.max, glm::vec3(180.0f)));
@@ -100,21 +120,22 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
   }
   rotation = glm::normalize(rotation);
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler)) return false;
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) return false;
   rotation = detail::to_quat(euler);
   return true;
 }
 
 namespace detail {
 
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept {
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed) noexcept {
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
   // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
   // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
   // the small ones keep their precision.
   const glm::dquat q(rotation);
   const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
-  if (!(norm2 > 1e-24) || !std::isfinite(norm2)) return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler);
+  if (!(norm2 > 1e-24) || !std::isfinite(norm2))
+    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed);
   const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
@@ -129,6 +150,11 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     first.dir[0] = glm::dvec2(r11, r21) * (1.0 / norm2);
     first.dir[2] = glm::dvec2(1.0, 0.0);
   }
+  EulerAngles second;
+  second.dir[0] = -first.dir[0];
+  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
+  second.dir[2] = -first.dir[2];
+  if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
   for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(first.dir[axis].y, first.dir[axis].x);
   const double first_outside = outside(limits, first.angle);
   if (first_outside == 0.0) {
@@ -136,11 +162,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     return false;
   }
   // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
-  EulerAngles second;
   second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
-  second.dir[0] = -first.dir[0];
-  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
-  second.dir[2] = -first.dir[2];
   const double second_outside = outside(limits, second.angle);
   euler = second_outside < first_outside ? second : first;
   if (second_outside == 0.0) return false;
@@ -210,7 +232,7 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
                  glm::vec3 wanted) noexcept {
   local = glm::normalize(local);
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler)) return false;
+  if (limits.free || !limit_euler(limits, local, euler, false)) return false;
   if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;

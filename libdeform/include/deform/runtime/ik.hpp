@@ -37,6 +37,10 @@ struct EulerLimits {
   glm::dvec2 min_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of min per axis
   glm::dvec2 max_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of max per axis
   bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
+  // Per axis, cos(max − min) (−1 for a range of 360° or more): whether a direction lies within the range is then a
+  // dot and a cross product, no arctangent (the clamp's test for a rotation that needs no clamping).
+  glm::dvec3 cos_width{-1.0};
+  bool wide[3]{true, true, true};  // max − min > 180°
 };
 
 // The prepared form of `limits` (degrees, X·Y·Z as in docs/formats.md). O(1), a few sin/cos calls.
@@ -151,16 +155,30 @@ struct DEFORM_RUNTIME_API IkJob {
   // ik_random_seed, so equal inputs give equal outputs.
   std::uint32_t* random_state = nullptr;
   IkResult* result = nullptr;               // out, optional
+  // Optional pole (hint), model space, used when `use_pole`: the point the chain's middle (the mean of the heads of
+  // the joints after the root; a one-joint chain has none) bends toward. Applied after the solve as a swivel of the
+  // whole chain about the line from the root's head to the effector's head, which leaves the effector where it is:
+  // the root joint turns about that line until the middle lies in the half-plane of the pole. The root's limits may
+  // cut the swivel short; it is kept only as far as it leaves the target reached (or, unreached, no farther away),
+  // trying the whole angle, then half, a quarter and an eighth of it. A pole on the line, or a chain whose middle is
+  // on it (straight), swivels nothing.
+  glm::vec3 pole{0.0f};
+  bool use_pole = false;
+  // How much of the solve is applied, in [0, 1]: each joint's rotation becomes the shortest-path slerp from its input
+  // rotation to the solved one by `weight`, clamped into its limits; result describes that pose. 1 (default) is the
+  // solve; 0 writes nothing to the pose (bit-identical, not even clamped), its result describing the input pose
+  // (iterations 0).
+  float weight = 1.0f;
 
   static constexpr std::size_t scratch_alignment = alignof(double);
-  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 120 per joint + 40.
-  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 120 * joint_count + 40; }
+  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 136 per joint + 40.
+  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 136 * joint_count + 40; }
   // scratch_size for this job's chain (0 without one).
   std::size_t scratch_size() const noexcept;
 
   // Why run() would refuse: no chain or one without joints, spans too short, a setting out of range (see IkSettings),
-  // the scratch too small or misaligned, a non-finite target, base, chain rotation or translation, or a chain whose
-  // length overflows. O(chain).
+  // the scratch too small or misaligned, a non-finite target, base, pole (when used), chain rotation or translation,
+  // a weight outside [0, 1] or NaN, or a chain whose length overflows. O(chain).
   Status validate() const noexcept;
   // validate(), then the solve. On failure writes nothing (neither the pose nor result nor random_state). Cost:
   // O(iterations × joints), no allocation.
