@@ -340,6 +340,138 @@ TEST_CASE("property: printed angles of CCD and FABRIK solves are within limits u
   CHECK(non_canonical > 500);
 }
 
+// The plain reference split, written differently from the library's: the swing is the shortest arc taking the axis
+// to where the rotation takes it (so q = swing · twist with the swing's axis perpendicular to the axis), the twist
+// what remains. (s1, s2, τ), radians.
+glm::dvec3 reference_swing_twist(const SwingTwistLimits& limits, glm::quat rotation) {
+  glm::dquat q = glm::normalize(glm::dquat(rotation));
+  const glm::dvec3 a = glm::normalize(glm::dvec3(limits.axis)), b1(limits.reference), b2 = glm::cross(a, b1);
+  const glm::dvec3 moved = q * a;
+  const glm::dvec3 normal = glm::cross(a, moved);
+  const double angle = std::atan2(glm::length(normal), glm::dot(a, moved));
+  const glm::dvec3 u = glm::length(normal) > 1e-15 ? glm::normalize(normal) : glm::dvec3(0.0);
+  const glm::dquat swing = glm::angleAxis(angle, glm::length(normal) > 1e-15 ? u : b1);
+  glm::dquat twist = glm::conjugate(swing) * q;
+  if (twist.w < 0.0) twist = -twist;
+  const double tau = 2.0 * std::atan2(glm::dot(glm::dvec3(twist.x, twist.y, twist.z), a), twist.w);
+  return {angle * glm::dot(u, b1), angle * glm::dot(u, b2), tau};
+}
+
+bool reference_within(const SwingTwistLimits& limits, glm::dvec3 split, double slack) {
+  const double a = limits.swing1, b = limits.swing2;
+  const double x = a > 0.0 ? split.x / (a + slack) : (std::abs(split.x) <= slack ? 0.0 : 2.0);
+  const double y = b > 0.0 ? split.y / (b + slack) : (std::abs(split.y) <= slack ? 0.0 : 2.0);
+  const double tau = split.z;
+  const bool twist = (tau >= limits.twist_min - slack && tau <= limits.twist_max + slack) ||
+                     (std::abs(std::abs(tau) - std::numbers::pi) <= slack &&
+                      (limits.twist_min <= -std::numbers::pi + slack || limits.twist_max >= std::numbers::pi - slack));
+  return x * x + y * y <= 1.0 && twist;
+}
+
+SwingTwistLimits random_swing_twist(std::mt19937& random) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float kind = unit(random);
+  const float swing1 = kind < 0.1f ? 0.0f : 180.0f * unit(random);
+  const float swing2 = kind < 0.3f ? swing1 : (kind < 0.35f ? 0.0f : 180.0f * unit(random));  // circular, flat
+  float t0 = -180.0f + 360.0f * unit(random), t1 = -180.0f + 360.0f * unit(random);
+  if (kind > 0.9f) t0 = -180.0f, t1 = 180.0f;
+  if (kind > 0.8f && kind <= 0.85f) t1 = t0;  // locked twist
+  return make_swing_twist_limits(ik_test::random_direction(random), swing1, swing2, t0, t1);
+}
+
+TEST_CASE("swing-twist limits: the split agrees with a plain reference; projection lands inside, nearest, idempotent") {
+  std::mt19937 random(4242);
+  std::normal_distribution<float> normal;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int inside = 0, projected = 0;
+  for (int c = 0; c < 20000; ++c) {
+    const SwingTwistLimits limits = random_swing_twist(random);
+    const glm::quat q = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::dvec3 reference = reference_swing_twist(limits, q);
+    const glm::vec3 split = swing_twist_angles(limits, q);
+    if (glm::length(glm::dvec2(reference)) < 3.1) {  // away from a half-turn swing, where the split is not unique
+      CHECK(std::abs(split.x - reference.x) <= 1e-5);
+      CHECK(std::abs(split.y - reference.y) <= 1e-5);
+      const double twist_gap = std::remainder(split.z - reference.z, 2.0 * std::numbers::pi);
+      CHECK(std::abs(twist_gap) <= 1e-5);
+    }
+    glm::quat clamped = q;
+    const bool changed = clamp_swing_twist(limits, clamped);
+    if (reference_within(limits, reference, -1e-5)) {  // strictly inside: untouched
+      CHECK_FALSE(changed);
+      CHECK(clamped == glm::normalize(q));
+      ++inside;
+    }
+    const glm::dvec3 after = reference_swing_twist(limits, clamped);
+    CHECK(reference_within(limits, after, 1e-5));
+    glm::quat again = clamped;
+    clamp_swing_twist(limits, again);
+    CHECK(rotation_difference(again, clamped) <= 1e-6);
+    if (!changed) continue;
+    ++projected;
+    // Nearest: no sampled point of the ellipse is nearer the input's swing than the projected one, and the twist
+    // went to its nearer limit.
+    const glm::dvec2 from(reference), to(after);
+    if (glm::length(from) < 3.1 && !reference_within(limits, glm::dvec3(from, limits.twist_min), 1e-9)) {
+      for (int k = 0; k < 64; ++k) {
+        const double phi = 2.0 * std::numbers::pi * unit(random);
+        const glm::dvec2 rim(limits.swing1 * std::cos(phi), limits.swing2 * std::sin(phi));
+        CHECK(glm::length(to - from) <= glm::length(rim - from) + 1e-5);
+      }
+      if (limits.swing1 == limits.swing2)  // a circular cone keeps the swing's direction
+        CHECK(glm::length(to - from * (limits.swing1 / glm::length(from))) <= 1e-5);
+    }
+  }
+  MESSAGE("swing-twist: 20000 random rotations, ", inside, " strictly inside, ", projected, " projected");
+  CHECK(inside > 1000);
+  CHECK(projected > 10000);
+  // Never NaN.
+  glm::quat bad(not_a_number, 0.0f, 1.0f, 0.0f);
+  const SwingTwistLimits cone = make_swing_twist_limits(glm::vec3(0, 1, 0), 30.0f, 45.0f, 10.0f, 20.0f);
+  CHECK(clamp_swing_twist(cone, bad));
+  CHECK(reference_within(cone, reference_swing_twist(cone, bad), 1e-5));
+  CHECK(std::isfinite(bad.w));
+}
+
+TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; bad chains are refused") {
+  std::mt19937 random(9191);
+  int reached = 0, cases = 0;
+  for (int c = 0; c < 600; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4);
+    IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    for (std::size_t k = 0; k < chain.joint_count(); ++k)
+      if ((c + k) % 3 != 0) {
+        const glm::vec3 bone = rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k + 1])].bind_translation;
+        set_swing_twist(chain, k, swing_twist_from_euler(rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits, bone));
+      }
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose();
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    IkResult result;
+    REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
+    for (std::size_t k = 0; k < chain.joint_count(); ++k) {
+      const glm::quat q = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
+      if (chain.swing_twist[k].active) CHECK(reference_within(chain.swing_twist[k], reference_swing_twist(chain.swing_twist[k], q), 1e-4));
+      else CHECK(ik_test::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
+    }
+    CHECK(result.distance == doctest::Approx(glm::length(reference_effector(rig.skeleton, pose, rig.effector) - target)).scale(rig.length).epsilon(1e-3));
+    reached += result.reached;
+    ++cases;
+  }
+  MESSAGE("swing-twist chains: ", reached, " of ", cases, " reachable-by-Euler targets reached");
+  CHECK(reached > cases / 2);
+  IkChain chain = make_chain(ik_test::random_chain(random, 3).skeleton, 1, 4);
+  CHECK_THROWS_AS(set_swing_twist(chain, 3, SwingTwistLimits{}), Error);
+  chain.swing_twist.resize(1);
+  Pose pose = ik_test::random_chain(random, 3).skeleton.bind_pose();
+  IkResult result;
+  const Status status = solve(IkMethod::ccd, chain, pose, glm::vec3(0.0f), IkSettings{}, result);
+  CHECK_FALSE(status);
+  CHECK(std::string(status.reason()) == "swing_twist has neither 0 nor one entry per joint");
+}
+
 TEST_CASE("make_chain finds root..effector and rejects anything else") {
   std::mt19937 random(1);
   const RandomChain rig = ik_test::random_chain(random, 3);

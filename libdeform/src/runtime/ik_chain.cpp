@@ -162,6 +162,8 @@ Status check(const IkJob& job, float& length) noexcept {
   if (!detail::finite(job.target)) return Status::failure("target is not finite");
   if (!finite(job.base)) return Status::failure("base is not finite");
   if (job.use_pole && !detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (!chain->swing_twist.empty() && chain->swing_twist.size() != chain->joint_count())
+    return Status::failure("swing_twist has neither 0 nor one entry per joint");
   if (!(job.weight >= 0.0f && job.weight <= 1.0f)) return Status::failure("weight not within [0, 1]");
   return check_chain_pose(*chain, job.rotations, job.translations, length);
 }
@@ -215,7 +217,7 @@ Status IkJob::run() const noexcept {
         glm::quat& rotation = rotations[static_cast<std::size_t>(chain->bones[k])];
         const glm::quat from = parts.input[k];
         rotation = glm::slerp(from, glm::dot(from, rotation) < 0.0f ? -rotation : rotation, weight);
-        clamp_rotation(chain->limits[k], rotation);
+        detail::clamp_chain_joint(*chain, k, rotation);
       }
       detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
       solved.distance = glm::length(parts.heads[joints] - target);
@@ -294,7 +296,7 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
   for (double fraction = 1.0; fraction >= 0.125; fraction *= 0.5) {
     const glm::quat turn(glm::angleAxis(static_cast<float>(angle * fraction), glm::vec3(axis)));
     local = glm::normalize(glm::conjugate(parent) * turn * parent * solved);
-    clamp_rotation(chain.limits[0], local);
+    clamp_chain_joint(chain, 0, local);
     chain_fk(chain, pose, base, frames, heads);
     const float swivelled = glm::length(heads[joints] - target);
     if (swivelled <= allowed) return swivelled;
@@ -309,7 +311,7 @@ StepCap cap_for(float max_radians) noexcept {
   return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
 }
 
-void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
+void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept {
   for (std::size_t k = 0; k < chain.joint_count(); ++k) {
     const glm::quat parent = k == 0 ? base : frames[k - 1];
@@ -317,7 +319,7 @@ void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits
     const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain.bones[k + 1])];
     const glm::vec3 wanted = glm::conjugate(parent) * (target - heads[k]);
     local = rotation_between(local * offset, wanted) * local;
-    clamp_joint(limits[k], local, true, offset, wanted);
+    clamp_chain_joint(chain, k, local, true, offset, wanted);
     frames[k] = parent * local;
     heads[k + 1] = heads[k] + frames[k] * offset;
   }
@@ -375,7 +377,14 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
       angle = max - min >= 2.0 * std::numbers::pi ? std::remainder(angle, 2.0 * std::numbers::pi)
                                                   : std::clamp(angle, min, max);
     }
-    pose.rotations[static_cast<std::size_t>(chain.bones[k])] = to_quat(euler_at(limit, angles[k]));
+    glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
+    rotation = to_quat(euler_at(limit, angles[k]));
+    // A swing-twist joint (free Euler entry) is projected; its angles follow the projected rotation.
+    if (const SwingTwistLimits* cone = swing_twist_of(chain, k); cone != nullptr && clamp_swing_twist(*cone, rotation)) {
+      EulerAngles euler;
+      limit_euler(limit, rotation, euler);
+      angles[k] = euler.angle;
+    }
   }
 }
 
@@ -389,7 +398,7 @@ void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseVie
     pose.rotations[static_cast<std::size_t>(chain.bones[k])] = saved[k];
 }
 
-void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state,
                     float degrees) noexcept {
   auto uniform = [&state]() {  // xorshift32, in [-1, 1)
     state ^= state << 13;
@@ -401,7 +410,7 @@ void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, P
     const glm::vec3 delta(uniform() * degrees, uniform() * degrees, uniform() * degrees);
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     rotation = rotation * quat_from_euler(delta);
-    clamp_rotation(limits[k], rotation);
+    clamp_chain_joint(chain, k, rotation);
   }
 }
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <utility>
 
 #include "ik_chain.hpp"
 
@@ -236,6 +238,183 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
   if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;
+}
+
+}  // namespace detail
+}  // namespace deform
+
+// --- swing-twist limits ---
+namespace deform {
+namespace {
+
+glm::dvec3 unit_or_x(glm::vec3 v) {
+  const glm::dvec3 d(v);
+  const double length = glm::length(d);
+  return length > 1e-30 && std::isfinite(length) ? d / length : glm::dvec3(1.0, 0.0, 0.0);
+}
+
+// `e` made perpendicular to the unit `axis` and unit; the coordinate axis least aligned with `axis` when `e` is
+// (nearly) along it.
+glm::dvec3 perpendicular(glm::dvec3 axis, glm::dvec3 e) {
+  glm::dvec3 r = e - glm::dot(e, axis) * axis;
+  if (glm::dot(r, r) < 1e-6) {
+    const glm::dvec3 m = glm::abs(axis);
+    e = m.x <= m.y && m.x <= m.z ? glm::dvec3(1, 0, 0) : (m.y <= m.z ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, 1));
+    r = e - glm::dot(e, axis) * axis;
+  }
+  return glm::normalize(r);
+}
+
+float radians_within(float degrees, float lo, float hi) {
+  return glm::radians(std::clamp(std::isnan(degrees) ? 0.0f : degrees, lo, hi));
+}
+
+// A rotation split about the limits' axis: the swing (w >= 0), its rotation-vector components, the twist angle.
+struct Split {
+  glm::dquat swing{1.0, 0.0, 0.0, 0.0};
+  glm::dvec2 s{0.0};
+  double twist = 0.0;
+};
+
+Split split(const SwingTwistLimits& limits, glm::quat rotation) {
+  glm::dquat q(rotation);
+  const double norm = std::sqrt(glm::dot(q, q));
+  q = norm > 1e-30 && std::isfinite(norm) ? q * (1.0 / norm) : glm::dquat(1.0, 0.0, 0.0, 0.0);
+  if (q.w < 0.0) q = -q;
+  const glm::dvec3 axis(limits.axis), b1(limits.reference), b2 = glm::cross(axis, b1);
+  const double p = q.x * axis.x + q.y * axis.y + q.z * axis.z, twist_norm = std::sqrt(q.w * q.w + p * p);
+  Split result;
+  glm::dquat twist(1.0, 0.0, 0.0, 0.0);
+  if (twist_norm > 1e-12) {
+    twist = glm::dquat(q.w / twist_norm, axis * (p / twist_norm));
+    result.twist = 2.0 * std::atan2(p, q.w);
+    if (result.twist > pi) result.twist -= 2.0 * pi;  // q.w >= 0 keeps it within [-π, π]; π rather than -π is kept
+  }
+  glm::dquat swing = q * glm::conjugate(twist);
+  if (swing.w < 0.0) swing = -swing;
+  result.swing = swing;
+  const glm::dvec3 v(swing.x, swing.y, swing.z);
+  const double sine = glm::length(v);
+  if (sine > 1e-300) {
+    const double angle = 2.0 * std::atan2(sine, swing.w);
+    result.s = glm::dvec2(glm::dot(v, b1), glm::dot(v, b2)) * (angle / sine);
+  }
+  return result;
+}
+
+// The point of the ellipse (x / a)² + (y / b)² <= 1 (a, b >= 0) nearest (x, y), which lies outside it: (a² x / (t +
+// a²), b² y / (t + b²)) at the root t > 0 of f(t) = (a x / (t + a²))² + (b y / (t + b²))² - 1, which is convex and
+// decreasing there, so Newton's method from t = 0 climbs to it without overshooting.
+glm::dvec2 nearest_on_ellipse(glm::dvec2 p, double a, double b) {
+  if (a <= 0.0 && b <= 0.0) return glm::dvec2(0.0);
+  if (a <= 0.0) return glm::dvec2(0.0, std::clamp(p.y, -b, b));
+  if (b <= 0.0) return glm::dvec2(std::clamp(p.x, -a, a), 0.0);
+  const double a2 = a * a, b2 = b * b, ax = a * p.x, by = b * p.y;
+  double t = 0.0;
+  for (int step = 0; step < 32; ++step) {
+    const double u = ax / (t + a2), v = by / (t + b2);
+    const double f = u * u + v * v - 1.0;
+    if (f <= 1e-15) break;
+    const double slope = -2.0 * (u * u / (t + a2) + v * v / (t + b2));
+    const double next = t - f / slope;
+    if (!(next > t)) break;
+    t = next;
+  }
+  return glm::dvec2(a2 * p.x / (t + a2), b2 * p.y / (t + b2));
+}
+
+bool within_cone(glm::dvec2 s, double a, double b) {
+  const double tiny = 1e-12;
+  if (a <= 0.0 && std::abs(s.x) > tiny) return false;
+  if (b <= 0.0 && std::abs(s.y) > tiny) return false;
+  const double x = a > 0.0 ? s.x / a : 0.0, y = b > 0.0 ? s.y / b : 0.0;
+  return x * x + y * y <= 1.0 + 1e-12;
+}
+
+}  // namespace
+
+SwingTwistLimits make_swing_twist_limits(glm::vec3 axis, float swing1_degrees, float swing2_degrees,
+                                         float twist_min_degrees, float twist_max_degrees) noexcept {
+  SwingTwistLimits limits;
+  const glm::dvec3 a = unit_or_x(axis);
+  limits.axis = glm::vec3(a);
+  limits.reference = glm::vec3(perpendicular(a, glm::dvec3(0.0)));
+  limits.swing1 = radians_within(swing1_degrees, 0.0f, 180.0f);
+  limits.swing2 = radians_within(swing2_degrees, 0.0f, 180.0f);
+  limits.twist_min = radians_within(twist_min_degrees, -180.0f, 180.0f);
+  limits.twist_max = radians_within(twist_max_degrees, -180.0f, 180.0f);
+  if (limits.twist_min > limits.twist_max) std::swap(limits.twist_min, limits.twist_max);
+  limits.active = true;
+  return limits;
+}
+
+SwingTwistLimits swing_twist_from_euler(const DofLimits& euler, glm::vec3 axis) noexcept {
+  const glm::dvec3 a = unit_or_x(axis), m = glm::abs(a);
+  const int t = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2), i = (t + 1) % 3, j = (t + 2) % 3;
+  const bool flipped = a[t] < 0.0;
+  auto larger_bound = [&](int k) { return std::max(std::abs(euler.min[k]), std::abs(euler.max[k])); };
+  SwingTwistLimits limits = make_swing_twist_limits(glm::vec3(a), larger_bound(i), larger_bound(j),
+                                                    flipped ? -euler.max[t] : euler.min[t],
+                                                    flipped ? -euler.min[t] : euler.max[t]);
+  glm::dvec3 e(0.0);
+  e[i] = 1.0;
+  limits.reference = glm::vec3(perpendicular(a, e));
+  return limits;
+}
+
+glm::vec3 swing_twist_angles(const SwingTwistLimits& limits, glm::quat rotation) noexcept {
+  const Split parts = split(limits, rotation);
+  return glm::vec3(static_cast<float>(parts.s.x), static_cast<float>(parts.s.y), static_cast<float>(parts.twist));
+}
+
+bool clamp_swing_twist(const SwingTwistLimits& limits, glm::quat& rotation) noexcept {
+  const float norm2 = glm::dot(rotation, rotation);
+  const bool usable = norm2 > 1e-30f && std::isfinite(norm2);
+  rotation = usable ? glm::normalize(rotation) : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const Split parts = split(limits, rotation);
+  const double a = limits.swing1, b = limits.swing2, lo = limits.twist_min, hi = limits.twist_max;
+  const bool cone = within_cone(parts.s, a, b);
+  const bool twisted_in = outside(parts.twist, lo, hi) == 0.0;
+  if (cone && twisted_in) return !usable;
+  glm::dquat swing = parts.swing;
+  if (!cone) {
+    const glm::dvec2 s = nearest_on_ellipse(parts.s, a, b);
+    const double angle = glm::length(s);
+    const glm::dvec3 axis(limits.axis), b1(limits.reference), b2 = glm::cross(axis, b1);
+    const glm::dvec3 u = angle > 1e-300 ? (s.x * b1 + s.y * b2) / angle : glm::dvec3(0.0);
+    swing = glm::dquat(std::cos(0.5 * angle), u * std::sin(0.5 * angle));
+  }
+  double twist = parts.twist;
+  if (!twisted_in) {
+    const double to_min = twist < lo ? lo - twist : lo + 2.0 * pi - twist;
+    const double to_max = twist > hi ? twist - hi : twist + 2.0 * pi - hi;
+    twist = to_min <= to_max ? lo : hi;
+  }
+  const glm::dquat turn(std::cos(0.5 * twist), glm::dvec3(limits.axis) * std::sin(0.5 * twist));
+  rotation = glm::quat(glm::normalize(swing * turn));
+  return true;
+}
+
+void set_swing_twist(IkChain& chain, std::size_t joint, const SwingTwistLimits& limits) {
+  if (joint >= chain.joint_count())
+    throw Error::invalid_argument("joint " + std::to_string(joint), "not a joint of the chain");
+  if (chain.swing_twist.empty()) chain.swing_twist.resize(chain.joint_count());
+  chain.swing_twist[joint] = limits;
+  chain.swing_twist[joint].active = true;
+  chain.limits[joint] = EulerLimits{};
+}
+
+namespace detail {
+
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& rotation) noexcept {
+  if (const SwingTwistLimits* limits = swing_twist_of(chain, k)) return clamp_swing_twist(*limits, rotation);
+  return clamp_rotation(chain.limits[k], rotation);
+}
+
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& local, bool reaim, glm::vec3 carried,
+                       glm::vec3 wanted) noexcept {
+  if (const SwingTwistLimits* limits = swing_twist_of(chain, k)) return clamp_swing_twist(*limits, local);
+  return clamp_joint(chain.limits[k], local, reaim, carried, wanted);
 }
 
 }  // namespace detail

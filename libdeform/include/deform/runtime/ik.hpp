@@ -54,6 +54,45 @@ DEFORM_RUNTIME_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
 // changed. A zero or non-finite rotation (NaN) becomes the identity clamped into the limits (true): never NaN.
 DEFORM_RUNTIME_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept;
 
+// Swing-twist limits of a joint, the alternative to Euler min/max. A joint's local rotation q (relative to its parent,
+// the identity being its rest, as for Euler limits) is split about the bone's rest axis `axis` (a unit vector in the
+// joint's frame; normally the direction of its child's translation) with q taken with w >= 0:
+//   twist = the rotation about `axis` by τ = 2 atan2(q.xyz · axis, q.w), in (-180°, 180°] (identity when q is a
+//           half turn about an axis perpendicular to `axis`, where the split is not defined);
+//   swing = q · twist⁻¹, a rotation by θ in [0°, 180°] about a unit axis u perpendicular to `axis`; q = swing · twist.
+// The swing's rotation vector θ u has components (s1, s2) = θ (u · reference, u · (axis × reference)); the swing is
+// within the elliptical cone when (s1 / swing1)² + (s2 / swing2)² <= 1 (swing1 = swing2: a circular cone of that
+// half-angle; a zero half-angle allows no swing about that direction); the twist when τ is within [twist_min,
+// twist_max]. Projection (clamp_swing_twist) moves (s1, s2) to the nearest point of the ellipse in that plane (for a
+// circular cone: the same swing axis, the angle cut to the cone) and τ to its nearer limit around the circle.
+struct SwingTwistLimits {
+  glm::vec3 axis{1.0f, 0.0f, 0.0f};       // unit, the joint's frame
+  glm::vec3 reference{0.0f, 1.0f, 0.0f};  // unit, perpendicular to axis
+  float swing1 = std::numbers::pi_v<float>, swing2 = std::numbers::pi_v<float>;  // radians, [0, π]
+  float twist_min = -std::numbers::pi_v<float>, twist_max = std::numbers::pi_v<float>;  // radians, within [-π, π]
+  bool active = false;  // an IkChain joint uses these instead of its Euler limits
+};
+
+// Swing-twist limits about `axis` (any non-zero vector; (1, 0, 0) when zero or not finite) with a reference direction
+// chosen perpendicular to it (the coordinate axis least aligned with it, made perpendicular), half-angles and the
+// twist range in degrees (clamped to [0, 180] and [-180, 180]; twist_min > twist_max are swapped). active is true.
+DEFORM_RUNTIME_API SwingTwistLimits make_swing_twist_limits(glm::vec3 axis, float swing1_degrees, float swing2_degrees,
+                                                            float twist_min_degrees, float twist_max_degrees) noexcept;
+// Swing-twist limits standing in for Euler ones (`deform ik --limits swing-twist`): about the bone axis `axis`, the
+// twist range is the Euler range of the coordinate axis nearest `axis` (X, Y or Z; its sign flips the range), and
+// the cone's half-angles (reference = the next coordinate axis in X→Y→Z order, made perpendicular) are the larger
+// |bound| of each of the other two axes' ranges, at most 180°: a cone that holds every swing the Euler limits allow
+// about those axes alone.
+DEFORM_RUNTIME_API SwingTwistLimits swing_twist_from_euler(const DofLimits& limits, glm::vec3 axis) noexcept;
+// The swing's rotation-vector components and the twist of `rotation` under `limits`' split: (s1, s2, τ), radians.
+// A zero or non-finite rotation reads as the identity.
+DEFORM_RUNTIME_API glm::vec3 swing_twist_angles(const SwingTwistLimits& limits, glm::quat rotation) noexcept;
+// Normalises `rotation` and projects it onto the limits (see SwingTwistLimits; `active` is not read). A rotation
+// within them is left as it is (normalised); projecting is idempotent to float rounding. Returns true when it was
+// outside and was changed. A zero or non-finite rotation becomes the identity projected (true). O(1), a Newton
+// solve of at most 32 steps for an elliptical cone.
+DEFORM_RUNTIME_API bool clamp_swing_twist(const SwingTwistLimits& limits, glm::quat& rotation) noexcept;
+
 // The bones of a chain and its joints' prepared limits, made once (make_chain). bones[0] is the root, bones.back() the
 // effector, each the parent of the next; `ancestors` are the bones above the root, from bone 0 down to the root's
 // parent (chain_base multiplies their transforms); `limits` has one entry per joint, in chain order.
@@ -61,9 +100,18 @@ struct IkChain {
   std::vector<std::int32_t> bones;
   std::vector<std::int32_t> ancestors;
   std::vector<EulerLimits> limits;
+  // Empty (every joint has Euler limits), or one entry per joint: a joint whose entry is active is limited by it
+  // instead of by its Euler entry, which set_swing_twist makes free (so that the solvers' Euler steps leave the
+  // joint alone and the projection decides).
+  std::vector<SwingTwistLimits> swing_twist;
   std::int32_t max_bone = -1;  // the largest id in bones and ancestors: pose spans need more entries than this
   std::size_t joint_count() const noexcept { return bones.empty() ? 0 : bones.size() - 1; }
 };
+
+// Gives joint `joint` (chain order) the swing-twist `limits` (stored active) and makes its Euler entry free.
+// Allocates swing_twist (joint_count() inactive entries) on first use. Throws deform::Error when `joint` is not a
+// joint of the chain. (make_chain again restores the skeleton's Euler limits.)
+DEFORM_RUNTIME_API void set_swing_twist(IkChain& chain, std::size_t joint, const SwingTwistLimits& limits);
 
 // Most bones a chain may have (255 joints and the effector).
 inline constexpr std::size_t max_chain_bones = 256;
