@@ -77,7 +77,8 @@ class DEFORM_RUNTIME_API Skeleton {
   // unless `clamp` is false. Returns the angles actually used.
   glm::vec3 set_euler(Pose& pose, std::int32_t bone, glm::vec3 degrees, bool clamp = true) const;
   // Clamps the bone's current local rotation into its DOF limits (convert to Euler, clamp, convert back). Of the two
-  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged.
+  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged;
+  // each angle is taken modulo 360 to the value nearest its range, so it goes to its nearer limit around the circle.
   void clamp_to_limits(Pose& pose, std::int32_t bone) const;
 
  private:
