@@ -5,16 +5,19 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <optional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
+#include "deform/io/pose_json.hpp"
 #include "runtime/ik_test_rig.hpp"
 
 // Counts heap allocations, to show that a solve allocates nothing. (GCC cannot see that this operator new is the
@@ -166,8 +169,18 @@ std::optional<glm::quat> tied_answer(glm::quat rotation, const DofLimits& limits
     const glm::vec3 d = e - clamp_euler(e, limits);
     return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
   };
-  const glm::vec3 first = euler_from_quat(rotation);
-  const glm::vec3 second(wrap(first.x + 180.0f), wrap(180.0f - first.y), wrap(first.z + 180.0f));
+  auto nearest_turn = [&](glm::vec3 e) {  // each angle ± 360 to the value nearest its range
+    for (int axis = 0; axis < 3; ++axis)
+      for (const float shift : {-360.0f, 360.0f})
+        if (excess(glm::vec3(e[axis] + shift) * glm::vec3(axis == 0, axis == 1, axis == 2) +
+                   e * glm::vec3(axis != 0, axis != 1, axis != 2)) < excess(e))
+          e[axis] += shift;
+    return e;
+  };
+  const glm::vec3 canonical = euler_from_quat(rotation);
+  const glm::vec3 first = nearest_turn(canonical);
+  const glm::vec3 second = nearest_turn(
+      glm::vec3(wrap(canonical.x + 180.0f), wrap(180.0f - canonical.y), wrap(canonical.z + 180.0f)));
   if (std::abs(excess(first) - excess(second)) > 1e-3f) return std::nullopt;
   return quat_from_euler(clamp_euler(excess(second) < excess(first) ? first : second, limits));
 }
@@ -238,6 +251,225 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
   }
   CHECK(prepare_limits(DofLimits{}).free);
   CHECK(EulerLimits{}.free);
+}
+
+// Exactly within: an angle compared with its float limits, no slack (the contract the CLI's printed angles keep).
+bool angles_within(glm::vec3 degrees, const DofLimits& limits) { return within_limits(degrees, limits, 0.0f); }
+
+TEST_CASE("euler_within_limits: the triple the limits mean, within them; the rotation itself when it is within") {
+  std::mt19937 random(77);
+  std::normal_distribution<float> normal;
+  int second_triple = 0;
+  double worst = 0.0;
+  for (int c = 0; c < 20000; ++c) {
+    const DofLimits limits = ik_test::random_wide_limits(random);
+    // In-limit rotations (every 8th exactly on a bound, y at ±90° among them): the same rotation back, inside.
+    glm::vec3 angles = ik_test::random_in_limits(random, limits);
+    if (c % 8 == 0) angles[c % 3] = c % 16 ? limits.min[c % 3] : limits.max[c % 3];
+    const glm::quat inside = quat_from_euler(angles);
+    const glm::vec3 e = euler_within_limits(inside, limits);
+    CHECK(angles_within(e, limits));
+    const double difference = rotation_difference(quat_from_euler(e), inside);
+    CHECK(difference <= 1e-5);
+    worst = std::max(worst, difference);
+    second_triple += !within_limits(euler_from_quat(inside), limits, 1e-3f);
+    // Any rotation: within the limits, and a fixed point (what is printed reads back as itself).
+    const glm::quat any = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::vec3 clamped = euler_within_limits(any, limits);
+    CHECK(angles_within(clamped, limits));
+    const glm::quat back = quat_from_euler(clamped);
+    CHECK(rotation_difference(quat_from_euler(euler_within_limits(back, limits)), back) <= 1e-5);
+  }
+  MESSAGE("euler_within_limits: 20000 in-limit rotations, ", second_triple,
+          " of them only within in the non-canonical triple; largest difference ", worst, " rad");
+  CHECK(second_triple > 1000);
+  // Never NaN: a NaN or zero rotation reads as the identity, NaN angles clamp to the value nearest 0.
+  const DofLimits limits{glm::vec3(10.0f, -30.0f, -180.0f), glm::vec3(20.0f, 30.0f, 180.0f)};
+  const float nan = not_a_number;
+  CHECK(euler_within_limits(glm::quat(nan, 0.0f, 0.0f, 0.0f), limits) == glm::vec3(10.0f, 0.0f, 0.0f));
+  CHECK(euler_within_limits(glm::quat(0.0f, 0.0f, 0.0f, 0.0f), limits) == glm::vec3(10.0f, 0.0f, 0.0f));
+  CHECK(clamp_euler(glm::vec3(nan, nan, 5.0f), limits) == glm::vec3(10.0f, 0.0f, 5.0f));
+  glm::quat q(nan, nan, 0.0f, 1.0f);
+  CHECK(clamp_rotation(prepare_limits(limits), q));
+  CHECK(rotation_difference(q, quat_from_euler(glm::vec3(10.0f, 0.0f, 0.0f))) <= 1e-6);
+  q = glm::quat(inf, 0.0f, 0.0f, 0.0f);
+  CHECK(clamp_rotation(prepare_limits(DofLimits{}), q));
+  CHECK(q == glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+}
+
+// The issue's contract, over random chains with limits up to ±180° on every axis: what the CLI prints of a solve
+// (format_pose_bones_json: euler_within_limits of each joint) is within the limits, and reading it back as `deform
+// skin --pose` does (parse_pose_json, clamping) gives the solver's own effector.
+TEST_CASE("property: printed angles of CCD and FABRIK solves are within limits up to ±180° and give the solver's effector") {
+  std::mt19937 random(20261123);
+  int cases = 0, non_canonical = 0;
+  float worst = 0.0f;
+  for (int c = 0; c < 4000; ++c) {
+    const std::size_t joints = 2 + static_cast<std::size_t>(c % 5);
+    const RandomChain rig = ik_test::random_chain(random, joints, false, -1, true);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    // Reachable targets, and every fourth anywhere around (often out of reach: the clamps work hardest there).
+    const glm::vec3 target = c % 4 == 3 ? ik_test::chain_root_head(rig.skeleton.bind_pose()) +
+                                              rig.length * 1.3f * ik_test::random_direction(random)
+                                        : ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose();
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 100;
+    IkResult result;
+    REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
+    const glm::vec3 solved = effector_position(chain, pose.rotations, pose.translations);
+    const std::span<const std::int32_t> bones(chain.bones);
+    const Pose printed = parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}",
+                                         rig.skeleton);
+    for (std::size_t k = 0; k < joints; ++k) {
+      const auto b = static_cast<std::size_t>(chain.bones[k]);
+      const DofLimits& limits = rig.skeleton.bones()[b].limits;
+      const glm::vec3 e = euler_within_limits(pose.rotations[b], limits);
+      CHECK(angles_within(e, limits));
+      non_canonical += !within_limits(euler_from_quat(pose.rotations[b]), limits, 1e-3f);
+    }
+    const float moved = glm::length(effector_position(chain, printed.rotations, printed.translations) - solved);
+    CHECK(moved <= 2e-5f * rig.length);
+    worst = std::max(worst, moved / rig.length);
+    ++cases;
+  }
+  MESSAGE("printed solves: ", cases, " chains of 2-6 joints, ", non_canonical,
+          " joints within their limits only in the non-canonical triple; largest effector move ", worst,
+          " x chain length");
+  CHECK(non_canonical > 500);
+}
+
+// The plain reference split, written differently from the library's: the swing is the shortest arc taking the axis
+// to where the rotation takes it (so q = swing · twist with the swing's axis perpendicular to the axis), the twist
+// what remains. (s1, s2, τ), radians.
+glm::dvec3 reference_swing_twist(const SwingTwistLimits& limits, glm::quat rotation) {
+  glm::dquat q = glm::normalize(glm::dquat(rotation));
+  const glm::dvec3 a = glm::normalize(glm::dvec3(limits.axis)), b1(limits.reference), b2 = glm::cross(a, b1);
+  const glm::dvec3 moved = q * a;
+  const glm::dvec3 normal = glm::cross(a, moved);
+  const double angle = std::atan2(glm::length(normal), glm::dot(a, moved));
+  const glm::dvec3 u = glm::length(normal) > 1e-15 ? glm::normalize(normal) : glm::dvec3(0.0);
+  const glm::dquat swing = glm::angleAxis(angle, glm::length(normal) > 1e-15 ? u : b1);
+  glm::dquat twist = glm::conjugate(swing) * q;
+  if (twist.w < 0.0) twist = -twist;
+  const double tau = 2.0 * std::atan2(glm::dot(glm::dvec3(twist.x, twist.y, twist.z), a), twist.w);
+  return {angle * glm::dot(u, b1), angle * glm::dot(u, b2), tau};
+}
+
+bool reference_within(const SwingTwistLimits& limits, glm::dvec3 split, double slack) {
+  const double a = limits.swing1, b = limits.swing2;
+  const double x = a > 0.0 ? split.x / (a + slack) : (std::abs(split.x) <= slack ? 0.0 : 2.0);
+  const double y = b > 0.0 ? split.y / (b + slack) : (std::abs(split.y) <= slack ? 0.0 : 2.0);
+  const double tau = split.z;
+  const bool twist = (tau >= limits.twist_min - slack && tau <= limits.twist_max + slack) ||
+                     (std::abs(std::abs(tau) - std::numbers::pi) <= slack &&
+                      (limits.twist_min <= -std::numbers::pi + slack || limits.twist_max >= std::numbers::pi - slack));
+  return x * x + y * y <= 1.0 && twist;
+}
+
+SwingTwistLimits random_swing_twist(std::mt19937& random) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float kind = unit(random);
+  const float swing1 = kind < 0.1f ? 0.0f : 180.0f * unit(random);
+  const float swing2 = kind < 0.3f ? swing1 : (kind < 0.35f ? 0.0f : 180.0f * unit(random));  // circular, flat
+  float t0 = -180.0f + 360.0f * unit(random), t1 = -180.0f + 360.0f * unit(random);
+  if (kind > 0.9f) t0 = -180.0f, t1 = 180.0f;
+  if (kind > 0.8f && kind <= 0.85f) t1 = t0;  // locked twist
+  return make_swing_twist_limits(ik_test::random_direction(random), swing1, swing2, t0, t1);
+}
+
+TEST_CASE("swing-twist limits: the split agrees with a plain reference; projection lands inside, nearest, idempotent") {
+  std::mt19937 random(4242);
+  std::normal_distribution<float> normal;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int inside = 0, projected = 0;
+  for (int c = 0; c < 20000; ++c) {
+    const SwingTwistLimits limits = random_swing_twist(random);
+    const glm::quat q = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::dvec3 reference = reference_swing_twist(limits, q);
+    const glm::vec3 split = swing_twist_angles(limits, q);
+    if (glm::length(glm::dvec2(reference)) < 3.1) {  // away from a half-turn swing, where the split is not unique
+      CHECK(std::abs(split.x - reference.x) <= 1e-5);
+      CHECK(std::abs(split.y - reference.y) <= 1e-5);
+      const double twist_gap = std::remainder(split.z - reference.z, 2.0 * std::numbers::pi);
+      CHECK(std::abs(twist_gap) <= 1e-5);
+    }
+    glm::quat clamped = q;
+    const bool changed = clamp_swing_twist(limits, clamped);
+    if (reference_within(limits, reference, -1e-5)) {  // strictly inside: untouched
+      CHECK_FALSE(changed);
+      CHECK(clamped == glm::normalize(q));
+      ++inside;
+    }
+    const glm::dvec3 after = reference_swing_twist(limits, clamped);
+    CHECK(reference_within(limits, after, 1e-5));
+    glm::quat again = clamped;
+    clamp_swing_twist(limits, again);
+    CHECK(rotation_difference(again, clamped) <= 1e-6);
+    if (!changed) continue;
+    ++projected;
+    // Nearest: no sampled point of the ellipse is nearer the input's swing than the projected one, and the twist
+    // went to its nearer limit.
+    const glm::dvec2 from(reference), to(after);
+    if (glm::length(from) < 3.1 && !reference_within(limits, glm::dvec3(from, limits.twist_min), 1e-9)) {
+      for (int k = 0; k < 64; ++k) {
+        const double phi = 2.0 * std::numbers::pi * unit(random);
+        const glm::dvec2 rim(limits.swing1 * std::cos(phi), limits.swing2 * std::sin(phi));
+        CHECK(glm::length(to - from) <= glm::length(rim - from) + 1e-5);
+      }
+      if (limits.swing1 == limits.swing2)  // a circular cone keeps the swing's direction
+        CHECK(glm::length(to - from * (limits.swing1 / glm::length(from))) <= 1e-5);
+    }
+  }
+  MESSAGE("swing-twist: 20000 random rotations, ", inside, " strictly inside, ", projected, " projected");
+  CHECK(inside > 1000);
+  CHECK(projected > 10000);
+  // Never NaN.
+  glm::quat bad(not_a_number, 0.0f, 1.0f, 0.0f);
+  const SwingTwistLimits cone = make_swing_twist_limits(glm::vec3(0, 1, 0), 30.0f, 45.0f, 10.0f, 20.0f);
+  CHECK(clamp_swing_twist(cone, bad));
+  CHECK(reference_within(cone, reference_swing_twist(cone, bad), 1e-5));
+  CHECK(std::isfinite(bad.w));
+}
+
+TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; bad chains are refused") {
+  std::mt19937 random(9191);
+  int reached = 0, cases = 0;
+  for (int c = 0; c < 600; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4);
+    IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    for (std::size_t k = 0; k < chain.joint_count(); ++k)
+      if ((c + k) % 3 != 0) {
+        const glm::vec3 bone = rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k + 1])].bind_translation;
+        set_swing_twist(chain, k, swing_twist_from_euler(rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits, bone));
+      }
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    Pose pose = rig.skeleton.bind_pose();
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    IkResult result;
+    REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
+    for (std::size_t k = 0; k < chain.joint_count(); ++k) {
+      const glm::quat q = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
+      if (chain.swing_twist[k].active) CHECK(reference_within(chain.swing_twist[k], reference_swing_twist(chain.swing_twist[k], q), 1e-4));
+      else CHECK(ik_test::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
+    }
+    CHECK(result.distance == doctest::Approx(glm::length(reference_effector(rig.skeleton, pose, rig.effector) - target)).scale(rig.length).epsilon(1e-3));
+    reached += result.reached;
+    ++cases;
+  }
+  MESSAGE("swing-twist chains: ", reached, " of ", cases, " reachable-by-Euler targets reached");
+  CHECK(reached > cases / 2);
+  IkChain chain = make_chain(ik_test::random_chain(random, 3).skeleton, 1, 4);
+  CHECK_THROWS_AS(set_swing_twist(chain, 3, SwingTwistLimits{}), Error);
+  chain.swing_twist.resize(1);
+  Pose pose = ik_test::random_chain(random, 3).skeleton.bind_pose();
+  IkResult result;
+  const Status status = solve(IkMethod::ccd, chain, pose, glm::vec3(0.0f), IkSettings{}, result);
+  CHECK_FALSE(status);
+  CHECK(std::string(status.reason()) == "swing_twist has neither 0 nor one entry per joint");
 }
 
 TEST_CASE("make_chain finds root..effector and rejects anything else") {
@@ -498,6 +730,113 @@ TEST_CASE("random_state carries the stall escape's generator from solve to solve
   CHECK(kicked > 0);
 }
 
+// One solve by the job with a pole and a weight.
+Status solve_with(IkMethod method, const IkChain& chain, Pose& pose, glm::vec3 target, const IkSettings& settings,
+                  std::optional<glm::vec3> pole, float weight, IkResult& result) {
+  std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
+  IkJob job;
+  job.method = method;
+  job.chain = &chain;
+  if (const Status status = chain_base(chain, pose.rotations, pose.translations, job.base); !status) return status;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = target;
+  job.settings = settings;
+  job.scratch = scratch;
+  job.use_pole = pole.has_value();
+  job.pole = pole.value_or(glm::vec3(0.0f));
+  job.weight = weight;
+  job.result = &result;
+  return job.run();
+}
+
+// The mean of the inner joints' heads, across the line root → effector (model space), and the pole's part across it.
+std::pair<glm::vec3, glm::vec3> across_line(const RandomChain& rig, const Pose& pose, glm::vec3 pole) {
+  std::vector<glm::mat4> world(rig.skeleton.bone_count());
+  REQUIRE(world_matrices(rig.skeleton, pose, world));
+  const glm::vec3 root(world[1][3]), axis = glm::normalize(glm::vec3(world[rig.joints + 1][3]) - root);
+  glm::vec3 middle(0.0f);
+  for (std::size_t b = 2; b <= rig.joints; ++b) middle += glm::vec3(world[b][3]) - root;
+  middle /= static_cast<float>(rig.joints - 1);
+  const glm::vec3 p = pole - root;
+  return {middle - glm::dot(middle, axis) * axis, p - glm::dot(p, axis) * axis};
+}
+
+TEST_CASE("a pole swivels CCD and FABRIK chains toward it, keeping the effector; free chains face it exactly") {
+  std::mt19937 random(515);
+  int faced = 0, cases = 0, kept = 0;
+  for (int c = 0; c < 400; ++c) {
+    const bool free_joints = c % 2 == 0;
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4, free_joints);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 pole = ik_test::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_test::random_direction(random);
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    settings.max_iterations = 200;
+    const IkMethod method = c % 4 < 2 ? IkMethod::ccd : IkMethod::fabrik;
+    Pose plain = rig.skeleton.bind_pose(), poled = plain;
+    const Pose before = plain;
+    IkResult plain_result, poled_result;
+    REQUIRE(solve_with(method, chain, plain, target, settings, std::nullopt, 1.0f, plain_result));
+    REQUIRE(solve_with(method, chain, poled, target, settings, pole, 1.0f, poled_result));
+    check_pose(rig, before, poled);
+    const glm::vec3 effector = reference_effector(rig.skeleton, poled, rig.effector);
+    CHECK(poled_result.distance == doctest::Approx(glm::length(effector - target)).epsilon(1e-3).scale(rig.length));
+    // The swivel never loses the solve: reached stays reached, unreached gets no farther.
+    if (plain_result.reached) CHECK(poled_result.reached);
+    else CHECK(poled_result.distance <= plain_result.distance + 1e-5f * rig.length);
+    const auto [middle, wanted] = across_line(rig, poled, pole);
+    if (glm::length(middle) < 1e-3f * rig.length || glm::length(wanted) < 1e-3f) continue;
+    const float cosine = glm::dot(middle, wanted) / (glm::length(middle) * glm::length(wanted));
+    ++cases;
+    kept += plain_result.reached == poled_result.reached;
+    if (free_joints) CHECK(cosine >= 0.9999f);  // nothing limits the root: the middle faces the pole
+    faced += cosine > 0.0f;
+  }
+  MESSAGE("pole: ", faced, " of ", cases, " bent chains end with their middle on the pole's side");
+  CHECK(faced >= cases * 3 / 4);
+  CHECK(kept == cases);
+}
+
+TEST_CASE("weight blends the solve with the input pose: 0 leaves it bit-identical, 1 is the solve") {
+  std::mt19937 random(616);
+  for (int c = 0; c < 300; ++c) {
+    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
+    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    IkSettings settings;
+    settings.tolerance = 1e-4f * rig.length;
+    const IkMethod method = c % 2 ? IkMethod::ccd : IkMethod::fabrik;
+    // Start out of the limits too: weight 0 must not even clamp.
+    Pose start = ik_test::random_in_limit_pose(random, rig);
+    if (c % 3 == 0) start.rotations[1] = glm::normalize(glm::quat(0.3f, 0.9f, -0.2f, 0.4f));
+    Pose zero = start, full = start, half = start, plain = start;
+    IkResult zero_result, full_result, half_result, plain_result;
+    REQUIRE(solve(method, chain, plain, target, settings, plain_result));
+    REQUIRE(solve_with(method, chain, zero, target, settings, std::nullopt, 0.0f, zero_result));
+    REQUIRE(solve_with(method, chain, full, target, settings, std::nullopt, 1.0f, full_result));
+    REQUIRE(solve_with(method, chain, half, target, settings, std::nullopt, 0.5f, half_result));
+    CHECK(std::memcmp(zero.rotations.data(), start.rotations.data(), start.rotations.size() * sizeof(glm::quat)) == 0);
+    CHECK(zero_result.iterations == 0);
+    CHECK(zero_result.distance ==
+          doctest::Approx(glm::length(reference_effector(rig.skeleton, start, rig.effector) - target)).scale(rig.length));
+    CHECK(std::memcmp(full.rotations.data(), plain.rotations.data(), plain.rotations.size() * sizeof(glm::quat)) == 0);
+    CHECK(full_result.distance == plain_result.distance);
+    check_pose(rig, start, half);
+    CHECK(half_result.distance ==
+          doctest::Approx(glm::length(reference_effector(rig.skeleton, half, rig.effector) - target)).scale(rig.length));
+    // Halfway: each joint is the shortest-path slerp halfway from its input to the solve, clamped.
+    for (std::size_t k = 0; k < chain.joint_count(); ++k) {
+      const auto b = static_cast<std::size_t>(chain.bones[k]);
+      const glm::quat from = start.rotations[b], to = full.rotations[b];
+      glm::quat expected = glm::slerp(from, glm::dot(from, to) < 0.0f ? -to : to, 0.5f);
+      clamp_rotation(chain.limits[k], expected);
+      CHECK(rotation_difference(half.rotations[b], expected) <= 1e-6);
+    }
+  }
+}
+
 TEST_CASE("max_step_degrees caps each CCD update and still converges") {
   std::mt19937 random(3);
   int reached = 0;
@@ -579,6 +918,16 @@ TEST_CASE("non-finite targets, poses and bases, overflowing chains, bad settings
     two = good_two;
     two.base.rotation.x = bad.x + bad.y + bad.z;
     refused(two, "base is not finite");
+    job = good;
+    job.pole = bad;
+    CHECK(job.validate());  // an unused pole is not read
+    job.use_pole = true;
+    refused(job, "pole is not finite");
+  }
+  for (const float weight : {not_a_number, -0.01f, 1.01f, inf}) {
+    IkJob job = good;
+    job.weight = weight;
+    refused(job, "weight not within [0, 1]");
   }
   // Non-finite entries of the chain's pose (other bones are not read), an overflowing chain length.
   for (const std::size_t bone : {std::size_t{1}, std::size_t{2}, std::size_t{3}}) {

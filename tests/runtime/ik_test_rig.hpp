@@ -38,6 +38,26 @@ inline deform::DofLimits random_limits(std::mt19937& random) {
   return limits;
 }
 
+// Limits of every kind up to ±180° on every axis, y included (so that the Euler triple the limits mean may be either
+// of a rotation's two): free, locked, bounds exactly at ±90° or ±180°, any range within [-180, 180].
+inline deform::DofLimits random_wide_limits(std::mt19937& random) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const float special[] = {-180.0f, -90.0f, 90.0f, 180.0f};
+  deform::DofLimits limits;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float kind = unit(random);
+    if (kind < 0.15f) continue;  // free
+    if (kind < 0.25f) {
+      limits.min[axis] = limits.max[axis] = -180.0f + 360.0f * unit(random);
+      continue;
+    }
+    float a = -180.0f + 360.0f * unit(random), b = -180.0f + 360.0f * unit(random);
+    if (kind < 0.4f) a = special[static_cast<int>(unit(random) * 3.999f)];
+    limits.min[axis] = std::min(a, b), limits.max[axis] = std::max(a, b);
+  }
+  return limits;
+}
+
 inline glm::vec3 random_in_limits(std::mt19937& random, const deform::DofLimits& limits) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   glm::vec3 e;
@@ -52,8 +72,9 @@ inline glm::vec3 random_direction(std::mt19937& random) {
 }
 
 // `joints` joints with lengths in [0.2, 1.5]; free_joints: every joint free on every axis; zero_bone: this chain bone
-// (1-based joint index) gets a zero-length segment.
-inline RandomChain random_chain(std::mt19937& random, std::size_t joints, bool free_joints = false, int zero_bone = -1) {
+// (1-based joint index) gets a zero-length segment; wide_limits: random_wide_limits instead of random_limits.
+inline RandomChain random_chain(std::mt19937& random, std::size_t joints, bool free_joints = false, int zero_bone = -1,
+                                bool wide_limits = false) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   std::vector<deform::Bone> bones(joints + 3);
   const auto last = static_cast<std::int32_t>(joints + 2);
@@ -70,7 +91,7 @@ inline RandomChain random_chain(std::mt19937& random, std::size_t joints, bool f
     const float segment = static_cast<int>(k) - 1 == zero_bone ? 0.0f : 0.2f + 1.3f * unit(random);
     bone.bind_translation = k == 1 ? random_direction(random) : segment * random_direction(random);
     if (k > 1) length += segment;
-    if (!free_joints && k <= joints) bone.limits = random_limits(random);
+    if (!free_joints && k <= joints) bone.limits = wide_limits ? random_wide_limits(random) : random_limits(random);
     bone.bind_rotation = random_in_limits(random, bone.limits);
   }
   bones[static_cast<std::size_t>(last)].name = "sibling";

@@ -21,7 +21,7 @@ std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance"},
+  const Args args(argv, {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance", "--limits"},
                   {"--builtin"});
   const bool builtin = args.has("--builtin");
   if (args.positionals().size() != (builtin ? 0u : 1u))
@@ -40,8 +40,21 @@ int run(const std::vector<std::string>& argv) {
   if (auto n = args.value("--max-iterations"))
     settings.max_iterations = static_cast<int>(parse_integer(*n, "--max-iterations", 1, 1000000));
 
+  const std::string limits = args.value("--limits").value_or("euler");
+  if (limits != "euler" && limits != "swing-twist")
+    throw UsageError("--limits: '" + limits + "' is not euler or swing-twist");
+  const bool swing_twist = limits == "swing-twist";
+  if (swing_twist && solver == "two-bone") throw UsageError("--limits swing-twist: the two-bone solver has Euler limits only");
+
   deform::Pose pose = skeleton.bind_pose();
-  const deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
+  deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
+  // Swing-twist limits from the .sk Euler ones: about each joint's bone axis (its child's bind translation), the
+  // twist range of the nearest coordinate axis and a cone of the other two axes' larger bounds
+  // (deform::swing_twist_from_euler).
+  if (swing_twist)
+    for (std::size_t k = 0; k < chain.joint_count(); ++k)
+      deform::set_swing_twist(chain, k, deform::swing_twist_from_euler(
+          skeleton.bone(chain.bones[k]).limits, skeleton.bone(chain.bones[k + 1]).bind_translation));
   settings.tolerance = 1e-4f * deform::chain_length(chain, pose.translations);
   if (auto t = args.value("--tolerance")) {
     const double tolerance = parse_number(*t, "--tolerance");
@@ -84,8 +97,10 @@ int run(const std::vector<std::string>& argv) {
   if (!solved) throw UsageError("the target or a setting is not valid");
 
   // Report what the printed angles give: read them back as `deform skin --pose` will, and measure that pose.
-  const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones);
-  const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton);
+  // Swing-twist joints may leave the .sk's Euler box (a cone is another shape): printed exactly, read back unclamped
+  // (`deform skin --pose P --no-limits`).
+  const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones, !swing_twist);
+  const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton, !swing_twist);
   const glm::vec3 reached_point = deform::effector_position(chain, printed.rotations, printed.translations);
   const float distance = glm::length(reached_point - target);
 
@@ -105,12 +120,15 @@ int run(const std::vector<std::string>& argv) {
 const Command ik_command = {
     "ik", "solve inverse kinematics for a bone chain",
     "usage: deform ik (S.sk | --builtin) --effector NAME --target X,Y,Z [--root NAME] [--solver ccd|fabrik|two-bone]\n"
-    "                 [--max-iterations N] [--tolerance T]\n\n"
+    "                 [--max-iterations N] [--tolerance T] [--limits euler|swing-twist]\n\n"
     "Moves the chain from --root (default: the skeleton root) to --effector, starting from the bind pose and within\n"
     "the DOF limits, so that the effector's head reaches the target (world coordinates).\n"
     "  --solver            ccd (default), fabrik, or two-bone (a chain of exactly two joints, closed form)\n"
     "  --max-iterations N  sweeps or passes, default 100\n"
     "  --tolerance T       reached when |effector - target| <= T, default 1e-4 x the chain length\n"
+    "  --limits KIND       euler (default): the .sk's per-axis Euler limits; swing-twist (ccd, fabrik): per joint a\n"
+    "                      twist range about the bone axis and a swing cone, derived from the Euler limits; the\n"
+    "                      angles are then printed unclamped, for `deform skin --pose P --no-limits`\n"
     "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", \"effector\": [x, y, z], \"bones\": {...}}; `bones`\n"
     "holds every chain bone's local rotation (Euler degrees) and translation, ready for `deform skin --pose`.\n"
     "An unreachable target is not an error: the closest pose found, \"reached\": false.\n",

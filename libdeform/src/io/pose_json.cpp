@@ -40,11 +40,13 @@ Pose read_pose_json(const std::string& path, const Skeleton& skeleton, bool clam
   return parse_pose_json(read_file_text(path), skeleton, clamp, path);
 }
 
-std::string format_pose_bones_json(const Skeleton& skeleton, const Pose& pose, std::span<const std::int32_t> bones) {
+std::string format_pose_bones_json(const Skeleton& skeleton, const Pose& pose, std::span<const std::int32_t> bones,
+                                   bool within_limits) {
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
   auto add = [&](std::int32_t id) {
     const auto i = static_cast<std::size_t>(id);
-    const glm::vec3 e = euler_from_quat(pose.rotations.at(i));
+    const glm::vec3 e = within_limits ? euler_within_limits(pose.rotations.at(i), skeleton.bone(id).limits)
+                                      : euler_from_quat(pose.rotations.at(i));
     const glm::vec3 t = pose.translations.at(i);
     out[skeleton.key(id)] = {{"rotation", {shortest_double(e.x), shortest_double(e.y), shortest_double(e.z)}},
                              {"translation", {shortest_double(t.x), shortest_double(t.y), shortest_double(t.z)}}};

@@ -22,7 +22,7 @@ void sweep(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec
     const glm::vec3 wanted = glm::conjugate(parent) * (target - head);
     const glm::vec3 carried = glm::conjugate(local) * reach;
     local = rotation_between(reach, wanted, cap) * local;
-    clamp_joint(chain.limits[k], local, reaim, carried, wanted);
+    clamp_chain_joint(chain, k, local, reaim, carried, wanted);
     scratch.frames[k] = parent * local;
     effector = head + scratch.frames[k] * carried;
   }
@@ -38,7 +38,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
   const std::span<glm::quat> frames = scratch.frames;
   const std::span<glm::vec3> heads = scratch.heads;
   for (std::size_t k = 0; k < joints; ++k)
-    clamp_rotation(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
+    clamp_chain_joint(chain, k, pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
   const float max_step = glm::radians(settings.max_step_degrees);
 
   chain_fk(chain, pose, base, frames, heads);
@@ -57,7 +57,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
   while (distance > floor + settings.tolerance && iterations < settings.max_iterations) {
     ++iterations;
     if (stage == 1) {
-      point_segments_at(chain, limits, pose, base.rotation, frames, heads, target);
+      point_segments_at(chain, pose, base.rotation, frames, heads, target);
     } else if (stage == 2) {
       damped_least_squares_step(chain, limits, pose, base.rotation, frames, heads, target, damping_fraction * length,
                                 angles_current, scratch.angles, scratch.columns);
@@ -83,7 +83,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
       stage = 2;
     } else if (stage == 2 && gain < stall_gain * (previous - floor)) {
       load_joints(chain, scratch.best, pose);
-      perturb_joints(chain, limits, pose, random_state, escape_degrees);
+      perturb_joints(chain, pose, random_state, escape_degrees);
       chain_fk(chain, pose, base, frames, heads);
       distance = glm::length(heads.back() - target);
       stage = 0;

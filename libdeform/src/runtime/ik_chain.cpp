@@ -161,6 +161,10 @@ Status check(const IkJob& job, float& length) noexcept {
     return Status::failure("scratch misaligned");
   if (!detail::finite(job.target)) return Status::failure("target is not finite");
   if (!finite(job.base)) return Status::failure("base is not finite");
+  if (job.use_pole && !detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (!chain->swing_twist.empty() && chain->swing_twist.size() != chain->joint_count())
+    return Status::failure("swing_twist has neither 0 nor one entry per joint");
+  if (!(job.weight >= 0.0f && job.weight <= 1.0f)) return Status::failure("weight not within [0, 1]");
   return check_chain_pose(*chain, job.rotations, job.translations, length);
 }
 
@@ -190,11 +194,36 @@ Status IkJob::run() const noexcept {
   parts.columns = carve<glm::vec3>(bytes, 3 * joints);
   parts.goals = carve<glm::vec3>(bytes, bones);
   parts.lengths = carve<float>(bytes, joints);
-  std::uint32_t state = random_state != nullptr ? *random_state : ik_random_seed;
+  parts.input = carve<glm::quat>(bytes, joints);
   const detail::PoseView pose{rotations, translations};
-  const IkResult solved = method == IkMethod::fabrik
-                              ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
-                              : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+  if (weight == 0.0f) {  // nothing to apply: the input pose as it is, measured
+    detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+    const float distance = glm::length(parts.heads[joints] - target);
+    if (result != nullptr) *result = IkResult{distance <= settings.tolerance, distance, 0};
+    return {};
+  }
+  if (weight < 1.0f) detail::save_joints(*chain, pose, parts.input);
+  std::uint32_t state = random_state != nullptr ? *random_state : ik_random_seed;
+  IkResult solved = method == IkMethod::fabrik
+                        ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
+                        : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+  if (use_pole || weight < 1.0f) {
+    detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+    if (use_pole)
+      solved.distance = detail::swivel_toward_pole(*chain, pose, base, target, pole, solved.distance,
+                                                   settings.tolerance, parts.frames, parts.heads);
+    if (weight < 1.0f) {
+      for (std::size_t k = 0; k < joints; ++k) {
+        glm::quat& rotation = rotations[static_cast<std::size_t>(chain->bones[k])];
+        const glm::quat from = parts.input[k];
+        rotation = glm::slerp(from, glm::dot(from, rotation) < 0.0f ? -rotation : rotation, weight);
+        detail::clamp_chain_joint(*chain, k, rotation);
+      }
+      detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+      solved.distance = glm::length(parts.heads[joints] - target);
+    }
+    solved.reached = solved.distance <= settings.tolerance;
+  }
   if (random_state != nullptr) *random_state = state;
   if (result != nullptr) *result = solved;
   return {};
@@ -240,12 +269,49 @@ void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<
   }
 }
 
+float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                         float distance, float tolerance, std::span<glm::quat> frames,
+                         std::span<glm::vec3> heads) noexcept {
+  const std::size_t joints = chain.joint_count();
+  if (joints < 2) return distance;
+  const glm::dvec3 root(heads[0]);
+  const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
+  const double line_length = glm::length(line);
+  if (!(line_length > 1e-12)) return distance;
+  const glm::dvec3 axis = line / line_length;
+  glm::dvec3 middle(0.0);
+  for (std::size_t k = 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
+  middle /= static_cast<double>(joints - 1);
+  // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
+  const glm::dvec3 from = middle - glm::dot(middle, axis) * axis;
+  const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, axis) * axis;
+  const double scale = line_length * line_length;
+  if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return distance;
+  const double angle = std::atan2(glm::dot(axis, glm::cross(from, to)), glm::dot(from, to));
+  glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[0])];
+  const glm::quat solved = local;
+  const glm::quat parent = base.rotation;
+  // Acceptable: reached stays reached; otherwise no farther than the solve (float rounding of the turn allowed).
+  const float allowed = distance <= tolerance ? tolerance : distance + 1e-6f * static_cast<float>(line_length);
+  for (double fraction = 1.0; fraction >= 0.125; fraction *= 0.5) {
+    const glm::quat turn(glm::angleAxis(static_cast<float>(angle * fraction), glm::vec3(axis)));
+    local = glm::normalize(glm::conjugate(parent) * turn * parent * solved);
+    clamp_chain_joint(chain, 0, local);
+    chain_fk(chain, pose, base, frames, heads);
+    const float swivelled = glm::length(heads[joints] - target);
+    if (swivelled <= allowed) return swivelled;
+  }
+  local = solved;
+  chain_fk(chain, pose, base, frames, heads);
+  return distance;
+}
+
 StepCap cap_for(float max_radians) noexcept {
   if (!(max_radians > 0.0f) || max_radians >= std::numbers::pi_v<float>) return {};
   return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
 }
 
-void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
+void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept {
   for (std::size_t k = 0; k < chain.joint_count(); ++k) {
     const glm::quat parent = k == 0 ? base : frames[k - 1];
@@ -253,7 +319,7 @@ void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits
     const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain.bones[k + 1])];
     const glm::vec3 wanted = glm::conjugate(parent) * (target - heads[k]);
     local = rotation_between(local * offset, wanted) * local;
-    clamp_joint(limits[k], local, true, offset, wanted);
+    clamp_chain_joint(chain, k, local, true, offset, wanted);
     frames[k] = parent * local;
     heads[k + 1] = heads[k] + frames[k] * offset;
   }
@@ -311,7 +377,14 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
       angle = max - min >= 2.0 * std::numbers::pi ? std::remainder(angle, 2.0 * std::numbers::pi)
                                                   : std::clamp(angle, min, max);
     }
-    pose.rotations[static_cast<std::size_t>(chain.bones[k])] = to_quat(euler_at(limit, angles[k]));
+    glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
+    rotation = to_quat(euler_at(limit, angles[k]));
+    // A swing-twist joint (free Euler entry) is projected; its angles follow the projected rotation.
+    if (const SwingTwistLimits* cone = swing_twist_of(chain, k); cone != nullptr && clamp_swing_twist(*cone, rotation)) {
+      EulerAngles euler;
+      limit_euler(limit, rotation, euler);
+      angles[k] = euler.angle;
+    }
   }
 }
 
@@ -325,7 +398,7 @@ void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseVie
     pose.rotations[static_cast<std::size_t>(chain.bones[k])] = saved[k];
 }
 
-void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state,
                     float degrees) noexcept {
   auto uniform = [&state]() {  // xorshift32, in [-1, 1)
     state ^= state << 13;
@@ -337,7 +410,7 @@ void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, P
     const glm::vec3 delta(uniform() * degrees, uniform() * degrees, uniform() * degrees);
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     rotation = rotation * quat_from_euler(delta);
-    clamp_rotation(limits[k], rotation);
+    clamp_chain_joint(chain, k, rotation);
   }
 }
 

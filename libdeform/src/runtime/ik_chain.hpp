@@ -25,7 +25,15 @@ struct Scratch {
   std::span<glm::vec3> columns;   // Jacobian columns, 3 per joint (stall escape)
   std::span<glm::vec3> goals;     // FABRIK's joint positions, per chain bone
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
+  std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
 };
+
+// The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
+// middle moves toward `pole`, as far as the root's limits allow without losing the solve's distance. `frames` and
+// `heads` hold the chain's FK for `pose` on entry and on return; returns the new effector–target distance.
+float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
+                         float distance, float tolerance, std::span<glm::quat> frames,
+                         std::span<glm::vec3> heads) noexcept;
 
 // The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
 // `length` is chain_length of the pose.
@@ -88,8 +96,9 @@ struct EulerAngles {
 };
 
 // The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
-// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it.
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept;
+// limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it. Without
+// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent).
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true) noexcept;
 
 // Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
 // direction, the others a polynomial (cos, sin) within 1e-12.
@@ -112,6 +121,16 @@ glm::quat to_quat(const EulerAngles& euler) noexcept;
 // limits allow. `euler` must be within the limits and stays so.
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept;
 
+// Joint k's swing-twist limits when it has active ones, else null (its Euler entry applies).
+inline const SwingTwistLimits* swing_twist_of(const IkChain& chain, std::size_t k) noexcept {
+  return chain.swing_twist.empty() || !chain.swing_twist[k].active ? nullptr : &chain.swing_twist[k];
+}
+// Joint k's rotation clamped into its limits, whichever kind (clamp_rotation or clamp_swing_twist).
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& rotation) noexcept;
+// clamp_joint for joint k, whichever kind of limits (a swing-twist joint is projected, not re-aimed).
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& local, bool reaim, glm::vec3 carried,
+                       glm::vec3 wanted) noexcept;
+
 // Normalises a joint's local rotation and clamps it into its limits; when it was outside and `reaim` is set, the
 // clamped rotation is re-aimed (reaim_euler) with `carried` and `wanted`. Returns true when it was outside.
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried, glm::vec3 wanted) noexcept;
@@ -120,7 +139,7 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
 // for an out-of-reach target this is the straight chain, the answer an unconstrained chain minimises the distance
 // with, which CCD only approaches slowly (the distance is second order in the joints' deviation from it).
 // `frames` and `heads` hold the chain's FK for `pose` on entry and are updated.
-void point_segments_at(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
+void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
                        std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept;
 
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
@@ -139,7 +158,7 @@ void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved
 void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseView pose) noexcept;
 
 // Rotates every joint by up to `degrees` per Euler axis at random (xorshift32 on `state`), then clamps it.
-void perturb_joints(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, std::uint32_t& state,
+void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state,
                     float degrees) noexcept;
 
 

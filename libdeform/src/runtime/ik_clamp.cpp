@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <utility>
 
 #include "ik_chain.hpp"
 
@@ -33,11 +35,35 @@ inline double polynomial_atan2(double y, double x) {
 
 inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
 
-// How far the angles lie outside the limits, summed over the axes (radians): 0 when within.
+// Whether the unit direction (cos a, sin a) of each axis lies within its limits, from dot and cross products with
+// the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at most the width;
+// for a wider one, the angle is outside when strictly within the complementary range from max to min. Agrees with
+// comparing the angles except within rounding (1e-7 rad) of a limit.
+inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)[3]) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const glm::dvec2 d = dir[axis], lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double c = limits.cos_width[axis];
+    if (!limits.wide[axis]) {
+      if (!(lo.x * d.y - lo.y * d.x >= 0.0 && glm::dot(lo, d) >= c)) return false;
+    } else if (hi.x * d.y - hi.y * d.x > 0.0 && glm::dot(hi, d) > c) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// How far an angle in (-π, π] lies outside [min, max] (within [-π, π]) around the circle: 0 within, else the
+// distance to the nearer limit, one of them possibly across ±π.
+inline double outside(double angle, double min, double max) {
+  if (angle < min) return std::min(min - angle, angle + 2.0 * pi - max);
+  if (angle > max) return std::min(angle - max, min + 2.0 * pi - angle);
+  return 0.0;
+}
+
+// outside() summed over the axes (radians).
 inline double outside(const EulerLimits& limits, glm::dvec3 angle) {
   double sum = 0.0;
-  for (int axis = 0; axis < 3; ++axis)
-    sum += std::max(0.0, limits.min[axis] - angle[axis]) + std::max(0.0, angle[axis] - limits.max[axis]);
+  for (int axis = 0; axis < 3; ++axis) sum += outside(angle[axis], limits.min[axis], limits.max[axis]);
   return sum;
 }
 
@@ -78,6 +104,9 @@ EulerLimits prepare_limits(const DofLimits& limits) noexcept {
     prepared.max[axis] = static_cast<double>(limits.max[axis]) * (pi / 180.0);
     prepared.min_dir[axis] = glm::dvec2(std::cos(prepared.min[axis]), std::sin(prepared.min[axis]));
     prepared.max_dir[axis] = glm::dvec2(std::cos(prepared.max[axis]), std::sin(prepared.max[axis]));
+    const double width = prepared.max[axis] - prepared.min[axis];
+    prepared.cos_width[axis] = width >= 2.0 * pi ? -1.0 : std::cos(width);
+    prepared.wide[axis] = width > pi;
   }
   prepared.free = glm::all(glm::lessThanEqual(limits.min, glm::vec3(-180.0f))) &&
                   glm::all(glm::greaterThanEqual(limits.max, glm::vec3(180.0f)));
@@ -85,23 +114,30 @@ EulerLimits prepare_limits(const DofLimits& limits) noexcept {
 }
 
 bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
+  const float norm2 = glm::dot(rotation, rotation);
+  if (!(norm2 > 1e-30f) || !std::isfinite(norm2)) {
+    rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    clamp_rotation(limits, rotation);
+    return true;
+  }
   rotation = glm::normalize(rotation);
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler)) return false;
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) return false;
   rotation = detail::to_quat(euler);
   return true;
 }
 
 namespace detail {
 
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler) noexcept {
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed) noexcept {
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
   // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
   // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
   // the small ones keep their precision.
   const glm::dquat q(rotation);
   const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
-  if (!(norm2 > 1e-24) || !std::isfinite(norm2)) return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler);
+  if (!(norm2 > 1e-24) || !std::isfinite(norm2))
+    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed);
   const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
@@ -116,6 +152,11 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     first.dir[0] = glm::dvec2(r11, r21) * (1.0 / norm2);
     first.dir[2] = glm::dvec2(1.0, 0.0);
   }
+  EulerAngles second;
+  second.dir[0] = -first.dir[0];
+  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
+  second.dir[2] = -first.dir[2];
+  if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
   for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(first.dir[axis].y, first.dir[axis].x);
   const double first_outside = outside(limits, first.angle);
   if (first_outside == 0.0) {
@@ -123,19 +164,20 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     return false;
   }
   // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
-  EulerAngles second;
   second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
-  second.dir[0] = -first.dir[0];
-  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
-  second.dir[2] = -first.dir[2];
   const double second_outside = outside(limits, second.angle);
   euler = second_outside < first_outside ? second : first;
   if (second_outside == 0.0) return false;
+  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
   for (int axis = 0; axis < 3; ++axis) {
-    if (euler.angle[axis] < limits.min[axis]) {
-      euler.angle[axis] = limits.min[axis], euler.dir[axis] = limits.min_dir[axis];
-    } else if (euler.angle[axis] > limits.max[axis]) {
-      euler.angle[axis] = limits.max[axis], euler.dir[axis] = limits.max_dir[axis];
+    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
+    if (angle >= min && angle <= max) continue;
+    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
+    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
+    if (to_min <= to_max) {
+      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    } else {
+      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
     }
   }
   return true;
@@ -192,10 +234,187 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
                  glm::vec3 wanted) noexcept {
   local = glm::normalize(local);
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler)) return false;
+  if (limits.free || !limit_euler(limits, local, euler, false)) return false;
   if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;
+}
+
+}  // namespace detail
+}  // namespace deform
+
+// --- swing-twist limits ---
+namespace deform {
+namespace {
+
+glm::dvec3 unit_or_x(glm::vec3 v) {
+  const glm::dvec3 d(v);
+  const double length = glm::length(d);
+  return length > 1e-30 && std::isfinite(length) ? d / length : glm::dvec3(1.0, 0.0, 0.0);
+}
+
+// `e` made perpendicular to the unit `axis` and unit; the coordinate axis least aligned with `axis` when `e` is
+// (nearly) along it.
+glm::dvec3 perpendicular(glm::dvec3 axis, glm::dvec3 e) {
+  glm::dvec3 r = e - glm::dot(e, axis) * axis;
+  if (glm::dot(r, r) < 1e-6) {
+    const glm::dvec3 m = glm::abs(axis);
+    e = m.x <= m.y && m.x <= m.z ? glm::dvec3(1, 0, 0) : (m.y <= m.z ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, 1));
+    r = e - glm::dot(e, axis) * axis;
+  }
+  return glm::normalize(r);
+}
+
+float radians_within(float degrees, float lo, float hi) {
+  return glm::radians(std::clamp(std::isnan(degrees) ? 0.0f : degrees, lo, hi));
+}
+
+// A rotation split about the limits' axis: the swing (w >= 0), its rotation-vector components, the twist angle.
+struct Split {
+  glm::dquat swing{1.0, 0.0, 0.0, 0.0};
+  glm::dvec2 s{0.0};
+  double twist = 0.0;
+};
+
+Split split(const SwingTwistLimits& limits, glm::quat rotation) {
+  glm::dquat q(rotation);
+  const double norm = std::sqrt(glm::dot(q, q));
+  q = norm > 1e-30 && std::isfinite(norm) ? q * (1.0 / norm) : glm::dquat(1.0, 0.0, 0.0, 0.0);
+  if (q.w < 0.0) q = -q;
+  const glm::dvec3 axis(limits.axis), b1(limits.reference), b2 = glm::cross(axis, b1);
+  const double p = q.x * axis.x + q.y * axis.y + q.z * axis.z, twist_norm = std::sqrt(q.w * q.w + p * p);
+  Split result;
+  glm::dquat twist(1.0, 0.0, 0.0, 0.0);
+  if (twist_norm > 1e-12) {
+    twist = glm::dquat(q.w / twist_norm, axis * (p / twist_norm));
+    result.twist = 2.0 * std::atan2(p, q.w);
+    if (result.twist > pi) result.twist -= 2.0 * pi;  // q.w >= 0 keeps it within [-π, π]; π rather than -π is kept
+  }
+  glm::dquat swing = q * glm::conjugate(twist);
+  if (swing.w < 0.0) swing = -swing;
+  result.swing = swing;
+  const glm::dvec3 v(swing.x, swing.y, swing.z);
+  const double sine = glm::length(v);
+  if (sine > 1e-300) {
+    const double angle = 2.0 * std::atan2(sine, swing.w);
+    result.s = glm::dvec2(glm::dot(v, b1), glm::dot(v, b2)) * (angle / sine);
+  }
+  return result;
+}
+
+// The point of the ellipse (x / a)² + (y / b)² <= 1 (a, b >= 0) nearest (x, y), which lies outside it: (a² x / (t +
+// a²), b² y / (t + b²)) at the root t > 0 of f(t) = (a x / (t + a²))² + (b y / (t + b²))² - 1, which is convex and
+// decreasing there, so Newton's method from t = 0 climbs to it without overshooting.
+glm::dvec2 nearest_on_ellipse(glm::dvec2 p, double a, double b) {
+  if (a <= 0.0 && b <= 0.0) return glm::dvec2(0.0);
+  if (a <= 0.0) return glm::dvec2(0.0, std::clamp(p.y, -b, b));
+  if (b <= 0.0) return glm::dvec2(std::clamp(p.x, -a, a), 0.0);
+  const double a2 = a * a, b2 = b * b, ax = a * p.x, by = b * p.y;
+  double t = 0.0;
+  for (int step = 0; step < 32; ++step) {
+    const double u = ax / (t + a2), v = by / (t + b2);
+    const double f = u * u + v * v - 1.0;
+    if (f <= 1e-15) break;
+    const double slope = -2.0 * (u * u / (t + a2) + v * v / (t + b2));
+    const double next = t - f / slope;
+    if (!(next > t)) break;
+    t = next;
+  }
+  return glm::dvec2(a2 * p.x / (t + a2), b2 * p.y / (t + b2));
+}
+
+bool within_cone(glm::dvec2 s, double a, double b) {
+  const double tiny = 1e-12;
+  if (a <= 0.0 && std::abs(s.x) > tiny) return false;
+  if (b <= 0.0 && std::abs(s.y) > tiny) return false;
+  const double x = a > 0.0 ? s.x / a : 0.0, y = b > 0.0 ? s.y / b : 0.0;
+  return x * x + y * y <= 1.0 + 1e-12;
+}
+
+}  // namespace
+
+SwingTwistLimits make_swing_twist_limits(glm::vec3 axis, float swing1_degrees, float swing2_degrees,
+                                         float twist_min_degrees, float twist_max_degrees) noexcept {
+  SwingTwistLimits limits;
+  const glm::dvec3 a = unit_or_x(axis);
+  limits.axis = glm::vec3(a);
+  limits.reference = glm::vec3(perpendicular(a, glm::dvec3(0.0)));
+  limits.swing1 = radians_within(swing1_degrees, 0.0f, 180.0f);
+  limits.swing2 = radians_within(swing2_degrees, 0.0f, 180.0f);
+  limits.twist_min = radians_within(twist_min_degrees, -180.0f, 180.0f);
+  limits.twist_max = radians_within(twist_max_degrees, -180.0f, 180.0f);
+  if (limits.twist_min > limits.twist_max) std::swap(limits.twist_min, limits.twist_max);
+  limits.active = true;
+  return limits;
+}
+
+SwingTwistLimits swing_twist_from_euler(const DofLimits& euler, glm::vec3 axis) noexcept {
+  const glm::dvec3 a = unit_or_x(axis), m = glm::abs(a);
+  const int t = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2), i = (t + 1) % 3, j = (t + 2) % 3;
+  const bool flipped = a[t] < 0.0;
+  auto larger_bound = [&](int k) { return std::max(std::abs(euler.min[k]), std::abs(euler.max[k])); };
+  SwingTwistLimits limits = make_swing_twist_limits(glm::vec3(a), larger_bound(i), larger_bound(j),
+                                                    flipped ? -euler.max[t] : euler.min[t],
+                                                    flipped ? -euler.min[t] : euler.max[t]);
+  glm::dvec3 e(0.0);
+  e[i] = 1.0;
+  limits.reference = glm::vec3(perpendicular(a, e));
+  return limits;
+}
+
+glm::vec3 swing_twist_angles(const SwingTwistLimits& limits, glm::quat rotation) noexcept {
+  const Split parts = split(limits, rotation);
+  return glm::vec3(static_cast<float>(parts.s.x), static_cast<float>(parts.s.y), static_cast<float>(parts.twist));
+}
+
+bool clamp_swing_twist(const SwingTwistLimits& limits, glm::quat& rotation) noexcept {
+  const float norm2 = glm::dot(rotation, rotation);
+  const bool usable = norm2 > 1e-30f && std::isfinite(norm2);
+  rotation = usable ? glm::normalize(rotation) : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const Split parts = split(limits, rotation);
+  const double a = limits.swing1, b = limits.swing2, lo = limits.twist_min, hi = limits.twist_max;
+  const bool cone = within_cone(parts.s, a, b);
+  const bool twisted_in = outside(parts.twist, lo, hi) == 0.0;
+  if (cone && twisted_in) return !usable;
+  glm::dquat swing = parts.swing;
+  if (!cone) {
+    const glm::dvec2 s = nearest_on_ellipse(parts.s, a, b);
+    const double angle = glm::length(s);
+    const glm::dvec3 axis(limits.axis), b1(limits.reference), b2 = glm::cross(axis, b1);
+    const glm::dvec3 u = angle > 1e-300 ? (s.x * b1 + s.y * b2) / angle : glm::dvec3(0.0);
+    swing = glm::dquat(std::cos(0.5 * angle), u * std::sin(0.5 * angle));
+  }
+  double twist = parts.twist;
+  if (!twisted_in) {
+    const double to_min = twist < lo ? lo - twist : lo + 2.0 * pi - twist;
+    const double to_max = twist > hi ? twist - hi : twist + 2.0 * pi - hi;
+    twist = to_min <= to_max ? lo : hi;
+  }
+  const glm::dquat turn(std::cos(0.5 * twist), glm::dvec3(limits.axis) * std::sin(0.5 * twist));
+  rotation = glm::quat(glm::normalize(swing * turn));
+  return true;
+}
+
+void set_swing_twist(IkChain& chain, std::size_t joint, const SwingTwistLimits& limits) {
+  if (joint >= chain.joint_count())
+    throw Error::invalid_argument("joint " + std::to_string(joint), "not a joint of the chain");
+  if (chain.swing_twist.empty()) chain.swing_twist.resize(chain.joint_count());
+  chain.swing_twist[joint] = limits;
+  chain.swing_twist[joint].active = true;
+  chain.limits[joint] = EulerLimits{};
+}
+
+namespace detail {
+
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& rotation) noexcept {
+  if (const SwingTwistLimits* limits = swing_twist_of(chain, k)) return clamp_swing_twist(*limits, rotation);
+  return clamp_rotation(chain.limits[k], rotation);
+}
+
+bool clamp_chain_joint(const IkChain& chain, std::size_t k, glm::quat& local, bool reaim, glm::vec3 carried,
+                       glm::vec3 wanted) noexcept {
+  if (const SwingTwistLimits* limits = swing_twist_of(chain, k)) return clamp_swing_twist(*limits, local);
+  return clamp_joint(chain.limits[k], local, reaim, carried, wanted);
 }
 
 }  // namespace detail

@@ -43,7 +43,7 @@ void pass(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec3
     const glm::vec3 offset = pose.translations[static_cast<std::size_t>(chain.bones[k + 1])];
     const glm::vec3 wanted = glm::conjugate(parent) * (goals[k + 1] - heads[k]);
     local = rotation_between(local * offset, wanted) * local;
-    clamp_joint(chain.limits[k], local, reaim, offset, wanted);
+    clamp_chain_joint(chain, k, local, reaim, offset, wanted);
     scratch.frames[k] = parent * local;
     heads[k + 1] = heads[k] + scratch.frames[k] * offset;
   }
@@ -58,7 +58,7 @@ IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, gl
   const std::span<glm::quat> frames = scratch.frames;
   const std::span<glm::vec3> heads = scratch.heads;
   for (std::size_t k = 0; k < joints; ++k)
-    clamp_rotation(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
+    clamp_chain_joint(chain, k, pose.rotations[static_cast<std::size_t>(chain.bones[k])]);
 
   chain_fk(chain, pose, base, frames, heads);
   float reach_length = 0.0f;
@@ -95,7 +95,7 @@ IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, gl
       // As in solve_ccd: damped least-squares steps, then a random kick from the best pose.
       if (polishing) {
         load_joints(chain, scratch.best, pose);
-        perturb_joints(chain, limits, pose, random_state, escape_degrees);
+        perturb_joints(chain, pose, random_state, escape_degrees);
         chain_fk(chain, pose, base, frames, heads);
         distance = glm::length(heads.back() - target);
         angles_current = false;

@@ -94,6 +94,21 @@ glm::vec3 other_euler(glm::vec3 e) {
   return {wrap(e.x + 180.0f), wrap(180.0f - e.y), wrap(e.z + 180.0f)};
 }
 
+// e's angles (in [-180, 180]) each moved by the multiple of 360 that brings it nearest its axis' range: clamping
+// then goes to the limit nearer around the circle (across ±180 when that one is nearer), as the solvers' clamp.
+glm::vec3 nearest_turn(glm::vec3 e, const DofLimits& limits) {
+  for (int axis = 0; axis < 3; ++axis) {
+    float best = e[axis], best_outside = 1e30f;
+    for (const float shift : {0.0f, -360.0f, 360.0f}) {
+      const float a = e[axis] + shift;
+      const float outside = std::max(0.0f, limits.min[axis] - a) + std::max(0.0f, a - limits.max[axis]);
+      if (outside < best_outside) best = a, best_outside = outside;
+    }
+    e[axis] = best;
+  }
+  return e;
+}
+
 float clamp_distance(glm::vec3 e, const DofLimits& limits) {
   const glm::vec3 d = e - clamp_euler(e, limits);
   return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
@@ -190,8 +205,8 @@ glm::vec3 Skeleton::set_euler(Pose& pose, std::int32_t bone_id, glm::vec3 degree
 void Skeleton::clamp_to_limits(Pose& pose, std::int32_t bone_id) const {
   const DofLimits& limits = bone(bone_id).limits;
   glm::quat& rotation = pose.rotations.at(static_cast<std::size_t>(bone_id));
-  const glm::vec3 first = euler_from_quat(rotation);
-  const glm::vec3 second = other_euler(first);
+  const glm::vec3 first = nearest_turn(euler_from_quat(rotation), limits);
+  const glm::vec3 second = nearest_turn(other_euler(euler_from_quat(rotation)), limits);
   const glm::vec3 nearer = clamp_distance(second, limits) < clamp_distance(first, limits) ? second : first;
   if (clamp_distance(nearer, limits) == 0.0f) return;  // already inside: keep the exact quaternion
   rotation = quat_from_euler(clamp_euler(nearer, limits));

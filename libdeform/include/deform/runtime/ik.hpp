@@ -37,6 +37,10 @@ struct EulerLimits {
   glm::dvec2 min_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of min per axis
   glm::dvec2 max_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of max per axis
   bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
+  // Per axis, cos(max − min) (−1 for a range of 360° or more): whether a direction lies within the range is then a
+  // dot and a cross product, no arctangent (the clamp's test for a rotation that needs no clamping).
+  glm::dvec3 cos_width{-1.0};
+  bool wide[3]{true, true, true};  // max − min > 180°
 };
 
 // The prepared form of `limits` (degrees, X·Y·Z as in docs/formats.md). O(1), a few sin/cos calls.
@@ -45,9 +49,49 @@ DEFORM_RUNTIME_API EulerLimits prepare_limits(const DofLimits& limits) noexcept;
 // Normalises `rotation` and clamps it into the limits as Skeleton::clamp_to_limits does (of its two Euler triples the
 // one nearer the limits, angles in (-180°, 180°], clamped per axis, converted back), with square roots and a
 // polynomial arctangent instead of trigonometric calls: the same rotation to float rounding (the tests allow 4e-6
-// rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. Returns
-// true when the rotation was outside the limits and was changed.
+// rad) in half the time (docs/performance.md, ik/clamp). A rotation within the limits is left as it is. An axis
+// outside goes to its nearer limit around the circle. Returns true when the rotation was outside the limits and was
+// changed. A zero or non-finite rotation (NaN) becomes the identity clamped into the limits (true): never NaN.
 DEFORM_RUNTIME_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept;
+
+// Swing-twist limits of a joint, the alternative to Euler min/max. A joint's local rotation q (relative to its parent,
+// the identity being its rest, as for Euler limits) is split about the bone's rest axis `axis` (a unit vector in the
+// joint's frame; normally the direction of its child's translation) with q taken with w >= 0:
+//   twist = the rotation about `axis` by τ = 2 atan2(q.xyz · axis, q.w), in (-180°, 180°] (identity when q is a
+//           half turn about an axis perpendicular to `axis`, where the split is not defined);
+//   swing = q · twist⁻¹, a rotation by θ in [0°, 180°] about a unit axis u perpendicular to `axis`; q = swing · twist.
+// The swing's rotation vector θ u has components (s1, s2) = θ (u · reference, u · (axis × reference)); the swing is
+// within the elliptical cone when (s1 / swing1)² + (s2 / swing2)² <= 1 (swing1 = swing2: a circular cone of that
+// half-angle; a zero half-angle allows no swing about that direction); the twist when τ is within [twist_min,
+// twist_max]. Projection (clamp_swing_twist) moves (s1, s2) to the nearest point of the ellipse in that plane (for a
+// circular cone: the same swing axis, the angle cut to the cone) and τ to its nearer limit around the circle.
+struct SwingTwistLimits {
+  glm::vec3 axis{1.0f, 0.0f, 0.0f};       // unit, the joint's frame
+  glm::vec3 reference{0.0f, 1.0f, 0.0f};  // unit, perpendicular to axis
+  float swing1 = std::numbers::pi_v<float>, swing2 = std::numbers::pi_v<float>;  // radians, [0, π]
+  float twist_min = -std::numbers::pi_v<float>, twist_max = std::numbers::pi_v<float>;  // radians, within [-π, π]
+  bool active = false;  // an IkChain joint uses these instead of its Euler limits
+};
+
+// Swing-twist limits about `axis` (any non-zero vector; (1, 0, 0) when zero or not finite) with a reference direction
+// chosen perpendicular to it (the coordinate axis least aligned with it, made perpendicular), half-angles and the
+// twist range in degrees (clamped to [0, 180] and [-180, 180]; twist_min > twist_max are swapped). active is true.
+DEFORM_RUNTIME_API SwingTwistLimits make_swing_twist_limits(glm::vec3 axis, float swing1_degrees, float swing2_degrees,
+                                                            float twist_min_degrees, float twist_max_degrees) noexcept;
+// Swing-twist limits standing in for Euler ones (`deform ik --limits swing-twist`): about the bone axis `axis`, the
+// twist range is the Euler range of the coordinate axis nearest `axis` (X, Y or Z; its sign flips the range), and
+// the cone's half-angles (reference = the next coordinate axis in X→Y→Z order, made perpendicular) are the larger
+// |bound| of each of the other two axes' ranges, at most 180°: a cone that holds every swing the Euler limits allow
+// about those axes alone.
+DEFORM_RUNTIME_API SwingTwistLimits swing_twist_from_euler(const DofLimits& limits, glm::vec3 axis) noexcept;
+// The swing's rotation-vector components and the twist of `rotation` under `limits`' split: (s1, s2, τ), radians.
+// A zero or non-finite rotation reads as the identity.
+DEFORM_RUNTIME_API glm::vec3 swing_twist_angles(const SwingTwistLimits& limits, glm::quat rotation) noexcept;
+// Normalises `rotation` and projects it onto the limits (see SwingTwistLimits; `active` is not read). A rotation
+// within them is left as it is (normalised); projecting is idempotent to float rounding. Returns true when it was
+// outside and was changed. A zero or non-finite rotation becomes the identity projected (true). O(1), a Newton
+// solve of at most 32 steps for an elliptical cone.
+DEFORM_RUNTIME_API bool clamp_swing_twist(const SwingTwistLimits& limits, glm::quat& rotation) noexcept;
 
 // The bones of a chain and its joints' prepared limits, made once (make_chain). bones[0] is the root, bones.back() the
 // effector, each the parent of the next; `ancestors` are the bones above the root, from bone 0 down to the root's
@@ -56,9 +100,18 @@ struct IkChain {
   std::vector<std::int32_t> bones;
   std::vector<std::int32_t> ancestors;
   std::vector<EulerLimits> limits;
+  // Empty (every joint has Euler limits), or one entry per joint: a joint whose entry is active is limited by it
+  // instead of by its Euler entry, which set_swing_twist makes free (so that the solvers' Euler steps leave the
+  // joint alone and the projection decides).
+  std::vector<SwingTwistLimits> swing_twist;
   std::int32_t max_bone = -1;  // the largest id in bones and ancestors: pose spans need more entries than this
   std::size_t joint_count() const noexcept { return bones.empty() ? 0 : bones.size() - 1; }
 };
+
+// Gives joint `joint` (chain order) the swing-twist `limits` (stored active) and makes its Euler entry free.
+// Allocates swing_twist (joint_count() inactive entries) on first use. Throws deform::Error when `joint` is not a
+// joint of the chain. (make_chain again restores the skeleton's Euler limits.)
+DEFORM_RUNTIME_API void set_swing_twist(IkChain& chain, std::size_t joint, const SwingTwistLimits& limits);
 
 // Most bones a chain may have (255 joints and the effector).
 inline constexpr std::size_t max_chain_bones = 256;
@@ -150,16 +203,30 @@ struct DEFORM_RUNTIME_API IkJob {
   // ik_random_seed, so equal inputs give equal outputs.
   std::uint32_t* random_state = nullptr;
   IkResult* result = nullptr;               // out, optional
+  // Optional pole (hint), model space, used when `use_pole`: the point the chain's middle (the mean of the heads of
+  // the joints after the root; a one-joint chain has none) bends toward. Applied after the solve as a swivel of the
+  // whole chain about the line from the root's head to the effector's head, which leaves the effector where it is:
+  // the root joint turns about that line until the middle lies in the half-plane of the pole. The root's limits may
+  // cut the swivel short; it is kept only as far as it leaves the target reached (or, unreached, no farther away),
+  // trying the whole angle, then half, a quarter and an eighth of it. A pole on the line, or a chain whose middle is
+  // on it (straight), swivels nothing.
+  glm::vec3 pole{0.0f};
+  bool use_pole = false;
+  // How much of the solve is applied, in [0, 1]: each joint's rotation becomes the shortest-path slerp from its input
+  // rotation to the solved one by `weight`, clamped into its limits; result describes that pose. 1 (default) is the
+  // solve; 0 writes nothing to the pose (bit-identical, not even clamped), its result describing the input pose
+  // (iterations 0).
+  float weight = 1.0f;
 
   static constexpr std::size_t scratch_alignment = alignof(double);
-  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 120 per joint + 40.
-  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 120 * joint_count + 40; }
+  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 136 per joint + 40.
+  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 136 * joint_count + 40; }
   // scratch_size for this job's chain (0 without one).
   std::size_t scratch_size() const noexcept;
 
   // Why run() would refuse: no chain or one without joints, spans too short, a setting out of range (see IkSettings),
-  // the scratch too small or misaligned, a non-finite target, base, chain rotation or translation, or a chain whose
-  // length overflows. O(chain).
+  // the scratch too small or misaligned, a non-finite target, base, pole (when used), chain rotation or translation,
+  // a weight outside [0, 1] or NaN, or a chain whose length overflows. O(chain).
   Status validate() const noexcept;
   // validate(), then the solve. On failure writes nothing (neither the pose nor result nor random_state). Cost:
   // O(iterations × joints), no allocation.

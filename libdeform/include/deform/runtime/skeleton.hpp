@@ -77,7 +77,8 @@ class DEFORM_RUNTIME_API Skeleton {
   // unless `clamp` is false. Returns the angles actually used.
   glm::vec3 set_euler(Pose& pose, std::int32_t bone, glm::vec3 degrees, bool clamp = true) const;
   // Clamps the bone's current local rotation into its DOF limits (convert to Euler, clamp, convert back). Of the two
-  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged.
+  // Euler triples of a rotation it clamps the one nearer to the limits, so an in-limit rotation is left unchanged;
+  // each angle is taken modulo 360 to the value nearest its range, so it goes to its nearer limit around the circle.
   void clamp_to_limits(Pose& pose, std::int32_t bone) const;
 
  private:
@@ -96,8 +97,19 @@ DEFORM_RUNTIME_API glm::quat quat_from_euler(glm::vec3 degrees) noexcept;
 // The inverse of quat_from_euler with angles in [-180, 180] and y in [-90, 90]; robust at y = ±90° (gimbal lock:
 // the whole X/Z rotation is put on x, z = 0), never NaN for a unit or near-unit quaternion.
 DEFORM_RUNTIME_API glm::vec3 euler_from_quat(glm::quat q) noexcept;
-// Clamps each angle into [min, max] of its axis.
+// Clamps each angle into [min, max] of its axis. A NaN angle becomes the angle of [min, max] nearest 0 (never NaN).
 DEFORM_RUNTIME_API glm::vec3 clamp_euler(glm::vec3 degrees, const DofLimits& limits) noexcept;
+// The Euler angles (degrees, X·Y·Z) of `rotation` that `limits` mean, always within them: of the rotation's two
+// triples (x, y, z) and (x + 180, 180 - y, z + 180), each angle taken modulo 360 to the value nearest its axis'
+// range, the one nearer the limits (summed over the axes; the first on a tie). Within the limits (as a solver or
+// clamp_to_limits leaves a rotation, to float rounding) that triple is the rotation. Outside them, the nearest
+// limit of x, then y refitted to it and clamped, then z refitted to both and clamped: at y = ±90° (gimbal lock,
+// where only x ± z is defined) x goes to the value within its limits nearest the triple's that leaves the remainder
+// for z within z's limits, where one exists. So quat_from_euler of the result is the
+// rotation itself when it is within the limits (to 1e-5 rad; float rounding far from gimbal lock), and whatever is printed from it reads back unchanged through
+// set_euler's clamp. Limits within [-180, 180]; a non-unit rotation is normalised, a zero or non-finite one reads as
+// the identity. Double precision, a few atan2 calls.
+DEFORM_RUNTIME_API glm::vec3 euler_within_limits(glm::quat rotation, const DofLimits& limits) noexcept;
 // True when every angle is within its axis' limits (with `slack` degrees of tolerance).
 DEFORM_RUNTIME_API bool within_limits(glm::vec3 degrees, const DofLimits& limits, float slack = 1e-3f) noexcept;
 
