@@ -198,8 +198,9 @@ Status TwoBoneIkJob::run() const noexcept {
     if (weight < 1.0f) {
       upper = nlerp(upper_in, upper, weight);
       lower = nlerp(lower_in, lower, weight);
-      clamp_rotation(chain->limits[0], upper);
-      clamp_rotation(chain->limits[1], lower);
+      // (nlerp normalised them: a free joint needs nothing more.)
+      if (!chain->limits[0].free) clamp_rotation(chain->limits[0], upper);
+      if (!chain->limits[1].free) clamp_rotation(chain->limits[1], lower);
       factor = 1.0f + weight * (factor - 1.0f);
     }
     rotations[root] = upper;
