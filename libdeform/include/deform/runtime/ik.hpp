@@ -191,7 +191,8 @@ inline constexpr float two_bone_pole_cone_sine = 0.25f;
 //  5. the rotations are blended with the input pose by `weight` (Weight) and clamped again.
 // Soften. With L = a + b and soften k in [0, 1], the limb's root–effector distance is c = r up to r = L − kL, and
 // beyond it c = L − kL·exp((L − r)/(kL) − 1): continuous with its first derivative, increasing in r, decreasing in k,
-// and below L for every finite r, so the knee approaches straight asymptotically instead of snapping. k = 0 gives
+// and below L for every finite r (until it rounds to L, some 15 zones beyond), so the knee approaches straight
+// asymptotically instead of snapping. k = 0 gives
 // c = min(r, L) (no softening). c is then kept at least |a − b| (the folded limb). (ozz's soften ratio is 1 − k.)
 // Stretch. With max_stretch S >= 1: s = clamp(r / c, 1, S), so the limb lengthens exactly when the (softened) limb
 // falls short of the target; both bones are scaled by s (the bend angle is c's, unchanged), so with s < S the
@@ -202,13 +203,17 @@ inline constexpr float two_bone_pole_cone_sine = 0.25f;
 // lattice); `result` describes the stretched limb either way. S = 1 (the default) never stretches.
 // Pole. The bend reference is the pole's part across the line root → target (the pole is a direction or, with
 // PoleKind::point, the direction from the root's head to the point). Where the target passes near the pole's line
-// that part shrinks to nothing and turns by 180° across it, which would flip the knee; so inside the cone about the
-// line whose sine is two_bone_pole_cone_sine, the reference is blended smoothly (smoothstep of sine / cone sine) into
-// the limb's own bend direction after step 2 (the input pose's plane), which it equals on the line: the middle joint
-// moves continuously as the target crosses the pole's line, turning over to the other side across the cone. A zero
-// pole uses the input pose's plane throughout. The one place left where the bend direction is discontinuous (some
-// place must be: a tangent direction cannot turn continuously over every target direction) is where the blend is
-// exactly half and the pole's across part exactly opposite the pose's bend; there the pose's plane is kept.
+// that part shrinks to nothing and turns by 180° across it, which flips the knee of a plain pole solve; so inside the
+// cone about the line whose sine is two_bone_pole_cone_sine, the reference is blended (smoothstep of sine / cone
+// sine, as vectors) into the limb's own bend direction after step 3's aim (the input pose's plane), which it equals
+// on the line: as the target crosses the line the middle joint swings over to the pole's new side continuously,
+// spread over the cone (the tests bound its swing at 40× the target's turn; a flip is a jump). A zero pole uses the
+// input pose's plane throughout. Some target direction must remain where the bend direction jumps (a direction
+// across the line cannot turn continuously over every target direction): here it is one direction per end of the
+// line, at sine cone/2 from it on the side the pose bends toward, where the pole's part is exactly opposite the
+// pose's bend at half blend (the pose's plane is kept there). A rig whose targets do pass there can put the pole to
+// the limb's side with swivel_degrees = ±90 (the "no-flip" setup), which moves these directions to where the limb
+// points along the pole.
 // Swivel. The reference is then turned by swivel_degrees about root → target (right-handed): the bend plane's angle
 // a rigger dials in, with or without a pole.
 // Weight. Each joint's local rotation is nlerp(input, solved, weight) (the same as blending the correction
