@@ -40,10 +40,13 @@ glm::quat turn_quat(glm::vec3 axis, glm::dvec2 turn, double length) noexcept {
   return glm::quat(static_cast<float>(half.x), v.x, v.y, v.z);
 }
 
-// The solve at full weight: the joints' new local rotations and the stretch factor.
+// The solve at full weight: the joints' new local rotations (unit), the stretch factor and, when no limit moved a
+// joint, the effector relative to the root's head in the root parent's frame (it lies on the line to the target).
 struct Solved {
   glm::quat upper, lower;
   double stretch = 1.0;
+  bool clamped = false;
+  glm::vec3 effector{0.0f};
 };
 
 // Steps 1–4 of ik.hpp. `upper` and `lower` are the normalised input rotations; `u` and `lower_offset` the middle and
@@ -90,7 +93,8 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   // v turned (Rodrigues, v ⊥ axis), or from the pose again when the limit moved the joint (the clamp normalises).
   const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
                              static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
-  v = clamp_rotation(limits[1], lower) ? lower * lower_offset : turned_v;
+  out.clamped = clamp_rotation(limits[1], lower);
+  v = out.clamped ? lower * lower_offset : turned_v;
   // The bend plane's normal, u × v, or the turn's axis where the limb ends straight or folded.
   glm::vec3 normal = glm::cross(u, v);
   if (glm::dot(normal, normal) <= 1e-12f * static_cast<float>(a * a * b * b)) normal = axis;
@@ -112,61 +116,79 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   if (bend_length > tiny) {
     bend /= bend_length;
     glm::vec3 reference = bend;
+    bool unit_reference = true;
     const float pole2 = glm::dot(pole, pole);
     if (pole2 > 0.0f) {
       const glm::vec3 across = pole - d * glm::dot(pole, d);
-      const float across_length = glm::length(across);
-      const float t = across_length / (std::sqrt(pole2) * two_bone_pole_cone_sine);
-      if (t >= 1.0f) {
-        reference = across / across_length;
-      } else if (t > 0.0f) {
+      const float across2 = glm::dot(across, across);
+      constexpr float cone2 = two_bone_pole_cone_sine * two_bone_pole_cone_sine;
+      if (across2 >= cone2 * pole2) {
+        reference = across / std::sqrt(across2);
+      } else if (across2 > 0.0f) {
+        const float across_length = std::sqrt(across2);
+        const float t = across_length / (std::sqrt(pole2) * two_bone_pole_cone_sine);
         const float blend = t * t * (3.0f - 2.0f * t);
         reference = across * (blend / across_length) + bend * (1.0f - blend);
+        unit_reference = false;
       }
     }
     if (job.swivel_degrees != 0.0f) {
       const float angle = job.swivel_degrees * (std::numbers::pi_v<float> / 180.0f);
       reference = reference * std::cos(angle) + glm::cross(d, reference) * std::sin(angle);
     }
+    // (cos, sin) of the twist times |reference|, which is 1 to rounding outside the cone: the clamp below
+    // normalises what that leaves.
     const glm::dvec2 twist(glm::dot(bend, reference), glm::dot(glm::cross(bend, reference), d));
-    const double twist_length = glm::length(twist);
+    const double twist_length = unit_reference ? 1.0 : glm::length(twist);
     if (twist_length > 1e-6) upper = turn_quat(d, twist, twist_length) * upper;
   }
-  clamp_rotation(limits[0], upper);  // normalises
+  if (clamp_rotation(limits[0], upper)) out.clamped = true;  // (normalises)
   out.upper = upper;
   out.lower = lower;
+  // The twist keeps the effector on the line; |u + v| is the bent limb's length.
+  if (!out.clamped) out.effector = d * (glm::length(u + v) * static_cast<float>(out.stretch));
   return out;
 }
 
-}  // namespace
-
-Status TwoBoneIkJob::validate() const noexcept {
+// validate() with the bone lengths it measured (a, b) for run().
+Status check(const TwoBoneIkJob& job, float& a, float& b) noexcept {
+  const IkChain* chain = job.chain;
+  const auto& rotations = job.rotations;
+  const auto& translations = job.translations;
+  const float tolerance = job.tolerance, soften = job.soften, weight = job.weight, max_stretch = job.max_stretch;
   if (chain == nullptr || chain->joint_count() != 2 || chain->limits.size() != 2)
     return Status::failure("chain does not have two joints");
   const auto needed = static_cast<std::size_t>(chain->max_bone) + 1;
   if (chain->max_bone < 0 || rotations.size() < needed || translations.size() < needed)
     return Status::failure("pose spans do not hold every chain bone");
-  if (!stretched_translations.empty() && stretched_translations.size() < needed)
+  if (!job.stretched_translations.empty() && job.stretched_translations.size() < needed)
     return Status::failure("stretched_translations do not hold every chain bone");
   if (!std::isfinite(tolerance) || tolerance < 0.0f) return Status::failure("tolerance not finite and >= 0");
   if (!(soften >= 0.0f && soften <= 1.0f)) return Status::failure("soften not within [0, 1]");
   if (!(weight >= 0.0f && weight <= 1.0f)) return Status::failure("weight not within [0, 1]");
   if (!(max_stretch >= 1.0f) || !std::isfinite(max_stretch)) return Status::failure("max_stretch not finite and >= 1");
-  if (!(std::abs(swivel_degrees) <= 360.0f)) return Status::failure("swivel_degrees not within [-360, 360]");
-  if (pole_kind != PoleKind::direction && pole_kind != PoleKind::point)
+  if (!(std::abs(job.swivel_degrees) <= 360.0f)) return Status::failure("swivel_degrees not within [-360, 360]");
+  if (job.pole_kind != PoleKind::direction && job.pole_kind != PoleKind::point)
     return Status::failure("pole_kind is not direction or point");
-  if (!detail::finite(target)) return Status::failure("target is not finite");
-  if (!detail::finite(pole)) return Status::failure("pole is not finite");
-  if (!finite(base.rotation) || !detail::finite(base.translation)) return Status::failure("base is not finite");
+  if (!detail::finite(job.target)) return Status::failure("target is not finite");
+  if (!detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (!finite(job.base.rotation) || !detail::finite(job.base.translation)) return Status::failure("base is not finite");
   for (const std::int32_t id : chain->bones) {
-    const auto b = static_cast<std::size_t>(id);
-    if (!finite(rotations[b]) || !detail::finite(translations[b])) return Status::failure("chain pose is not finite");
+    const auto bone = static_cast<std::size_t>(id);
+    if (!finite(rotations[bone]) || !detail::finite(translations[bone])) return Status::failure("chain pose is not finite");
   }
-  const float a = glm::length(translations[static_cast<std::size_t>(chain->bones[1])]);
-  const float b = glm::length(translations[static_cast<std::size_t>(chain->bones[2])]);
+  a = glm::length(translations[static_cast<std::size_t>(chain->bones[1])]);
+  b = glm::length(translations[static_cast<std::size_t>(chain->bones[2])]);
   if (!std::isfinite(a + b)) return Status::failure("chain length overflows");
   if (!(std::min(a, b) > zero_bone_fraction * (a + b))) return Status::failure("limb has a zero-length bone");
   return {};
+}
+
+}  // namespace
+
+Status TwoBoneIkJob::validate() const noexcept {
+  float a = 0.0f, b = 0.0f;
+  return check(*this, a, b);
 }
 
 Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {
@@ -175,10 +197,12 @@ Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {
 }
 
 Status TwoBoneIkJob::run() const noexcept {
-  if (const Status status = validate(); !status) return status;
+  float a = 0.0f, b = 0.0f;
+  if (const Status status = check(*this, a, b); !status) return status;
   const auto root = static_cast<std::size_t>(chain->bones[0]);
   const auto middle = static_cast<std::size_t>(chain->bones[1]);
   const auto end = static_cast<std::size_t>(chain->bones[2]);
+  // (glm turns vectors by unit quaternions only.)
   const glm::quat upper_in = glm::normalize(rotations[root]), lower_in = glm::normalize(rotations[middle]);
   const glm::vec3 u = translations[middle], lower_offset = translations[end];
   // The target and the pole in the root parent's frame, relative to the root's head.
@@ -189,12 +213,15 @@ Status TwoBoneIkJob::run() const noexcept {
 
   glm::quat upper = upper_in, lower = lower_in;
   float factor = 1.0f;
+  bool effector_known = false;
+  glm::vec3 effector(0.0f);
   if (weight > 0.0f) {
-    const Solved solved = solve(*this, upper_in, lower_in, u, lower_offset, glm::length(glm::dvec3(u)),
-                                glm::length(glm::dvec3(lower_offset)), to_target, base_pole);
+    const Solved solved = solve(*this, upper_in, lower_in, u, lower_offset, a, b, to_target, base_pole);
     upper = solved.upper;
     lower = solved.lower;
     factor = static_cast<float>(solved.stretch);
+    effector_known = weight == 1.0f && !solved.clamped;
+    effector = solved.effector;
     if (weight < 1.0f) {
       upper = nlerp(upper_in, upper, weight);
       lower = nlerp(lower_in, lower, weight);
@@ -210,7 +237,7 @@ Status TwoBoneIkJob::run() const noexcept {
     stretched_translations[middle] = u * factor;
     stretched_translations[end] = lower_offset * factor;
   }
-  const glm::vec3 effector = upper * (u * factor + lower * (lower_offset * factor));
+  if (!effector_known) effector = upper * (u * factor + lower * (lower_offset * factor));
   const float distance = glm::length(effector - to_target);
   if (stretch != nullptr) *stretch = factor;
   if (result != nullptr) *result = IkResult{distance <= tolerance, distance, 1};
