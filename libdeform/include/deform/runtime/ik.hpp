@@ -10,10 +10,11 @@
 //    root's parent (its base), the pose's local rotations and translations and the target, and writes the joints'
 //    local rotations. No allocation, no exceptions, no I/O; scratch memory is the caller's.
 // Every solve
-//  - starts from the pose it is given and changes only the local rotations of the chain's joints;
+//  - starts from the pose it is given and changes only the local rotations of the chain's joints (a two-bone solve
+//    also writes its stretched translations, into a span of their own);
 //  - leaves every joint inside its DOF limits (the starting pose is clamped first);
 //  - minimises the effector–target distance when the target is out of reach (an unconstrained chain ends straight,
-//    pointing at the target).
+//    pointing at the target), unless a two-bone solve is told to soften.
 // docs/ik.md describes the algorithms, their guarantees and measured behaviour.
 #include <cstddef>
 #include <cstdint>
