@@ -17,6 +17,14 @@ bool finite(glm::quat q) noexcept {
   return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
 }
 
+// Normalises `rotation` and clamps it into `limits` (clamp_rotation), the normalisation inline for a free joint.
+// True when the limits moved it.
+inline bool clamp_joint(const EulerLimits& limits, glm::quat& rotation) noexcept {
+  if (!limits.free) return clamp_rotation(limits, rotation);
+  rotation = glm::normalize(rotation);
+  return false;
+}
+
 // Any unit vector perpendicular to `v` (non-zero).
 glm::vec3 perpendicular(glm::vec3 v) noexcept {
   const glm::vec3 helper = std::abs(v.x) < 0.6f * glm::length(v) ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
@@ -93,7 +101,7 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   // v turned (Rodrigues, v ⊥ axis), or from the pose again when the limit moved the joint (the clamp normalises).
   const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
                              static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
-  out.clamped = clamp_rotation(limits[1], lower);
+  out.clamped = clamp_joint(limits[1], lower);
   v = out.clamped ? lower * lower_offset : turned_v;
   // The bend plane's normal, u × v, or the turn's axis where the limb ends straight or folded.
   glm::vec3 normal = glm::cross(u, v);
@@ -142,7 +150,7 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
     const double twist_length = unit_reference ? 1.0 : glm::length(twist);
     if (twist_length > 1e-6) upper = turn_quat(d, twist, twist_length) * upper;
   }
-  if (clamp_rotation(limits[0], upper)) out.clamped = true;  // (normalises)
+  if (clamp_joint(limits[0], upper)) out.clamped = true;  // (normalises)
   out.upper = upper;
   out.lower = lower;
   // The twist keeps the effector on the line; |u + v| is the bent limb's length.
@@ -173,10 +181,14 @@ Status check(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   if (!detail::finite(job.target)) return Status::failure("target is not finite");
   if (!detail::finite(job.pole)) return Status::failure("pole is not finite");
   if (!finite(job.base.rotation) || !detail::finite(job.base.translation)) return Status::failure("base is not finite");
+  // Each number times 0 is 0 when finite and NaN when not: one test for the 21 (no -ffinite-math-only here).
+  float zero = 0.0f;
   for (const std::int32_t id : chain->bones) {
-    const auto bone = static_cast<std::size_t>(id);
-    if (!finite(rotations[bone]) || !detail::finite(translations[bone])) return Status::failure("chain pose is not finite");
+    const glm::quat q = rotations[static_cast<std::size_t>(id)];
+    const glm::vec3 t = translations[static_cast<std::size_t>(id)];
+    zero += q.x * 0.0f + q.y * 0.0f + q.z * 0.0f + q.w * 0.0f + t.x * 0.0f + t.y * 0.0f + t.z * 0.0f;
   }
+  if (!(zero == 0.0f)) return Status::failure("chain pose is not finite");
   a = glm::length(translations[static_cast<std::size_t>(chain->bones[1])]);
   b = glm::length(translations[static_cast<std::size_t>(chain->bones[2])]);
   if (!std::isfinite(a + b)) return Status::failure("chain length overflows");
