@@ -271,7 +271,7 @@ TEST_CASE("two-bone matches the double-precision reference over 6,000 random lim
   CHECK(stretched > 1000);
 }
 
-TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between blends each joint by nlerp of the solve") {
+TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between turns each joint by that part of the solve") {
   const Limb limb = make_limb();
   std::mt19937 random(77);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -309,8 +309,14 @@ TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between blends each
       const glm::dquat from = glm::normalize(glm::dquat(pose.rotations[joint]));
       glm::dquat to(full.rotations[joint]);
       if (glm::dot(from, to) < 0.0) to = -to;
-      const glm::dquat expected = glm::normalize(glm::dquat((1.0 - w) * from.w + w * to.w, (1.0 - w) * from.x + w * to.x,
-                                                           (1.0 - w) * from.y + w * to.y, (1.0 - w) * from.z + w * to.z));
+      // The shortest rotation from the input to the solve, by the angle times w (slerp, written as an axis-angle).
+      const glm::dquat correction = to * glm::conjugate(from);
+      const double half = std::acos(std::clamp(correction.w, -1.0, 1.0));
+      const glm::dvec3 axis = std::sin(half) > 1e-12
+                                  ? glm::dvec3(correction.x, correction.y, correction.z) / std::sin(half)
+                                  : glm::dvec3(1.0, 0.0, 0.0);
+      const glm::dquat part_correction(std::cos(w * half), axis * std::sin(w * half));
+      const glm::dquat expected = part_correction * from;
       glm::dquat got(part.rotations[joint]);
       if (glm::dot(got, expected) < 0.0) got = -got;
       CHECK(glm::length(glm::dvec4(got.x - expected.x, got.y - expected.y, got.z - expected.z, got.w - expected.w)) <=

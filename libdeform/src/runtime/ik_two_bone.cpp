@@ -31,13 +31,19 @@ glm::vec3 perpendicular(glm::vec3 v) noexcept {
   return glm::normalize(glm::cross(v, helper));
 }
 
-// `rotation` blended toward `solved` by `weight` in (0, 1): normalised linear interpolation on the nearer hemisphere.
-glm::quat nlerp(glm::quat rotation, glm::quat solved, float weight) noexcept {
-  const float sign = glm::dot(rotation, solved) < 0.0f ? -weight : weight;
-  return glm::normalize(glm::quat(rotation.w * (1.0f - weight) + solved.w * sign,
-                                  rotation.x * (1.0f - weight) + solved.x * sign,
-                                  rotation.y * (1.0f - weight) + solved.y * sign,
-                                  rotation.z * (1.0f - weight) + solved.z * sign));
+// `rotation` turned toward `solved` by the fraction `weight` in (0, 1) of the shortest rotation between them (slerp
+// on the nearer hemisphere; unit inputs, unit result). Nearly equal rotations blend linearly, normalised.
+glm::quat slerp(glm::quat rotation, glm::quat solved, float weight) noexcept {
+  float cosine = glm::dot(rotation, solved);
+  if (cosine < 0.0f) solved = -solved, cosine = -cosine;
+  float from = 1.0f - weight, to = weight;
+  if (cosine < 0.9995f) {
+    const float angle = std::acos(cosine), scale = 1.0f / std::sin(angle);
+    from = std::sin(from * angle) * scale;
+    to = std::sin(weight * angle) * scale;
+  }
+  return glm::normalize(glm::quat(rotation.w * from + solved.w * to, rotation.x * from + solved.x * to,
+                                  rotation.y * from + solved.y * to, rotation.z * from + solved.z * to));
 }
 
 // The quaternion (not normalised) of the turn about unit `axis` whose cosine and sine, both times `length`, are
@@ -235,9 +241,9 @@ Status TwoBoneIkJob::run() const noexcept {
     effector_known = weight == 1.0f && !solved.clamped;
     effector = solved.effector;
     if (weight < 1.0f) {
-      upper = nlerp(upper_in, upper, weight);
-      lower = nlerp(lower_in, lower, weight);
-      // (nlerp normalised them: a free joint needs nothing more.)
+      upper = slerp(upper_in, upper, weight);
+      lower = slerp(lower_in, lower, weight);
+      // (slerp normalised them: a free joint needs nothing more.)
       if (!chain->limits[0].free) clamp_rotation(chain->limits[0], upper);
       if (!chain->limits[1].free) clamp_rotation(chain->limits[1], lower);
       factor = 1.0f + weight * (factor - 1.0f);

@@ -217,9 +217,10 @@ inline constexpr float two_bone_pole_cone_sine = 0.25f;
 // points along the pole.
 // Swivel. The reference is then turned by swivel_degrees about root → target (right-handed): the bend plane's angle
 // a rigger dials in, with or without a pole.
-// Weight. Each joint's local rotation is nlerp(input, solved, weight) (the same as blending the correction
-// solved · input⁻¹ from the identity), then clamped into its limits; the stretch is 1 + weight·(s − 1). weight = 0
-// writes no rotation (the pose stays bit-identical) and a stretch of 1.
+// Weight. Each joint's local rotation becomes slerp(input, solved, weight): the input turned by that fraction of the
+// shortest rotation to the solved one (the correction solved · input⁻¹ scaled by weight, as IkJob's weight), then
+// clamped into its limits; the stretch is 1 + weight·(s − 1). weight = 0 writes no rotation (the pose stays
+// bit-identical) and a stretch of 1.
 // Degenerate cases. A target on the root keeps the limb's direction and folds it as far as it goes (c = |a − b|,
 // or soften's value); a bone of (nearly) zero length is refused by validate().
 // Result: `reached` when the effector — of the written rotations, with the stretch applied — lies within tolerance
