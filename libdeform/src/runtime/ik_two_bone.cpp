@@ -38,9 +38,11 @@ glm::quat slerp(glm::quat rotation, glm::quat solved, float weight) noexcept {
   if (cosine < 0.0f) solved = -solved, cosine = -cosine;
   float from = 1.0f - weight, to = weight;
   if (cosine < 0.9995f) {
-    const float angle = std::acos(cosine), scale = 1.0f / std::sin(angle);
-    from = std::sin(from * angle) * scale;
-    to = std::sin(weight * angle) * scale;
+    // sin((1 − w)θ) / sin θ = cos wθ − cos θ · sin wθ / sin θ: one arc cosine, one sine and cosine.
+    const float angle = weight * std::acos(cosine), sine = std::sqrt(1.0f - cosine * cosine);
+    const float part_sine = std::sin(angle) / sine;
+    from = std::cos(angle) - cosine * part_sine;
+    to = part_sine;
   }
   return glm::normalize(glm::quat(rotation.w * from + solved.w * to, rotation.x * from + solved.x * to,
                                   rotation.y * from + solved.y * to, rotation.z * from + solved.z * to));
