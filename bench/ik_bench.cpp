@@ -1,4 +1,5 @@
-// IK benchmarks: ik/ccd, ik/fabrik on 2- to 6-joint chains with random DOF limits, ik/two_bone; random reachable
+// IK benchmarks: ik/ccd, ik/fabrik on 2- to 6-joint chains with random DOF limits, ik/two_bone (and ik/two_bone_rig
+// with a pole point, swivel, soften, stretch and weight); random reachable
 // targets (FK of random in-limit poses), tolerance 1e-4 of the chain length, from the bind pose each solve.
 // Items = solves. Counters: mean iterations, reached (fraction), median_us (median time of one solve).
 // ik/clamp: one joint's DOF clamp, the solvers' clamp_rotation against Skeleton::clamp_to_limits.
@@ -92,7 +93,9 @@ void ccd_plain(benchmark::State& state) { solve_loop(state, deform::IkMethod::cc
 void fabrik(benchmark::State& state) { solve_loop(state, deform::IkMethod::fabrik, true); }
 
 // state.range(0): 1 = random DOF limits (the closed form, then clamps), 0 = free joints (the closed form alone).
-void two_bone(benchmark::State& state) {
+// rig: 1 = a rigger's settings on top (pole point, swivel, soften, stretch, the stretched translations written),
+// 2 = those and weight 0.7 (the blend and two more clamps); 0 = a pole direction only.
+void two_bone_loop(benchmark::State& state, long rig) {
   const std::vector<Case> cases = make_cases(2, 99, state.range(0) == 0);
   std::vector<deform::IkChain> chains;
   std::vector<deform::Pose> poses;  // one per rig; each solve starts from its bind pose again
@@ -100,6 +103,9 @@ void two_bone(benchmark::State& state) {
     chains.push_back(deform::make_chain(c.rig.skeleton, c.rig.root, c.rig.effector));
     poses.push_back(c.bind);
   }
+  std::vector<std::vector<glm::vec3>> stretched;
+  for (const deform::Pose& pose : poses) stretched.push_back(pose.translations);
+  float stretch = 1.0f;
   long solves = 0, reached = 0;
   for (auto _ : state) {
     const auto i = static_cast<std::size_t>(solves % rig_count);
@@ -121,6 +127,17 @@ void two_bone(benchmark::State& state) {
     job.pole = glm::vec3(0, 0, 1);
     job.tolerance = 1e-4f * c.rig.length;
     job.result = &result;
+    if (rig >= 1) {
+      job.pole = c.targets[(t + 1) % targets_per_rig];  // a point somewhere near the limb
+      job.pole_kind = deform::PoleKind::point;
+      job.swivel_degrees = 10.0f;
+      job.soften = 0.1f;
+      job.max_stretch = 1.5f;
+      job.stretched_translations = stretched[i];
+      job.stretch = &stretch;
+      job.target *= 1.2f;  // some targets beyond the rest reach, to stretch to
+    }
+    if (rig >= 2) job.weight = 0.7f;
     deform::chain_base(chains[i], pose.rotations, pose.translations, job.base);
     job.run();
     benchmark::DoNotOptimize(pose.rotations.data());
@@ -131,6 +148,10 @@ void two_bone(benchmark::State& state) {
   state.counters["iterations"] = 1.0;
   state.counters["reached"] = static_cast<double>(reached) / static_cast<double>(solves);
 }
+
+void two_bone(benchmark::State& state) { two_bone_loop(state, 0); }
+// state.range(0) as two_bone's, state.range(1) the rig settings (two_bone_loop).
+void two_bone_rig(benchmark::State& state) { two_bone_loop(state, state.range(1)); }
 
 // One joint clamp on random rotations and the tests' random limits: state.range(0) = 1 the solvers' clamp_rotation,
 // 0 the double-precision Skeleton::clamp_to_limits (convert, clamp, convert back). Items = clamps.
@@ -171,4 +192,5 @@ BENCHMARK(ccd)->Name("ik/ccd")->DenseRange(2, 6);
 BENCHMARK(ccd_plain)->Name("ik/ccd_plain")->DenseRange(2, 6);
 BENCHMARK(fabrik)->Name("ik/fabrik")->DenseRange(2, 6);
 BENCHMARK(two_bone)->Name("ik/two_bone")->Arg(1)->Arg(0);
+BENCHMARK(two_bone_rig)->Name("ik/two_bone_rig")->ArgsProduct({{1, 0}, {1, 2}})->ArgNames({"limits", "rig"});
 BENCHMARK(clamp)->Name("ik/clamp")->Arg(1)->Arg(0);

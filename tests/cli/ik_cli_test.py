@@ -221,12 +221,26 @@ check(beyond_90 >= 5, f"wide: only {beyond_90} printed joints beyond ±90° abou
 # --limits swing-twist: per joint a cone and a twist range derived from the Euler limits (docs/cli.md). Checked here
 # with this script's own split: swing = the shortest arc taking the bone axis where the rotation takes it, twist =
 # the rest; the printed angles are exact (unclamped), so `deform skin --no-limits` reproduces the effector.
+# --- two-bone rig settings: shoulder (head (0, 1, 0)) -> elbow -> wrist, both bones of length 1, the elbow bending
+# about its -y (toward +z of the shoulder's frame) within its limits.
+SHOULDER = (0.0, 1.0, 0.0)
+
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def dot(a, b):
     return sum(x * y for x, y in zip(a, b))
+
+
+def across(v, d):  # the part of v across the unit direction d
+    k = dot(v, d)
+    return tuple(x - k * y for x, y in zip(v, d))
 
 
 def unit(v):
@@ -294,6 +308,84 @@ for args, what in (((wide_sk, "--effector", "tip", "--target", "1,1,1", "--limit
     code, out, err = run(*args)
     check(code == 2 and out == "" and "--limits" in err, f"{what}: exit {code}, stderr {err.strip()!r}")
 BONES = saved
+def two_bone(target, *flags):
+    code, out, err = run(sk, "--effector", "wrist", "--root", "shoulder", "--solver", "two-bone", "--target",
+                         ",".join(map(str, target)), *flags)
+    check(code == 0, f"two-bone {flags}: exit {code} ({err.strip()})")
+    return json.loads(out) if code == 0 else None
+
+
+# --pole (a world point): the elbow lies in the plane of shoulder, target and pole, on the pole's side; --swivel 90
+# turns it a quarter turn about shoulder -> target (right-handed).
+target, pole = (1.2, 1.9, 0.6), (0.5, 1.0, 2.0)
+d = unit(sub(target, SHOULDER))
+pole_across = unit(across(sub(pole, SHOULDER), d))
+for swivel, expected in ((None, pole_across), ("90", cross(d, pole_across))):
+    flags = ("--pole", "0.5,1,2") + (("--swivel", swivel) if swivel else ())
+    doc = two_bone(target, *flags)
+    if doc:
+        check(doc["reached"] is True, f"two-bone {flags}: reached {doc['reached']} distance {doc['distance']}")
+        elbow = across(sub(head_of("elbow", doc["bones"]), SHOULDER), d)
+        check(dot(unit(elbow), expected) > 1 - 1e-6, f"two-bone {flags}: elbow direction {unit(elbow)} vs {expected}")
+        check(dist(head_of("wrist", doc["bones"]), target) <= 1e-4, f"two-bone {flags}: FK of printed bones")
+        check("stretch" not in doc, f"two-bone {flags}: no stretch key without --stretch")
+
+# --soften: a target at full reach (2 from the shoulder) is met without it and falls short by soften x 2 / e with it.
+full = (SHOULDER[0] + 1.2, SHOULDER[1] + 1.6, 0.0)
+previous = 0.0
+for soften in ("0", "0.1", "0.2"):
+    doc = two_bone(full, "--pole", "0,1,1", "--soften", soften)
+    if doc:
+        expected = float(soften) * 2.0 / math.e
+        check(abs(doc["distance"] - expected) <= 1e-4, f"--soften {soften}: distance {doc['distance']} vs {expected}")
+        check(doc["reached"] is (soften == "0"), f"--soften {soften}: reached {doc['reached']}")
+        check(doc["distance"] >= previous, f"--soften {soften}: farther than a smaller soften")
+        previous = doc["distance"]
+
+# --stretch: 2.6 from the shoulder needs 1.3; up to 1.5 it reaches with both bones 1.3 long (the printed
+# translations carry it), with 1.2 it stops 0.2 short.
+far = (SHOULDER[0] + 1.56, SHOULDER[1] + 2.08, 0.0)
+for max_stretch, factor, distance in (("1.5", 1.3, 0.0), ("1.2", 1.2, 0.2)):
+    doc = two_bone(far, "--pole", "0,1,1", "--stretch", max_stretch)
+    if doc:
+        check(list(doc) == ["solver", "reached", "distance", "iterations", "stretch", "effector", "bones"],
+              f"--stretch: keys {list(doc)}")
+        check(abs(doc["stretch"] - factor) <= 1e-5, f"--stretch {max_stretch}: stretch {doc['stretch']} vs {factor}")
+        check(abs(doc["distance"] - distance) <= 1e-4, f"--stretch {max_stretch}: distance {doc['distance']}")
+        check(doc["reached"] is (distance == 0.0), f"--stretch {max_stretch}: reached {doc['reached']}")
+        for bone in ("elbow", "wrist"):
+            length = math.sqrt(dot(doc["bones"][bone]["translation"], doc["bones"][bone]["translation"]))
+            check(abs(length - factor) <= 1e-5, f"--stretch {max_stretch}: {bone} translation length {length}")
+        check(dist(head_of("wrist", doc["bones"]), doc["effector"]) <= 1e-4, f"--stretch {max_stretch}: FK of bones")
+
+# --pole with the chain solvers (IkJob::pole): the elbow ends on the pole's side of shoulder -> target, for a pole on
+# either side, and the target is still reached.
+for solver in ("ccd", "fabrik"):
+    for pole in ((0.5, 1.0, 2.0), (0.5, 1.0, -2.0)):
+        code, out, err = run(sk, "--effector", "wrist", "--root", "shoulder", "--solver", solver, "--target",
+                             ",".join(map(str, target)), "--pole", ",".join(map(str, pole)))
+        check(code == 0, f"{solver} --pole {pole}: exit {code} ({err.strip()})")
+        if code == 0:
+            doc = json.loads(out)
+            check(doc["reached"] is True, f"{solver} --pole {pole}: not reached ({doc['distance']})")
+            elbow = across(sub(head_of("elbow", doc["bones"]), SHOULDER), d)
+            side = dot(unit(elbow), unit(across(sub(pole, SHOULDER), d)))
+            check(side > 0.9, f"{solver} --pole {pole}: the elbow is not on the pole's side ({side})")
+
+# The other rig flags are the two-bone solver's: another solver, or a value out of range, is exit 2.
+for args, what in (
+    (("--solver", "fabrik", "--soften", "0.1"), "--soften with fabrik"),
+    (("--stretch", "2"), "--stretch with ccd"),
+    (("--solver", "two-bone", "--root", "shoulder", "--soften", "1.5"), "--soften above 1"),
+    (("--solver", "two-bone", "--root", "shoulder", "--soften", "-0.1"), "--soften below 0"),
+    (("--solver", "two-bone", "--root", "shoulder", "--stretch", "0.5"), "--stretch below 1"),
+    (("--solver", "two-bone", "--root", "shoulder", "--stretch", "inf"), "--stretch infinite"),
+    (("--solver", "two-bone", "--root", "shoulder", "--swivel", "400"), "--swivel beyond 360"),
+    (("--solver", "two-bone", "--root", "shoulder", "--pole", "1,nan,0"), "--pole not finite"),
+    (("--solver", "two-bone", "--root", "shoulder", "--pole", "1,1"), "--pole with two numbers"),
+):
+    code, out, err = run(sk, "--effector", "wrist", "--target", "1,1,1", *args)
+    check(code == 2 and out == "" and err != "", f"{what}: exit {code}, stdout {out!r}, stderr {err.strip()!r}")
 
 print("ik CLI:", "FAILED" if failures else "ok", f"({len(failures)} failures)")
 sys.exit(1 if failures else 0)

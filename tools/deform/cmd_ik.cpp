@@ -1,4 +1,5 @@
 // deform ik: solve a bone chain toward a target point (docs/cli.md, docs/cli.md).
+#include <cmath>
 #include <cstddef>
 #include <iostream>
 #include <string>
@@ -21,7 +22,9 @@ std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance", "--limits"},
+  const Args args(argv,
+                  {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance", "--limits",
+                   "--pole", "--soften", "--stretch", "--swivel"},
                   {"--builtin"});
   const bool builtin = args.has("--builtin");
   if (args.positionals().size() != (builtin ? 0u : 1u))
@@ -35,6 +38,22 @@ int run(const std::vector<std::string>& argv) {
   const std::string solver = args.value("--solver").value_or("ccd");
   if (solver != "ccd" && solver != "fabrik" && solver != "two-bone")
     throw UsageError("--solver: '" + solver + "' is not ccd, fabrik or two-bone");
+  // The two-bone solver's rig settings (TwoBoneIkJob); of them the chain solvers take only the pole (IkJob::pole).
+  for (const char* flag : {"--soften", "--stretch", "--swivel"})
+    if (args.value(flag) && solver != "two-bone")
+      throw UsageError(std::string(flag) + ": applies to --solver two-bone only");
+  const std::optional<glm::vec3> pole =
+      args.value("--pole") ? std::optional(parse_vec3(*args.value("--pole"), "--pole")) : std::nullopt;
+  auto number_in = [&](const char* flag, double low, double high, const char* range, double fallback) {
+    const auto text = args.value(flag);
+    if (!text) return static_cast<float>(fallback);
+    const double value = parse_number(*text, flag);
+    if (!(value >= low && value <= high)) throw UsageError(std::string(flag) + ": '" + *text + "' is not " + range);
+    return static_cast<float>(value);
+  };
+  const float soften = number_in("--soften", 0.0, 1.0, "within [0, 1]", 0.0);
+  const float max_stretch = number_in("--stretch", 1.0, 1e6, "within [1, 1e6]", 1.0);
+  const float swivel = number_in("--swivel", -360.0, 360.0, "within [-360, 360] degrees", 0.0);
   deform::IkSettings settings;
   settings.max_iterations = 100;
   if (auto n = args.value("--max-iterations"))
@@ -70,16 +89,31 @@ int run(const std::vector<std::string>& argv) {
   deform::RigidTransform base;
   deform::IkResult result;
   deform::Status solved = deform::chain_base(chain, pose.rotations, pose.translations, base);
-  if (solved && solver == "two-bone") {  // no pole: the limb keeps its bind-pose bend plane
+  float stretch = 1.0f;
+  if (solved && solver == "two-bone") {  // without --pole the limb keeps its bind-pose bend plane
+    std::vector<glm::vec3> stretched = pose.translations;
     deform::TwoBoneIkJob job;
     job.chain = &chain;
     job.base = base;
     job.rotations = pose.rotations;
     job.translations = pose.translations;
     job.target = target;
+    if (pole) {
+      job.pole = *pole;
+      job.pole_kind = deform::PoleKind::point;
+    }
+    job.swivel_degrees = swivel;
+    job.soften = soften;
+    job.max_stretch = max_stretch;
     job.tolerance = settings.tolerance;
+    job.stretched_translations = stretched;
     job.result = &result;
+    job.stretch = &stretch;
+    if (const deform::Status valid = job.validate(); !valid)
+      throw deform::Error::invalid_argument("bone " + std::to_string(effector),
+                                            std::string("two-bone solve: ") + valid.reason());
     solved = job.run();
+    pose.translations = stretched;  // the printed bones carry the stretch, so FK of them reaches the target
   } else if (solved) {
     std::vector<std::byte> scratch(deform::IkJob::scratch_size(chain.joint_count()));
     deform::IkJob job;
@@ -92,6 +126,7 @@ int run(const std::vector<std::string>& argv) {
     job.settings = settings;
     job.scratch = scratch;
     job.result = &result;
+    if (pole) job.pole = *pole, job.use_pole = true;
     solved = job.run();
   }
   if (!solved) throw UsageError("the target or a setting is not valid");
@@ -109,6 +144,7 @@ int run(const std::vector<std::string>& argv) {
   out["reached"] = distance <= settings.tolerance;
   out["distance"] = distance;
   out["iterations"] = result.iterations;
+  if (args.value("--stretch")) out["stretch"] = stretch;
   out["effector"] = to_json(reached_point);
   out["bones"] = nlohmann::ordered_json::parse(bones);
   print_json_in_order(out);
@@ -120,7 +156,8 @@ int run(const std::vector<std::string>& argv) {
 const Command ik_command = {
     "ik", "solve inverse kinematics for a bone chain",
     "usage: deform ik (S.sk | --builtin) --effector NAME --target X,Y,Z [--root NAME] [--solver ccd|fabrik|two-bone]\n"
-    "                 [--max-iterations N] [--tolerance T] [--limits euler|swing-twist]\n\n"
+    "                 [--max-iterations N] [--tolerance T] [--limits euler|swing-twist] [--pole X,Y,Z]\n"
+    "                 [--soften F] [--stretch MAX] [--swivel DEGREES]\n\n"
     "Moves the chain from --root (default: the skeleton root) to --effector, starting from the bind pose and within\n"
     "the DOF limits, so that the effector's head reaches the target (world coordinates).\n"
     "  --solver            ccd (default), fabrik, or two-bone (a chain of exactly two joints, closed form)\n"
@@ -129,7 +166,12 @@ const Command ik_command = {
     "  --limits KIND       euler (default): the .sk's per-axis Euler limits; swing-twist (ccd, fabrik): per joint a\n"
     "                      twist range about the bone axis and a swing cone, derived from the Euler limits; the\n"
     "                      angles are then printed unclamped, for `deform skin --pose P --no-limits`\n"
-    "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", \"effector\": [x, y, z], \"bones\": {...}}; `bones`\n"
+    "  --pole X,Y,Z        a world point the chain's middle bends toward (default: the bind pose's bend plane)\n"
+    "two-bone only (exit 2 with another solver):\n"
+    "  --soften F          0..1: approach full extension softly over that fraction of the reach, default 0\n"
+    "  --stretch MAX       >= 1: the bones may lengthen up to MAX times to reach; prints \"stretch\", default 1\n"
+    "  --swivel DEGREES    -360..360: turn of the bend plane about root -> target, default 0\n"
+    "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", (\"stretch\",) \"effector\": [x, y, z], \"bones\": {...}}; `bones`\n"
     "holds every chain bone's local rotation (Euler degrees) and translation, ready for `deform skin --pose`.\n"
     "An unreachable target is not an error: the closest pose found, \"reached\": false.\n",
     run};

@@ -229,31 +229,6 @@ Status IkJob::run() const noexcept {
   return {};
 }
 
-Status TwoBoneIkJob::validate() const noexcept {
-  if (chain == nullptr || chain->joint_count() != 2) return Status::failure("chain does not have two joints");
-  if (!spans_fit(*chain, rotations.size(), translations.size()))
-    return Status::failure("pose spans do not hold every chain bone");
-  if (!std::isfinite(tolerance) || tolerance < 0.0f) return Status::failure("tolerance not finite and >= 0");
-  if (!detail::finite(target)) return Status::failure("target is not finite");
-  if (!detail::finite(pole)) return Status::failure("pole is not finite");
-  if (!finite(base)) return Status::failure("base is not finite");
-  float length = 0.0f;
-  return check_chain_pose(*chain, rotations, translations, length);
-}
-
-Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {
-  if (begin > end || end > count()) return Status::failure("range out of bounds");
-  return begin == end ? Status() : run();
-}
-
-Status TwoBoneIkJob::run() const noexcept {
-  if (const Status status = validate(); !status) return status;
-  const IkResult solved =
-      detail::solve_two_bone(*chain, {rotations, translations}, base, target, pole, tolerance);
-  if (result != nullptr) *result = solved;
-  return {};
-}
-
 namespace detail {
 
 void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<glm::quat> rotations,

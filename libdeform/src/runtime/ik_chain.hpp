@@ -42,9 +42,6 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
                    std::uint32_t& random_state) noexcept;
 IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
                       const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
-// The closed-form two-bone solve (TwoBoneIkJob), inputs checked.
-IkResult solve_two_bone(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
-                        float tolerance) noexcept;
 
 inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 

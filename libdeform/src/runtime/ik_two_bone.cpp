@@ -1,98 +1,269 @@
-// The closed-form two-bone solver: law of cosines in 3D with a pole vector (thesis eqs. 14–28 without the plane).
+// The closed-form two-bone solver (TwoBoneIkJob, ik.hpp): law of cosines in 3D (thesis eqs. 14–28 without the
+// plane) with a pole, swivel, soft extension, stretch and a weight.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "ik_chain.hpp"
 
-namespace deform::detail {
+namespace deform {
 namespace {
 
 constexpr float tiny = 1e-12f;
+// A bone shorter than this fraction of the limb counts as zero-length (validate refuses it).
+constexpr float zero_bone_fraction = 1e-6f;
+
+bool finite(glm::quat q) noexcept {
+  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
+}
+
+// Normalises `rotation` and clamps it into `limits` (clamp_rotation), the normalisation inline for a free joint.
+// True when the limits moved it.
+inline bool clamp_joint(const EulerLimits& limits, glm::quat& rotation) noexcept {
+  if (!limits.free) return clamp_rotation(limits, rotation);
+  rotation = glm::normalize(rotation);
+  return false;
+}
 
 // Any unit vector perpendicular to `v` (non-zero).
-glm::vec3 perpendicular(glm::vec3 v) {
+glm::vec3 perpendicular(glm::vec3 v) noexcept {
   const glm::vec3 helper = std::abs(v.x) < 0.6f * glm::length(v) ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
   return glm::normalize(glm::cross(v, helper));
 }
 
-}  // namespace
-
-IkResult solve_two_bone(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
-                        float tolerance) noexcept {
-  const EulerLimits* limits = chain.limits.data();  // root, middle
-  glm::quat& upper = pose.rotations[static_cast<std::size_t>(chain.bones[0])];
-  glm::quat& lower = pose.rotations[static_cast<std::size_t>(chain.bones[1])];
-  const glm::vec3 u = pose.translations[static_cast<std::size_t>(chain.bones[1])];  // root → middle, upper's frame
-  const glm::vec3 lower_offset = pose.translations[static_cast<std::size_t>(chain.bones[2])];
-  // The start pose is only normalised: the answer's root rotation does not depend on it (the effector line and the
-  // pole fix it) and the middle joint is clamped after its turn, so clamping the start as well would not change the
-  // limits the answer keeps, only cost two more clamps.
-  upper = glm::normalize(upper);
-  lower = glm::normalize(lower);
-  // Steps 2 and 3 work in the frame of the root's parent with the root's head at the origin, where the upper
-  // bone's rotation turns the limb directly; the target and the pole are brought there once.
-  const glm::quat to_base = glm::conjugate(base.rotation);
-  const glm::vec3 to_target =
-      to_base * (target - base.translation) - pose.translations[static_cast<std::size_t>(chain.bones[0])];
-  const glm::vec3 base_pole = to_base * pole;
-  const float target_distance = glm::length(to_target);
-  const double a = glm::length(u), b = glm::length(lower_offset);
-  glm::vec3 v = lower * lower_offset;  // middle → effector, upper's frame
-
-  // 1. In the upper bone's frame, the middle joint opens or closes about the limb's bend axis until |effector −
-  //    root| is the reachable distance c nearest the target's, c in [|a − b|, a + b]: the interior angle's cosine
-  //    from the law of cosines. The turn (current − wanted interior angle) is built from cosines and sines.
-  if (a > tiny && b > tiny) {
-    const glm::dvec3 cross = glm::cross(glm::dvec3(u), glm::dvec3(v));
-    const double sine = glm::length(cross);  // a · b · sin(interior angle)
-    glm::vec3 axis;
-    if (sine < 1e-7 * a * b) {  // a straight limb: bend toward the pole, or any way
-      const glm::vec3 upper_pole = glm::conjugate(upper) * base_pole;
-      axis = glm::cross(u, upper_pole - u * (glm::dot(upper_pole, u) / static_cast<float>(a * a)));
-      axis = glm::length(axis) < 1e-7f * static_cast<float>(a) * glm::length(pole) || glm::length(pole) <= tiny
-                 ? perpendicular(u)
-                 : glm::normalize(axis);
-    } else {
-      axis = glm::vec3(cross / sine);
-    }
-    const glm::dvec2 current(-glm::dot(glm::dvec3(u), glm::dvec3(v)), sine);  // (cos, sin) · a · b
-    const double c = std::clamp(static_cast<double>(target_distance), std::abs(a - b), a + b);
-    const double cos_wanted = std::clamp((a * a + b * b - c * c) / (2.0 * a * b), -1.0, 1.0);
-    const glm::dvec2 wanted(cos_wanted, std::sqrt(1.0 - cos_wanted * cos_wanted));
-    const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
-    // The turn's quaternion from its half angle, normalised by the clamp; v turned with it (Rodrigues, v ⊥ axis),
-    // or from the pose again when a limit moved the joint.
-    const glm::dvec2 half = scaled_half_angle(turn, a * b);
-    const glm::vec3 turn_axis = axis * static_cast<float>(half.y);
-    lower = glm::quat(static_cast<float>(half.x), turn_axis.x, turn_axis.y, turn_axis.z) * lower;
-    const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
-                               static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
-    v = clamp_rotation(limits[1], lower) ? lower * lower_offset : turned_v;
+// `rotation` turned toward `solved` by the fraction `weight` in (0, 1) of the shortest rotation between them (slerp
+// on the nearer hemisphere; unit inputs, unit result). Nearly equal rotations blend linearly, normalised.
+glm::quat slerp(glm::quat rotation, glm::quat solved, float weight) noexcept {
+  float cosine = glm::dot(rotation, solved);
+  if (cosine < 0.0f) solved = -solved, cosine = -cosine;
+  float from = 1.0f - weight, to = weight;
+  if (cosine < 0.9995f) {
+    // sin((1 − w)θ) / sin θ = cos wθ − cos θ · sin wθ / sin θ: one arc cosine, one sine and cosine.
+    const float angle = weight * std::acos(cosine), sine = std::sqrt(1.0f - cosine * cosine);
+    const float part_sine = std::sin(angle) / sine;
+    from = std::cos(angle) - cosine * part_sine;
+    to = part_sine;
   }
-  // 2. The root turns the effector onto the line to the target, 3. then twists about that line so the middle joint
-  //    lies on the pole's side. A target on the root leaves the direction as it is; a pole on the line, the plane.
-  glm::vec3 effector = upper * (u + v);
-  if (target_distance > tiny) {
-    const glm::quat turned = rotation_between(effector, to_target) * upper;
-    const glm::vec3 d = to_target * (1.0f / target_distance);
-    const glm::vec3 mid = turned * u;
-    const glm::vec3 mid_across = mid - d * glm::dot(mid, d);
-    const glm::vec3 pole_across = base_pole - d * glm::dot(base_pole, d);
-    const float mid_across2 = glm::dot(mid_across, mid_across), pole_across2 = glm::dot(pole_across, pole_across);
-    upper = turned;
-    if (mid_across2 > 1e-12f * static_cast<float>(a * a) && pole_across2 > 1e-12f * glm::dot(base_pole, base_pole)) {
-      // The twist from mid_across to pole_across: cosine and sine times |mid_across| |pole_across|.
-      const glm::dvec2 half = scaled_half_angle(
-          glm::dvec2(glm::dot(mid_across, pole_across), glm::dot(glm::cross(mid_across, pole_across), d)),
-          std::sqrt(static_cast<double>(mid_across2) * static_cast<double>(pole_across2)));
-      const glm::vec3 twist_axis = d * static_cast<float>(half.y);
-      upper = glm::quat(static_cast<float>(half.x), twist_axis.x, twist_axis.y, twist_axis.z) * turned;
-    }
-    // The limb now lies along the line to the target, unless a limit moved the root. (The clamp also normalises.)
-    effector = clamp_rotation(limits[0], upper) ? upper * (u + v) : d * glm::length(effector);
-  }
-  const float distance = glm::length(effector - to_target);
-  return IkResult{distance <= tolerance, distance, 1};
+  return glm::normalize(glm::quat(rotation.w * from + solved.w * to, rotation.x * from + solved.x * to,
+                                  rotation.y * from + solved.y * to, rotation.z * from + solved.z * to));
 }
 
-}  // namespace deform::detail
+// The quaternion (not normalised) of the turn about unit `axis` whose cosine and sine, both times `length`, are
+// `turn`.
+glm::quat turn_quat(glm::vec3 axis, glm::dvec2 turn, double length) noexcept {
+  const glm::dvec2 half = detail::scaled_half_angle(turn, length);
+  const glm::vec3 v = axis * static_cast<float>(half.y);
+  return glm::quat(static_cast<float>(half.x), v.x, v.y, v.z);
+}
+
+// The solve at full weight: the joints' new local rotations (unit), the stretch factor and, when no limit moved a
+// joint, the effector relative to the root's head in the root parent's frame (it lies on the line to the target).
+struct Solved {
+  glm::quat upper, lower;
+  double stretch = 1.0;
+  bool clamped = false;
+  glm::vec3 effector{0.0f};
+};
+
+// Steps 1–4 of ik.hpp. `upper` and `lower` are the normalised input rotations; `u` and `lower_offset` the middle and
+// effector bones' translations (lengths a, b > 0); `to_target` and `pole` are in the root parent's frame relative to
+// the root's head (`pole` already a vector, from the root for a point).
+Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec3 u, glm::vec3 lower_offset,
+             double a, double b, glm::vec3 to_target, glm::vec3 pole) noexcept {
+  const EulerLimits* limits = job.chain->limits.data();  // root, middle
+  Solved out;
+  // 1. The limb's root–effector distance c: the target's, softened near full extension, at least the folded limb's.
+  const double r = glm::length(glm::dvec3(to_target));
+  const double reach = a + b, fold = std::abs(a - b);
+  double c = std::min(r, reach);
+  if (job.soften > 0.0f) {
+    const double zone = static_cast<double>(job.soften) * reach, start = reach - zone;
+    // c = L − kL·exp((L − r)/(kL) − 1) = start − zone·expm1((start − r)/zone), exact near r = start.
+    if (r > start) c = start - zone * std::expm1((start - r) / zone);
+  }
+  c = std::max(c, fold);
+  if (job.max_stretch > 1.0f && r > c && c > 0.0)
+    out.stretch = std::min(r / c, static_cast<double>(job.max_stretch));
+
+  // 2. In the upper bone's frame, the middle joint turns about the bend axis until |u + v| = c: the turn (current −
+  //    wanted interior angle) from cosines and sines, the wanted one's from the law of cosines.
+  glm::vec3 v = lower * lower_offset;  // middle → effector, upper's frame
+  const glm::dvec3 cross = glm::cross(glm::dvec3(u), glm::dvec3(v));
+  const double sine = glm::length(cross);  // a · b · sin(interior angle)
+  glm::vec3 axis;
+  if (sine < 1e-7 * a * b) {  // straight or folded: bend toward the pole, or about any perpendicular
+    const glm::vec3 upper_pole = glm::conjugate(upper) * pole;
+    axis = glm::cross(u, upper_pole);
+    const float axis_length = glm::length(axis);
+    axis = axis_length > 1e-6f * static_cast<float>(a) * glm::length(upper_pole) && axis_length > tiny
+               ? axis / axis_length
+               : perpendicular(u);
+  } else {
+    axis = glm::vec3(cross / sine);
+  }
+  const glm::dvec2 current(-glm::dot(glm::dvec3(u), glm::dvec3(v)), sine);  // (cos, sin) · a · b
+  const double cos_wanted = std::clamp((a * a + b * b - c * c) / (2.0 * a * b), -1.0, 1.0);
+  const glm::dvec2 wanted(cos_wanted, std::sqrt(1.0 - cos_wanted * cos_wanted));
+  const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
+  lower = turn_quat(axis, turn, a * b) * lower;
+  // v turned (Rodrigues, v ⊥ axis), or from the pose again when the limit moved the joint (the clamp normalises).
+  const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
+                             static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
+  out.clamped = clamp_joint(limits[1], lower);
+  v = out.clamped ? lower * lower_offset : turned_v;
+  // The bend plane's normal, u × v, or the turn's axis where the limb ends straight or folded.
+  glm::vec3 normal = glm::cross(u, v);
+  if (glm::dot(normal, normal) <= 1e-12f * static_cast<float>(a * a * b * b)) normal = axis;
+
+  // 3. The root turns the effector onto the line to the target; a target on the root keeps the limb's direction.
+  glm::vec3 effector = upper * (u + v);
+  glm::vec3 d;
+  if (r > 1e-9 * reach) {
+    upper = detail::rotation_between(effector, to_target) * upper;
+    d = to_target * static_cast<float>(1.0 / r);
+  } else {
+    const float length = glm::length(effector);
+    d = length > 1e-9f * static_cast<float>(reach) ? effector / length : glm::vec3(0.0f);
+  }
+  //    Then it twists about that line, turning the middle joint's direction across it (d × normal) onto the
+  //    reference: the pole's part across the line, blended into the limb's own direction inside the cone.
+  glm::vec3 bend = glm::cross(d, upper * normal);
+  const float bend_length = glm::length(bend);
+  if (bend_length > tiny) {
+    bend /= bend_length;
+    glm::vec3 reference = bend;
+    bool unit_reference = true;
+    const float pole2 = glm::dot(pole, pole);
+    if (pole2 > 0.0f) {
+      const glm::vec3 across = pole - d * glm::dot(pole, d);
+      const float across2 = glm::dot(across, across);
+      constexpr float cone2 = two_bone_pole_cone_sine * two_bone_pole_cone_sine;
+      if (across2 >= cone2 * pole2) {
+        reference = across / std::sqrt(across2);
+      } else if (across2 > 0.0f) {
+        const float across_length = std::sqrt(across2);
+        const float t = across_length / (std::sqrt(pole2) * two_bone_pole_cone_sine);
+        const float blend = t * t * (3.0f - 2.0f * t);
+        reference = across * (blend / across_length) + bend * (1.0f - blend);
+        unit_reference = false;
+      }
+    }
+    if (job.swivel_degrees != 0.0f) {
+      const float angle = job.swivel_degrees * (std::numbers::pi_v<float> / 180.0f);
+      reference = reference * std::cos(angle) + glm::cross(d, reference) * std::sin(angle);
+    }
+    // (cos, sin) of the twist times |reference|, which is 1 to rounding outside the cone: the clamp below
+    // normalises what that leaves.
+    const glm::dvec2 twist(glm::dot(bend, reference), glm::dot(glm::cross(bend, reference), d));
+    const double twist_length = unit_reference ? 1.0 : glm::length(twist);
+    if (twist_length > 1e-6) upper = turn_quat(d, twist, twist_length) * upper;
+  }
+  if (clamp_joint(limits[0], upper)) out.clamped = true;  // (normalises)
+  out.upper = upper;
+  out.lower = lower;
+  // The twist keeps the effector on the line; |u + v| is the bent limb's length.
+  if (!out.clamped) out.effector = d * (glm::length(u + v) * static_cast<float>(out.stretch));
+  return out;
+}
+
+// validate() with the bone lengths it measured (a, b) for run().
+Status check(const TwoBoneIkJob& job, float& a, float& b) noexcept {
+  const IkChain* chain = job.chain;
+  const auto& rotations = job.rotations;
+  const auto& translations = job.translations;
+  const float tolerance = job.tolerance, soften = job.soften, weight = job.weight, max_stretch = job.max_stretch;
+  if (chain == nullptr || chain->joint_count() != 2 || chain->limits.size() != 2)
+    return Status::failure("chain does not have two joints");
+  for (const SwingTwistLimits& joint : chain->swing_twist)
+    if (joint.active) return Status::failure("chain has swing-twist limits (the two-bone solver takes Euler limits)");
+  const auto needed = static_cast<std::size_t>(chain->max_bone) + 1;
+  if (chain->max_bone < 0 || rotations.size() < needed || translations.size() < needed)
+    return Status::failure("pose spans do not hold every chain bone");
+  if (!job.stretched_translations.empty() && job.stretched_translations.size() < needed)
+    return Status::failure("stretched_translations do not hold every chain bone");
+  if (!std::isfinite(tolerance) || tolerance < 0.0f) return Status::failure("tolerance not finite and >= 0");
+  if (!(soften >= 0.0f && soften <= 1.0f)) return Status::failure("soften not within [0, 1]");
+  if (!(weight >= 0.0f && weight <= 1.0f)) return Status::failure("weight not within [0, 1]");
+  if (!(max_stretch >= 1.0f) || !std::isfinite(max_stretch)) return Status::failure("max_stretch not finite and >= 1");
+  if (!(std::abs(job.swivel_degrees) <= 360.0f)) return Status::failure("swivel_degrees not within [-360, 360]");
+  if (job.pole_kind != PoleKind::direction && job.pole_kind != PoleKind::point)
+    return Status::failure("pole_kind is not direction or point");
+  if (!detail::finite(job.target)) return Status::failure("target is not finite");
+  if (!detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (!finite(job.base.rotation) || !detail::finite(job.base.translation)) return Status::failure("base is not finite");
+  // Each number times 0 is 0 when finite and NaN when not: one test for the 21 (no -ffinite-math-only here).
+  float zero = 0.0f;
+  for (const std::int32_t id : chain->bones) {
+    const glm::quat q = rotations[static_cast<std::size_t>(id)];
+    const glm::vec3 t = translations[static_cast<std::size_t>(id)];
+    zero += q.x * 0.0f + q.y * 0.0f + q.z * 0.0f + q.w * 0.0f + t.x * 0.0f + t.y * 0.0f + t.z * 0.0f;
+  }
+  if (!(zero == 0.0f)) return Status::failure("chain pose is not finite");
+  a = glm::length(translations[static_cast<std::size_t>(chain->bones[1])]);
+  b = glm::length(translations[static_cast<std::size_t>(chain->bones[2])]);
+  if (!std::isfinite(a + b)) return Status::failure("chain length overflows");
+  if (!(std::min(a, b) > zero_bone_fraction * (a + b))) return Status::failure("limb has a zero-length bone");
+  return {};
+}
+
+}  // namespace
+
+Status TwoBoneIkJob::validate() const noexcept {
+  float a = 0.0f, b = 0.0f;
+  return check(*this, a, b);
+}
+
+Status TwoBoneIkJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (begin > end || end > count()) return Status::failure("range out of bounds");
+  return begin == end ? Status() : run();
+}
+
+Status TwoBoneIkJob::run() const noexcept {
+  float a = 0.0f, b = 0.0f;
+  if (const Status status = check(*this, a, b); !status) return status;
+  const auto root = static_cast<std::size_t>(chain->bones[0]);
+  const auto middle = static_cast<std::size_t>(chain->bones[1]);
+  const auto end = static_cast<std::size_t>(chain->bones[2]);
+  // (glm turns vectors by unit quaternions only.)
+  const glm::quat upper_in = glm::normalize(rotations[root]), lower_in = glm::normalize(rotations[middle]);
+  const glm::vec3 u = translations[middle], lower_offset = translations[end];
+  // The target and the pole in the root parent's frame, relative to the root's head.
+  const glm::quat to_base = glm::conjugate(base.rotation);
+  const glm::vec3 to_target = to_base * (target - base.translation) - translations[root];
+  const glm::vec3 base_pole =
+      pole_kind == PoleKind::point ? to_base * (pole - base.translation) - translations[root] : to_base * pole;
+
+  glm::quat upper = upper_in, lower = lower_in;
+  float factor = 1.0f;
+  bool effector_known = false;
+  glm::vec3 effector(0.0f);
+  if (weight > 0.0f) {
+    const Solved solved = solve(*this, upper_in, lower_in, u, lower_offset, a, b, to_target, base_pole);
+    upper = solved.upper;
+    lower = solved.lower;
+    factor = static_cast<float>(solved.stretch);
+    effector_known = weight == 1.0f && !solved.clamped;
+    effector = solved.effector;
+    if (weight < 1.0f) {
+      upper = slerp(upper_in, upper, weight);
+      lower = slerp(lower_in, lower, weight);
+      // (slerp normalised them: a free joint needs nothing more.)
+      if (!chain->limits[0].free) clamp_rotation(chain->limits[0], upper);
+      if (!chain->limits[1].free) clamp_rotation(chain->limits[1], lower);
+      factor = 1.0f + weight * (factor - 1.0f);
+    }
+    rotations[root] = upper;
+    rotations[middle] = lower;
+  }
+  if (!stretched_translations.empty()) {
+    stretched_translations[middle] = u * factor;
+    stretched_translations[end] = lower_offset * factor;
+  }
+  if (!effector_known) effector = upper * (u * factor + lower * (lower_offset * factor));
+  const float distance = glm::length(effector - to_target);
+  if (stretch != nullptr) *stretch = factor;
+  if (result != nullptr) *result = IkResult{distance <= tolerance, distance, 1};
+  return {};
+}
+
+}  // namespace deform

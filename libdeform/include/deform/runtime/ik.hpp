@@ -10,10 +10,11 @@
 //    root's parent (its base), the pose's local rotations and translations and the target, and writes the joints'
 //    local rotations. No allocation, no exceptions, no I/O; scratch memory is the caller's.
 // Every solve
-//  - starts from the pose it is given and changes only the local rotations of the chain's joints;
+//  - starts from the pose it is given and changes only the local rotations of the chain's joints (a two-bone solve
+//    also writes its stretched translations, into a span of their own);
 //  - leaves every joint inside its DOF limits (the starting pose is clamped first);
 //  - minimises the effector–target distance when the target is out of reach (an unconstrained chain ends straight,
-//    pointing at the target).
+//    pointing at the target), unless a two-bone solve is told to soften.
 // docs/ik.md describes the algorithms, their guarantees and measured behaviour.
 #include <cstddef>
 #include <cstdint>
@@ -235,27 +236,86 @@ struct DEFORM_RUNTIME_API IkJob {
   std::size_t count() const noexcept { return 1; }
 };
 
-// The closed-form two-bone solve (thesis eqs. 14–28, generalised to 3D): the law of cosines gives the angle at the
-// middle joint, the root turns the effector onto the target, and a twist about root→target puts the middle joint on
-// the side of `pole`. Exact (to float rounding) for an unconstrained limb and a reachable target; an out-of-reach
-// target gives the straight limb pointing at it (or, when the bones differ in length, the limb folded toward it). The
-// DOF limits are applied after the closed form, so a limb whose limits cut the closed-form answer off gets the
-// clamped pose, which is then not exact: `reached` says whether it still is within tolerance. A target on the root
-// folds the limb as far as it goes. count() is 1, as IkJob's.
+// How TwoBoneIkJob::pole is read.
+enum class PoleKind : std::uint8_t {
+  direction,  // a model-space direction (ozz-animation's pole vector)
+  point,      // a model-space point (a rig's knee or elbow target): the direction from the root's head to it
+};
+
+// Sine of the cone about the line root → target inside which the pole hands the bend plane over to the pose's
+// (TwoBoneIkJob, "Pole"): 0.25, about 14.5°.
+inline constexpr float two_bone_pole_cone_sine = 0.25f;
+
+// The closed-form two-bone solve (thesis eqs. 14–28, generalised to 3D) with what a rigger sets on a limb: a pole,
+// a swivel, soft extension, stretch and a weight. For a chain of exactly two joints (root → middle → effector, bone
+// lengths a = |translation of the middle bone| and b = |translation of the effector bone|, both > 0):
+//  1. the reachable distance c (Soften) and the stretch factor s (Stretch) are chosen from r = |target − root head|;
+//  2. the middle joint opens or closes about the limb's current bend axis until |effector − root| = c (law of
+//     cosines); a straight or folded start bends about the axis toward the pole (else any perpendicular);
+//  3. the root turns the effector onto the line root → target (shortest arc), then twists about that line so that
+//     the middle joint lies in the half-plane of the bend reference (Pole), turned by swivel_degrees;
+//  4. each joint is clamped into its DOF limits (the closed form does not know them: when they cut it off the pose is
+//     the clamped one, not exact, and `reached` says so);
+//  5. the rotations are blended with the input pose by `weight` (Weight) and clamped again.
+// Soften. With L = a + b and soften k in [0, 1], the limb's root–effector distance is c = r up to r = L − kL, and
+// beyond it c = L − kL·exp((L − r)/(kL) − 1): continuous with its first derivative, increasing in r, decreasing in k,
+// and below L for every finite r (until it rounds to L, some 15 zones beyond), so the knee approaches straight
+// asymptotically instead of snapping. k = 0 gives
+// c = min(r, L) (no softening). c is then kept at least |a − b| (the folded limb). (ozz's soften ratio is 1 − k.)
+// Stretch. With max_stretch S >= 1: s = clamp(r / c, 1, S), so the limb lengthens exactly when the (softened) limb
+// falls short of the target; both bones are scaled by s (the bend angle is c's, unchanged), so with s < S the
+// effector reaches the target. s is output (`stretch`) and, when `stretched_translations` is given, the middle and
+// effector bones' local translations times s are written there: forward kinematics of the written rotations with
+// those translations puts the effector at the target whenever r <= S·c. Without stretched_translations the caller
+// applies s itself (scale those two translations, or leave the bones and show the stretch otherwise, as an elastic
+// lattice); `result` describes the stretched limb either way. S = 1 (the default) never stretches.
+// Pole. The bend reference is the pole's part across the line root → target (the pole is a direction or, with
+// PoleKind::point, the direction from the root's head to the point). Where the target passes near the pole's line
+// that part shrinks to nothing and turns by 180° across it, which flips the knee of a plain pole solve; so inside the
+// cone about the line whose sine is two_bone_pole_cone_sine, the reference is blended (smoothstep of sine / cone
+// sine, as vectors) into the limb's own bend direction after step 3's aim (the input pose's plane), which it equals
+// on the line: as the target crosses the line the middle joint swings over to the pole's new side continuously,
+// spread over the cone (the tests bound its swing at 40× the target's turn; a flip is a jump). A zero pole uses the
+// input pose's plane throughout. Some target direction must remain where the bend direction jumps (a direction
+// across the line cannot turn continuously over every target direction): here it is one direction per end of the
+// line, at sine cone/2 from it on the side the pose bends toward, where the pole's part is exactly opposite the
+// pose's bend at half blend (the pose's plane is kept there). A rig whose targets do pass there can put the pole to
+// the limb's side with swivel_degrees = ±90 (the "no-flip" setup), which moves these directions to where the limb
+// points along the pole.
+// Swivel. The reference is then turned by swivel_degrees about root → target (right-handed): the bend plane's angle
+// a rigger dials in, with or without a pole.
+// Weight. Each joint's local rotation becomes slerp(input, solved, weight): the input turned by that fraction of the
+// shortest rotation to the solved one (the correction solved · input⁻¹ scaled by weight, as IkJob's weight), then
+// clamped into its limits; the stretch is 1 + weight·(s − 1). weight = 0 writes no rotation (the pose stays
+// bit-identical) and a stretch of 1.
+// Degenerate cases. A target on the root keeps the limb's direction and folds it as far as it goes (c = |a − b|,
+// or soften's value); a bone of (nearly) zero length is refused by validate().
+// Result: `reached` when the effector — of the written rotations, with the stretch applied — lies within tolerance
+// of the target; `distance` is that remaining distance. count() is 1, as IkJob's.
 struct DEFORM_RUNTIME_API TwoBoneIkJob {
   const IkChain* chain = nullptr;           // exactly two joints: root → middle → effector
   RigidTransform base;                      // model-space transform of the root's parent (chain_base), finite
   std::span<glm::quat> rotations;           // in/out: local rotations, more than chain->max_bone entries
-  std::span<const glm::vec3> translations;  // local translations, as many
+  std::span<const glm::vec3> translations;  // local translations, as many; the bones' rest lengths are read here
   glm::vec3 target{0.0f};                   // model space
-  // A model-space direction the middle joint should bend toward (its part across the line root→target counts); a
-  // zero pole, or one along that line, keeps the limb's current bend plane.
-  glm::vec3 pole{0.0f};
-  float tolerance = 1e-3f;                  // reached when |effector - target| <= tolerance; >= 0
-  IkResult* result = nullptr;               // out, optional (iterations = 1)
+  glm::vec3 pole{0.0f};                     // model space, read as pole_kind says; zero: the pose's bend plane
+  PoleKind pole_kind = PoleKind::direction;
+  float swivel_degrees = 0.0f;  // turn of the bend plane about root → target, in [-360, 360]
+  float soften = 0.0f;          // fraction of the reach over which full extension is approached, in [0, 1]
+  float weight = 1.0f;          // blend of the solve with the input pose, in [0, 1]
+  float max_stretch = 1.0f;     // largest factor on the bones' lengths, finite and >= 1; 1 = rigid bones
+  float tolerance = 1e-3f;      // reached when |effector - target| <= tolerance; >= 0
+  // Out, optional: as many entries as `translations`, or empty. When given, only the middle and effector bones'
+  // entries are written: their translations times the stretch. It may view the same storage as `translations` if
+  // the caller puts the rest translations back before the next solve (they are the lengths it reads).
+  std::span<glm::vec3> stretched_translations;
+  IkResult* result = nullptr;  // out, optional (iterations = 1)
+  float* stretch = nullptr;    // out, optional: the stretch factor applied, in [1, max_stretch]
 
-  // Why run() would refuse: no chain or not two joints, spans too short, a non-finite target, pole, base, chain
-  // rotation or translation, a negative or non-finite tolerance. O(1).
+  // Why run() would refuse: no chain or not two joints, swing-twist limits on a joint (Euler limits only here),
+  // spans too short, a non-finite target, pole, base, chain
+  // rotation or translation, a bone of zero length (shorter than 1e-6 of the limb), a parameter outside the range
+  // its comment gives. O(1).
   Status validate() const noexcept;
   // validate(), then the solve; on failure writes nothing. O(1), no allocation.
   Status run() const noexcept;
