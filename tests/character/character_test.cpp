@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <type_traits>
 #include <random>
@@ -121,6 +122,48 @@ TEST_CASE("a reachable target needs no stretch") {
   run_for(c, 0.5, 1.0f / 60.0f);
   CHECK(glm::length(c.bone_position(arm.hand) - target) < 1e-3f);
   CHECK(c.stretch() == 0.0f);
+}
+
+TEST_CASE("reach with a pole: the elbow turns toward the pole within the arm's limits, the target still reached") {
+  const std::int32_t elbow_bone = deform::make_builtin_character().skeleton().find("forearm_l");
+  REQUIRE(elbow_bone > 0);
+  for (const float side : {1.0f, -1.0f}) {
+    // How far toward the pole the elbow ends: the cosine between their parts across the line shoulder → target.
+    const auto facing = [&](bool use_pole) {
+      Character c = deform::make_builtin_character();
+      const Arm arm = left_arm(c);
+      const glm::vec3 shoulder = c.bone_position(c.skeleton().find("upperarm_l"));
+      const glm::vec3 hand = c.bone_position(arm.hand);
+      const glm::vec3 target = shoulder + 0.7f * (hand - shoulder) + glm::vec3(0.0f, -0.1f, 0.1f);
+      const glm::vec3 pole = shoulder + glm::vec3(0.0f, 0.0f, side);
+      c.reach_pole = pole;
+      c.use_reach_pole = use_pole;
+      REQUIRE(c.reach(arm.hand, target).status);
+      run_for(c, 0.5, 1.0f / 60.0f);
+      CHECK(glm::length(c.bone_position(arm.hand) - target) < 1e-3f);
+      const glm::vec3 line = glm::normalize(target - shoulder);
+      const auto across = [&](glm::vec3 v) { return glm::normalize(v - glm::dot(v, line) * line); };
+      return glm::dot(across(c.bone_position(elbow_bone) - shoulder), across(pole - shoulder));
+    };
+    const float without = facing(false), with = facing(true);
+    CAPTURE(side);
+    CAPTURE(without);
+    CHECK(with > std::min(without + 0.5f, 0.99f));
+  }
+}
+
+TEST_CASE("set_max_stretch bounds the stretch reach() asks") {
+  Character c = deform::make_builtin_character();
+  CHECK_FALSE(c.set_max_stretch(-1.0f));
+  CHECK_FALSE(c.set_max_stretch(std::numeric_limits<float>::quiet_NaN()));
+  REQUIRE(c.set_max_stretch(0.1f));
+  const Arm arm = left_arm(c);
+  const deform::ReachResult far = c.reach(arm.hand, glm::vec3(3.0f, 1.5f, 0.3f));
+  REQUIRE(far.status);
+  float longest = 0.0f;
+  for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) longest = std::max(longest, c.deformers().length(l));
+  CHECK(far.stretch > 0.0f);
+  CHECK(far.stretch <= 0.1f * 3.0f * longest + 1e-6f);
 }
 
 TEST_CASE("release: the stretch springs back as a damped oscillation and settles at rest") {

@@ -157,6 +157,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   solve.scratch = ik_scratch_;
   solve.random_state = &random_state;
   solve.result = &ik_result;
+  solve.pole = reach_pole;
+  solve.use_pole = use_reach_pole;
   if (const Status status = chain_base(chain_, work_.rotations, work_.translations, solve.base); !status) {
     result.status = status;
     return result;
@@ -228,6 +230,12 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   }
   effector_ = effector;
   return result;
+}
+
+Status Character::set_max_stretch(float max_stretch) noexcept {
+  if (!(max_stretch >= 0.0f && max_stretch <= 1000.0f)) return Status::failure("max_stretch not within [0, 1000]");
+  rig_.max_stretch = max_stretch;
+  return {};
 }
 
 void Character::release() {

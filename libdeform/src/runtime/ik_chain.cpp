@@ -249,35 +249,65 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
                          std::span<glm::vec3> heads) noexcept {
   const std::size_t joints = chain.joint_count();
   if (joints < 2) return distance;
-  const glm::dvec3 root(heads[0]);
-  const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
-  const double line_length = glm::length(line);
-  if (!(line_length > 1e-12)) return distance;
-  const glm::dvec3 axis = line / line_length;
-  glm::dvec3 middle(0.0);
-  for (std::size_t k = 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
-  middle /= static_cast<double>(joints - 1);
-  // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
-  const glm::dvec3 from = middle - glm::dot(middle, axis) * axis;
-  const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, axis) * axis;
-  const double scale = line_length * line_length;
-  if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return distance;
-  const double angle = std::atan2(glm::dot(axis, glm::cross(from, to)), glm::dot(from, to));
-  glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[0])];
-  const glm::quat solved = local;
-  const glm::quat parent = base.rotation;
+  // Whether the middle (mean of the heads after `pivot`) lies on the pole's side of the line pivot → effector, and
+  // the turn about that line that would put it there.
+  struct Aim {
+    bool valid = false;
+    double angle = 0.0;
+    glm::dvec3 axis{0.0};
+    double line_length = 0.0;
+  };
+  const auto aim = [&](std::size_t pivot) {
+    Aim a;
+    const glm::dvec3 root(heads[pivot]);
+    const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
+    a.line_length = glm::length(line);
+    if (!(a.line_length > 1e-12)) return a;
+    a.axis = line / a.line_length;
+    glm::dvec3 middle(0.0);
+    for (std::size_t k = pivot + 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
+    middle /= static_cast<double>(joints - 1 - pivot);
+    // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
+    const glm::dvec3 from = middle - glm::dot(middle, a.axis) * a.axis;
+    const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, a.axis) * a.axis;
+    const double scale = a.line_length * a.line_length;
+    if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return a;
+    a.valid = true;
+    a.angle = std::atan2(glm::dot(a.axis, glm::cross(from, to)), glm::dot(from, to));
+    return a;
+  };
   // Acceptable: reached stays reached; otherwise no farther than the solve (float rounding of the turn allowed).
-  const float allowed = distance <= tolerance ? tolerance : distance + 1e-6f * static_cast<float>(line_length);
-  for (double fraction = 1.0; fraction >= 0.125; fraction *= 0.5) {
-    const glm::quat turn(glm::angleAxis(static_cast<float>(angle * fraction), glm::vec3(axis)));
-    local = glm::normalize(glm::conjugate(parent) * turn * parent * solved);
-    clamp_chain_joint(chain, 0, local);
-    chain_fk(chain, pose, base, frames, heads);
-    const float swivelled = glm::length(heads[joints] - target);
-    if (swivelled <= allowed) return swivelled;
+  const float allowed =
+      distance <= tolerance ? tolerance : distance + 1e-6f * glm::length(heads[joints] - heads[0]);
+  // The root turns first; when its limits keep the middle off the pole's side (a clavicle turns little), the next
+  // joint turns the rest of the chain about its own line to the effector, and so on down to the last joint with a
+  // middle after it.
+  for (std::size_t pivot = 0; pivot + 1 < joints; ++pivot) {
+    const Aim a = aim(pivot);
+    if (!a.valid) continue;
+    glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[pivot])];
+    const glm::quat solved = local;
+    const glm::quat parent = pivot == 0 ? base.rotation : frames[pivot - 1];
+    bool turned = false;
+    for (double fraction = 1.0; fraction >= 0.125; fraction *= 0.5) {
+      const glm::quat turn(glm::angleAxis(static_cast<float>(a.angle * fraction), glm::vec3(a.axis)));
+      local = glm::normalize(glm::conjugate(parent) * turn * parent * solved);
+      clamp_chain_joint(chain, pivot, local);
+      chain_fk(chain, pose, base, frames, heads);
+      const float swivelled = glm::length(heads[joints] - target);
+      if (swivelled <= allowed) {
+        distance = swivelled;
+        turned = true;
+        break;
+      }
+    }
+    if (!turned) {
+      local = solved;
+      chain_fk(chain, pose, base, frames, heads);
+    }
+    const Aim after = aim(0);
+    if (!after.valid || std::abs(after.angle) < 0.5 * std::numbers::pi) break;  // the middle faces the pole's side
   }
-  local = solved;
-  chain_fk(chain, pose, base, frames, heads);
   return distance;
 }
 

@@ -29,7 +29,8 @@ struct Scratch {
 };
 
 // The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
-// middle moves toward `pole`, as far as the root's limits allow without losing the solve's distance. `frames` and
+// middle moves toward `pole`, as far as the root's limits allow without losing the solve's distance; while the middle
+// is still not on the pole's side, the next joint turns the rest of the chain about its own line to the effector. `frames` and
 // `heads` hold the chain's FK for `pose` on entry and on return; returns the new effector–target distance.
 float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
                          float distance, float tolerance, std::span<glm::quat> frames,

@@ -81,6 +81,13 @@ class DEFORM_CHARACTER_API Character {
   // the skinned, carried surface, and adding the fields to positions() gives what true gives.
   bool lattice_fields = true;
   IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
+  // A pole for reach() (IkJob::pole), used when `use_reach_pole`: a model-space point the chain's middle bends toward
+  // (a knee or elbow hint), applied without losing the target.
+  glm::vec3 reach_pole{0.0f};
+  bool use_reach_pole = false;
+  // The largest stretch reach() asks of a lattice, in multiples of its length (the rig's max_stretch, [0, 1000]).
+  // Refuses, changing nothing, a value outside that range. Takes effect at the next reach().
+  Status set_max_stretch(float max_stretch) noexcept;
 
   // Reaches for `target` (model space) with `effector`'s head: IK on the held pose, then the stretch target of the
   // chain's lattices. Refuses (result.status), changing nothing, an effector out of range or the root, a non-finite

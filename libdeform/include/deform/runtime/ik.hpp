@@ -209,8 +209,9 @@ struct DEFORM_RUNTIME_API IkJob {
   // whole chain about the line from the root's head to the effector's head, which leaves the effector where it is:
   // the root joint turns about that line until the middle lies in the half-plane of the pole. The root's limits may
   // cut the swivel short; it is kept only as far as it leaves the target reached (or, unreached, no farther away),
-  // trying the whole angle, then half, a quarter and an eighth of it. A pole on the line, or a chain whose middle is
-  // on it (straight), swivels nothing.
+  // trying the whole angle, then half, a quarter and an eighth of it. While the middle is still not on the pole's
+  // side (a clavicle root turns little), the next joint does the same for the rest of the chain about its own line to
+  // the effector, and so on. A pole on the line, or a chain whose middle is on it (straight), swivels nothing.
   glm::vec3 pole{0.0f};
   bool use_pole = false;
   // How much of the solve is applied, in [0, 1]: each joint's rotation becomes the shortest-path slerp from its input
