@@ -3,7 +3,7 @@
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]... [--gpu] [--up y|z]
-//   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F]
+//   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
 // (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
@@ -50,13 +50,15 @@ using Clock = std::chrono::steady_clock;
 
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
-    "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]]\n"
+    "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
+    "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space.\n"
     "--gpu: evaluate the lattices on the GPU (OpenGL 4.3). --up z: the model's up axis is +Z (default: +Y, or what\n"
     "an imported file's metadata says).\n"
-    "Mouse: left click/drag a point to reach for it, release to let go; right drag orbits; middle drag or\n"
+    "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
+    "elbow's hint); right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
     "L the lattices, G the GPU lattices, R resets, Esc quits.\n";
 
@@ -67,7 +69,7 @@ struct Options {
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;   // start with the lattices evaluated on the GPU
   char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
-  std::optional<glm::vec3> reach;
+  std::optional<glm::vec3> reach, pole;
 };
 
 [[noreturn]] void fail(const std::string& message) {
@@ -82,11 +84,11 @@ int parse_int(const std::string& s, const char* what) {
   return int(v);
 }
 
-glm::vec3 parse_vec3(const std::string& s) {
+glm::vec3 parse_vec3(const std::string& s, const char* what) {
   glm::vec3 v;
   char tail = 0;
   if (std::sscanf(s.c_str(), "%f,%f,%f%c", &v.x, &v.y, &v.z, &tail) != 3 || !std::isfinite(v.x + v.y + v.z))
-    fail("--reach: '" + s + "' is not X,Y,Z");
+    fail(std::string(what) + ": '" + s + "' is not X,Y,Z");
   return v;
 }
 
@@ -106,7 +108,8 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--clip") o.clip = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
-    else if (a == "--reach") o.reach = parse_vec3(next());
+    else if (a == "--reach") o.reach = parse_vec3(next(), "--reach");
+    else if (a == "--pole") o.pole = parse_vec3(next(), "--pole");
     else if (a == "--at") o.reach_at = parse_int(next(), "--at");
     else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
     else if (a == "--bare") o.bare = true;
@@ -174,6 +177,7 @@ class Viewer {
     rig_ = options.rig.empty()
                ? model_loading::starting_rig(loaded)
                : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
+    if (options.pole) pole_ = *options.pole, use_pole_ = true;
     rebuild_character();
     if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
       clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
@@ -303,6 +307,20 @@ class Viewer {
     }
     if (reaching_ || character_->stretch() != 0.0f)
       ImGui::Text("stretch %.3f, residual %.3f", character_->stretch(), last_reach_.residual);
+    // The rubber's shape: a limb never shorter than `min length` of its rest, its cross-section thinning as it
+    // stretches (volume 1: the volume kept) and bulging as it shortens.
+    bool shaped = ImGui::SliderFloat("volume", &shape_.volume, 0.0f, 1.0f);
+    shaped |= ImGui::SliderFloat("min length", &shape_.min_length_fraction, 0.0f, 1.0f);
+    if (shaped) apply_shape();
+    if (ImGui::SliderFloat("max stretch", &max_stretch_, 0.0f, 10.0f)) apply_reach_settings();
+
+    ImGui::Separator();
+    ImGui::Text("Reach");
+    bool reach_changed = ImGui::Checkbox("pole", &use_pole_);
+    ImGui::SameLine();
+    ImGui::TextDisabled("(shift+click places it)");
+    reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
+    if (reach_changed) apply_reach_settings();
 
     ImGui::Separator();
     ImGui::Checkbox("skeleton", &show_skeleton_);
@@ -385,7 +403,27 @@ class Viewer {
     }
     reaching_ = false;
     effector_ = -1;
+    if (max_stretch_ < 0.0f) max_stretch_ = character_->rig().max_stretch;
+    apply_shape();
+    apply_reach_settings();
     set_gpu(gpu_);
+  }
+
+  // The panel's shape for every lattice (DeformerHierarchy::set_shape).
+  void apply_shape() {
+    try {
+      for (std::size_t i = 0; i < character_->deformers().lattice_count(); ++i) character_->deformers().set_shape(i, shape_);
+    } catch (const deform::Error& e) {
+      std::fprintf(stderr, "warning: %s\n", e.what());
+    }
+  }
+
+  // The panel's pole and stretch bound; a reach in progress is solved again with them.
+  void apply_reach_settings() {
+    character_->reach_pole = pole_;
+    character_->use_reach_pole = use_pole_;
+    character_->set_max_stretch(max_stretch_);
+    if (reaching_) last_reach_ = character_->reach(effector_, target_);
   }
 
   void apply_elastic() {
@@ -467,7 +505,13 @@ class Viewer {
   }
 
   void handle_mouse(const sample::Input& in) {
-    if (in.left_pressed) {
+    if (in.left_pressed && in.shift) {  // the pole: the point clicked, in the model's space
+      if (const auto p = pick(in.mouse)) {
+        pole_ = transform_point(glm::inverse(character_world()), *p);
+        use_pole_ = true;
+        apply_reach_settings();
+      }
+    } else if (in.left_pressed) {
       if (const auto p = pick(in.mouse)) {
         begin_reach(*p);
         drag_depth_ = glm::dot(*p - camera_.eye(), glm::normalize(camera_.target - camera_.eye()));
@@ -541,6 +585,16 @@ class Viewer {
       }
     }
     if (reaching_) overlay_.point(transform_point(to_world, target_), glm::vec3(1.0f, 0.5f, 0.0f), 12.0f);
+    if (use_pole_ && !options_.bare) {  // the pole gizmo: a point, and a line to the chain's middle while reaching
+      const glm::vec3 pole = transform_point(to_world, pole_);
+      overlay_.point(pole, glm::vec3(0.9f, 0.2f, 0.9f), 11.0f);
+      if (reaching_) {
+        const deform::Skeleton& sk = character_->skeleton();
+        const std::int32_t middle = sk.bone(effector_).parent;
+        if (middle >= 0) overlay_.line(transform_point(to_world, character_->bone_position(middle)), pole,
+                                       glm::vec3(0.9f, 0.2f, 0.9f));
+      }
+    }
     overlay_.flush(projection * view, true);
   }
 
@@ -571,6 +625,10 @@ class Viewer {
   int degree_ = 0;
   bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
   bool playing_ = true;
+  deform::StretchShape shape_;           // the panel's rubber shape, for every lattice
+  float max_stretch_ = -1.0f;            // the panel's stretch bound (-1: the rig's, taken at the first build)
+  glm::vec3 pole_{0.0f, 0.0f, 1.0f};     // the reach pole, model space (--pole, the panel, shift+click)
+  bool use_pole_ = false;
   int clip_ = -1;
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;

@@ -195,6 +195,7 @@ Status IkJob::run() const noexcept {
   parts.goals = carve<glm::vec3>(bytes, bones);
   parts.lengths = carve<float>(bytes, joints);
   parts.input = carve<glm::quat>(bytes, joints);
+  parts.first = carve<glm::quat>(bytes, joints);
   const detail::PoseView pose{rotations, translations};
   if (weight == 0.0f) {  // nothing to apply: the input pose as it is, measured
     detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
@@ -209,9 +210,32 @@ Status IkJob::run() const noexcept {
                         : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
   if (use_pole || weight < 1.0f) {
     detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
-    if (use_pole)
+    if (use_pole) {
       solved.distance = detail::swivel_toward_pole(*chain, pose, base, target, pole, solved.distance,
                                                    settings.tolerance, parts.frames, parts.heads);
+      if (!detail::faces_pole(*chain, parts.heads, pole)) {
+        // The limits kept the middle off the pole's side: seed a second solve bent toward the pole.
+        detail::save_joints(*chain, pose, parts.first);
+        const float first_distance = solved.distance;
+        detail::swivel_toward_pole(*chain, pose, base, target, pole, first_distance, settings.tolerance, parts.frames,
+                                   parts.heads, true);
+        IkResult again = method == IkMethod::fabrik
+                             ? detail::solve_fabrik(*chain, pose, base, target, settings, parts, state)
+                             : detail::solve_ccd(*chain, pose, base, target, settings, length, parts, state);
+        detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+        again.distance = detail::swivel_toward_pole(*chain, pose, base, target, pole, again.distance,
+                                                    settings.tolerance, parts.frames, parts.heads);
+        const float good_enough = std::max(first_distance, settings.tolerance);
+        if (detail::faces_pole(*chain, parts.heads, pole) && again.distance <= good_enough) {
+          again.iterations += solved.iterations;
+          solved = again;
+        } else {
+          detail::load_joints(*chain, parts.first, pose);
+          detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
+          solved.distance = first_distance;
+        }
+      }
+    }
     if (weight < 1.0f) {
       for (std::size_t k = 0; k < joints; ++k) {
         glm::quat& rotation = rotations[static_cast<std::size_t>(chain->bones[k])];
@@ -244,38 +268,49 @@ void chain_fk(const IkChain& chain, PoseView pose, const Frame& base, std::span<
   }
 }
 
+namespace {
+
+// Whether the middle (mean of the heads after `pivot`) lies on the pole's side of the line pivot → effector, and
+// the turn about that line that would put it there.
+struct PoleAim {
+  bool valid = false;
+  double angle = 0.0;
+  glm::dvec3 axis{0.0};
+};
+
+PoleAim aim_at_pole(std::size_t joints, std::span<const glm::vec3> heads, glm::vec3 pole, std::size_t pivot) noexcept {
+  PoleAim a;
+  const glm::dvec3 root(heads[pivot]);
+  const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
+  const double line_length = glm::length(line);
+  if (!(line_length > 1e-12)) return a;
+  a.axis = line / line_length;
+  glm::dvec3 middle(0.0);
+  for (std::size_t k = pivot + 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
+  middle /= static_cast<double>(joints - 1 - pivot);
+  // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
+  const glm::dvec3 from = middle - glm::dot(middle, a.axis) * a.axis;
+  const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, a.axis) * a.axis;
+  const double scale = line_length * line_length;
+  if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return a;
+  a.valid = true;
+  a.angle = std::atan2(glm::dot(a.axis, glm::cross(from, to)), glm::dot(from, to));
+  return a;
+}
+
+}  // namespace
+
+bool faces_pole(const IkChain& chain, std::span<const glm::vec3> heads, glm::vec3 pole) noexcept {
+  if (chain.joint_count() < 2) return true;
+  const PoleAim a = aim_at_pole(chain.joint_count(), heads, pole, 0);
+  return !a.valid || std::abs(a.angle) < 0.5 * std::numbers::pi;
+}
+
 float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
-                         float distance, float tolerance, std::span<glm::quat> frames,
-                         std::span<glm::vec3> heads) noexcept {
+                         float distance, float tolerance, std::span<glm::quat> frames, std::span<glm::vec3> heads,
+                         bool whole) noexcept {
   const std::size_t joints = chain.joint_count();
   if (joints < 2) return distance;
-  // Whether the middle (mean of the heads after `pivot`) lies on the pole's side of the line pivot → effector, and
-  // the turn about that line that would put it there.
-  struct Aim {
-    bool valid = false;
-    double angle = 0.0;
-    glm::dvec3 axis{0.0};
-    double line_length = 0.0;
-  };
-  const auto aim = [&](std::size_t pivot) {
-    Aim a;
-    const glm::dvec3 root(heads[pivot]);
-    const glm::dvec3 line = glm::dvec3(heads[joints]) - root;
-    a.line_length = glm::length(line);
-    if (!(a.line_length > 1e-12)) return a;
-    a.axis = line / a.line_length;
-    glm::dvec3 middle(0.0);
-    for (std::size_t k = pivot + 1; k < joints; ++k) middle += glm::dvec3(heads[k]) - root;
-    middle /= static_cast<double>(joints - 1 - pivot);
-    // The parts of the middle and of the pole across the line: the swivel turns the one onto the other.
-    const glm::dvec3 from = middle - glm::dot(middle, a.axis) * a.axis;
-    const glm::dvec3 to = (glm::dvec3(pole) - root) - glm::dot(glm::dvec3(pole) - root, a.axis) * a.axis;
-    const double scale = a.line_length * a.line_length;
-    if (glm::dot(from, from) < 1e-12 * scale || glm::dot(to, to) < 1e-12 * scale) return a;
-    a.valid = true;
-    a.angle = std::atan2(glm::dot(a.axis, glm::cross(from, to)), glm::dot(from, to));
-    return a;
-  };
   // Acceptable: reached stays reached; otherwise no farther than the solve (float rounding of the turn allowed).
   const float allowed =
       distance <= tolerance ? tolerance : distance + 1e-6f * glm::length(heads[joints] - heads[0]);
@@ -283,7 +318,7 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
   // joint turns the rest of the chain about its own line to the effector, and so on down to the last joint with a
   // middle after it.
   for (std::size_t pivot = 0; pivot + 1 < joints; ++pivot) {
-    const Aim a = aim(pivot);
+    const PoleAim a = aim_at_pole(joints, heads, pole, pivot);
     if (!a.valid) continue;
     glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[pivot])];
     const glm::quat solved = local;
@@ -295,7 +330,7 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
       clamp_chain_joint(chain, pivot, local);
       chain_fk(chain, pose, base, frames, heads);
       const float swivelled = glm::length(heads[joints] - target);
-      if (swivelled <= allowed) {
+      if (whole || swivelled <= allowed) {
         distance = swivelled;
         turned = true;
         break;
@@ -305,8 +340,7 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
       local = solved;
       chain_fk(chain, pose, base, frames, heads);
     }
-    const Aim after = aim(0);
-    if (!after.valid || std::abs(after.angle) < 0.5 * std::numbers::pi) break;  // the middle faces the pole's side
+    if (faces_pole(chain, heads, pole)) break;
   }
   return distance;
 }

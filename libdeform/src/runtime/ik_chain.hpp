@@ -26,15 +26,21 @@ struct Scratch {
   std::span<glm::vec3> goals;     // FABRIK's joint positions, per chain bone
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
   std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
+  std::span<glm::quat> first;     // the first solve's joint rotations, while a pole seeds a second
 };
 
 // The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
 // middle moves toward `pole`, as far as the root's limits allow without losing the solve's distance; while the middle
-// is still not on the pole's side, the next joint turns the rest of the chain about its own line to the effector. `frames` and
-// `heads` hold the chain's FK for `pose` on entry and on return; returns the new effector–target distance.
+// is still not on the pole's side, the next joint turns the rest of the chain about its own line to the effector.
+// With `whole`, each turn is applied entire (clamped) whatever it does to the distance: the seed of a second solve.
+// `frames` and `heads` hold the chain's FK for `pose` on entry and on return; returns the new effector–target
+// distance.
 float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, glm::vec3 pole,
-                         float distance, float tolerance, std::span<glm::quat> frames,
-                         std::span<glm::vec3> heads) noexcept;
+                         float distance, float tolerance, std::span<glm::quat> frames, std::span<glm::vec3> heads,
+                         bool whole = false) noexcept;
+// Whether the chain's middle (the mean of the heads after the root) lies on the pole's side of the line root →
+// effector (or the question has no answer: a straight chain, a pole on the line). `heads` from chain_fk.
+bool faces_pole(const IkChain& chain, std::span<const glm::vec3> heads, glm::vec3 pole) noexcept;
 
 // The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
 // `length` is chain_length of the pose.

@@ -211,7 +211,11 @@ struct DEFORM_RUNTIME_API IkJob {
   // cut the swivel short; it is kept only as far as it leaves the target reached (or, unreached, no farther away),
   // trying the whole angle, then half, a quarter and an eighth of it. While the middle is still not on the pole's
   // side (a clavicle root turns little), the next joint does the same for the rest of the chain about its own line to
-  // the effector, and so on. A pole on the line, or a chain whose middle is on it (straight), swivels nothing.
+  // the effector, and so on. When the limits still keep the middle off the pole's side, the pole seeds a second
+  // solve: the swivel is applied whole (clamped, losing the target for a moment) and the solver starts again from
+  // there; its answer is kept when its middle faces the pole and it reaches the target as well as the first (or
+  // comes no farther from it), else the first stands. A pole on the line, or a chain whose middle is on it
+  // (straight), swivels nothing. Cost: at most one more solve, only with a pole.
   glm::vec3 pole{0.0f};
   bool use_pole = false;
   // How much of the solve is applied, in [0, 1]: each joint's rotation becomes the shortest-path slerp from its input
@@ -221,8 +225,8 @@ struct DEFORM_RUNTIME_API IkJob {
   float weight = 1.0f;
 
   static constexpr std::size_t scratch_alignment = alignof(double);
-  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 136 per joint + 40.
-  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 136 * joint_count + 40; }
+  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 152 per joint + 40.
+  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 152 * joint_count + 40; }
   // scratch_size for this job's chain (0 without one).
   std::size_t scratch_size() const noexcept;
 
