@@ -51,10 +51,12 @@ using Clock = std::chrono::steady_clock;
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
+    "                     [--limits euler|swing-twist]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
-    "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space.\n"
+    "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
+    "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--gpu: evaluate the lattices on the GPU (OpenGL 4.3). --up z: the model's up axis is +Z (default: +Y, or what\n"
     "an imported file's metadata says).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
@@ -68,6 +70,7 @@ struct Options {
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;   // start with the lattices evaluated on the GPU
+  bool swing_twist = false;  // reach with swing-twist joint limits
   char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   std::optional<glm::vec3> reach, pole;
 };
@@ -114,6 +117,11 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
     else if (a == "--bare") o.bare = true;
     else if (a == "--gpu") o.gpu = true;
+    else if (a == "--limits") {
+      const std::string limits = next();
+      if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
+      o.swing_twist = limits == "swing-twist";
+    }
     else if (a == "--up") {
       const std::string up = next();
       if (up != "y" && up != "z") fail("--up: '" + up + "' is not y or z");
@@ -178,6 +186,7 @@ class Viewer {
                ? model_loading::starting_rig(loaded)
                : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
     if (options.pole) pole_ = *options.pole, use_pole_ = true;
+    if (options.swing_twist) reach_limits_ = deform::Character::JointLimits::swing_twist;
     rebuild_character();
     if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
       clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
@@ -320,6 +329,14 @@ class Viewer {
     ImGui::SameLine();
     ImGui::TextDisabled("(shift+click places it)");
     reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
+    bool swing_twist = character_->reach_limits == deform::Character::JointLimits::swing_twist;
+    if (ImGui::Checkbox("swing-twist limits", &swing_twist)) {
+      reach_limits_ = swing_twist ? deform::Character::JointLimits::swing_twist : deform::Character::JointLimits::euler;
+      reach_changed = true;
+    }
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("each joint of the reach chain limited by a twist range and a swing cone (drawn in cyan)\n"
+                        "made from its Euler limits, instead of the Euler box");
     if (reach_changed) apply_reach_settings();
 
     ImGui::Separator();
@@ -422,6 +439,7 @@ class Viewer {
   void apply_reach_settings() {
     character_->reach_pole = pole_;
     character_->use_reach_pole = use_pole_;
+    character_->reach_limits = reach_limits_;
     character_->set_max_stretch(max_stretch_);
     if (reaching_) last_reach_ = character_->reach(effector_, target_);
   }
@@ -585,6 +603,7 @@ class Viewer {
       }
     }
     if (reaching_) overlay_.point(transform_point(to_world, target_), glm::vec3(1.0f, 0.5f, 0.0f), 12.0f);
+    if (show_skeleton_ && !options_.bare) draw_swing_twist_cones(to_world);
     if (use_pole_ && !options_.bare) {  // the pole gizmo: a point, and a line to the chain's middle while reaching
       const glm::vec3 pole = transform_point(to_world, pole_);
       overlay_.point(pole, glm::vec3(0.9f, 0.2f, 0.9f), 11.0f);
@@ -596,6 +615,44 @@ class Viewer {
       }
     }
     overlay_.flush(projection * view, true);
+  }
+
+  // The swing cones of the reach chain's joints (Character::reach_swing_twist): from each joint's head, lines to the
+  // cone's rim — the directions its bone may point in — turned by its parent's current rotation (the pose's; what the
+  // lattices carry is left out).
+  void draw_swing_twist_cones(const glm::mat4& to_world) {
+    const std::span<const std::int32_t> chain = character_->reach_chain();
+    if (chain.empty() || character_->reach_swing_twist(0) == nullptr) return;
+    const deform::Skeleton& sk = character_->skeleton();
+    const deform::Pose& pose = character_->pose();
+    world_rotations_.resize(sk.bone_count());
+    for (const std::int32_t b : sk.order()) {
+      const std::int32_t parent = sk.bone(b).parent;
+      world_rotations_[std::size_t(b)] =
+          (parent >= 0 ? world_rotations_[std::size_t(parent)] : glm::quat(1, 0, 0, 0)) * pose.rotations[std::size_t(b)];
+    }
+    const glm::vec3 cyan(0.2f, 0.9f, 1.0f);
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      const deform::SwingTwistLimits* limits = character_->reach_swing_twist(k);
+      if (limits == nullptr) continue;
+      const std::int32_t parent = sk.bone(chain[k]).parent;
+      const glm::quat frame = parent >= 0 ? world_rotations_[std::size_t(parent)] : glm::quat(1, 0, 0, 0);
+      const glm::vec3 head = character_->bone_position(chain[k]);
+      const float length = 0.6f * glm::length(sk.bone(chain[k + 1]).bind_translation);
+      const glm::vec3 side = glm::cross(limits->axis, limits->reference);
+      glm::vec3 previous(0.0f);
+      constexpr int steps = 24;
+      for (int i = 0; i <= steps; ++i) {
+        const float phi = glm::two_pi<float>() * float(i) / float(steps);
+        const glm::vec3 swing = limits->swing1 * std::cos(phi) * limits->reference + limits->swing2 * std::sin(phi) * side;
+        const float angle = glm::length(swing);
+        const glm::quat turn = angle > 1e-6f ? glm::angleAxis(angle, swing / angle) : glm::quat(1, 0, 0, 0);
+        const glm::vec3 rim = transform_point(to_world, head + frame * (turn * limits->axis) * length);
+        if (i > 0) overlay_.line(previous, rim, cyan);
+        if (i % 6 == 0) overlay_.line(transform_point(to_world, head), rim, cyan);
+        previous = rim;
+      }
+    }
   }
 
   const Options& options_;
@@ -629,6 +686,8 @@ class Viewer {
   float max_stretch_ = -1.0f;            // the panel's stretch bound (-1: the rig's, taken at the first build)
   glm::vec3 pole_{0.0f, 0.0f, 1.0f};     // the reach pole, model space (--pole, the panel, shift+click)
   bool use_pole_ = false;
+  deform::Character::JointLimits reach_limits_ = deform::Character::JointLimits::euler;
+  std::vector<glm::quat> world_rotations_;  // draw_swing_twist_cones' scratch
   int clip_ = -1;
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;

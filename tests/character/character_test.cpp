@@ -152,6 +152,41 @@ TEST_CASE("reach with a pole: the elbow turns toward the pole within the arm's l
   }
 }
 
+TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone and twist range") {
+  Character c = deform::make_builtin_character();
+  const Arm arm = left_arm(c);
+  c.reach_limits = Character::JointLimits::swing_twist;
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> offset(-0.4f, 0.4f);
+  const glm::vec3 shoulder = c.bone_position(c.skeleton().find("upperarm_l"));
+  int reached = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const glm::vec3 target = shoulder + glm::vec3(0.3f + offset(random), offset(random), offset(random));
+    const deform::ReachResult result = c.reach(arm.hand, target);
+    REQUIRE(result.status);
+    reached += result.residual < 1e-3f;
+    const std::span<const std::int32_t> chain = c.reach_chain();
+    REQUIRE(chain.size() >= 3);
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      const deform::SwingTwistLimits* limits = c.reach_swing_twist(k);
+      REQUIRE(limits != nullptr);
+      const glm::vec3 angles = deform::swing_twist_angles(*limits, c.pose().rotations[std::size_t(chain[k])]);
+      // (a zero half-angle allows no swing that way: a tiny one stands in for it)
+      const float ellipse = std::pow(angles.x / std::max(limits->swing1, 1e-4f), 2.0f) +
+                            std::pow(angles.y / std::max(limits->swing2, 1e-4f), 2.0f);
+      CAPTURE(trial);
+      CAPTURE(k);
+      CHECK(ellipse <= 1.0f + 1e-3f);
+      CHECK(angles.z >= limits->twist_min - 1e-3f);
+      CHECK(angles.z <= limits->twist_max + 1e-3f);
+    }
+  }
+  CHECK(reached > 20);
+  c.reach_limits = Character::JointLimits::euler;
+  REQUIRE(c.reach(arm.hand, shoulder + glm::vec3(0.3f, 0.0f, 0.1f)).status);
+  CHECK(c.reach_swing_twist(0) == nullptr);
+}
+
 TEST_CASE("set_max_stretch bounds the stretch reach() asks") {
   Character c = deform::make_builtin_character();
   CHECK_FALSE(c.set_max_stretch(-1.0f));

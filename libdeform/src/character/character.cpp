@@ -61,6 +61,7 @@ Character::Character(Model model, const Rig& rig)
   const std::size_t chain_bones = std::min(depth, max_chain_bones);
   chain_.bones.reserve(chain_bones);
   chain_.limits.reserve(chain_bones - 1);
+  chain_.swing_twist.reserve(chain_bones - 1);
   chain_.ancestors.reserve(depth - 1);
   ik_scratch_.resize(IkJob::scratch_size(chain_bones - 1));
   chain_world_.resize(chain_bones);
@@ -101,7 +102,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
 
   // The chain, rebuilt only for another effector (its root depends on the effector alone): the rig's root, else the
   // parent of the topmost lattice bone above the effector, else two bones up.
-  if (effector != chain_effector_) {
+  if (effector != chain_effector_ || reach_limits != chain_limits_) {
     std::int32_t root = effector == rig_.reach_effector ? rig_.reach_root : -1;
     if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
       root = -1;
@@ -121,6 +122,16 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
       result.status = status;  // a chain longer than a solve takes
       return result;
     }
+    chain_.swing_twist.clear();
+    if (reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
+      chain_.swing_twist.resize(chain_.joint_count());
+      for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
+        chain_.swing_twist[k] = swing_twist_from_euler(skel.bone(chain_.bones[k]).limits,
+                                                       skel.bone(chain_.bones[k + 1]).bind_translation);
+        chain_.limits[k] = EulerLimits{};
+      }
+    }
+    chain_limits_ = reach_limits;
     chain_effector_ = effector;
   }
   const std::int32_t root = chain_.bones.front();

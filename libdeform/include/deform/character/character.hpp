@@ -85,6 +85,17 @@ class DEFORM_CHARACTER_API Character {
   // (a knee or elbow hint), applied without losing the target.
   glm::vec3 reach_pole{0.0f};
   bool use_reach_pole = false;
+  // How reach() limits the chain's joints: by the skeleton's Euler limits (the default), or by swing-twist limits
+  // derived from them (swing_twist_from_euler: a twist range about each bone's axis and a swing cone around it, which
+  // may leave the Euler box; the reached pose is kept as solved). Takes effect at the next reach().
+  enum class JointLimits : std::uint8_t { euler, swing_twist };
+  JointLimits reach_limits = JointLimits::euler;
+  // The bones of the last reach's chain, root first, effector last (empty before any).
+  std::span<const std::int32_t> reach_chain() const noexcept { return chain_.bones; }
+  // Joint k's swing-twist limits in the last reach's chain (reach_limits swing_twist), else null.
+  const SwingTwistLimits* reach_swing_twist(std::size_t joint) const noexcept {
+    return joint < chain_.swing_twist.size() && chain_.swing_twist[joint].active ? &chain_.swing_twist[joint] : nullptr;
+  }
   // The largest stretch reach() asks of a lattice, in multiples of its length (the rig's max_stretch, [0, 1000]).
   // Refuses, changing nothing, a value outside that range. Takes effect at the next reach().
   Status set_max_stretch(float max_stretch) noexcept;
@@ -144,6 +155,7 @@ class DEFORM_CHARACTER_API Character {
   // solved, the IK scratch and the joints' model-space matrices for the deepest chain, the chain's lattices.
   IkChain chain_;
   std::int32_t chain_effector_ = -1;
+  JointLimits chain_limits_ = JointLimits::euler;  // the kind chain_ was built with
   Pose work_;
   std::vector<std::byte> ik_scratch_;
   std::vector<glm::mat4> chain_world_;
