@@ -1,7 +1,8 @@
 // skin/lbs and skin/dqs: positions + normals, 4 influences per vertex, a 28-bone palette, at 2,552 (the built-in
 // character's size), 100k and 1M vertices; one thread and all threads. Also the forced instruction-set paths and
 // a plain glm loop (skin/lbs_reference), so docs/performance.md can show what the SIMD kernels buy; skin/*_stream
-// with SkinningJob::stream_outputs.
+// with SkinningJob::stream_outputs. Bytes per second count the 72 bytes a vertex reads and writes, to set against
+// memory/add (memory_bench.cpp).
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -92,6 +93,9 @@ void run_skin(benchmark::State& state, deform::SkinningMethod method, deform::Is
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+  // What a vertex moves: position, normal, 4 bone ids and 4 weights read (48 bytes), position and normal written
+  // (24): the bytes memory/add's bandwidth is counted in (the bound, docs/performance.md).
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0) * 72);
   state.counters["threads"] = all_threads ? pool().size() : 1;
 }
 

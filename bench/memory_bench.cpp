@@ -1,0 +1,47 @@
+// memory/*: this machine's memory speed, the bound for kernels that stream large arrays (docs/performance.md,
+// "The bandwidth bound"). memory/add: out[i] = a[i] + b[i] over arrays far larger than the caches — two bytes read
+// for each byte written, the proportions of skinning positions and normals (48 bytes read, 24 written per vertex).
+// memory/read: a sum over one array (reads only). Bytes per second count what the program reads and writes, as
+// skin/lbs's do, so the two compare directly; the write-allocate traffic both incur is in the time, not the count.
+#include <benchmark/benchmark.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace {
+
+constexpr std::size_t floats = std::size_t{1} << 25;  // 128 MiB per array
+
+std::vector<float>& array(int which) {
+  static std::vector<float> arrays[3] = {std::vector<float>(floats, 1.0f), std::vector<float>(floats, 2.0f),
+                                         std::vector<float>(floats, 0.0f)};
+  return arrays[which];
+}
+
+void memory_add(benchmark::State& state) {
+  const float* a = array(0).data();
+  const float* b = array(1).data();
+  float* out = array(2).data();
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < floats; ++i) out[i] = a[i] + b[i];
+    benchmark::DoNotOptimize(out);
+    benchmark::ClobberMemory();
+  }
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * 3 * floats * sizeof(float)));
+}
+
+void memory_read(benchmark::State& state) {
+  const float* a = array(0).data();
+  for (auto _ : state) {
+    float sums[8] = {};
+    for (std::size_t i = 0; i < floats; i += 8)
+      for (int k = 0; k < 8; ++k) sums[k] += a[i + std::size_t(k)];
+    benchmark::DoNotOptimize(sums);
+  }
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * floats * sizeof(float)));
+}
+
+}  // namespace
+
+BENCHMARK(memory_add)->Name("memory/add")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(memory_read)->Name("memory/read")->Unit(benchmark::kMillisecond)->UseRealTime();
