@@ -39,10 +39,12 @@ deform::Rig everything() {
   upper.elastic.integrator = deform::Integrator::verlet;
   upper.elastic.verlet_kd = 0.07f;
   upper.elastic.oscillator = {123.456f, 1.7f, 0.3f};
+  upper.shape = {0.55f, 0.25f};
   deform::LatticeSpec& fore = rig.lattices[1];
   fore.selection = deform::VertexSelection::list;
   fore.vertices = {3, 17, 400, 2000};
   fore.elastic.springs = {true, false, true, 12.5f, 0.1f, 1.0f / 480.0f};
+  fore.shape.min_length_fraction = 0.0f;  // no floor; volume stays default
   return rig;
 }
 
@@ -76,6 +78,32 @@ TEST_CASE("the written form: hierarchy, names, model") {
   CHECK(doc["lattices"][1]["elastic"]["stiffness"] == 150.0);
   CHECK(doc["lattices"][1]["elastic"]["damping_ratio"] == 0.2);  // shortest form of 0.2f, not 0.20000000298...
   CHECK(doc["lattices"][1]["select"]["by"] == "weight");
+  // Default stretch shapes are not written, so files from before the keys existed round-trip byte for byte.
+  for (const auto& lattice : doc["lattices"]) {
+    CHECK_FALSE(lattice.contains("min_length_fraction"));
+    CHECK_FALSE(lattice.contains("volume"));
+  }
+}
+
+TEST_CASE("the stretch shape: written where it differs from the default, read back exactly") {
+  const nlohmann::json doc = nlohmann::json::parse(deform::format_rig_json(everything(), model().skeleton));
+  CHECK(doc["lattices"][0]["min_length_fraction"] == 0.55);
+  CHECK(doc["lattices"][0]["volume"] == 0.25);
+  CHECK(doc["lattices"][1]["min_length_fraction"] == 0.0);
+  CHECK_FALSE(doc["lattices"][1].contains("volume"));
+  CHECK_FALSE(doc["lattices"][2].contains("min_length_fraction"));
+  // Read: the values given, the defaults (0.7, 1) where absent.
+  const deform::Rig rig = parse(R"({"rig": 1, "lattices": [{"name": "a", "bone": "forearm_l",
+      "min_length_fraction": 0.8, "volume": 0}]})");
+  CHECK(rig.lattices[0].shape == deform::StretchShape{0.8f, 0.0f});
+  const deform::Rig defaults = parse(R"({"rig": 1, "lattices": [{"name": "a", "bone": "forearm_l"}]})");
+  CHECK(defaults.lattices[0].shape == deform::StretchShape{});
+  CHECK(defaults.lattices[0].shape.min_length_fraction == 0.7f);
+  CHECK(defaults.lattices[0].shape.volume == 1.0f);
+  // A shape on one lattice of the built-in rig survives the round trip.
+  deform::Rig shaped = deform::builtin_rig(model());
+  shaped.lattices[1].shape = {0.6f, 0.5f};
+  CHECK(parse(deform::format_rig_json(shaped, model().skeleton)).lattices[1].shape == shaped.lattices[1].shape);
 }
 
 TEST_CASE("a minimal rig takes the defaults") {
@@ -116,6 +144,15 @@ TEST_CASE("bad rig files: the error names the file and the key") {
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "nearest"}}]})", "key 'lattices[0].select.by'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "select": {"by": "weight", "threshold": 1}}]})",
        "key 'lattices[0].select.threshold'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "min_length_fraction": 1}]})",
+       "key 'lattices[0].min_length_fraction': must be in [0, 1)"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "min_length_fraction": -0.1}]})",
+       "key 'lattices[0].min_length_fraction'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "min_length_fraction": "soft"}]})",
+       "key 'lattices[0].min_length_fraction'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "volume": 1.5}]})", "key 'lattices[0].volume'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "volume": -1}]})", "key 'lattices[0].volume'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "volume": 1e300}]})", "key 'lattices[0].volume'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"stiffness": 0}}]})",
        "key 'lattices[0].elastic.stiffness'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "elastic": {"integrator": "rk4"}}]})",

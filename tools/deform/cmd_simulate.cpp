@@ -37,9 +37,11 @@ constexpr const char* usage =
     "  --dt DT              step in seconds (default 1/60)\n"
     "  --effector BONE      effector bone (default: the rig's reach effector)\n"
     "  --integrator NAME    override every lattice's integrator: exact (default) or verlet (the thesis' Verlet)\n"
-    "  --min-length F       every lattice shows at least F of its length, in [0, 1) (default 0.7; 0: no floor)\n"
+    "  --min-length F       every lattice shows at least F of its length, in [0, 1) (default: the rig's,\n"
+    "                       0.7 unless it says; 0: no floor)\n"
     "  --volume F           volume compensation in [0, 1]: a lattice stretched by s scales across its bone by\n"
-    "                       s^(-F/2) (default 1: keeps its volume; 0: the plain stretch)\n";
+    "                       s^(-F/2) (default: the rig's, 1 unless it says: keeps its volume; 0: the plain\n"
+    "                       stretch)\n";
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }

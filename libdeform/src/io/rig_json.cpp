@@ -118,7 +118,8 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
   std::vector<std::string> parents(count);
   for (std::size_t i = 0; i < count; ++i) {
     const JsonReader r = lattices.at(i);
-    r.expect_object({"name", "bone", "parent", "degree", "select", "margin", "carry", "elastic"});
+    r.expect_object({"name", "bone", "parent", "degree", "select", "margin", "carry", "min_length_fraction", "volume",
+                     "elastic"});
     LatticeSpec spec;
     spec.name = r.at("name").text();
     if (spec.name.empty()) r.at("name").fail("must not be empty");
@@ -158,6 +159,13 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
     }
     if (r.has("margin")) spec.margin = r.at("margin").number(0.0f, 1.0f);
     if (r.has("carry")) spec.carry_descendants = r.at("carry").boolean();
+    // The ranges validate_shape enforces (runtime/hierarchy.hpp); the floor must stay below the full length.
+    if (r.has("min_length_fraction")) {
+      const JsonReader floor = r.at("min_length_fraction");
+      spec.shape.min_length_fraction = floor.number(0.0f, 1.0f);
+      if (!(spec.shape.min_length_fraction < 1.0f)) floor.fail("must be in [0, 1)");
+    }
+    if (r.has("volume")) spec.shape.volume = r.at("volume").number(0.0f, 1.0f);
     if (r.has("elastic")) spec.elastic = read_elastic(r.at("elastic"));
     rig.lattices.push_back(std::move(spec));
   }
@@ -214,8 +222,15 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
                         {"degree", {spec.degree.x, spec.degree.y, spec.degree.z}},
                         {"select", select},
                         {"margin", shortest_double(spec.margin)},
-                        {"carry", spec.carry_descendants},
-                        {"elastic", elastic}});
+                        {"carry", spec.carry_descendants}});
+    // The stretch shape only where it differs from the default, so rig files written before it existed (all of
+    // them default) are written back byte for byte.
+    const StretchShape default_shape;
+    ojson& written = lattices.back();
+    if (spec.shape.min_length_fraction != default_shape.min_length_fraction)
+      written["min_length_fraction"] = shortest_double(spec.shape.min_length_fraction);
+    if (spec.shape.volume != default_shape.volume) written["volume"] = shortest_double(spec.shape.volume);
+    written["elastic"] = elastic;
   }
   document["lattices"] = lattices;
   return document.dump(2) + "\n";

@@ -21,7 +21,8 @@ DEFORM_IO_API RigModel parse_rig_model(std::string_view json, const std::string&
 DEFORM_IO_API Rig parse_rig_json(std::string_view json, const Skeleton& skeleton, std::size_t point_count,
                               const std::string& name = "<memory>");
 DEFORM_IO_API Rig read_rig_json(const std::string& path, const Skeleton& skeleton, std::size_t point_count);
-// The rig as JSON text (every field written, floats shortest-exact): parse_rig_json(format_rig_json(r)) == r.
+// The rig as JSON text (every field written, except a lattice's min_length_fraction and volume where they have
+// StretchShape's defaults; floats shortest-exact): parse_rig_json(format_rig_json(r)) == r.
 DEFORM_IO_API std::string format_rig_json(const Rig& rig, const Skeleton& skeleton);
 DEFORM_IO_API void write_rig_json(const std::string& path, const Rig& rig, const Skeleton& skeleton);  // atomic
 

@@ -78,7 +78,7 @@ struct LatticeSpec {
   float margin = 0.05f;                 // sideways padding of the fitted box, fraction of its width, in [0, 1]
   ElasticSettings elastic;              // how its control points spring
   bool carry_descendants = true;        // points beyond the far face follow it (fig. 54); false = fig. 53
-  StretchShape shape;                   // length floor and volume compensation (not stored in rig files)
+  StretchShape shape;                   // length floor and volume compensation
   bool operator==(const LatticeSpec&) const = default;
 };
 
