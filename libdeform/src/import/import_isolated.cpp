@@ -174,15 +174,19 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   if (!stopped.empty()) throw Error::in_file(path, "", "the importer " + stopped + " and was stopped");
 
   while (!messages.empty() && (messages.back() == '\n' || messages.back() == '\r')) messages.pop_back();
+  // A sanitized worker past its memory limit (worker_environment) reports it and exits or aborts (abort_on_error):
+  // the same error as an unsanitized worker's RLIMIT_AS gives.
+  const bool out_of_memory = messages.find("AddressSanitizer: soft rss limit exhausted") != std::string::npos ||
+                             messages.find("AddressSanitizer: allocator is out of memory") != std::string::npos ||
+                             messages.find("AddressSanitizer: requested allocation size") != std::string::npos;
+  if (out_of_memory && !(WIFEXITED(status) && WEXITSTATUS(status) == 0))
+    throw Error::in_file(path, "", "the import needed more than " + std::to_string(limits.max_memory_bytes) +
+                                       " bytes of memory");
   if (WIFSIGNALED(status)) {
     throw Error::in_file(path, "", "the importer crashed (signal " + signal_name(WTERMSIG(status)) +
                                        ") reading it" + (messages.empty() ? "" : ": " + messages));
   }
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
-  if (code != 0 && (messages.find("AddressSanitizer: soft rss limit exhausted") != std::string::npos ||
-                    messages.find("AddressSanitizer: allocator is out of memory") != std::string::npos ||
-                    messages.find("AddressSanitizer: requested allocation size") != std::string::npos))
-    messages = "the import needed more than " + std::to_string(limits.max_memory_bytes) + " bytes of memory";
   if (code != 0) {
     // The worker prints deform::Error's what(), which already names the file; anything else is passed on as is.
     const std::string prefix = path + ": ";
