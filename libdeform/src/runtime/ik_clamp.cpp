@@ -120,9 +120,13 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
     clamp_rotation(limits, rotation);
     return true;
   }
-  rotation = glm::normalize(rotation);
+  // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
+  // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) return false;
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) {
+    rotation = glm::normalize(rotation);
+    return false;
+  }
   rotation = detail::to_quat(euler);
   return true;
 }
@@ -142,22 +146,28 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
   const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
+  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
+  // for the square root and division.
+  const bool regular = cos_b > 1e-9 * norm2;
+  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
+                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
   EulerAngles first;
-  first.dir[1] = glm::dvec2(cos_b, r02) * (1.0 / norm2);
-  if (cos_b > 1e-9 * norm2) {
+  const double inverse_norm2 = 1.0 / norm2;
+  first.dir[1] = raw[1] * inverse_norm2;
+  if (regular) {
     const double scale = 1.0 / cos_b;
-    first.dir[0] = glm::dvec2(r22, -r12) * scale;
-    first.dir[2] = glm::dvec2(r00, -r01) * scale;
+    first.dir[0] = raw[0] * scale;
+    first.dir[2] = raw[2] * scale;
   } else {
-    first.dir[0] = glm::dvec2(r11, r21) * (1.0 / norm2);
-    first.dir[2] = glm::dvec2(1.0, 0.0);
+    first.dir[0] = raw[0] * inverse_norm2;
+    first.dir[2] = raw[2];
   }
   EulerAngles second;
   second.dir[0] = -first.dir[0];
   second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
   second.dir[2] = -first.dir[2];
   if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
-  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(first.dir[axis].y, first.dir[axis].x);
+  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
   const double first_outside = outside(limits, first.angle);
   if (first_outside == 0.0) {
     euler = first;
@@ -232,9 +242,11 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
-  local = glm::normalize(local);
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false)) return false;
+  if (limits.free || !limit_euler(limits, local, euler, false)) {  // (reads `local` up to scale)
+    local = glm::normalize(local);
+    return false;
+  }
   if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;
