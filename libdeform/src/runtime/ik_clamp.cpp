@@ -223,19 +223,18 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
     if (v[i] * v[i] + v[j] * v[j] < 1e-20 || u[i] * u[i] + u[j] * u[j] < 1e-20) continue;
     // The best angle turns v's direction in the plane onto u's: the direction of u · conj(v) as complex numbers.
     const glm::dvec2 best_dir(u[i] * v[i] + u[j] * v[j], u[j] * v[i] - u[i] * v[j]);
-    const double best = polynomial_atan2(best_dir.y, best_dir.x);
-    // The angle in [min, max] nearest to `best` around the circle (where −cos(angle − best) is smallest).
-    const double min = limits.min[axis], max = limits.max[axis];
-    bool inside = max - min >= 2.0 * pi;
-    double angle = best;
-    for (const double shift : {-2.0 * pi, 0.0, 2.0 * pi})
-      if (!inside && best + shift >= min && best + shift <= max) angle = best + shift, inside = true;
+    // Whether it lies within [min, max], from the sines of its angles to the limits (cross products, which keep
+    // full precision at a limit; best_dir's length does not matter): for a range of at most 180° it must be
+    // counter-clockwise of min and clockwise of max; a wider one excludes only the strictly opposite case.
+    const glm::dvec2 lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double from_min = lo.x * best_dir.y - lo.y * best_dir.x, to_max = best_dir.x * hi.y - best_dir.y * hi.x;
+    const bool inside = limits.max[axis] - limits.min[axis] >= 2.0 * pi ||
+                        (limits.wide[axis] ? !(from_min < 0.0 && to_max < 0.0) : from_min >= 0.0 && to_max >= 0.0);
     if (inside) {
-      euler.angle[axis] = angle, euler.dir[axis] = best_dir * (1.0 / glm::length(best_dir));
-    } else if (std::abs(wrap(best - min)) <= std::abs(wrap(best - max))) {
-      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+      euler.dir[axis] = best_dir * (1.0 / glm::length(best_dir));
     } else {
-      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+      // The nearer limit around the circle: the one with the larger cosine to best_dir.
+      euler.dir[axis] = glm::dot(best_dir, lo) >= glm::dot(best_dir, hi) ? lo : hi;
     }
   }
 }
