@@ -122,7 +122,8 @@ glm::quat to_quat(const EulerAngles& euler) noexcept;
 // Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
 // limits, a 1-D problem with a closed form) so that `carried` — a point in the joint's own frame relative to its
 // head, such as the effector — comes as close to `wanted` — in the parent's frame, relative to the head — as the
-// limits allow. `euler` must be within the limits and stays so.
+// limits allow. `euler` must be within the limits and its directions stay so; only the directions are updated (its
+// angles go stale: to_quat reads the directions alone), with no arctangent.
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept;
 
 // Joint k's swing-twist limits when it has active ones, else null (its Euler entry applies).

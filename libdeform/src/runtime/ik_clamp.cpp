@@ -120,9 +120,13 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
     clamp_rotation(limits, rotation);
     return true;
   }
-  rotation = glm::normalize(rotation);
+  // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
+  // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) return false;
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) {
+    rotation = glm::normalize(rotation);
+    return false;
+  }
   rotation = detail::to_quat(euler);
   return true;
 }
@@ -142,22 +146,28 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
   const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
+  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
+  // for the square root and division.
+  const bool regular = cos_b > 1e-9 * norm2;
+  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
+                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
   EulerAngles first;
-  first.dir[1] = glm::dvec2(cos_b, r02) * (1.0 / norm2);
-  if (cos_b > 1e-9 * norm2) {
+  const double inverse_norm2 = 1.0 / norm2;
+  first.dir[1] = raw[1] * inverse_norm2;
+  if (regular) {
     const double scale = 1.0 / cos_b;
-    first.dir[0] = glm::dvec2(r22, -r12) * scale;
-    first.dir[2] = glm::dvec2(r00, -r01) * scale;
+    first.dir[0] = raw[0] * scale;
+    first.dir[2] = raw[2] * scale;
   } else {
-    first.dir[0] = glm::dvec2(r11, r21) * (1.0 / norm2);
-    first.dir[2] = glm::dvec2(1.0, 0.0);
+    first.dir[0] = raw[0] * inverse_norm2;
+    first.dir[2] = raw[2];
   }
   EulerAngles second;
   second.dir[0] = -first.dir[0];
   second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
   second.dir[2] = -first.dir[2];
   if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
-  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(first.dir[axis].y, first.dir[axis].x);
+  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
   const double first_outside = outside(limits, first.angle);
   if (first_outside == 0.0) {
     euler = first;
@@ -213,28 +223,29 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
     if (v[i] * v[i] + v[j] * v[j] < 1e-20 || u[i] * u[i] + u[j] * u[j] < 1e-20) continue;
     // The best angle turns v's direction in the plane onto u's: the direction of u · conj(v) as complex numbers.
     const glm::dvec2 best_dir(u[i] * v[i] + u[j] * v[j], u[j] * v[i] - u[i] * v[j]);
-    const double best = polynomial_atan2(best_dir.y, best_dir.x);
-    // The angle in [min, max] nearest to `best` around the circle (where −cos(angle − best) is smallest).
-    const double min = limits.min[axis], max = limits.max[axis];
-    bool inside = max - min >= 2.0 * pi;
-    double angle = best;
-    for (const double shift : {-2.0 * pi, 0.0, 2.0 * pi})
-      if (!inside && best + shift >= min && best + shift <= max) angle = best + shift, inside = true;
+    // Whether it lies within [min, max], from the sines of its angles to the limits (cross products, which keep
+    // full precision at a limit; best_dir's length does not matter): for a range of at most 180° it must be
+    // counter-clockwise of min and clockwise of max; a wider one excludes only the strictly opposite case.
+    const glm::dvec2 lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double from_min = lo.x * best_dir.y - lo.y * best_dir.x, to_max = best_dir.x * hi.y - best_dir.y * hi.x;
+    const bool inside = limits.max[axis] - limits.min[axis] >= 2.0 * pi ||
+                        (limits.wide[axis] ? !(from_min < 0.0 && to_max < 0.0) : from_min >= 0.0 && to_max >= 0.0);
     if (inside) {
-      euler.angle[axis] = angle, euler.dir[axis] = best_dir * (1.0 / glm::length(best_dir));
-    } else if (std::abs(wrap(best - min)) <= std::abs(wrap(best - max))) {
-      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+      euler.dir[axis] = best_dir * (1.0 / glm::length(best_dir));
     } else {
-      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+      // The nearer limit around the circle: the one with the larger cosine to best_dir.
+      euler.dir[axis] = glm::dot(best_dir, lo) >= glm::dot(best_dir, hi) ? lo : hi;
     }
   }
 }
 
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
-  local = glm::normalize(local);
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false)) return false;
+  if (limits.free || !limit_euler(limits, local, euler, false)) {  // (reads `local` up to scale)
+    local = glm::normalize(local);
+    return false;
+  }
   if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;
