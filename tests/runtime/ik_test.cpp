@@ -20,19 +20,7 @@
 #include "deform/io/pose_json.hpp"
 #include "runtime/ik_test_rig.hpp"
 
-// Counts heap allocations, to show that a solve allocates nothing. (GCC cannot see that this operator new is the
-// malloc behind the matching delete's free.)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<long> allocations{0};
-}
-void* operator new(std::size_t size) {
-  ++allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.hpp"  // allocations: a solve allocates nothing
 
 using namespace deform;
 using ik_test::RandomChain;
