@@ -325,7 +325,15 @@ class Viewer {
 
     ImGui::Separator();
     ImGui::Text("Reach");
-    bool reach_changed = ImGui::Checkbox("pole", &use_pole_);
+    int solver = reach_solver_ == deform::Character::ReachSolver::two_bone;
+    bool reach_changed = ImGui::RadioButton("CCD chain", &solver, 0);
+    ImGui::SameLine();
+    reach_changed |= ImGui::RadioButton("two-bone limb", &solver, 1);
+    reach_solver_ = solver ? deform::Character::ReachSolver::two_bone : deform::Character::ReachSolver::ccd;
+    ImGui::BeginDisabled(!solver);
+    reach_changed |= ImGui::SliderFloat("soften", &soften_, 0.0f, 1.0f);
+    ImGui::EndDisabled();
+    reach_changed |= ImGui::Checkbox("pole", &use_pole_);
     ImGui::SameLine();
     ImGui::TextDisabled("(shift+click places it)");
     reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
@@ -440,6 +448,8 @@ class Viewer {
     character_->reach_pole = pole_;
     character_->use_reach_pole = use_pole_;
     character_->reach_limits = reach_limits_;
+    character_->reach_solver = reach_solver_;
+    character_->reach_soften = soften_;
     character_->set_max_stretch(max_stretch_);
     if (reaching_) last_reach_ = character_->reach(effector_, target_);
   }
@@ -687,6 +697,8 @@ class Viewer {
   glm::vec3 pole_{0.0f, 0.0f, 1.0f};     // the reach pole, model space (--pole, the panel, shift+click)
   bool use_pole_ = false;
   deform::Character::JointLimits reach_limits_ = deform::Character::JointLimits::euler;
+  deform::Character::ReachSolver reach_solver_ = deform::Character::ReachSolver::ccd;  // (two-bone: Euler limits only)
+  float soften_ = 0.0f;
   std::vector<glm::quat> world_rotations_;  // draw_swing_twist_cones' scratch
   int clip_ = -1;
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;

@@ -187,6 +187,41 @@ TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone
   CHECK(c.reach_swing_twist(0) == nullptr);
 }
 
+TEST_CASE("reach with the two-bone solver: the limb below the effector's grandparent, soften, stretch for the rest") {
+  Character c = deform::make_builtin_character();
+  const Arm arm = left_arm(c);
+  c.reach_solver = Character::ReachSolver::two_bone;
+  const std::int32_t upperarm = c.skeleton().find("upperarm_l");
+  const glm::vec3 shoulder = c.bone_position(upperarm);
+  const glm::vec3 hand = c.bone_position(arm.hand);
+  const float limb = glm::length(hand - shoulder);
+  // Within reach: the hand on the target, the chain upper arm → forearm → hand.
+  const glm::vec3 near = shoulder + 0.75f * (hand - shoulder) + glm::vec3(0.0f, -0.1f, 0.1f);
+  deform::ReachResult result = c.reach(arm.hand, near);
+  REQUIRE(result.status);
+  REQUIRE(c.reach_chain().size() == 3);
+  CHECK(c.reach_chain()[0] == upperarm);
+  CHECK(result.residual < 1e-4f * limb);
+  run_for(c, 0.5, 1.0f / 60.0f);
+  CHECK(glm::length(c.bone_position(arm.hand) - near) < 1e-3f);
+  // Soften leaves the arm short of a target at its full length; the lattices stretch to cover it.
+  const glm::vec3 full = shoulder + glm::normalize(hand - shoulder + glm::vec3(0.0f, -0.2f, 0.2f)) * limb * 0.999f;
+  c.reach_soften = 0.0f;
+  const float hard = c.reach(arm.hand, full).residual;
+  c.reach_soften = 0.3f;
+  result = c.reach(arm.hand, full);
+  REQUIRE(result.status);
+  CHECK(result.residual > hard + 0.01f * limb);
+  CHECK(result.stretch > 0.0f);
+  CHECK(result.distance < 0.05f * result.residual + 1e-4f);  // soften applies to the stretched limb too
+  // Out of range, or with swing-twist limits, reach refuses and changes nothing.
+  c.reach_soften = 1.5f;
+  CHECK_FALSE(c.reach(arm.hand, full).status);
+  c.reach_soften = 0.0f;
+  c.reach_limits = Character::JointLimits::swing_twist;
+  CHECK_FALSE(c.reach(arm.hand, full).status);
+}
+
 TEST_CASE("set_max_stretch bounds the stretch reach() asks") {
   Character c = deform::make_builtin_character();
   CHECK_FALSE(c.set_max_stretch(-1.0f));

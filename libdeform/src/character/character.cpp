@@ -100,11 +100,19 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     return result;
   }
 
-  // The chain, rebuilt only for another effector (its root depends on the effector alone): the rig's root, else the
-  // parent of the topmost lattice bone above the effector, else two bones up.
-  if (effector != chain_effector_ || reach_limits != chain_limits_) {
-    std::int32_t root = effector == rig_.reach_effector ? rig_.reach_root : -1;
-    if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
+  // The chain, rebuilt only for another effector or setting (its root depends on the effector alone): two bones up
+  // for the two-bone solver; else the rig's root, else the parent of the topmost lattice bone above the effector, else
+  // two bones up.
+  const bool two_bone = reach_solver == ReachSolver::two_bone;
+  if (effector != chain_effector_ || reach_limits != chain_limits_ || reach_solver != chain_solver_) {
+    std::int32_t root = effector == rig_.reach_effector && !two_bone ? rig_.reach_root : -1;
+    if (two_bone) {
+      root = skel.bone(effector).parent >= 0 ? skel.bone(skel.bone(effector).parent).parent : -1;
+      if (root < 0) {
+        result.status = Status::failure("the two-bone solver needs an effector two bones below another");
+        return result;
+      }
+    } else if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
       root = -1;
       for (std::int32_t b = skel.bone(effector).parent; b >= 0; b = skel.bone(b).parent) {
         for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
@@ -132,6 +140,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
       }
     }
     chain_limits_ = reach_limits;
+    chain_solver_ = reach_solver;
     chain_effector_ = effector;
   }
   const std::int32_t root = chain_.bones.front();
@@ -174,7 +183,18 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     result.status = status;
     return result;
   }
-  if (const Status status = solve.run(); !status) {
+  TwoBoneIkJob limb;
+  limb.chain = &chain_;
+  limb.base = solve.base;
+  limb.rotations = work_.rotations;
+  limb.translations = work_.translations;
+  limb.target = target;
+  limb.tolerance = solve.settings.tolerance;
+  limb.soften = reach_soften;
+  if (use_reach_pole) limb.pole = reach_pole, limb.pole_kind = PoleKind::point;  // else the pose's bend plane
+  limb.result = &ik_result;
+  const auto run_ik = [&] { return two_bone ? limb.run() : solve.run(); };
+  if (const Status status = run_ik(); !status) {
     result.status = status;
     return result;
   }
@@ -221,7 +241,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     for (const Stretched& s : chain_lattices_) {  // (two lattices on one bone both push its child)
       work_.translations[std::size_t(s.child)] += s.axis * (lambda * hierarchy_.length(s.lattice));
     }
-    if (!solve.run()) break;
+    if (!run_ik()) break;
     distance = ik_result.distance;
     ++result.iterations;
   }

@@ -25,6 +25,12 @@ inline bool clamp_joint(const EulerLimits& limits, glm::quat& rotation) noexcept
   return false;
 }
 
+// The axis a straight or folded limb with no pole bends about: the middle joint's widest-ranging Euler axis (in its
+// parent's frame, where its X·Y·Z rotations turn) that is not along the bone, made perpendicular to it, signed toward
+// the side its range allows more of — so an elbow whose limits leave one hinge axis bends about that hinge. A free
+// joint, or no such axis: any perpendicular.
+glm::vec3 hinge_axis(const EulerLimits& middle, glm::vec3 bone) noexcept;
+
 // Any unit vector perpendicular to `v` (non-zero).
 glm::vec3 perpendicular(glm::vec3 v) noexcept {
   const glm::vec3 helper = std::abs(v.x) < 0.6f * glm::length(v) ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
@@ -97,7 +103,7 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
     const float axis_length = glm::length(axis);
     axis = axis_length > 1e-6f * static_cast<float>(a) * glm::length(upper_pole) && axis_length > tiny
                ? axis / axis_length
-               : perpendicular(u);
+               : hinge_axis(limits[1], u);
   } else {
     axis = glm::vec3(cross / sine);
   }
@@ -204,6 +210,23 @@ Status check(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   if (!std::isfinite(a + b)) return Status::failure("chain length overflows");
   if (!(std::min(a, b) > zero_bone_fraction * (a + b))) return Status::failure("limb has a zero-length bone");
   return {};
+}
+
+glm::vec3 hinge_axis(const EulerLimits& middle, glm::vec3 bone) noexcept {
+  const glm::vec3 along = glm::normalize(bone);
+  if (middle.free) return perpendicular(bone);
+  int best = -1;
+  double widest = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    glm::vec3 e(0.0f);
+    e[k] = 1.0f;
+    const double width = middle.max[k] - middle.min[k];
+    if (std::abs(glm::dot(e, along)) < 0.9f && width > widest) widest = width, best = k;
+  }
+  if (best < 0) return perpendicular(bone);
+  glm::vec3 e(0.0f);
+  e[best] = middle.max[best] >= -middle.min[best] ? 1.0f : -1.0f;
+  return glm::normalize(e - glm::dot(e, along) * along);
 }
 
 }  // namespace

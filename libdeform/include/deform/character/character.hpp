@@ -85,6 +85,16 @@ class DEFORM_CHARACTER_API Character {
   // (a knee or elbow hint), applied without losing the target.
   glm::vec3 reach_pole{0.0f};
   bool use_reach_pole = false;
+  // The solver reach() uses: CCD over the rig's chain (the default), or the closed-form two-bone solve of the limb
+  // that ends at the effector — its parent and grandparent joints, e.g. upper arm and forearm (TwoBoneIkJob, with
+  // reach_soften and the pole) — for a limb that should bend like one; it takes Euler limits only (with swing_twist
+  // reach_limits, reach() refuses). Takes effect at the next reach().
+  enum class ReachSolver : std::uint8_t { ccd, two_bone };
+  ReachSolver reach_solver = ReachSolver::ccd;
+  // two_bone: how softly the limb approaches full extension, [0, 1] (TwoBoneIkJob::soften); out of range, reach()
+  // refuses. What it leaves short the lattices stretch to cover, like any residual (to within a few percent of it:
+  // the stretched limb is softened again).
+  float reach_soften = 0.0f;
   // How reach() limits the chain's joints: by the skeleton's Euler limits (the default), or by swing-twist limits
   // derived from them (swing_twist_from_euler: a twist range about each bone's axis and a swing cone around it, which
   // may leave the Euler box; the reached pose is kept as solved). Takes effect at the next reach().
@@ -156,6 +166,7 @@ class DEFORM_CHARACTER_API Character {
   IkChain chain_;
   std::int32_t chain_effector_ = -1;
   JointLimits chain_limits_ = JointLimits::euler;  // the kind chain_ was built with
+  ReachSolver chain_solver_ = ReachSolver::ccd;    // the solver chain_ was built for
   Pose work_;
   std::vector<std::byte> ik_scratch_;
   std::vector<glm::mat4> chain_world_;

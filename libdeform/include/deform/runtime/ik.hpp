@@ -256,7 +256,8 @@ inline constexpr float two_bone_pole_cone_sine = 0.25f;
 // lengths a = |translation of the middle bone| and b = |translation of the effector bone|, both > 0):
 //  1. the reachable distance c (Soften) and the stretch factor s (Stretch) are chosen from r = |target − root head|;
 //  2. the middle joint opens or closes about the limb's current bend axis until |effector − root| = c (law of
-//     cosines); a straight or folded start bends about the axis toward the pole (else any perpendicular);
+//     cosines); a straight or folded start bends about the axis toward the pole (else about the middle joint's
+//     widest-ranging Euler axis across the bone, a hinge, signed toward the side its range allows);
 //  3. the root turns the effector onto the line root → target (shortest arc), then twists about that line so that
 //     the middle joint lies in the half-plane of the bend reference (Pole), turned by swivel_degrees;
 //  4. each joint is clamped into its DOF limits (the closed form does not know them: when they cut it off the pose is
