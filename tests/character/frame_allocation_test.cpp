@@ -66,7 +66,7 @@ TEST_CASE("the counting operator new sees the library's allocations") {
   CHECK(c.positions().size() > 1000);
 }
 
-TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach (pole, swing-twist), release, "
+TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach (pole, swing-twist, two-bone), release, "
           "update, normals") {
   // Held in a vector, moved there after construction: a move keeps the storage the frame relies on.
   std::vector<Character> characters;
@@ -100,10 +100,13 @@ TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach 
       const glm::vec3 target = effector == hand_l ? shoulder + glm::vec3(0.9f + 0.1f * float(phase), 0.2f, 0.3f)
                                : effector == hand_r ? glm::vec3(-0.4f, 1.3f, 0.4f)
                                                     : glm::vec3(0.2f, 0.3f, 0.3f);
-      // Phases 1 and 3 reach with a pole, 3 with swing-twist limits too (the chain is rebuilt with them).
+      // Phases 1 and 3 reach with a pole, 3 with swing-twist limits too (the chain is rebuilt with them), 5 with the
+      // two-bone solver and soften.
       c.use_reach_pole = phase % 2 == 1;
       c.reach_pole = shoulder + glm::vec3(0.0f, -0.5f, 1.0f);
       c.reach_limits = phase == 3 ? Character::JointLimits::swing_twist : Character::JointLimits::euler;
+      c.reach_solver = phase == 5 ? Character::ReachSolver::two_bone : Character::ReachSolver::ccd;
+      c.reach_soften = 0.2f;
       const deform::ReachResult result = c.reach(effector, target);
       tally.note(result.status);
       ++tally.reaches;
