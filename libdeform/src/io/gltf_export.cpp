@@ -102,30 +102,38 @@ glm::vec3 unit_or_z(glm::vec3 n) {
 
 // A VEC3 morph-target accessor holding `displacement` sparsely: the elements with a component beyond `tolerance`. No element:
 // no bufferView and no sparse block (the accessor reads as zeros). Returns the accessor and adds its stored count.
-int sparse_vec3(Builder& b, const std::vector<glm::vec3>& displacement, float tolerance, bool bounds,
-                std::size_t& stored) {
+// The sparse parts of every morph target, gathered into two buffer views (indices, values) so that the JSON holds
+// one small accessor per target and attribute, not two buffer views each.
+struct SparseData {
   std::vector<std::uint32_t> indices;
   std::vector<float> values;
+  std::vector<std::size_t> patch;  // accessors whose sparse block names the two views, filled in at the end
+};
+
+int sparse_vec3(Builder& b, SparseData& sparse, const std::vector<glm::vec3>& displacement, float tolerance,
+                bool bounds, std::size_t& stored) {
+  const std::size_t first_index = sparse.indices.size(), first_value = sparse.values.size();
+  std::vector<float> range;
   for (std::size_t i = 0; i < displacement.size(); ++i) {
     const glm::vec3 d = displacement[i];
     if (std::abs(d.x) <= tolerance && std::abs(d.y) <= tolerance && std::abs(d.z) <= tolerance) continue;
-    indices.push_back(static_cast<std::uint32_t>(i));
-    values.insert(values.end(), {d.x, d.y, d.z});
+    sparse.indices.push_back(static_cast<std::uint32_t>(i));
+    sparse.values.insert(sparse.values.end(), {d.x, d.y, d.z});
   }
+  const std::size_t count = sparse.indices.size() - first_index;
   Json a = {{"componentType", float_type}, {"count", displacement.size()}, {"type", "VEC3"}};
   if (bounds) {
-    std::vector<float> range = values;
-    if (indices.size() < displacement.size()) range.insert(range.end(), {0.0f, 0.0f, 0.0f});  // the zeros
+    range.assign(sparse.values.begin() + std::ptrdiff_t(first_value), sparse.values.end());
+    if (count < displacement.size()) range.insert(range.end(), {0.0f, 0.0f, 0.0f});  // the zeros
     Builder::add_bounds(a, range, 3);
   }
-  if (!indices.empty()) {
-    const int index_view = b.view(indices.data(), indices.size() * sizeof(std::uint32_t), 0);
-    const int value_view = b.view(values.data(), values.size() * sizeof(float), 0);
-    a["sparse"] = {{"count", indices.size()},
-                   {"indices", {{"bufferView", index_view}, {"componentType", unsigned_int_type}}},
-                   {"values", {{"bufferView", value_view}}}};
+  if (count > 0) {
+    a["sparse"] = {{"count", count},
+                   {"indices", {{"bufferView", 0}, {"byteOffset", first_index * sizeof(std::uint32_t)}, {"componentType", unsigned_int_type}}},
+                   {"values", {{"bufferView", 0}, {"byteOffset", first_value * sizeof(float)}}}};
+    sparse.patch.push_back(b.accessors.size());
   }
-  stored += indices.size();
+  stored += count;
   return b.push(std::move(a));
 }
 
@@ -271,6 +279,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   std::vector<Submesh> submeshes = mesh.submeshes;
   if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh.triangle_count()), -1, {}, {}});
   std::vector<std::uint32_t> local(vertices, 0);
+  SparseData sparse;
   std::size_t frame_count = 0;
   for (const Submesh& s : submeshes) {
     if (s.triangle_count == 0) continue;
@@ -325,9 +334,9 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
       const BakedFrames& baked = *options.baked;
       Json targets = Json::array();
       for (std::size_t k = 0; k < baked.times.size(); ++k) {
-        Json target = {{"POSITION", sparse_vec3(b, displacements(k, used, false), baked.position_tolerance, true, written.sparse_values)}};
+        Json target = {{"POSITION", sparse_vec3(b, sparse, displacements(k, used, false), baked.position_tolerance, true, written.sparse_values)}};
         if (!baked.normals.empty())
-          target["NORMAL"] = sparse_vec3(b, displacements(k, used, true), baked.normal_tolerance, false, written.sparse_values);
+          target["NORMAL"] = sparse_vec3(b, sparse, displacements(k, used, true), baked.normal_tolerance, false, written.sparse_values);
         targets.push_back(std::move(target));
       }
       frame_count = targets.size();
@@ -336,6 +345,14 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     primitives.push_back(std::move(primitive));
   }
   written.morph_targets = frame_count;
+  if (!sparse.patch.empty()) {
+    const int index_view = b.view(sparse.indices.data(), sparse.indices.size() * sizeof(std::uint32_t), 0);
+    const int value_view = b.view(sparse.values.data(), sparse.values.size() * sizeof(float), 0);
+    for (const std::size_t a : sparse.patch) {
+      b.accessors[a]["sparse"]["indices"]["bufferView"] = index_view;
+      b.accessors[a]["sparse"]["values"]["bufferView"] = value_view;
+    }
+  }
   Json gltf_mesh = {{"primitives", std::move(primitives)}};
   if (!model.name.empty()) gltf_mesh["name"] = model.name;
   if (frame_count > 0) gltf_mesh["weights"] = std::vector<float>(frame_count, 0.0f);
