@@ -172,6 +172,12 @@ if out:
 expect_only(os.path.join(work, "gltf"), ["builtin.gltf", "builtin.bin"])
 run("export", "--builtin", "--format", "gltf", "--out", "builtin.glb")
 written += ["gltf/builtin.gltf", "builtin.glb"]
+# The native triple of samples/data, whose material has a PNG texture in the model's folder: it is embedded.
+out = run("export", os.path.join(samples, "builtin.obj"), "--skeleton", os.path.join(samples, "builtin.sk"),
+          "--weights", os.path.join(samples, "builtin.skw"), "--format", "gltf", "--out", "textured.glb")
+if out:
+    check(out["textures"] == 1, f"export textured: {out['textures']} textures embedded, not 1")
+written.append("textured.glb")
 run("export", "--builtin", "--out", "native")
 source = obj_points(os.path.join(work, "native", "builtin.obj"))
 for name in ("gltf/builtin.gltf", "builtin.glb"):

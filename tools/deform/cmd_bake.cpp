@@ -100,9 +100,12 @@ std::string checked_out(const Args& args) {
   return out;
 }
 
-int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing) {
+// `texture_root`: the only folder textures are embedded from (the mesh's own).
+int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
+          const std::string& texture_root) {
   deform::GltfExportOptions options;
   options.baked = &baked;
+  options.texture_root = texture_root.empty() ? "." : texture_root;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
@@ -187,7 +190,9 @@ int bake_reach(const Args& args) {
     now = t;
     keep(k);
   }
-  return write(out, rest, baked, timing);
+  const std::string folder =
+      builtin ? "." : std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
+  return write(out, rest, baked, timing, folder);
 }
 
 // Render-vertex normals of the deformed points: n' ∝ cof(J)·n with J = ∂Q/∂(u,v,w) · diag(size)⁻¹ (as `deform ffd`).
@@ -254,7 +259,7 @@ int bake_ffd(const Args& args) {
     baked.positions.push_back(std::move(positions));
     baked.normals.push_back(ffd_normals(mesh, current, deformed));
   }
-  return write(out, model, baked, timing);
+  return write(out, model, baked, timing, std::filesystem::path(mesh_path).parent_path().lexically_normal().string());
 }
 
 int run(const std::vector<std::string>& argv) {

@@ -17,12 +17,21 @@ namespace {
 
 using Json = nlohmann::json;  // keys in alphabetical order, as docs/cli.md shows
 
+// Textures are taken only from the model's own folder (the current folder for --builtin).
+std::string texture_root(const Args& args) {
+  std::string root;
+  if (!args.positionals().empty())
+    root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
+  return root.empty() ? "." : root;
+}
+
 int run_gltf(const Args& args, const std::string& out) {
   const LoadedModel loaded = load_model(args);
   const deform::Model& model = loaded.model;
   deform::GltfExportOptions options;
   options.clips = loaded.clips;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
+  options.texture_root = texture_root(args);
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
   Json clips = Json::array();
@@ -30,6 +39,7 @@ int run_gltf(const Args& args, const std::string& out) {
   print_json(Json{{"gltf", written.gltf},
                   {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
                   {"bytes", written.bytes},
+                  {"textures", written.textures},
                   {"vertices", model.mesh.point_count()},
                   {"render_vertices", written.vertices},
                   {"triangles", model.mesh.triangle_count()},
@@ -46,9 +56,7 @@ int run_native(const Args& args, const std::string& out) {
   for (const deform::Animation& clip : loaded.clips) clips.push_back(clip.name);
   // Textures are copied only from the model's own folder (deform::ExportOptions).
   deform::ExportOptions options;
-  if (!args.positionals().empty())
-    options.texture_root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
-  if (options.texture_root.empty()) options.texture_root = ".";
+  options.texture_root = texture_root(args);
   const deform::ExportedFiles files = deform::export_native(model, out, options);
   for (const std::string& w : files.warnings) note(w);
   print_json(Json{{"obj", files.obj},
@@ -105,8 +113,9 @@ const Command export_command = {
     "\n"
     "--format gltf: writes FILE as glTF 2.0 (docs/gltf-export.md): FILE.glb as one binary file, FILE.gltf plus\n"
     "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation.\n"
-    "Textures are not written. Prints {\"gltf\": FILE, \"bin\": path or null, \"bytes\", \"vertices\",\n"
-    "\"render_vertices\", \"triangles\", \"bones\", \"clips\": [names]}. Needs no importer for --builtin or native files.\n"
+    "Diffuse textures (PNG, JPEG) from the model's folder are embedded. Prints {\"gltf\": FILE, \"bin\": path or\n"
+    "null, \"bytes\", \"textures\": images embedded, \"vertices\", \"render_vertices\", \"triangles\", \"bones\",\n"
+    "\"clips\": [names]}. Needs no importer for --builtin or native files.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a file that cannot be read (the message names it); 1 any other failure.\n",
     run};

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
+#include <utility>
 #include <limits>
 
 #include <nlohmann/json.hpp>
@@ -176,12 +178,43 @@ std::vector<float> track_output(const Track<glm::quat>& t) {
   return out;
 }
 
-Json material_json(const Material& m) {
+// The MIME type of a PNG or JPEG file by its first bytes, or "" for anything else.
+std::string image_type(const std::vector<std::uint8_t>& bytes) {
+  static const std::uint8_t png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static const std::uint8_t jpeg[] = {0xff, 0xd8, 0xff};
+  if (bytes.size() >= sizeof png && std::equal(std::begin(png), std::end(png), bytes.begin())) return "image/png";
+  if (bytes.size() >= sizeof jpeg && std::equal(std::begin(jpeg), std::end(jpeg), bytes.begin())) return "image/jpeg";
+  return {};
+}
+
+// Reads a texture that may be embedded: inside `root` once links are resolved, PNG or JPEG. Empty result = refused,
+// `why` says why.
+std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root, std::string& why,
+                                        std::string& mime) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path real = fs::canonical(texture, error);
+  if (error || !fs::is_regular_file(real, error)) return why = "not found", std::vector<std::uint8_t>{};
+  const fs::path real_root = fs::canonical(root, error);
+  if (error) return why = "the texture folder '" + root + "' does not exist", std::vector<std::uint8_t>{};
+  const fs::path inside = real.lexically_relative(real_root);
+  if (inside.empty() || *inside.begin() == "..")
+    return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
+  std::vector<std::uint8_t> bytes = read_file_bytes(real.string());
+  mime = image_type(bytes);
+  if (mime.empty()) return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
+  return bytes;
+}
+
+Json material_json(const Material& m, int texture) {
   const auto unit = [](float x) { return std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 1.0f; };
   const float alpha = unit(m.opacity);
-  Json pbr = {{"baseColorFactor", {unit(m.diffuse.r), unit(m.diffuse.g), unit(m.diffuse.b), alpha}},
+  // A textured material shows its texture (as OBJ viewers do with map_Kd); glTF multiplies the factor in.
+  const glm::vec3 colour = texture >= 0 ? glm::vec3(1.0f) : m.diffuse;
+  Json pbr = {{"baseColorFactor", {unit(colour.r), unit(colour.g), unit(colour.b), alpha}},
               {"metallicFactor", 0.0},
               {"roughnessFactor", 1.0}};
+  if (texture >= 0) pbr["baseColorTexture"] = {{"index", texture}};
   Json out = {{"pbrMetallicRoughness", std::move(pbr)}, {"doubleSided", true}};
   if (!m.name.empty()) out["name"] = m.name;
   if (alpha < 1.0f) out["alphaMode"] = "BLEND";
@@ -275,7 +308,32 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   // order), so that no reader has to split shared vertex buffers ---
   Json primitives = Json::array();
   Json materials = Json::array();
-  for (const Material& m : mesh.materials) materials.push_back(material_json(m));
+  Json images = Json::array(), textures = Json::array();
+  {
+    std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
+    for (const Material& m : mesh.materials) {
+      int texture = -1;
+      if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
+        for (const auto& [file, index] : embedded)
+          if (file == m.diffuse_map) texture = index;
+        if (texture < 0) {
+          std::string why, mime;
+          const std::vector<std::uint8_t> bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          if (bytes.empty()) {
+            written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
+                                       why + ")");
+          } else {
+            images.push_back({{"bufferView", b.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
+            textures.push_back({{"source", images.size() - 1}});
+            texture = static_cast<int>(textures.size() - 1);
+            embedded.emplace_back(m.diffuse_map, texture);
+          }
+        }
+      }
+      materials.push_back(material_json(m, texture));
+    }
+    written.textures = images.size();
+  }
   std::vector<Submesh> submeshes = mesh.submeshes;
   if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh.triangle_count()), -1, {}, {}});
   std::vector<std::uint32_t> local(vertices, 0);
@@ -434,6 +492,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   doc["nodes"] = std::move(nodes);
   doc["meshes"] = Json::array({std::move(gltf_mesh)});
   if (!materials.empty()) doc["materials"] = std::move(materials);
+  if (!images.empty()) doc["images"] = std::move(images), doc["textures"] = std::move(textures);
   if (!animations.empty()) doc["animations"] = std::move(animations);
   while (b.bin.size() % 4) b.bin.push_back(0);
   doc["accessors"] = std::move(b.accessors);

@@ -45,6 +45,11 @@ struct GltfExportOptions {
   const BakedFrames* baked = nullptr;
   // Written as asset.generator.
   std::string generator = "libdeform";
+  // The only folder textures are embedded from: a material's diffuse texture (Material::diffuse_map) is embedded in
+  // the buffer when, with every symbolic link resolved, it lies inside this folder and is a PNG or JPEG file (the
+  // image formats glTF 2.0 defines, by their first bytes). Any other is left out with a warning naming it, so a model
+  // naming /etc/passwd as its texture leaks nothing. Empty: no texture is embedded.
+  std::string texture_root;
 };
 
 struct GltfWritten {
@@ -54,12 +59,14 @@ struct GltfWritten {
   std::size_t vertices = 0;           // glTF vertices, over the primitives (a render vertex per submesh using it)
   std::size_t morph_targets = 0;      // baked frames written
   std::size_t sparse_values = 0;      // displacements stored, over every target (POSITION and NORMAL each count)
-  std::vector<std::string> warnings;  // clips or tracks left out (e.g. keys before t = 0), one line each
+  std::size_t textures = 0;           // images embedded
+  std::vector<std::string> warnings;  // textures, clips or tracks left out (e.g. keys before t = 0), one line each
 };
 
 // Writes `model` as glTF 2.0 at `path` (.gltf or .glb). The mesh: one primitive per non-empty submesh, holding the
 // render vertices its triangles use (each: its point's position, its normal normalised, TEXCOORD_0 as (u, 1 - v)
-// when the mesh has UVs), with its material's diffuse colour and opacity as the base colour (textures are not written). Without
+// when the mesh has UVs), with its material's diffuse colour and opacity as the base colour, or its diffuse texture (see
+// `texture_root`) times its opacity. Without
 // `baked`: a skin whose joints are the bones (node i = bone i, named Skeleton::key(i), its bind translation and
 // rotation as the node's TRS; inverseBindMatrices from Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from
 // `model.weights`, and the clips. Throws deform::Error of kind argument for another extension, a model whose weights
