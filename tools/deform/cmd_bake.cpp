@@ -100,12 +100,12 @@ std::string checked_out(const Args& args) {
   return out;
 }
 
-// `texture_root`: the only folder textures are embedded from (the mesh's own).
+// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none.
 int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
           const std::string& texture_root) {
   deform::GltfExportOptions options;
   options.baked = &baked;
-  options.texture_root = texture_root.empty() ? "." : texture_root;
+  options.texture_root = texture_root;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
@@ -190,9 +190,10 @@ int bake_reach(const Args& args) {
     now = t;
     keep(k);
   }
-  const std::string folder =
-      builtin ? "." : std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
-  return write(out, rest, baked, timing, folder);
+  // The built-in character's texture is a file name with no folder: none is embedded for it.
+  std::string folder;
+  if (!builtin) folder = std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
+  return write(out, rest, baked, timing, builtin ? std::string() : folder.empty() ? std::string(".") : folder);
 }
 
 // Render-vertex normals of the deformed points: n' ∝ cof(J)·n with J = ∂Q/∂(u,v,w) · diag(size)⁻¹ (as `deform ffd`).
@@ -259,7 +260,8 @@ int bake_ffd(const Args& args) {
     baked.positions.push_back(std::move(positions));
     baked.normals.push_back(ffd_normals(mesh, current, deformed));
   }
-  return write(out, model, baked, timing, std::filesystem::path(mesh_path).parent_path().lexically_normal().string());
+  const std::string folder = std::filesystem::path(mesh_path).parent_path().lexically_normal().string();
+  return write(out, model, baked, timing, folder.empty() ? "." : folder);
 }
 
 int run(const std::vector<std::string>& argv) {
