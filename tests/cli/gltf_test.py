@@ -186,6 +186,15 @@ for name in ("gltf/builtin.gltf", "builtin.glb"):
         check(back["bones"] == 29, f"{name} re-imported: {back['bones']} bones, not 29")
         correspondence(name + " (bind pose)", source, obj_points(os.path.join(work, back["obj"])))
 
+# A .gltf whose name a URI cannot hold as it is: the .bin's name is made safe, and the importer finds it.
+out = run("export", "--builtin", "--format", "gltf", "--out", "my model%.gltf")
+if out:
+    check(out["bin"] == "my_model_.bin", f"export 'my model%.gltf': bin {out['bin']}")
+    back = run("export", "my model%.gltf", "--out", "back-spaces")
+    if back:
+        correspondence("my model%.gltf (bind pose)", source, obj_points(os.path.join(work, back["obj"])))
+written.append("my model%.gltf")
+
 # --- export: an imported character with clips, posed by a clip after the round trip ---
 wuson = os.path.join(models, "X", "Testwuson.X")
 if os.path.exists(wuson):

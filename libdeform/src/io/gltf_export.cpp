@@ -2,6 +2,7 @@
 #include "deform/io/gltf_export.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -32,21 +33,14 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-// A relative URI for a file name: RFC 3986 unreserved characters as they are, every other byte percent-encoded.
-std::string uri_for(const std::string& file_name) {
-  static const char hex[] = "0123456789ABCDEF";
-  std::string uri;
-  for (const char ch : file_name) {
+// A file name every reader finds as a relative URI: characters outside [A-Za-z0-9._-] become '_' (percent-encoding
+// would be valid, but Assimp 5.2 does not decode it).
+std::string uri_safe(std::string name) {
+  for (char& ch : name) {
     const auto c = static_cast<unsigned char>(ch);
-    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
-      uri += ch;
-    } else {
-      uri += '%';
-      uri += hex[c >> 4];
-      uri += hex[c & 15];
-    }
+    if (!(std::isalnum(c) && c < 128) && c != '-' && c != '.' && c != '_') ch = '_';
   }
-  return uri;
+  return name;
 }
 
 // The binary buffer and the JSON arrays that describe it, built together.
@@ -521,9 +515,9 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     written.bytes = glb.size();
   } else {
     const std::filesystem::path gltf_path(path);
-    const std::string bin_name = gltf_path.stem().string() + ".bin";
+    const std::string bin_name = uri_safe(gltf_path.stem().string()) + ".bin";
     written.bin = (gltf_path.parent_path() / bin_name).string();
-    buffer["uri"] = uri_for(bin_name);
+    buffer["uri"] = bin_name;
     doc["buffers"] = Json::array({std::move(buffer)});
     const std::string json = dump(doc);
     write_file_atomic(written.bin, b.bin);

@@ -2,7 +2,8 @@
 // glTF 2.0 out (docs/gltf-export.md): a Model as a skinned mesh with its skeleton and clips, or a mesh whose
 // deformation over time is baked into morph targets, so that any glTF viewer plays what libdeform computed.
 //  - PATH ending in .glb (any case): one binary glTF file. PATH ending in .gltf: PATH plus STEM.bin beside it (STEM:
-//    PATH's file name without .gltf), which PATH names by a relative URI. Nothing else is written.
+//    PATH's file name without .gltf, characters outside [A-Za-z0-9._-] replaced by '_'), which PATH names by a
+//    relative URI. Nothing else is written.
 //  - every file is written atomically (io/atomic_file.hpp); for .gltf the .bin is written first, so a PATH that exists
 //    always names a complete buffer.
 #include <cstdint>
