@@ -70,5 +70,6 @@ extern const Command ik_command;
 extern const Command ffd_command;
 extern const Command simulate_command;
 extern const Command export_command;
+extern const Command bake_command;
 
 }  // namespace cli

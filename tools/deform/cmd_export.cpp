@@ -1,35 +1,62 @@
-// deform export MODEL --out DIR: a model as the native OBJ + MTL + .sk + .skw, textures copied (docs/cli.md).
+// deform export MODEL --out DIR: a model as the native OBJ + MTL + .sk + .skw, textures copied; with --format gltf,
+// as one glTF 2.0 file (.gltf + .bin or .glb) with its skin and clips (docs/cli.md, docs/gltf-export.md).
 #include <filesystem>
 
 #include "cli.hpp"
 #include "model_loader.hpp"
-#ifdef DEFORM_HAVE_IMPORT
-#include "deform/import/import.hpp"
+#include "deform/io/gltf_export.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
+#include "deform/version.hpp"
+#ifdef DEFORM_HAVE_IMPORT
+#include "deform/import/import.hpp"
 #endif
 
 namespace cli {
 namespace {
 
-#ifdef DEFORM_HAVE_IMPORT
 using Json = nlohmann::json;  // keys in alphabetical order, as docs/cli.md shows
 
-int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = model_value_flags;
-  value_flags.push_back("--out");
-  const Args args(argv, value_flags, model_switch_flags);
-  const std::string out = args.required("--out");
+// Textures are taken only from the model's own folder (the current folder for --builtin).
+std::string texture_root(const Args& args) {
+  std::string root;
+  if (!args.positionals().empty())
+    root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
+  return root.empty() ? "." : root;
+}
 
+int run_gltf(const Args& args, const std::string& out) {
+  const LoadedModel loaded = load_model(args);
+  const deform::Model& model = loaded.model;
+  deform::GltfExportOptions options;
+  options.clips = loaded.clips;
+  options.generator = "libdeform " DEFORM_VERSION_STRING;
+  options.texture_root = texture_root(args);
+  const deform::GltfWritten written = deform::write_gltf(out, model, options);
+  for (const std::string& w : written.warnings) note(w);
+  Json clips = Json::array();
+  for (const deform::Animation& clip : loaded.clips) clips.push_back(clip.name);
+  print_json(Json{{"gltf", written.gltf},
+                  {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
+                  {"bytes", written.bytes},
+                  {"textures", written.textures},
+                  {"vertices", model.mesh.point_count()},
+                  {"render_vertices", written.vertices},
+                  {"triangles", model.mesh.triangle_count()},
+                  {"bones", loaded.rigged ? model.skeleton.bone_count() : 0},
+                  {"clips", std::move(clips)}});
+  return exit_ok;
+}
+
+#ifdef DEFORM_HAVE_IMPORT
+int run_native(const Args& args, const std::string& out) {
   const LoadedModel loaded = load_model(args);
   const deform::Model& model = loaded.model;
   Json clips = Json::array();
   for (const deform::Animation& clip : loaded.clips) clips.push_back(clip.name);
   // Textures are copied only from the model's own folder (deform::ExportOptions).
   deform::ExportOptions options;
-  if (!args.positionals().empty())
-    options.texture_root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
-  if (options.texture_root.empty()) options.texture_root = ".";
+  options.texture_root = texture_root(args);
   const deform::ExportedFiles files = deform::export_native(model, out, options);
   for (const std::string& w : files.warnings) note(w);
   print_json(Json{{"obj", files.obj},
@@ -44,19 +71,38 @@ int run(const std::vector<std::string>& argv) {
   return exit_ok;
 }
 #else
-int run(const std::vector<std::string>&) {
-  note("'export' needs the importer component (deform::import, Assimp), which this build lacks");
+int run_native(const Args&, const std::string&) {
+  note("'export' to native files needs the importer component (deform::import, Assimp), which this build lacks; "
+       "--format gltf works without it");
   return exit_failure;
 }
 #endif
 
+int run(const std::vector<std::string>& argv) {
+  std::vector<std::string> value_flags = model_value_flags;
+  value_flags.push_back("--out");
+  value_flags.push_back("--format");
+  const Args args(argv, value_flags, model_switch_flags);
+  const std::string out = args.required("--out");
+  const std::string format = args.value("--format").value_or("native");
+  if (format == "gltf") {
+    std::string ext = std::filesystem::path(out).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".gltf" && ext != ".glb") throw UsageError("--format gltf: --out must name a .gltf or .glb file");
+    return run_gltf(args, out);
+  }
+  if (format != "native") throw UsageError("--format must be native or gltf");
+  return run_native(args, out);
+}
+
 }  // namespace
 
 const Command export_command = {
-    "export", "write a model (an import: glTF, FBX, .x, ...) as OBJ + MTL + .sk + .skw",
+    "export", "write a model as OBJ + MTL + .sk + .skw, or as glTF 2.0 (--format gltf)",
     "usage: deform export MODEL --out DIR\n"
     "       deform export MESH.obj --skeleton S.sk --weights W.skw --out DIR\n"
     "       deform export --builtin --out DIR\n"
+    "       deform export (MODEL | MESH.obj --skeleton S.sk --weights W.skw | --builtin) --format gltf --out FILE\n"
     "\n"
     "Writes DIR/NAME.obj, NAME.mtl, NAME.sk and NAME.skw (NAME: the model file's stem) and copies each material's\n"
     "diffuse texture into DIR; every file is written atomically. The OBJ holds the mesh in the bind pose the .sk\n"
@@ -64,6 +110,12 @@ const Command export_command = {
     "the same result as skinning MODEL with P.json. Clips are not exported (there is no native clip file).\n"
     "Prints {\"obj\", \"mtl\", \"sk\", \"skw\": paths, \"textures\": [paths], \"vertices\", \"triangles\", \"bones\"\n"
     "(0 for a static model), \"clips\": [names]}. Importer warnings go to stderr.\n"
+    "\n"
+    "--format gltf: writes FILE as glTF 2.0 (docs/gltf-export.md): FILE.glb as one binary file, FILE.gltf plus\n"
+    "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation.\n"
+    "Diffuse textures (PNG, JPEG) from the model's folder are embedded. Prints {\"gltf\": FILE, \"bin\": path or\n"
+    "null, \"bytes\", \"textures\": images embedded, \"vertices\", \"render_vertices\", \"triangles\", \"bones\",\n"
+    "\"clips\": [names]}. Needs no importer for --builtin or native files.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a file that cannot be read (the message names it); 1 any other failure.\n",
     run};

@@ -1,0 +1,530 @@
+// glTF 2.0 writer (deform/io/gltf_export.hpp, docs/gltf-export.md).
+#include "deform/io/gltf_export.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iterator>
+#include <utility>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+
+#include "deform/io/atomic_file.hpp"
+#include "deform/runtime/error.hpp"
+
+namespace deform {
+namespace {
+
+using Json = nlohmann::json;
+
+// glTF enumerations (glTF 2.0 specification, 5.1 and 5.11).
+constexpr int float_type = 5126;
+constexpr int unsigned_short_type = 5123;
+constexpr int unsigned_int_type = 5125;
+constexpr int array_buffer = 34962;
+constexpr int element_array_buffer = 34963;
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// A file name every reader finds as a relative URI: characters outside [A-Za-z0-9._-] become '_' (percent-encoding
+// would be valid, but Assimp 5.2 does not decode it).
+std::string uri_safe(std::string name) {
+  for (char& ch : name) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (!(std::isalnum(c) && c < 128) && c != '-' && c != '.' && c != '_') ch = '_';
+  }
+  return name;
+}
+
+// The binary buffer and the JSON arrays that describe it, built together.
+class Builder {
+ public:
+  Json accessors = Json::array();
+  Json buffer_views = Json::array();
+  std::vector<std::uint8_t> bin;
+
+  // A buffer view over `bytes` bytes of `data`, 4-byte aligned; `target` 0 for none.
+  int view(const void* data, std::size_t bytes, int target) {
+    while (bin.size() % 4) bin.push_back(0);
+    Json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+    if (target) v["target"] = target;
+    const auto* p = static_cast<const std::uint8_t*>(data);
+    bin.insert(bin.end(), p, p + bytes);
+    buffer_views.push_back(std::move(v));
+    return static_cast<int>(buffer_views.size() - 1);
+  }
+
+  // A float accessor of `count` elements of `components` floats (type "SCALAR", "VEC2", "VEC3", "VEC4", "MAT4").
+  int floats(const std::vector<float>& values, int components, const char* type, int target, bool bounds) {
+    const std::size_t count = values.size() / std::size_t(components);
+    const int v = view(values.data(), values.size() * sizeof(float), target);
+    Json a = {{"bufferView", v}, {"componentType", float_type}, {"count", count}, {"type", type}};
+    if (bounds) add_bounds(a, values, components);
+    return push(std::move(a));
+  }
+
+  static void add_bounds(Json& accessor, const std::vector<float>& values, int components) {
+    std::vector<float> lo(std::size_t(components), std::numeric_limits<float>::infinity());
+    std::vector<float> hi(std::size_t(components), -std::numeric_limits<float>::infinity());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const std::size_t c = i % std::size_t(components);
+      lo[c] = std::min(lo[c], values[i]);
+      hi[c] = std::max(hi[c], values[i]);
+    }
+    if (values.empty()) std::fill(lo.begin(), lo.end(), 0.0f), std::fill(hi.begin(), hi.end(), 0.0f);
+    accessor["min"] = lo;
+    accessor["max"] = hi;
+  }
+
+  int push(Json accessor) {
+    accessors.push_back(std::move(accessor));
+    return static_cast<int>(accessors.size() - 1);
+  }
+};
+
+// A unit normal (glTF requires NORMAL to be unit length); a zero or non-finite one becomes +Z.
+glm::vec3 unit_or_z(glm::vec3 n) {
+  const float length = glm::length(n);
+  if (!(length > 1e-20f) || !std::isfinite(length)) return {0.0f, 0.0f, 1.0f};
+  return n / length;
+}
+
+// A VEC3 morph-target accessor holding `displacement` sparsely: the elements with a component beyond `tolerance`. No element:
+// no bufferView and no sparse block (the accessor reads as zeros). Returns the accessor and adds its stored count.
+// The sparse parts of every morph target, gathered into two buffer views (indices, values) so that the JSON holds
+// one small accessor per target and attribute, not two buffer views each.
+struct SparseData {
+  std::vector<std::uint32_t> indices;
+  std::vector<float> values;
+  std::vector<std::size_t> patch;  // accessors whose sparse block names the two views, filled in at the end
+};
+
+int sparse_vec3(Builder& b, SparseData& sparse, const std::vector<glm::vec3>& displacement, float tolerance,
+                bool bounds, std::size_t& stored) {
+  const std::size_t first_index = sparse.indices.size(), first_value = sparse.values.size();
+  std::vector<float> range;
+  for (std::size_t i = 0; i < displacement.size(); ++i) {
+    const glm::vec3 d = displacement[i];
+    if (std::abs(d.x) <= tolerance && std::abs(d.y) <= tolerance && std::abs(d.z) <= tolerance) continue;
+    sparse.indices.push_back(static_cast<std::uint32_t>(i));
+    sparse.values.insert(sparse.values.end(), {d.x, d.y, d.z});
+  }
+  const std::size_t count = sparse.indices.size() - first_index;
+  Json a = {{"componentType", float_type}, {"count", displacement.size()}, {"type", "VEC3"}};
+  if (bounds) {
+    range.assign(sparse.values.begin() + std::ptrdiff_t(first_value), sparse.values.end());
+    if (count < displacement.size()) range.insert(range.end(), {0.0f, 0.0f, 0.0f});  // the zeros
+    Builder::add_bounds(a, range, 3);
+  }
+  if (count > 0) {
+    a["sparse"] = {{"count", count},
+                   {"indices", {{"bufferView", 0}, {"byteOffset", first_index * sizeof(std::uint32_t)}, {"componentType", unsigned_int_type}}},
+                   {"values", {{"bufferView", 0}, {"byteOffset", first_value * sizeof(float)}}}};
+    sparse.patch.push_back(b.accessors.size());
+  }
+  stored += count;
+  return b.push(std::move(a));
+}
+
+const char* interpolation_name(Interpolation i) {
+  switch (i) {
+    case Interpolation::step: return "STEP";
+    case Interpolation::cubic_spline: return "CUBICSPLINE";
+    case Interpolation::linear: break;
+  }
+  return "LINEAR";
+}
+
+// Sampler output values of a track: the values, or (in-tangent, value, out-tangent) per key for CUBICSPLINE, as
+// glTF orders them. Rotations are written as unit (x, y, z, w) quaternions; tangents as they are.
+std::vector<float> track_output(const Track<glm::vec3>& t) {
+  std::vector<float> out;
+  for (std::size_t k = 0; k < t.times.size(); ++k) {
+    if (t.interpolation == Interpolation::cubic_spline) out.insert(out.end(), {t.in_tangents[k].x, t.in_tangents[k].y, t.in_tangents[k].z});
+    out.insert(out.end(), {t.values[k].x, t.values[k].y, t.values[k].z});
+    if (t.interpolation == Interpolation::cubic_spline) out.insert(out.end(), {t.out_tangents[k].x, t.out_tangents[k].y, t.out_tangents[k].z});
+  }
+  return out;
+}
+std::vector<float> track_output(const Track<glm::quat>& t) {
+  std::vector<float> out;
+  for (std::size_t k = 0; k < t.times.size(); ++k) {
+    if (t.interpolation == Interpolation::cubic_spline) {
+      const glm::quat q = t.in_tangents[k];
+      out.insert(out.end(), {q.x, q.y, q.z, q.w});
+    }
+    glm::quat q = t.values[k];
+    const float length = glm::length(q);
+    q = length > 0.0f ? q / length : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    out.insert(out.end(), {q.x, q.y, q.z, q.w});
+    if (t.interpolation == Interpolation::cubic_spline) {
+      const glm::quat o = t.out_tangents[k];
+      out.insert(out.end(), {o.x, o.y, o.z, o.w});
+    }
+  }
+  return out;
+}
+
+// The MIME type of a PNG or JPEG file by its first bytes, or "" for anything else.
+std::string image_type(const std::vector<std::uint8_t>& bytes) {
+  static const std::uint8_t png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static const std::uint8_t jpeg[] = {0xff, 0xd8, 0xff};
+  if (bytes.size() >= sizeof png && std::equal(std::begin(png), std::end(png), bytes.begin())) return "image/png";
+  if (bytes.size() >= sizeof jpeg && std::equal(std::begin(jpeg), std::end(jpeg), bytes.begin())) return "image/jpeg";
+  return {};
+}
+
+// Reads a texture that may be embedded: inside `root` once links are resolved, PNG or JPEG. Empty result = refused,
+// `why` says why.
+std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root, std::string& why,
+                                        std::string& mime) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path real = fs::canonical(texture, error);
+  if (error || !fs::is_regular_file(real, error)) return why = "not found", std::vector<std::uint8_t>{};
+  const fs::path real_root = fs::canonical(root, error);
+  if (error) return why = "the texture folder '" + root + "' does not exist", std::vector<std::uint8_t>{};
+  const fs::path inside = real.lexically_relative(real_root);
+  if (inside.empty() || *inside.begin() == "..")
+    return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
+  std::vector<std::uint8_t> bytes = read_file_bytes(real.string());
+  mime = image_type(bytes);
+  if (mime.empty()) return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
+  return bytes;
+}
+
+Json material_json(const Material& m, int texture) {
+  const auto unit = [](float x) { return std::isfinite(x) ? std::clamp(x, 0.0f, 1.0f) : 1.0f; };
+  const float alpha = unit(m.opacity);
+  // A textured material shows its texture (as OBJ viewers do with map_Kd); glTF multiplies the factor in.
+  const glm::vec3 colour = texture >= 0 ? glm::vec3(1.0f) : m.diffuse;
+  Json pbr = {{"baseColorFactor", {unit(colour.r), unit(colour.g), unit(colour.b), alpha}},
+              {"metallicFactor", 0.0},
+              {"roughnessFactor", 1.0}};
+  if (texture >= 0) pbr["baseColorTexture"] = {{"index", texture}};
+  Json out = {{"pbrMetallicRoughness", std::move(pbr)}, {"doubleSided", true}};
+  if (!m.name.empty()) out["name"] = m.name;
+  if (alpha < 1.0f) out["alphaMode"] = "BLEND";
+  return out;
+}
+
+void check_baked(const BakedFrames& baked, const Model& model) {
+  const std::size_t frames = baked.times.size();
+  if (frames == 0) throw Error::invalid_argument("baked", "no frames");
+  if (baked.positions.size() != frames)
+    throw Error::invalid_argument("baked.positions", "one entry per frame (" + std::to_string(frames) + ") expected");
+  if (!baked.normals.empty() && baked.normals.size() != frames)
+    throw Error::invalid_argument("baked.normals", "empty, or one entry per frame");
+  for (std::size_t k = 0; k < frames; ++k) {
+    if (!std::isfinite(baked.times[k]) || baked.times[k] < 0.0f || (k > 0 && !(baked.times[k] > baked.times[k - 1])))
+      throw Error::invalid_argument("baked.times[" + std::to_string(k) + "]", "times must be finite, >= 0 and increasing");
+    if (baked.positions[k].size() != model.mesh.point_count())
+      throw Error::invalid_argument("baked.positions[" + std::to_string(k) + "]", "one position per mesh point expected");
+    for (const glm::vec3& p : baked.positions[k])
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw Error::invalid_argument("baked.positions[" + std::to_string(k) + "]", "a position is not finite");
+    if (!baked.normals.empty() && baked.normals[k].size() != model.mesh.vertex_count())
+      throw Error::invalid_argument("baked.normals[" + std::to_string(k) + "]", "one normal per render vertex expected");
+  }
+}
+
+}  // namespace
+
+GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options) {
+  const std::string ext = lower_extension(path);
+  const bool binary = ext == ".glb";
+  if (!binary && ext != ".gltf")
+    throw Error::invalid_argument(path, "a glTF file name ends in .gltf or .glb");
+  const Mesh& mesh = model.mesh;
+  const Skeleton& skeleton = model.skeleton;
+  if (mesh.triangle_count() == 0) throw Error::invalid_argument(path, "the mesh has no triangles");
+  if (mesh.vertex_count() > std::numeric_limits<std::uint32_t>::max())
+    throw Error::invalid_argument(path, "more than 2^32 - 1 render vertices");
+  const bool skinned = options.baked == nullptr;
+  if (!skinned && !options.clips.empty())
+    throw Error::invalid_argument("clips", "a baked file holds no skeleton: give clips or baked frames, not both");
+  if (skinned && (model.weights.size() != mesh.point_count() || skeleton.bone_count() == 0))
+    throw Error::invalid_argument(path, "the model's weights do not match its points, or it has no skeleton");
+  if (!skinned) check_baked(*options.baked, model);
+
+  GltfWritten written;
+  written.gltf = path;
+  Builder b;
+  Json doc;
+  doc["asset"] = {{"version", "2.0"}, {"generator", options.generator}};
+
+  // --- per-vertex data over all render vertices; each primitive takes the vertices its triangles use ---
+  const std::size_t vertices = mesh.vertex_count();
+  std::vector<glm::vec3> base_positions(vertices);
+  for (std::size_t r = 0; r < vertices; ++r) base_positions[r] = mesh.positions.at(mesh.vertex_point[r]);
+  std::vector<glm::vec3> base_normals(vertices, glm::vec3(0.0f, 0.0f, 1.0f));
+  for (std::size_t r = 0; r < vertices && r < mesh.vertex_normals.size(); ++r) base_normals[r] = unit_or_z(mesh.vertex_normals[r]);
+  std::vector<glm::u16vec4> vertex_joints;
+  std::vector<glm::vec4> vertex_weights;
+  if (skinned) {
+    vertex_joints.resize(vertices);
+    vertex_weights.resize(vertices);
+    for (std::size_t r = 0; r < vertices; ++r) {
+      const std::uint32_t p = mesh.vertex_point[r];
+      glm::u16vec4 bone = model.weights.bones[p];
+      glm::vec4 w = model.weights.weights[p];
+      float sum = 0.0f;
+      for (int i = 0; i < 4; ++i) {
+        if (!(w[i] > 0.0f) || bone[i] >= skeleton.bone_count()) w[i] = 0.0f, bone[i] = 0;  // glTF: unused = (0, 0)
+        sum += w[i];
+      }
+      if (sum > 0.0f) w /= sum;
+      else w = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f), bone = glm::u16vec4(0);
+      vertex_joints[r] = bone;
+      vertex_weights[r] = w;
+    }
+  }
+  // Per frame, the displacement of every render vertex from the rest shape.
+  const auto displacements = [&](std::size_t k, const std::vector<std::uint32_t>& used, bool normals) {
+    const BakedFrames& baked = *options.baked;
+    std::vector<glm::vec3> d(used.size());
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      const std::uint32_t r = used[i];
+      d[i] = normals ? unit_or_z(baked.normals[k][r]) - base_normals[r]
+                     : baked.positions[k][mesh.vertex_point[r]] - base_positions[r];
+    }
+    return d;
+  };
+
+  // --- primitives: one per non-empty submesh, each with its own vertices (the render vertices its triangles use, in
+  // order), so that no reader has to split shared vertex buffers ---
+  Json primitives = Json::array();
+  Json materials = Json::array();
+  Json images = Json::array(), textures = Json::array();
+  {
+    std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
+    for (const Material& m : mesh.materials) {
+      int texture = -1;
+      if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
+        for (const auto& [file, index] : embedded)
+          if (file == m.diffuse_map) texture = index;
+        if (texture < 0) {
+          std::string why, mime;
+          const std::vector<std::uint8_t> bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          if (bytes.empty()) {
+            written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
+                                       why + ")");
+          } else {
+            images.push_back({{"bufferView", b.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
+            textures.push_back({{"source", images.size() - 1}});
+            texture = static_cast<int>(textures.size() - 1);
+            embedded.emplace_back(m.diffuse_map, texture);
+          }
+        }
+      }
+      materials.push_back(material_json(m, texture));
+    }
+    written.textures = images.size();
+  }
+  std::vector<Submesh> submeshes = mesh.submeshes;
+  if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh.triangle_count()), -1, {}, {}});
+  std::vector<std::uint32_t> local(vertices, 0);
+  SparseData sparse;
+  std::size_t frame_count = 0;
+  for (const Submesh& s : submeshes) {
+    if (s.triangle_count == 0) continue;
+    const std::size_t first = std::size_t(s.first_triangle) * 3, count = std::size_t(s.triangle_count) * 3;
+    if (first + count > mesh.triangles.size()) throw Error::invalid_argument(path, "a submesh runs past the triangles");
+    std::vector<std::uint8_t> is_used(vertices, 0);
+    for (std::size_t i = first; i < first + count; ++i) {
+      if (mesh.triangles[i] >= vertices) throw Error::invalid_argument(path, "a triangle names no render vertex");
+      is_used[mesh.triangles[i]] = 1;
+    }
+    std::vector<std::uint32_t> used;
+    for (std::size_t r = 0; r < vertices; ++r)
+      if (is_used[r]) local[r] = static_cast<std::uint32_t>(used.size()), used.push_back(static_cast<std::uint32_t>(r));
+    written.vertices += used.size();
+    std::vector<std::uint32_t> indices(count);
+    for (std::size_t i = 0; i < count; ++i) indices[i] = local[mesh.triangles[first + i]];
+
+    const auto gather = [&used](const std::vector<glm::vec3>& all) {
+      std::vector<float> out;
+      out.reserve(used.size() * 3);
+      for (const std::uint32_t r : used) out.insert(out.end(), {all[r].x, all[r].y, all[r].z});
+      return out;
+    };
+    Json attributes;
+    attributes["POSITION"] = b.floats(gather(base_positions), 3, "VEC3", array_buffer, true);
+    attributes["NORMAL"] = b.floats(gather(base_normals), 3, "VEC3", array_buffer, false);
+    if (mesh.vertex_uvs.size() == vertices) {
+      std::vector<float> uvs;
+      uvs.reserve(used.size() * 2);
+      for (const std::uint32_t r : used) uvs.insert(uvs.end(), {mesh.vertex_uvs[r].x, 1.0f - mesh.vertex_uvs[r].y});  // glTF's v runs down
+      attributes["TEXCOORD_0"] = b.floats(uvs, 2, "VEC2", array_buffer, false);
+    }
+    if (skinned) {
+      std::vector<std::uint16_t> joint_data;
+      std::vector<float> weight_data;
+      joint_data.reserve(used.size() * 4);
+      weight_data.reserve(used.size() * 4);
+      for (const std::uint32_t r : used) {
+        joint_data.insert(joint_data.end(), {vertex_joints[r][0], vertex_joints[r][1], vertex_joints[r][2], vertex_joints[r][3]});
+        weight_data.insert(weight_data.end(), {vertex_weights[r][0], vertex_weights[r][1], vertex_weights[r][2], vertex_weights[r][3]});
+      }
+      const int jv = b.view(joint_data.data(), joint_data.size() * sizeof(std::uint16_t), array_buffer);
+      attributes["JOINTS_0"] = b.push({{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
+      attributes["WEIGHTS_0"] = b.floats(weight_data, 4, "VEC4", array_buffer, false);
+    }
+    const int iv = b.view(indices.data(), indices.size() * sizeof(std::uint32_t), element_array_buffer);
+    Json primitive = {{"attributes", std::move(attributes)},
+                      {"indices", b.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
+                      {"mode", 4}};
+    if (s.material >= 0 && std::size_t(s.material) < mesh.materials.size()) primitive["material"] = s.material;
+    if (!skinned) {  // baked frames: one morph target per frame
+      const BakedFrames& baked = *options.baked;
+      Json targets = Json::array();
+      for (std::size_t k = 0; k < baked.times.size(); ++k) {
+        Json target = {{"POSITION", sparse_vec3(b, sparse, displacements(k, used, false), baked.position_tolerance, true, written.sparse_values)}};
+        if (!baked.normals.empty())
+          target["NORMAL"] = sparse_vec3(b, sparse, displacements(k, used, true), baked.normal_tolerance, false, written.sparse_values);
+        targets.push_back(std::move(target));
+      }
+      frame_count = targets.size();
+      primitive["targets"] = std::move(targets);
+    }
+    primitives.push_back(std::move(primitive));
+  }
+  written.morph_targets = frame_count;
+  if (!sparse.patch.empty()) {
+    const int index_view = b.view(sparse.indices.data(), sparse.indices.size() * sizeof(std::uint32_t), 0);
+    const int value_view = b.view(sparse.values.data(), sparse.values.size() * sizeof(float), 0);
+    for (const std::size_t a : sparse.patch) {
+      b.accessors[a]["sparse"]["indices"]["bufferView"] = index_view;
+      b.accessors[a]["sparse"]["values"]["bufferView"] = value_view;
+    }
+  }
+  Json gltf_mesh = {{"primitives", std::move(primitives)}};
+  if (!model.name.empty()) gltf_mesh["name"] = model.name;
+  if (frame_count > 0) gltf_mesh["weights"] = std::vector<float>(frame_count, 0.0f);
+
+  // --- nodes: the bones (node i = bone i) then the mesh; the skin; the animations ---
+  Json nodes = Json::array();
+  Json animations = Json::array();
+  const std::string mesh_name = model.name.empty() ? "mesh" : model.name;
+  if (skinned) {
+    for (std::size_t i = 0; i < skeleton.bone_count(); ++i) {
+      const Bone& bone = skeleton.bone(static_cast<std::int32_t>(i));
+      Json node = {{"name", skeleton.key(static_cast<std::int32_t>(i))}};
+      if (bone.bind_translation != glm::vec3(0.0f)) node["translation"] = {bone.bind_translation.x, bone.bind_translation.y, bone.bind_translation.z};
+      if (bone.bind_rotation != glm::vec3(0.0f)) {
+        const glm::quat q = glm::normalize(quat_from_euler(bone.bind_rotation));
+        node["rotation"] = {q.x, q.y, q.z, q.w};
+      }
+      if (!bone.children.empty()) node["children"] = bone.children;
+      nodes.push_back(std::move(node));
+    }
+    std::vector<float> inverse_binds;
+    inverse_binds.reserve(skeleton.bone_count() * 16);
+    for (glm::mat4 m : skeleton.inverse_bind_world()) {
+      m[0][3] = m[1][3] = m[2][3] = 0.0f, m[3][3] = 1.0f;  // affine: glTF requires the last row (0, 0, 0, 1) exactly
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) inverse_binds.push_back(m[c][r]);
+    }
+    std::vector<int> joints(skeleton.bone_count());
+    for (std::size_t i = 0; i < joints.size(); ++i) joints[i] = static_cast<int>(i);
+    doc["skins"] = Json::array({{{"joints", joints},
+                                 {"skeleton", 0},
+                                 {"inverseBindMatrices", b.floats(inverse_binds, 16, "MAT4", 0, false)}}});
+    nodes.push_back({{"name", mesh_name}, {"mesh", 0}, {"skin", 0}});
+    doc["scenes"] = Json::array({{{"nodes", {0, static_cast<int>(skeleton.bone_count())}}}});
+
+    for (const Animation& clip : options.clips) {
+      clip.validate(skeleton.bone_count(), "clip '" + clip.name + "'");
+      Json samplers = Json::array(), channels = Json::array();
+      const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components, const char* type) {
+        if (track.empty()) return;
+        if (track.times.front() < 0.0f) {
+          written.warnings.push_back("clip '" + clip.name + "': the " + property + " track of bone '" + skeleton.key(bone) +
+                                     "' has keys before t = 0, which glTF cannot hold: left out");
+          return;
+        }
+        const int input = b.floats(track.times, 1, "SCALAR", 0, true);
+        const int output = b.floats(track_output(track), components, type, 0, false);
+        samplers.push_back({{"input", input}, {"output", output}, {"interpolation", interpolation_name(track.interpolation)}});
+        channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", bone}, {"path", property}}}});
+      };
+      for (const Channel& channel : clip.channels) {
+        add(channel.translation, channel.bone, "translation", 3, "VEC3");
+        add(channel.rotation, channel.bone, "rotation", 4, "VEC4");
+      }
+      if (channels.empty()) {
+        written.warnings.push_back("clip '" + clip.name + "' animates no translation or rotation: left out");
+        continue;
+      }
+      Json animation = {{"channels", std::move(channels)}, {"samplers", std::move(samplers)}};
+      if (!clip.name.empty()) animation["name"] = clip.name;
+      animations.push_back(std::move(animation));
+    }
+  } else {
+    nodes.push_back({{"name", mesh_name}, {"mesh", 0}});
+    doc["scenes"] = Json::array({{{"nodes", {0}}}});
+    // Weights: frame k's key is target k at 1, the others 0; LINEAR between keys blends frames k and k + 1.
+    const BakedFrames& baked = *options.baked;
+    const std::size_t frames = baked.times.size();
+    std::vector<float> weights(frames * frames, 0.0f);
+    for (std::size_t k = 0; k < frames; ++k) weights[k * frames + k] = 1.0f;
+    const int input = b.floats(baked.times, 1, "SCALAR", 0, true);
+    const int output = b.floats(weights, 1, "SCALAR", 0, false);
+    Json animation = {{"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}},
+                      {"samplers", {{{"input", input}, {"output", output}, {"interpolation", "LINEAR"}}}}};
+    if (!baked.name.empty()) animation["name"] = baked.name;
+    animations.push_back(std::move(animation));
+  }
+  doc["scene"] = 0;
+  doc["nodes"] = std::move(nodes);
+  doc["meshes"] = Json::array({std::move(gltf_mesh)});
+  if (!materials.empty()) doc["materials"] = std::move(materials);
+  if (!images.empty()) doc["images"] = std::move(images), doc["textures"] = std::move(textures);
+  if (!animations.empty()) doc["animations"] = std::move(animations);
+  while (b.bin.size() % 4) b.bin.push_back(0);
+  doc["accessors"] = std::move(b.accessors);
+  doc["bufferViews"] = std::move(b.buffer_views);
+  Json buffer = {{"byteLength", b.bin.size()}};
+
+  // Invalid UTF-8 in a name (from a model file) becomes U+FFFD: glTF JSON must be UTF-8.
+  const auto dump = [](const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); };
+  if (binary) {
+    doc["buffers"] = Json::array({std::move(buffer)});
+    std::string json = dump(doc);
+    while (json.size() % 4) json += ' ';
+    const std::uint64_t total = 12 + 8 + json.size() + 8 + b.bin.size();
+    if (total > std::numeric_limits<std::uint32_t>::max()) throw Error::invalid_argument(path, "the file would exceed 4 GiB");
+    std::vector<std::uint8_t> glb;
+    glb.reserve(total);
+    const auto u32 = [&glb](std::uint32_t v) {
+      for (int i = 0; i < 4; ++i) glb.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    };
+    u32(0x46546C67u), u32(2), u32(static_cast<std::uint32_t>(total));  // "glTF", version 2, length
+    u32(static_cast<std::uint32_t>(json.size())), u32(0x4E4F534Au);    // "JSON"
+    glb.insert(glb.end(), json.begin(), json.end());
+    u32(static_cast<std::uint32_t>(b.bin.size())), u32(0x004E4942u);  // "BIN\0"
+    glb.insert(glb.end(), b.bin.begin(), b.bin.end());
+    write_file_atomic(path, glb);
+    written.bytes = glb.size();
+  } else {
+    const std::filesystem::path gltf_path(path);
+    const std::string bin_name = uri_safe(gltf_path.stem().string()) + ".bin";
+    written.bin = (gltf_path.parent_path() / bin_name).string();
+    buffer["uri"] = bin_name;
+    doc["buffers"] = Json::array({std::move(buffer)});
+    const std::string json = dump(doc);
+    write_file_atomic(written.bin, b.bin);
+    write_file_atomic(path, json);
+    written.bytes = b.bin.size() + json.size();
+  }
+  return written;
+}
+
+}  // namespace deform

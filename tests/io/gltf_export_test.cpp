@@ -1,0 +1,206 @@
+// write_gltf: the files it writes (and only those), their structure (GLB chunks, accessors that decode to the
+// model's data, sparse morph targets, the frame-selecting weights), and the arguments it refuses. The Khronos
+// validator and the round trip through the importer are the cli_gltf test's.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "deform/extras/builtin.hpp"
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/gltf_export.hpp"
+#include "deform/runtime/error.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+struct Folder {
+  fs::path path;
+  explicit Folder(const char* name) : path(fs::temp_directory_path() / name) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~Folder() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+  std::vector<std::string> files() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+};
+
+std::uint32_t u32(const std::vector<std::uint8_t>& b, std::size_t at) {
+  return std::uint32_t(b[at]) | std::uint32_t(b[at + 1]) << 8 | std::uint32_t(b[at + 2]) << 16 | std::uint32_t(b[at + 3]) << 24;
+}
+
+// A quad (two triangles, four points, one submesh) with a two-bone skeleton.
+deform::Model quad() {
+  deform::Model model;
+  model.name = "quad";
+  model.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  model.mesh.vertex_point = {0, 1, 2, 3};
+  model.mesh.vertex_normals = std::vector<glm::vec3>(4, glm::vec3(0, 0, 2));  // written normalised
+  model.mesh.triangles = {0, 1, 2, 0, 2, 3};
+  model.mesh.submeshes = {{0, 2, -1, {}, {}}};
+  deform::Bone root;
+  root.name = "root";
+  root.children = {1};
+  deform::Bone tip;
+  tip.name = "tip";
+  tip.parent = 0;
+  tip.bind_translation = {0, 1, 0};
+  model.skeleton = deform::Skeleton({root, tip});
+  model.weights.bones = std::vector<glm::u16vec4>(4, glm::u16vec4(0));
+  model.weights.weights = std::vector<glm::vec4>(4, glm::vec4(1, 0, 0, 0));
+  model.weights.bones[2] = {1, 0, 0, 0};
+  return model;
+}
+
+std::vector<float> floats(const Json& doc, const std::vector<std::uint8_t>& bin, int accessor) {
+  const Json& a = doc["accessors"][accessor];
+  const Json& v = doc["bufferViews"][a["bufferView"].get<int>()];
+  const std::size_t width = a["type"] == "VEC3" ? 3 : a["type"] == "VEC4" ? 4 : a["type"] == "MAT4" ? 16 : 1;
+  std::vector<float> out(a["count"].get<std::size_t>() * width);
+  std::memcpy(out.data(), bin.data() + v["byteOffset"].get<std::size_t>(), out.size() * sizeof(float));
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("write_gltf: a .glb holds the skinned mesh, its skeleton and clips in two chunks, and nothing else is written") {
+  const Folder folder("deform_gltf_glb_test");
+  deform::Animation clip;
+  clip.name = "wave";
+  clip.duration = 1.0f;
+  deform::Channel channel;
+  channel.bone = 1;
+  channel.rotation.times = {0.0f, 1.0f};
+  channel.rotation.values = {glm::quat(1, 0, 0, 0), glm::quat(0.7071068f, 0, 0, 0.7071068f)};
+  clip.channels.push_back(channel);
+  const std::vector<deform::Animation> clips = {clip};
+  deform::GltfExportOptions options;
+  options.clips = clips;
+  const std::string path = (folder.path / "quad.GLB").string();
+  const deform::GltfWritten written = deform::write_gltf(path, quad(), options);
+  CHECK(written.bin.empty());
+  CHECK(written.vertices == 4);
+  CHECK(folder.files() == std::vector<std::string>{"quad.GLB"});
+
+  const std::vector<std::uint8_t> glb = deform::read_file_bytes(path);
+  REQUIRE(glb.size() == written.bytes);
+  CHECK(u32(glb, 0) == 0x46546C67u);  // "glTF"
+  CHECK(u32(glb, 4) == 2);
+  CHECK(u32(glb, 8) == glb.size());
+  const std::uint32_t json_length = u32(glb, 12);
+  CHECK(json_length % 4 == 0);
+  CHECK(u32(glb, 16) == 0x4E4F534Au);  // "JSON"
+  const Json doc = Json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+  CHECK(u32(glb, 20 + json_length + 4) == 0x004E4942u);  // "BIN\0"
+  const std::vector<std::uint8_t> bin(glb.begin() + 28 + json_length, glb.end());
+  CHECK(bin.size() == doc["buffers"][0]["byteLength"].get<std::size_t>());
+
+  CHECK(doc["asset"]["version"] == "2.0");
+  REQUIRE(doc["nodes"].size() == 3);
+  CHECK(doc["nodes"][0]["name"] == "root");
+  CHECK(doc["nodes"][0]["children"] == Json::array({1}));
+  CHECK(doc["nodes"][1]["translation"] == Json::array({0.0, 1.0, 0.0}));
+  CHECK(doc["nodes"][2]["skin"] == 0);
+  CHECK(doc["scenes"][0]["nodes"] == Json::array({0, 2}));
+  CHECK(doc["skins"][0]["joints"] == Json::array({0, 1}));
+  const Json& primitive = doc["meshes"][0]["primitives"][0];
+  CHECK(floats(doc, bin, primitive["attributes"]["POSITION"].get<int>()) ==
+        std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
+  CHECK(floats(doc, bin, primitive["attributes"]["NORMAL"].get<int>())[2] == 1.0f);
+  const std::vector<float> inverse_binds = floats(doc, bin, doc["skins"][0]["inverseBindMatrices"].get<int>());
+  CHECK(inverse_binds[16 + 13] == -1.0f);  // bone 1's inverse bind translates by -1 in y
+  REQUIRE(doc["animations"].size() == 1);
+  CHECK(doc["animations"][0]["name"] == "wave");
+  CHECK(doc["animations"][0]["channels"][0]["target"] == Json{{"node", 1}, {"path", "rotation"}});
+}
+
+TEST_CASE("write_gltf: a .gltf writes NAME.bin beside it; baked frames become sparse morph targets selected by weights") {
+  const Folder folder("deform_gltf_bake_test");
+  const deform::Model model = quad();
+  deform::BakedFrames baked;
+  baked.times = {0.0f, 0.5f, 1.0f};
+  for (float s : {0.0f, 0.5f, 1.0f}) {
+    std::vector<glm::vec3> p = model.mesh.positions;
+    p[2].z += s;  // only point 2 moves
+    baked.positions.push_back(p);
+  }
+  deform::GltfExportOptions options;
+  options.baked = &baked;
+  const std::string path = (folder.path / "bake.gltf").string();
+  const deform::GltfWritten written = deform::write_gltf(path, model, options);
+  CHECK(folder.files() == std::vector<std::string>{"bake.bin", "bake.gltf"});
+  CHECK(written.morph_targets == 3);
+  CHECK(written.sparse_values == 2);  // frames 1 and 2, one vertex each; frame 0 stores nothing
+  const Json doc = Json::parse(deform::read_file_text(path));
+  CHECK(doc["buffers"][0]["uri"] == "bake.bin");
+  CHECK(!doc.contains("skins"));
+  const Json& primitive = doc["meshes"][0]["primitives"][0];
+  CHECK(!primitive["attributes"].contains("JOINTS_0"));
+  REQUIRE(primitive["targets"].size() == 3);
+  const Json& first = doc["accessors"][primitive["targets"][0]["POSITION"].get<int>()];
+  CHECK(!first.contains("sparse"));
+  CHECK(!first.contains("bufferView"));
+  const Json& last = doc["accessors"][primitive["targets"][2]["POSITION"].get<int>()];
+  CHECK(last["sparse"]["count"] == 1);
+  CHECK(last["max"] == Json::array({0.0, 0.0, 1.0}));
+  CHECK(doc["meshes"][0]["weights"] == Json::array({0.0, 0.0, 0.0}));
+  const Json& sampler = doc["animations"][0]["samplers"][0];
+  CHECK(sampler["interpolation"] == "LINEAR");
+  const std::vector<std::uint8_t> bin = deform::read_file_bytes((folder.path / "bake.bin").string());
+  CHECK(floats(doc, bin, sampler["output"].get<int>()) == std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1});
+}
+
+TEST_CASE("write_gltf: refuses what it cannot write, writing nothing") {
+  const Folder folder("deform_gltf_refusal_test");
+  const deform::Model model = quad();
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "quad.obj").string(), model), deform::Error);
+  deform::Model no_triangles = model;
+  no_triangles.mesh.triangles.clear();
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "a.glb").string(), no_triangles), deform::Error);
+  deform::Model bad_weights = model;
+  bad_weights.weights.bones.pop_back();
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "b.glb").string(), bad_weights), deform::Error);
+  deform::BakedFrames baked;
+  baked.times = {0.0f, 0.0f};  // not increasing
+  baked.positions = {model.mesh.positions, model.mesh.positions};
+  deform::GltfExportOptions options;
+  options.baked = &baked;
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "c.glb").string(), model, options), deform::Error);
+  baked.times = {0.0f, 1.0f};
+  baked.positions[1].pop_back();  // a frame with a point missing
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "d.glb").string(), model, options), deform::Error);
+  CHECK(folder.files().empty());
+}
+
+TEST_CASE("write_gltf: the built-in character's texture is embedded only from inside texture_root") {
+  const Folder folder("deform_gltf_texture_test");
+  const deform::Model model = deform::builtin_character();  // its material names "builtin.png"
+  deform::GltfExportOptions options;
+  options.texture_root = DEFORM_SOURCE_DIR "/samples";  // the PNG is in samples/data, but the name is relative
+  const deform::GltfWritten missing = deform::write_gltf((folder.path / "a.glb").string(), model, options);
+  CHECK(missing.textures == 0);
+  CHECK(missing.warnings.size() == 1);
+  deform::Model textured = model;
+  for (deform::Material& m : textured.mesh.materials)
+    if (!m.diffuse_map.empty()) m.diffuse_map = DEFORM_SOURCE_DIR "/samples/data/" + m.diffuse_map;
+  const deform::GltfWritten embedded = deform::write_gltf((folder.path / "b.glb").string(), textured, options);
+  CHECK(embedded.textures == 1);
+  CHECK(embedded.warnings.empty());
+  options.texture_root = DEFORM_SOURCE_DIR "/tests";  // the texture lies outside this folder
+  const deform::GltfWritten outside = deform::write_gltf((folder.path / "c.glb").string(), textured, options);
+  CHECK(outside.textures == 0);
+  CHECK(outside.warnings.size() == 1);
+}

@@ -1,0 +1,280 @@
+// deform bake: a deformation over time as a glTF 2.0 morph-target animation that any glTF viewer plays
+// (docs/cli.md, docs/gltf-export.md). Two sources: the reach-stretch-release `deform simulate` runs, and a Bézier FFD
+// growing from rest to its full displacement.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+#include <vector>
+
+#include "cli.hpp"
+#include "model_loading.hpp"
+#include "deform/character/character.hpp"
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/gltf_export.hpp"
+#include "deform/io/lattice_json.hpp"
+#include "deform/io/obj.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/io/text.hpp"
+#include "deform/offline/lattice_binding.hpp"
+#include "deform/offline/rig.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/lattice.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/version.hpp"
+
+namespace cli {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr const char* usage =
+    "usage: deform bake (--builtin | RIG) --target X,Y,Z [--release-at T] [--seconds S] [--fps F] [--dt DT]\n"
+    "                   --out FILE.(gltf|glb)\n"
+    "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
+    "\n"
+    "Writes a deformation over time as glTF 2.0 that any glTF viewer plays: the mesh at its bind pose plus one morph\n"
+    "target per frame (sparse: only the vertices that move), and one animation whose weights show frame k at k/F\n"
+    "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md).\n"
+    "\n"
+    "  --builtin | RIG      the reach-stretch-release of `deform simulate` (same rig, target and release): frame 0 is\n"
+    "                       just after the reach, the mesh's bind pose is the glTF's rest shape\n"
+    "  MESH.obj --lattice L.json   the FFD of `deform ffd`, its displacements scaled from 0 (frame 0) to 1 (the\n"
+    "                       last frame, which is `deform ffd`'s output)\n"
+    "  --seconds S          length (default 3 for a reach, 1 for an FFD); frames at 0, 1/F, ..., S\n"
+    "  --fps F              frames per second, in (0, 240] (default 30); at most 1000 frames\n"
+    "  --dt DT              largest simulation step, seconds (default 1/60); frames and the release split steps\n"
+    "  --release-at T       seconds after the reach when the stretch is released (default 1.5)\n"
+    "  --target X,Y,Z       world-space target of the rig's reach effector\n"
+    "\n"
+    "Prints {\"gltf\": FILE, \"bin\": path or null, \"bytes\", \"frames\", \"fps\", \"render_vertices\",\n"
+    "\"stored_displacements\": sparse values over all frames (positions and normals)}.\n";
+
+constexpr double max_frames = 1000;
+
+// The model a rig file names, its paths taken relative to the rig file's folder.
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
+  model_loading::ModelRequest request;
+  if (!named.builtin) {
+    if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
+    const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
+    request.path = (folder / named.obj).string();
+    request.skeleton = (folder / named.skeleton).string();
+    request.weights = (folder / named.weights).string();
+  }
+  model_loading::LoadedModel loaded = model_loading::load_model(request);
+  for (const std::string& message : loaded.warnings) note(message);
+  return loaded;
+}
+
+float diagonal(const std::vector<glm::vec3>& points) {
+  const deform::Bounds b = deform::compute_bounds(points);
+  return glm::length(b.max - b.min);
+}
+
+struct Timing {
+  double seconds = 0.0;
+  double fps = 30.0;
+  std::size_t frames = 1;
+  double time(std::size_t k) const { return double(k) / fps; }
+};
+
+Timing parse_timing(const Args& args, double default_seconds) {
+  Timing timing;
+  timing.seconds = args.value("--seconds") ? parse_number(*args.value("--seconds"), "--seconds") : default_seconds;
+  timing.fps = args.value("--fps") ? parse_number(*args.value("--fps"), "--fps") : 30.0;
+  if (!(timing.seconds >= 0.0)) throw UsageError("--seconds must be >= 0");
+  if (!(timing.fps > 0.0) || timing.fps > 240.0) throw UsageError("--fps must be in (0, 240]");
+  const double frames = std::floor(timing.seconds * timing.fps + 1e-9) + 1.0;
+  if (frames > max_frames) throw UsageError("--seconds * --fps gives more than 1000 frames");
+  timing.frames = static_cast<std::size_t>(frames);
+  return timing;
+}
+
+std::string checked_out(const Args& args) {
+  const std::string out = args.required("--out");
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".gltf" && ext != ".glb") throw UsageError("--out must name a .gltf or .glb file");
+  return out;
+}
+
+// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none.
+int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
+          const std::string& texture_root) {
+  deform::GltfExportOptions options;
+  options.baked = &baked;
+  options.texture_root = texture_root;
+  options.generator = "libdeform " DEFORM_VERSION_STRING;
+  const deform::GltfWritten written = deform::write_gltf(out, model, options);
+  for (const std::string& w : written.warnings) note(w);
+  print_json(Json{{"gltf", written.gltf},
+                  {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
+                  {"bytes", written.bytes},
+                  {"frames", written.morph_targets},
+                  {"fps", timing.fps},
+                  {"render_vertices", written.vertices},
+                  {"stored_displacements", written.sparse_values}});
+  return exit_ok;
+}
+
+int bake_reach(const Args& args) {
+  const std::string out = checked_out(args);
+  const bool builtin = args.has("--builtin");
+  if (builtin == (args.positionals().size() == 1) || args.positionals().size() > 1)
+    throw UsageError("give either --builtin or one RIG file (or MESH.obj --lattice L.json)");
+  const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
+  const double release_at = args.value("--release-at") ? parse_number(*args.value("--release-at"), "--release-at") : 1.5;
+  const double dt = args.value("--dt") ? parse_number(*args.value("--dt"), "--dt") : 1.0 / 60.0;
+  if (!(dt > 0.0) || dt > 10.0) throw UsageError("--dt must be in (0, 10] seconds");
+  const Timing timing = parse_timing(args, 3.0);
+  if (timing.seconds / dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
+
+  deform::Model model;
+  deform::Rig rig;
+  if (builtin) {
+    model_loading::LoadedModel loaded = model_loading::load_model({});
+    rig = model_loading::starting_rig(loaded);
+    model = std::move(loaded.model);
+  } else {
+    const std::string& path = args.positionals().front();
+    const std::string text = deform::read_file_text(path);
+    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
+    rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
+  }
+  const std::int32_t effector = rig.reach_effector;
+  if (effector <= 0) throw UsageError("the rig has no reach effector");
+
+  deform::Model rest = model;  // the glTF's rest shape: bind positions, the normals the character computes there
+  deform::Character character(std::move(model), rig);
+  if (!character.update(0.0f)) throw std::runtime_error("internal error: the bind pose did not deform");
+  const std::span<const glm::vec3> bind_normals = character.normals();
+  rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
+
+  const deform::ReachResult reach = character.reach(effector, target);
+  if (!reach.status)
+    throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
+
+  deform::BakedFrames baked;
+  baked.name = "reach";
+  baked.position_tolerance = 1e-6f * diagonal(rest.mesh.positions);
+  baked.normal_tolerance = 1e-5f;
+  const auto advance = [&](double step) {
+    if (const deform::Status status = character.update(float(step)); !status)
+      throw UsageError(std::string("a simulation step was refused: ") + status.reason());
+  };
+  const auto keep = [&](std::size_t k) {
+    baked.times.push_back(float(timing.time(k)));
+    baked.positions.emplace_back(character.positions().begin(), character.positions().end());
+    const std::span<const glm::vec3> normals = character.normals();
+    baked.normals.emplace_back(normals.begin(), normals.end());
+  };
+  // As `deform simulate`: t = 0 is just after the reach; the release happens at T whatever the steps (a step that
+  // crosses it is split there).
+  bool released = false;
+  const double snap = 1e-9 * dt;
+  if (release_at <= snap) character.release(), released = true;
+  advance(0.0);
+  keep(0);
+  double now = 0.0;
+  for (std::size_t k = 1; k < timing.frames; ++k) {
+    const double t = timing.time(k);
+    while (now < t - snap) {
+      double next = std::min(t, now + dt);
+      if (!released && release_at > now + snap && release_at < next - snap) next = release_at;
+      advance(next - now);
+      now = next;
+      if (!released && release_at <= now + snap) character.release(), released = true;
+    }
+    now = t;
+    keep(k);
+  }
+  // The built-in character's texture is a file name with no folder: none is embedded for it.
+  std::string folder;
+  if (!builtin) folder = std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
+  return write(out, rest, baked, timing, builtin ? std::string() : folder.empty() ? std::string(".") : folder);
+}
+
+// Render-vertex normals of the deformed points: n' ∝ cof(J)·n with J = ∂Q/∂(u,v,w) · diag(size)⁻¹ (as `deform ffd`).
+std::vector<glm::vec3> ffd_normals(const deform::Mesh& mesh, const deform::BezierLattice& lattice,
+                                   const std::vector<bool>& deformed) {
+  const deform::LatticeFrame& frame = lattice.frame();
+  const glm::vec3 size(frame.u_axis.x, frame.v_axis.y, frame.w_axis.z);
+  std::vector<glm::vec3> normals = mesh.vertex_normals;
+  for (std::size_t r = 0; r < normals.size() && r < mesh.vertex_point.size(); ++r) {
+    const std::uint32_t p = mesh.vertex_point[r];
+    if (!deformed[p]) continue;
+    glm::mat3 j = lattice.jacobian(frame.to_lattice(mesh.positions[p]));
+    for (int a = 0; a < 3; ++a) j[a] /= size[a];
+    const glm::mat3 cofactor(glm::cross(j[1], j[2]), glm::cross(j[2], j[0]), glm::cross(j[0], j[1]));
+    const glm::vec3 n = cofactor * normals[r];
+    const float length = glm::length(n);
+    if (length > 0.0f && std::isfinite(length)) normals[r] = n / length;
+  }
+  return normals;
+}
+
+int bake_ffd(const Args& args) {
+  const std::string out = checked_out(args);
+  if (args.positionals().size() != 1) throw UsageError("an FFD bake takes exactly one MESH.obj");
+  for (const char* flag : {"--builtin", "--target", "--release-at", "--dt"})
+    if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a reach bake, not an FFD (--lattice)");
+  const Timing timing = parse_timing(args, 1.0);
+  const std::string mesh_path = args.positionals()[0];
+  const std::string lattice_path = args.required("--lattice");
+
+  deform::Warnings warnings;
+  deform::Model model;
+  model.mesh = deform::read_obj(mesh_path, &warnings);
+  for (const std::string& w : warnings.messages) note(w);
+  model.name = std::filesystem::path(mesh_path).stem().string();
+  const deform::Mesh& mesh = model.mesh;
+  const deform::LatticeDocument doc = deform::read_lattice_json(lattice_path, mesh.point_count());
+  const deform::BezierLattice& displaced = doc.lattice;
+  const deform::BezierLattice rest(displaced.frame(), displaced.degree(), lattice_path);
+  const deform::LatticeBinding binding = doc.has_vertices ? deform::bind_lattice(rest, mesh.positions, doc.vertices)
+                                                          : deform::bind_lattice(rest, mesh.positions);
+  std::vector<bool> deformed(mesh.point_count(), false);
+  for (const std::uint32_t p : binding.vertices)
+    if (p != deform::LatticeBinding::no_vertex) deformed[p] = true;
+
+  deform::BakedFrames baked;
+  baked.name = "ffd";
+  baked.position_tolerance = 0.0f;  // a point outside the lattice is copied, to the bit
+  baked.normal_tolerance = 0.0f;
+  deform::BezierLattice current = rest;
+  const std::span<const glm::vec3> from = rest.control_points(), to = displaced.control_points();
+  for (std::size_t k = 0; k < timing.frames; ++k) {
+    // s = 1 on the last frame exactly: the displaced lattice itself, so that frame is `deform ffd`'s output.
+    const float s = timing.frames == 1 ? 1.0f : float(double(k) / double(timing.frames - 1));
+    const std::span<glm::vec3> points = current.control_points();
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = k + 1 == timing.frames ? to[i] : from[i] + s * (to[i] - from[i]);
+    std::vector<glm::vec3> positions = mesh.positions;
+    deform::LatticeEvaluateJob job;
+    job.binding = &binding;
+    job.control_points = current.control_points();
+    job.positions = positions;
+    if (!job.run()) throw std::runtime_error("internal error: the lattice evaluation rejected its arguments");
+    baked.times.push_back(float(timing.time(k)));
+    baked.positions.push_back(std::move(positions));
+    baked.normals.push_back(ffd_normals(mesh, current, deformed));
+  }
+  const std::string folder = std::filesystem::path(mesh_path).parent_path().lexically_normal().string();
+  return write(out, model, baked, timing, folder.empty() ? "." : folder);
+}
+
+int run(const std::vector<std::string>& argv) {
+  const Args args(argv, {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out"}, {"--builtin"});
+  if (args.help()) {
+    std::cout << usage;
+    return exit_ok;
+  }
+  return args.has("--lattice") ? bake_ffd(args) : bake_reach(args);
+}
+
+}  // namespace
+
+const Command bake_command = {"bake", "write a simulation or an FFD as a glTF morph-target animation", usage, run};
+
+}  // namespace cli
