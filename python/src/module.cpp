@@ -14,6 +14,7 @@
 #include "deform/io/sk.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/offline/weights.hpp"
+#include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
 #ifdef DEFORM_PYTHON_IMPORT
 #include "deform/import/import.hpp"
@@ -325,15 +326,13 @@ PYBIND11_MODULE(deform, m) {
         out["model"] = std::make_shared<deform::Model>(std::move(imported.model));
         out["rigged"] = imported.rigged;
         out["warnings"] = imported.warnings;
-        std::vector<std::string> clips;
-        for (const auto& clip : imported.clips) clips.push_back(clip.name);
-        out["clips"] = clips;
+        out["clips"] = std::move(imported.clips);
         return out;
       },
       py::arg("path"),
       "Imports glTF/FBX/Collada/X/... through Assimp in a separate process (deform::import_model_isolated; the "
       "worker executable deform-import-worker is found through $DEFORM_IMPORT_WORKER, the build or the install). "
-      "Returns a dict: model, rigged, warnings, clips (names).");
+      "Returns a dict: model, rigged, warnings, clips (a list of Animation).");
   m.def(
       "export_native",
       [](const deform::Model& md, const std::string& folder) {
@@ -352,6 +351,25 @@ PYBIND11_MODULE(deform, m) {
 #else
   m.attr("has_import") = false;
 #endif
+
+  py::class_<deform::Animation>(m, "Animation", "An imported clip: per-bone tracks (deform::Animation).")
+      .def_readonly("name", &deform::Animation::name)
+      .def_readonly("duration", &deform::Animation::duration, "seconds")
+      .def_readwrite("loop", &deform::Animation::loop, "sampling wraps time when True, clamps it otherwise")
+      .def(
+          "sample",
+          [](const deform::Animation& clip, float time, deform::Pose& pose) {
+            deform::SamplingJob job;
+            job.animation = &clip;
+            job.time = time;
+            job.rotations = pose.rotations;
+            job.translations = pose.translations;
+            check(job.validate());
+            check(job.run());
+          },
+          py::arg("time"), py::arg("pose"),
+          "Writes the clip at `time` seconds into `pose` (bones without a track keep their values). Start from the "
+          "skeleton's bind_pose().");
 
   bind_jobs(m);
   bind_lattices(m);

@@ -62,6 +62,18 @@ def test_import_and_export_native(tmp_path):
     imported = deform.import_model(str(WUSON))
     model = imported["model"]
     assert imported["rigged"] and model.point_count > 100 and len(model.skeleton) > 1
+    assert [clip.name for clip in imported["clips"]] == ["Wuson_Run", "Wuson_Walk", "Wuson_Bind"]
+    run = imported["clips"][0]
+    assert run.duration > 0
+    poses = []
+    for time in (0.0, run.duration / 2):
+        pose = model.skeleton.bind_pose()
+        run.sample(time, pose)
+        poses.append(pose.rotations.copy())
+    assert not np.allclose(poses[0], poses[1], atol=1e-3)  # the clip moves
+    _, palette = deform.forward_kinematics(model.skeleton, pose)
+    posed = deform.skin(model.positions, model.bone_indices, model.bone_weights, palette)
+    assert np.isfinite(posed).all() and np.abs(posed - model.positions).max() > 0
     files = deform.export_native(model, str(tmp_path))
     again = deform.load_model(files["obj"], files["sk"], files["skw"])
     assert again.point_count == model.point_count
