@@ -12,6 +12,10 @@ Two kinds of fenced blocks are run; the others (```text synopses, ```json, ```cp
 Commands run with bash in WORK_DIR, a scratch folder holding `samples/` (a copy: commands may write there),
 `tests/` (a link to the sources), `build/tools/deform` and `build/tools/make_builtin` (links to the binaries), with
 `deform` on PATH. A few commands are not run here, each for a stated reason (see NOT_RUN); every other one is.
+Python (docs/python.md): when the environment names the built module's folder (DEFORM_PYTHON_MODULE_DIR) and the
+interpreter the build found (DEFORM_PYTHON), WORK_DIR also holds `python/` (a link to the sources) and
+`build/python` (a link to that folder), and `python3` on PATH is that interpreter; without them, commands that use
+`build/python` are not run (the module is not built in that configuration, e.g. under the sanitizers).
 Exit status: 0 when every command behaved as shown, 1 otherwise (each failure printed).
 """
 import os
@@ -27,6 +31,7 @@ NOT_RUN = {
     "./scripts/demo": "the viewer under Xvfb is the viewer_smoke_xvfb test, the CLI half the commands below",
     "./scripts/fuzz": "the suite runs every fuzzer for a fixed number of inputs (the fuzz_* tests)",
     "cmake ": "the build itself: scripts/test builds, consumer_links_installed_library installs and links",
+    "python3 -m pip install": "it builds the whole library through CMake (minutes); docs/python.md says how it was checked",
 }
 
 
@@ -74,6 +79,8 @@ def matches(expected, actual):
 
 
 def skipped(command):
+    if "build/python" in command and not os.environ.get("DEFORM_PYTHON_MODULE_DIR"):
+        return "the Python module is not built in this configuration"
     for prefix, reason in NOT_RUN.items():
         if command.lstrip().startswith(prefix):
             return reason
@@ -101,7 +108,12 @@ def main():
     os.symlink(deform, work / "build" / "tools" / "deform")
     if os.path.exists(make_builtin):
         os.symlink(make_builtin, work / "build" / "tools" / "make_builtin")
-    env = dict(os.environ, PATH=f"{work / 'bin'}:{os.environ['PATH']}")
+    module_dir, python = os.environ.get("DEFORM_PYTHON_MODULE_DIR"), os.environ.get("DEFORM_PYTHON")
+    if module_dir and python:
+        os.symlink(pathlib.Path(source) / "python", work / "python")
+        os.symlink(module_dir, work / "build" / "python")
+        os.symlink(python, work / "bin" / "python3")
+    env = dict(os.environ, PATH=f"{work / 'bin'}:{os.environ['PATH']}", MPLBACKEND="Agg")
 
     failures, ran, not_run = [], 0, []
 

@@ -1,0 +1,147 @@
+// deform::Character: reach, release, update, and views of what it shows.
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "common.hpp"
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+
+namespace deform_python {
+
+std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
+std::string method_name(deform::SkinningMethod method);
+deform::SkinningMethod parse_method(const std::string& name);
+
+void bind_character(py::module_& m) {
+  py::class_<deform::ReachResult>(m, "ReachResult")
+      .def_property_readonly("ok", [](const deform::ReachResult& r) { return r.status.ok(); })
+      .def_readonly("residual", &deform::ReachResult::residual, "|target - effector| after IK alone (model units)")
+      .def_readonly("stretch", &deform::ReachResult::stretch, "total stretch asked of the lattices (model units)")
+      .def_readonly("distance", &deform::ReachResult::distance, "|target - effector| once the stretch has settled")
+      .def_readonly("iterations", &deform::ReachResult::iterations)
+      .def("__repr__", [](const deform::ReachResult& r) {
+        return "ReachResult(residual=" + std::to_string(r.residual) + ", stretch=" + std::to_string(r.stretch) +
+               ", distance=" + std::to_string(r.distance) + ")";
+      });
+
+  py::class_<deform::Character>(
+      m, "Character",
+      "A rigged model with its skin and elastic lattices: reach(), release(), update(dt), positions.\n"
+      "positions and normals() are read-only views of the character's storage (no copy): they change with each "
+      "update() and stay valid while the character lives (the view keeps it alive).")
+      .def(py::init([](const deform::Model& model, const deform::Rig* rig) {
+             return rig ? std::make_unique<deform::Character>(model, *rig) : std::make_unique<deform::Character>(model);
+           }),
+           py::arg("model"), py::arg("rig") = py::none(),
+           "Binds `rig`'s lattices to `model` (both copied into the character); without a rig, skinning and IK only.")
+      .def_static(
+          "builtin", []() { return std::make_unique<deform::Character>(deform::make_builtin_character()); },
+          "The built-in character with its rig (three elastic lattices on the left arm).")
+      .def_property_readonly(
+          "model",
+          [](py::object self) {
+            return py::cast(std::make_shared<deform::Model>(self.cast<deform::Character&>().model()));
+          },
+          "A copy of the character's model (bind pose).")
+      .def_property_readonly(
+          "skeleton",
+          [](py::object self) {
+            return py::cast(&self.cast<deform::Character&>().skeleton(), py::return_value_policy::reference_internal,
+                            self);
+          })
+      .def_property_readonly("point_count", [](const deform::Character& c) { return c.positions().size(); })
+      .def_property_readonly("lattice_count", [](const deform::Character& c) { return c.deformers().lattice_count(); })
+      .def_property(
+          "pose", [](const deform::Character& c) { return c.pose(); },
+          [](deform::Character& c, const deform::Pose& p) { check(c.set_pose(p)); },
+          "The held pose (get: a copy; set: clamped into the DOF limits, raises deform.Error when refused).")
+      .def_property(
+          "skinning", [](const deform::Character& c) { return method_name(c.skinning); },
+          [](deform::Character& c, const std::string& name) { c.skinning = parse_method(name); }, "'lbs' or 'dqs'.")
+      .def_property(
+          "reach_solver",
+          [](const deform::Character& c) {
+            return std::string(c.reach_solver == deform::Character::ReachSolver::ccd ? "ccd" : "two_bone");
+          },
+          [](deform::Character& c, const std::string& name) {
+            if (name == "ccd") c.reach_solver = deform::Character::ReachSolver::ccd;
+            else if (name == "two_bone") c.reach_solver = deform::Character::ReachSolver::two_bone;
+            else throw deform::Error::invalid_argument("reach_solver", "expected 'ccd' or 'two_bone'");
+          },
+          "'ccd' (the rig's chain) or 'two_bone' (the limb ending at the effector).")
+      .def_property(
+          "reach_limits",
+          [](const deform::Character& c) {
+            return std::string(c.reach_limits == deform::Character::JointLimits::euler ? "euler" : "swing_twist");
+          },
+          [](deform::Character& c, const std::string& name) {
+            if (name == "euler") c.reach_limits = deform::Character::JointLimits::euler;
+            else if (name == "swing_twist") c.reach_limits = deform::Character::JointLimits::swing_twist;
+            else throw deform::Error::invalid_argument("reach_limits", "expected 'euler' or 'swing_twist'");
+          },
+          "How reach() limits the joints: 'euler' (the skeleton's DOF limits) or 'swing_twist' (derived from them).")
+      .def_property(
+          "reach_pole",
+          [](const deform::Character& c) -> py::object {
+            if (!c.use_reach_pole) return py::none();
+            return py::make_tuple(c.reach_pole.x, c.reach_pole.y, c.reach_pole.z);
+          },
+          [](deform::Character& c, std::optional<FloatArray> pole) {
+            c.use_reach_pole = pole.has_value();
+            if (pole) c.reach_pole = to_vec3(*pole, "reach_pole");
+          },
+          "A model-space point the chain's middle bends toward (an elbow hint), or None.")
+      .def_readwrite("reach_soften", &deform::Character::reach_soften, "two_bone: softening in [0, 1].")
+      .def_property(
+          "ik_max_iterations", [](const deform::Character& c) { return c.ik.max_iterations; },
+          [](deform::Character& c, int n) {
+            if (n < 1) throw deform::Error::invalid_argument("ik_max_iterations", "must be >= 1");
+            c.ik.max_iterations = n;
+          })
+      .def_readwrite("lattice_fields", &deform::Character::lattice_fields)
+      .def(
+          "set_max_stretch", [](deform::Character& c, float s) { check(c.set_max_stretch(s)); }, py::arg("max_stretch"),
+          "The largest stretch reach() asks of a lattice, in multiples of its length, [0, 1000].")
+      .def(
+          "reach",
+          [](deform::Character& c, const py::object& effector, const FloatArray& target) {
+            const deform::ReachResult r = c.reach(resolve_bone(c.skeleton(), effector), to_vec3(target, "target"));
+            check(r.status);
+            return r;
+          },
+          py::arg("effector"), py::arg("target"),
+          "Reaches for `target` (model space) with the head of `effector` (id or name): IK, then a stretch target "
+          "for the chain's lattices that update() springs toward. Raises deform.Error when refused.")
+      .def("release", &deform::Character::release, "Lets go: the stretch springs back to zero.")
+      .def(
+          "update", [](deform::Character& c, float dt) { check(c.update(dt)); }, py::arg("dt"),
+          "Advances the springs dt seconds and deforms: FK, skinning, lattices.")
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return vec3_view(self.cast<deform::Character&>().positions(), self, false); },
+          "(N, 3) read-only view of the deformed positions (no copy; changes with each update()).")
+      .def(
+          "normals", [](py::object self) { return vec3_view(self.cast<deform::Character&>().normals(), self, false); },
+          "(V, 3) read-only view of the per-render-vertex normals, recomputed when stale (no copy).")
+      .def(
+          "control_points",
+          [](py::object self, std::size_t lattice) {
+            auto& c = self.cast<deform::Character&>();
+            if (lattice >= c.deformers().lattice_count())
+              throw deform::Error::invalid_argument("lattice " + std::to_string(lattice), "lattice out of range");
+            return vec3_view(c.control_points(lattice), self, false);
+          },
+          py::arg("lattice"), "(P, 3) read-only view of a lattice's world control points.")
+      .def(
+          "bone_position",
+          [](const deform::Character& c, const py::object& bone) {
+            const glm::vec3 p = c.bone_position(resolve_bone(c.skeleton(), bone));
+            return py::make_tuple(p.x, p.y, p.z);
+          },
+          py::arg("bone"), "World head of a bone, lattices included.")
+      .def_property_readonly("stretch", &deform::Character::stretch, "The stretch the lattices have now (model units).")
+      .def_property_readonly("effector", &deform::Character::effector);
+}
+
+}  // namespace deform_python

@@ -1,0 +1,89 @@
+"""The Character: reach, stretch, release, and positions as views of its storage."""
+import gc
+
+import numpy as np
+import pytest
+
+import deform
+
+TARGET = np.array([1.6, 1.5, 0.3], np.float32)
+
+
+@pytest.fixture
+def hero():
+    return deform.Character.builtin()
+
+
+def settle(character, seconds, dt=1 / 60):
+    for _ in range(int(round(seconds / dt))):
+        character.update(dt)
+
+
+def test_reach_stretches_to_the_target_and_release_springs_back(hero):
+    hero.update(0.0)
+    rest = hero.positions.copy()
+    result = hero.reach("hand_l", TARGET)
+    assert result.residual > 0.5 and result.stretch == pytest.approx(result.residual, rel=0.05)
+    settle(hero, 3.0)
+    hand = np.array(hero.bone_position("hand_l"))
+    assert np.linalg.norm(hand - TARGET) <= 0.01 * result.residual + 1e-3
+    assert hero.stretch == pytest.approx(result.stretch, rel=0.02)
+    hero.release()
+    settle(hero, 4.0)
+    assert abs(hero.stretch) < 0.01 * result.stretch
+    assert np.abs(hero.positions - rest).max() > 0.05  # the reached pose stays
+
+
+def test_positions_are_a_read_only_view_that_keeps_the_character(hero):
+    hero.update(0.0)
+    view = hero.positions
+    assert view.shape == (hero.point_count, 3) and view.dtype == np.float32
+    assert not view.flags.writeable
+    assert np.shares_memory(view, hero.positions)
+    before = view.copy()
+    hero.reach("hand_l", TARGET)
+    settle(hero, 0.5)
+    assert not np.array_equal(view, before)  # the same storage, updated
+    expected = view.copy()
+    del hero
+    gc.collect()
+    np.testing.assert_array_equal(view, expected)
+
+
+def test_normals_and_control_points(hero):
+    hero.update(0.0)
+    normals = hero.normals()
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-4)
+    assert hero.lattice_count == 3
+    assert hero.control_points(0).shape == (64, 3)
+    with pytest.raises(deform.Error):
+        hero.control_points(3)
+
+
+def test_settings_and_pose(hero):
+    hero.skinning = "dqs"
+    hero.reach_solver = "two_bone"
+    hero.reach_pole = [0.5, 1.4, -1.0]
+    assert hero.reach_pole == pytest.approx((0.5, 1.4, -1.0))
+    result = hero.reach("hand_l", [0.9, 1.2, 0.2])
+    settle(hero, 2.0)
+    distance = np.linalg.norm(np.array(hero.bone_position("hand_l")) - [0.9, 1.2, 0.2])
+    assert distance == pytest.approx(result.distance, abs=0.01)
+    with pytest.raises(deform.Error):
+        hero.skinning = "magic"
+    pose = hero.pose
+    hero.skeleton.set_euler(pose, "head", [0, 40, 0])
+    hero.pose = pose
+    np.testing.assert_allclose(hero.pose.rotations[4], pose.rotations[4], atol=1e-6)
+    with pytest.raises(deform.Error):
+        hero.reach("hips", TARGET)
+
+
+def test_a_character_from_loaded_files(native_paths):
+    model = deform.load_model(*native_paths)
+    hero = deform.Character(model, deform.builtin_rig(model))
+    hero.reach("hand_l", TARGET)
+    settle(hero, 3.0)
+    assert np.linalg.norm(np.array(hero.bone_position("hand_l")) - TARGET) < 0.02
+    plain = deform.Character(model)
+    assert plain.lattice_count == 0

@@ -1,0 +1,89 @@
+"""Loading native files, the built-in character, imports, automatic weights and export."""
+import pathlib
+
+import numpy as np
+import pytest
+
+import deform
+
+WUSON = pathlib.Path("/usr/share/assimp/models/X/Testwuson.X")  # Debian's assimp-testmodels
+
+
+def test_native_files_hold_the_builtin_character(native_paths, builtin_model):
+    model = deform.load_model(*native_paths)
+    assert model.point_count == builtin_model.point_count == 2554
+    assert model.skeleton.names == builtin_model.skeleton.names
+    np.testing.assert_allclose(model.positions, builtin_model.positions, atol=1e-6)
+    np.testing.assert_array_equal(model.bone_indices, builtin_model.bone_indices)
+
+
+def test_save_and_reload(tmp_path, model):
+    paths = [str(tmp_path / f"m.{ext}") for ext in ("obj", "sk", "skw")]
+    model.save(*paths)
+    again = deform.load_model(*paths)
+    np.testing.assert_array_equal(again.positions, model.positions)
+    np.testing.assert_array_equal(again.triangles, model.triangles)
+    np.testing.assert_array_equal(again.skeleton.parents, model.skeleton.parents)
+    np.testing.assert_allclose(again.bone_weights, model.bone_weights, atol=1e-6)
+
+
+def test_save_obj_writes_deformed_positions(tmp_path, native_paths):
+    hero = deform.Character.builtin()
+    hero.reach("hand_l", [1.6, 1.5, 0.3])
+    for _ in range(30):
+        hero.update(1 / 60)
+    obj = str(tmp_path / "posed.obj")
+    model = hero.model
+    deform.save_obj(obj, model, hero.positions)
+    again = deform.load_model(obj, native_paths[1], native_paths[2])
+    np.testing.assert_array_equal(again.positions, hero.positions)
+
+
+def test_automatic_weights_are_the_builtin_ones(builtin_model):
+    bones, weights = deform.compute_automatic_weights(builtin_model, builtin_model.skeleton)
+    assert bones.shape == weights.shape == (builtin_model.point_count, 4)
+    np.testing.assert_allclose(weights.sum(axis=1), 1, atol=1e-5)
+    np.testing.assert_array_equal(bones, builtin_model.bone_indices)
+    np.testing.assert_allclose(weights, builtin_model.bone_weights, atol=1e-6)
+    only_points = deform.compute_automatic_weights(builtin_model.positions, builtin_model.skeleton, max_influences=2)
+    assert np.all(only_points[1][:, 2:] == 0)
+
+
+def test_set_weights_checks_the_size(model):
+    bones, weights = deform.compute_automatic_weights(model, model.skeleton, falloff_power=8)
+    model.set_weights(bones, weights)
+    np.testing.assert_array_equal(model.bone_weights, weights)
+    with pytest.raises(deform.Error):
+        model.set_weights(bones[:10], weights[:10])
+
+
+@pytest.mark.skipif(not deform.has_import or not WUSON.exists(), reason="needs deform::import and assimp-testmodels")
+def test_import_and_export_native(tmp_path):
+    imported = deform.import_model(str(WUSON))
+    model = imported["model"]
+    assert imported["rigged"] and model.point_count > 100 and len(model.skeleton) > 1
+    assert [clip.name for clip in imported["clips"]] == ["Wuson_Run", "Wuson_Walk", "Wuson_Bind"]
+    run = imported["clips"][0]
+    assert run.duration > 0
+    poses = []
+    for time in (0.0, run.duration / 2):
+        pose = model.skeleton.bind_pose()
+        run.sample(time, pose)
+        poses.append(pose.rotations.copy())
+    assert not np.allclose(poses[0], poses[1], atol=1e-3)  # the clip moves
+    _, palette = deform.forward_kinematics(model.skeleton, pose)
+    posed = deform.skin(model.positions, model.bone_indices, model.bone_weights, palette)
+    assert np.isfinite(posed).all() and np.abs(posed - model.positions).max() > 0
+    files = deform.export_native(model, str(tmp_path))
+    again = deform.load_model(files["obj"], files["sk"], files["skw"])
+    assert again.point_count == model.point_count
+    np.testing.assert_allclose(again.positions, model.positions, atol=1e-5)
+
+
+@pytest.mark.skipif(not deform.has_import, reason="needs deform::import")
+def test_import_error_names_the_file(tmp_path):
+    bad = tmp_path / "broken.gltf"
+    bad.write_text("{ not json")
+    with pytest.raises(deform.Error) as info:
+        deform.import_model(str(bad))
+    assert str(bad) in str(info.value)
