@@ -10,6 +10,8 @@ deform_packages=(
 
 deform_install_deps() {
   local missing=()
+  # Node.js and npm run the peers of tests/node; a machine with its own Node.js (NodeSource's carries npm) keeps it.
+  command -v npm >/dev/null || missing+=(nodejs npm)
   for p in "${deform_packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
