@@ -6,6 +6,7 @@
 //
 // --all-bones lets every bone of the imported skeleton take weight; by default only the bones the artist weighted
 // deform (the rig's deform bones, as a rigger flags them), for both methods.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -29,11 +30,48 @@ std::string file_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
+// The 15 points that move farthest from the artist's skinning in any sample, with both weights (stderr).
+void print_worst(const deform::Model& model, const std::vector<deform::Animation>& clips,
+                 const deform::SkinWeights& automatic, int samples) {
+  std::vector<float> worst(model.mesh.point_count(), 0.0f);
+  std::vector<glm::mat4> world(model.skeleton.bone_count()), palette(model.skeleton.bone_count());
+  for (const deform::Animation& clip : clips)
+    for (int s = 0; s < samples; ++s) {
+      deform::Pose pose = model.skeleton.bind_pose();
+      deform::SamplingJob sampling{&clip, clip.duration * (float(s) + 0.5f) / float(samples), pose.rotations,
+                                   pose.translations};
+      (void)sampling.run();
+      deform::LocalToWorldJob fk{&model.skeleton, pose.rotations, pose.translations, world, palette};
+      (void)fk.run();
+      for (std::size_t i = 0; i < worst.size(); ++i) {
+        const glm::vec3 p = model.mesh.positions[i];
+        worst[i] = std::max(worst[i], glm::length(weights_study::skin_point(palette, model.weights, i, p) -
+                                                  weights_study::skin_point(palette, automatic, i, p)));
+      }
+    }
+  std::vector<std::size_t> order(worst.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return worst[a] > worst[b]; });
+  auto text = [&](const deform::SkinWeights& w, std::size_t i) {
+    std::string out;
+    for (int k = 0; k < 4; ++k)
+      if (w.weights[i][k] > 0.0f)
+        out += model.skeleton.key(w.bones[i][k]) + ":" + std::to_string(w.weights[i][k]).substr(0, 4) + " ";
+    return out;
+  };
+  for (std::size_t k = 0; k < std::min<std::size_t>(15, order.size()); ++k) {
+    const std::size_t i = order[k];
+    std::fprintf(stderr, "point %zu moved %.4g  artist %s| auto %s\n", i, double(worst[i]),
+                 text(model.weights, i).c_str(), text(automatic, i).c_str());
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int samples = 8;
   bool all_bones = false;
+  bool detail = false;
   deform::HeatWeightsOptions heat_options;
   std::vector<std::string> paths;
   for (int i = 1; i < argc; ++i) {
@@ -42,6 +80,7 @@ int main(int argc, char** argv) {
     else if (a == "--all-bones") all_bones = true;
     else if (a == "--heat" && i + 1 < argc) heat_options.heat = std::strtof(argv[++i], nullptr);
     else if (a == "--no-visibility") heat_options.visibility = false;
+    else if (a == "--detail") detail = true;
     else paths.push_back(a);
   }
   if (paths.empty() || samples < 1) {
@@ -83,6 +122,7 @@ int main(int argc, char** argv) {
         for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: heat: %s\n", file_name(path).c_str(), w.c_str());
         runs.push_back({"heat", std::move(r.weights), took, r.warnings.size()});
       }
+      if (detail) print_worst(model, imported.clips, runs.back().weights, samples);
       for (const Run& run : runs) {
         const weights_study::Figures f = weights_study::compare(model, imported.clips, run.weights, samples);
         std::printf("| %s | %zu | %zu (%zu) | %zu (%zu) | %s | %.2f%% | %.2f%% | %.2f%% | %.1f%% | %.3f s |\n",

@@ -247,7 +247,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   }
 
   // --- heat: the nearest visible bone of every surface vertex ---
-  const std::vector<BoneShape> shapes = bone_shapes(skeleton, options.leaf_length);
+  std::vector<BoneShape> shapes = bone_shapes(skeleton, options.leaf_length);
   std::vector<std::uint32_t> candidates;
   for (std::size_t b = 0; b < bone_count; ++b)
     if (deforms(b)) candidates.push_back(static_cast<std::uint32_t>(b));
@@ -293,7 +293,17 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   };
   {
     TriangleBvh whole;
-    if (options.visibility) build_bvh(whole, UINT32_MAX);
+    build_bvh(whole, UINT32_MAX);
+    // A leaf ends where it leaves the mesh: its made-up extension must not reach into a neighbouring part (a
+    // fingertip bone poking out of the hand into the hip it rests on).
+    for (std::size_t b = 0; b < bone_count; ++b) {
+      if (!skeleton.bones()[b].children.empty() || whole.triangle_count() == 0) continue;
+      auto& [head, tail] = shapes[b].segments.front();
+      const float length = glm::length(tail - head);
+      if (!(length > 0.0f)) continue;
+      const RayHit hit = whole.intersect({head, (tail - head) / length}, length);
+      if (hit.hit) tail = head + (tail - head) * (hit.distance / length);
+    }
     for (std::uint32_t v = 0; v < n; ++v) heat_vertex(v, options.visibility ? &whole : nullptr);
   }
   std::vector<std::uint8_t> island_heated(island_count, 0);
