@@ -54,7 +54,7 @@ void weights_heat(benchmark::State& state) {
     deform::WeightsResult r = deform::compute_heat_weights(m, character().skeleton);
     benchmark::DoNotOptimize(r);
   }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * m.point_count()));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(m.point_count()));
   state.counters["points"] = static_cast<double>(m.point_count());
 }
 
@@ -64,7 +64,7 @@ void weights_distance(benchmark::State& state) {
     deform::SkinWeights w = deform::compute_automatic_weights(m, character().skeleton);
     benchmark::DoNotOptimize(w);
   }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * m.point_count()));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(m.point_count()));
   state.counters["points"] = static_cast<double>(m.point_count());
 }
 
