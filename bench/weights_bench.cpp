@@ -1,5 +1,5 @@
-// Bind-time benchmarks of automatic weights (docs/performance.md, docs/weights.md): weights/heat and
-// weights/distance on the built-in character (2,554 points, 29 bones) and on the same character with every triangle
+// Bind-time benchmarks of automatic weights (docs/performance.md, docs/weights.md): weights/heat, weights/voxel
+// (resolution 128) and weights/distance on the built-in character (2,554 points, 29 bones) and on the same character with every triangle
 // split in four twice (40k points: the "35,000-point mesh" of the targets, rounded up). Items = points.
 #include <benchmark/benchmark.h>
 
@@ -11,6 +11,7 @@
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/heat_weights.hpp"
 #include "deform/offline/picking.hpp"
+#include "deform/offline/voxel_weights.hpp"
 #include "deform/offline/weights.hpp"
 namespace {
 
@@ -58,6 +59,16 @@ void weights_heat(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(m.point_count());
 }
 
+void weights_voxel(benchmark::State& state) {
+  const deform::Mesh& m = mesh(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    deform::WeightsResult r = deform::compute_voxel_weights(m, character().skeleton);
+    benchmark::DoNotOptimize(r);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(m.point_count()));
+  state.counters["points"] = static_cast<double>(m.point_count());
+}
+
 void weights_distance(benchmark::State& state) {
   const deform::Mesh& m = mesh(static_cast<int>(state.range(0)));
   for (auto _ : state) {
@@ -72,5 +83,7 @@ void weights_distance(benchmark::State& state) {
 
 BENCHMARK(weights_heat)->Name("weights/heat_builtin")->Arg(0)->Unit(benchmark::kMillisecond);
 BENCHMARK(weights_heat)->Name("weights/heat_40k")->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(weights_voxel)->Name("weights/voxel_builtin")->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(weights_voxel)->Name("weights/voxel_40k")->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK(weights_distance)->Name("weights/distance_builtin")->Arg(0)->Unit(benchmark::kMillisecond);
 BENCHMARK(weights_distance)->Name("weights/distance_40k")->Arg(2)->Unit(benchmark::kMillisecond);

@@ -1,4 +1,4 @@
-# `deform weights` end to end: heat weights by default, the distance method on the built-in character and its files
+# `deform weights` end to end: heat weights by default, voxel weights, the distance method on the built-in character and its files
 # gives the same .skw as samples/data holds, the options act, warnings reach stderr, bad usage and bad input exit 2
 # without touching the output.
 # Run as: cmake -DDEFORM=<deform executable> -DSAMPLES=<samples/data> -DDATA=<tests/data> -DWORK=<scratch folder>
@@ -94,9 +94,22 @@ if(sharp STREQUAL heat)
   fail("--heat 4 changed nothing")
 endif()
 
+# --- geodesic voxel weights: their own, and --resolution acts ---
+weights(--builtin --method voxel --resolution 48 --out "${WORK}/voxel.skw")
+expect_equal("exit status, --method voxel" "${rc}" 0)
+expect_json(voxel method)
+expect_json(2554 vertices)
+expect_json(0 warnings)
+file(SHA256 "${WORK}/voxel.skw" voxel)
+weights(--builtin --method voxel --resolution 40 --out "${WORK}/voxel40.skw")
+file(SHA256 "${WORK}/voxel40.skw" voxel40)
+if(voxel STREQUAL heat OR voxel STREQUAL built OR voxel STREQUAL voxel40)
+  fail("voxel weights equal another method's, or --resolution changed nothing")
+endif()
+
 # --- warnings on stderr: one triangle near the arm skeleton's root leaves the other bones without a vertex ---
 file(WRITE "${WORK}/tri.obj" "v -0.1 1 0\nv 0.1 1 0\nv 0 1.1 0\nf 1 2 3\n")
-foreach(method heat distance)
+foreach(method heat voxel distance)
   weights("${WORK}/tri.obj" --skeleton "${DATA}/skeleton/arm.sk" --method ${method} --out "${WORK}/tri.skw")
   expect_equal("exit status, one triangle (${method})" "${rc}" 0)
   expect_json(4 warnings)
@@ -119,7 +132,11 @@ expect_invalid("--max-influences" --builtin --max-influences 5 --out "${WORK}/ke
 expect_invalid("--falloff" --builtin --method distance --falloff 0 --out "${WORK}/keep.skw")
 expect_invalid("--falloff" --builtin --method distance --falloff abc --out "${WORK}/keep.skw")
 expect_invalid("--smoothing" --builtin --method distance --smoothing -1 --out "${WORK}/keep.skw")
-expect_invalid("--method: 'voxel' is not heat or distance" --builtin --method voxel --out "${WORK}/keep.skw")
+expect_invalid("--method: 'bones' is not heat, voxel or distance" --builtin --method bones --out "${WORK}/keep.skw")
+expect_invalid("--resolution does not apply to --method heat" --builtin --resolution 64 --out "${WORK}/keep.skw")
+expect_invalid("--behind-penalty does not apply to --method voxel" --builtin --method voxel --behind-penalty 2
+               --out "${WORK}/keep.skw")
+expect_invalid("--resolution" --builtin --method voxel --resolution 4 --out "${WORK}/keep.skw")
 expect_invalid("--falloff does not apply to --method heat" --builtin --falloff 2 --out "${WORK}/keep.skw")
 expect_invalid("--smoothing does not apply to --method heat" --builtin --smoothing 2 --out "${WORK}/keep.skw")
 expect_invalid("--heat does not apply to --method distance" --builtin --method distance --heat 2

@@ -6,6 +6,7 @@
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/offline/heat_weights.hpp"
+#include "deform/offline/voxel_weights.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -15,14 +16,16 @@ namespace cli {
 namespace {
 
 constexpr const char* usage =
-    "usage: deform weights MESH.obj --skeleton S.sk --out W.skw [--method heat|distance] [OPTIONS]\n"
-    "       deform weights --builtin --out W.skw [--method heat|distance] [OPTIONS]\n"
+    "usage: deform weights MESH.obj --skeleton S.sk --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
+    "       deform weights --builtin --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
     "\n"
     "Computes automatic skin weights for the mesh's points (one .skw line per OBJ `v`) from the skeleton's bind pose\n"
     "(docs/weights.md). --builtin uses the built-in character's mesh and skeleton.\n"
     "  heat (default)  bone heat diffusion over the surface (Baran & Popovic 2007): each point is heated by its\n"
     "                  nearest bone that it sees through no triangle, and the heat of each bone spreads over the\n"
     "                  surface; a hand resting against a thigh keeps its arm's weights.\n"
+    "  voxel           geodesic voxel binding (after Dionne & de Lasa 2013): distances to the bones measured\n"
+    "                  inside the voxelised volume, then falloff and smoothing as for distance.\n"
     "  distance        distance to each bone segment, only the nearest bone, its parent and its children competing,\n"
     "                  inverse-distance falloff, then one-ring smoothing (docs/builtin-character.md).\n"
     "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"max_influences\", \"warnings\",\n"
@@ -33,9 +36,12 @@ constexpr const char* usage =
     "  --leaf-length L      a leaf bone's length as a multiple of its distance to its parent, >= 0 (default 1)\n"
     "heat only:\n"
     "  --heat C             heat constant of H = C / d^2, > 0 (default 1; higher = sharper joints)\n"
-    "distance only:\n"
+    "voxel only:\n"
+    "  --resolution N       voxels along the longest side of the mesh's box, 8 to 1024 (default 128)\n"
+    "distance and voxel:\n"
     "  --falloff P          inverse-distance power, > 0 (default 4; higher = sharper joints)\n"
     "  --smoothing N        one-ring smoothing passes, 0 to 100 (default 2)\n"
+    "distance only:\n"
     "  --behind-penalty K   weight of the distance behind a bone's head, >= 1 (default 2)\n";
 
 // A numeric option's value, `fallback` when absent; UsageError unless it lies in [min, 1e6] (and above `min` when
@@ -50,15 +56,18 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--falloff", "--max-influences", "--smoothing",
-                         "--behind-penalty", "--leaf-length"},
+  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--resolution", "--falloff", "--max-influences",
+                         "--smoothing", "--behind-penalty", "--leaf-length"},
                   {"--builtin"});
   const std::string out = args.required("--out");
   const std::string method = args.value("--method").value_or("heat");
-  if (method != "heat" && method != "distance")
-    throw UsageError("--method: '" + method + "' is not heat or distance");
-  for (const char* flag : method == "heat" ? std::vector<const char*>{"--falloff", "--smoothing", "--behind-penalty"}
-                                           : std::vector<const char*>{"--heat"})
+  if (method != "heat" && method != "voxel" && method != "distance")
+    throw UsageError("--method: '" + method + "' is not heat, voxel or distance");
+  const std::vector<const char*> not_for =
+      method == "heat"    ? std::vector<const char*>{"--resolution", "--falloff", "--smoothing", "--behind-penalty"}
+      : method == "voxel" ? std::vector<const char*>{"--heat", "--behind-penalty"}
+                          : std::vector<const char*>{"--heat", "--resolution"};
+  for (const char* flag : not_for)
     if (args.value(flag)) throw UsageError(std::string(flag) + " does not apply to --method " + method);
   deform::AutoWeightsOptions options;
   options.falloff_power = number_option(args, "--falloff", options.falloff_power, 0.0f, true);
@@ -72,6 +81,13 @@ int run(const std::vector<std::string>& argv) {
   heat_options.heat = number_option(args, "--heat", heat_options.heat, 0.0f, true);
   heat_options.leaf_length = options.leaf_length;
   heat_options.max_influences = options.max_influences;
+  deform::VoxelWeightsOptions voxel_options;
+  if (auto n = args.value("--resolution"))
+    voxel_options.resolution = static_cast<int>(parse_integer(*n, "--resolution", 8, 1024));
+  voxel_options.falloff_power = options.falloff_power;
+  voxel_options.smoothing_iterations = options.smoothing_iterations;
+  voxel_options.leaf_length = options.leaf_length;
+  voxel_options.max_influences = options.max_influences;
 
   deform::Mesh mesh;
   deform::Skeleton skeleton;
@@ -96,6 +112,8 @@ int run(const std::vector<std::string>& argv) {
   deform::WeightsResult result;
   if (method == "heat") {
     result = deform::compute_heat_weights(mesh, skeleton, heat_options);
+  } else if (method == "voxel") {
+    result = deform::compute_voxel_weights(mesh, skeleton, voxel_options);
   } else {
     result.weights = deform::compute_automatic_weights(mesh, skeleton, options);
     result.warnings = deform::bones_without_vertices(result.weights, skeleton);

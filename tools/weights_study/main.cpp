@@ -15,6 +15,7 @@
 
 #include "deform/import/import.hpp"
 #include "deform/offline/heat_weights.hpp"
+#include "deform/offline/voxel_weights.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
 #include "study.hpp"
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
   int samples = 8;
   bool all_bones = false;
   bool detail = false;
+  int voxel_resolution = 128;
   deform::HeatWeightsOptions heat_options;
   std::vector<std::string> paths;
   for (int i = 1; i < argc; ++i) {
@@ -81,6 +83,7 @@ int main(int argc, char** argv) {
     else if (a == "--heat" && i + 1 < argc) heat_options.heat = std::strtof(argv[++i], nullptr);
     else if (a == "--no-visibility") heat_options.visibility = false;
     else if (a == "--detail") detail = true;
+    else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
     else paths.push_back(a);
   }
   if (paths.empty() || samples < 1) {
@@ -121,6 +124,16 @@ int main(int argc, char** argv) {
         const double took = seconds_since(start);
         for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: heat: %s\n", file_name(path).c_str(), w.c_str());
         runs.push_back({"heat", std::move(r.weights), took, r.warnings.size()});
+      }
+      {
+        deform::VoxelWeightsOptions o;
+        o.resolution = voxel_resolution;
+        o.deforming = deforming;
+        const auto start = std::chrono::steady_clock::now();
+        deform::WeightsResult r = deform::compute_voxel_weights(model.mesh, model.skeleton, o);
+        const double took = seconds_since(start);
+        for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: voxel: %s\n", file_name(path).c_str(), w.c_str());
+        runs.push_back({"voxel", std::move(r.weights), took, r.warnings.size()});
       }
       if (detail) print_worst(model, imported.clips, runs.back().weights, samples);
       for (const Run& run : runs) {

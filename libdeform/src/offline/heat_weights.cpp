@@ -16,6 +16,7 @@
 #include "deform/offline/picking.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
+#include "offline/bone_shapes.hpp"
 #include "runtime/finite.hpp"
 namespace deform {
 namespace {
@@ -39,27 +40,6 @@ void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
   }
 }
 
-// A bone as segments in the bind pose (one per child; one for a leaf; a point for a lone root).
-struct BoneShape {
-  std::vector<std::pair<glm::vec3, glm::vec3>> segments;
-};
-
-std::vector<BoneShape> bone_shapes(const Skeleton& skeleton, float leaf_length) {
-  const std::vector<BoneSegment> single = bone_segments(skeleton, leaf_length);
-  const std::span<const glm::mat4> world = skeleton.bind_world();
-  std::vector<BoneShape> shapes(skeleton.bone_count());
-  for (std::size_t b = 0; b < shapes.size(); ++b) {
-    const Bone& bone = skeleton.bones()[b];
-    if (bone.children.empty()) {
-      shapes[b].segments.emplace_back(single[b].head, single[b].tail);
-      continue;
-    }
-    for (std::int32_t c : bone.children)
-      shapes[b].segments.emplace_back(single[b].head, glm::vec3(world[static_cast<std::size_t>(c)][3]));
-  }
-  return shapes;
-}
-
 // The nearest point of segment [a, b] to p.
 glm::vec3 nearest_on_segment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
   const glm::vec3 axis = b - a;
@@ -70,7 +50,7 @@ glm::vec3 nearest_on_segment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
 }
 
 // The nearest point of a bone to p.
-glm::vec3 nearest_on_bone(glm::vec3 p, const BoneShape& shape) {
+glm::vec3 nearest_on_bone(glm::vec3 p, const detail::BoneShape& shape) {
   glm::vec3 best = shape.segments.front().first;
   float best2 = INFINITY;
   for (const auto& [a, b] : shape.segments) {
@@ -247,7 +227,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   }
 
   // --- heat: the nearest visible bone of every surface vertex ---
-  std::vector<BoneShape> shapes = bone_shapes(skeleton, options.leaf_length);
+  std::vector<detail::BoneShape> shapes = detail::bone_shapes(skeleton, options.leaf_length);
   std::vector<std::uint32_t> candidates;
   for (std::size_t b = 0; b < bone_count; ++b)
     if (deforms(b)) candidates.push_back(static_cast<std::uint32_t>(b));
@@ -294,16 +274,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   {
     TriangleBvh whole;
     build_bvh(whole, UINT32_MAX);
-    // A leaf ends where it leaves the mesh: its made-up extension must not reach into a neighbouring part (a
-    // fingertip bone poking out of the hand into the hip it rests on).
-    for (std::size_t b = 0; b < bone_count; ++b) {
-      if (!skeleton.bones()[b].children.empty() || whole.triangle_count() == 0) continue;
-      auto& [head, tail] = shapes[b].segments.front();
-      const float length = glm::length(tail - head);
-      if (!(length > 0.0f)) continue;
-      const RayHit hit = whole.intersect({head, (tail - head) / length}, length);
-      if (hit.hit) tail = head + (tail - head) * (hit.distance / length);
-    }
+    detail::clip_leaves(shapes, skeleton, whole);
     for (std::uint32_t v = 0; v < n; ++v) heat_vertex(v, options.visibility ? &whole : nullptr);
   }
   std::vector<std::uint8_t> island_heated(island_count, 0);
