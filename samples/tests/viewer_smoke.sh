@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Smoke test of the viewer under Xvfb with Mesa's software renderer: a frame before a reach and one after it,
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
-# (non-bare) screenshot; a reach with a pole and one with swing-twist limits; the frame after the reach again with the lattices on the GPU (--gpu), which must be the same
+# (non-bare) screenshot; one with a bone's weight map; a reach with a pole and one with swing-twist limits; the frame after the reach again with the lattices on the GPU (--gpu), which must be the same
 # picture (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are
 # there).  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
@@ -21,6 +21,10 @@ run --bare --screenshot "$work/near_pole.png" --frames 40 --reach 0.3,1.15,0.3 -
 run --screenshot "$work/swing_twist.png" --frames 30 --reach 0.3,1.15,0.3 --at 2 --pole 0.3,0.6,1.5 \
   --limits swing-twist >/dev/null
 test -s "$work/swing_twist.png"
+
+# The weight map of one bone (points coloured by its weights, over the full picture).
+run --screenshot "$work/weight_map.png" --frames 5 --weight-map upperarm_l >/dev/null
+test -s "$work/weight_map.png"
 
 run --bare --gpu --screenshot "$work/after_gpu.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 > "$work/gpu.json"
 if grep -q '"gpu_lattices": true' "$work/gpu.json"; then

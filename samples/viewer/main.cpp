@@ -51,12 +51,13 @@ using Clock = std::chrono::steady_clock;
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
-    "                     [--limits euler|swing-twist]\n"
+    "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
+    "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
     "--gpu: evaluate the lattices on the GPU (OpenGL 4.3). --up z: the model's up axis is +Z (default: +Y, or what\n"
     "an imported file's metadata says).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
@@ -65,7 +66,7 @@ const char* usage =
     "L the lattices, G the GPU lattices, R resets, Esc quits.\n";
 
 struct Options {
-  std::string model, skeleton, weights, rig, screenshot, clip;
+  std::string model, skeleton, weights, rig, screenshot, clip, weight_map;
   std::vector<std::string> props;
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
@@ -109,6 +110,7 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--rig") o.rig = next();
     else if (a == "--prop") o.props.push_back(next());
     else if (a == "--clip") o.clip = next();
+    else if (a == "--weight-map") o.weight_map = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
     else if (a == "--reach") o.reach = parse_vec3(next(), "--reach");
@@ -188,6 +190,10 @@ class Viewer {
     if (options.pole) pole_ = *options.pole, use_pole_ = true;
     if (options.swing_twist) reach_limits_ = deform::Character::JointLimits::swing_twist;
     rebuild_character();
+    if (!options.weight_map.empty()) {
+      weight_bone_ = base_model_.skeleton.find(options.weight_map);
+      if (weight_bone_ < 0) fail("--weight-map: no bone '" + options.weight_map + "'");
+    }
     if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
       clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
       if (clip_ < 0 || clip_ >= int(clips_.size())) fail(options.model + ": no clip '" + options.clip + "'");
@@ -351,6 +357,15 @@ class Viewer {
     ImGui::Checkbox("skeleton", &show_skeleton_);
     ImGui::SameLine();
     ImGui::Checkbox("lattices", &show_lattices_);
+    {  // the weight map: one bone's skin weight at every point, blue (low) to red (1); points without it undrawn
+      const deform::Skeleton& sk = character_->skeleton();
+      std::vector<std::string> keys{"(none)"};
+      for (std::size_t b = 0; b < sk.bone_count(); ++b) keys.push_back(sk.key(std::int32_t(b)));
+      std::vector<const char*> names;
+      for (const std::string& k : keys) names.push_back(k.c_str());
+      int selected = weight_bone_ + 1;
+      if (ImGui::Combo("weights of", &selected, names.data(), int(names.size()))) weight_bone_ = selected - 1;
+    }
     if (!clips_.empty()) {
       ImGui::Separator();
       std::vector<const char*> names{"(bind pose)"};
@@ -602,6 +617,14 @@ class Viewer {
       }
       overlay_.flush(projection * view, false);
     }
+    if (weight_bone_ >= 0 && std::size_t(weight_bone_) < character_->skeleton().bone_count()) {
+      const deform::SkinWeights& w = character_->model().weights;
+      for (std::size_t i = 0; i < points.size() && i < w.size(); ++i)
+        for (int k = 0; k < deform::max_influences; ++k)
+          if (w.weights[i][k] > 0.0f && w.bones[i][k] == weight_bone_)
+            overlay_.point(transform_point(to_world, points[i]), heat(w.weights[i][k]), 5.0f);
+      overlay_.flush(projection * view, false);
+    }
     if (show_skeleton_) {
       const deform::Skeleton& sk = character_->skeleton();
       for (std::size_t b = 0; b < sk.bone_count(); ++b) {
@@ -691,6 +714,7 @@ class Viewer {
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
   bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
+  int weight_bone_ = -1;  // the bone whose weights the weight map shows; -1: none
   bool playing_ = true;
   deform::StretchShape shape_;           // the panel's rubber shape, for every lattice
   float max_stretch_ = -1.0f;            // the panel's stretch bound (-1: the rig's, taken at the first build)

@@ -5,6 +5,8 @@
 #include "deform/extras/builtin.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
+#include "deform/offline/heat_weights.hpp"
+#include "deform/offline/voxel_weights.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -14,21 +16,33 @@ namespace cli {
 namespace {
 
 constexpr const char* usage =
-    "usage: deform weights MESH.obj --skeleton S.sk --out W.skw [OPTIONS]\n"
-    "       deform weights --builtin --out W.skw [OPTIONS]\n"
+    "usage: deform weights MESH.obj --skeleton S.sk --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
+    "       deform weights --builtin --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
     "\n"
-    "Computes automatic skin weights for the mesh's points (one .skw line per OBJ `v`) from the skeleton's bind pose:\n"
-    "distance to each bone segment, only the nearest bone, its parent and its children competing, inverse-distance\n"
-    "falloff, the strongest influences kept and normalised, then one-ring smoothing over the mesh edges\n"
-    "(docs/builtin-character.md, \"Automatic weights\"). --builtin uses the built-in character's mesh and skeleton.\n"
-    "Writes W.skw atomically; prints {\"mesh\", \"vertices\", \"bones\", \"max_influences\", \"output\"}.\n"
+    "Computes automatic skin weights for the mesh's points (one .skw line per OBJ `v`) from the skeleton's bind pose\n"
+    "(docs/weights.md). --builtin uses the built-in character's mesh and skeleton.\n"
+    "  heat (default)  bone heat diffusion over the surface (Baran & Popovic 2007): each point is heated by its\n"
+    "                  nearest bone that it sees through no triangle, and the heat of each bone spreads over the\n"
+    "                  surface; a hand resting against a thigh keeps its arm's weights.\n"
+    "  voxel           geodesic voxel binding (after Dionne & de Lasa 2013): distances to the bones measured\n"
+    "                  inside the voxelised volume, then falloff and smoothing as for distance.\n"
+    "  distance        distance to each bone segment, only the nearest bone, its parent and its children competing,\n"
+    "                  inverse-distance falloff, then one-ring smoothing (docs/builtin-character.md).\n"
+    "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"max_influences\", \"warnings\",\n"
+    "\"output\"}. Each warning (a bone that gets no vertex, an island of the mesh that sees no bone) goes to stderr.\n"
     "\n"
     "options:\n"
-    "  --falloff P          inverse-distance power, > 0 (default 4; higher = sharper joints)\n"
     "  --max-influences N   bones per vertex, 1 to 4 (default 4)\n"
+    "  --leaf-length L      a leaf bone's length as a multiple of its distance to its parent, >= 0 (default 1)\n"
+    "heat only:\n"
+    "  --heat C             heat constant of H = C / d^2, > 0 (default 1; higher = sharper joints)\n"
+    "voxel only:\n"
+    "  --resolution N       voxels along the longest side of the mesh's box, 8 to 1024 (default 128)\n"
+    "distance and voxel:\n"
+    "  --falloff P          inverse-distance power, > 0 (default 4; higher = sharper joints)\n"
     "  --smoothing N        one-ring smoothing passes, 0 to 100 (default 2)\n"
-    "  --behind-penalty K   weight of the distance behind a bone's head, >= 1 (default 2)\n"
-    "  --leaf-length L      a leaf bone's length as a multiple of its distance to its parent, >= 0 (default 1)\n";
+    "distance only:\n"
+    "  --behind-penalty K   weight of the distance behind a bone's head, >= 1 (default 2)\n";
 
 // A numeric option's value, `fallback` when absent; UsageError unless it lies in [min, 1e6] (and above `min` when
 // `above` is set).
@@ -42,10 +56,19 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--skeleton", "--out", "--falloff", "--max-influences", "--smoothing", "--behind-penalty",
-                         "--leaf-length"},
+  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--resolution", "--falloff", "--max-influences",
+                         "--smoothing", "--behind-penalty", "--leaf-length"},
                   {"--builtin"});
   const std::string out = args.required("--out");
+  const std::string method = args.value("--method").value_or("heat");
+  if (method != "heat" && method != "voxel" && method != "distance")
+    throw UsageError("--method: '" + method + "' is not heat, voxel or distance");
+  const std::vector<const char*> not_for =
+      method == "heat"    ? std::vector<const char*>{"--resolution", "--falloff", "--smoothing", "--behind-penalty"}
+      : method == "voxel" ? std::vector<const char*>{"--heat", "--behind-penalty"}
+                          : std::vector<const char*>{"--heat", "--resolution"};
+  for (const char* flag : not_for)
+    if (args.value(flag)) throw UsageError(std::string(flag) + " does not apply to --method " + method);
   deform::AutoWeightsOptions options;
   options.falloff_power = number_option(args, "--falloff", options.falloff_power, 0.0f, true);
   options.behind_head_penalty = number_option(args, "--behind-penalty", options.behind_head_penalty, 1.0f);
@@ -54,6 +77,17 @@ int run(const std::vector<std::string>& argv) {
     options.max_influences = static_cast<int>(parse_integer(*n, "--max-influences", 1, deform::max_influences));
   if (auto n = args.value("--smoothing"))
     options.smoothing_iterations = static_cast<int>(parse_integer(*n, "--smoothing", 0, 100));
+  deform::HeatWeightsOptions heat_options;
+  heat_options.heat = number_option(args, "--heat", heat_options.heat, 0.0f, true);
+  heat_options.leaf_length = options.leaf_length;
+  heat_options.max_influences = options.max_influences;
+  deform::VoxelWeightsOptions voxel_options;
+  if (auto n = args.value("--resolution"))
+    voxel_options.resolution = static_cast<int>(parse_integer(*n, "--resolution", 8, 1024));
+  voxel_options.falloff_power = options.falloff_power;
+  voxel_options.smoothing_iterations = options.smoothing_iterations;
+  voxel_options.leaf_length = options.leaf_length;
+  voxel_options.max_influences = options.max_influences;
 
   deform::Mesh mesh;
   deform::Skeleton skeleton;
@@ -75,8 +109,18 @@ int run(const std::vector<std::string>& argv) {
     skeleton = deform::read_sk(sk);
   }
 
-  const deform::SkinWeights weights = deform::compute_automatic_weights(mesh, skeleton, options);
+  deform::WeightsResult result;
+  if (method == "heat") {
+    result = deform::compute_heat_weights(mesh, skeleton, heat_options);
+  } else if (method == "voxel") {
+    result = deform::compute_voxel_weights(mesh, skeleton, voxel_options);
+  } else {
+    result.weights = deform::compute_automatic_weights(mesh, skeleton, options);
+    result.warnings = deform::bones_without_vertices(result.weights, skeleton);
+  }
+  const deform::SkinWeights& weights = result.weights;
   deform::write_skw(out, weights);
+  for (const std::string& w : result.warnings) note(w);
 
   int most = 0;
   for (const glm::vec4& w : weights.weights) {
@@ -84,10 +128,12 @@ int run(const std::vector<std::string>& argv) {
     for (int k = 0; k < deform::max_influences; ++k) used += w[k] > 0.0f ? 1 : 0;
     most = std::max(most, used);
   }
-  print_json({{"mesh", source},
+  print_json({{"method", method},
+              {"mesh", source},
               {"vertices", mesh.point_count()},
               {"bones", skeleton.bone_count()},
               {"max_influences", most},
+              {"warnings", result.warnings.size()},
               {"output", out}});
   return exit_ok;
 }

@@ -10,7 +10,7 @@
 #include "deform/io/model_files.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
-#include "deform/offline/weights.hpp"
+#include "deform/offline/heat_weights.hpp"
 #include "deform/runtime/error.hpp"
 #ifdef DEFORM_HAVE_IMPORT
 #include "deform/import/import.hpp"
@@ -43,8 +43,10 @@ LoadedModel load_native(const ModelRequest& request) {
   loaded.model.name = std::filesystem::path(request.path).stem().string();
   loaded.model.mesh = deform::read_obj(request.path, &warnings);
   loaded.model.skeleton = deform::read_sk(request.skeleton);
-  loaded.model.weights = deform::compute_automatic_weights(loaded.model.mesh, loaded.model.skeleton);
+  deform::WeightsResult automatic = deform::compute_heat_weights(loaded.model.mesh, loaded.model.skeleton);
+  loaded.model.weights = std::move(automatic.weights);
   loaded.warnings = std::move(warnings.messages);
+  for (std::string& w : automatic.warnings) loaded.warnings.push_back("automatic weights: " + std::move(w));
   return loaded;
 }
 

@@ -29,6 +29,14 @@ void check_options(const AutoWeightsOptions& o) {
   if (o.smoothing_iterations < 0) fail("smoothing_iterations", "must be >= 0");
 }
 
+void check_deforming(const AutoWeightsOptions& o, std::size_t bone_count) {
+  if (o.deforming.empty()) return;
+  auto fail = [](const char* rule) { throw Error::in_file("automatic weights", "deforming", rule); };
+  if (o.deforming.size() != bone_count) fail("must be empty or hold one entry per bone");
+  if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
+    fail("no bone deforms");
+}
+
 // Keeps the `keep` strongest influences (ties: lower bone id), drops those under min_weight of the total, normalises,
 // and stores them strongest first in slot `point` of `out`. `list` is scratch and is reordered.
 void store_strongest(std::vector<Influence>& list, int keep, std::size_t point, SkinWeights& out) {
@@ -84,6 +92,10 @@ float distance_squared(const SegmentTest& s, glm::vec3 p) {
 SkinWeights unsmoothed_weights(std::span<const glm::vec3> points, const Skeleton& skeleton,
                                const AutoWeightsOptions& options) {
   check_options(options);
+  check_deforming(options, skeleton.bone_count());
+  auto deforms = [&](std::int32_t b) {
+    return options.deforming.empty() || options.deforming[static_cast<std::size_t>(b)] != 0;
+  };
   const std::vector<BoneSegment> segments = bone_segments(skeleton, options.leaf_length);
   const std::size_t bone_count = skeleton.bone_count();
   std::vector<SegmentTest> tests(bone_count);
@@ -108,10 +120,10 @@ SkinWeights unsmoothed_weights(std::span<const glm::vec3> points, const Skeleton
     const glm::vec3 p = points[i];
     if (!finite(p))
       throw Error::in_file("automatic weights", "vertex " + std::to_string(i), "position is not finite");
-    std::size_t nearest = 0;
+    std::size_t nearest = bone_count;
     for (std::size_t b = 0; b < bone_count; ++b) {
       d2[b] = distance_squared(tests[b], p);
-      if (d2[b] < d2[nearest]) nearest = b;
+      if (deforms(static_cast<std::int32_t>(b)) && (nearest == bone_count || d2[b] < d2[nearest])) nearest = b;
     }
     const Bone& n = skeleton.bones()[nearest];
     const float reference = d2[nearest] + epsilon2;
@@ -120,8 +132,11 @@ SkinWeights unsmoothed_weights(std::span<const glm::vec3> points, const Skeleton
     };
     list.clear();
     add(nearest);
-    if (n.parent >= 0) add(static_cast<std::size_t>(n.parent));
-    for (std::int32_t c : n.children) add(static_cast<std::size_t>(c));
+    std::int32_t up = n.parent;
+    while (up >= 0 && !deforms(up)) up = skeleton.bones()[static_cast<std::size_t>(up)].parent;
+    if (up >= 0) add(static_cast<std::size_t>(up));
+    for (std::int32_t c : n.children)
+      if (deforms(c)) add(static_cast<std::size_t>(c));
     store_strongest(list, options.max_influences, i, out);
   }
   return out;

@@ -15,6 +15,7 @@
 //     `smoothing_iterations` passes of one-ring averaging over the mesh's edges (new = 1/2 own + 1/2 mean of the
 //     neighbours, then the cut and normalisation again) soften the seams where the nearest bone changes.
 // Every point gets at least one positive weight; ties resolve to the lower bone id, so the result is deterministic.
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -32,6 +33,10 @@ struct AutoWeightsOptions {
   float leaf_length = 1.0f;          // >= 0; a leaf bone's length as a multiple of its distance to its parent
   int max_influences = 4;            // 1 .. deform::max_influences
   int smoothing_iterations = 2;      // >= 0; passes of one-ring averaging (only with a mesh)
+  // Per bone id, 0 for a bone that must get no weight (a control or end bone); empty = every bone deforms. Only
+  // deforming bones are candidates for the nearest; a non-deforming parent is replaced by its nearest deforming
+  // ancestor, non-deforming children are left out. At least one bone must deform.
+  std::vector<std::uint8_t> deforming;
 };
 
 // A bone's bind-pose segment in world space (metres or whatever unit the skeleton uses).

@@ -1,0 +1,67 @@
+#pragma once
+// Automatic skin weights by bone heat diffusion (Baran & Popović 2007, "Automatic Rigging and Animation of 3D
+// Characters", section 4): weights that follow the surface of the body instead of straight-line distance, so a hand
+// resting against a thigh keeps its arm's weights. docs/weights.md describes the method and measures it against the
+// weights artists painted.
+//
+// The method, per point j of the mesh (points sharing one exact position are welded first, so a seam of split
+// points is one surface):
+//  1. Bones are segments in the bind pose: from the head to the head of *each* child (a bone that forks, such as a
+//     pelvis, is the union of its segments); a leaf continues its parent's direction for `leaf_length` times its
+//     distance to the parent (as bone_segments() does); a root without children is a point.
+//  2. Heat: among the bones, nearest first, the first one *visible* from the point (the straight segment from the
+//     point to the bone's nearest point crosses no triangle of the mesh) heats the point: p_j = that bone,
+//     H_jj = heat / d², d its distance. A point that sees no bone gets no heat (H_jj = 0) and takes its weights from
+//     its neighbours.
+//  3. For each bone i, solve (L + A·H) w_i = A·H·p_i over the surface, L the cotangent Laplacian (negative
+//     cotangents clamped to 0, degenerate triangles skipped, plus 1e-3 of a uniform Laplacian over every edge so
+//     that a surface of slivers stays connected), A the barycentric point areas. The matrix is the same for every
+//     bone: it is factored once (sparse LDLᵀ), then each bone is one back-substitution. Each connected piece of the
+//     surface (island) is solved on its own; the weights of a piece sum to 1 at every point.
+//  4. An island where no point sees any bone past the rest of the mesh (a garment around a limb, a plate on a
+//     tail: the body hides the bones) looks again past its own triangles only, with a warning naming it. An island
+//     that still sees none is bound rigidly to the bone nearest most of its points, with a warning naming it. The strongest `max_influences` weights are kept, those under 0.1% of their sum dropped,
+//     the rest normalised, strongest first.
+// Cost: O(points × bones) for the nearest bones, a ray per point and tried bone (BVH, docs/performance.md), one
+// sparse factorisation (about O(points^1.5) for a surface) and one solve per heated bone.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "deform/offline/export.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/skeleton.hpp"
+namespace deform {
+
+struct HeatWeightsOptions {
+  int max_influences = 4;     // 1 .. deform::max_influences
+  float heat = 1.0f;          // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
+  float leaf_length = 1.0f;   // >= 0: a leaf bone's length as a multiple of its distance to its parent
+  bool visibility = true;     // false: the nearest bone heats each point whether it sees it or not
+  // An island (a connected piece of the surface) none of whose points sees a bone past the rest of the mesh (a
+  // garment around a limb, a plate on a tail) looks again past its own triangles only; false: it is bound rigidly.
+  bool island_visibility = true;
+  // Per bone id, 0 for a bone that must get no weight (a control or end bone); empty = every bone deforms. At
+  // least one bone must deform.
+  std::vector<std::uint8_t> deforming;
+};
+
+// Weights plus what a user should know about them: one line per bone that gets no vertex, per island that no bone
+// sees, per point outside every triangle that no bone sees. Never silently empty.
+struct WeightsResult {
+  SkinWeights weights;
+  std::vector<std::string> warnings;
+};
+
+// Bone heat weights for the mesh's points (mesh.point_count() entries). Throws deform::Error (kind argument) for
+// invalid options, a non-finite point or a triangle index out of range. Allocates O(points · bones) while it works.
+DEFORM_OFFLINE_API WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton,
+                                                      const HeatWeightsOptions& options = {});
+
+// One warning per bone (of those `deforming` allows; empty = all) that has positive weight on no point:
+// "bone 'NAME' (id N) gets no vertex". For any method's weights. O(points + bones).
+DEFORM_OFFLINE_API std::vector<std::string> bones_without_vertices(const SkinWeights& weights,
+                                                                   const Skeleton& skeleton,
+                                                                   const std::vector<std::uint8_t>& deforming = {});
+
+}  // namespace deform

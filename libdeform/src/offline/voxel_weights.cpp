@@ -1,0 +1,366 @@
+// Geodesic voxel weights (voxel_weights.hpp): voxelise, flood the outside, one Dijkstra per bone through the
+// volume, hierarchy-restricted inverse-distance falloff, one-ring smoothing.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "deform/offline/picking.hpp"
+#include "deform/offline/topology.hpp"
+#include "deform/offline/voxel_weights.hpp"
+#include "deform/runtime/error.hpp"
+#include "offline/bone_shapes.hpp"
+#include "runtime/finite.hpp"
+namespace deform {
+namespace {
+
+constexpr float min_weight = 1e-3f;
+constexpr float unreached = std::numeric_limits<float>::infinity();
+
+struct Influence {
+  std::uint32_t bone;
+  float weight;
+};
+
+void check_options(const VoxelWeightsOptions& o, std::size_t bone_count) {
+  auto fail = [](const char* what, const char* rule) { throw Error::invalid_argument(what, rule); };
+  if (o.resolution < 8 || o.resolution > 1024) fail("resolution", "must be 8 to 1024");
+  if (!std::isfinite(o.falloff_power) || o.falloff_power <= 0.0f) fail("falloff_power", "must be finite and > 0");
+  if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
+  if (o.max_influences < 1 || o.max_influences > max_influences) fail("max_influences", "must be 1 to 4");
+  if (o.smoothing_iterations < 0) fail("smoothing_iterations", "must be >= 0");
+  if (!o.deforming.empty()) {
+    if (o.deforming.size() != bone_count) fail("deforming", "must be empty or hold one entry per bone");
+    if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
+      fail("deforming", "no bone deforms");
+  }
+}
+
+// Keeps the `keep` strongest (ties: lower bone), drops those under min_weight of the total, normalises, strongest
+// first; unused slots (bone 0, weight 0). `list` must not be empty.
+void store_strongest(std::vector<Influence>& list, int keep, glm::u16vec4& bones, glm::vec4& weights) {
+  std::sort(list.begin(), list.end(), [](const Influence& a, const Influence& b) {
+    return a.weight != b.weight ? a.weight > b.weight : a.bone < b.bone;
+  });
+  if (list.size() > static_cast<std::size_t>(keep)) list.resize(static_cast<std::size_t>(keep));
+  float total = 0.0f;
+  for (const Influence& i : list) total += i.weight;
+  std::size_t used = 0;
+  for (const Influence& i : list)
+    if (i.weight >= min_weight * total) ++used;
+  used = std::max<std::size_t>(used, 1);
+  total = 0.0f;
+  for (std::size_t k = 0; k < used; ++k) total += list[k].weight;
+  bones = glm::u16vec4(0);
+  weights = glm::vec4(0.0f);
+  for (std::size_t k = 0; k < used; ++k) {
+    bones[static_cast<int>(k)] = static_cast<std::uint16_t>(list[k].bone);
+    weights[static_cast<int>(k)] = total > 0.0f ? list[k].weight / total : (k == 0 ? 1.0f : 0.0f);
+  }
+}
+
+// A voxel grid over a box: index = x + dims.x · (y + dims.y · z).
+struct Grid {
+  glm::vec3 origin{0.0f};
+  float size = 1.0f;
+  glm::ivec3 dims{0};
+  std::size_t count() const { return std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z); }
+  glm::ivec3 cell(glm::vec3 p) const {
+    const glm::ivec3 c(glm::floor((p - origin) / size));
+    return glm::clamp(c, glm::ivec3(0), dims - 1);
+  }
+  std::size_t index(glm::ivec3 c) const {
+    return std::size_t(c.x) + std::size_t(dims.x) * (std::size_t(c.y) + std::size_t(dims.y) * std::size_t(c.z));
+  }
+};
+
+}  // namespace
+
+WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, const VoxelWeightsOptions& options) {
+  const std::size_t bone_count = skeleton.bone_count();
+  check_options(options, bone_count);
+  auto deforms = [&](std::size_t b) { return options.deforming.empty() || options.deforming[b] != 0; };
+  const std::size_t point_count = mesh.point_count();
+  for (std::size_t i = 0; i < point_count; ++i)
+    if (!finite(mesh.positions[i]))
+      throw Error::invalid_argument("vertex " + std::to_string(i), "position is not finite");
+  if (mesh.triangles.size() % 3 != 0) throw Error::invalid_argument("triangles", "index count is not a multiple of 3");
+  std::vector<std::uint32_t> corners(mesh.triangles.size());
+  for (std::size_t c = 0; c < corners.size(); ++c) {
+    const std::uint32_t v = mesh.triangles[c];
+    if (v >= mesh.vertex_point.size() || mesh.vertex_point[v] >= point_count)
+      throw Error::invalid_argument("triangle " + std::to_string(c / 3), "vertex index out of range");
+    corners[c] = mesh.vertex_point[v];
+  }
+  WeightsResult result;
+  result.weights.bones.assign(point_count, glm::u16vec4(0));
+  result.weights.weights.assign(point_count, glm::vec4(0.0f));
+  if (point_count == 0) {
+    result.warnings = bones_without_vertices(result.weights, skeleton, options.deforming);
+    return result;
+  }
+
+  // --- the grid: the points' box, two voxels of margin all round ---
+  const Bounds bounds = compute_bounds(mesh.positions);
+  const glm::vec3 extent = bounds.max - bounds.min;
+  const float longest = std::max({extent.x, extent.y, extent.z, 1e-30f});
+  Grid grid;
+  grid.size = longest / static_cast<float>(options.resolution);
+  grid.origin = bounds.min - 2.0f * grid.size;
+  grid.dims = glm::ivec3(glm::ceil(extent / grid.size)) + 5;
+  const std::size_t voxels = grid.count();
+
+  // --- surface: every voxel a triangle passes through (sampled at under half a voxel) ---
+  enum : std::uint8_t { outside = 0, surface = 1, inside = 2 };
+  std::vector<std::uint8_t> state(voxels, inside);
+  std::vector<std::uint8_t> is_surface(voxels, 0);
+  for (std::size_t t = 0; t + 2 < corners.size(); t += 3) {
+    const glm::vec3 a = mesh.positions[corners[t]], b = mesh.positions[corners[t + 1]],
+                    c = mesh.positions[corners[t + 2]];
+    const float edge = std::max({glm::length(b - a), glm::length(c - a), glm::length(c - b)});
+    const int steps = std::max(1, static_cast<int>(std::ceil(2.0f * edge / grid.size)));
+    for (int i = 0; i <= steps; ++i)
+      for (int j = 0; i + j <= steps; ++j) {
+        const float u = static_cast<float>(i) / static_cast<float>(steps);
+        const float v = static_cast<float>(j) / static_cast<float>(steps);
+        is_surface[grid.index(grid.cell(a + u * (b - a) + v * (c - a)))] = 1;
+      }
+  }
+  for (std::size_t i = 0; i < point_count; ++i) is_surface[grid.index(grid.cell(mesh.positions[i]))] = 1;
+  // --- outside: flooded from the grid's corner through voxels that are not surface (6 neighbours) ---
+  {
+    std::vector<std::size_t> stack{0};
+    state[0] = outside;
+    const std::array<glm::ivec3, 6> steps{glm::ivec3(1, 0, 0), glm::ivec3(-1, 0, 0), glm::ivec3(0, 1, 0),
+                                          glm::ivec3(0, -1, 0), glm::ivec3(0, 0, 1), glm::ivec3(0, 0, -1)};
+    while (!stack.empty()) {
+      const std::size_t at = stack.back();
+      stack.pop_back();
+      const glm::ivec3 c(static_cast<int>(at % std::size_t(grid.dims.x)),
+                         static_cast<int>(at / std::size_t(grid.dims.x) % std::size_t(grid.dims.y)),
+                         static_cast<int>(at / (std::size_t(grid.dims.x) * std::size_t(grid.dims.y))));
+      for (const glm::ivec3& s : steps) {
+        const glm::ivec3 n = c + s;
+        if (glm::any(glm::lessThan(n, glm::ivec3(0))) || glm::any(glm::greaterThanEqual(n, grid.dims))) continue;
+        const std::size_t ni = grid.index(n);
+        if (state[ni] != inside || is_surface[ni]) continue;
+        state[ni] = outside;
+        stack.push_back(ni);
+      }
+    }
+  }
+  // Volume voxels (surface or inside) get compact ids.
+  std::vector<std::int32_t> volume_id(voxels, -1);
+  std::vector<glm::ivec3> volume_cell;
+  for (int z = 0; z < grid.dims.z; ++z)
+    for (int y = 0; y < grid.dims.y; ++y)
+      for (int x = 0; x < grid.dims.x; ++x) {
+        const std::size_t i = grid.index({x, y, z});
+        if (state[i] == outside) continue;
+        volume_id[i] = static_cast<std::int32_t>(volume_cell.size());
+        volume_cell.emplace_back(x, y, z);
+      }
+
+  // --- bones and their seeds ---
+  std::vector<detail::BoneShape> shapes = detail::bone_shapes(skeleton, options.leaf_length);
+  {
+    TriangleBvh bvh;
+    std::vector<std::uint32_t> flat;
+    for (std::size_t t = 0; t + 2 < corners.size(); t += 3)
+      if (corners[t] != corners[t + 1] && corners[t + 1] != corners[t + 2] && corners[t] != corners[t + 2])
+        flat.insert(flat.end(), {corners[t], corners[t + 1], corners[t + 2]});
+    if (!flat.empty()) {
+      bvh.build(mesh.positions, flat);
+      detail::clip_leaves(shapes, skeleton, bvh);
+    }
+  }
+  auto seeds_of = [&](const detail::BoneShape& shape) {
+    std::vector<std::int32_t> seeds, near;
+    bool within_grid = false;
+    for (const auto& [a, b] : shape.segments) {
+      const int steps = std::max(1, static_cast<int>(std::ceil(2.0f * glm::length(b - a) / grid.size)));
+      for (int k = 0; k <= steps; ++k) {
+        const glm::vec3 p = a + (b - a) * (static_cast<float>(k) / static_cast<float>(steps));
+        const glm::ivec3 c = grid.cell(p);
+        const glm::vec3 local = (p - grid.origin) / grid.size;
+        if (glm::any(glm::lessThan(local, glm::vec3(0.0f))) || glm::any(glm::greaterThan(local, glm::vec3(grid.dims))))
+          continue;  // outside the grid: seeds nothing
+        within_grid = true;
+        const std::int32_t id = volume_id[grid.index(c)];
+        if (id >= 0) {
+          seeds.push_back(id);
+          continue;
+        }
+        for (int dz = -1; dz <= 1; ++dz)  // a bone outside the volume seeds the volume voxels beside it
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const glm::ivec3 n = glm::clamp(c + glm::ivec3(dx, dy, dz), glm::ivec3(0), grid.dims - 1);
+              const std::int32_t nid = volume_id[grid.index(n)];
+              if (nid >= 0) near.push_back(nid);
+            }
+      }
+    }
+    if (seeds.empty()) seeds = std::move(near);
+    if (seeds.empty() && within_grid) {  // inside a leaking (open) mesh's shell: the volume voxels nearest to it
+      std::vector<float> gap(volume_cell.size(), unreached);
+      float best = unreached;
+      for (std::size_t v = 0; v < volume_cell.size(); ++v) {
+        const glm::vec3 centre = grid.origin + (glm::vec3(volume_cell[v]) + 0.5f) * grid.size;
+        for (const auto& [a, b] : shape.segments) {
+          const glm::vec3 axis = b - a;
+          const float length2 = glm::dot(axis, axis);
+          const float t = length2 > 0.0f ? std::clamp(glm::dot(centre - a, axis) / length2, 0.0f, 1.0f) : 0.0f;
+          gap[v] = std::min(gap[v], glm::length(centre - (a + t * axis)));
+        }
+        best = std::min(best, gap[v]);
+      }
+      for (std::size_t v = 0; v < volume_cell.size(); ++v)
+        if (gap[v] <= best + grid.size) seeds.push_back(static_cast<std::int32_t>(v));
+    }
+    std::sort(seeds.begin(), seeds.end());
+    seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+    return seeds;
+  };
+
+  // --- one Dijkstra per deforming bone; each point's distance read at its voxel ---
+  std::vector<std::int32_t> point_voxel(point_count);
+  for (std::size_t i = 0; i < point_count; ++i)
+    point_voxel[i] = volume_id[grid.index(grid.cell(mesh.positions[i]))];
+  std::vector<float> distance(point_count * bone_count, unreached);
+  std::vector<float> field(volume_cell.size());
+  std::vector<std::array<std::int32_t, 26>> neighbours(volume_cell.size());
+  std::array<float, 26> step_length{};
+  {
+    int k = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dx == 0 && dy == 0 && dz == 0) continue;
+          step_length[static_cast<std::size_t>(k)] =
+              grid.size * std::sqrt(static_cast<float>(dx * dx + dy * dy + dz * dz));
+          for (std::size_t v = 0; v < volume_cell.size(); ++v) {
+            const glm::ivec3 n = volume_cell[v] + glm::ivec3(dx, dy, dz);
+            const bool in = glm::all(glm::greaterThanEqual(n, glm::ivec3(0))) && glm::all(glm::lessThan(n, grid.dims));
+            neighbours[v][static_cast<std::size_t>(k)] = in ? volume_id[grid.index(n)] : -1;
+          }
+          ++k;
+        }
+  }
+  using Entry = std::pair<float, std::int32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  for (std::size_t b = 0; b < bone_count; ++b) {
+    if (!deforms(b)) continue;
+    std::fill(field.begin(), field.end(), unreached);
+    for (std::int32_t s : seeds_of(shapes[b])) {
+      field[static_cast<std::size_t>(s)] = 0.0f;
+      queue.push({0.0f, s});
+    }
+    while (!queue.empty()) {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > field[static_cast<std::size_t>(v)]) continue;
+      for (std::size_t k = 0; k < 26; ++k) {
+        const std::int32_t n = neighbours[static_cast<std::size_t>(v)][k];
+        if (n < 0) continue;
+        const float nd = d + step_length[k];
+        if (nd < field[static_cast<std::size_t>(n)]) {
+          field[static_cast<std::size_t>(n)] = nd;
+          queue.push({nd, n});
+        }
+      }
+    }
+    for (std::size_t i = 0; i < point_count; ++i)
+      if (point_voxel[i] >= 0) distance[i * bone_count + b] = field[static_cast<std::size_t>(point_voxel[i])];
+  }
+
+  // --- weights: geodesic nearest, its parent, its children; inverse-distance falloff ---
+  const float half = 0.5f * grid.size;
+  const float power = options.falloff_power;
+  std::vector<Influence> list;
+  std::size_t unreached_points = 0, first_unreached = 0;
+  for (std::size_t i = 0; i < point_count; ++i) {
+    const float* d = &distance[i * bone_count];
+    std::size_t nearest = bone_count;
+    for (std::size_t b = 0; b < bone_count; ++b)
+      if (deforms(b) && d[b] < unreached && (nearest == bone_count || d[b] < d[nearest])) nearest = b;
+    list.clear();
+    if (nearest == bone_count) {  // no bone reaches it through the volume: the straight-line nearest, rigidly
+      if (unreached_points++ == 0) first_unreached = i;
+      float best = unreached;
+      for (std::size_t b = 0; b < bone_count; ++b) {
+        if (!deforms(b)) continue;
+        for (const auto& [a, e] : shapes[b].segments) {
+          const glm::vec3 axis = e - a;
+          const float length2 = glm::dot(axis, axis);
+          const float t = length2 > 0.0f ? std::clamp(glm::dot(mesh.positions[i] - a, axis) / length2, 0.0f, 1.0f)
+                                         : 0.0f;
+          const float dd = glm::length(mesh.positions[i] - (a + t * axis));
+          if (dd < best) {
+            best = dd;
+            nearest = b;
+          }
+        }
+      }
+      list.push_back({static_cast<std::uint32_t>(nearest), 1.0f});
+    } else {
+      const float reference = d[nearest] + half;
+      auto add = [&](std::size_t b) {
+        if (d[b] < unreached)
+          list.push_back({static_cast<std::uint32_t>(b), std::pow(reference / (d[b] + half), power)});
+      };
+      add(nearest);
+      const Bone& n = skeleton.bones()[nearest];
+      std::int32_t up = n.parent;
+      while (up >= 0 && !deforms(static_cast<std::size_t>(up))) up = skeleton.bones()[static_cast<std::size_t>(up)].parent;
+      if (up >= 0) add(static_cast<std::size_t>(up));
+      for (std::int32_t c : n.children)
+        if (deforms(static_cast<std::size_t>(c))) add(static_cast<std::size_t>(c));
+    }
+    store_strongest(list, options.max_influences, result.weights.bones[i], result.weights.weights[i]);
+  }
+  distance = {};
+
+  // --- one-ring smoothing ---
+  if (options.smoothing_iterations > 0) {
+    const PointTopology topology = build_point_topology(mesh);
+    SkinWeights next = result.weights;
+    for (int pass = 0; pass < options.smoothing_iterations; ++pass) {
+      for (std::uint32_t i = 0; i < point_count; ++i) {
+        const auto ring = topology.point_neighbours(i);
+        if (ring.empty()) continue;
+        list.clear();
+        auto accumulate = [&](std::size_t point, float scale) {
+          for (int k = 0; k < max_influences; ++k) {
+            const float w = result.weights.weights[point][k];
+            if (w <= 0.0f) continue;
+            const std::uint32_t bone = result.weights.bones[point][k];
+            auto it = std::find_if(list.begin(), list.end(), [&](const Influence& x) { return x.bone == bone; });
+            if (it == list.end()) list.push_back({bone, scale * w});
+            else it->weight += scale * w;
+          }
+        };
+        accumulate(i, 0.5f);
+        const float share = 0.5f / static_cast<float>(ring.size());
+        for (std::uint32_t n : ring) accumulate(n, share);
+        store_strongest(list, options.max_influences, next.bones[i], next.weights[i]);
+      }
+      std::swap(result.weights, next);
+    }
+  }
+
+  if (unreached_points > 0)
+    result.warnings.push_back(std::to_string(unreached_points) + " point" + (unreached_points == 1 ? "" : "s") +
+                              " (the first: point " + std::to_string(first_unreached) +
+                              ") reached by no bone through the volume: bound rigidly to the nearest bone");
+  for (std::string& w : bones_without_vertices(result.weights, skeleton, options.deforming))
+    result.warnings.push_back(std::move(w));
+  return result;
+}
+
+}  // namespace deform

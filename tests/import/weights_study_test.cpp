@@ -1,0 +1,52 @@
+// The weights study (docs/weights.md) on two of its characters, so that its figures cannot regress unnoticed: heat
+// weights stay within a tenth above the figures docs/weights.md reports and nearer the artists' weights than
+// distance weights. Skipped when Debian's assimp-testmodels are not installed.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "deform/import/import.hpp"
+#include "deform/offline/heat_weights.hpp"
+#include "deform/offline/weights.hpp"
+#include "study.hpp"
+
+namespace {
+
+struct Expected {
+  const char* path;       // under /usr/share/assimp/models
+  double heat_mean;       // % of the diagonal, as docs/weights.md reports it
+  double heat_p99;
+};
+
+void check_model(const Expected& e) {
+  const std::filesystem::path path = std::filesystem::path("/usr/share/assimp/models") / e.path;
+  if (!std::filesystem::exists(path)) {
+    MESSAGE("skipped: " << path.string() << " is missing (install Debian's assimp-testmodels)");
+    return;
+  }
+  const deform::ImportedModel imported = deform::import_model(path.string());
+  const std::vector<std::uint8_t> deforming = weights_study::painted_bones(imported.model);
+  deform::HeatWeightsOptions heat_options;
+  heat_options.deforming = deforming;
+  const deform::WeightsResult heat =
+      deform::compute_heat_weights(imported.model.mesh, imported.model.skeleton, heat_options);
+  deform::AutoWeightsOptions distance_options;
+  distance_options.deforming = deforming;
+  const deform::SkinWeights distance =
+      deform::compute_automatic_weights(imported.model.mesh, imported.model.skeleton, distance_options);
+  const weights_study::Figures h = weights_study::compare(imported.model, imported.clips, heat.weights);
+  const weights_study::Figures d = weights_study::compare(imported.model, imported.clips, distance);
+  MESSAGE(std::string(e.path) << ": heat mean " << h.mean_percent << "%, p99 " << h.p99_percent << "%; distance mean "
+                 << d.mean_percent << "%, p99 " << d.p99_percent << "%");
+  REQUIRE(h.poses > 0);
+  CHECK(h.mean_percent <= 1.1 * e.heat_mean);
+  CHECK(h.p99_percent <= 1.1 * e.heat_p99);
+  CHECK(h.mean_percent < d.mean_percent);
+  CHECK(h.p99_percent < d.p99_percent);
+}
+
+}  // namespace
+
+TEST_CASE("heat weights stay near the artists' on X/anim_test.x") { check_model({"X/anim_test.x", 0.60, 4.23}); }
+TEST_CASE("heat weights stay near the artists' on X/Testwuson.X") { check_model({"X/Testwuson.X", 0.24, 3.03}); }

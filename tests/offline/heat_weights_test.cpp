@@ -1,0 +1,330 @@
+// Volumetric weights: bone heat (heat_weights.hpp) and geodesic voxel (voxel_weights.hpp) weights on a two-bone
+// cylinder (monotone along the axis, sums of 1), a hand resting against a thigh (where distance weights bind the
+// hand to the leg and these do not), islands no bone sees or reaches, bones with no vertex, points outside every
+// triangle, the deforming mask, invalid options.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "deform/offline/heat_weights.hpp"
+#include "deform/offline/voxel_weights.hpp"
+#include "deform/offline/weights.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/skeleton.hpp"
+using deform::Bone;
+using deform::Mesh;
+using deform::Skeleton;
+using deform::SkinWeights;
+
+namespace {
+
+Bone bone(std::int32_t parent, glm::vec3 translation, std::string name = {}) {
+  Bone b;
+  b.name = std::move(name);
+  b.parent = parent;
+  b.bind_translation = translation;
+  return b;
+}
+
+Skeleton make_skeleton(std::vector<Bone> bones) {
+  for (std::size_t i = 1; i < bones.size(); ++i)
+    bones[static_cast<std::size_t>(bones[i].parent)].children.push_back(static_cast<std::int32_t>(i));
+  return Skeleton(std::move(bones));
+}
+
+// Appends a closed cylinder along +Y (axis through `base`, `rings` rings of `sides` points from base.y to base.y +
+// height, a centre point on each cap) as its own island. Render vertex = point.
+void add_cylinder(Mesh& mesh, glm::vec3 base, float radius, float height, int rings = 21, int sides = 12) {
+  const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+  auto index = [&](int ring, int side) {
+    return first + static_cast<std::uint32_t>(ring * sides + (side % sides));
+  };
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < sides; ++s) {
+      const float angle = 2.0f * 3.14159265f * static_cast<float>(s) / static_cast<float>(sides);
+      const float y = height * static_cast<float>(r) / static_cast<float>(rings - 1);
+      mesh.positions.push_back(base + glm::vec3(radius * std::cos(angle), y, radius * std::sin(angle)));
+    }
+  const auto bottom = static_cast<std::uint32_t>(mesh.positions.size());
+  mesh.positions.push_back(base);
+  const auto top = bottom + 1;
+  mesh.positions.push_back(base + glm::vec3(0.0f, height, 0.0f));
+  auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    mesh.triangles.insert(mesh.triangles.end(), {a, b, c});
+  };
+  for (int r = 0; r + 1 < rings; ++r)
+    for (int s = 0; s < sides; ++s) {
+      triangle(index(r, s), index(r + 1, s), index(r + 1, s + 1));
+      triangle(index(r, s), index(r + 1, s + 1), index(r, s + 1));
+    }
+  for (int s = 0; s < sides; ++s) {
+    triangle(bottom, index(0, s), index(0, s + 1));
+    triangle(top, index(rings - 1, s + 1), index(rings - 1, s));
+  }
+  while (mesh.vertex_point.size() < mesh.positions.size())
+    mesh.vertex_point.push_back(static_cast<std::uint32_t>(mesh.vertex_point.size()));
+}
+
+// Appends a closed axis-aligned box (8 points, 12 triangles) as its own island.
+void add_box(Mesh& mesh, glm::vec3 min, glm::vec3 max) {
+  const auto f = static_cast<std::uint32_t>(mesh.positions.size());
+  for (int i = 0; i < 8; ++i)
+    mesh.positions.push_back({(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z});
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads)
+    mesh.triangles.insert(mesh.triangles.end(), {f + q[0], f + q[1], f + q[2], f + q[0], f + q[2], f + q[3]});
+  while (mesh.vertex_point.size() < mesh.positions.size())
+    mesh.vertex_point.push_back(static_cast<std::uint32_t>(mesh.vertex_point.size()));
+}
+
+float weight_of(const SkinWeights& w, std::size_t point, int bone_id) {
+  for (int k = 0; k < 4; ++k)
+    if (w.weights[point][k] > 0.0f && w.bones[point][k] == bone_id) return w.weights[point][k];
+  return 0.0f;
+}
+
+// The .skw contract: normalised, strongest first, at most `most` used, unused slots (bone 0, weight 0).
+void check_contract(const SkinWeights& w, std::size_t points, std::size_t bones, int most = 4) {
+  REQUIRE(w.size() == points);
+  for (std::size_t i = 0; i < points; ++i) {
+    float sum = 0.0f;
+    int used = 0;
+    for (int k = 0; k < 4; ++k) {
+      const float x = w.weights[i][k];
+      REQUIRE(x >= 0.0f);
+      REQUIRE(w.bones[i][k] < bones);
+      if (k > 0) REQUIRE(x <= w.weights[i][k - 1]);
+      if (x == 0.0f) REQUIRE(w.bones[i][k] == 0);
+      used += x > 0.0f ? 1 : 0;
+      sum += x;
+    }
+    REQUIRE(used >= 1);
+    REQUIRE(used <= most);
+    REQUIRE(std::abs(sum - 1.0f) <= 1e-5f);
+  }
+}
+
+bool mentions(const std::vector<std::string>& warnings, const std::string& text) {
+  return std::any_of(warnings.begin(), warnings.end(),
+                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
+
+// Two bones along +Y: "lower" from y = 0 to 1, "upper" from 1 on (a leaf, to y = 2).
+Skeleton two_bones() { return make_skeleton({bone(-1, {0, 0, 0}, "lower"), bone(0, {0, 1, 0}, "upper")}); }
+
+}  // namespace
+
+TEST_CASE("heat weights on a two-bone cylinder: sums of 1, monotone along the axis, each end on its bone") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = two_bones();
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton);
+  check_contract(r.weights, mesh.point_count(), 2);
+  CHECK(r.warnings.empty());
+  // Along the axis the upper bone's weight never falls (per side, ring by ring), and the ends are rigid.
+  const int rings = 21, sides = 12;
+  for (int s = 0; s < sides; ++s) {
+    float previous = -1.0f;
+    for (int ring = 0; ring < rings; ++ring) {
+      const float w = weight_of(r.weights, static_cast<std::size_t>(ring * sides + s), 1);
+      CHECK(w >= previous - 1e-5f);
+      previous = w;
+    }
+  }
+  CHECK(weight_of(r.weights, 0, 0) > 0.95f);                                      // y = 0
+  CHECK(weight_of(r.weights, static_cast<std::size_t>((rings - 1) * sides), 1) > 0.95f);  // y = 2
+  // Symmetric about the joint: the ring at y = 1 is shared about half and half.
+  const float middle = weight_of(r.weights, static_cast<std::size_t>(10 * sides), 1);
+  CHECK(middle > 0.3f);
+  CHECK(middle < 0.7f);
+}
+
+TEST_CASE("heat weights: a hand resting against a thigh keeps its arm's weights (distance weights do not)") {
+  // Pelvis at (0, 1.5, 0); a thin leg (thigh, shin) at x = 0.3; an arm hanging at x = 0.51 whose fat hand (radius
+  // 0.12) rests 3 cm from the thigh (radius 0.06): the hand's inner side is nearer the thigh's bone than its own.
+  const Skeleton skeleton = make_skeleton({bone(-1, {0, 1.5f, 0}, "pelvis"), bone(0, {0.3f, -0.5f, 0}, "thigh"),
+                                           bone(1, {0, -0.5f, 0}, "shin"), bone(0, {0.51f, -0.05f, 0}, "forearm"),
+                                           bone(3, {0, -0.5f, 0}, "hand")});
+  Mesh mesh;
+  add_cylinder(mesh, {0.3f, 0.0f, 0}, 0.06f, 1.0f);     // leg
+  add_cylinder(mesh, {0.51f, 0.95f, 0}, 0.04f, 0.5f);   // forearm
+  const std::size_t hand_first = mesh.point_count();
+  add_cylinder(mesh, {0.51f, 0.65f, 0}, 0.12f, 0.3f);   // hand
+  const std::size_t hand_end = mesh.point_count();
+
+  auto leg_weight = [&](const SkinWeights& w) {
+    float most = 0.0f;
+    for (std::size_t i = hand_first; i < hand_end; ++i) most = std::max(most, weight_of(w, i, 1) + weight_of(w, i, 2));
+    return most;
+  };
+  const SkinWeights distance = deform::compute_automatic_weights(mesh, skeleton);
+  CHECK(leg_weight(distance) > 0.4f);  // the failure heat weights fix: about half the hand's weight on the leg
+  const deform::WeightsResult heat = deform::compute_heat_weights(mesh, skeleton);
+  check_contract(heat.weights, mesh.point_count(), 5);
+  CHECK(leg_weight(heat.weights) == 0.0f);
+  // And the leg keeps its own weights.
+  for (std::size_t i = 0; i < hand_first / 2; ++i)
+    CHECK(weight_of(heat.weights, i, 1) + weight_of(heat.weights, i, 2) + weight_of(heat.weights, i, 0) > 0.99f);
+  // Geodesic voxel weights: the path from the thigh into the hand goes through the pelvis and down the arm.
+  const deform::WeightsResult voxel = deform::compute_voxel_weights(mesh, skeleton);
+  check_contract(voxel.weights, mesh.point_count(), 5);
+  CHECK(leg_weight(voxel.weights) == 0.0f);
+}
+
+TEST_CASE("voxel weights on a two-bone cylinder: sums of 1, monotone along the axis, each end on its bone") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const deform::WeightsResult r = deform::compute_voxel_weights(mesh, two_bones());
+  check_contract(r.weights, mesh.point_count(), 2);
+  CHECK(r.warnings.empty());
+  const int rings = 21, sides = 12;
+  for (int s = 0; s < sides; ++s) {
+    float previous = -1.0f;
+    for (int ring = 0; ring < rings; ++ring) {
+      const float w = weight_of(r.weights, static_cast<std::size_t>(ring * sides + s), 1);
+      CHECK(w >= previous - 1e-5f);
+      previous = w;
+    }
+  }
+  CHECK(weight_of(r.weights, 0, 0) > 0.95f);
+  CHECK(weight_of(r.weights, static_cast<std::size_t>((rings - 1) * sides), 1) > 0.95f);
+}
+
+TEST_CASE("voxel weights: a piece no bone reaches through the volume is bound rigidly and reported") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const std::size_t box = mesh.point_count();
+  add_box(mesh, {1.0f, 1.2f, -0.1f}, {1.2f, 1.4f, 0.1f});
+  const Skeleton skeleton =
+      make_skeleton({bone(-1, {0, 0, 0}, "lower"), bone(0, {0, 1, 0}, "upper"), bone(0, {0, 0, 40}, "far")});
+  deform::VoxelWeightsOptions o;
+  o.resolution = 64;
+  const deform::WeightsResult r = deform::compute_voxel_weights(mesh, skeleton, o);
+  check_contract(r.weights, mesh.point_count(), 3);
+  REQUIRE(r.warnings.size() == 2);
+  CHECK(r.warnings[0] == "8 points (the first: point " + std::to_string(box) +
+                             ") reached by no bone through the volume: bound rigidly to the nearest bone");
+  CHECK(r.warnings[1] == "bone 'far' (id 2) gets no vertex");
+  for (std::size_t i = box; i < box + 8; ++i) CHECK(r.weights.weights[i][0] == 1.0f);
+  o.resolution = 4;
+  CHECK_THROWS_AS(deform::compute_voxel_weights(mesh, skeleton, o), deform::Error);
+}
+
+TEST_CASE("heat weights: islands the body hides from every bone are named, and weighted past their own surface") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  // A closed shell around a small box, beside the cylinder: the cylinder hides its bones from both.
+  const std::size_t shell = mesh.point_count();
+  add_box(mesh, {0.5f, 0.5f, -0.5f}, {1.5f, 1.5f, 0.5f});
+  const std::size_t inner = mesh.point_count();
+  add_box(mesh, {0.9f, 0.9f, -0.1f}, {1.1f, 1.1f, 0.1f});
+  const Skeleton skeleton = two_bones();
+  SUBCASE("by default they look again past their own triangles") {
+    const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton);
+    check_contract(r.weights, mesh.point_count(), 2);
+    REQUIRE(r.warnings.size() == 2);
+    CHECK(r.warnings[0] == "island of 8 points (from point " + std::to_string(shell) +
+                               ", around (1, 1, 0)) sees no bone past the rest of the mesh: weighted by the bones it "
+                               "sees past its own triangles");
+    CHECK(mentions(r.warnings, "island of 8 points (from point " + std::to_string(inner)));
+    // The shell takes weight from both bones (its lower corners more from the lower one).
+    CHECK(weight_of(r.weights, shell, 0) > weight_of(r.weights, shell + 2, 0));
+  }
+  SUBCASE("island_visibility = false: bound rigidly to the nearest bone, and named") {
+    deform::HeatWeightsOptions o;
+    o.island_visibility = false;
+    const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+    check_contract(r.weights, mesh.point_count(), 2);
+    REQUIRE(r.warnings.size() == 2);
+    CHECK(r.warnings[1] == "island of 8 points (from point " + std::to_string(inner) +
+                               ", around (1, 1, 0)) sees no bone: bound rigidly to the nearest, bone 'lower' (id 0)");
+    CHECK(mentions(r.warnings, "sees no bone: bound rigidly to the nearest, bone '"));
+    for (std::size_t i = shell; i < shell + 16; ++i) CHECK(r.weights.weights[i][0] == 1.0f);
+    for (std::size_t i = inner; i < inner + 8; ++i) CHECK(r.weights.bones[i][0] == 0);  // 4 votes each: the lower id
+  }
+}
+
+TEST_CASE("heat weights: a bone with no vertex is named; a point in no triangle gets a weight") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  mesh.positions.push_back({0.0f, 3.0f, 0.0f});  // in no triangle, seeing the upper bone
+  mesh.vertex_point.push_back(static_cast<std::uint32_t>(mesh.vertex_point.size()));
+  const Skeleton skeleton =
+      make_skeleton({bone(-1, {0, 0, 0}, "lower"), bone(0, {0, 1, 0}, "upper"), bone(0, {0, 0, 40}, "far")});
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton);
+  check_contract(r.weights, mesh.point_count(), 3);
+  REQUIRE(r.warnings.size() == 1);
+  CHECK(r.warnings[0] == "bone 'far' (id 2) gets no vertex");
+  CHECK(weight_of(r.weights, mesh.point_count() - 1, 1) == 1.0f);
+  CHECK(deform::bones_without_vertices(r.weights, skeleton, {1, 1, 0}).empty());
+}
+
+TEST_CASE("heat weights: points welded across a seam, the deforming mask, max_influences, invalid options") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = two_bones();
+  SUBCASE("a seam of duplicated points is one surface: both copies get the same weights") {
+    Mesh split = mesh;
+    const std::size_t copy = split.positions.size();
+    split.positions.push_back(split.positions[10 * 12]);
+    split.vertex_point.push_back(static_cast<std::uint32_t>(copy));
+    for (std::size_t t = 0; t < split.triangles.size(); t += 3)  // the first triangle using point 120 uses the copy
+      if (split.triangles[t] == 10 * 12) {
+        split.triangles[t] = static_cast<std::uint32_t>(copy);
+        break;
+      }
+    const deform::WeightsResult r = deform::compute_heat_weights(split, skeleton);
+    CHECK(r.weights.weights[copy] == r.weights.weights[10 * 12]);
+    CHECK(r.weights.bones[copy] == r.weights.bones[10 * 12]);
+  }
+  SUBCASE("a bone that does not deform gets nothing and is not reported") {
+    deform::HeatWeightsOptions o;
+    o.deforming = {1, 0};
+    const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+    for (std::size_t i = 0; i < mesh.point_count(); ++i) CHECK(weight_of(r.weights, i, 0) == 1.0f);
+    CHECK(r.warnings.empty());
+  }
+  SUBCASE("one influence") {
+    deform::HeatWeightsOptions o;
+    o.max_influences = 1;
+    check_contract(deform::compute_heat_weights(mesh, skeleton, o).weights, mesh.point_count(), 2, 1);
+  }
+  SUBCASE("invalid options and input throw") {
+    deform::HeatWeightsOptions o;
+    o.max_influences = 5;
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    o = {};
+    o.heat = 0.0f;
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    o = {};
+    o.deforming = {0, 0};
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    o.deforming = {1};
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    Mesh bad = mesh;
+    bad.positions[3].x = NAN;
+    CHECK_THROWS_AS(deform::compute_heat_weights(bad, skeleton), deform::Error);
+    bad = mesh;
+    bad.triangles[0] = 100000;
+    CHECK_THROWS_AS(deform::compute_heat_weights(bad, skeleton), deform::Error);
+  }
+  SUBCASE("an empty mesh gives no weights") {
+    CHECK(deform::compute_heat_weights(Mesh{}, skeleton).weights.size() == 0);
+  }
+}
+
+TEST_CASE("distance weights honour the deforming mask") {
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = make_skeleton({bone(-1, {0, 0, 0}), bone(0, {0, 1, 0}), bone(1, {0, 0.5f, 0})});
+  deform::AutoWeightsOptions o;
+  o.deforming = {1, 0, 1};
+  const SkinWeights w = deform::compute_automatic_weights(mesh, skeleton, o);
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) CHECK(weight_of(w, i, 1) == 0.0f);
+  o.deforming = {0, 0, 0};
+  CHECK_THROWS_AS(deform::compute_automatic_weights(mesh, skeleton, o), deform::Error);
+}

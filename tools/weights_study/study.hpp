@@ -1,0 +1,112 @@
+#pragma once
+// The weights study (docs/weights.md): how far automatic weights move a character's points from where the weights
+// its artist painted put them, over the character's own clips. Header-only so that the tool and the regression test
+// (tests/import/weights_study_test.cpp) measure the same way.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
+
+namespace weights_study {
+
+struct Figures {
+  double mean_percent = 0;               // mean point distance, % of the bind-pose bounding-box diagonal
+  double p99_percent = 0;                // 99th percentile of the point distances (all points × all samples)
+  double max_percent = 0;                // the largest
+  double strongest_differs_percent = 0;  // points whose strongest bone differs from the artist's
+  std::size_t poses = 0;                 // clip samples measured
+};
+
+// The bone with the largest weight of point i (the lower id on a tie).
+inline std::uint16_t strongest_bone(const deform::SkinWeights& w, std::size_t i) {
+  int best = 0;
+  for (int k = 1; k < deform::max_influences; ++k)
+    if (w.weights[i][k] > w.weights[i][best] ||
+        (w.weights[i][k] == w.weights[i][best] && w.weights[i][k] > 0.0f && w.bones[i][k] < w.bones[i][best]))
+      best = k;
+  return w.bones[i][best];
+}
+
+// Linear blend skinning of one point (weights renormalised, as SkinningJob does).
+inline glm::vec3 skin_point(const std::vector<glm::mat4>& palette, const deform::SkinWeights& w, std::size_t i,
+                            glm::vec3 p) {
+  glm::vec4 sum(0.0f);
+  float total = 0.0f;
+  for (int k = 0; k < deform::max_influences; ++k) {
+    const float x = w.weights[i][k];
+    if (x <= 0.0f) continue;
+    sum += x * (palette[w.bones[i][k]] * glm::vec4(p, 1.0f));
+    total += x;
+  }
+  return total > 0.0f ? glm::vec3(sum) / total : p;
+}
+
+// Plays every clip, `samples_per_clip` evenly spaced times each (t = duration · (k + 0.5) / samples), and compares
+// the points skinned with `automatic` and with `model.weights` (the artist's).
+inline Figures compare(const deform::Model& model, const std::vector<deform::Animation>& clips,
+                       const deform::SkinWeights& automatic, int samples_per_clip = 8) {
+  const deform::Skeleton& skeleton = model.skeleton;
+  const std::vector<glm::vec3>& points = model.mesh.positions;
+  const deform::Bounds bounds = deform::compute_bounds(points);
+  const double diagonal = std::max(static_cast<double>(glm::length(bounds.max - bounds.min)), 1e-30);
+  std::vector<float> distances;
+  std::vector<glm::mat4> world(skeleton.bone_count()), palette(skeleton.bone_count());
+  Figures f;
+  double total = 0;
+  for (const deform::Animation& clip : clips) {
+    for (int s = 0; s < samples_per_clip; ++s) {
+      deform::Pose pose = skeleton.bind_pose();
+      deform::SamplingJob sampling;
+      sampling.animation = &clip;
+      sampling.time = clip.duration * (static_cast<float>(s) + 0.5f) / static_cast<float>(samples_per_clip);
+      sampling.rotations = pose.rotations;
+      sampling.translations = pose.translations;
+      if (!sampling.run()) continue;
+      deform::LocalToWorldJob fk;
+      fk.skeleton = &skeleton;
+      fk.rotations = pose.rotations;
+      fk.translations = pose.translations;
+      fk.world = world;
+      fk.palette = palette;
+      if (!fk.run()) continue;
+      ++f.poses;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const glm::vec3 a = skin_point(palette, model.weights, i, points[i]);
+        const glm::vec3 b = skin_point(palette, automatic, i, points[i]);
+        const float d = glm::length(a - b);
+        distances.push_back(d);
+        total += d;
+      }
+    }
+  }
+  if (!distances.empty()) {
+    f.mean_percent = 100.0 * total / static_cast<double>(distances.size()) / diagonal;
+    const std::size_t at = std::min(distances.size() - 1, static_cast<std::size_t>(0.99 * double(distances.size())));
+    std::nth_element(distances.begin(), distances.begin() + static_cast<std::ptrdiff_t>(at), distances.end());
+    f.p99_percent = 100.0 * distances[at] / diagonal;
+    f.max_percent = 100.0 * *std::max_element(distances.begin(), distances.end()) / diagonal;
+  }
+  std::size_t differs = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    differs += strongest_bone(model.weights, i) != strongest_bone(automatic, i) ? 1 : 0;
+  f.strongest_differs_percent = points.empty() ? 0.0 : 100.0 * double(differs) / double(points.size());
+  return f;
+}
+
+// Per bone, 1 when the artist gave it weight on some point: the rig's deforming bones.
+inline std::vector<std::uint8_t> painted_bones(const deform::Model& model) {
+  std::vector<std::uint8_t> used(model.skeleton.bone_count(), 0);
+  for (std::size_t i = 0; i < model.weights.size(); ++i)
+    for (int k = 0; k < deform::max_influences; ++k)
+      if (model.weights.weights[i][k] > 0.0f) used[model.weights.bones[i][k]] = 1;
+  return used;
+}
+
+}  // namespace weights_study
