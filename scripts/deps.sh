@@ -3,7 +3,7 @@
 deform_packages=(
   build-essential cmake pkg-config python3 clang libclang-rt-14-dev
   libglm-dev doctest-dev libopenmesh-dev nlohmann-json3-dev libbenchmark-dev
-  libassimp-dev assimp-testmodels libtinygltf-dev
+  libassimp-dev assimp-testmodels libtinygltf-dev nodejs
   libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
 )
 

@@ -774,7 +774,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
         for (std::size_t i = 0; i + 2 < indices.size(); ++i)
           if (i % 2 == 0) triangle(indices[i], indices[i + 1], indices[i + 2]);
-          else triangle(indices[i + 1], indices[i], indices[i + 2]);
+          else triangle(indices[i + 2], indices[i + 1], indices[i]);  // odd triangles reversed to keep the winding
       } else {
         for (std::size_t i = 1; i + 1 < indices.size(); ++i) triangle(indices[0], indices[i], indices[i + 1]);
       }
