@@ -84,12 +84,38 @@ bool refuse_write(std::string* error, const std::string&, const std::vector<unsi
   return false;
 }
 
+// Whether a double converts to a finite float (a cast of a larger one is undefined behaviour).
+bool fits_float(double v) { return std::fabs(v) <= 3.0e38; }  // false for NaN too
+template <int N>
+bool fits_float(const glm::vec<N, double>& v) {
+  for (int i = 0; i < N; ++i)
+    if (!fits_float(v[i])) return false;
+  return true;
+}
+bool fits_float(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    if (!fits_float(m[c])) return false;
+  return true;
+}
+
+// Accessor values beyond this magnitude are refused: every product the reader forms of two of them stays a double.
+constexpr double max_accessor_value = 1e30;
+
 struct Reader {
   const tinygltf::Model& gltf;
   const std::string& path;
 
   [[noreturn]] void fail(const std::string& element, const std::string& message) const {
     throw Error::in_file(path, element, message);
+  }
+  // `v` as floats, or an error naming `element` when it does not fit.
+  glm::vec3 narrow(const glm::dvec3& v, const std::string& element) const {
+    if (!fits_float(v)) fail(element, "a value is not finite or too large for a float");
+    return glm::vec3(v);
+  }
+  glm::mat4 narrow(const glm::dmat4& m, const std::string& element) const {
+    if (!fits_float(m)) fail(element, "a transform is not finite or too large for a float");
+    return glm::mat4(m);
   }
 
   static std::size_t component_size(int type) {
@@ -232,7 +258,7 @@ struct Reader {
       }
     }
     for (double v : out)
-      if (!std::isfinite(v)) fail(element, "holds a value that is not finite");
+      if (!(std::fabs(v) <= max_accessor_value)) fail(element, "holds a value that is not finite or beyond ±1e30");
     return out;
   }
 };
@@ -330,7 +356,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     NodeInfo& info = nodes[i];
     if (n.matrix.size() == 16) {
       info.local = to_dmat4(n.matrix);
-      const Split s = split(glm::mat4(info.local));
+      const Split s = split(reader.narrow(info.local, element + ".matrix"));
       info.translation = glm::dvec3(info.local[3]);
       info.rotation = glm::dquat(s.rotation);
       info.scale = glm::dvec3(s.axis_scale);
@@ -341,7 +367,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       if (n.scale.size() == 3) info.scale = {n.scale[0], n.scale[1], n.scale[2]};
       info.local = trs(info.translation, info.rotation, info.scale);
     }
-    if (!finite(glm::mat4(info.local))) reader.fail(element, "transform is not finite");
+    if (!finite(reader.narrow(info.local, element))) reader.fail(element, "transform is not finite");
   }
   // Roots of the scene shown: the default scene, else the first, else every node without a parent.
   std::vector<std::int32_t> roots;
@@ -374,7 +400,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         reader.fail("nodes[" + std::to_string(n) + "]", "node tree deeper than " + std::to_string(max_node_depth));
       info.in_scene = true;
       info.global = info.parent < 0 ? info.local : nodes[static_cast<std::size_t>(info.parent)].global * info.local;
-      if (!finite(glm::mat4(info.global))) reader.fail("nodes[" + std::to_string(n) + "]", "world transform is not finite");
+      reader.narrow(info.global, "nodes[" + std::to_string(n) + "] (world transform)");
       order.push_back(n);
       const auto& children = gltf.nodes[static_cast<std::size_t>(n)].children;
       for (auto c = children.rbegin(); c != children.rend(); ++c) stack.emplace_back(*c, depth + 1);
@@ -442,7 +468,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         for (int c = 0; c < 4; ++c)
           for (int r = 0; r < 4; ++r) ibm[c][r] = m[16 * j + static_cast<std::size_t>(c * 4 + r)];
         skins[s].bind[j] = glm::inverse(ibm);
-        if (!finite(glm::mat4(skins[s].bind[j])) || std::fabs(glm::determinant(ibm)) < 1e-30)
+        if (!fits_float(skins[s].bind[j]) || std::fabs(glm::determinant(ibm)) < 1e-30)
           reader.fail(element + ".inverseBindMatrices", "matrix " + std::to_string(j) + " is singular or not finite");
       }
     }
@@ -582,7 +608,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       material.name = name;
       const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
       if (factor.size() == 4 && std::all_of(factor.begin(), factor.end(), [](double v) { return std::isfinite(v); })) {
-        material.diffuse = {factor[0], factor[1], factor[2]};
+        material.diffuse = {std::clamp(factor[0], 0.0, 1.0), std::clamp(factor[1], 0.0, 1.0),
+                            std::clamp(factor[2], 0.0, 1.0)};
         material.opacity = static_cast<float>(std::clamp(factor[3], 0.0, 1.0));
       }
       const int texture = source.pbrMetallicRoughness.baseColorTexture.index;
@@ -721,8 +748,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
           }
         }
         const glm::dvec3 raw{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
-        const glm::vec3 position = glm::vec3(to_world * glm::dvec4(raw, 1.0));
-        if (!finite(position)) reader.fail(element + " POSITION", "vertex " + std::to_string(v) + " is not finite");
+        const glm::vec3 position = reader.narrow(glm::dvec3(to_world * glm::dvec4(raw, 1.0)),
+                                                 element + " POSITION: vertex " + std::to_string(v));
         const auto [found, inserted] =
             point_of_key.emplace(point_key(position, influences), static_cast<std::uint32_t>(mesh.positions.size()));
         if (inserted) {
@@ -825,7 +852,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   for (std::size_t b = 0; b < bones.size(); ++b) {
     if (node_of_bone[b] < 0) continue;
     const NodeInfo& n = nodes[static_cast<std::size_t>(node_of_bone[b])];
-    rest[b] = {glm::vec3(translation_scale[b] * n.translation), glm::quat(glm::normalize(n.rotation))};
+    rest[b] = {reader.narrow(translation_scale[b] * n.translation, "nodes[" + std::to_string(node_of_bone[b]) + "]"),
+               glm::quat(glm::normalize(n.rotation))};
     const glm::quat r = bind.rotations[b];
     differs[b] = glm::length(rest[b].first - bind.translations[b]) > 1e-6f * model_size ||
                  std::min(glm::length(rest[b].second - r), glm::length(rest[b].second + r)) > 1e-6f;
@@ -913,7 +941,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       };
       if (target == "translation") {
         fill(out.translation, [&](const double* v, bool) {
-          return glm::vec3(translation_scale[b] * glm::dvec3(v[0], v[1], v[2]));
+          return reader.narrow(translation_scale[b] * glm::dvec3(v[0], v[1], v[2]), sampler_element + ".output");
         });
       } else if (target == "rotation") {
         fill(out.rotation, [&](const double* v, bool value) {
@@ -922,7 +950,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         });
       } else {
         fill(out.scale, [&](const double* v, bool) {
-          return glm::vec3(glm::dvec3(v[0], v[1], v[2]) / node.scale);
+          return reader.narrow(glm::dvec3(v[0], v[1], v[2]) / node.scale, sampler_element + ".output");
         });
         const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(), [](glm::vec3 s) {
           return glm::length(s - glm::vec3(1.0f)) <= 1e-4f;
