@@ -357,6 +357,13 @@ generated.append((g.save("eight_influences.gltf"), "libdeform keeps the stronges
 for path, gap in generated:
     compare(os.path.basename(path), path, known_gap=gap)
 
+# `deform info` names the samplers each clip uses.
+for name, expected in (("step.gltf", ["step"]), ("cubic.gltf", ["cubic_spline"]), ("two_rigs.gltf", ["linear"])):
+    p = subprocess.run([deform, "info", os.path.join(work, name)], capture_output=True, text=True, timeout=120)
+    got = [c.get("interpolation") for c in json.loads(p.stdout).get("clips", [])] if p.returncode == 0 else p.stderr
+    if got != [expected]:
+        failures.append("deform info %s: clip interpolation %s, expected %s" % (name, got, [expected]))
+
 # --- the glTF 2.0 models Debian's assimp-testmodels ships ---
 gaps = {"AnimatedMorphCube.gltf": "morph targets are not read"}
 for path in sorted(glob.glob(os.path.join(models, "glTF2", "**", "*.gl*"), recursive=True)):
