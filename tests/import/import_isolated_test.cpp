@@ -98,7 +98,7 @@ TEST_CASE("a deep node chain that overflows Assimp's stack is an error, not a cr
   CHECK(message != "no error");
 }
 
-TEST_CASE("a 2 KB glTF that makes Assimp expand 2^24 nodes is stopped at the memory limit") {
+TEST_CASE("a 2 KB glTF whose nodes form a DAG of 2^24 paths is refused or stopped at the memory limit") {
   // Two nodes per level, each the parent of both nodes of the next level: Assimp copies every path, 2^24 leaves.
   const fs::path dag = fs::temp_directory_path() / "deform_isolated_dag.gltf";
   {
@@ -119,7 +119,9 @@ TEST_CASE("a 2 KB glTF that makes Assimp expand 2^24 nodes is stopped at the mem
   const std::string message = failure(dag.string(), limits);
   CAPTURE(message);
   CHECK(message.find(dag.string()) == 0);
-  CHECK((message.find("bad_alloc") != std::string::npos || message.find("memory") != std::string::npos));
+  // The glTF reader refuses a node with two parents; Assimp (through the same limits) runs out of memory.
+  CHECK((message.find("bad_alloc") != std::string::npos || message.find("memory") != std::string::npos ||
+         message.find("more than one parent") != std::string::npos));
 }
 
 TEST_CASE("a .glb whose header claims a 4 GB JSON chunk is refused without allocating it") {

@@ -93,8 +93,21 @@ int run(const std::vector<std::string>& argv) {
     if (imported.rigged) {
       info["bones"] = imported.model.skeleton.bone_count();
       Json clips = Json::array();
-      for (const deform::Animation& clip : imported.clips)
-        clips.push_back({{"name", clip.name}, {"duration", deform::shortest_double(clip.duration)}, {"channels", clip.channels.size()}});
+      for (const deform::Animation& clip : imported.clips) {
+        // The samplers the clip's tracks of two keys or more use (one key holds a value), in the order step,
+        // linear, cubic_spline.
+        bool used[3] = {false, false, false};
+        for (const deform::Channel& channel : clip.channels) {
+          if (channel.translation.times.size() > 1) used[static_cast<int>(channel.translation.interpolation)] = true;
+          if (channel.rotation.times.size() > 1) used[static_cast<int>(channel.rotation.interpolation)] = true;
+        }
+        Json interpolation = Json::array();
+        const char* names[3] = {"step", "linear", "cubic_spline"};
+        for (int i = 0; i < 3; ++i)
+          if (used[i]) interpolation.push_back(names[i]);
+        clips.push_back({{"name", clip.name}, {"duration", deform::shortest_double(clip.duration)},
+                         {"channels", clip.channels.size()}, {"interpolation", std::move(interpolation)}});
+      }
       info["clips"] = std::move(clips);
     }
 #endif
@@ -120,7 +133,8 @@ const Command info_command = {
     "            Reader warnings (a missing MTL or texture) go to stderr.\n"
     "  MODEL     any format the importer reads (glTF, FBX, .x, ...; builds with deform::import): the mesh keys\n"
     "            (\"vertices\": distinct points) and, when rigged, \"bones\": B and \"clips\": [{\"name\",\n"
-    "            \"duration\" (seconds), \"channels\"}]. Importer warnings go to stderr.\n"
+    "            \"duration\" (seconds), \"channels\", \"interpolation\": the samplers its tracks use, of step,\n"
+    "            linear, cubic_spline}]. Importer warnings go to stderr.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
     "line, and the bone or element); 1 any other failure.\n",

@@ -18,11 +18,13 @@
 #include "deform/io/atomic_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
+#include "import/import_common.hpp"
 #include "runtime/finite.hpp"
 namespace deform {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace import_detail;
 
 glm::mat4 to_glm(const aiMatrix4x4& m) {
   // aiMatrix4x4 is row-major with column vectors (translation in a4, b4, c4); glm is column-major.
@@ -31,39 +33,6 @@ glm::mat4 to_glm(const aiMatrix4x4& m) {
 }
 glm::vec3 to_glm(const aiVector3D& v) { return {v.x, v.y, v.z}; }
 glm::quat to_glm(const aiQuaternion& q) { return glm::quat(q.w, q.x, q.y, q.z); }
-
-// A transform split into its rigid part (rotation, translation) and a uniform scale. `similarity` is false when
-// the matrix has non-uniform scale, shear or a mirror, which a Skeleton cannot hold (the rigid part is then the
-// nearest rotation of the normalised columns).
-struct Split {
-  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
-  glm::vec3 translation{0.0f};
-  glm::vec3 axis_scale{1.0f};
-  float scale = 1.0f;
-  bool similarity = true;
-  glm::mat4 rigid() const { return glm::translate(glm::mat4(1.0f), translation) * glm::mat4_cast(rotation); }
-};
-
-Split split(const glm::mat4& m) {
-  Split s;
-  s.translation = glm::vec3(m[3]);
-  glm::mat3 r(m);
-  const float det = glm::determinant(r);
-  for (int i = 0; i < 3; ++i) {
-    s.axis_scale[i] = glm::length(r[i]);
-    if (s.axis_scale[i] > 0.0f) r[i] /= s.axis_scale[i];
-  }
-  if (det < 0.0f) r[2] = -r[2];
-  s.rotation = glm::normalize(glm::quat_cast(r));
-  s.scale = std::cbrt(std::fabs(det));
-  constexpr float tolerance = 1e-3f;
-  s.similarity = det > 0.0f;
-  for (int i = 0; i < 3; ++i) {
-    s.similarity = s.similarity && std::fabs(s.axis_scale[i] - s.scale) <= tolerance * s.scale &&
-                   std::fabs(glm::dot(r[i], r[(i + 1) % 3])) <= tolerance;
-  }
-  return s;
-}
 
 // The node tree, flattened in pre-order (parents before children), with rest-pose transforms.
 struct Node {
@@ -80,39 +49,6 @@ void flatten(const aiNode* node, std::int32_t parent, std::vector<Node>& out, st
   out.push_back({node, parent, local, global});
   const auto self = static_cast<std::int32_t>(out.size() - 1);
   for (unsigned i = 0; i < node->mNumChildren; ++i) flatten(node->mChildren[i], self, out, depth + 1);
-}
-
-// Length of the valid UTF-8 sequence starting at `i` (1 to 4), or 0 when the bytes there are not one.
-std::size_t utf8_length(const std::string& s, std::size_t i) {
-  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
-  const unsigned char lead = byte(i);
-  const std::size_t n = lead < 0x80 ? 1 : (lead >> 5) == 0x6 ? 2 : (lead >> 4) == 0xE ? 3 : (lead >> 3) == 0x1E ? 4 : 0;
-  if (n == 0 || i + n > s.size()) return 0;
-  for (std::size_t k = 1; k < n; ++k)
-    if ((byte(i + k) & 0xC0) != 0x80) return 0;
-  return n;
-}
-
-// A bone name that fits a .sk record: valid UTF-8 without control characters (each invalid byte or control character
-// becomes '_'), at most 79 bytes, cut at a character boundary.
-std::string fit_name(const std::string& raw, std::size_t& shortened) {
-  std::string name;
-  for (std::size_t i = 0; i < raw.size();) {
-    const std::size_t n = utf8_length(raw, i);
-    const auto lead = static_cast<unsigned char>(raw[i]);
-    if (n == 0 || lead < 0x20 || lead == 0x7f) {
-      name.push_back('_');
-      ++i;
-    } else {
-      name.append(raw, i, n);
-      i += n;
-    }
-  }
-  if (name.size() <= 79) return name;
-  std::size_t end = 79;
-  while (end > 0 && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) --end;
-  ++shortened;
-  return name.substr(0, end);
 }
 
 std::string material_name(const aiMaterial& material, std::size_t index, std::vector<std::string>& used) {
@@ -156,34 +92,6 @@ Material convert_material(const aiScene& scene, const aiMaterial& source, std::s
   return m;
 }
 
-// One vertex's skin influences, strongest first; the key a point is merged by (with the exact position).
-struct Influences {
-  std::array<std::uint16_t, 4> bones{};
-  std::array<float, 4> weights{};
-};
-
-struct PointKey {
-  std::array<std::uint32_t, 11> bits;
-  bool operator==(const PointKey&) const = default;
-};
-struct PointKeyHash {
-  std::size_t operator()(const PointKey& key) const noexcept {
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the words
-    for (std::uint32_t word : key.bits) h = (h ^ word) * 1099511628211ull;
-    return static_cast<std::size_t>(h);
-  }
-};
-
-PointKey point_key(glm::vec3 position, const Influences& influences) {
-  PointKey key{};
-  std::memcpy(key.bits.data(), &position, sizeof(float) * 3);
-  for (int i = 0; i < 4; ++i) {
-    key.bits[static_cast<std::size_t>(3 + i)] = influences.bones[static_cast<std::size_t>(i)];
-    std::memcpy(&key.bits[static_cast<std::size_t>(7 + i)], &influences.weights[static_cast<std::size_t>(i)], 4);
-  }
-  return key;
-}
-
 // Key times must increase strictly: a key at or before its predecessor is dropped (counted in `dropped`).
 template <class T, class Key, class Convert>
 Track<T> convert_track(const Key* keys, unsigned count, double ticks_per_second, Convert convert, std::size_t& dropped,
@@ -220,6 +128,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   if (!fs::is_regular_file(path, error)) throw Error::in_file(path, "", "no such file");
   const auto size = fs::file_size(path, error);
   if (error || size > max_file_bytes) throw Error::in_file(path, "", "cannot be read or larger than 1 GiB");
+  if (is_gltf_path(path)) return import_gltf(path, options);
 
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // no $AssimpFbx$ helper nodes

@@ -1,7 +1,8 @@
 #pragma once
-// Importer (optional component deform::import, link deform::import): rigged characters from any format Assimp reads
-// (glTF 2.0, FBX, Collada, DirectX .x, IQM, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md
-// explains every conversion; in short:
+// Importer (optional component deform::import, link deform::import): rigged characters from glTF 2.0 (.gltf, .glb:
+// a reader of our own on tinygltf, skins bound by node index, samplers kept) and from any other format Assimp reads
+// (FBX, Collada, DirectX .x, IQM, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md explains every
+// conversion (glTF's differences in its own section); in short:
 //  - all meshes merge into one Mesh in the scene's world space (node transforms applied), one submesh per mesh
 //    instance, with its materials; texture paths are resolved relative to the model's folder.
 //  - a *point* (Mesh::positions, .skw line, OBJ `v`) is a unique (exact bind position, skin influences) pair: Assimp

@@ -1,0 +1,994 @@
+// glTF 2.0 reader on tinygltf (import.hpp, docs/import.md). tinygltf parses the JSON and decodes the buffers; every
+// index and byte range it hands over is checked here before it is used, because tinygltf checks few of them.
+//
+// tinygltf is compiled here, inside a namespace of our own, rather than linked from Debian's libtinygltf: that
+// library's Model does not match its header's (freeing one crashes), this keeps stb_image (image decoding) and
+// tinygltf's own file access out of the importer, and it cannot clash with another tinygltf in the same program.
+// The standard headers tinygltf includes are included first, so that it sees them already defined.
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#define TINYGLTF_NO_FS
+#define TINYGLTF_NO_INCLUDE_JSON
+namespace deform_gltf_import {
+#include <tiny_gltf.h>
+}  // namespace deform_gltf_import
+namespace tinygltf = deform_gltf_import::tinygltf;
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <set>
+#include <unordered_map>
+
+#include "deform/io/atomic_file.hpp"
+#include "deform/runtime/error.hpp"
+#include "import/import_common.hpp"
+#include "runtime/finite.hpp"
+namespace deform::import_detail {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Elements an accessor may hold: its bytes must lie in its buffer, so only a sparse accessor without a buffer view
+// (all zeros plus a few substitutions) could ask for more; this caps what it makes us allocate.
+constexpr std::size_t max_bufferless_elements = std::size_t{1} << 26;
+constexpr int max_node_depth = 10000;
+
+// Images are not decoded (textures are referenced by path, never read): this loader accepts every image untouched.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+// tinygltf reads the files a .gltf names (buffers, images) through these: regular files only (not /dev/zero or a
+// FIFO), at most 1 GiB each; nothing is ever written.
+bool file_exists(const std::string& path, void*) {
+  std::error_code error;
+  return fs::is_regular_file(path, error);
+}
+std::string expand_path(const std::string& path, void*) { return path; }
+bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const std::string& path, void*) {
+  try {
+    if (!file_exists(path, nullptr)) throw Error::in_file(path, "", "not a regular file");
+    const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+    out->assign(bytes.begin(), bytes.end());
+    return true;
+  } catch (const std::exception& e) {
+    if (error != nullptr) *error += e.what();
+    return false;
+  }
+}
+bool refuse_write(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (error != nullptr) *error += "the importer writes no file";
+  return false;
+}
+
+// Whether a double converts to a finite float (a cast of a larger one is undefined behaviour).
+bool fits_float(double v) { return std::fabs(v) <= 3.0e38; }  // false for NaN too
+template <int N>
+bool fits_float(const glm::vec<N, double>& v) {
+  for (int i = 0; i < N; ++i)
+    if (!fits_float(v[i])) return false;
+  return true;
+}
+bool fits_float(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    if (!fits_float(m[c])) return false;
+  return true;
+}
+
+// Accessor values beyond this magnitude are refused: every product the reader forms of two of them stays a double.
+constexpr double max_accessor_value = 1e30;
+
+struct Reader {
+  const tinygltf::Model& gltf;
+  const std::string& path;
+
+  [[noreturn]] void fail(const std::string& element, const std::string& message) const {
+    throw Error::in_file(path, element, message);
+  }
+  // `v` as floats, or an error naming `element` when it does not fit.
+  glm::vec3 narrow(const glm::dvec3& v, const std::string& element) const {
+    if (!fits_float(v)) fail(element, "a value is not finite or too large for a float");
+    return glm::vec3(v);
+  }
+  glm::mat4 narrow(const glm::dmat4& m, const std::string& element) const {
+    if (!fits_float(m)) fail(element, "a transform is not finite or too large for a float");
+    return glm::mat4(m);
+  }
+
+  static std::size_t component_size(int type) {
+    switch (type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE:
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+      case TINYGLTF_COMPONENT_TYPE_SHORT:
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+      default: return 0;
+    }
+  }
+  static std::size_t component_count(int type) {
+    switch (type) {
+      case TINYGLTF_TYPE_SCALAR: return 1;
+      case TINYGLTF_TYPE_VEC2: return 2;
+      case TINYGLTF_TYPE_VEC3: return 3;
+      case TINYGLTF_TYPE_VEC4: return 4;
+      case TINYGLTF_TYPE_MAT4: return 16;
+      default: return 0;  // MAT2 and MAT3 (column padding) are used by nothing read here
+    }
+  }
+
+  // One component at `p` as a number: normalised integers map to [0, 1] or [-1, 1] (glTF 2.0 §3.11), others as is.
+  static double component(const unsigned char* p, int type, bool normalized) {
+    switch (type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        std::int8_t v;
+        std::memcpy(&v, p, 1);
+        return normalized ? std::max(v / 127.0, -1.0) : v;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        std::int16_t v;
+        std::memcpy(&v, p, 2);
+        return normalized ? std::max(v / 32767.0, -1.0) : v;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        std::uint16_t v;
+        std::memcpy(&v, p, 2);
+        return normalized ? v / 65535.0 : v;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        std::uint32_t v;
+        std::memcpy(&v, p, 4);
+        return normalized ? v / 4294967295.0 : v;
+      }
+      default: {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+    }
+  }
+
+  // The bytes of buffer view `index` after checking that they lie inside their buffer.
+  std::pair<const unsigned char*, std::size_t> view_bytes(int index, const std::string& element) const {
+    if (index < 0 || static_cast<std::size_t>(index) >= gltf.bufferViews.size())
+      fail(element, "bufferView " + std::to_string(index) + " does not exist");
+    const tinygltf::BufferView& view = gltf.bufferViews[static_cast<std::size_t>(index)];
+    const std::string view_element = "bufferViews[" + std::to_string(index) + "]";
+    if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= gltf.buffers.size())
+      fail(view_element, "buffer " + std::to_string(view.buffer) + " does not exist");
+    const auto& data = gltf.buffers[static_cast<std::size_t>(view.buffer)].data;
+    if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+      fail(view_element, "bytes " + std::to_string(view.byteOffset) + " + " + std::to_string(view.byteLength) +
+                             " lie outside buffer " + std::to_string(view.buffer) + " (" +
+                             std::to_string(data.size()) + " bytes)");
+    return {data.data() + view.byteOffset, view.byteLength};
+  }
+
+  // Accessor `index` as count × components numbers, sparse substitutions applied. `want` lists the accepted
+  // component counts (element types); every byte read is checked against its buffer first.
+  std::vector<double> read(int index, std::initializer_list<std::size_t> want, const std::string& use,
+                           std::size_t* components_out = nullptr) const {
+    if (index < 0 || static_cast<std::size_t>(index) >= gltf.accessors.size())
+      fail(use, "accessor " + std::to_string(index) + " does not exist");
+    const tinygltf::Accessor& a = gltf.accessors[static_cast<std::size_t>(index)];
+    const std::string element = "accessors[" + std::to_string(index) + "] (" + use + ")";
+    const std::size_t components = component_count(a.type);
+    const std::size_t size = component_size(a.componentType);
+    if (components == 0 || std::find(want.begin(), want.end(), components) == want.end())
+      fail(element, "element type " + std::to_string(a.type) + " is not what " + use + " needs");
+    if (size == 0) fail(element, "componentType " + std::to_string(a.componentType) + " is not a glTF type");
+    if (components_out != nullptr) *components_out = components;
+    const std::size_t element_bytes = components * size;
+    std::vector<double> out;
+    if (a.bufferView >= 0) {
+      const auto [bytes, length] = view_bytes(a.bufferView, element);
+      const tinygltf::BufferView& view = gltf.bufferViews[static_cast<std::size_t>(a.bufferView)];
+      const std::size_t stride = view.byteStride == 0 ? element_bytes : view.byteStride;
+      if (stride < element_bytes) fail(element, "byteStride " + std::to_string(stride) + " is shorter than an element");
+      if (a.count > 0) {
+        const bool fits = a.byteOffset <= length && (a.count - 1) <= (length - a.byteOffset) / stride &&
+                          (a.count - 1) * stride + element_bytes <= length - a.byteOffset;
+        if (!fits)
+          fail(element, std::to_string(a.count) + " elements from byte " + std::to_string(a.byteOffset) +
+                            " run past the end of bufferView " + std::to_string(a.bufferView) + " (" +
+                            std::to_string(length) + " bytes)");
+      }
+      out.resize(a.count * components);
+      for (std::size_t i = 0; i < a.count; ++i) {
+        const unsigned char* p = bytes + a.byteOffset + i * stride;
+        for (std::size_t c = 0; c < components; ++c)
+          out[i * components + c] = component(p + c * size, a.componentType, a.normalized);
+      }
+    } else {
+      if (a.count > max_bufferless_elements)
+        fail(element, std::to_string(a.count) + " elements without a bufferView (at most " +
+                          std::to_string(max_bufferless_elements) + ")");
+      out.assign(a.count * components, 0.0);
+    }
+    if (a.sparse.isSparse) {
+      const std::string sparse = element + ".sparse";
+      if (a.sparse.count < 0 || static_cast<std::size_t>(a.sparse.count) > a.count)
+        fail(sparse, "count " + std::to_string(a.sparse.count) + " is not within the accessor's " +
+                         std::to_string(a.count));
+      const auto n = static_cast<std::size_t>(a.sparse.count);
+      const int index_type = a.sparse.indices.componentType;
+      const std::size_t index_size = component_size(index_type);
+      if (index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+          index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        fail(sparse + ".indices", "componentType " + std::to_string(index_type) + " is not an unsigned integer");
+      const auto [ibytes, ilength] = view_bytes(a.sparse.indices.bufferView, sparse + ".indices");
+      const auto [vbytes, vlength] = view_bytes(a.sparse.values.bufferView, sparse + ".values");
+      const auto ioffset = static_cast<std::size_t>(std::max(a.sparse.indices.byteOffset, 0));
+      const auto voffset = static_cast<std::size_t>(std::max(a.sparse.values.byteOffset, 0));
+      if (ioffset > ilength || n > (ilength - ioffset) / index_size)
+        fail(sparse + ".indices", std::to_string(n) + " indices run past the end of their bufferView");
+      if (voffset > vlength || n > (vlength - voffset) / element_bytes)
+        fail(sparse + ".values", std::to_string(n) + " values run past the end of their bufferView");
+      for (std::size_t k = 0; k < n; ++k) {
+        const auto target = static_cast<std::size_t>(component(ibytes + ioffset + k * index_size, index_type, false));
+        if (target >= a.count)
+          fail(sparse + ".indices", "index " + std::to_string(target) + " is not below count " + std::to_string(a.count));
+        for (std::size_t c = 0; c < components; ++c)
+          out[target * components + c] =
+              component(vbytes + voffset + k * element_bytes + c * size, a.componentType, a.normalized);
+      }
+    }
+    for (double v : out)
+      if (!(std::fabs(v) <= max_accessor_value)) fail(element, "holds a value that is not finite or beyond ±1e30");
+    return out;
+  }
+};
+
+glm::dmat4 to_dmat4(const std::vector<double>& m) {
+  glm::dmat4 out(1.0);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) out[c][r] = m[static_cast<std::size_t>(c * 4 + r)];
+  return out;
+}
+
+struct NodeInfo {
+  std::int32_t parent = -1;
+  glm::dvec3 translation{0.0};
+  glm::dquat rotation{1.0, 0.0, 0.0, 0.0};
+  glm::dvec3 scale{1.0};
+  glm::dmat4 local{1.0};
+  glm::dmat4 global{1.0};
+  bool in_scene = false;
+};
+
+glm::dmat4 trs(glm::dvec3 t, glm::dquat r, glm::dvec3 s) {
+  return glm::translate(glm::dmat4(1.0), t) * glm::mat4_cast(r) * glm::scale(glm::dmat4(1.0), s);
+}
+
+}  // namespace
+
+bool is_gltf_path(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".gltf" || extension == ".glb";
+}
+
+ImportedModel import_gltf(const std::string& path, const ImportOptions& options) {
+  // --- parse ---
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, nullptr});
+  tinygltf::Model gltf;
+  std::string error, warning;
+  const std::string base = fs::path(path).parent_path().string();
+  bool loaded = false;
+  const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error::in_file(path, "", "larger than 4 GiB");
+  if (binary) {
+    // The GLB header's lengths are checked here: tinygltf adds them in 32 bits.
+    std::uint32_t header[5] = {};
+    if (bytes.size() < 20) throw Error::in_file(path, "GLB header", "shorter than 20 bytes");
+    std::memcpy(header, bytes.data(), 20);
+    if (header[1] != 2) throw Error::in_file(path, "GLB header", "version " + std::to_string(header[1]) + ", not 2");
+    if (header[2] > bytes.size() || header[2] < 20)
+      throw Error::in_file(path, "GLB header", "length " + std::to_string(header[2]) + " is not the file's " +
+                                                   std::to_string(bytes.size()) + " bytes");
+    if (header[4] != 0x4E4F534Au || std::uint64_t{header[3]} + 20 > header[2])
+      throw Error::in_file(path, "GLB header", "the first chunk is not JSON within the file (" +
+                                                   std::to_string(header[3]) + " bytes claimed)");
+    loaded = loader.LoadBinaryFromMemory(&gltf, &error, &warning, bytes.data(),
+                                         static_cast<unsigned int>(bytes.size()), base);
+  } else {
+    loaded = loader.LoadASCIIFromString(&gltf, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
+                                        static_cast<unsigned int>(bytes.size()), base);
+  }
+  if (!loaded) {
+    while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
+    std::replace(error.begin(), error.end(), '\n', ' ');
+    throw Error::in_file(path, "", "not a valid glTF 2.0 file: " + (error.empty() ? std::string("unreadable") : error));
+  }
+  const Reader reader{gltf, path};
+
+  ImportedModel result;
+  std::vector<std::string>& warnings = result.warnings;
+  result.model.name = fs::path(path).stem().string();
+  for (const std::string& required : gltf.extensionsRequired) {
+    const bool harmless = required == "KHR_mesh_quantization" || required == "KHR_texture_transform" ||
+                          required.rfind("KHR_materials_", 0) == 0 || required == "KHR_texture_basisu" ||
+                          required == "KHR_lights_punctual";
+    if (!harmless) reader.fail("extensionsRequired", required + " is not supported");
+  }
+
+  // --- nodes: a forest (one parent each, no cycles), local and world transforms in double precision ---
+  const std::size_t node_count = gltf.nodes.size();
+  std::vector<NodeInfo> nodes(node_count);
+  for (std::size_t i = 0; i < node_count; ++i) {
+    const tinygltf::Node& n = gltf.nodes[i];
+    const std::string element = "nodes[" + std::to_string(i) + "]";
+    for (int child : n.children) {
+      if (child < 0 || static_cast<std::size_t>(child) >= node_count)
+        reader.fail(element + ".children", "node " + std::to_string(child) + " does not exist");
+      NodeInfo& c = nodes[static_cast<std::size_t>(child)];
+      if (c.parent >= 0 || static_cast<std::size_t>(child) == i)
+        reader.fail(element + ".children", "node " + std::to_string(child) + " has more than one parent");
+      c.parent = static_cast<std::int32_t>(i);
+    }
+    NodeInfo& info = nodes[i];
+    if (n.matrix.size() == 16) {
+      info.local = to_dmat4(n.matrix);
+      const Split s = split(reader.narrow(info.local, element + ".matrix"));
+      info.translation = glm::dvec3(info.local[3]);
+      info.rotation = glm::dquat(s.rotation);
+      info.scale = glm::dvec3(s.axis_scale);
+    } else {
+      if (n.translation.size() == 3) info.translation = {n.translation[0], n.translation[1], n.translation[2]};
+      if (n.rotation.size() == 4)
+        info.rotation = glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]));
+      if (n.scale.size() == 3) info.scale = {n.scale[0], n.scale[1], n.scale[2]};
+      info.local = trs(info.translation, info.rotation, info.scale);
+    }
+    if (!finite(reader.narrow(info.local, element))) reader.fail(element, "transform is not finite");
+  }
+  // Roots of the scene shown: the default scene, else the first, else every node without a parent.
+  std::vector<std::int32_t> roots;
+  if (!gltf.scenes.empty()) {
+    const int scene = gltf.defaultScene >= 0 ? gltf.defaultScene : 0;
+    if (static_cast<std::size_t>(scene) >= gltf.scenes.size())
+      reader.fail("scene", "scene " + std::to_string(scene) + " does not exist");
+    for (int n : gltf.scenes[static_cast<std::size_t>(scene)].nodes) {
+      if (n < 0 || static_cast<std::size_t>(n) >= node_count)
+        reader.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " does not exist");
+      if (nodes[static_cast<std::size_t>(n)].parent >= 0)
+        reader.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " is not a root");
+      roots.push_back(n);
+    }
+  } else {
+    for (std::size_t i = 0; i < node_count; ++i)
+      if (nodes[i].parent < 0) roots.push_back(static_cast<std::int32_t>(i));
+  }
+  // Pre-order over the scene (iterative: node chains may be deep); a node reached twice means a cycle.
+  std::vector<std::int32_t> order;
+  {
+    std::vector<std::pair<std::int32_t, int>> stack;
+    for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.emplace_back(*r, 0);
+    while (!stack.empty()) {
+      const auto [n, depth] = stack.back();
+      stack.pop_back();
+      NodeInfo& info = nodes[static_cast<std::size_t>(n)];
+      if (info.in_scene) reader.fail("nodes[" + std::to_string(n) + "]", "is part of a cycle");
+      if (depth > max_node_depth)
+        reader.fail("nodes[" + std::to_string(n) + "]", "node tree deeper than " + std::to_string(max_node_depth));
+      info.in_scene = true;
+      info.global = info.parent < 0 ? info.local : nodes[static_cast<std::size_t>(info.parent)].global * info.local;
+      reader.narrow(info.global, "nodes[" + std::to_string(n) + "] (world transform)");
+      order.push_back(n);
+      const auto& children = gltf.nodes[static_cast<std::size_t>(n)].children;
+      for (auto c = children.rbegin(); c != children.rend(); ++c) stack.emplace_back(*c, depth + 1);
+    }
+  }
+
+  // --- mesh instances and skins ---
+  struct Instance {
+    std::int32_t node;
+    std::int32_t mesh;
+    std::int32_t skin;  // -1: rigid on its node
+  };
+  std::vector<Instance> instances;
+  for (std::int32_t n : order) {
+    const tinygltf::Node& node = gltf.nodes[static_cast<std::size_t>(n)];
+    if (node.mesh < 0) continue;
+    const std::string element = "nodes[" + std::to_string(n) + "]";
+    if (static_cast<std::size_t>(node.mesh) >= gltf.meshes.size())
+      reader.fail(element + ".mesh", "mesh " + std::to_string(node.mesh) + " does not exist");
+    if (node.skin >= 0 && static_cast<std::size_t>(node.skin) >= gltf.skins.size())
+      reader.fail(element + ".skin", "skin " + std::to_string(node.skin) + " does not exist");
+    instances.push_back({n, node.mesh, node.skin});
+  }
+  if (instances.empty()) reader.fail("", "the scene has no mesh");
+  bool any_animation = false;
+  for (const tinygltf::Animation& animation : gltf.animations)
+    for (const tinygltf::AnimationChannel& channel : animation.channels)
+      any_animation = any_animation || (channel.target_node >= 0 &&
+                                        static_cast<std::size_t>(channel.target_node) < node_count &&
+                                        nodes[static_cast<std::size_t>(channel.target_node)].in_scene);
+  const bool any_skin = std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.skin >= 0; });
+  const bool rigged = any_skin || any_animation;
+  result.rigged = rigged;
+
+  // Skins: joints by node index; bind world = inverse(inverseBindMatrices[j]) (identity when none are given).
+  struct SkinInfo {
+    std::vector<std::int32_t> joints;
+    std::vector<glm::dmat4> bind;
+  };
+  std::vector<SkinInfo> skins(gltf.skins.size());
+  std::vector<bool> skin_used(gltf.skins.size(), false);
+  for (const Instance& i : instances)
+    if (i.skin >= 0) skin_used[static_cast<std::size_t>(i.skin)] = true;
+  for (std::size_t s = 0; s < gltf.skins.size(); ++s) {
+    if (!skin_used[s]) continue;
+    const tinygltf::Skin& skin = gltf.skins[s];
+    const std::string element = "skins[" + std::to_string(s) + "]";
+    if (skin.joints.empty()) reader.fail(element + ".joints", "is empty");
+    std::set<std::int32_t> seen;
+    for (int j : skin.joints) {
+      if (j < 0 || static_cast<std::size_t>(j) >= node_count)
+        reader.fail(element + ".joints", "node " + std::to_string(j) + " does not exist");
+      if (!nodes[static_cast<std::size_t>(j)].in_scene)
+        reader.fail(element + ".joints", "node " + std::to_string(j) + " is not in the scene");
+      if (!seen.insert(j).second) reader.fail(element + ".joints", "node " + std::to_string(j) + " is listed twice");
+      skins[s].joints.push_back(j);
+    }
+    skins[s].bind.assign(skin.joints.size(), glm::dmat4(1.0));
+    if (skin.inverseBindMatrices >= 0) {
+      const std::vector<double> m = reader.read(skin.inverseBindMatrices, {16}, element + ".inverseBindMatrices");
+      if (m.size() < 16 * skin.joints.size())
+        reader.fail(element + ".inverseBindMatrices", "fewer matrices than joints");
+      for (std::size_t j = 0; j < skin.joints.size(); ++j) {
+        glm::dmat4 ibm;
+        for (int c = 0; c < 4; ++c)
+          for (int r = 0; r < 4; ++r) ibm[c][r] = m[16 * j + static_cast<std::size_t>(c * 4 + r)];
+        skins[s].bind[j] = glm::inverse(ibm);
+        if (!fits_float(skins[s].bind[j]) || std::fabs(glm::determinant(ibm)) < 1e-30)
+          reader.fail(element + ".inverseBindMatrices", "matrix " + std::to_string(j) + " is singular or not finite");
+      }
+    }
+  }
+
+  // --- bones: the nodes skinning needs (joints of the used skins, nodes of rigid meshes) and all their ancestors,
+  // in pre-order; several top-level nodes hang under an added bone "root" at the origin ---
+  std::vector<std::int32_t> bone_of_node(node_count, -1);
+  std::vector<std::int32_t> node_of_bone;
+  std::vector<Bone> bones;
+  std::vector<glm::dmat4> bind_world;
+  std::vector<bool> has_bind;
+  std::size_t shortened = 0;
+  if (rigged) {
+    std::vector<bool> needed(node_count, false);
+    for (const Instance& i : instances)
+      if (i.skin < 0) needed[static_cast<std::size_t>(i.node)] = true;
+    for (std::size_t s = 0; s < skins.size(); ++s)
+      for (std::int32_t j : skins[s].joints) needed[static_cast<std::size_t>(j)] = true;
+    std::vector<bool> in_skeleton(node_count, false);
+    for (std::size_t i = 0; i < node_count; ++i)
+      if (needed[i])
+        for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
+             n = nodes[static_cast<std::size_t>(n)].parent)
+          in_skeleton[static_cast<std::size_t>(n)] = true;
+    std::size_t tops = 0;
+    for (std::int32_t r : roots) tops += in_skeleton[static_cast<std::size_t>(r)] ? 1 : 0;
+    if (tops > 1) {
+      Bone root;
+      root.name = "root";
+      bones.push_back(root);
+      node_of_bone.push_back(-1);
+    }
+    for (std::int32_t n : order) {
+      if (!in_skeleton[static_cast<std::size_t>(n)]) continue;
+      Bone bone;
+      const std::string& raw = gltf.nodes[static_cast<std::size_t>(n)].name;
+      bone.name = fit_name(raw.empty() ? "node" + std::to_string(n) : raw, shortened);
+      const std::int32_t parent = nodes[static_cast<std::size_t>(n)].parent;
+      bone.parent = parent >= 0 ? bone_of_node[static_cast<std::size_t>(parent)] : (tops > 1 ? 0 : -1);
+      bone_of_node[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(bones.size());
+      node_of_bone.push_back(n);
+      bones.push_back(std::move(bone));
+    }
+  } else {
+    Bone bone;  // static scene: one bone at the origin holds every point
+    bone.name = "root";
+    bones.push_back(bone);
+    node_of_bone.push_back(-1);
+  }
+  if (bones.size() > 65535) reader.fail("", std::to_string(bones.size()) + " bones (at most 65535)");
+  if (shortened > 0)
+    warnings.push_back(std::to_string(shortened) + " bone names longer than 79 bytes shortened to fit .sk");
+  {
+    std::map<std::string, std::size_t> uses;
+    for (const Bone& b : bones) ++uses[b.name];
+    std::size_t repeated = 0;
+    for (const auto& [name, count] : uses) repeated += count > 1 ? count : 0;
+    if (repeated > 0)
+      warnings.push_back(std::to_string(repeated) +
+                         " bones share their name with another (skins bind by node, so this is harmless; "
+                         "look such bones up by '#id')");
+  }
+
+  // Bind world transforms: a joint's from its skin, every other bone's from the node tree.
+  bind_world.assign(bones.size(), glm::dmat4(1.0));
+  has_bind.assign(bones.size(), false);
+  std::size_t conflicting_binds = 0;
+  for (std::size_t s = 0; s < skins.size(); ++s)
+    for (std::size_t j = 0; j < skins[s].joints.size(); ++j) {
+      const auto b = static_cast<std::size_t>(bone_of_node[static_cast<std::size_t>(skins[s].joints[j])]);
+      if (!has_bind[b]) {
+        bind_world[b] = skins[s].bind[j];
+        has_bind[b] = true;
+      } else {
+        double difference = 0.0;
+        for (int c = 0; c < 4; ++c)
+          difference = std::max(difference, glm::length(skins[s].bind[j][c] - bind_world[b][c]));
+        if (difference > 1e-5 * std::max(1.0, glm::length(glm::dvec3(bind_world[b][3])))) ++conflicting_binds;
+      }
+    }
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (!has_bind[b] && node_of_bone[b] >= 0) bind_world[b] = nodes[static_cast<std::size_t>(node_of_bone[b])].global;
+  if (conflicting_binds > 0)
+    warnings.push_back(std::to_string(conflicting_binds) +
+                       " joints are bound differently by two skins: the first skin's bind is used, the other skin's "
+                       "vertices on them are off by the difference");
+
+  // Rigid bind locals. A bone's local translation in the skeleton is its node translation scaled by the parent's
+  // world axis scales (exact while the parent's scale is not animated and has no shear); its rotation is the node's.
+  std::vector<Split> bind_split(bones.size());
+  for (std::size_t b = 0; b < bones.size(); ++b) bind_split[b] = split(glm::mat4(bind_world[b]));
+  std::size_t approximate = 0;
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    if (node_of_bone[b] < 0) continue;
+    const std::int32_t n = node_of_bone[b];
+    const Split rest = split(glm::mat4(nodes[static_cast<std::size_t>(n)].global));
+    bool exact = glm::length(rest.axis_scale - bind_split[b].axis_scale) <= 1e-4f * glm::length(rest.axis_scale);
+    // A shear or mirror in this bone's world, or a non-uniform scale passed on to children, is not a rigid motion.
+    const bool has_children = std::any_of(bones.begin(), bones.end(),
+                                          [&](const Bone& other) { return other.parent == static_cast<std::int32_t>(b); });
+    exact = exact && (rest.similarity || (!has_children && glm::determinant(glm::mat3(rest.rigid())) > 0.0f &&
+                                          glm::determinant(glm::mat3(nodes[static_cast<std::size_t>(n)].global)) > 0.0));
+    if (!exact) ++approximate;
+  }
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    const glm::mat4 parent =
+        bones[b].parent < 0 ? glm::mat4(1.0f) : bind_split[static_cast<std::size_t>(bones[b].parent)].rigid();
+    const Split local = split(glm::inverse(parent) * bind_split[b].rigid());
+    bones[b].bind_translation = local.translation;
+    bones[b].bind_rotation = euler_from_quat(local.rotation);
+  }
+  if (approximate > 0)
+    warnings.push_back(std::to_string(approximate) +
+                       " bones have a scale a Skeleton cannot hold (non-uniform scale passed to children, shear, a "
+                       "mirror, or a bind scale other than the node's): clips move them approximately, the bind pose "
+                       "stays exact; ImportedModel::file_bind_world holds the exact bind");
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (bones[b].parent >= 0)
+      bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
+  result.model.skeleton = Skeleton(bones, path);
+  result.file_bind_world.reserve(bones.size());
+  for (const glm::dmat4& m : bind_world) result.file_bind_world.emplace_back(m);
+
+  // --- materials ---
+  Mesh& mesh = result.model.mesh;
+  {
+    std::vector<std::string> used;
+    for (std::size_t m = 0; m < gltf.materials.size(); ++m) {
+      const tinygltf::Material& source = gltf.materials[m];
+      Material material;
+      std::string name = source.name;
+      for (char& c : name)
+        if (std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20) c = '_';
+      if (name.empty() || std::find(used.begin(), used.end(), name) != used.end()) name = "material" + std::to_string(m);
+      used.push_back(name);
+      material.name = name;
+      const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
+      if (factor.size() == 4 && std::all_of(factor.begin(), factor.end(), [](double v) { return std::isfinite(v); })) {
+        material.diffuse = {std::clamp(factor[0], 0.0, 1.0), std::clamp(factor[1], 0.0, 1.0),
+                            std::clamp(factor[2], 0.0, 1.0)};
+        material.opacity = static_cast<float>(std::clamp(factor[3], 0.0, 1.0));
+      }
+      const int texture = source.pbrMetallicRoughness.baseColorTexture.index;
+      if (texture >= 0 && static_cast<std::size_t>(texture) < gltf.textures.size()) {
+        const int image = gltf.textures[static_cast<std::size_t>(texture)].source;
+        if (image >= 0 && static_cast<std::size_t>(image) < gltf.images.size()) {
+          const tinygltf::Image& img = gltf.images[static_cast<std::size_t>(image)];
+          if (img.uri.empty() || img.uri.rfind("data:", 0) == 0) {
+            warnings.push_back("material '" + name + "': embedded texture is not extracted");
+          } else {
+            std::string uri = img.uri;
+            std::string decoded;  // URIs escape spaces and other bytes as %XX
+            for (std::size_t i = 0; i < uri.size(); ++i) {
+              if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+                  std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+                decoded.push_back(static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
+                i += 2;
+              } else {
+                decoded.push_back(uri[i]);
+              }
+            }
+            fs::path resolved(decoded);
+            if (resolved.is_relative()) resolved = fs::path(base) / resolved;
+            material.diffuse_map = resolved.lexically_normal().string();
+            std::error_code ignored;
+            if (!fs::is_regular_file(material.diffuse_map, ignored))
+              warnings.push_back("material '" + name + "': texture '" + material.diffuse_map + "' not found");
+          }
+        }
+      }
+      mesh.materials.push_back(std::move(material));
+    }
+  }
+
+  // --- mesh: one submesh per primitive instance; points merged by (exact bind position, influences) ---
+  std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
+  std::size_t unweighted = 0, over_four = 0, skipped_primitives = 0, morph_meshes = 0;
+  double max_dropped = 0.0;
+  bool any_uvs = false;
+  for (const Instance& instance : instances)
+    for (const tinygltf::Primitive& p : gltf.meshes[static_cast<std::size_t>(instance.mesh)].primitives)
+      any_uvs = any_uvs || p.attributes.count("TEXCOORD_0") > 0;
+  for (const Instance& instance : instances) {
+    const tinygltf::Mesh& source = gltf.meshes[static_cast<std::size_t>(instance.mesh)];
+    const NodeInfo& node = nodes[static_cast<std::size_t>(instance.node)];
+    const std::string mesh_element = "meshes[" + std::to_string(instance.mesh) + "]";
+    // A skinned mesh ignores its node's transform (glTF 2.0 §3.7.3.3): its vertices are in the skin's bind space.
+    const glm::dmat4 to_world = instance.skin >= 0 ? glm::dmat4(1.0) : node.global;
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(to_world)));
+    const std::uint16_t rigid_bone =
+        rigged && instance.skin < 0 ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(instance.node)])
+                                    : 0;
+    bool has_morphs = false;
+    for (std::size_t pi = 0; pi < source.primitives.size(); ++pi) {
+      const tinygltf::Primitive& primitive = source.primitives[pi];
+      const std::string element = mesh_element + ".primitives[" + std::to_string(pi) + "]";
+      has_morphs = has_morphs || !primitive.targets.empty();
+      const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        ++skipped_primitives;
+        continue;
+      }
+      const auto position_attribute = primitive.attributes.find("POSITION");
+      if (position_attribute == primitive.attributes.end()) reader.fail(element + ".attributes", "has no POSITION");
+      const std::vector<double> positions = reader.read(position_attribute->second, {3}, element + " POSITION");
+      const std::size_t count = positions.size() / 3;
+      auto optional = [&](const char* name, std::size_t components) {
+        const auto found = primitive.attributes.find(name);
+        if (found == primitive.attributes.end()) return std::vector<double>();
+        std::vector<double> values = reader.read(found->second, {components}, element + " " + name);
+        if (values.size() != count * components)
+          reader.fail(element + ".attributes." + name, "has not as many elements as POSITION");
+        return values;
+      };
+      const std::vector<double> normals = optional("NORMAL", 3);
+      const std::vector<double> uvs = optional("TEXCOORD_0", 2);
+      // Every JOINTS_n / WEIGHTS_n pair, as (bone, weight) lists per vertex.
+      std::vector<std::vector<double>> joint_sets, weight_sets;
+      if (instance.skin >= 0) {
+        for (int set = 0;; ++set) {
+          const std::string joints_name = "JOINTS_" + std::to_string(set), weights_name = "WEIGHTS_" + std::to_string(set);
+          const bool has_joints = primitive.attributes.count(joints_name) > 0;
+          const bool has_weights = primitive.attributes.count(weights_name) > 0;
+          if (!has_joints && !has_weights) break;
+          if (has_joints != has_weights)
+            reader.fail(element + ".attributes", joints_name + " and " + weights_name + " must come together");
+          joint_sets.push_back(optional(joints_name.c_str(), 4));
+          weight_sets.push_back(optional(weights_name.c_str(), 4));
+        }
+      }
+      const SkinInfo* skin = instance.skin >= 0 ? &skins[static_cast<std::size_t>(instance.skin)] : nullptr;
+
+      const std::size_t first_vertex = mesh.vertex_point.size();
+      if (first_vertex + count > 0xFFFFFFFFull) reader.fail(element, "too many vertices");
+      std::vector<std::pair<std::uint16_t, double>> influences_of;
+      for (std::size_t v = 0; v < count; ++v) {
+        Influences influences;
+        influences_of.clear();
+        for (std::size_t set = 0; set < joint_sets.size(); ++set)
+          for (std::size_t k = 0; k < 4; ++k) {
+            const double w = weight_sets[set][4 * v + k];
+            if (!(w > 0.0)) continue;
+            const double joint = joint_sets[set][4 * v + k];
+            if (joint < 0.0 || joint >= static_cast<double>(skin->joints.size()))
+              reader.fail(element + ".attributes.JOINTS_" + std::to_string(set),
+                          "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " of " +
+                              std::to_string(skin->joints.size()));
+            const auto bone = static_cast<std::uint16_t>(
+                bone_of_node[static_cast<std::size_t>(skin->joints[static_cast<std::size_t>(joint)])]);
+            auto same = std::find_if(influences_of.begin(), influences_of.end(),
+                                     [&](const auto& i) { return i.first == bone; });
+            if (same != influences_of.end()) same->second += w;
+            else influences_of.emplace_back(bone, w);
+          }
+        std::sort(influences_of.begin(), influences_of.end(), [](const auto& a, const auto& b) {
+          return a.second != b.second ? a.second > b.second : a.first < b.first;
+        });
+        if (influences_of.empty()) {
+          if (skin != nullptr) ++unweighted;
+          // glTF leaves such a vertex undefined; three.js and others leave it where the skin's space puts it.
+          influences.bones[0] = skin != nullptr ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(
+                                                      skin->joints[0])])
+                                                : rigid_bone;
+          influences.weights[0] = 1.0f;
+        } else {
+          double total = 0.0, kept = 0.0;
+          for (const auto& i : influences_of) total += i.second;
+          for (std::size_t k = 0; k < influences_of.size() && k < 4; ++k) kept += influences_of[k].second;
+          if (influences_of.size() > 4) {
+            ++over_four;
+            max_dropped = std::max(max_dropped, influences_of[4].second / total);
+          }
+          for (std::size_t k = 0; k < influences_of.size() && k < 4; ++k) {
+            influences.bones[k] = influences_of[k].first;
+            influences.weights[k] = static_cast<float>(influences_of[k].second / kept);
+          }
+        }
+        const glm::dvec3 raw{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
+        const glm::vec3 position = reader.narrow(glm::dvec3(to_world * glm::dvec4(raw, 1.0)),
+                                                 element + " POSITION: vertex " + std::to_string(v));
+        const auto [found, inserted] =
+            point_of_key.emplace(point_key(position, influences), static_cast<std::uint32_t>(mesh.positions.size()));
+        if (inserted) {
+          mesh.positions.push_back(position);
+          result.model.weights.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2],
+                                                  influences.bones[3]);
+          result.model.weights.weights.emplace_back(influences.weights[0], influences.weights[1],
+                                                    influences.weights[2], influences.weights[3]);
+        }
+        mesh.vertex_point.push_back(found->second);
+        glm::dvec3 normal = normals.empty() ? glm::dvec3(0.0)
+                                            : normal_matrix * glm::dvec3(normals[3 * v], normals[3 * v + 1],
+                                                                         normals[3 * v + 2]);
+        const double length = glm::length(normal);
+        normal = std::isfinite(length) && length > 0.0 ? normal / length : glm::dvec3(0.0, 0.0, 1.0);
+        mesh.vertex_normals.emplace_back(normal);
+        if (any_uvs)
+          mesh.vertex_uvs.emplace_back(uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v]),
+                                       uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v + 1]));
+      }
+
+      // Triangles (strips and fans unrolled; degenerate ones kept as the file has them).
+      std::vector<std::uint32_t> indices;
+      if (primitive.indices >= 0) {
+        const std::vector<double> raw = reader.read(primitive.indices, {1}, element + " indices");
+        indices.reserve(raw.size());
+        for (std::size_t i = 0; i < raw.size(); ++i) {
+          if (raw[i] >= static_cast<double>(count))
+            reader.fail(element + ".indices", "index " + std::to_string(i) + " (" + std::to_string(raw[i]) +
+                                                  ") is not below the vertex count " + std::to_string(count));
+          indices.push_back(static_cast<std::uint32_t>(raw[i]));
+        }
+      } else {
+        indices.resize(count);
+        for (std::size_t i = 0; i < count; ++i) indices[i] = static_cast<std::uint32_t>(i);
+      }
+      Submesh submesh;
+      submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
+      submesh.material = primitive.material >= 0 && static_cast<std::size_t>(primitive.material) < mesh.materials.size()
+                             ? primitive.material
+                             : -1;
+      submesh.object = gltf.nodes[static_cast<std::size_t>(instance.node)].name;
+      submesh.group = source.name;
+      auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        for (std::uint32_t corner : {a, b, c}) mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
+      };
+      if (mode == TINYGLTF_MODE_TRIANGLES) {
+        for (std::size_t i = 0; i + 2 < indices.size(); i += 3) triangle(indices[i], indices[i + 1], indices[i + 2]);
+      } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (std::size_t i = 0; i + 2 < indices.size(); ++i)
+          if (i % 2 == 0) triangle(indices[i], indices[i + 1], indices[i + 2]);
+          else triangle(indices[i + 2], indices[i + 1], indices[i]);  // odd triangles reversed to keep the winding
+      } else {
+        for (std::size_t i = 1; i + 1 < indices.size(); ++i) triangle(indices[0], indices[i], indices[i + 1]);
+      }
+      submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
+      mesh.submeshes.push_back(std::move(submesh));
+    }
+    if (has_morphs) {
+      ++morph_meshes;
+      warnings.push_back("mesh '" + source.name + "' (" + mesh_element +
+                         "): morph targets are not read; the mesh keeps its base shape and animated weights are "
+                         "ignored");
+    }
+  }
+  if (mesh.triangles.empty()) reader.fail("", "the scene has no triangles");
+  mesh.face_sizes.assign(mesh.triangle_count(), 3);
+  mesh.face_corners = mesh.triangles;
+  if (unweighted > 0)
+    warnings.push_back(std::to_string(unweighted) +
+                       " skinned vertices have no weight: bound rigidly to their skin's first joint");
+  if (over_four > 0) {
+    char dropped[32];
+    std::snprintf(dropped, sizeof dropped, "%.4g", max_dropped);
+    warnings.push_back(std::to_string(over_four) +
+                       " vertices have more than 4 influences: the strongest 4 kept, renormalised (largest weight "
+                       "dropped: " + std::string(dropped) + " of the vertex's total)");
+  }
+  if (skipped_primitives > 0)
+    warnings.push_back(std::to_string(skipped_primitives) + " primitives of points or lines skipped");
+  (void)morph_meshes;
+  if (!rigged) return result;
+
+  // --- clips ---
+  const Skeleton& skeleton = result.model.skeleton;
+  const Pose bind = skeleton.bind_pose();
+  const float model_size = [&] {
+    const Bounds b = compute_bounds(mesh.positions);
+    return std::max(glm::length(b.max - b.min), 1e-6f);
+  }();
+  // Skeleton space: T(axis_scale(parent rest world) · t) · R(q); a root bone's parent is the origin.
+  std::vector<glm::dvec3> translation_scale(bones.size(), glm::dvec3(1.0));
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    if (node_of_bone[b] < 0) continue;
+    const std::int32_t parent = nodes[static_cast<std::size_t>(node_of_bone[b])].parent;
+    if (parent >= 0) translation_scale[b] = glm::dvec3(split(glm::mat4(nodes[static_cast<std::size_t>(parent)].global)).axis_scale);
+  }
+  std::vector<std::pair<glm::vec3, glm::quat>> rest(bones.size());
+  std::vector<bool> differs(bones.size(), false);
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    if (node_of_bone[b] < 0) continue;
+    const NodeInfo& n = nodes[static_cast<std::size_t>(node_of_bone[b])];
+    rest[b] = {reader.narrow(translation_scale[b] * n.translation, "nodes[" + std::to_string(node_of_bone[b]) + "]"),
+               glm::quat(glm::normalize(n.rotation))};
+    const glm::quat r = bind.rotations[b];
+    differs[b] = glm::length(rest[b].first - bind.translations[b]) > 1e-6f * model_size ||
+                 std::min(glm::length(rest[b].second - r), glm::length(rest[b].second + r)) > 1e-6f;
+  }
+
+  std::vector<std::string> clip_names;
+  std::size_t morph_clips = 0;
+  for (std::size_t a = 0; a < gltf.animations.size(); ++a) {
+    const tinygltf::Animation& source = gltf.animations[a];
+    const std::string animation_element = "animations[" + std::to_string(a) + "]";
+    Animation clip;
+    clip.name = source.name;
+    if (clip.name.empty() || std::find(clip_names.begin(), clip_names.end(), clip.name) != clip_names.end())
+      clip.name = "clip" + std::to_string(a);
+    clip_names.push_back(clip.name);
+    clip.loop = options.loop_clips;
+    std::vector<std::int32_t> channel_of_bone(bones.size(), -1);
+    std::size_t dropped = 0, scaled_bones = 0;
+    bool animates_weights = false;
+    float duration = 0.0f;
+    for (std::size_t c = 0; c < source.channels.size(); ++c) {
+      const tinygltf::AnimationChannel& channel = source.channels[c];
+      const std::string element = animation_element + ".channels[" + std::to_string(c) + "]";
+      if (channel.target_node < 0 || static_cast<std::size_t>(channel.target_node) >= node_count)
+        reader.fail(element + ".target.node", "node " + std::to_string(channel.target_node) + " does not exist");
+      if (channel.sampler < 0 || static_cast<std::size_t>(channel.sampler) >= source.samplers.size())
+        reader.fail(element + ".sampler", "sampler " + std::to_string(channel.sampler) + " does not exist");
+      const tinygltf::AnimationSampler& sampler = source.samplers[static_cast<std::size_t>(channel.sampler)];
+      const std::string sampler_element = animation_element + ".samplers[" + std::to_string(channel.sampler) + "]";
+      const std::string& target = channel.target_path;
+      if (target == "weights") {
+        animates_weights = true;
+        continue;
+      }
+      if (target != "translation" && target != "rotation" && target != "scale")
+        reader.fail(element + ".target.path", "'" + target + "' is not a glTF target");
+      const std::int32_t bone = bone_of_node[static_cast<std::size_t>(channel.target_node)];
+      Interpolation interpolation = Interpolation::linear;
+      if (sampler.interpolation == "STEP") interpolation = Interpolation::step;
+      else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::cubic_spline;
+      else if (sampler.interpolation != "LINEAR")
+        reader.fail(sampler_element + ".interpolation", "'" + sampler.interpolation + "' is not a glTF interpolation");
+      const std::vector<double> times = reader.read(sampler.input, {1}, sampler_element + ".input");
+      if (!times.empty()) duration = std::max(duration, static_cast<float>(times.back()));
+      if (bone < 0) continue;  // the node moves nothing the skeleton holds
+      const auto b = static_cast<std::size_t>(bone);
+      const std::size_t width = target == "rotation" ? 4 : 3;
+      std::size_t components = 0;
+      const std::vector<double> values =
+          reader.read(sampler.output, {width}, sampler_element + ".output", &components);
+      const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
+      if (values.size() != times.size() * width * per_key)
+        reader.fail(sampler_element + ".output", std::to_string(values.size() / width) + " elements for " +
+                                                     std::to_string(times.size()) + " key times");
+      if (channel_of_bone[b] < 0) {
+        channel_of_bone[b] = static_cast<std::int32_t>(clip.channels.size());
+        Channel fresh;
+        fresh.bone = bone;
+        clip.channels.push_back(std::move(fresh));
+      }
+      Channel& out = clip.channels[static_cast<std::size_t>(channel_of_bone[b])];
+      const NodeInfo& node = nodes[static_cast<std::size_t>(channel.target_node)];
+      // Element k of key i: in-tangent, value, out-tangent for a cubic spline, else the value.
+      auto element_at = [&](std::size_t key, std::size_t part) {
+        return &values[(key * per_key + part) * width];
+      };
+      auto fill = [&](auto& track, auto convert) {
+        track.interpolation = interpolation;
+        double last = -std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < times.size(); ++k) {
+          if (!(times[k] > last)) {
+            ++dropped;
+            continue;
+          }
+          last = times[k];
+          track.times.push_back(static_cast<float>(times[k]));
+          if (per_key == 3) {
+            track.in_tangents.push_back(convert(element_at(k, 0), false));
+            track.values.push_back(convert(element_at(k, 1), true));
+            track.out_tangents.push_back(convert(element_at(k, 2), false));
+          } else {
+            track.values.push_back(convert(element_at(k, 0), true));
+          }
+        }
+      };
+      if (target == "translation") {
+        fill(out.translation, [&](const double* v, bool) {
+          return reader.narrow(translation_scale[b] * glm::dvec3(v[0], v[1], v[2]), sampler_element + ".output");
+        });
+      } else if (target == "rotation") {
+        fill(out.rotation, [&](const double* v, bool value) {
+          const glm::dquat q(v[3], v[0], v[1], v[2]);
+          return glm::quat(value && glm::length(q) > 0.0 ? glm::normalize(q) : q);
+        });
+      } else {
+        fill(out.scale, [&](const double* v, bool) {
+          return reader.narrow(glm::dvec3(v[0], v[1], v[2]) / node.scale, sampler_element + ".output");
+        });
+        const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(), [](glm::vec3 s) {
+          return glm::length(s - glm::vec3(1.0f)) <= 1e-4f;
+        });
+        if (!constant_one) ++scaled_bones;
+      }
+    }
+    // Bones a clip moves hold their rest value in the properties it leaves; other bones whose rest differs from
+    // their bind hold their rest (players leave unanimated nodes at their node transform).
+    for (Channel& channel : clip.channels) {
+      const auto b = static_cast<std::size_t>(channel.bone);
+      if (channel.translation.empty()) channel.translation = {Interpolation::linear, {0.0f}, {rest[b].first}, {}, {}};
+      if (channel.rotation.empty()) channel.rotation = {Interpolation::linear, {0.0f}, {rest[b].second}, {}, {}};
+    }
+    for (std::size_t b = 0; b < bones.size(); ++b) {
+      if (channel_of_bone[b] >= 0 || !differs[b]) continue;
+      Channel hold;
+      hold.bone = static_cast<std::int32_t>(b);
+      hold.translation = {Interpolation::linear, {0.0f}, {rest[b].first}, {}, {}};
+      hold.rotation = {Interpolation::linear, {0.0f}, {rest[b].second}, {}, {}};
+      clip.channels.push_back(std::move(hold));
+    }
+    clip.duration = duration;
+    if (!std::isfinite(clip.duration) || clip.duration < 0.0f)
+      reader.fail(animation_element, "key times are not finite or negative");
+    const std::string element = "clip '" + clip.name + "'";
+    if (dropped > 0)
+      warnings.push_back(element + ": " + std::to_string(dropped) + " keys at or before their predecessor's time dropped");
+    if (scaled_bones > 0)
+      warnings.push_back(element + ": " + std::to_string(scaled_bones) +
+                         " bones animate scale, which a Pose cannot hold (ignored)");
+    if (animates_weights) ++morph_clips;
+    clip.validate(bones.size(), path);
+    result.clips.push_back(std::move(clip));
+  }
+  if (morph_clips > 0)
+    warnings.push_back(std::to_string(morph_clips) + " clips animate morph target weights, which are ignored");
+  return result;
+}
+
+}  // namespace deform::import_detail

@@ -1,0 +1,316 @@
+// The glTF 2.0 reader (gltf_import.cpp) on files written here: skins bound by node (two same-named rigs apart),
+// samplers kept as the file gives them, quantised and sparse accessors, the warnings for what is not read, and
+// malformed files as errors naming the file and the JSON path or accessor.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "deform/import/import.hpp"
+#include "deform/runtime/animation.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/skeleton.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string base64(const std::vector<std::uint8_t>& bytes) {
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) | (i + 1 < bytes.size() ? bytes[i + 1] << 8 : 0) |
+                            (i + 2 < bytes.size() ? bytes[i + 2] : 0);
+    out += digits[(n >> 18) & 63];
+    out += digits[(n >> 12) & 63];
+    out += i + 1 < bytes.size() ? digits[(n >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[n & 63] : '=';
+  }
+  return out;
+}
+
+// A glTF document under construction: one buffer, accessors appended as JSON text.
+struct Doc {
+  std::vector<std::uint8_t> data;
+  std::vector<std::string> views, accessors;
+
+  template <class T>
+  int accessor(const std::vector<T>& values, const char* type, int component, const std::string& extra = "") {
+    while (data.size() % 4) data.push_back(0);
+    const std::size_t offset = data.size();
+    data.resize(offset + values.size() * sizeof(T));
+    std::memcpy(data.data() + offset, values.data(), values.size() * sizeof(T));
+    views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(offset) +
+                    R"(, "byteLength": )" + std::to_string(values.size() * sizeof(T)) + "}");
+    const std::size_t width = std::string(type) == "SCALAR" ? 1 : std::string(type) == "MAT4" ? 16 : type[3] - '0';
+    accessors.push_back(R"({"bufferView": )" + std::to_string(views.size() - 1) + R"(, "componentType": )" +
+                        std::to_string(component) + R"(, "count": )" + std::to_string(values.size() / width) +
+                        R"(, "type": ")" + type + "\"" + extra + "}");
+    return static_cast<int>(accessors.size() - 1);
+  }
+
+  // The document with `body` (nodes, meshes, skins, animations, ...) and this buffer.
+  std::string json(const std::string& body) const {
+    std::string out = R"({"asset": {"version": "2.0"}, )" + body + R"(, "bufferViews": [)";
+    for (std::size_t i = 0; i < views.size(); ++i) out += (i ? ", " : "") + views[i];
+    out += R"(], "accessors": [)";
+    for (std::size_t i = 0; i < accessors.size(); ++i) out += (i ? ", " : "") + accessors[i];
+    out += R"(], "buffers": [{"byteLength": )" + std::to_string(data.size()) +
+           R"(, "uri": "data:application/octet-stream;base64,)" + base64(data) + R"("}]})";
+    return out;
+  }
+};
+
+std::string write(const std::string& name, const std::string& text) {
+  const fs::path path = fs::temp_directory_path() / ("deform_gltf_test_" + name);
+  std::ofstream(path, std::ios::binary) << text;
+  return path.string();
+}
+
+std::string import_error(const std::string& path) {
+  try {
+    deform::import_model(path);
+  } catch (const deform::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// A quad strip at x0 over y in [0, 2], 3 rows; joints 0 (bottom) and 1 (top) of its skin.
+struct Strip {
+  int positions, joints, weights, indices;
+};
+Strip strip(Doc& doc, float x0) {
+  std::vector<float> p;
+  std::vector<std::uint16_t> j;
+  std::vector<float> w;
+  for (int r = 0; r < 3; ++r)
+    for (float dx : {-0.5f, 0.5f}) {
+      p.insert(p.end(), {x0 + dx, float(r), 0.0f});
+      j.insert(j.end(), {0, 1, 0, 0});
+      w.insert(w.end(), {1.0f - float(r) / 2.0f, float(r) / 2.0f, 0.0f, 0.0f});
+    }
+  const std::vector<std::uint16_t> i = {0, 1, 3, 0, 3, 2, 2, 3, 5, 2, 5, 4};
+  return {doc.accessor(p, "VEC3", 5126, R"(, "min": [)" + std::to_string(x0 - 0.5f) + R"(, 0, 0], "max": [)" +
+                                             std::to_string(x0 + 0.5f) + ", 2, 0]"),
+          doc.accessor(j, "VEC4", 5123), doc.accessor(w, "VEC4", 5126), doc.accessor(i, "SCALAR", 5123)};
+}
+std::string primitive(const Strip& s) {
+  return R"({"attributes": {"POSITION": )" + std::to_string(s.positions) + R"(, "JOINTS_0": )" +
+         std::to_string(s.joints) + R"(, "WEIGHTS_0": )" + std::to_string(s.weights) + R"(}, "indices": )" +
+         std::to_string(s.indices) + "}";
+}
+std::vector<float> translation_ibm(float x, float y) {
+  return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -x, -y, 0, 1};
+}
+
+}  // namespace
+
+TEST_CASE("two rigs with the same joint names each skin their own mesh with their own bind") {
+  Doc doc;
+  const Strip a = strip(doc, 0.0f), b = strip(doc, 5.0f);
+  std::vector<float> ibm_a = translation_ibm(0, 0), ibm_a1 = translation_ibm(0, 1);
+  ibm_a.insert(ibm_a.end(), ibm_a1.begin(), ibm_a1.end());
+  std::vector<float> ibm_b = translation_ibm(5, 0), ibm_b1 = translation_ibm(5, 1);
+  ibm_b.insert(ibm_b.end(), ibm_b1.begin(), ibm_b1.end());
+  const int ia = doc.accessor(ibm_a, "MAT4", 5126), ib = doc.accessor(ibm_b, "MAT4", 5126);
+  const int times = doc.accessor(std::vector<float>{0.0f, 0.5f, 1.0f}, "SCALAR", 5126, R"(, "min": [0], "max": [1])");
+  const float h = std::sin(0.35f), c = std::cos(0.35f);  // 40° about z
+  const int step = doc.accessor(std::vector<float>{0, 0, 0, 1, 0, 0, h, c, 0, 0, 0, 1}, "VEC4", 5126);
+  const std::string body =
+      R"("scene": 0, "scenes": [{"nodes": [0, 2, 4, 5]}], "nodes": [)"
+      R"({"name": "Hips", "children": [1]}, {"name": "Spine", "translation": [0, 1, 0]},)"
+      R"({"name": "Hips", "translation": [5, 0, 0], "children": [3]}, {"name": "Spine", "translation": [0, 1, 0]},)"
+      R"({"name": "a", "mesh": 0, "skin": 0}, {"name": "b", "mesh": 1, "skin": 1}],)"
+      R"("meshes": [{"primitives": [)" + primitive(a) + R"(]}, {"primitives": [)" + primitive(b) + R"(]}],)"
+      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" + std::to_string(ia) +
+      R"(}, {"joints": [2, 3], "inverseBindMatrices": )" + std::to_string(ib) + R"(}],)"
+      R"("animations": [{"name": "wave", "samplers": [{"input": )" + std::to_string(times) +
+      R"(, "output": )" + std::to_string(step) + R"(, "interpolation": "STEP"}],)"
+      R"("channels": [{"sampler": 0, "target": {"node": 3, "path": "rotation"}}]}])";
+  const deform::ImportedModel imported = deform::import_model(write("two_rigs.gltf", doc.json(body)));
+  const deform::Skeleton& skeleton = imported.model.skeleton;
+  REQUIRE(skeleton.bone_count() == 5);  // an added root over the two Hips
+  CHECK(imported.rigged);
+  // Every point is weighted only to bones of its own rig: their bind x is the point's strip's.
+  for (std::size_t p = 0; p < imported.model.mesh.point_count(); ++p) {
+    const float strip_x = imported.model.mesh.positions[p].x < 2.5f ? 0.0f : 5.0f;
+    for (int k = 0; k < 4; ++k) {
+      if (imported.model.weights.weights[p][k] == 0.0f) continue;
+      const glm::mat4& bind = imported.file_bind_world[imported.model.weights.bones[p][k]];
+      CHECK(bind[3].x == doctest::Approx(strip_x));
+    }
+  }
+  // The STEP sampler stays a step: at 0.4 s the spine holds its first key.
+  REQUIRE(imported.clips.size() == 1);
+  const deform::Animation& clip = imported.clips[0];
+  bool found = false;
+  for (const deform::Channel& channel : clip.channels) {
+    if (channel.rotation.times.size() != 3) continue;
+    found = true;
+    CHECK(channel.rotation.interpolation == deform::Interpolation::step);
+    const glm::quat q = deform::sample_track(channel.rotation, 0.4f, glm::quat(1, 0, 0, 0));
+    CHECK(std::fabs(q.w) == doctest::Approx(1.0f));
+  }
+  CHECK(found);
+  bool repeated_names_warned = false;
+  for (const std::string& w : imported.warnings) repeated_names_warned |= w.find("share their name") != std::string::npos;
+  CHECK(repeated_names_warned);
+}
+
+TEST_CASE("quantised positions, sparse accessors, cubic splines; dropped influences and morphs are warned") {
+  Doc doc;
+  // Normalised shorts (16384 / 32767 ≈ 0.5), 6 bytes per element padded to 8 as the spec requires (byteStride 8).
+  int positions = 0;
+  {
+    const std::int16_t padded[12] = {-16384, 0, 0, 0, 16384, 0, 0, 0, 0, 16384, 0, 0};
+    const std::size_t offset = doc.data.size();
+    doc.data.resize(offset + sizeof padded);
+    std::memcpy(doc.data.data() + offset, padded, sizeof padded);
+    doc.views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(offset) +
+                        R"(, "byteLength": 24, "byteStride": 8})");
+    doc.accessors.push_back(R"({"bufferView": )" + std::to_string(doc.views.size() - 1) +
+                            R"(, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC3",)"
+                            R"( "min": [-0.5, 0, 0], "max": [0.5, 0.5, 0]})");
+    positions = static_cast<int>(doc.accessors.size() - 1);
+  }
+  // Six influences on each vertex over six joints: two JOINTS/WEIGHTS sets.
+  const int joints0 = doc.accessor(std::vector<std::uint8_t>{0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3}, "VEC4", 5121);
+  const int joints1 = doc.accessor(std::vector<std::uint8_t>{4, 5, 0, 0, 4, 5, 0, 0, 4, 5, 0, 0}, "VEC4", 5121);
+  const std::vector<float> w0 = {0.3f, 0.2f, 0.15f, 0.15f, 0.3f, 0.2f, 0.15f, 0.15f, 0.3f, 0.2f, 0.15f, 0.15f};
+  const std::vector<float> w1 = {0.1f, 0.1f, 0, 0, 0.1f, 0.1f, 0, 0, 0.1f, 0.1f, 0, 0};
+  const int weights0 = doc.accessor(w0, "VEC4", 5126), weights1 = doc.accessor(w1, "VEC4", 5126);
+  const int target = doc.accessor(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3", 5126,
+                                  R"(, "min": [0, 0, 1], "max": [0, 0, 1])");
+  // A sparse translation output: zeros with key 1 replaced by (0, 2, 0).
+  const int sparse_index = doc.accessor(std::vector<std::uint16_t>{1, 0}, "SCALAR", 5123);
+  const int sparse_value = doc.accessor(std::vector<float>{0, 2, 0}, "VEC3", 5126);
+  const int times = doc.accessor(std::vector<float>{0, 1}, "SCALAR", 5126, R"(, "min": [0], "max": [1])");
+  doc.accessors.push_back(R"({"componentType": 5126, "count": 2, "type": "VEC3", "sparse": {"count": 1,)"
+                          R"( "indices": {"bufferView": )" + std::to_string(sparse_index) +
+                          R"(, "componentType": 5123}, "values": {"bufferView": )" + std::to_string(sparse_value) + "}}}");
+  const int sparse_output = static_cast<int>(doc.accessors.size() - 1);
+  // A cubic spline rotation: (in-tangent, value, out-tangent) per key.
+  const int cubic = doc.accessor(std::vector<float>{0, 0, 0.5f, 0, 0, 0, 0, 1, 0, 0, 0.5f, 0,
+                                                    0, 0, 0.1f, 0, 0, 0, 0.3826834f, 0.9238795f, 0, 0, 0.1f, 0},
+                                 "VEC4", 5126);
+  std::vector<float> ibms;
+  for (int j = 0; j < 6; ++j) {
+    const std::vector<float> m = translation_ibm(0, 0.1f * float(j));
+    ibms.insert(ibms.end(), m.begin(), m.end());
+  }
+  const int ibm = doc.accessor(ibms, "MAT4", 5126);
+  const std::string body =
+      R"("scene": 0, "scenes": [{"nodes": [0, 6]}], "extensionsUsed": ["KHR_mesh_quantization"],)"
+      R"("extensionsRequired": ["KHR_mesh_quantization"], "nodes": [)"
+      R"({"name": "j0", "children": [1]}, {"name": "j1", "translation": [0, 0.1, 0], "children": [2]},)"
+      R"({"name": "j2", "translation": [0, 0.1, 0], "children": [3]}, {"name": "j3", "translation": [0, 0.1, 0], "children": [4]},)"
+      R"({"name": "j4", "translation": [0, 0.1, 0], "children": [5]}, {"name": "j5", "translation": [0, 0.1, 0]},)"
+      R"({"name": "body", "mesh": 0, "skin": 0}],)"
+      R"("meshes": [{"name": "blob", "primitives": [{"attributes": {"POSITION": )" + std::to_string(positions) +
+      R"(, "JOINTS_0": )" + std::to_string(joints0) + R"(, "WEIGHTS_0": )" + std::to_string(weights0) +
+      R"(, "JOINTS_1": )" + std::to_string(joints1) + R"(, "WEIGHTS_1": )" + std::to_string(weights1) +
+      R"(}, "targets": [{"POSITION": )" + std::to_string(target) + R"(}]}]}],)"
+      R"("skins": [{"joints": [0, 1, 2, 3, 4, 5], "inverseBindMatrices": )" + std::to_string(ibm) + R"(}],)"
+      R"("animations": [{"samplers": [{"input": )" + std::to_string(times) + R"(, "output": )" +
+      std::to_string(sparse_output) + R"(}, {"input": )" + std::to_string(times) + R"(, "output": )" +
+      std::to_string(cubic) + R"(, "interpolation": "CUBICSPLINE"}], "channels": [)"
+      R"({"sampler": 0, "target": {"node": 0, "path": "translation"}},)"
+      R"({"sampler": 1, "target": {"node": 1, "path": "rotation"}}]}])";
+  const deform::ImportedModel imported = deform::import_model(write("quantised.gltf", doc.json(body)));
+  REQUIRE(imported.model.mesh.point_count() == 3);
+  CHECK(imported.model.mesh.positions[0].x == doctest::Approx(-16384.0f / 32767.0f));
+  CHECK(imported.model.mesh.positions[2].y == doctest::Approx(16384.0f / 32767.0f));
+  for (std::size_t p = 0; p < 3; ++p) {
+    const glm::vec4 w = imported.model.weights.weights[p];
+    CHECK(w.x + w.y + w.z + w.w == doctest::Approx(1.0f));
+    CHECK(w.x == doctest::Approx(0.3f / 0.8f));
+  }
+  REQUIRE(imported.clips.size() == 1);
+  for (const deform::Channel& channel : imported.clips[0].channels) {
+    if (channel.bone == imported.model.skeleton.find("j0")) {
+      REQUIRE(channel.translation.values.size() == 2);
+      CHECK(channel.translation.values[1].y == doctest::Approx(2.0f));
+    }
+    if (channel.bone == imported.model.skeleton.find("j1")) {
+      CHECK(channel.rotation.interpolation == deform::Interpolation::cubic_spline);
+      REQUIRE(channel.rotation.in_tangents.size() == 2);
+      CHECK(channel.rotation.in_tangents[1].z == doctest::Approx(0.1f));
+      CHECK(channel.rotation.values[1].z == doctest::Approx(0.3826834f));
+    }
+  }
+  std::string warnings;
+  for (const std::string& w : imported.warnings) warnings += w + "\n";
+  CAPTURE(warnings);
+  CHECK(warnings.find("3 vertices have more than 4 influences") != std::string::npos);
+  CHECK(warnings.find("largest weight dropped: 0.1") != std::string::npos);
+  CHECK(warnings.find("mesh 'blob'") != std::string::npos);
+  CHECK(warnings.find("morph targets are not read") != std::string::npos);
+}
+
+TEST_CASE("malformed glTF files are errors naming the file and the JSON path or accessor") {
+  const std::string triangle = R"("scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],)"
+                               R"("meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}])";
+  struct Case {
+    const char* name;
+    std::string json;
+    const char* expected;
+  };
+  const std::string buffer36 = R"("buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,)"
+                               R"(AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}])";
+  const std::string view = R"("bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 12, "byteLength": 6}],)";
+  auto doc = [&](const std::string& accessors, const std::string& extra = "") {
+    return R"({"asset": {"version": "2.0"}, )" + triangle + ", " + view + R"("accessors": [)" + accessors + "], " +
+           buffer36 + extra + "}";
+  };
+  const std::string good_positions = R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})";
+  const Case cases[] = {
+      {"past_view.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},)"
+                             R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "accessors[0] (meshes[0].primitives[0] POSITION): 4 elements from byte 0 run past the end of bufferView 0"},
+      {"huge_count.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4611686018427387904,)"
+                              R"( "type": "VEC3"}, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "run past the end of bufferView 0"},
+      {"bufferless.gltf", doc(R"({"componentType": 5126, "count": 4611686018427387904, "type": "VEC3"},)"
+                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "elements without a bufferView"},
+      {"index.gltf", doc(good_positions + R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "meshes[0].primitives[0].indices: index 1 (16256"},
+      {"no_accessor.gltf", doc(good_positions + R"(, {"bufferView": 7, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "accessor[1] invalid bufferView"},  // tinygltf's own check
+      {"wrong_type.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"},)"
+                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+       "accessors[0] (meshes[0].primitives[0] POSITION): element type"},
+      {"view_outside.gltf",
+       R"({"asset": {"version": "2.0"}, )" + triangle +
+           R"(, "bufferViews": [{"buffer": 0, "byteOffset": 30, "byteLength": 36}], "accessors": [)" + good_positions +
+           "], " + buffer36 + "}",
+       "out of bounds"},  // tinygltf's own check
+      {"two_parents.gltf",
+       R"({"asset": {"version": "2.0"}, "nodes": [{"children": [2]}, {"children": [2]}, {}]})",
+       "nodes[1].children: node 2 has more than one parent"},
+      {"cycle.gltf", R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"children": [0]}]})",
+       "nodes[0].children: node 0 has more than one parent"},
+      {"extension.gltf", R"({"asset": {"version": "2.0"}, "extensionsRequired": ["KHR_draco_mesh_compression"]})",
+       "extensionsRequired: KHR_draco_mesh_compression is not supported"},
+      {"not_json.gltf", "{ this is not glTF", "not a valid glTF 2.0 file"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = write(c.name, c.json);
+    const std::string message = import_error(path);
+    CAPTURE(message);
+    CHECK(message.find(path) == 0);
+    CHECK(message.find(c.expected) != std::string::npos);
+  }
+  // A .glb whose JSON chunk claims more bytes than the file has.
+  const std::uint32_t header[5] = {0x46546C67u, 2u, 40u, 0xFFFFFFE0u, 0x4E4F534Au};
+  std::string glb(reinterpret_cast<const char*>(header), sizeof header);
+  glb += std::string(20, ' ');
+  const std::string path = write("chunk.glb", glb);
+  CHECK(import_error(path).find("GLB header") != std::string::npos);
+}
