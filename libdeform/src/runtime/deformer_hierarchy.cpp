@@ -304,10 +304,9 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     job.normals_out = normal_scratch_;
     return job;
   };
-  for (Lattice& lattice : lattices_) {
-    if (lattice.active && (!field_job(lattice).validate() || !mapped_job(lattice).validate()))
-      return Status::failure("a lattice field does not fit");
-  }
+  // The constructor checked every binding against its lattice and the points, and the control point arrays are
+  // sized with the lattice, so neither job can refuse: their O(bound points) validate() stays out of the frame.
+  // Only the points' count is the caller's, checked above.
   apply_carried(positions);
   for (Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
