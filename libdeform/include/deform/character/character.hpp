@@ -78,7 +78,8 @@ class DEFORM_CHARACTER_API Character {
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, the
   // settings below (skinning, lattice_fields, ik, reach options, normals mode, max stretch) and the lattices' current
-  // elastic settings and shapes copied. Allocates that state only (docs/performance.md, "A crowd", states its size).
+  // elastic settings and shapes copied. Allocates that state only (about 218 KB for the built-in character;
+  // docs/performance.md, "Elasticity and the whole frame").
   Character instance() const;
 
   const Model& model() const noexcept { return bind_->model; }
