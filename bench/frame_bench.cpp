@@ -2,6 +2,7 @@
 // points) reaching far, its three arm lattices stretched and springing: elastic step, FK, skinning, lattices.
 // The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
 // frame/builtin_lattices_step_update and frame/builtin_3_lattices_shape: the cost of the stretch shape.
+// frame/builtin_3_lattices_normals: the frame and normals() (transported, the default); frame/builtin_whole below.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -9,6 +10,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/animation.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/model.hpp"
 namespace {
@@ -88,10 +90,38 @@ void frame_with_normals(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
 }
 
+// frame/builtin_whole: the whole frame of the built-in character as an engine runs it, on one thread — the walk
+// sampled (SamplingJob) into the pose, set_pose, update (FK, the springs' step, skinning, the three arm lattices,
+// stretched mid-reach and springing) and normals() — with the transported normals (the default, Arg 0) or the
+// recomputed ones (Arg 1).
+void whole_frame(benchmark::State& state) {
+  deform::Character c = reaching_character(0);
+  c.set_normals_mode(state.range(0) ? deform::Character::NormalsMode::recomputed
+                                    : deform::Character::NormalsMode::transported);
+  const deform::Animation walk = deform::builtin_walk(c.model());
+  deform::Pose pose = c.skeleton().bind_pose();
+  deform::SamplingJob sampling;
+  sampling.animation = &walk;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  if (!sampling.validate()) state.SkipWithError("walk does not fit");
+  float time = 0.0f;
+  for (auto _ : state) {
+    time += 1.0f / 60.0f;
+    sampling.time = time;
+    sampling.run();
+    c.set_pose(pose);
+    c.update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c.normals().data());
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
+}
+
 BENCHMARK(frame)->Name("frame/builtin_3_lattices")->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame)->Name("frame/3_lattices")->Arg(100000)->Arg(1000000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(hierarchy_update)->Name("frame/builtin_lattices_step_update")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame_shape)->Name("frame/builtin_3_lattices_shape")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame_with_normals)->Name("frame/builtin_3_lattices_normals")->Unit(benchmark::kMicrosecond);
+BENCHMARK(whole_frame)->Name("frame/builtin_whole")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "deform/character/character.hpp"
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <utility>
 
 #include "deform/offline/hierarchy_binding.hpp"
@@ -29,35 +30,70 @@ std::size_t skeleton_depth(const Skeleton& skeleton) {
 Character::Character(Model model) : Character(std::move(model), Rig{}) {}
 
 Character::Character(Model model, const Rig& rig)
-    : model_(std::move(model)),
+    : bind_([&] {
+        auto bind = std::make_shared<BindData>();
+        bind->model = std::move(model);
+        bind->vertex_normals = bind_vertex_normals(bind->model.mesh);
+        // The bind pose's angle-weighted normals, one per point (every render vertex of a point gets the same).
+        const Mesh& mesh = bind->model.mesh;
+        std::vector<glm::vec3> vertex_normals(mesh.vertex_count());
+        std::vector<glm::vec4> scratch(bind->vertex_normals.scratch_size());
+        VertexNormalsJob job;
+        job.binding = &bind->vertex_normals;
+        job.positions = mesh.positions;
+        job.normals = vertex_normals;
+        job.scratch = scratch;
+        if (!job.run()) throw Error::in_file(bind->model.name, "mesh", "vertex normals refused the mesh");
+        bind->point_normals.assign(mesh.point_count(), glm::vec3(0.0f));
+        for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+          bind->point_normals[mesh.vertex_point[v]] = vertex_normals[v];
+        }
+        return std::shared_ptr<const BindData>(std::move(bind));
+      }()),
       rig_(rig),
-      hierarchy_(bind_hierarchy(model_.skeleton, model_.mesh.positions, model_.weights, rig_.lattices, model_.name)),
-      pose_(model_.skeleton.bind_pose()),
-      world_(model_.skeleton.bone_count()),
-      palette_(model_.skeleton.bone_count()),
-      dual_quats_(model_.skeleton.bone_count()),
-      scales_(model_.skeleton.bone_count()),
-      positions_(model_.mesh.positions),
-      normals_(model_.mesh.vertex_count()),
-      vertex_normals_(bind_vertex_normals(model_.mesh)),
-      normals_scratch_(vertex_normals_.scratch_size()),
+      hierarchy_(bind_hierarchy(bind_->model.skeleton, bind_->model.mesh.positions, bind_->model.weights, rig_.lattices,
+                                bind_->model.name)),
+      pose_(bind_->model.skeleton.bind_pose()),
       work_(pose_) {
-  const auto bones = std::int32_t(model_.skeleton.bone_count());
+  const Model& bound = bind_->model;
+  const auto bones = std::int32_t(bound.skeleton.bone_count());
   if (rig_.reach_effector >= bones || rig_.reach_root >= bones) {
-    throw Error::in_file(model_.name, "rig", "reach bone out of range");
+    throw Error::in_file(bound.name, "rig", "reach bone out of range");
   }
   if (!(rig_.max_stretch >= 0.0f) || !std::isfinite(rig_.max_stretch)) {
-    throw Error::in_file(model_.name, "rig", "max_stretch must be finite and >= 0");
+    throw Error::in_file(bound.name, "rig", "max_stretch must be finite and >= 0");
   }
+  allocate_frame_state();
   SkinningJob job;
   job.matrices = palette_;
-  job.bone_indices = model_.weights.bones;
-  job.bone_weights = model_.weights.weights;
-  job.in_positions = as_floats(std::span<const glm::vec3>(model_.mesh.positions));
+  job.bone_indices = bound.weights.bones;
+  job.bone_weights = bound.weights.weights;
+  job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
-  if (!job.validate()) throw Error::in_file(model_.name, "weights", "skin weights do not fit the mesh and skeleton");
+  job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
+  job.out_normals = as_floats(std::span<glm::vec3>(point_normals_));
+  if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
+  if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
+}
+
+Character::Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy)
+    : bind_(std::move(bind)), rig_(rig), hierarchy_(hierarchy), pose_(bind_->model.skeleton.bind_pose()), work_(pose_) {
+  hierarchy_.reset();
+  allocate_frame_state();
+}
+
+void Character::allocate_frame_state() {
+  const Model& bound = bind_->model;
+  const std::size_t bones = bound.skeleton.bone_count();
+  world_.assign(bones, glm::mat4(1.0f));
+  palette_.assign(bones, glm::mat4(1.0f));
+  dual_quats_.assign(bones, DualQuat{});
+  scales_.assign(bones, glm::mat3(1.0f));
+  positions_ = bound.mesh.positions;
+  point_normals_ = bind_->point_normals;
+  normals_.assign(bound.mesh.vertex_count(), glm::vec3(0.0f));
   // reach()'s storage for the deepest chain any effector can have.
-  const std::size_t depth = skeleton_depth(model_.skeleton);
+  const std::size_t depth = skeleton_depth(bound.skeleton);
   const std::size_t chain_bones = std::min(depth, max_chain_bones);
   chain_.bones.reserve(chain_bones);
   chain_.limits.reserve(chain_bones - 1);
@@ -67,7 +103,29 @@ Character::Character(Model model, const Rig& rig)
   chain_world_.resize(chain_bones);
   chain_lattices_.reserve(hierarchy_.lattice_count());
   stretched_.reserve(hierarchy_.lattice_count());
-  if (const Status status = update(0.0f); !status) throw Error::in_file(model_.name, "bind pose", status.reason());
+}
+
+Character Character::instance() const {
+  Character copy(bind_, rig_, hierarchy_);
+  copy.skinning = skinning;
+  copy.lattice_fields = lattice_fields;
+  copy.ik = ik;
+  copy.reach_pole = reach_pole;
+  copy.use_reach_pole = use_reach_pole;
+  copy.reach_solver = reach_solver;
+  copy.reach_soften = reach_soften;
+  copy.reach_limits = reach_limits;
+  copy.set_normals_mode(normals_mode_);
+  // The same update as this character's at construction, which succeeded on the same data.
+  copy.update(0.0f);
+  return copy;
+}
+
+void Character::set_normals_mode(NormalsMode mode) {
+  if (mode == NormalsMode::recomputed && normals_scratch_.empty()) {
+    normals_scratch_.resize(bind_->vertex_normals.scratch_size());
+  }
+  normals_mode_ = mode;
 }
 
 Status Character::set_pose(const Pose& pose) {
@@ -275,7 +333,8 @@ void Character::release() {
 
 Status Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
-  const Skeleton& skel = skeleton();
+  const Model& bound = bind_->model;
+  const Skeleton& skel = bound.skeleton;
   LocalToWorldJob fk;
   fk.skeleton = &skel;
   fk.rotations = pose_.rotations;
@@ -284,13 +343,18 @@ Status Character::update(float dt) {
   fk.palette = palette_;
   if (const Status status = fk.run(); !status) return status;
   if (const Status status = hierarchy_.step(dt); !status) return status;
+  const bool transport = normals_mode_ == NormalsMode::transported;
   SkinningJob job;
   job.method = skinning;
   job.matrices = palette_;
-  job.bone_indices = model_.weights.bones;
-  job.bone_weights = model_.weights.weights;
-  job.in_positions = as_floats(std::span<const glm::vec3>(model_.mesh.positions));
+  job.bone_indices = bound.weights.bones;
+  job.bone_weights = bound.weights.weights;
+  job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
+  if (transport) {
+    job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
+    job.out_normals = as_floats(std::span<glm::vec3>(point_normals_));
+  }
   if (skinning == SkinningMethod::dqs) {
     bool has_scale = false;
     if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))
@@ -298,20 +362,34 @@ Status Character::update(float dt) {
     job.dual_quats = dual_quats_;
     if (has_scale) job.scales = scales_;
   }
-  if (!job.run()) return Status::failure("skinning refused");
   normals_current_ = false;
+  transported_current_ = false;
+  if (!job.run()) return Status::failure("skinning refused");
   if (const Status status = hierarchy_.update(world_); !status) return status;
-  return lattice_fields ? hierarchy_.apply(positions_) : hierarchy_.apply_carried(positions_);
+  if (!lattice_fields) {
+    // The carried points only translate: their normals stay as skinned.
+    if (const Status status = hierarchy_.apply_carried(positions_); !status) return status;
+  } else if (const Status status = transport ? hierarchy_.apply(positions_, point_normals_) : hierarchy_.apply(positions_);
+             !status) {
+    return status;
+  }
+  transported_current_ = transport;
+  return {};
 }
 
 std::span<const glm::vec3> Character::normals() {
   if (!normals_current_) {
-    VertexNormalsJob job;
-    job.binding = &vertex_normals_;
-    job.positions = positions_;
-    job.normals = normals_;
-    job.scratch = normals_scratch_;
-    job.run();
+    if (transported_current_) {
+      const std::vector<std::uint32_t>& vertex_point = bind_->model.mesh.vertex_point;
+      for (std::size_t v = 0; v < normals_.size(); ++v) normals_[v] = point_normals_[vertex_point[v]];
+    } else if (!normals_scratch_.empty()) {
+      VertexNormalsJob job;
+      job.binding = &bind_->vertex_normals;
+      job.positions = positions_;
+      job.normals = normals_;
+      job.scratch = normals_scratch_;
+      job.run();
+    }
     normals_current_ = true;
   }
   return normals_;

@@ -33,7 +33,7 @@ void validate_shape(const StretchShape& shape) {
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
                                      std::size_t point_count)
-    : scratch_(point_count, glm::vec3(0.0f)) {
+    : scratch_(point_count, glm::vec3(0.0f)), normal_scratch_(point_count, glm::vec3(0.0f)) {
   bone_parents_.reserve(skeleton.bone_count());
   for (const Bone& bone : skeleton.bones()) bone_parents_.push_back(bone.parent);
   lattices_.reserve(lattices.size());
@@ -77,6 +77,7 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.target_points.assign(lattice.rest.control_points().begin(), lattice.rest.control_points().end());
     lattice.world_displacements.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.world_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattice.mapped_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattices_.push_back(std::move(lattice));
   }
 
@@ -223,6 +224,7 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
     far /= float(lattice.far_face.size());
     shape_slices(lattice, slices);
     const glm::mat3 linear(world[std::size_t(lattice.spec.bone)]);
+    lattice.linear = linear;
     const float still = 1e-7f * lattice.length;
     for (int k = 0; k < counts.z; ++k) {
       for (int j = 0; j < counts.y; ++j) {
@@ -285,6 +287,57 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
     const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+    }
+  }
+  return {};
+}
+
+Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::vec3> normals) {
+  if (positions.size() != scratch_.size() || normals.size() != scratch_.size())
+    return Status::failure("positions and normals do not have one entry per point");
+  const auto mapped_job = [this](Lattice& lattice) {
+    LatticeEvaluateJob job;
+    job.binding = &lattice.binding;
+    job.control_points = lattice.mapped_points;
+    job.positions = scratch_;
+    job.normals_in = normal_scratch_;
+    job.normals_out = normal_scratch_;
+    return job;
+  };
+  // The constructor checked every binding against its lattice and the points, and the control point arrays are
+  // sized with the lattice, so neither job can refuse: their O(bound points) validate() stays out of the frame.
+  // Only the points' count is the caller's, checked above.
+  apply_carried(positions);
+  for (Lattice& lattice : lattices_) {
+    if (!lattice.active) continue;
+    // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
+    // skinned neighbourhood's (linear) times the field's (I + ∂D_local/∂x).
+    const std::span<const glm::vec3> rest = lattice.rest.control_points();
+    for (std::size_t n = 0; n < rest.size(); ++n) {
+      lattice.mapped_points[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
+    }
+    // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse
+    // of its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
+    const glm::mat3 to_bind = glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));
+    const LatticeBinding& binding = lattice.binding;
+    const std::vector<std::uint32_t>& lanes = binding.vertices;
+    for (std::size_t n = 0; n < lanes.size(); ++n) {
+      if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[lanes[n]] = to_bind * normals[lanes[n]];
+    }
+    // The positions exactly as apply() moves them; then the normals (the mapped job's positions, overwriting the
+    // consumed displacements, are not used).
+    field_job(lattice).run();
+    for (std::size_t n = 0; n < lanes.size(); ++n) {
+      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+    }
+    mapped_job(lattice).run();
+    for (std::size_t n = 0; n < lanes.size(); ++n) {
+      const std::uint32_t p = lanes[n];
+      if (p == LatticeBinding::no_vertex) continue;
+      const float weight = lattice.lane_weights[n];
+      const glm::vec3 blended = normals[p] + weight * (normal_scratch_[p] - normals[p]);
+      const float length2 = glm::dot(blended, blended);
+      if (length2 > 1e-12f) normals[p] = blended / std::sqrt(length2);
     }
   }
   return {};

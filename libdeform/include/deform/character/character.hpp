@@ -19,9 +19,22 @@
 // once (LocalToWorldJob: world matrices and skinning palette), the springs' step, skinning, the lattices' carried
 // points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
 // construction. Characters are movable values (a std::vector of them is fine).
+//
+// Normals (NormalsMode): transported by default — each point's bind-pose normal (angle-weighted, from the bind
+// positions) goes through the skinning (cofactor of the blended matrix) and the lattices (cofactor of their map's
+// Jacobian) in update(), and normals() copies it to the point's render vertices; or recomputed from the deformed
+// positions by normals() (VertexNormalsJob). Transported normals are exact for a point skinned rigidly and moved
+// by one lattice with full weight, and approximate where skin or selection weights blend (docs/performance.md,
+// "Vertex normals", states the error on the built-in character).
+//
+// A crowd: instance() makes another character of the same model and rig that shares the immutable bind data
+// (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
+// positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
+// thread (no hidden threads; bench/crowd_bench.cpp).
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -62,8 +75,15 @@ class DEFORM_CHARACTER_API Character {
   Character& operator=(const Character&) = delete;
   ~Character() = default;
 
-  const Model& model() const noexcept { return model_; }
-  const Skeleton& skeleton() const noexcept { return model_.skeleton; }
+  // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
+  // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, the
+  // settings below (skinning, lattice_fields, ik, reach options, normals mode, max stretch) and the lattices' current
+  // elastic settings and shapes copied. Allocates that state only (about 218 KB for the built-in character;
+  // docs/performance.md, "Elasticity and the whole frame").
+  Character instance() const;
+
+  const Model& model() const noexcept { return bind_->model; }
+  const Skeleton& skeleton() const noexcept { return bind_->model.skeleton; }
   const Rig& rig() const noexcept { return rig_; }
   DeformerHierarchy& deformers() noexcept { return hierarchy_; }
   const DeformerHierarchy& deformers() const noexcept { return hierarchy_; }
@@ -126,8 +146,19 @@ class DEFORM_CHARACTER_API Character {
 
   // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
-  // Deformed normals, one per render vertex, recomputed from positions() on the first call after update()
-  // (VertexNormalsJob over a binding made at construction: O(triangles)).
+  // How normals() gets its normals (see the top of this file).
+  enum class NormalsMode : std::uint8_t {
+    transported,  // the default: carried through skinning and lattices in update(); normals() gathers (O(vertices))
+    recomputed,   // recomputed from positions() by normals() (VertexNormalsJob: O(triangles), exact)
+  };
+  NormalsMode normals_mode() const noexcept { return normals_mode_; }
+  // Takes effect at the next update() (recomputed: at the next normals()). Switching to recomputed the first time
+  // allocates its scratch (one entry per point and corner): call it at set-up, not per frame.
+  void set_normals_mode(NormalsMode mode);
+
+  // Deformed normals, one per render vertex, as of the last update(): transported (gathered on the first call after
+  // update(), O(render vertices)) or recomputed from positions() on the first call after update() (VertexNormalsJob
+  // over a binding made at construction: O(triangles)), by normals_mode().
   std::span<const glm::vec3> normals();
   // A lattice's control points in world space (for drawing), i-fastest.
   std::span<const glm::vec3> control_points(std::size_t lattice) const { return hierarchy_.control_points(lattice); }
@@ -146,7 +177,16 @@ class DEFORM_CHARACTER_API Character {
     glm::vec3 axis{0.0f};     // stretch per unit, in the lattice bone's frame
   };
 
-  Model model_;
+  // What instances share: read-only after construction.
+  struct BindData {
+    Model model;
+    VertexNormalsBinding vertex_normals;
+    std::vector<glm::vec3> point_normals;  // bind-pose unit normals, one per point (angle-weighted)
+  };
+  Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy);
+  void allocate_frame_state();
+
+  std::shared_ptr<const BindData> bind_;
   Rig rig_;
   DeformerHierarchy hierarchy_;
   Pose pose_;
@@ -155,9 +195,11 @@ class DEFORM_CHARACTER_API Character {
   std::vector<DualQuat> dual_quats_;
   std::vector<glm::mat3> scales_;
   std::vector<glm::vec3> positions_;
-  std::vector<glm::vec3> normals_;
-  VertexNormalsBinding vertex_normals_;
-  std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch
+  std::vector<glm::vec3> point_normals_;     // transported: one per point, as of update()
+  std::vector<glm::vec3> normals_;           // one per render vertex
+  std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch (allocated for the recomputed mode only)
+  NormalsMode normals_mode_ = NormalsMode::transported;
+  bool transported_current_ = false;  // the last update() transported point_normals_
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
   std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)

@@ -153,6 +153,16 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // a caller that evaluates the fields itself, e.g. on a GPU. Refuses, changing nothing, a size mismatch.
   // O(carried points), no allocation.
   Status apply_carried(std::span<glm::vec3> positions);
+  // apply() carrying per-point unit normals along (`normals`: one per point, e.g. SkinningJob's out_normals, in the
+  // space of `positions`): the carried points' normals are kept (a translation), and a bound point's normal becomes
+  // (1 - weight) · n + weight · n_l, renormalised, where n_l is n mapped by the cofactor of the lattice's map
+  // (LatticeEvaluateJob's normals, with n taken back into the bind pose by the transpose of the bone's palette
+  // matrix). Exact for a point of selection weight 1 skinned rigidly to the lattice's bone (the FFD map of its
+  // skinned neighbourhood); where weights blend it leaves out the gradient of the weight and blends directions.
+  // The positions are apply()'s, bit for bit. Refuses, changing nothing, a size mismatch. No allocation; per bound
+  // point apply()'s evaluation and one with normals (control points: the bone-rotated rest plus the displacements),
+  // about three times apply()'s field cost.
+  Status apply(std::span<glm::vec3> positions, std::span<glm::vec3> normals);
 
   // What evaluating a lattice's field takes, for callers of apply_carried():
   // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
@@ -189,6 +199,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> world_displacements;
     glm::vec3 far_displacement{0.0f};
     std::vector<glm::vec3> world_points;
+    glm::mat3 linear{1.0f};                // the bone's world 3×3 (rotation, with any scale)
+    std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
@@ -206,6 +218,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
   std::vector<Lattice> lattices_;
   std::vector<glm::vec3> scratch_;  // per mesh point: Bézier displacements of the lattice being applied
+  std::vector<glm::vec3> normal_scratch_;  // per mesh point: bound normals of the lattice being applied (with normals)
 };
 
 }  // namespace deform
