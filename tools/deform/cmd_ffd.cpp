@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "shared_steps.hpp"
 #include "deform/io/lattice_json.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/offline/lattice_binding.hpp"
@@ -51,26 +52,15 @@ int run(const std::vector<std::string>& argv) {
   job.positions = positions;
   if (!job.run()) throw std::runtime_error("internal error: the lattice evaluation rejected its arguments");
 
-  // Render-vertex normals of deformed points: n' ∝ cof(J)·n with J = ∂Q/∂(u,v,w) · diag(size)⁻¹.
   std::vector<bool> deformed(mesh.point_count(), false);
   for (const std::uint32_t p : binding.vertices)
     if (p != deform::LatticeBinding::no_vertex) deformed[p] = true;
-  const deform::LatticeFrame& frame = lattice.frame();
-  const glm::vec3 size(frame.u_axis.x, frame.v_axis.y, frame.w_axis.z);
-  std::vector<glm::vec3> normals = mesh.vertex_normals;
-  for (std::size_t r = 0; r < normals.size() && r < mesh.vertex_point.size(); ++r) {
-    const std::uint32_t p = mesh.vertex_point[r];
-    if (!deformed[p]) continue;
-    glm::mat3 j = lattice.jacobian(frame.to_lattice(mesh.positions[p]));
-    for (int a = 0; a < 3; ++a) j[a] /= size[a];
-    const glm::mat3 cofactor(glm::cross(j[1], j[2]), glm::cross(j[2], j[0]), glm::cross(j[0], j[1]));
-    const glm::vec3 n = cofactor * normals[r];
-    const float length = glm::length(n);
-    if (length > 0.0f && std::isfinite(length)) normals[r] = n / length;
-  }
+  const std::vector<glm::vec3> normals = ffd_normals(mesh, lattice, deformed);
   // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
   deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
 
+  const deform::LatticeFrame& frame = lattice.frame();
+  const glm::vec3 size(frame.u_axis.x, frame.v_axis.y, frame.w_axis.z);
   nlohmann::json lattice_json = {{"origin", to_json(frame.origin)},
                                  {"size", to_json(size)},
                                  {"degree", {lattice.degree().x, lattice.degree().y, lattice.degree().z}},

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "shared_steps.hpp"
 #include "model_loading.hpp"
 #include "deform/character/character.hpp"
 #include "deform/io/atomic_file.hpp"
@@ -45,21 +46,6 @@ constexpr const char* usage =
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
-
-// The model a rig file names, its paths taken relative to the rig file's folder.
-model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
-  model_loading::ModelRequest request;
-  if (!named.builtin) {
-    if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
-    const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
-    request.path = (folder / named.obj).string();
-    request.skeleton = (folder / named.skeleton).string();
-    request.weights = (folder / named.weights).string();
-  }
-  model_loading::LoadedModel loaded = model_loading::load_model(request);
-  for (const std::string& message : loaded.warnings) note(message);
-  return loaded;
-}
 
 int run(const std::vector<std::string>& argv) {
   const Args args(argv, {"--target", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
