@@ -1,7 +1,9 @@
 #pragma once
-// Private to deform::offline: bones as bind-pose segments for the volumetric weights (heat_weights.cpp,
-// voxel_weights.cpp). O(bones) each.
+// Private to deform::offline: what the volumetric weights (heat_weights.cpp, voxel_weights.cpp) share: the input
+// checks and bones as bind-pose segments. O(points + triangles) and O(bones).
+#include <cmath>
 #include <cstdint>
+#include <string>
 #include <span>
 #include <utility>
 #include <vector>
@@ -10,8 +12,30 @@
 
 #include "deform/offline/picking.hpp"
 #include "deform/offline/weights.hpp"
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/mesh.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace deform::detail {
+
+// Each triangle corner's point (three per triangle), after checking that every point is finite and every corner in
+// range. Throws deform::Error of kind argument naming the vertex or triangle.
+inline std::vector<std::uint32_t> checked_corners(const Mesh& mesh) {
+  const std::size_t point_count = mesh.point_count();
+  for (std::size_t i = 0; i < point_count; ++i) {
+    const glm::vec3 p = mesh.positions[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw Error::invalid_argument("vertex " + std::to_string(i), "position is not finite");
+  }
+  if (mesh.triangles.size() % 3 != 0) throw Error::invalid_argument("triangles", "index count is not a multiple of 3");
+  std::vector<std::uint32_t> corners(mesh.triangles.size());
+  for (std::size_t c = 0; c < corners.size(); ++c) {
+    const std::uint32_t v = mesh.triangles[c];
+    if (v >= mesh.vertex_point.size() || mesh.vertex_point[v] >= point_count)
+      throw Error::invalid_argument("triangle " + std::to_string(c / 3), "vertex index out of range");
+    corners[c] = mesh.vertex_point[v];
+  }
+  return corners;
+}
 
 // A bone as segments in the bind pose: head -> each child's head; a leaf continues its parent's direction
 // (bone_segments()); a lone root is a point.

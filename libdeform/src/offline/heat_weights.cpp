@@ -156,18 +156,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   check_options(options, bone_count);
   auto deforms = [&](std::size_t b) { return options.deforming.empty() || options.deforming[b] != 0; };
   const std::size_t point_count = mesh.point_count();
-  for (std::size_t i = 0; i < point_count; ++i)
-    if (!finite(mesh.positions[i]))
-      throw Error::invalid_argument("vertex " + std::to_string(i), "position is not finite");
-  if (mesh.triangles.size() % 3 != 0)
-    throw Error::invalid_argument("triangles", "index count is not a multiple of 3");
-  std::vector<std::uint32_t> corners(mesh.triangles.size());
-  for (std::size_t c = 0; c < corners.size(); ++c) {
-    const std::uint32_t v = mesh.triangles[c];
-    if (v >= mesh.vertex_point.size() || mesh.vertex_point[v] >= point_count)
-      throw Error::invalid_argument("triangle " + std::to_string(c / 3), "vertex index out of range");
-    corners[c] = mesh.vertex_point[v];
-  }
+  const std::vector<std::uint32_t> corners = detail::checked_corners(mesh);
 
   WeightsResult result;
   result.weights.bones.assign(point_count, glm::u16vec4(0));
