@@ -574,23 +574,13 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
                                           glm::determinant(glm::mat3(nodes[static_cast<std::size_t>(n)].global)) > 0.0));
     if (!exact) ++approximate;
   }
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    const glm::mat4 parent =
-        bones[b].parent < 0 ? glm::mat4(1.0f) : bind_split[static_cast<std::size_t>(bones[b].parent)].rigid();
-    const Split local = split(glm::inverse(parent) * bind_split[b].rigid());
-    bones[b].bind_translation = local.translation;
-    bones[b].bind_rotation = euler_from_quat(local.rotation);
-  }
   if (approximate > 0)
     warnings.push_back(std::to_string(approximate) +
                        " bones have a scale a Skeleton cannot hold (non-uniform scale passed to children, shear, a "
                        "mirror, or a bind scale other than the node's): clips move them approximately, the bind pose "
                        "stays exact; ImportedModel::file_bind_world holds the exact bind");
-  for (std::size_t b = 0; b < bones.size(); ++b)
-    if (bones[b].parent >= 0)
-      bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
-  result.model.skeleton = Skeleton(bones, path);
-  result.file_bind_world.reserve(bones.size());
+  result.model.skeleton = skeleton_from_binds(bones, bind_split, path);
+  result.file_bind_world.reserve(bind_world.size());
   for (const glm::dmat4& m : bind_world) result.file_bind_world.emplace_back(m);
 
   // --- materials ---

@@ -338,21 +338,11 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
     }
     if (!exact) ++scaled;
   }
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    const glm::mat4 parent =
-        bones[b].parent < 0 ? glm::mat4(1.0f) : bind_split[static_cast<std::size_t>(bones[b].parent)].rigid();
-    const Split local = split(glm::inverse(parent) * bind_split[b].rigid());
-    bones[b].bind_translation = local.translation;
-    bones[b].bind_rotation = euler_from_quat(local.rotation);
-  }
   if (scaled > 0)
     warnings.push_back(std::to_string(scaled) +
                        " bones have non-uniform, mirrored or bind-vs-node-tree differing scale: a Skeleton holds no "
                        "scale, so clips move them approximately (the bind pose stays exact)");
-  for (std::size_t b = 0; b < bones.size(); ++b)
-    if (bones[b].parent >= 0)
-      bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
-  result.model.skeleton = Skeleton(bones, path);
+  result.model.skeleton = skeleton_from_binds(bones, bind_split, path);
   result.file_bind_world = bind_world;
   const Skeleton& skeleton = result.model.skeleton;
 

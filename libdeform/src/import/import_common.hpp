@@ -1,6 +1,6 @@
 #pragma once
 // Helpers the importers share (import_assimp.cpp, gltf_import.cpp): the split of a transform into what a Skeleton
-// holds, bone names that fit .sk, and the key a point is merged by.
+// holds and the skeleton of those parts, bone names that fit .sk, and the key a point is merged by.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -9,8 +9,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <string>
+#include <vector>
 
 #include "deform/import/import.hpp"
+#include "deform/runtime/skeleton.hpp"
 namespace deform::import_detail {
 
 // A transform split into its rigid part (rotation, translation) and a uniform scale. `similarity` is false when
@@ -44,6 +46,24 @@ inline Split split(const glm::mat4& m) {
                    std::fabs(glm::dot(r[i], r[(i + 1) % 3])) <= tolerance;
   }
   return s;
+}
+
+// Sets each of `bones` (parents set, children empty) to the rigid part of its bind world transform `bind_split[b]`:
+// bind translation and rotation relative to the parent's rigid part; fills the children in bone order; returns the
+// Skeleton of them. Throws what Skeleton's constructor throws, naming `path`.
+inline Skeleton skeleton_from_binds(std::vector<Bone>& bones, const std::vector<Split>& bind_split,
+                                    const std::string& path) {
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    const glm::mat4 parent =
+        bones[b].parent < 0 ? glm::mat4(1.0f) : bind_split[static_cast<std::size_t>(bones[b].parent)].rigid();
+    const Split local = split(glm::inverse(parent) * bind_split[b].rigid());
+    bones[b].bind_translation = local.translation;
+    bones[b].bind_rotation = euler_from_quat(local.rotation);
+  }
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (bones[b].parent >= 0)
+      bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
+  return Skeleton(bones, path);
 }
 
 // Length of the valid UTF-8 sequence starting at `i` (1 to 4), or 0 when the bytes there are not one.
