@@ -37,8 +37,8 @@ inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.
 
 // Whether the unit direction (cos a, sin a) of each axis lies within its limits, from dot and cross products with
 // the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at most the width;
-// for a wider one, the angle is outside when strictly within the complementary range from max to min. Agrees with
-// comparing the angles except within rounding (1e-7 rad) of a limit.
+// for a wider one, the angle is outside when strictly within the complementary range from max to min (never for a
+// full circle, whose cos_width is 2). Agrees with comparing the angles except within rounding (1e-7 rad) of a limit.
 inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)[3]) {
   for (int axis = 0; axis < 3; ++axis) {
     const glm::dvec2 d = dir[axis], lo = limits.min_dir[axis], hi = limits.max_dir[axis];
@@ -105,7 +105,8 @@ EulerLimits prepare_limits(const DofLimits& limits) noexcept {
     prepared.min_dir[axis] = glm::dvec2(std::cos(prepared.min[axis]), std::sin(prepared.min[axis]));
     prepared.max_dir[axis] = glm::dvec2(std::cos(prepared.max[axis]), std::sin(prepared.max[axis]));
     const double width = prepared.max[axis] - prepared.min[axis];
-    prepared.cos_width[axis] = width >= 2.0 * pi ? -1.0 : std::cos(width);
+    // (−1 for a full circle would call half of its directions outside: the dot with max then exceeds it.)
+    prepared.cos_width[axis] = width >= 2.0 * pi ? 2.0 : std::cos(width);
     prepared.wide[axis] = width > pi;
   }
   prepared.free = glm::all(glm::lessThanEqual(limits.min, glm::vec3(-180.0f))) &&

@@ -38,9 +38,10 @@ struct EulerLimits {
   glm::dvec2 min_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of min per axis
   glm::dvec2 max_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of max per axis
   bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
-  // Per axis, cos(max − min) (−1 for a range of 360° or more): whether a direction lies within the range is then a
-  // dot and a cross product, no arctangent (the clamp's test for a rotation that needs no clamping).
-  glm::dvec3 cos_width{-1.0};
+  // Per axis, cos(max − min), or 2 for a range of 360° or more (which every direction lies within): whether a
+  // direction lies within the range is then a dot and a cross product, no arctangent (the clamp's test for a
+  // rotation that needs no clamping).
+  glm::dvec3 cos_width{2.0};
   bool wide[3]{true, true, true};  // max − min > 180°
 };
 
