@@ -31,6 +31,15 @@ void validate_shape(const StretchShape& shape) {
     throw Error::invalid_argument("<stretch shape>", "shape volume must be in [0, 1]");
 }
 
+void validate_motion(const LatticeMotion& motion) {
+  const auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+  if (!(motion.inertia >= 0.0f && motion.inertia <= 1.0f))
+    throw Error::invalid_argument("<lattice motion>", "motion inertia must be in [0, 1]");
+  if (!finite(motion.gravity)) throw Error::invalid_argument("<lattice motion>", "motion gravity must be finite");
+  if (!(motion.units_per_metre > 0.0f) || !std::isfinite(motion.units_per_metre))
+    throw Error::invalid_argument("<lattice motion>", "motion units_per_metre must be finite and > 0");
+}
+
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
                                      std::size_t point_count)
     : scratch_(point_count, glm::vec3(0.0f)), normal_scratch_(point_count, glm::vec3(0.0f)) {
@@ -44,6 +53,7 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     }
     try {
       validate_shape(bound.spec.shape);
+      validate_motion(bound.spec.motion);
     } catch (const Error& error) {
       throw Error::invalid_argument(element, error.message());
     }
@@ -78,6 +88,9 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.world_displacements.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.world_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.mapped_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattice.rest_velocity.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattice.accel_start.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    lattice.accel_end.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattices_.push_back(std::move(lattice));
   }
 
@@ -197,10 +210,95 @@ void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& se
 
 Status DeformerHierarchy::step(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
-  // With dt checked, a lattice's step cannot refuse: its target points were sized with it at construction.
   for (Lattice& lattice : lattices_)
-    if (const Status status = lattice.elastic.step(dt, lattice.target_points); !status) return status;
+    if (const Status status = step_lattice(lattice, dt, nullptr, nullptr); !status) return status;
   return {};
+}
+
+Status DeformerHierarchy::step(float dt, std::span<const glm::mat4> world, std::span<const glm::mat4> world_rate) {
+  if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
+  if (world.size() != bone_parents_.size()) return Status::failure("world does not have one entry per bone");
+  if (!world_rate.empty() && world_rate.size() != bone_parents_.size())
+    return Status::failure("world_rate is neither empty nor one per bone");
+  for (Lattice& lattice : lattices_) {
+    const auto bone = std::size_t(lattice.spec.bone);
+    if (const Status status = step_lattice(lattice, dt, &world[bone], world_rate.empty() ? nullptr : &world_rate[bone]);
+        !status)
+      return status;
+  }
+  return {};
+}
+
+Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::mat4* world, const glm::mat4* rate) {
+  // With dt checked, a lattice's step cannot refuse: its target and acceleration arrays were sized with it.
+  const LatticeMotion& motion = lattice.spec.motion;
+  if (!motion.active()) return lattice.elastic.step(dt, lattice.target_points);
+  // Everything in the bone's frame: the rest's world acceleration taken back by the bone's inverse 3×3, gravity by
+  // the same and rescaled by the bone's scale (so a scaled character moves the same way, scaled).
+  const glm::mat4 now = world != nullptr ? *world : lattice.motion_known ? lattice.motion_world : lattice.bind_world;
+  if (!lattice.motion_known || world == nullptr) {
+    // The first step, or bones held still: the motion starts as it is now, with no jolt — a rate given now is the
+    // step's starting rate, and without one the first step's own velocity is (rest_velocity_known).
+    lattice.motion_world = now;
+    lattice.rate_known = rate != nullptr;
+    if (rate != nullptr) lattice.motion_rate = *rate;
+    lattice.rest_velocity_known = false;
+    lattice.motion_known = world != nullptr;
+  }
+  const glm::mat4 before = lattice.motion_world;
+  const glm::mat3 inverse_before = glm::inverse(glm::mat3(before));
+  const glm::mat3 inverse_now = glm::inverse(glm::mat3(now));
+  const auto scale = [](const glm::mat4& m) { return std::cbrt(std::abs(glm::determinant(glm::mat3(m)))); };
+  const glm::vec3 gravity = motion.gravity * motion.units_per_metre;
+  const glm::vec3 gravity_before = inverse_before * (gravity * scale(before));
+  const glm::vec3 gravity_now = inverse_now * (gravity * scale(now));
+  const float inertia = motion.inertia;
+  const std::size_t n = lattice.target_points.size();
+  if (dt > 0.0f && rate != nullptr && inertia > 0.0f) {
+    // The rest moves along the cubic through its positions and velocities at the two ends: its acceleration is linear
+    // over the step, which the exact integrator follows exactly.
+    const glm::mat4 rate_before = lattice.rate_known ? lattice.motion_rate : *rate;
+    for (std::size_t i = 0; i < n; ++i) {
+      const glm::vec4 x(lattice.target_points[i], 1.0f);
+      const HermiteAccelerations a =
+          hermite_accelerations(glm::vec3(before * x), glm::vec3(rate_before * x), glm::vec3(now * x),
+                                glm::vec3(*rate * x), dt);
+      lattice.accel_start[i] = gravity_before - inertia * (inverse_before * a.start);
+      lattice.accel_end[i] = gravity_now - inertia * (inverse_now * a.end);
+      lattice.rest_velocity[i] = glm::vec3(*rate * x);
+    }
+    lattice.rest_velocity_known = true;
+  } else {
+    // The rest moves linearly within the step: its velocity changes at the step's start, an impulse of minus λ times
+    // that change on the points' velocities (in the bone's frame).
+    if (dt > 0.0f && inertia > 0.0f) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const glm::vec4 x(lattice.target_points[i], 1.0f);
+        const glm::vec3 velocity = glm::vec3(now * x - before * x) / dt;
+        const glm::vec3 change = lattice.rest_velocity_known ? velocity - lattice.rest_velocity[i] : glm::vec3(0.0f);
+        lattice.accel_start[i] = -inertia * (inverse_before * change);
+        lattice.rest_velocity[i] = velocity;
+      }
+      lattice.elastic.add_velocity(lattice.accel_start);
+    }
+    std::fill(lattice.accel_start.begin(), lattice.accel_start.end(), gravity_before);
+    std::fill(lattice.accel_end.begin(), lattice.accel_end.end(), gravity_now);
+  }
+  if (dt > 0.0f) {
+    lattice.motion_world = now;
+    lattice.rest_velocity_known = lattice.rest_velocity_known || inertia > 0.0f;
+    lattice.rate_known = rate != nullptr;
+    if (rate != nullptr) lattice.motion_rate = *rate;
+  } else if (world != nullptr) {
+    lattice.motion_world = now;  // a pose changed without time passing is a jump, not a motion
+  }
+  return lattice.elastic.step(dt, lattice.target_points, lattice.accel_start, lattice.accel_end);
+}
+
+void DeformerHierarchy::set_motion(std::size_t index, const LatticeMotion& motion) {
+  Lattice& lattice = lattices_.at(index);
+  validate_motion(motion);
+  lattice.spec.motion = motion;
 }
 
 void DeformerHierarchy::reset() {
@@ -208,6 +306,8 @@ void DeformerHierarchy::reset() {
     lattice.target = 0.0f;
     stretch_points(lattice);
     lattice.elastic.reset(lattice.rest.control_points());
+    lattice.motion_known = false;
+    lattice.rate_known = false;
   }
 }
 

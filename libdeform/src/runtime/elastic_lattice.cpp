@@ -92,6 +92,43 @@ OscillatorStep oscillator_step(const ElasticParams& params, double t) noexcept {
   return m;
 }
 
+ForcedStep forced_step(const ElasticParams& params, double t) noexcept {
+  // Particular solutions of y'' + 2ζω y' + ω² y = f(s): for f = 1, y_p = 1/ω²; for the ramp f = s/t,
+  // y_p = (s - 2ζ/ω) / (t ω²). Starting from y = v = 0, the forced part is y_p plus the homogeneous flow of -y_p(0),
+  // -y_p'(0). The start's share is the constant's response minus the ramp's.
+  ForcedStep f;
+  const double omega = angular_frequency(params);
+  if (!(t > 0.0)) return f;
+  if (omega * t < 1e-4) {  // Taylor: y ≈ ∫(t - s) f(s) ds, v ≈ ∫ f(s) ds
+    f.position_from_start = t * t / 3.0;
+    f.position_from_end = t * t / 6.0;
+    f.velocity_from_start = 0.5 * t;
+    f.velocity_from_end = 0.5 * t;
+    return f;
+  }
+  const OscillatorStep m = oscillator_step(params, t);
+  const double w2 = omega * omega;
+  const double c = 2.0 * double(params.damping_ratio) / omega;
+  const double constant_y = (1.0 - m.position_from_offset) / w2;
+  const double constant_v = -m.velocity_from_offset / w2;
+  const double ramp_y = (t - m.position_from_velocity - c * (1.0 - m.position_from_offset)) / (t * w2);
+  const double ramp_v = (1.0 - m.velocity_from_velocity + c * m.velocity_from_offset) / (t * w2);
+  f.position_from_start = constant_y - ramp_y;
+  f.position_from_end = ramp_y;
+  f.velocity_from_start = constant_v - ramp_v;
+  f.velocity_from_end = ramp_v;
+  return f;
+}
+
+HermiteAccelerations hermite_accelerations(glm::vec3 p0, glm::vec3 v0, glm::vec3 p1, glm::vec3 v1, float h) noexcept {
+  // p(s) = h00 p0 + h10 h v0 + h01 p1 + h11 h v1 with the cubic Hermite basis; p''(0) and p''(h):
+  const glm::vec3 chord = (p1 - p0) * (6.0f / (h * h));
+  HermiteAccelerations a;
+  a.start = chord - (4.0f * v0 + 2.0f * v1) / h;
+  a.end = -chord + (2.0f * v0 + 4.0f * v1) / h;
+  return a;
+}
+
 double settling_time(const ElasticParams& params, double tolerance) noexcept {
   if (!is_valid(params) || !(tolerance > 0.0 && tolerance < 1.0)) return std::numeric_limits<double>::quiet_NaN();
   const double omega = angular_frequency(params);
@@ -145,6 +182,7 @@ ElasticLattice::ElasticLattice(std::span<const glm::vec3> rest, const ElasticSet
   sub_positions_ = positions_;
   sub_velocities_ = velocities_;
   forces_.assign(rest.size(), glm::vec3(0.0f));
+  held_accel_.assign(rest.size(), glm::vec3(0.0f));
   set_settings(settings);
 }
 
@@ -178,20 +216,28 @@ Status ElasticLattice::reset(std::span<const glm::vec3> rest) {
   return {};
 }
 
-Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
+Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest) { return step(dt, rest, {}, {}); }
+
+Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest, std::span<const glm::vec3> accel_start,
+                            std::span<const glm::vec3> accel_end) {
   if (!(dt >= 0.0f) || !finite(dt)) return Status::failure("dt is negative or not finite");
   if (rest.size() != size()) return Status::failure("rest does not have one entry per point");
+  const bool forced = !accel_start.empty() || !accel_end.empty();
+  if (forced && (accel_start.size() != size() || accel_end.size() != size()))
+    return Status::failure("accelerations do not have one entry per point");
   if (settings_.integrator == Integrator::verlet &&
       !(double(dt) < verlet_max_step(settings_.oscillator, double(settings_.verlet_kd))))
     return Status::failure("dt is beyond the Verlet integrator's stable step (verlet_max_step)");
   std::copy(rest.begin(), rest.end(), rest_.begin());
+  const glm::vec3* start = forced ? accel_start.data() : nullptr;
+  const glm::vec3* end = forced ? accel_end.data() : nullptr;
   if (dt > 0.0f) {
     if (settings_.integrator == Integrator::verlet) {
-      step_verlet(dt);
+      step_verlet(dt, end);
     } else if (!springs_.empty()) {
-      step_with_springs(dt);
+      step_with_springs(dt, start, end);
     } else {
-      step_exact(dt);
+      step_exact(dt, start, end);
     }
   }
   if (!pinned_.empty()) {
@@ -204,6 +250,17 @@ Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest) {
   return {};
 }
 
+Status ElasticLattice::add_velocity(std::span<const glm::vec3> delta) {
+  if (delta.size() != size()) return Status::failure("delta does not have one entry per point");
+  for (std::size_t i = 0; i < size(); ++i) {
+    if (!pinned_.empty() && pinned_[i]) continue;
+    velocities_[i] += delta[i];
+    sub_velocities_[i] += delta[i];
+    previous_[i] -= delta[i] * last_dt_;  // Verlet's velocity is p - p_old over the last step
+  }
+  return {};
+}
+
 const OscillatorStep& ElasticLattice::cached_step(double dt, OscillatorStep& cache, double& cache_dt) const {
   if (dt != cache_dt) {  // a fixed frame rate computes the map once
     cache = oscillator_step(settings_.oscillator, dt);
@@ -212,8 +269,10 @@ const OscillatorStep& ElasticLattice::cached_step(double dt, OscillatorStep& cac
   return cache;
 }
 
-void ElasticLattice::step_exact(double dt) {
+void ElasticLattice::step_exact(double dt, const glm::vec3* accel_start, const glm::vec3* accel_end) {
+  const double cached_dt = step_cache_dt_;
   const OscillatorStep& m = cached_step(dt, step_cache_, step_cache_dt_);
+  if (cached_dt != step_cache_dt_) forced_cache_ = forced_step(settings_.oscillator, dt);
   const float py = float(m.position_from_offset), pv = float(m.position_from_velocity);
   const float vy = float(m.velocity_from_offset), vv = float(m.velocity_from_velocity);
   const std::size_t n = size();
@@ -226,19 +285,28 @@ void ElasticLattice::step_exact(double dt) {
     p[i] = r[i] + py * y + pv * u;
     v[i] = vy * y + vv * u;
   }
+  if (accel_start == nullptr) return;
+  const ForcedStep& f = forced_cache_;
+  const float ps = float(f.position_from_start), pe = float(f.position_from_end);
+  const float vs = float(f.velocity_from_start), ve = float(f.velocity_from_end);
+  for (std::size_t i = 0; i < n; ++i) {
+    p[i] += ps * accel_start[i] + pe * accel_end[i];
+    v[i] += vs * accel_start[i] + ve * accel_end[i];
+  }
 }
 
-void ElasticLattice::step_verlet(float dt) {
+void ElasticLattice::step_verlet(float dt, const glm::vec3* accel_end) {
   // The seed (§8.4.2): unit-time Verlet with the implicit velocity p - p_old scaled by (1 - Kd) every frame.
   const float k_over_m = settings_.oscillator.stiffness / settings_.oscillator.mass;
   const float keep = 1.0f - settings_.verlet_kd;
   for (std::size_t i = 0; i < size(); ++i) {
     const glm::vec3 p = positions_[i];
-    const glm::vec3 a = -k_over_m * (p - rest_[i]);
+    const glm::vec3 a = -k_over_m * (p - rest_[i]) + (accel_end != nullptr ? accel_end[i] : glm::vec3(0.0f));
     positions_[i] = p + (p - previous_[i]) * keep + a * (dt * dt);
     previous_[i] = p;
     velocities_[i] = (positions_[i] - p) / dt;
   }
+  last_dt_ = dt;
 }
 
 }  // namespace deform

@@ -54,6 +54,8 @@ void ElasticLattice::substep(double h, std::span<glm::vec3> positions, std::span
     forces_[spring.a] += f;
     forces_[spring.b] -= f;
   }
+  const float mass = settings_.oscillator.mass;
+  for (std::size_t i = 0; i < positions.size(); ++i) forces_[i] += mass * held_accel_[i];
   const OscillatorStep m =
       h == double(s.substep) ? cached_step(h, sub_cache_, sub_cache_dt_) : oscillator_step(settings_.oscillator, h);
   const float py = float(m.position_from_offset), pv = float(m.position_from_velocity);
@@ -73,9 +75,12 @@ void ElasticLattice::substep(double h, std::span<glm::vec3> positions, std::span
   }
 }
 
-void ElasticLattice::step_with_springs(double dt) {
+void ElasticLattice::step_with_springs(double dt, const glm::vec3* accel_start, const glm::vec3* accel_end) {
   // Whole sub-steps advance the kept state; the reported state is that one advanced by the leftover time, so the
-  // output is at exactly the caller's time while the kept state only ever moves by the fixed sub-step.
+  // output is at exactly the caller's time while the kept state only ever moves by the fixed sub-step. An outside
+  // acceleration is held at its mean over this call (first order, like the springs themselves).
+  for (std::size_t i = 0; i < held_accel_.size(); ++i)
+    held_accel_[i] = accel_start != nullptr ? 0.5f * (accel_start[i] + accel_end[i]) : glm::vec3(0.0f);
   const double h = settings_.springs.substep;
   double available = owed_ + dt;
   // A step longer than one second (a stall) takes its excess in one sub-step, so the cost per call stays bounded; the

@@ -67,6 +67,30 @@ struct OscillatorStep {
 };
 DEFORM_RUNTIME_API OscillatorStep oscillator_step(const ElasticParams& params, double t) noexcept;
 
+// What an acceleration f acting on the point adds over a time t, when f changes linearly from f0 at the start to f1
+// at the end (m·y'' = -k·y - b·y' + m·f): exactly, with the homogeneous part from oscillator_step,
+//   y(t) += position_from_start·f0 + position_from_end·f1,   v(t) += velocity_from_start·f0 + velocity_from_end·f1.
+// Such an f is gravity (constant) or, for points whose rest rides on a moving frame, minus the rest's acceleration
+// (inertia): a rest moving along a cubic between two frames has an acceleration linear in time, so a step over a
+// piecewise-cubic rest is exact. Computed in double; for ω·t < 1e-4 from the Taylor series (no cancellation).
+struct ForcedStep {
+  double position_from_start = 0.0;
+  double position_from_end = 0.0;
+  double velocity_from_start = 0.0;
+  double velocity_from_end = 0.0;
+};
+DEFORM_RUNTIME_API ForcedStep forced_step(const ElasticParams& params, double t) noexcept;
+
+// The accelerations at the start and the end of a step of length h of a point moving along the cubic (Hermite)
+// through position p0 with velocity v0 at the start and p1, v1 at the end: the cubic's second derivative, linear in
+// time between these two values. With v0 = v1 = (p1 - p0) / h both are 0 (a point moving linearly).
+struct HermiteAccelerations {
+  glm::vec3 start{0.0f};
+  glm::vec3 end{0.0f};
+};
+DEFORM_RUNTIME_API HermiteAccelerations hermite_accelerations(glm::vec3 p0, glm::vec3 v0, glm::vec3 p1, glm::vec3 v1,
+                                                              float h) noexcept;
+
 enum class Integrator { exact, verlet };
 
 // Springs between control points of a grid (thesis §8.2.3, fig. 38): structural (axis neighbours), shear (face and
@@ -131,6 +155,18 @@ class DEFORM_RUNTIME_API ElasticLattice {
   // that moves is sampled once per step). dt = 0 only re-anchors pinned points. Refuses, changing nothing, a dt that
   // is negative or not finite, or a `rest` of the wrong size. Cost O(points (+ springs · sub-steps)), no allocation.
   Status step(float dt, std::span<const glm::vec3> rest);
+  // The same step with every point also pushed by an acceleration (the caller's frame, units/s², size() entries
+  // each) that changes linearly over the step from accel_start to accel_end: gravity, or minus the rest's own
+  // acceleration for points that ride on an accelerating frame (inertia; see DeformerHierarchy). Exact with the exact
+  // integrator (forced_step); with neighbour springs the mean of the two is held over the step's sub-steps, and
+  // Verlet adds accel_end to its acceleration (both first order in the step). Refuses, changing nothing, what step()
+  // refuses and accelerations of the wrong size.
+  Status step(float dt, std::span<const glm::vec3> rest, std::span<const glm::vec3> accel_start,
+              std::span<const glm::vec3> accel_end);
+  // Adds `delta` (size() entries) to the points' velocities, pinned points excepted: an impulse, such as the change
+  // of velocity of a rest that moves linearly within each step and turns at the step's start. Refuses, changing
+  // nothing, a size mismatch. No allocation.
+  Status add_velocity(std::span<const glm::vec3> delta);
 
   // Puts every point on `rest` with zero velocity (size() entries; refused, changing nothing, otherwise). No
   // allocation.
@@ -143,9 +179,9 @@ class DEFORM_RUNTIME_API ElasticLattice {
   std::span<const Spring> springs() const noexcept { return springs_; }
 
  private:
-  void step_exact(double dt);
-  void step_verlet(float dt);
-  void step_with_springs(double dt);
+  void step_exact(double dt, const glm::vec3* accel_start, const glm::vec3* accel_end);
+  void step_verlet(float dt, const glm::vec3* accel_end);
+  void step_with_springs(double dt, const glm::vec3* accel_start, const glm::vec3* accel_end);
   void substep(double h, std::span<glm::vec3> positions, std::span<glm::vec3> velocities);
   const OscillatorStep& cached_step(double dt, OscillatorStep& cache, double& cache_dt) const;
 
@@ -161,8 +197,11 @@ class DEFORM_RUNTIME_API ElasticLattice {
   std::vector<glm::vec3> sub_positions_;
   std::vector<glm::vec3> sub_velocities_;
   std::vector<glm::vec3> forces_;
+  std::vector<glm::vec3> held_accel_;  // sub-stepping: the acceleration held over this call's sub-steps
   double owed_ = 0.0;
+  float last_dt_ = 0.0f;  // Verlet: the last step, which turns a change of velocity into one of p_old
   OscillatorStep step_cache_;
+  ForcedStep forced_cache_;
   double step_cache_dt_ = -1.0;
   OscillatorStep sub_cache_;
   double sub_cache_dt_ = -1.0;

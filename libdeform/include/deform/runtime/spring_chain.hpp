@@ -1,0 +1,146 @@
+#pragma once
+// Spring chains: secondary motion for tails, hair, ears, cloth strips and bellies — bones that trail behind the
+// animated pose, overshoot and settle, pulled by gravity and kept out of the body by colliders. docs/elasticity.md,
+// "Spring chains".
+//
+// Each bone of a chain ends in a tail (the next bone's head; the last bone's `tip`) that is a damped oscillator in
+// world space: pulled toward where the animated pose puts it — relative to the chain as simulated so far, so a bend
+// near the root carries the rest of the chain — with a natural frequency in Hz and a damping ratio, pushed by
+// gravity, then kept at its bone's length from its head and out of the colliders. The chain's first head stays
+// where the animation puts it. The simulated chain then rotates each chain bone (shortest arc from its animated
+// direction to its simulated one, no twist added) and carries every bone below it rigidly.
+//
+// The same at any frame rate: the state advances in fixed sub-steps (`substep`, 1/240 s by default) whatever the
+// caller's frame time, each sub-step the exact flow of the oscillators toward a rest moving linearly over it; the
+// caller's frame only decides where the animated pose is sampled, and between frames the animated points move along
+// the cubic through their positions and velocities (world_rate given) or linearly (not given). Output is reported
+// at exactly the caller's time (the kept state advanced by the leftover time, not committed).
+// The same at any scale: frequency and damping ratio have no length in them; gravity (m/s²) and the tails' collision
+// radius are scaled by the scale of the chain's first bone relative to the bind pose, and colliders are placed by
+// their bones' matrices, scale included — a character scaled by 0.01 or 100 moves the same way, scaled.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/export.hpp"
+#include "deform/runtime/skeleton.hpp"
+namespace deform {
+
+// A sphere (start == end) or a capsule (the segment start–end swept by the radius) moving with a bone.
+struct SpringCollider {
+  std::int32_t bone = -1;  // moves with this bone's animated world matrix
+  glm::vec3 start{0.0f};   // bone-local (bind units): a sphere's centre, a capsule's first end
+  glm::vec3 end{0.0f};     // bone-local: a capsule's second end
+  float radius = 0.0f;     // bone-local units, > 0
+  bool operator==(const SpringCollider&) const = default;
+};
+
+// One chain of spring bones.
+struct SpringChainSpec {
+  std::string name;                  // unique among the chains
+  std::vector<std::int32_t> bones;   // root first, each bone the parent of the next; at least one
+  glm::vec3 tip{0.0f};               // the last bone's tail in its local frame; zero: its first child's bind head,
+                                     // else its own offset from its parent continued
+  float frequency = 2.0f;            // Hz, > 0: each tail's natural frequency toward the animated pose
+  float damping_ratio = 0.3f;        // >= 0: < 1 overshoots and settles, 1 returns without overshoot
+  glm::vec3 gravity{0.0f};           // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model
+  float units_per_metre = 1.0f;      // model units in a metre (100 for centimetres), > 0
+  float radius = 0.0f;               // each tail's collision radius, model units at bind scale, >= 0
+  std::vector<std::uint32_t> colliders;  // indices into the colliders the chains share
+  bool operator==(const SpringChainSpec&) const = default;
+};
+
+// Throws deform::Error ("<spring chain>" or the chain's name, naming the field) when a setting is not finite or out
+// of its range. The bones and colliders are checked against a skeleton by SpringChains' constructor.
+DEFORM_RUNTIME_API void validate_chain_settings(const SpringChainSpec& chain);
+
+// The spring chains of one skeleton and their state. Construction allocates; run() does not.
+class DEFORM_RUNTIME_API SpringChains {
+ public:
+  static constexpr float default_substep = 1.0f / 240.0f;
+
+  SpringChains() = default;
+  // Throws deform::Error naming the chain or collider for a bone out of range, a chain whose bones are not a parent
+  // path, a bone in two chains, a chain below another chain's bone (chains do not nest), a leaf root with no tip to
+  // guess, a collider index out of range, a setting out of range (validate_chain_settings) or a substep outside
+  // (0, 1] s.
+  SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec> chains, std::vector<SpringCollider> colliders,
+               float substep = default_substep);
+
+  // Advances the chains by dt seconds and bends the pose: `world` holds the animated world matrices at the end of
+  // the step (LocalToWorldJob's, one per bone) and receives the simulated ones for every chain bone and bone below
+  // one; `palette`, when not empty, is rewritten for those bones (world · inverse bind). `world_rate`, when not
+  // empty, is d(world)/dt per bone at the end of the step (see DeformerHierarchy::step). The first run after
+  // construction or reset() starts the chains on the animated pose, at rest. Refuses, changing nothing, a dt that is
+  // negative or not finite, or spans of the wrong size. No allocation, no exceptions; O(sub-steps × (tails +
+  // tail-collider pairs) + bones).
+  Status run(float dt, std::span<glm::mat4> world, std::span<const glm::mat4> world_rate = {},
+             std::span<glm::mat4> palette = {});
+  // The next run() starts on the animated pose, at rest (after a teleport, say).
+  void reset() noexcept { started_ = false; }
+
+  std::size_t chain_count() const noexcept { return chains_.size(); }
+  const SpringChainSpec& spec(std::size_t chain) const { return chains_.at(chain).spec; }
+  std::span<const SpringCollider> colliders() const noexcept { return colliders_; }
+  float substep() const noexcept { return substep_; }
+  // Changes a chain's frequency, damping, gravity, units and radius (its bones, tip and colliders stay), keeping the
+  // state. Throws deform::Error when invalid or the index is out of range.
+  void set_settings(std::size_t chain, const SpringChainSpec& settings);
+  // As of the last run(): the chain's first head and its tails, world space (bones + 1 points, for drawing).
+  std::span<const glm::vec3> points(std::size_t chain) const;
+
+ private:
+  struct Oscillator {  // one sub-step's maps (double-computed, stored as float)
+    float py = 1, pv = 0, vy = 0, vv = 1;  // oscillator_step
+    float pg = 0, vg = 0;                  // forced_step for a constant acceleration
+  };
+  struct Chain {
+    SpringChainSpec spec;
+    Oscillator fixed;        // the maps of one whole sub-step
+    std::size_t first = 0;   // its first joint in the flat arrays (one per bone); its points start at first + index
+    std::size_t count = 0;   // bones
+    glm::vec3 tip{0.0f};     // the last bone's tail, bone-local
+    float bind_scale = 1.0f;  // the first bone's scale in the bind pose
+    float scale = 1.0f;       // ... and as of the last run
+  };
+  struct Placed {  // a collider in world space
+    glm::vec3 start{0.0f};
+    glm::vec3 end{0.0f};
+    float radius = 0.0f;
+  };
+  Oscillator oscillator(const Chain& chain, double h) const noexcept;
+  void sample_points(double tau, double dt);
+  void sample_colliders(float blend);
+  void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
+               glm::vec3* rests) const noexcept;
+  void advance(double dt);
+
+  std::vector<Chain> chains_;
+  std::vector<SpringCollider> colliders_;
+  float substep_ = default_substep;
+  std::vector<std::int32_t> point_bone_;     // per point (chains' first heads and tails, then colliders' ends):
+                                             // the bone whose matrix places it
+  std::vector<glm::vec3> point_local_;       // ... and where in that bone's frame
+  std::vector<std::int32_t> governed_;       // per bone: the joint that moves it, or -1
+  std::vector<glm::mat4> inverse_bind_;      // per bone
+  // Animated points at the last run (start of this step) and now, with velocities; the sample at a sub-step.
+  std::vector<glm::vec3> start_points_, start_velocities_, end_points_, end_velocities_;
+  std::vector<glm::vec3> sample_points_, sample_velocities_;
+  std::size_t collider_points_ = 0;  // the first collider end among the points
+  // Colliders' radii in world space at the start and end of the step; colliders at a sub-step.
+  std::vector<float> collider_start_radius_, collider_end_radius_;
+  std::vector<Placed> sample_colliders_;
+  // Per joint: the kept state (positions, velocities, rest at the last sub-step), the reported one, corrections.
+  std::vector<glm::vec3> positions_, velocities_, rests_;
+  std::vector<glm::vec3> report_positions_, report_velocities_, report_rests_;
+  std::vector<glm::vec3> drawn_;  // per point: the reported chain (first head, tails)
+  std::vector<glm::mat4> corrections_;
+  double owed_ = 0.0;
+  bool started_ = false;
+};
+
+}  // namespace deform

@@ -1,0 +1,383 @@
+// Spring chains: tails as damped oscillators in fixed sub-steps, their bones' lengths kept, colliders, and the bent
+// pose written back into the world matrices.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "deform/runtime/elastic.hpp"
+#include "deform/runtime/spring_chain.hpp"
+#include "finite.hpp"
+
+namespace deform {
+namespace {
+
+glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+
+float matrix_scale(const glm::mat4& m) { return std::cbrt(std::abs(glm::determinant(glm::mat3(m)))); }
+
+// The shortest rotation taking the direction of a to that of b; identity when either is zero. Opposite directions
+// turn half a turn about an axis perpendicular to a.
+glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
+  const float norms = std::sqrt(glm::dot(a, a) * glm::dot(b, b));
+  if (!(norms > 0.0f)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  const float w = norms + glm::dot(a, b);
+  if (w <= 1e-6f * norms) {
+    const glm::vec3 axis = std::abs(a.x) > std::abs(a.z) ? glm::vec3(-a.y, a.x, 0.0f) : glm::vec3(0.0f, -a.z, a.y);
+    return glm::normalize(glm::quat(0.0f, axis.x, axis.y, axis.z));
+  }
+  const glm::vec3 c = glm::cross(a, b);
+  return glm::normalize(glm::quat(w, c.x, c.y, c.z));
+}
+
+// The point of segment [a, b] nearest p.
+glm::vec3 nearest_on_segment(glm::vec3 a, glm::vec3 b, glm::vec3 p) noexcept {
+  const glm::vec3 ab = b - a;
+  const float length2 = glm::dot(ab, ab);
+  if (!(length2 > 0.0f)) return a;
+  return a + ab * std::clamp(glm::dot(p - a, ab) / length2, 0.0f, 1.0f);
+}
+
+void require(bool ok, const std::string& element, const char* what) {
+  if (!ok) throw Error::invalid_argument(element, what);
+}
+
+}  // namespace
+
+void validate_chain_settings(const SpringChainSpec& chain) {
+  const std::string element = chain.name.empty() ? std::string("<spring chain>") : "spring chain '" + chain.name + "'";
+  require(std::isfinite(chain.frequency) && chain.frequency > 0.0f, element, "frequency must be finite and > 0 Hz");
+  require(std::isfinite(chain.damping_ratio) && chain.damping_ratio >= 0.0f, element,
+          "damping_ratio must be finite and >= 0");
+  require(finite(chain.gravity), element, "gravity must be finite");
+  require(std::isfinite(chain.units_per_metre) && chain.units_per_metre > 0.0f, element,
+          "units_per_metre must be finite and > 0");
+  require(std::isfinite(chain.radius) && chain.radius >= 0.0f, element, "radius must be finite and >= 0");
+  require(finite(chain.tip), element, "tip must be finite");
+}
+
+SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec> chains,
+                           std::vector<SpringCollider> colliders, float substep)
+    : colliders_(std::move(colliders)), substep_(substep) {
+  require(std::isfinite(substep) && substep > 0.0f && substep <= 1.0f, "<spring chains>",
+          "substep must be in (0, 1] seconds");
+  const std::size_t bones = skeleton.bone_count();
+  const std::span<const Bone> bone_list = skeleton.bones();
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const SpringCollider& collider = colliders_[c];
+    const std::string element = "collider " + std::to_string(c);
+    require(collider.bone >= 0 && std::size_t(collider.bone) < bones, element, "bone is out of range");
+    require(finite(collider.start) && finite(collider.end), element, "ends must be finite");
+    require(std::isfinite(collider.radius) && collider.radius > 0.0f, element, "radius must be finite and > 0");
+  }
+  inverse_bind_.assign(skeleton.inverse_bind_world().begin(), skeleton.inverse_bind_world().end());
+  std::vector<std::int32_t> joint_of(bones, -1);
+  std::size_t joints = 0;
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    SpringChainSpec& spec = chains[c];
+    validate_chain_settings(spec);
+    const std::string element = "spring chain '" + spec.name + "'";
+    for (std::size_t other = 0; other < c; ++other)
+      require(chains[other].name != spec.name, element, "name is used by another chain");
+    require(!spec.bones.empty(), element, "has no bones");
+    for (std::size_t i = 0; i < spec.bones.size(); ++i) {
+      const std::int32_t b = spec.bones[i];
+      require(b >= 0 && std::size_t(b) < bones, element, "a bone is out of range");
+      require(joint_of[std::size_t(b)] < 0, element, "a bone is in two chains");
+      require(i == 0 || bone_list[std::size_t(b)].parent == spec.bones[i - 1], element,
+              "bones are not a parent path (each bone the parent of the next)");
+      joint_of[std::size_t(b)] = std::int32_t(joints + i);
+    }
+    for (std::uint32_t collider : spec.colliders)
+      require(collider < colliders_.size(), element, "a collider index is out of range");
+    Chain chain;
+    chain.first = joints;
+    chain.count = spec.bones.size();
+    const auto last = std::size_t(spec.bones.back());
+    chain.tip = spec.tip;
+    if (chain.tip == glm::vec3(0.0f)) {
+      const glm::mat4& bind = skeleton.bind_world()[last];
+      std::int32_t child = -1;
+      for (std::size_t b = 0; b < bones && child < 0; ++b)
+        if (bone_list[b].parent == std::int32_t(last)) child = std::int32_t(b);
+      if (child >= 0) {
+        chain.tip = transform_point(inverse_bind_[last], glm::vec3(skeleton.bind_world()[std::size_t(child)][3]));
+      } else if (const std::int32_t parent = bone_list[last].parent; parent >= 0) {
+        const glm::vec3 offset = glm::vec3(bind[3]) - glm::vec3(skeleton.bind_world()[std::size_t(parent)][3]);
+        chain.tip = glm::inverse(glm::mat3(bind)) * offset;
+      }
+      require(glm::dot(chain.tip, chain.tip) > 0.0f, element, "the last bone has no tip to guess: give one");
+    }
+    chain.bind_scale = matrix_scale(skeleton.bind_world()[std::size_t(spec.bones.front())]);
+    chain.spec = std::move(spec);
+    chain.fixed = oscillator(chain, substep_);
+    joints += chain.count;
+    chains_.push_back(std::move(chain));
+  }
+  // Who moves each bone: its own joint, else its parent's (the order visits parents first).
+  governed_.assign(bones, -1);
+  for (const std::int32_t b : skeleton.order()) {
+    const std::int32_t parent = bone_list[std::size_t(b)].parent;
+    governed_[std::size_t(b)] = joint_of[std::size_t(b)] >= 0 ? joint_of[std::size_t(b)]
+                                : parent >= 0                 ? governed_[std::size_t(parent)]
+                                                              : -1;
+  }
+  for (const Chain& chain : chains_) {
+    const std::int32_t parent = bone_list[std::size_t(chain.spec.bones.front())].parent;
+    require(parent < 0 || governed_[std::size_t(parent)] < 0, "spring chain '" + chain.spec.name + "'",
+            "lies below another chain's bone (chains do not nest)");
+  }
+  // The points: per chain its first head, then each bone's tail (the next bone's head, the last bone's tip).
+  for (const Chain& chain : chains_) {
+    for (std::size_t i = 0; i < chain.count; ++i) {
+      point_bone_.push_back(chain.spec.bones[i]);
+      point_local_.push_back(glm::vec3(0.0f));
+    }
+    point_bone_.push_back(chain.spec.bones.back());
+    point_local_.push_back(chain.tip);
+  }
+  // Then the colliders' ends, so that they move between frames as the chains' points do.
+  collider_points_ = point_bone_.size();
+  for (const SpringCollider& collider : colliders_) {
+    point_bone_.insert(point_bone_.end(), 2, collider.bone);
+    point_local_.push_back(collider.start);
+    point_local_.push_back(collider.end);
+  }
+  const std::size_t points = point_bone_.size();
+  for (auto* v : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_,
+                  &sample_velocities_, &drawn_})
+    v->assign(points, glm::vec3(0.0f));
+  for (auto* v : {&positions_, &velocities_, &rests_, &report_positions_, &report_velocities_, &report_rests_})
+    v->assign(joints, glm::vec3(0.0f));
+  corrections_.assign(joints, glm::mat4(1.0f));
+  collider_start_radius_.assign(colliders_.size(), 0.0f);
+  collider_end_radius_ = collider_start_radius_;
+  sample_colliders_.assign(colliders_.size(), Placed{});
+}
+
+void SpringChains::set_settings(std::size_t chain, const SpringChainSpec& settings) {
+  Chain& target = chains_.at(chain);
+  SpringChainSpec checked = settings;
+  checked.name = target.spec.name;
+  checked.tip = target.spec.tip;
+  validate_chain_settings(checked);
+  target.spec.frequency = settings.frequency;
+  target.spec.damping_ratio = settings.damping_ratio;
+  target.spec.gravity = settings.gravity;
+  target.spec.units_per_metre = settings.units_per_metre;
+  target.spec.radius = settings.radius;
+  target.fixed = oscillator(target, substep_);
+}
+
+std::span<const glm::vec3> SpringChains::points(std::size_t chain) const {
+  const Chain& c = chains_.at(chain);
+  return std::span<const glm::vec3>(drawn_).subspan(c.first + chain, c.count + 1);
+}
+
+SpringChains::Oscillator SpringChains::oscillator(const Chain& chain, double h) const noexcept {
+  ElasticParams params;  // unit mass: only ω and ζ matter
+  const double omega = 2.0 * std::numbers::pi * double(chain.spec.frequency);
+  params.stiffness = float(omega * omega);
+  params.damping_ratio = chain.spec.damping_ratio;
+  const OscillatorStep m = oscillator_step(params, h);
+  const ForcedStep f = forced_step(params, h);
+  Oscillator o;
+  o.py = float(m.position_from_offset);
+  o.pv = float(m.position_from_velocity);
+  o.vy = float(m.velocity_from_offset);
+  o.vv = float(m.velocity_from_velocity);
+  o.pg = float(f.position_from_start + f.position_from_end);
+  o.vg = float(f.velocity_from_start + f.velocity_from_end);
+  return o;
+}
+
+void SpringChains::sample_points(double tau, double dt) {
+  // The cubic Hermite through the step's start and end (positions, velocities), at tau in [0, dt].
+  const double s = dt > 0.0 ? std::clamp(tau / dt, 0.0, 1.0) : 1.0;
+  const auto s2 = float(s * s), s3 = float(s * s * s), sf = float(s), h = float(dt);
+  const float h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + sf, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+  const float d00 = h > 0 ? (6 * s2 - 6 * sf) / h : 0, d10 = 3 * s2 - 4 * sf + 1, d11 = 3 * s2 - 2 * sf;
+  for (std::size_t k = 0; k < sample_points_.size(); ++k) {
+    const glm::vec3 p0 = start_points_[k], v0 = start_velocities_[k], p1 = end_points_[k], v1 = end_velocities_[k];
+    sample_points_[k] = h00 * p0 + (h10 * h) * v0 + h01 * p1 + (h11 * h) * v1;
+    sample_velocities_[k] = d00 * (p0 - p1) + d10 * v0 + d11 * v1;
+  }
+}
+
+void SpringChains::sample_colliders(float blend) {
+  // The ends ride with the points (sample_points); the radius, which only the bone's scale changes, linearly.
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const float start = collider_start_radius_[c], end = collider_end_radius_[c];
+    sample_colliders_[c] = {sample_points_[collider_points_ + 2 * c], sample_points_[collider_points_ + 2 * c + 1],
+                            start + (end - start) * blend};
+  }
+}
+
+void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions,
+                           glm::vec3* velocities, glm::vec3* rests) const noexcept {
+  // Root to tip: each tail's rest is its head (the parent's simulated tail) plus its animated bone vector turned by
+  // the rotation the chain above has been bent by; the rest moves linearly over the sub-step, which the oscillator
+  // step follows exactly; then the colliders and the bone's length.
+  const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+  glm::vec3 head = sample_points_[point0];
+  glm::vec3 head_velocity = sample_velocities_[point0];
+  glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
+  const glm::vec3 gravity = chain.spec.gravity * (chain.spec.units_per_metre * chain.scale);
+  const float radius = chain.spec.radius * chain.scale;
+  for (std::size_t i = 0; i < chain.count; ++i) {
+    const std::size_t j = chain.first + i;
+    const glm::vec3 bone = bend * (sample_points_[point0 + i + 1] - sample_points_[point0 + i]);
+    const float length = glm::length(bone);
+    const glm::vec3 rest = head + bone;
+    const glm::vec3 rest_velocity = (rest - rests[j]) / h;
+    const glm::vec3 y = positions[j] - rests[j];
+    const glm::vec3 u = velocities[j] - rest_velocity;
+    glm::vec3 p = rest + m.py * y + m.pv * u + m.pg * gravity;
+    glm::vec3 v = rest_velocity + m.vy * y + m.vv * u + m.vg * gravity;
+    // Out of the colliders, then back to the bone's length; the length may lead back in, so a few rounds (a tail
+    // caught between a collider and its length settles on the circle where both hold).
+    const auto keep_length = [&] {
+      const glm::vec3 from_head = p - head;
+      const float distance = glm::length(from_head);
+      const glm::vec3 along = distance > 1e-12f * length ? from_head / distance : length > 0.0f ? bone / length : bone;
+      p = head + along * length;
+      v -= glm::dot(v - head_velocity, along) * along;
+    };
+    keep_length();
+    for (int round = 0; round < 4; ++round) {
+      bool pushed = false;
+      for (const std::uint32_t c : chain.spec.colliders) {
+        const Placed& collider = sample_colliders_[c];
+        const glm::vec3 nearest = nearest_on_segment(collider.start, collider.end, p);
+        const glm::vec3 out = p - nearest;
+        const float distance = glm::length(out);
+        const float reach = collider.radius + radius;
+        if (distance >= reach) continue;
+        const glm::vec3 normal = distance > 1e-12f * reach ? out / distance : glm::normalize(rest - nearest + 1e-30f);
+        p = nearest + normal * reach;
+        const float inward = glm::dot(v, normal);
+        if (inward < 0.0f) v -= inward * normal;
+        pushed = true;
+      }
+      if (!pushed) break;
+      keep_length();
+    }
+    positions[j] = p;
+    velocities[j] = v;
+    rests[j] = rest;
+    bend = shortest_arc(bone, p - head) * bend;
+    head = p;
+    head_velocity = v;
+  }
+}
+
+void SpringChains::advance(double dt) {
+  // Whole sub-steps from the kept state's time (owed_ before this step's start) to the last one within the step,
+  // then the leftover from a copy: the kept state only ever moves by the fixed sub-step.
+  const double h = substep_;
+  double kept = -owed_;  // the kept state's time relative to this step's start
+  double available = owed_ + dt;
+  constexpr double max_substepped = 1.0;  // a longer stall takes its excess in one sub-step
+  const auto whole = [&](double length) {
+    kept += length;
+    sample_points(kept, dt);
+    sample_colliders(dt > 0.0 ? float(std::clamp(kept / dt, 0.0, 1.0)) : 1.0f);
+    for (const Chain& chain : chains_) {
+      substep(chain, length == h ? chain.fixed : oscillator(chain, length), float(length), positions_.data(),
+              velocities_.data(), rests_.data());
+    }
+  };
+  if (available > max_substepped) {
+    whole(available - max_substepped);
+    available = max_substepped;
+  }
+  // Count the sub-steps first so that rounding in `available` cannot drop or add one.
+  const auto count = std::size_t(std::floor(available / h + 1e-9));
+  for (std::size_t n = 0; n < count; ++n) whole(h);
+  owed_ = std::max(0.0, available - double(count) * h);
+  report_positions_ = positions_;
+  report_velocities_ = velocities_;
+  report_rests_ = rests_;
+  if (owed_ > 1e-12) {
+    sample_points(dt, dt);
+    sample_colliders(1.0f);
+    for (const Chain& chain : chains_) {
+      substep(chain, oscillator(chain, owed_), float(owed_), report_positions_.data(), report_velocities_.data(),
+              report_rests_.data());
+    }
+  }
+}
+
+Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const glm::mat4> world_rate,
+                         std::span<glm::mat4> palette) {
+  if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
+  const std::size_t bones = governed_.size();
+  if (world.size() != bones) return Status::failure("world does not have one entry per bone");
+  if (!world_rate.empty() && world_rate.size() != bones)
+    return Status::failure("world_rate is neither empty nor one per bone");
+  if (!palette.empty() && palette.size() != bones) return Status::failure("palette is neither empty nor one per bone");
+  if (chains_.empty()) return {};
+  // The animated points and colliders at the end of the step.
+  for (std::size_t k = 0; k < point_bone_.size(); ++k) {
+    const auto b = std::size_t(point_bone_[k]);
+    end_points_[k] = transform_point(world[b], point_local_[k]);
+    if (!world_rate.empty()) {
+      end_velocities_[k] = glm::vec3(world_rate[b] * glm::vec4(point_local_[k], 1.0f));
+    } else {  // moving linearly over the step
+      end_velocities_[k] = started_ && dt > 0.0f ? (end_points_[k] - start_points_[k]) / dt : glm::vec3(0.0f);
+      start_velocities_[k] = end_velocities_[k];
+    }
+  }
+  for (std::size_t c = 0; c < colliders_.size(); ++c)
+    collider_end_radius_[c] = colliders_[c].radius * matrix_scale(world[std::size_t(colliders_[c].bone)]);
+  for (Chain& chain : chains_) chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
+  if (!started_) {
+    start_points_ = end_points_;
+    start_velocities_ = end_velocities_;
+    collider_start_radius_ = collider_end_radius_;
+    for (const Chain& chain : chains_) {
+      const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+      for (std::size_t i = 0; i < chain.count; ++i) {
+        positions_[chain.first + i] = rests_[chain.first + i] = end_points_[point0 + i + 1];
+        velocities_[chain.first + i] = end_velocities_[point0 + i + 1];
+      }
+    }
+    report_positions_ = positions_;
+    report_velocities_ = velocities_;
+    report_rests_ = rests_;
+    owed_ = 0.0;
+    started_ = true;
+  } else if (dt > 0.0f) {
+    advance(double(dt));
+  }
+  // The bent pose: per joint the rigid map taking its animated bone onto its simulated one.
+  for (const Chain& chain : chains_) {
+    const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+    glm::vec3 head = end_points_[point0];
+    drawn_[point0] = head;
+    glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
+    for (std::size_t i = 0; i < chain.count; ++i) {
+      const std::size_t j = chain.first + i;
+      const glm::vec3 animated_head = end_points_[point0 + i];
+      const glm::vec3 bone = bend * (end_points_[point0 + i + 1] - animated_head);
+      bend = shortest_arc(bone, report_positions_[j] - head) * bend;
+      glm::mat4 correction = glm::mat4_cast(bend);
+      correction[3] = glm::vec4(head - glm::mat3(correction) * animated_head, 1.0f);
+      corrections_[j] = correction;
+      head = report_positions_[j];
+      drawn_[point0 + i + 1] = head;
+    }
+  }
+  for (std::size_t b = 0; b < bones; ++b) {
+    const std::int32_t joint = governed_[b];
+    if (joint < 0) continue;
+    world[b] = corrections_[std::size_t(joint)] * world[b];
+    if (!palette.empty()) palette[b] = world[b] * inverse_bind_[b];
+  }
+  start_points_ = end_points_;
+  start_velocities_ = end_velocities_;
+  collider_start_radius_ = collider_end_radius_;
+  return {};
+}
+
+}  // namespace deform
