@@ -127,6 +127,52 @@ TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach 
   CHECK(std::abs(c.stretch()) < 0.05f * tally.largest_stretch);  // 500 frames after the release: settled back
 }
 
+TEST_CASE("1,000 frames of secondary motion allocate nothing: a clip with its lead, spring chains, inertial lattices, "
+          "reach") {
+  const deform::Model model = deform::builtin_character();
+  deform::Rig rig = deform::builtin_rig(model);
+  for (deform::LatticeSpec& lattice : rig.lattices) lattice.motion = {1.0f, glm::vec3(0.0f, -9.81f, 0.0f), 1.0f};
+  deform::SpringChainSpec fingers;
+  fingers.name = "fingers_r";
+  fingers.bones = {model.skeleton.find("fingers1_r"), model.skeleton.find("fingers2_r")};
+  fingers.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+  fingers.radius = 0.01f;
+  fingers.colliders = {0};
+  rig.colliders = {{model.skeleton.find("thigh_r"), glm::vec3(0.0f), glm::vec3(0.0f, -0.3f, 0.0f), 0.07f}};
+  rig.spring_chains = {fingers};
+  std::vector<Character> characters;
+  characters.emplace_back(deform::builtin_character(), rig);
+  Character& c = characters.front();
+  const deform::Animation walk = deform::builtin_walk(c.model());
+  deform::Pose pose = c.skeleton().bind_pose(), later = pose;
+  deform::SamplingJob sampling;
+  sampling.animation = &walk;
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  const glm::vec3 shoulder = c.bone_position(c.skeleton().find("clavicle_l"));
+  Tally tally;
+  const long before = allocations.load();
+  for (int frame = 0; frame < frames; ++frame) {
+    for (deform::Pose* p : {&pose, &later}) {
+      sampling.time = float(frame) * dt + (p == &later ? 1e-3f : 0.0f);
+      sampling.rotations = p->rotations;
+      sampling.translations = p->translations;
+      tally.note(sampling.run());
+    }
+    tally.note(c.set_pose(pose, later, 1e-3f));
+    if (frame >= 100 && frame < 500) {
+      tally.note(c.reach(hand, shoulder + glm::vec3(1.0f, 0.2f, 0.3f)).status);
+      ++tally.reaches;
+    }
+    if (frame == 500) c.release();
+    if (frame == 800) c.springs().reset();
+    tally.note(c.update(frame % 7 == 0 ? 0.5f * dt : dt));
+    tally.normals_checksum += c.normals()[std::size_t(frame) % 100].z;
+    tally.largest_stretch = std::max(tally.largest_stretch, c.stretch());
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+}
+
 #if defined(DEFORM_HAVE_IMPORT)
 TEST_CASE("1,000 frames of an imported character allocate nothing: clip, reach, release, update, normals") {
   const std::string path = "/usr/share/assimp/models/X/Testwuson.X";  // Debian's assimp-testmodels

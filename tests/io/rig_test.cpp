@@ -45,6 +45,25 @@ deform::Rig everything() {
   fore.vertices = {3, 17, 400, 2000};
   fore.elastic.springs = {true, false, true, 12.5f, 0.1f, 1.0f / 480.0f};
   fore.shape.min_length_fraction = 0.0f;  // no floor; volume stays default
+  upper.motion = {0.75f, glm::vec3(0.0f, -9.81f, 0.0f), 100.0f};
+  const deform::Skeleton& skeleton = model().skeleton;
+  rig.colliders = {{skeleton.find("chest"), glm::vec3(0.0f, 0.1f, 0.0f), glm::vec3(0.0f, 0.3f, 0.0f), 0.12f},
+                   {skeleton.find("thigh_r"), glm::vec3(0.0f), glm::vec3(0.0f), 0.08f}};
+  deform::SpringChainSpec fingers;
+  fingers.name = "fingers_r";
+  fingers.bones = {skeleton.find("fingers1_r"), skeleton.find("fingers2_r")};
+  fingers.tip = glm::vec3(0.05f, 0.0f, 0.0f);
+  fingers.frequency = 3.5f;
+  fingers.damping_ratio = 0.45f;
+  fingers.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+  fingers.units_per_metre = 1.0f;
+  fingers.radius = 0.01f;
+  fingers.colliders = {0, 1};
+  deform::SpringChainSpec head;
+  head.name = "head";
+  head.bones = {skeleton.find("neck"), skeleton.find("head")};
+  rig.spring_chains = {fingers, head};
+  rig.spring_substep = 1.0f / 120.0f;
   return rig;
 }
 
@@ -78,11 +97,14 @@ TEST_CASE("the written form: hierarchy, names, model") {
   CHECK(doc["lattices"][1]["elastic"]["stiffness"] == 150.0);
   CHECK(doc["lattices"][1]["elastic"]["damping_ratio"] == 0.2);  // shortest form of 0.2f, not 0.20000000298...
   CHECK(doc["lattices"][1]["select"]["by"] == "weight");
-  // Default stretch shapes are not written, so files from before the keys existed round-trip byte for byte.
+  // Default stretch shapes and motion are not written, nor an empty springs block, so files from before the keys
+  // existed round-trip byte for byte.
   for (const auto& lattice : doc["lattices"]) {
     CHECK_FALSE(lattice.contains("min_length_fraction"));
     CHECK_FALSE(lattice.contains("volume"));
+    CHECK_FALSE(lattice.contains("motion"));
   }
+  CHECK_FALSE(doc.contains("springs"));
 }
 
 TEST_CASE("the stretch shape: written where it differs from the default, read back exactly") {
@@ -104,6 +126,35 @@ TEST_CASE("the stretch shape: written where it differs from the default, read ba
   deform::Rig shaped = deform::builtin_rig(model());
   shaped.lattices[1].shape = {0.6f, 0.5f};
   CHECK(parse(deform::format_rig_json(shaped, model().skeleton)).lattices[1].shape == shaped.lattices[1].shape);
+}
+
+TEST_CASE("secondary motion: lattice motion and spring chains are written and read back, defaults filled in") {
+  const nlohmann::json doc = nlohmann::json::parse(deform::format_rig_json(everything(), model().skeleton));
+  CHECK(doc["lattices"][0]["motion"]["inertia"] == 0.75);
+  CHECK(doc["lattices"][0]["motion"]["units_per_metre"] == 100.0);
+  CHECK_FALSE(doc["lattices"][1].contains("motion"));
+  CHECK(doc["springs"]["chains"][0]["bones"] == nlohmann::json::array({"fingers1_r", "fingers2_r"}));
+  CHECK(doc["springs"]["colliders"][0]["bone"] == "chest");
+  const deform::Rig rig = parse(R"({"rig": 1, "lattices": [], "springs": {"colliders": [{"bone": "head",
+      "start": [0, 0.1, 0], "radius": 0.1}], "chains": [{"name": "t", "bones": ["neck", "head"],
+      "colliders": [0]}]}})");
+  REQUIRE(rig.spring_chains.size() == 1);
+  CHECK(rig.colliders[0].end == rig.colliders[0].start);  // a sphere
+  deform::SpringChainSpec expected;
+  expected.name = "t";
+  expected.bones = {model().skeleton.find("neck"), model().skeleton.find("head")};
+  expected.colliders = {0};
+  CHECK(rig.spring_chains[0] == expected);
+  CHECK(rig.spring_substep == deform::SpringChains::default_substep);
+  // The rig's chains and motion reach the character.
+  deform::Rig moving = deform::builtin_rig(model());
+  moving.lattices[0].motion = everything().lattices[0].motion;
+  moving.spring_chains = everything().spring_chains;
+  moving.colliders = everything().colliders;
+  deform::Model m = model();
+  const deform::Character character(std::move(m), moving);
+  CHECK(character.springs().chain_count() == 2);
+  CHECK(character.deformers().spec(0).motion.inertia == 0.75f);
 }
 
 TEST_CASE("a minimal rig takes the defaults") {
@@ -168,6 +219,25 @@ TEST_CASE("bad rig files: the error names the file and the key") {
       {R"({"rig": 1, "reach": {"effector": "hand_l", "root": "thigh_l"}, "lattices": []})", "key 'reach.root'"},
       {R"({"rig": 1, "model": "hero.fbx", "lattices": []})", "key 'model'"},
       {R"({"rig": 1, "model": {"obj": "a.obj"}, "lattices": []})", "key 'model.skeleton'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"inertia": 2}}]})", "key 'lattices[0].motion.inertia'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"gravity": [0, 1]}}]})",
+       "key 'lattices[0].motion.gravity'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"units_per_metre": 0}}]})",
+       "key 'lattices[0].motion.units_per_metre'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": []}]}})",
+       "key 'springs.chains[0].bones'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck", "chest"]}]}})",
+       "key 'springs.chains[0].bones[1]': must be a child"},
+      {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck"], "frequency": 0}]}})",
+       "key 'springs.chains[0].frequency'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck"], "colliders": [0]}]}})",
+       "key 'springs.chains[0].colliders[0]'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck"]},
+           {"name": "t", "bones": ["head"]}]}})", "used twice"},
+      {R"({"rig": 1, "lattices": [], "springs": {"colliders": [{"bone": "head", "start": [0, 0, 0], "radius": 0}]}})",
+       "key 'springs.colliders[0].radius'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"substep": 2}})", "key 'springs.substep'"},
+      {R"({"rig": 1, "lattices": [], "springs": {"stiffness": 2}})", "key 'springs.stiffness': unknown key"},
   };
   for (const Case& c : cases) {
     CAPTURE(c.text);

@@ -25,6 +25,29 @@ std::size_t skeleton_depth(const Skeleton& skeleton) {
   return deepest;
 }
 
+SpringChains make_springs(const Model& model, const Rig& rig) {
+  try {
+    return SpringChains(model.skeleton, rig.spring_chains, rig.colliders, rig.spring_substep);
+  } catch (const Error& error) {
+    throw Error::in_file(model.name, "rig", error.message());
+  }
+}
+
+// The checks set_pose makes of a pose.
+Status check_pose(const Pose& pose, std::size_t bones) {
+  if (pose.rotations.size() != bones || pose.translations.size() != bones)
+    return Status::failure("pose does not have one entry per bone");
+  for (std::size_t b = 0; b < bones; ++b) {
+    const glm::quat q = pose.rotations[b];
+    if (!finite(pose.translations[b]) || !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
+        !std::isfinite(q.w)) {
+      return Status::failure("pose is not finite");
+    }
+    if (!(glm::dot(q, q) > 1e-12f)) return Status::failure("pose has a zero rotation");
+  }
+  return {};
+}
+
 }  // namespace
 
 Character::Character(Model model) : Character(std::move(model), Rig{}) {}
@@ -53,7 +76,9 @@ Character::Character(Model model, const Rig& rig)
       rig_(rig),
       hierarchy_(bind_hierarchy(bind_->model.skeleton, bind_->model.mesh.positions, bind_->model.weights, rig_.lattices,
                                 bind_->model.name)),
+      springs_(make_springs(bind_->model, rig_)),
       pose_(bind_->model.skeleton.bind_pose()),
+      later_(pose_),
       work_(pose_) {
   const Model& bound = bind_->model;
   const auto bones = std::int32_t(bound.skeleton.bone_count());
@@ -77,7 +102,13 @@ Character::Character(Model model, const Rig& rig)
 }
 
 Character::Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy)
-    : bind_(std::move(bind)), rig_(rig), hierarchy_(hierarchy), pose_(bind_->model.skeleton.bind_pose()), work_(pose_) {
+    : bind_(std::move(bind)),
+      rig_(rig),
+      hierarchy_(hierarchy),
+      springs_(make_springs(bind_->model, rig_)),
+      pose_(bind_->model.skeleton.bind_pose()),
+      later_(pose_),
+      work_(pose_) {
   hierarchy_.reset();
   allocate_frame_state();
 }
@@ -86,6 +117,8 @@ void Character::allocate_frame_state() {
   const Model& bound = bind_->model;
   const std::size_t bones = bound.skeleton.bone_count();
   world_.assign(bones, glm::mat4(1.0f));
+  world_later_.assign(bones, glm::mat4(1.0f));
+  world_rate_.assign(bones, glm::mat4(0.0f));
   palette_.assign(bones, glm::mat4(1.0f));
   dual_quats_.assign(bones, DualQuat{});
   scales_.assign(bones, glm::mat3(1.0f));
@@ -130,19 +163,23 @@ void Character::set_normals_mode(NormalsMode mode) {
 
 Status Character::set_pose(const Pose& pose) {
   const std::size_t bones = skeleton().bone_count();
-  if (pose.rotations.size() != bones || pose.translations.size() != bones)
-    return Status::failure("pose does not have one entry per bone");
-  for (std::size_t b = 0; b < bones; ++b) {
-    const glm::quat q = pose.rotations[b];
-    if (!finite(pose.translations[b]) || !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
-        !std::isfinite(q.w)) {
-      return Status::failure("pose is not finite");
-    }
-    if (!(glm::dot(q, q) > 1e-12f)) return Status::failure("pose has a zero rotation");
-  }
+  if (const Status status = check_pose(pose, bones); !status) return status;
   std::copy(pose.rotations.begin(), pose.rotations.end(), pose_.rotations.begin());
   std::copy(pose.translations.begin(), pose.translations.end(), pose_.translations.begin());
   for (std::size_t b = 0; b < bones; ++b) skeleton().clamp_to_limits(pose_, std::int32_t(b));
+  lead_ = 0.0f;
+  return {};
+}
+
+Status Character::set_pose(const Pose& pose, const Pose& later, float lead) {
+  const std::size_t bones = skeleton().bone_count();
+  if (!(lead > 0.0f) || !std::isfinite(lead)) return Status::failure("lead is not finite and > 0");
+  if (const Status status = check_pose(later, bones); !status) return Status::failure(status.reason());
+  if (const Status status = set_pose(pose); !status) return status;
+  std::copy(later.rotations.begin(), later.rotations.end(), later_.rotations.begin());
+  std::copy(later.translations.begin(), later.translations.end(), later_.translations.begin());
+  for (std::size_t b = 0; b < bones; ++b) skeleton().clamp_to_limits(later_, std::int32_t(b));
+  lead_ = lead;
   return {};
 }
 
@@ -310,6 +347,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     work_.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
   }
   std::swap(pose_, work_);
+  // The reached joints hold still relative to their parents: the later pose's motion of them is the body's.
+  for (const std::int32_t bone : chain_.bones) later_.rotations[std::size_t(bone)] = pose_.rotations[std::size_t(bone)];
   release();
   stretched_.clear();
   for (const Stretched& s : chain_lattices_) {
@@ -342,7 +381,19 @@ Status Character::update(float dt) {
   fk.world = world_;
   fk.palette = palette_;
   if (const Status status = fk.run(); !status) return status;
-  if (const Status status = hierarchy_.step(dt); !status) return status;
+  // The bones' velocities, from the pose a moment later (set_pose with a lead), for the springs that feel motion.
+  std::span<const glm::mat4> rate;
+  if (lead_ > 0.0f) {
+    fk.rotations = later_.rotations;
+    fk.translations = later_.translations;
+    fk.world = world_later_;
+    fk.palette = {};
+    if (const Status status = fk.run(); !status) return status;
+    for (std::size_t b = 0; b < world_.size(); ++b) world_rate_[b] = (world_later_[b] - world_[b]) / lead_;
+    rate = world_rate_;
+  }
+  if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
+  if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
   const bool transport = normals_mode_ == NormalsMode::transported;
   SkinningJob job;
   job.method = skinning;

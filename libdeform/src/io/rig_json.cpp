@@ -69,6 +69,74 @@ ElasticSettings read_elastic(const JsonReader& r) {
   return e;
 }
 
+LatticeMotion read_motion(const JsonReader& r) {
+  // The ranges validate_motion enforces (runtime/hierarchy.hpp).
+  LatticeMotion motion;
+  r.expect_object({"inertia", "gravity", "units_per_metre"});
+  if (r.has("inertia")) motion.inertia = r.at("inertia").number(0.0f, 1.0f);
+  if (r.has("gravity")) motion.gravity = r.at("gravity").vec3();
+  if (r.has("units_per_metre"))
+    motion.units_per_metre = r.at("units_per_metre").number(0.0f, std::numeric_limits<float>::max(), true);
+  return motion;
+}
+
+// The "springs" block: colliders first, since chains name them by index.
+void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
+  const float big = std::numeric_limits<float>::max();
+  r.expect_object({"substep", "colliders", "chains"});
+  if (r.has("substep")) rig.spring_substep = r.at("substep").number(0.0f, 1.0f, true);
+  if (r.has("colliders")) {
+    const JsonReader colliders = r.at("colliders");
+    for (std::size_t i = 0; i < colliders.array_size(); ++i) {
+      const JsonReader c = colliders.at(i);
+      c.expect_object({"bone", "start", "end", "radius"});
+      SpringCollider collider;
+      collider.bone = read_bone(c.at("bone"), skeleton);
+      collider.start = c.at("start").vec3();
+      collider.end = c.has("end") ? c.at("end").vec3() : collider.start;
+      collider.radius = c.at("radius").number(0.0f, big, true);
+      rig.colliders.push_back(collider);
+    }
+  }
+  if (!r.has("chains")) return;
+  const JsonReader chains = r.at("chains");
+  for (std::size_t i = 0; i < chains.array_size(); ++i) {
+    const JsonReader c = chains.at(i);
+    c.expect_object({"name", "bones", "tip", "frequency", "damping_ratio", "gravity", "units_per_metre", "radius",
+                     "colliders"});
+    SpringChainSpec chain;
+    chain.name = c.at("name").text();
+    if (chain.name.empty()) c.at("name").fail("must not be empty");
+    for (const SpringChainSpec& other : rig.spring_chains)
+      if (other.name == chain.name) c.at("name").fail("chain name '" + chain.name + "' is used twice");
+    const JsonReader bones = c.at("bones");
+    const std::size_t count = bones.array_size();
+    if (count == 0) bones.fail("must name at least one bone");
+    for (std::size_t b = 0; b < count; ++b) {
+      chain.bones.push_back(read_bone(bones.at(b), skeleton));
+      if (b > 0 && skeleton.bones()[std::size_t(chain.bones[b])].parent != chain.bones[b - 1])
+        bones.at(b).fail("must be a child of the bone before it");
+    }
+    if (c.has("tip")) chain.tip = c.at("tip").vec3();
+    if (c.has("frequency")) chain.frequency = c.at("frequency").number(0.0f, big, true);
+    if (c.has("damping_ratio")) chain.damping_ratio = c.at("damping_ratio").number(0.0f, big);
+    if (c.has("gravity")) chain.gravity = c.at("gravity").vec3();
+    if (c.has("units_per_metre")) chain.units_per_metre = c.at("units_per_metre").number(0.0f, big, true);
+    if (c.has("radius")) chain.radius = c.at("radius").number(0.0f, big);
+    if (c.has("colliders")) {
+      const JsonReader list = c.at("colliders");
+      for (std::size_t k = 0; k < list.array_size(); ++k) {
+        const std::int64_t last = std::int64_t(rig.colliders.size()) - 1;
+        if (last < 0) list.at(k).fail("names a collider, but the rig has none");
+        chain.colliders.push_back(std::uint32_t(list.at(k).integer(0, last)));
+      }
+    }
+    rig.spring_chains.push_back(std::move(chain));
+  }
+}
+
+ojson vec3_json(glm::vec3 v) { return ojson::array({shortest_double(v.x), shortest_double(v.y), shortest_double(v.z)}); }
+
 RigModel read_model(const JsonReader& root) {
   RigModel model;
   if (!root.has("model") || root.at("model").is_null()) return model;
@@ -97,7 +165,7 @@ RigModel parse_rig_model(std::string_view text, const std::string& name) {
 Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t point_count, const std::string& name) {
   const json document = detail::parse_json(text, name);
   const JsonReader root(name, document, "");
-  root.expect_object({"rig", "model", "reach", "lattices"});
+  root.expect_object({"rig", "model", "reach", "lattices", "springs"});
   if (root.at("rig").integer(1, 1) != rig_format_version) root.at("rig").fail("unsupported version");
   Rig rig;
   rig.model = read_model(root);
@@ -119,7 +187,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
   for (std::size_t i = 0; i < count; ++i) {
     const JsonReader r = lattices.at(i);
     r.expect_object({"name", "bone", "parent", "degree", "select", "margin", "carry", "min_length_fraction", "volume",
-                     "elastic"});
+                     "motion", "elastic"});
     LatticeSpec spec;
     spec.name = r.at("name").text();
     if (spec.name.empty()) r.at("name").fail("must not be empty");
@@ -166,6 +234,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
       if (!(spec.shape.min_length_fraction < 1.0f)) floor.fail("must be in [0, 1)");
     }
     if (r.has("volume")) spec.shape.volume = r.at("volume").number(0.0f, 1.0f);
+    if (r.has("motion")) spec.motion = read_motion(r.at("motion"));
     if (r.has("elastic")) spec.elastic = read_elastic(r.at("elastic"));
     rig.lattices.push_back(std::move(spec));
   }
@@ -178,6 +247,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
                                        (expected.empty() ? std::string("null") : "'" + expected + "'"));
     }
   }
+  if (root.has("springs")) read_springs(root.at("springs"), skeleton, rig);
   return rig;
 }
 
@@ -230,9 +300,38 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
     if (spec.shape.min_length_fraction != default_shape.min_length_fraction)
       written["min_length_fraction"] = shortest_double(spec.shape.min_length_fraction);
     if (spec.shape.volume != default_shape.volume) written["volume"] = shortest_double(spec.shape.volume);
+    if (spec.motion != LatticeMotion{}) {  // likewise
+      written["motion"] = {{"inertia", shortest_double(spec.motion.inertia)},
+                           {"gravity", vec3_json(spec.motion.gravity)},
+                           {"units_per_metre", shortest_double(spec.motion.units_per_metre)}};
+    }
     written["elastic"] = elastic;
   }
   document["lattices"] = lattices;
+  if (!rig.spring_chains.empty() || !rig.colliders.empty()) {
+    ojson colliders = ojson::array();
+    for (const SpringCollider& c : rig.colliders) {
+      colliders.push_back({{"bone", skeleton.key(c.bone)},
+                           {"start", vec3_json(c.start)},
+                           {"end", vec3_json(c.end)},
+                           {"radius", shortest_double(c.radius)}});
+    }
+    ojson chains = ojson::array();
+    for (const SpringChainSpec& c : rig.spring_chains) {
+      ojson bones = ojson::array();
+      for (const std::int32_t b : c.bones) bones.push_back(skeleton.key(b));
+      chains.push_back({{"name", c.name},
+                        {"bones", bones},
+                        {"tip", vec3_json(c.tip)},
+                        {"frequency", shortest_double(c.frequency)},
+                        {"damping_ratio", shortest_double(c.damping_ratio)},
+                        {"gravity", vec3_json(c.gravity)},
+                        {"units_per_metre", shortest_double(c.units_per_metre)},
+                        {"radius", shortest_double(c.radius)},
+                        {"colliders", c.colliders}});
+    }
+    document["springs"] = {{"substep", shortest_double(rig.spring_substep)}, {"colliders", colliders}, {"chains", chains}};
+  }
   return document.dump(2) + "\n";
 }
 

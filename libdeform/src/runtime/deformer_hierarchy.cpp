@@ -289,8 +289,11 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     lattice.rest_velocity_known = lattice.rest_velocity_known || inertia > 0.0f;
     lattice.rate_known = rate != nullptr;
     if (rate != nullptr) lattice.motion_rate = *rate;
-  } else if (world != nullptr) {
-    lattice.motion_world = now;  // a pose changed without time passing is a jump, not a motion
+  } else if (world != nullptr) {  // a pose changed without time passing is a jump, not a motion
+    lattice.motion_world = now;
+    lattice.rate_known = rate != nullptr;
+    if (rate != nullptr) lattice.motion_rate = *rate;
+    lattice.rest_velocity_known = false;
   }
   return lattice.elastic.step(dt, lattice.target_points, lattice.accel_start, lattice.accel_end);
 }

@@ -331,6 +331,8 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
   for (std::size_t c = 0; c < colliders_.size(); ++c)
     collider_end_radius_[c] = colliders_[c].radius * matrix_scale(world[std::size_t(colliders_[c].bone)]);
   for (Chain& chain : chains_) chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
+  // A pose that changed while no time passed is a jump (a cut, a teleport): the chains start again on it, at rest.
+  if (started_ && dt == 0.0f) started_ = std::equal(end_points_.begin(), end_points_.end(), start_points_.begin());
   if (!started_) {
     start_points_ = end_points_;
     start_velocities_ = end_velocities_;

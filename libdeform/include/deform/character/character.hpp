@@ -16,8 +16,8 @@
 // (default 70%) and volume compensation (default full), so a stretched arm thins and the spring-back bulges.
 //
 // A frame: pose (set_pose, e.g. from a SamplingJob) → IK (reach, on the chain alone) → update(dt): forward kinematics
-// once (LocalToWorldJob: world matrices and skinning palette), the springs' step, skinning, the lattices' carried
-// points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
+// once (LocalToWorldJob: world matrices and skinning palette), the spring chains bending the pose, the lattices'
+// springs' step, skinning, the lattices' carried points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
 // construction. Characters are movable values (a std::vector of them is fine).
 //
 // Normals (NormalsMode): transported by default — each point's bind-pose normal (angle-weighted, from the bind
@@ -46,6 +46,7 @@
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/runtime/skinning.hpp"
+#include "deform/runtime/spring_chain.hpp"
 namespace deform {
 
 // What reach() decided.
@@ -92,7 +93,19 @@ class DEFORM_CHARACTER_API Character {
   // stretch in progress goes on. Refuses, changing nothing, a pose of the wrong size, not finite or with a zero
   // rotation. No allocation; O(bones).
   Status set_pose(const Pose& pose);
+  // The held pose and where it is heading: `later` is the same motion `lead` seconds later (the animation sampled at
+  // t + lead; a millisecond is plenty), both clamped alike. update() takes every bone's velocity from the two, and
+  // the lattices' inertia (LatticeMotion) and the spring chains follow the motion between frames along cubics
+  // through those velocities: the same curve at any frame rate. With set_pose(pose) alone the bones move linearly
+  // between frames (docs/elasticity.md, "Secondary motion", says what that costs). reach() keeps the reached joints
+  // still relative to their parents in `later`. Refuses, changing nothing, what set_pose refuses for either pose and
+  // a lead that is not finite and > 0. No allocation.
+  Status set_pose(const Pose& pose, const Pose& later, float lead);
   const Pose& pose() const noexcept { return pose_; }
+
+  // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
+  SpringChains& springs() noexcept { return springs_; }
+  const SpringChains& springs() const noexcept { return springs_; }
 
   SkinningMethod skinning = SkinningMethod::lbs;
   // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
@@ -138,8 +151,8 @@ class DEFORM_CHARACTER_API Character {
   // Lets go: every stretch target back to zero; the pose reached stays.
   void release();
 
-  // Advances the springs by dt seconds and deforms the held pose: FK once, skinning, lattices (see the top of this
-  // file). Refuses, changing nothing, a dt that is negative or not finite. The later stages cannot refuse for a pose
+  // Advances the springs by dt seconds and deforms the held pose: FK once (twice with a lead), the spring chains,
+  // the lattices' springs, skinning, lattices (see the top of this file). Refuses, changing nothing, a dt that is negative or not finite. The later stages cannot refuse for a pose
   // set by set_pose or reach; should one, update reports its reason, never success. No allocation;
   // O(bones + points + bound points · lattice cost).
   Status update(float dt);
@@ -189,8 +202,13 @@ class DEFORM_CHARACTER_API Character {
   std::shared_ptr<const BindData> bind_;
   Rig rig_;
   DeformerHierarchy hierarchy_;
+  SpringChains springs_;
   Pose pose_;
+  Pose later_;        // set_pose(pose, later, lead): the pose lead_ seconds later (lead_ 0: none)
+  float lead_ = 0.0f;
   std::vector<glm::mat4> world_;
+  std::vector<glm::mat4> world_later_;  // ... its world matrices and the bones' rates d(world)/dt
+  std::vector<glm::mat4> world_rate_;
   std::vector<glm::mat4> palette_;
   std::vector<DualQuat> dual_quats_;
   std::vector<glm::mat3> scales_;

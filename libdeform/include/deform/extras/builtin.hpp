@@ -33,8 +33,9 @@ DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
 // arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l. Throws deform::Error when `model`
 // lacks those bones.
 DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
-// A walk for the built-in character (builtin_character()): "walk", 1 s, looping, linear keys every 1/16 s on the
-// spine, neck, arms and legs (within their limits) and a bob of the hips; for SamplingJob, the benchmarks of a whole
+// A walk for the built-in character (builtin_character()): "walk", 1 s, looping, cubic-spline keys every 1/16 s
+// (tangents from the swing itself: smooth through the keys) on the spine, neck, arms and legs (within their limits)
+// and a bob of the hips; for SamplingJob, the benchmarks of a whole
 // frame and a crowd. Throws deform::Error when `model` lacks those bones.
 DEFORM_EXTRAS_API Animation builtin_walk(const Model& model);
 // The built-in character with builtin_rig(): the Character every sample starts from.

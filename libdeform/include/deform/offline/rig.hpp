@@ -10,6 +10,7 @@
 #include "deform/offline/export.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/model.hpp"
+#include "deform/runtime/spring_chain.hpp"
 
 namespace deform {
 
@@ -31,6 +32,10 @@ struct Rig {
   std::int32_t reach_root = -1;
   // Largest stretch reach() asks of a lattice, as a multiple of its length (>= 0).
   float max_stretch = 3.0f;
+  // Spring chains (tails, hair, ears: runtime/spring_chain.hpp), the colliders they share, and their sub-step.
+  std::vector<SpringChainSpec> spring_chains;
+  std::vector<SpringCollider> colliders;
+  float spring_substep = SpringChains::default_substep;
   bool operator==(const Rig&) const = default;
 };
 // A rig for any rigged model, so an imported character stretches too: up to three lattices on the limb that ends at

@@ -170,7 +170,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   //    15 Hz and at 240 Hz gives the same curve to far better than 0.1% of its amplitude (docs/elasticity.md);
   //  - without, the rest moves linearly within each step and turns at the steps' ends: exact for such motion and
   //    second order in the step for smooth motion (about 1–2% of the amplitude between 15 and 240 Hz).
-  // The first step after construction or reset() takes the motion as it is, with no jolt. Refuses, changing nothing, a dt that is
+  // The first step after construction or reset() takes the motion as it is, with no jolt; a step with dt = 0 takes
+  // a changed pose as a jump (a cut, a teleport), not as motion. Refuses, changing nothing, a dt that is
   // negative or not finite, or spans of the wrong size. No allocation.
   Status step(float dt, std::span<const glm::mat4> world, std::span<const glm::mat4> world_rate = {});
   // Every control point back on the unstretched rest, at rest; stretch targets 0.

@@ -75,7 +75,8 @@ class DEFORM_RUNTIME_API SpringChains {
   // the step (LocalToWorldJob's, one per bone) and receives the simulated ones for every chain bone and bone below
   // one; `palette`, when not empty, is rewritten for those bones (world · inverse bind). `world_rate`, when not
   // empty, is d(world)/dt per bone at the end of the step (see DeformerHierarchy::step). The first run after
-  // construction or reset() starts the chains on the animated pose, at rest. Refuses, changing nothing, a dt that is
+  // construction or reset(), and a run with dt = 0 whose pose moved the chains (a cut, a teleport), start the chains
+  // on the animated pose, at rest. Refuses, changing nothing, a dt that is
   // negative or not finite, or spans of the wrong size. No allocation, no exceptions; O(sub-steps × (tails +
   // tail-collider pairs) + bones).
   Status run(float dt, std::span<glm::mat4> world, std::span<const glm::mat4> world_rate = {},
