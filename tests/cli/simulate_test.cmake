@@ -1,5 +1,5 @@
 # `deform simulate` end to end: the reach-stretch-release-settle curve of the built-in character, a rig file naming
-# its model, frame-rate independence, and exit 2 on bad usage and bad rigs.
+# its model, frame-rate independence, a clip with jiggling lattices, and exit 2 on bad usage and bad rigs.
 # Run as: cmake -DDEFORM=<deform executable> -DWORK=<scratch folder> -P simulate_test.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/cli_test_common.cmake)
 
@@ -143,7 +143,31 @@ deform(simulate "${WORK}/forearm.rig.json" --target 1.2,1.6,0.3 --seconds 2 --dt
 expect_equal("exit status with a rig file" "${rc}" 0)
 expect_between(1.19 1.21 samples 15 effector 0)
 
+# --- a clip: the walk plays, the lattices with inertia lag behind it and jiggle; 15 Hz and 240 Hz agree within 6 mm
+# (about 1% of the hand's travel: a cubic between 15 Hz frames has the acceleration the lattices feel to O(h²)) ---
+deform(simulate --builtin --clip walk --inertia 1 --seconds 2 --dt 0.0666666666667)
+expect_equal("exit status of a clip at 15 Hz" "${rc}" 0)
+set(walk_15 "${out}")
+deform(simulate --builtin --clip walk --inertia 1 --seconds 2 --dt 0.0041666666667)
+expect_equal("exit status of a clip at 240 Hz" "${rc}" 0)
+largest_difference("${walk_15}" "${out}" 16 largest)
+if(largest GREATER 6000)
+  fail("the walk with inertia at 15 Hz and 240 Hz differs by ${largest} micrometres")
+endif()
+deform(simulate --builtin --clip walk --seconds 2 --dt 0.0666666666667)
+largest_difference("${walk_15}" "${out}" 1 largest)
+if(largest LESS 20000)
+  fail("inertia 1 moves the walking hand by only ${largest} micrometres off the rigid walk")
+endif()
+# A clip and a target: the hand reaches while the body walks.
+deform(simulate --builtin --clip walk --target 1.2,1.6,0.3 --inertia 0.5 --release-at 1.5 --seconds 2 --dt 0.05)
+expect_equal("exit status of a clip and a target" "${rc}" 0)
+expect_between(1.14 1.26 samples 28 effector 0)
+expect_between(1.54 1.66 samples 28 effector 1)
+
 # --- bad usage and bad input: exit 2 ---
+expect_invalid("no clip named 'run' (the model has 'walk')" --builtin --clip run)
+expect_invalid("--inertia" --builtin --clip walk --inertia 2)
 expect_invalid("--target" --builtin)
 expect_invalid("either --builtin or one RIG" --target 1,2,3)
 expect_invalid("either --builtin or one RIG" --builtin "${WORK}/forearm.rig.json" --target 1,2,3)

@@ -1,4 +1,5 @@
-// deform simulate (--builtin | RIG): reach for a target, hold, release, settle; the effector and stretch over time.
+// deform simulate (--builtin | RIG): reach for a target, hold, release, settle — or play a clip, the lattices and
+// spring chains jiggling with it, or both; the effector and stretch over time.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -11,6 +12,8 @@
 #include "deform/io/rig_json.hpp"
 #include "deform/io/text.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/animation.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
@@ -21,17 +24,22 @@ namespace {
 using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as documented
 
 constexpr const char* usage =
-    "usage: deform simulate (--builtin | RIG) --target X,Y,Z [--release-at T] [--seconds S] [--dt DT]\n"
-    "                       [--effector BONE] [--integrator exact|verlet] [--min-length F] [--volume F]\n"
+    "usage: deform simulate (--builtin | RIG) (--target X,Y,Z | --clip NAME | both) [--release-at T] [--seconds S]\n"
+    "                       [--dt DT] [--effector BONE] [--integrator exact|verlet] [--min-length F] [--volume F]\n"
+    "                       [--inertia F]\n"
     "\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
-    "stretch to cover what remains), holds, releases at T and lets the stretch spring back. Prints\n"
+    "stretch to cover what remains), holds, releases at T and lets the stretch spring back; with --clip, plays the\n"
+    "clip meanwhile (the reach follows the moving body), the lattices with inertia and the rig's spring chains\n"
+    "jiggling with it. Prints\n"
     "{\"dt\": DT, \"samples\": [{\"t\": .., \"effector\": [x, y, z], \"stretch\": ..}, ...]}, one sample per step from "
     "t = 0.\n"
     "\n"
     "  --builtin            the built-in character with its default rig (three lattices on the left arm)\n"
     "  RIG                  a rig file (docs/formats.md) whose \"model\" names the model\n"
     "  --target X,Y,Z       world-space target of the effector (metres for the built-in character)\n"
+    "  --clip NAME          play this clip of the model from t = 0 (the built-in character has \"walk\"; an\n"
+    "                       imported model, its file's clips), looping as the clip says\n"
     "  --release-at T       seconds after the reach when the stretch is released (default 1.5); a step that\n"
     "                       crosses T is split there\n"
     "  --seconds S          length of the simulation (default 3)\n"
@@ -42,14 +50,16 @@ constexpr const char* usage =
     "                       0.7 unless it says; 0: no floor)\n"
     "  --volume F           volume compensation in [0, 1]: a lattice stretched by s scales across its bone by\n"
     "                       s^(-F/2) (default: the rig's, 1 unless it says: keeps its volume; 0: the plain\n"
-    "                       stretch)\n";
+    "                       stretch)\n"
+    "  --inertia F          how much every lattice lags behind its bone's motion, in [0, 1] (default: the rig's,\n"
+    "                       0 unless it says: the lattices move only when stretched)\n";
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
-                                 "--min-length", "--volume"}, {"--builtin"});
+  const Args args(argv, {"--target", "--clip", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
+                         "--min-length", "--volume", "--inertia"}, {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;
@@ -58,7 +68,10 @@ int run(const std::vector<std::string>& argv) {
   if (builtin == (args.positionals().size() == 1) || args.positionals().size() > 1) {
     throw UsageError("give either --builtin or one RIG file");
   }
-  const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
+  const auto target_text = args.value("--target");
+  const auto clip_name = args.value("--clip");
+  if (!target_text && !clip_name) throw UsageError("give --target, --clip or both");
+  const glm::vec3 target = target_text ? parse_vec3(*target_text, "--target") : glm::vec3(0.0f);
   const double seconds = args.value("--seconds") ? parse_number(*args.value("--seconds"), "--seconds") : 3.0;
   const double release_at =
       args.value("--release-at") ? parse_number(*args.value("--release-at"), "--release-at") : 1.5;
@@ -69,15 +82,30 @@ int run(const std::vector<std::string>& argv) {
 
   deform::Model model;
   deform::Rig rig;
+  std::vector<deform::Animation> clips;
   if (builtin) {
     model_loading::LoadedModel loaded = model_loading::load_model({});
     rig = model_loading::starting_rig(loaded);
     model = std::move(loaded.model);
+    clips.push_back(deform::builtin_walk(model));
   } else {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
-    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
+    model_loading::LoadedModel loaded = load_rig_model(deform::parse_rig_model(text, path), path);
+    model = std::move(loaded.model);
+    clips = std::move(loaded.clips);
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
+  }
+  const deform::Animation* clip = nullptr;
+  if (clip_name) {
+    const std::int32_t found = deform::find_clip(clips, *clip_name);
+    if (found < 0) {
+      std::string names;
+      for (const deform::Animation& c : clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
+      throw UsageError("--clip: no clip named '" + *clip_name + "' (the model has " +
+                       (names.empty() ? std::string("none") : names) + ")");
+    }
+    clip = &clips[std::size_t(found)];
   }
   if (const auto name = args.value("--integrator")) {
     if (*name != "exact" && *name != "verlet") throw UsageError("--integrator must be exact or verlet");
@@ -95,6 +123,11 @@ int run(const std::vector<std::string>& argv) {
     if (!(volume >= 0.0 && volume <= 1.0)) throw UsageError("--volume must be in [0, 1]");
     for (deform::LatticeSpec& spec : rig.lattices) spec.shape.volume = float(volume);
   }
+  if (const auto text = args.value("--inertia")) {
+    const double inertia = parse_number(*text, "--inertia");
+    if (!(inertia >= 0.0 && inertia <= 1.0)) throw UsageError("--inertia must be in [0, 1]");
+    for (deform::LatticeSpec& spec : rig.lattices) spec.motion.inertia = float(inertia);
+  }
   std::int32_t effector = rig.reach_effector;
   if (const auto name = args.value("--effector")) {
     effector = model.skeleton.find(*name);
@@ -103,11 +136,36 @@ int run(const std::vector<std::string>& argv) {
   if (effector <= 0) throw UsageError("the rig has no reach effector: give --effector BONE");
 
   deform::Character character(std::move(model), rig);
-  const deform::ReachResult reach = character.reach(effector, target);
-  if (!reach.status)
-    throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
-  character.update(0.0f);
-
+  // The pose at time t: the clip's (and, a millisecond later, where it is heading), then the reach on top.
+  const deform::Pose bind = character.skeleton().bind_pose();
+  deform::Pose pose = bind, later = bind;
+  const auto sample_clip = [&](double t, deform::Pose& into) {
+    std::copy(bind.rotations.begin(), bind.rotations.end(), into.rotations.begin());
+    std::copy(bind.translations.begin(), bind.translations.end(), into.translations.begin());
+    deform::SamplingJob job;
+    job.animation = clip;
+    job.time = float(t);
+    job.rotations = into.rotations;
+    job.translations = into.translations;
+    if (!job.run()) throw UsageError("--clip: clip '" + clip->name + "' does not fit the skeleton");
+  };
+  bool reaching = target_text.has_value();
+  const auto pose_at = [&](double t) {
+    if (clip != nullptr) {
+      constexpr float lead = 1e-3f;
+      sample_clip(t, pose);
+      sample_clip(t + lead, later);
+      character.set_pose(pose, later, lead);
+    }
+    if (reaching) {
+      const deform::ReachResult reach = character.reach(effector, target);
+      if (!reach.status)
+        throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
+    }
+  };
+  pose_at(0.0);
+  if (const deform::Status status = character.update(0.0f); !status)
+    throw UsageError(std::string("the first pose was refused: ") + status.reason());
   Json samples = Json::array();
   const auto sample = [&](double t) {
     const glm::vec3 e = character.bone_position(effector);
@@ -118,6 +176,7 @@ int run(const std::vector<std::string>& argv) {
   sample(0.0);
   const auto steps = static_cast<long long>(std::llround(seconds / dt));
   const auto advance = [&](double step, double t) {
+    if (clip != nullptr) pose_at(t);
     if (const deform::Status status = character.update(float(step)); !status) {
       std::string detail = status.reason();
       for (const deform::LatticeSpec& spec : rig.lattices)
@@ -135,25 +194,23 @@ int run(const std::vector<std::string>& argv) {
   for (const deform::LatticeSpec& spec : rig.lattices) split = split && spec.elastic.integrator != deform::Integrator::verlet;
   const double snap = 1e-9 * dt;
   bool released = false;
-  if (release_at <= snap) {
+  const auto let_go = [&] {
     character.release();
+    reaching = false;
     released = true;
-  }
+  };
+  if (release_at <= snap) let_go();
   for (long long n = 1; n <= steps; ++n) {
     const double start = double(n - 1) * dt;
     const double t = double(n) * dt;
     if (!released && split && release_at < t - snap) {  // here release_at > start + snap: see the end of the loop
       advance(release_at - start, release_at);
-      character.release();
-      released = true;
+      let_go();
       advance(t - release_at, t);
     } else {
       advance(dt, t);
     }
-    if (!released && release_at <= t + (split ? snap : 1e-9)) {
-      character.release();
-      released = true;
-    }
+    if (!released && release_at <= t + (split ? snap : 1e-9)) let_go();
     sample(t);
   }
   // One sample per line: a long curve stays readable and greppable.
