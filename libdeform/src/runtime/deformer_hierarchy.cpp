@@ -256,18 +256,20 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
   const std::size_t n = lattice.target_points.size();
   if (dt > 0.0f && rate != nullptr && inertia > 0.0f) {
     // The rest moves along the cubic through its positions and velocities at the two ends: its acceleration is linear
-    // over the step, which the exact integrator follows exactly.
+    // over the step, which the exact integrator follows exactly. The cubic's end accelerations are linear in the
+    // point (hermite_accelerations of M·x and Ṁ·x), so each end's forcing is one affine map per lattice.
     const glm::mat4 rate_before = lattice.rate_known ? lattice.motion_rate : *rate;
+    const float h = dt;
+    const glm::mat4 chord = (now - before) * (6.0f / (h * h));
+    const glm::mat4 start = chord - (4.0f * rate_before + 2.0f * *rate) * (1.0f / h);
+    const glm::mat4 end = (2.0f * rate_before + 4.0f * *rate) * (1.0f / h) - chord;
+    const glm::mat4 force_start = glm::mat4(-inertia * inverse_before) * start;  // rows 0-2 used, bottom row 0
+    const glm::mat4 force_end = glm::mat4(-inertia * inverse_now) * end;
     for (std::size_t i = 0; i < n; ++i) {
       const glm::vec4 x(lattice.target_points[i], 1.0f);
-      const HermiteAccelerations a =
-          hermite_accelerations(glm::vec3(before * x), glm::vec3(rate_before * x), glm::vec3(now * x),
-                                glm::vec3(*rate * x), dt);
-      lattice.accel_start[i] = gravity_before - inertia * (inverse_before * a.start);
-      lattice.accel_end[i] = gravity_now - inertia * (inverse_now * a.end);
-      lattice.rest_velocity[i] = glm::vec3(*rate * x);
+      lattice.accel_start[i] = gravity_before + glm::vec3(force_start * x);
+      lattice.accel_end[i] = gravity_now + glm::vec3(force_end * x);
     }
-    lattice.rest_velocity_known = true;
   } else {
     // The rest moves linearly within the step: its velocity changes at the step's start, an impulse of minus λ times
     // that change on the points' velocities (in the bone's frame).
@@ -286,7 +288,7 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
   }
   if (dt > 0.0f) {
     lattice.motion_world = now;
-    lattice.rest_velocity_known = lattice.rest_velocity_known || inertia > 0.0f;
+    lattice.rest_velocity_known = rate == nullptr && inertia > 0.0f;  // what the linear path above left
     lattice.rate_known = rate != nullptr;
     if (rate != nullptr) lattice.motion_rate = *rate;
   } else if (world != nullptr) {  // a pose changed without time passing is a jump, not a motion

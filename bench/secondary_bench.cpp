@@ -1,0 +1,89 @@
+// Secondary motion per step. spring/chain/LINKS/HZ: one frame of a spring chain of LINKS bones following a swinging
+// root at HZ frames per second (at 60 Hz a frame is four 1/240 s sub-steps and the leftover; at 240 Hz one), the
+// bent pose written back; items are bones, so items_per_second inverts to the time per spring bone per frame.
+// elastic/inertial_step: the built-in character's three arm lattices stepped with the bones' motion and rates
+// (inertia 1), next to elastic/still_step, the same lattices stepped in their bones' frames.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"
+#include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/spring_chain.hpp"
+namespace {
+
+glm::mat4 swing(double t) {
+  return glm::rotate(glm::mat4(1.0f), float(0.6 * std::sin(2.0 * 3.14159265 * 0.8 * t)), glm::vec3(0, 0, 1));
+}
+
+void spring_chain(benchmark::State& state) {
+  const auto links = int(state.range(0));
+  const double hz = double(state.range(1));
+  std::vector<deform::Bone> bones(std::size_t(links) + 1);
+  bones[0] = {"root", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}};
+  for (int i = 1; i <= links; ++i)
+    bones[std::size_t(i)] = {"link" + std::to_string(i), i - 1,
+                             i < links ? std::vector<std::int32_t>{i + 1} : std::vector<std::int32_t>{},
+                             glm::vec3(0.1f, 0.0f, 0.0f), glm::vec3(0.0f), {}};
+  const deform::Skeleton skeleton(bones);
+  deform::SpringChainSpec chain;
+  chain.name = "tail";
+  for (int i = 1; i <= links; ++i) chain.bones.push_back(i);
+  chain.frequency = 4.0f;
+  chain.damping_ratio = 0.4f;
+  chain.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+  chain.radius = 0.01f;
+  chain.colliders = {0};
+  deform::SpringChains springs(skeleton, {chain}, {{0, glm::vec3(0.3f, -0.25f, 0.0f), glm::vec3(0.6f, -0.25f, 0.0f),
+                                                   0.1f}});
+  std::vector<glm::mat4> world(skeleton.bone_count()), rate(world.size()), palette(world.size());
+  int frame = 0;
+  for (auto _ : state) {
+    const double t = frame++ / hz;
+    const glm::mat4 root = swing(t), root_rate = (swing(t + 1e-3) - root) / 1e-3f;
+    for (std::size_t b = 0; b < world.size(); ++b) {  // part of what an engine's FK would do anyway
+      world[b] = root * skeleton.bind_world()[b];
+      rate[b] = root_rate * skeleton.bind_world()[b];
+    }
+    springs.run(float(1.0 / hz), world, rate, palette);
+    benchmark::DoNotOptimize(palette.data());
+  }
+  state.SetItemsProcessed(state.iterations() * links);
+}
+
+void lattices_step(benchmark::State& state) {
+  const bool inertial = state.range(0) != 0;
+  deform::Character character = deform::make_builtin_character();
+  deform::DeformerHierarchy hierarchy = character.deformers();
+  if (inertial)
+    for (std::size_t l = 0; l < hierarchy.lattice_count(); ++l) hierarchy.set_motion(l, {1.0f, glm::vec3(0.0f), 1.0f});
+  const deform::Skeleton& skeleton = character.skeleton();
+  std::vector<glm::mat4> world(skeleton.bone_count()), rate(world.size());
+  int frame = 0;
+  for (auto _ : state) {
+    const double t = frame++ / 60.0;
+    const glm::mat4 root = swing(t), root_rate = (swing(t + 1e-3) - root) / 1e-3f;
+    for (std::size_t b = 0; b < world.size(); ++b) {
+      world[b] = root * skeleton.bind_world()[b];
+      rate[b] = root_rate * skeleton.bind_world()[b];
+    }
+    if (inertial) {
+      hierarchy.step(1.0f / 60.0f, world, rate);
+    } else {
+      hierarchy.step(1.0f / 60.0f);
+    }
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(hierarchy.lattice_count()));
+}
+
+BENCHMARK(spring_chain)->Name("spring/chain")->ArgNames({"links", "hz"})->Args({6, 60})->Args({6, 240})->Args({24, 60});
+BENCHMARK(lattices_step)->Name("elastic/builtin_lattices_step")->ArgName("inertial")->Arg(0)->Arg(1);
+
+}  // namespace
