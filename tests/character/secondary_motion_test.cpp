@@ -4,13 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <vector>
 
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
+#include "study.hpp"  // tools/motion_study
 
 namespace {
 
@@ -58,26 +58,15 @@ struct Walk {
 };
 
 // The left hand (carried by the jiggling lattices) and the fingers' tip at every 1/15 s over `seconds`, stepped
-// at `hz` (or jittered steps averaging 240 Hz).
-std::vector<glm::vec3> walk_points(const deform::Rig& rig, double hz, bool jitter, bool lead, double seconds = 2.0) {
+// at `hz`, the pose with its lead or without.
+std::vector<glm::vec3> walk_points(const deform::Rig& rig, double hz, bool lead, double seconds) {
   Walk walk(rig);
-  std::mt19937 rng(5);
   const std::int32_t hand = walk.character.skeleton().find("hand_l");
   std::vector<glm::vec3> out;
-  walk.frame(0.0, 0.0f, lead);
-  const int per = std::max(1, int(std::lround(hz / 15.0)));
-  for (int c = 0; c < int(std::lround(seconds * 15.0)); ++c) {
-    std::vector<double> cuts;
-    for (int k = 1; k < per; ++k)
-      cuts.push_back(jitter ? std::uniform_real_distribution<double>(0.0, 1.0)(rng) : double(k) / per);
-    std::sort(cuts.begin(), cuts.end());
-    cuts.push_back(1.0);
-    double t = c / 15.0;
-    for (const double cut : cuts) {
-      const double next = (c + cut) / 15.0;
-      walk.frame(next, float(next - t), lead);
-      t = next;
-    }
+  const std::vector<double> times = motion_study::frame_times(hz, seconds, false);
+  for (std::size_t n = 0; n < times.size(); ++n) {
+    walk.frame(times[n], n == 0 ? 0.0f : float(times[n] - times[n - 1]), lead);
+    if (n == 0 || !motion_study::at_checkpoint(times[n])) continue;
     out.push_back(walk.character.bone_position(hand));
     out.push_back(walk.character.springs().chain_count() > 0 ? walk.character.springs().points(0).back()
                                                             : glm::vec3(0.0f));
@@ -85,59 +74,14 @@ std::vector<glm::vec3> walk_points(const deform::Rig& rig, double hz, bool jitte
   return out;
 }
 
-// The largest spread (max - min over runs) of either point, as a percentage of that point's motion (max - min over
-// the run at 240 Hz, per coordinate, the largest).
-double spread_percent(const std::vector<std::vector<glm::vec3>>& runs) {
-  double worst = 0.0;
-  for (std::size_t which = 0; which < 2; ++which) {
-    double amplitude = 0.0, spread = 0.0;
-    for (int axis = 0; axis < 3; ++axis) {
-      double lo = 1e30, hi = -1e30;
-      for (std::size_t k = which; k < runs.back().size(); k += 2)
-        lo = std::min(lo, double(runs.back()[k][axis])), hi = std::max(hi, double(runs.back()[k][axis]));
-      amplitude = std::max(amplitude, hi - lo);
-      for (std::size_t k = which; k < runs.front().size(); k += 2) {
-        double a = 1e30, b = -1e30;
-        for (const auto& run : runs) a = std::min(a, double(run[k][axis])), b = std::max(b, double(run[k][axis]));
-        spread = std::max(spread, b - a);
-      }
-    }
-    worst = std::max(worst, 100.0 * spread / amplitude);
-  }
-  return worst;
-}
-
 }  // namespace
 
-TEST_CASE("a walk with jiggle: the same at 30, 60, 144, 240 Hz and jittered frames within 0.5%, at 15 Hz within 1%") {
-  // The lattices feel the rest's acceleration, which a cubic between frames has to O(h²): 15 Hz frames leave the
-  // jiggling hand about 4 mm off the 240 Hz curve, 30 Hz about 1 mm (docs/elasticity.md).
-  const deform::Model model = deform::builtin_character();
-  const deform::Rig rig = jiggling_rig(model);
-  std::vector<std::vector<glm::vec3>> runs;
-  for (const double hz : {30.0, 60.0, 144.0}) runs.push_back(walk_points(rig, hz, false, true));
-  runs.push_back(walk_points(rig, 240.0, true, true));
-  runs.push_back(walk_points(rig, 240.0, false, true));
-  const double spread = spread_percent(runs);
-  MESSAGE("walk spread with the pose's lead, 30-240 Hz and jittered: " << spread << "%");
-  CHECK(spread < 0.5);
-  runs.insert(runs.begin(), walk_points(rig, 15.0, false, true));
-  const double with_15 = spread_percent(runs);
-  MESSAGE("... and 15 Hz: " << with_15 << "%");
-  CHECK(with_15 < 1.0);
-  // Without the lead the motion between frames is linear: worse, still bounded.
-  std::vector<std::vector<glm::vec3>> linear;
-  for (const double hz : {30.0, 60.0, 240.0}) linear.push_back(walk_points(rig, hz, false, false));
-  const double linear_spread = spread_percent(linear);
-  MESSAGE("walk spread without it (30-240 Hz): " << linear_spread << "%");
-  CHECK(linear_spread > spread);
-  CHECK(linear_spread < 10.0);
-}
+// The walk's spread over frame rates and scales is measured by tools/motion_study (motion_study_check).
 
 TEST_CASE("the jiggle is real: the walking hand leaves the rigid walk's path, and a still pose stays still") {
   const deform::Model model = deform::builtin_character();
-  const std::vector<glm::vec3> rigid = walk_points(deform::builtin_rig(model), 60.0, false, true, 1.0);
-  const std::vector<glm::vec3> jiggly = walk_points(jiggling_rig(model), 60.0, false, true, 1.0);
+  const std::vector<glm::vec3> rigid = walk_points(deform::builtin_rig(model), 60.0, true, 1.0);
+  const std::vector<glm::vec3> jiggly = walk_points(jiggling_rig(model), 60.0, true, 1.0);
   float largest = 0.0f;
   for (std::size_t k = 0; k < rigid.size(); k += 2) largest = std::max(largest, glm::length(jiggly[k] - rigid[k]));
   MESSAGE("largest lag of the hand behind the rigid walk: " << largest << " m");

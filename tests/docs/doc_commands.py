@@ -10,7 +10,8 @@ Two kinds of fenced blocks are run; the others (```text synopses, ```json, ```cp
                across lines, so a page can show the start of a long output. The command must exit 0 unless its
                expected output is empty and the block says `# exit N` after it.
 Commands run with bash in WORK_DIR, a scratch folder holding `samples/` (a copy: commands may write there),
-`tests/` (a link to the sources), `build/tools/deform` and `build/tools/make_builtin` (links to the binaries), with
+`tests/` (a link to the sources), `build/tools/deform`, `build/tools/make_builtin` and `build/tools/motion_study`
+(links to the binaries), with
 `deform` on PATH. A few commands are not run here, each for a stated reason (see NOT_RUN); every other one is.
 Python (docs/python.md): when the environment names the built module's folder (DEFORM_PYTHON_MODULE_DIR) and the
 interpreter the build found (DEFORM_PYTHON), WORK_DIR also holds `python/` (a link to the sources) and
@@ -32,6 +33,7 @@ NOT_RUN = {
     "./scripts/fuzz": "the suite runs every fuzzer for a fixed number of inputs (the fuzz_* tests)",
     "cmake ": "the build itself: scripts/test builds, consumer_links_installed_library installs and links",
     "python3 -m pip install": "it builds the whole library through CMake (minutes); docs/python.md says how it was checked",
+    "python3 tools/motion_study/plot.py": "the motion_study_plot test runs it with the interpreter that has matplotlib",
 }
 
 
@@ -108,6 +110,9 @@ def main():
     os.symlink(deform, work / "build" / "tools" / "deform")
     if os.path.exists(make_builtin):
         os.symlink(make_builtin, work / "build" / "tools" / "make_builtin")
+    study = pathlib.Path(deform).parent / "motion_study"  # built beside the CLI (tools/CMakeLists.txt)
+    if study.exists():
+        os.symlink(study, work / "build" / "tools" / "motion_study")
     module_dir, python = os.environ.get("DEFORM_PYTHON_MODULE_DIR"), os.environ.get("DEFORM_PYTHON")
     if module_dir and python:
         os.symlink(pathlib.Path(source) / "python", work / "python")

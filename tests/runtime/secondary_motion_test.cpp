@@ -8,6 +8,8 @@
 #include "deform/runtime/spring_chain.hpp"
 #include <doctest/doctest.h>
 
+#include "study.hpp"  // tools/motion_study: frame times landing on every 1/15 s, the spread of paths
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -17,6 +19,11 @@
 #include <vector>
 
 namespace {
+
+using motion_study::at_checkpoint;
+using motion_study::frame_times;
+using motion_study::spread_of;
+using Spread = motion_study::Spread;
 
 constexpr double pi = 3.14159265358979323846;
 
@@ -49,52 +56,6 @@ deform::ElasticParams params_of(double omega, double zeta) {
   p.damping_ratio = float(zeta);
   p.mass = 1.0f;
   return p;
-}
-
-// Frame times from 0 to `seconds` that land on every 1/15 s checkpoint: `hz` equal steps between, or, with jitter,
-// as many steps cut at random places.
-std::vector<double> frame_times(double hz, double seconds, bool jitter, std::uint32_t seed = 7) {
-  std::mt19937 rng(seed);
-  std::vector<double> times{0.0};
-  const int per_checkpoint = std::max(1, int(std::lround(hz / 15.0)));
-  const int checkpoints = int(std::lround(seconds * 15.0));
-  for (int c = 0; c < checkpoints; ++c) {
-    const double t0 = c / 15.0, t1 = (c + 1) / 15.0;
-    std::vector<double> cuts;
-    for (int k = 1; k < per_checkpoint; ++k) {
-      cuts.push_back(jitter ? std::uniform_real_distribution<double>(t0, t1)(rng)
-                            : t0 + (t1 - t0) * k / per_checkpoint);
-    }
-    std::sort(cuts.begin(), cuts.end());
-    times.insert(times.end(), cuts.begin(), cuts.end());
-    times.push_back(t1);
-  }
-  return times;
-}
-
-bool at_checkpoint(double t) { return std::abs(t * 15.0 - std::round(t * 15.0)) < 1e-7; }
-
-// The spread over runs (max - min per checkpoint, largest over checkpoints) and the motion's amplitude (max - min
-// over every run and checkpoint), per coordinate, the largest.
-struct Spread {
-  double spread = 0.0;
-  double amplitude = 0.0;
-  double percent() const { return 100.0 * spread / amplitude; }
-};
-Spread spread_of(const std::vector<std::vector<glm::vec3>>& runs) {
-  Spread s;
-  for (int axis = 0; axis < 3; ++axis) {
-    double lo = 1e30, hi = -1e30;
-    for (const auto& run : runs)
-      for (const glm::vec3& p : run) lo = std::min(lo, double(p[axis])), hi = std::max(hi, double(p[axis]));
-    s.amplitude = std::max(s.amplitude, hi - lo);
-    for (std::size_t k = 0; k < runs.front().size(); ++k) {
-      double a = 1e30, b = -1e30;
-      for (const auto& run : runs) a = std::min(a, double(run[k][axis])), b = std::max(b, double(run[k][axis]));
-      s.spread = std::max(s.spread, b - a);
-    }
-  }
-  return s;
 }
 
 }  // namespace

@@ -56,6 +56,28 @@ void validate_chain_settings(const SpringChainSpec& chain) {
   require(finite(chain.tip), element, "tip must be finite");
 }
 
+SpringChainSpec vrm_spring_settings(const VrmSpringJoint& joint, float bone_length, float frame_rate) {
+  const std::string element = "<VRM spring joint>";
+  require(std::isfinite(joint.stiffness) && joint.stiffness > 0.0f, element, "stiffness must be finite and > 0");
+  require(joint.drag_force >= 0.0f && joint.drag_force < 1.0f, element, "dragForce must be in [0, 1)");
+  require(std::isfinite(joint.gravity_power) && joint.gravity_power >= 0.0f, element,
+          "gravityPower must be finite and >= 0");
+  require(finite(joint.gravity_dir), element, "gravityDir must be finite");
+  require(std::isfinite(joint.hit_radius) && joint.hit_radius >= 0.0f, element, "hitRadius must be finite and >= 0");
+  require(std::isfinite(bone_length) && bone_length > 0.0f, element, "the bone length must be finite and > 0");
+  require(std::isfinite(frame_rate) && frame_rate > 0.0f, element, "the frame rate must be finite and > 0");
+  const double rate = frame_rate;
+  const double omega = std::sqrt(double(joint.stiffness) * rate / double(bone_length));
+  SpringChainSpec spec;
+  spec.frequency = float(omega / (2.0 * std::numbers::pi));
+  spec.damping_ratio = float(-std::log1p(-double(joint.drag_force)) * rate / (2.0 * omega));
+  const float length = glm::length(joint.gravity_dir);
+  spec.gravity = length > 0.0f ? joint.gravity_dir / length * float(double(joint.gravity_power) * rate) : glm::vec3(0.0f);
+  spec.units_per_metre = 1.0f;
+  spec.radius = joint.hit_radius;
+  return spec;
+}
+
 SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec> chains,
                            std::vector<SpringCollider> colliders, float substep)
     : colliders_(std::move(colliders)), substep_(substep) {

@@ -58,6 +58,27 @@ struct SpringChainSpec {
 // of its range. The bones and colliders are checked against a skeleton by SpringChains' constructor.
 DEFORM_RUNTIME_API void validate_chain_settings(const SpringChainSpec& chain);
 
+// A joint's parameters in VRMC_springBone (VRM 1.0), as a .vrm file gives them. VRM moves a tail every frame by
+//   next = tail + (tail - previous)·(1 - dragForce) + restDirection·stiffness·Δt + gravityDir·gravityPower·Δt,
+// then back to the bone's length: per-frame factors, so its motion changes with the frame rate.
+struct VrmSpringJoint {
+  float stiffness = 1.0f;                   // stiffness, >= 0
+  float drag_force = 0.4f;                  // dragForce, in [0, 1)
+  float gravity_power = 0.0f;               // gravityPower, >= 0
+  glm::vec3 gravity_dir{0.0f, -1.0f, 0.0f};  // gravityDir
+  float hit_radius = 0.0f;                  // hitRadius, metres, >= 0
+};
+
+// The chain settings (frequency, damping ratio, gravity, radius; units_per_metre 1: VRM is in metres) that move as
+// VRM moves a joint of `bone_length` metres when VRM runs at `frame_rate` frames per second — where the model was
+// tuned, usually 60. Linearised about the rest direction (docs/elasticity.md, "From VRM"): the stiffness term turns
+// the tail by stiffness·Δt/L per frame, so ω² = stiffness·rate/L; (1 - dragForce) of the velocity kept per frame
+// is a damping of -ln(1 - dragForce)·rate per second, so ζ = -ln(1 - dragForce)·rate/(2ω); gravityPower·Δt per
+// frame is an acceleration gravityPower·rate. Throws deform::Error naming the parameter when one is out of its range
+// (a stiffness of 0 has no frequency: refused).
+DEFORM_RUNTIME_API SpringChainSpec vrm_spring_settings(const VrmSpringJoint& joint, float bone_length,
+                                                       float frame_rate = 60.0f);
+
 // The spring chains of one skeleton and their state. Construction allocates; run() does not.
 class DEFORM_RUNTIME_API SpringChains {
  public:
