@@ -613,3 +613,45 @@ TEST_CASE("spring chains: bad set-ups throw naming the chain or collider; bad pe
   tuned.damping_ratio = -1.0f;
   CHECK_THROWS_AS(springs.set_settings(0, tuned), deform::Error);
 }
+
+TEST_CASE("vrm_spring_settings: at 60 Hz the converted chain moves as VRM's update does; bad parameters refused") {
+  // One still link of 0.3 m, gravity switched on at t = 0: it falls, swings and settles where the stiffness holds
+  // it (tan θ = gravityPower / stiffness in both). No rest motion, so VRM's drag (on the absolute velocity) and
+  // libdeform's damping (on the velocity relative to the rest) act alike.
+  deform::VrmSpringJoint joint;
+  joint.stiffness = 0.5f;       // about 1.6 Hz on 0.3 m at 60 Hz
+  joint.drag_force = 0.1f;      // ζ about 0.32
+  joint.gravity_power = 0.15f;  // 9 m/s² at 60 Hz; settles 16.7° down
+  const deform::SpringChainSpec converted = deform::vrm_spring_settings(joint, 0.3f);
+  CHECK(converted.frequency == doctest::Approx(std::sqrt(0.5 * 60.0 / 0.3) / (2 * pi)).epsilon(1e-5));
+  CHECK(converted.damping_ratio == doctest::Approx(-std::log(0.9) * 60.0 / (2 * std::sqrt(100.0))).epsilon(1e-5));
+  CHECK(converted.gravity.y == doctest::Approx(-9.0f));
+  const deform::Skeleton skeleton = chain_skeleton(1, 0.3f);
+  deform::SpringChainSpec spec = converted;
+  spec.name = "link";
+  spec.bones = {1};
+  spec.tip = glm::vec3(0.3f, 0.0f, 0.0f);
+  deform::SpringChains ours(skeleton, {spec}, {});
+  motion_study::VrmChain vrm({1}, spec.tip, joint, {});
+  std::vector<glm::mat4> world = chain_world(skeleton, glm::dmat4(1.0));
+  double error = 0.0, lowest = 0.0;
+  for (int n = 0; n <= 240; ++n) {
+    std::vector<glm::mat4> w = world;
+    vrm.run(n == 0 ? 0.0f : 1.0f / 60.0f, w, 1.0f);
+    REQUIRE(ours.run(n == 0 ? 0.0f : 1.0f / 60.0f, w));
+    error = std::max(error, double(glm::length(ours.points(0).back() - vrm.tip())));
+    lowest = std::min(lowest, double(vrm.tip().y));
+  }
+  const double settled = std::atan(0.15 / 0.5);
+  INFO("largest difference " << error << " of the fall " << -lowest);
+  CHECK(ours.points(0).back().y == doctest::Approx(-0.3 * std::sin(settled)).epsilon(0.01));
+  CHECK(vrm.tip().y == doctest::Approx(-0.3 * std::sin(settled)).epsilon(0.01));
+  CHECK(lowest < -0.1);  // it swung past where it settles
+  CHECK(error < 0.1 * -lowest);
+  joint.drag_force = 1.0f;
+  CHECK_THROWS_WITH_AS(deform::vrm_spring_settings(joint, 0.3f), doctest::Contains("dragForce"), deform::Error);
+  joint.drag_force = 0.4f;
+  CHECK_THROWS_WITH_AS(deform::vrm_spring_settings(joint, 0.0f), doctest::Contains("length"), deform::Error);
+  joint.stiffness = 0.0f;
+  CHECK_THROWS_WITH_AS(deform::vrm_spring_settings(joint, 0.3f), doctest::Contains("stiffness"), deform::Error);
+}
