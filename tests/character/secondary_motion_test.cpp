@@ -121,7 +121,11 @@ TEST_CASE("set_pose with a lead refuses what set_pose refuses, and a lead that i
   CHECK_FALSE(c.set_pose(bind, bad, 1e-3f));
   CHECK_FALSE(c.set_pose(bad, bind, 1e-3f));
   CHECK(c.set_pose(bind, bind, 1e-3f));
-  // An instance has the rig's chains, at rest.
+  // An instance has the rig's chains, at rest, with this character's settings.
+  deform::SpringChainSpec tuned = c.springs().spec(0);
+  tuned.frequency = 5.0f;
+  c.springs().set_settings(0, tuned);
   const deform::Character copy = c.instance();
-  CHECK(copy.springs().chain_count() == 1);
+  REQUIRE(copy.springs().chain_count() == 1);
+  CHECK(copy.springs().spec(0).frequency == 5.0f);
 }

@@ -149,6 +149,7 @@ Character Character::instance() const {
   copy.reach_soften = reach_soften;
   copy.reach_limits = reach_limits;
   copy.set_normals_mode(normals_mode_);
+  for (std::size_t c = 0; c < springs_.chain_count(); ++c) copy.springs_.set_settings(c, springs_.spec(c));
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
   return copy;
@@ -269,6 +270,10 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   solve.target = target;
   solve.settings = ik;
   solve.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
+  // A reach held frame after frame (the same effector, not released) is solved without the random restarts of the
+  // stall escape, so that the solution moves with its target instead of flipping between solutions.
+  const bool continuing = reaching_ && effector == effector_;
+  if (continuing) solve.settings.escape_stalls = false;
   solve.scratch = ik_scratch_;
   solve.random_state = &random_state;
   solve.result = &ik_result;
@@ -349,7 +354,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   std::swap(pose_, work_);
   // The reached joints hold still relative to their parents: the later pose's motion of them is the body's.
   for (const std::int32_t bone : chain_.bones) later_.rotations[std::size_t(bone)] = pose_.rotations[std::size_t(bone)];
-  release();
+  for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) hierarchy_.set_stretch_target(l, 0.0f);
   stretched_.clear();
   for (const Stretched& s : chain_lattices_) {
     hierarchy_.set_stretch_target(s.lattice, lambda * hierarchy_.length(s.lattice));
@@ -357,6 +362,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     result.stretch += lambda * hierarchy_.length(s.lattice);
   }
   effector_ = effector;
+  if (!continuing) jumped_root_ = chain_.bones.front();  // the limb snaps to the reach: a jump, not a motion
+  reaching_ = true;
   return result;
 }
 
@@ -368,6 +375,8 @@ Status Character::set_max_stretch(float max_stretch) noexcept {
 
 void Character::release() {
   for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) hierarchy_.set_stretch_target(l, 0.0f);
+  if (reaching_ && !chain_.bones.empty()) jumped_root_ = chain_.bones.front();  // the next pose may snap back
+  reaching_ = false;
 }
 
 Status Character::update(float dt) {
@@ -391,6 +400,15 @@ Status Character::update(float dt) {
     if (const Status status = fk.run(); !status) return status;
     for (std::size_t b = 0; b < world_.size(); ++b) world_rate_[b] = (world_later_[b] - world_[b]) / lead_;
     rate = world_rate_;
+  }
+  if (jumped_root_ >= 0) {
+    // A reach that started or ended moved its limb at once: the lattices and spring chains there start again from
+    // the pose as it is, rather than feeling the snap as motion.
+    for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l)
+      if (skel.is_ancestor(jumped_root_, hierarchy_.spec(l).bone)) hierarchy_.restart_motion(l);
+    for (std::size_t c = 0; c < springs_.chain_count(); ++c)
+      if (skel.is_ancestor(jumped_root_, springs_.spec(c).bones.front())) springs_.restart(c);
+    jumped_root_ = -1;
   }
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
   if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;

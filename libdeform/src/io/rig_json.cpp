@@ -69,20 +69,26 @@ ElasticSettings read_elastic(const JsonReader& r) {
   return e;
 }
 
+// A gravity vector, m/s², at most 1e6 long (validate_motion, validate_chain_settings).
+glm::vec3 read_gravity(const JsonReader& r) {
+  const glm::vec3 g = r.vec3();
+  if (!(glm::length(g) <= 1e6f)) r.fail("must be at most 1e6 m/s² long");
+  return g;
+}
+
 LatticeMotion read_motion(const JsonReader& r) {
   // The ranges validate_motion enforces (runtime/hierarchy.hpp).
   LatticeMotion motion;
   r.expect_object({"inertia", "gravity", "units_per_metre"});
   if (r.has("inertia")) motion.inertia = r.at("inertia").number(0.0f, 1.0f);
-  if (r.has("gravity")) motion.gravity = r.at("gravity").vec3();
-  if (r.has("units_per_metre"))
-    motion.units_per_metre = r.at("units_per_metre").number(0.0f, std::numeric_limits<float>::max(), true);
+  if (r.has("gravity")) motion.gravity = read_gravity(r.at("gravity"));
+  if (r.has("units_per_metre")) motion.units_per_metre = r.at("units_per_metre").number(0.0f, 1e6f, true);
   return motion;
 }
 
 // The "springs" block: colliders first, since chains name them by index.
 void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
-  const float big = std::numeric_limits<float>::max();
+  constexpr float big = 1e6f;  // the runtime's bound on lengths and units (validate_chain_settings)
   r.expect_object({"substep", "colliders", "chains"});
   if (r.has("substep")) rig.spring_substep = r.at("substep").number(0.0f, 1.0f, true);
   if (r.has("colliders")) {
@@ -118,9 +124,9 @@ void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
         bones.at(b).fail("must be a child of the bone before it");
     }
     if (c.has("tip")) chain.tip = c.at("tip").vec3();
-    if (c.has("frequency")) chain.frequency = c.at("frequency").number(0.0f, big, true);
-    if (c.has("damping_ratio")) chain.damping_ratio = c.at("damping_ratio").number(0.0f, big);
-    if (c.has("gravity")) chain.gravity = c.at("gravity").vec3();
+    if (c.has("frequency")) chain.frequency = c.at("frequency").number(0.0f, 1000.0f, true);
+    if (c.has("damping_ratio")) chain.damping_ratio = c.at("damping_ratio").number(0.0f, 1000.0f);
+    if (c.has("gravity")) chain.gravity = read_gravity(c.at("gravity"));
     if (c.has("units_per_metre")) chain.units_per_metre = c.at("units_per_metre").number(0.0f, big, true);
     if (c.has("radius")) chain.radius = c.at("radius").number(0.0f, big);
     if (c.has("colliders")) {

@@ -5,6 +5,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
+#include "finite.hpp"
 
 namespace deform {
 namespace {
@@ -32,12 +33,13 @@ void validate_shape(const StretchShape& shape) {
 }
 
 void validate_motion(const LatticeMotion& motion) {
-  const auto finite = [](glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
   if (!(motion.inertia >= 0.0f && motion.inertia <= 1.0f))
     throw Error::invalid_argument("<lattice motion>", "motion inertia must be in [0, 1]");
-  if (!finite(motion.gravity)) throw Error::invalid_argument("<lattice motion>", "motion gravity must be finite");
-  if (!(motion.units_per_metre > 0.0f) || !std::isfinite(motion.units_per_metre))
-    throw Error::invalid_argument("<lattice motion>", "motion units_per_metre must be finite and > 0");
+  // Bounds far beyond any character, so that their product cannot overflow a float.
+  if (!finite(motion.gravity) || !(glm::length(motion.gravity) <= 1e6f))
+    throw Error::invalid_argument("<lattice motion>", "motion gravity must be finite and at most 1e6 m/s²");
+  if (!(motion.units_per_metre > 0.0f && motion.units_per_metre <= 1e6f))
+    throw Error::invalid_argument("<lattice motion>", "motion units_per_metre must be in (0, 1e6]");
 }
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
@@ -246,6 +248,15 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     lattice.motion_known = world != nullptr;
   }
   const glm::mat4 before = lattice.motion_world;
+  // A bone squashed flat has no frame to feel motion in: the springs then step as if it were still.
+  const auto invertible = [](const glm::mat4& m) {
+    const float det = glm::determinant(glm::mat3(m));
+    return std::isfinite(det) && std::abs(det) > 1e-30f;
+  };
+  if (!invertible(before) || !invertible(now) || (rate != nullptr && !finite(*rate))) {
+    lattice.motion_known = false;
+    return lattice.elastic.step(dt, lattice.target_points);
+  }
   const glm::mat3 inverse_before = glm::inverse(glm::mat3(before));
   const glm::mat3 inverse_now = glm::inverse(glm::mat3(now));
   const auto scale = [](const glm::mat4& m) { return std::cbrt(std::abs(glm::determinant(glm::mat3(m)))); };

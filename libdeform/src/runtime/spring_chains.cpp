@@ -46,13 +46,14 @@ void require(bool ok, const std::string& element, const char* what) {
 
 void validate_chain_settings(const SpringChainSpec& chain) {
   const std::string element = chain.name.empty() ? std::string("<spring chain>") : "spring chain '" + chain.name + "'";
-  require(std::isfinite(chain.frequency) && chain.frequency > 0.0f, element, "frequency must be finite and > 0 Hz");
-  require(std::isfinite(chain.damping_ratio) && chain.damping_ratio >= 0.0f, element,
-          "damping_ratio must be finite and >= 0");
-  require(finite(chain.gravity), element, "gravity must be finite");
-  require(std::isfinite(chain.units_per_metre) && chain.units_per_metre > 0.0f, element,
-          "units_per_metre must be finite and > 0");
-  require(std::isfinite(chain.radius) && chain.radius >= 0.0f, element, "radius must be finite and >= 0");
+  // Bounds far beyond any character, so that no product of them overflows a float.
+  require(chain.frequency > 0.0f && chain.frequency <= 1000.0f, element, "frequency must be in (0, 1000] Hz");
+  require(chain.damping_ratio >= 0.0f && chain.damping_ratio <= 1000.0f, element, "damping_ratio must be in [0, 1000]");
+  require(finite(chain.gravity) && glm::length(chain.gravity) <= 1e6f, element,
+          "gravity must be finite and at most 1e6 m/s²");
+  require(chain.units_per_metre > 0.0f && chain.units_per_metre <= 1e6f, element,
+          "units_per_metre must be in (0, 1e6]");
+  require(chain.radius >= 0.0f && chain.radius <= 1e6f, element, "radius must be in [0, 1e6]");
   require(finite(chain.tip), element, "tip must be finite");
 }
 
@@ -90,7 +91,7 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
     const std::string element = "collider " + std::to_string(c);
     require(collider.bone >= 0 && std::size_t(collider.bone) < bones, element, "bone is out of range");
     require(finite(collider.start) && finite(collider.end), element, "ends must be finite");
-    require(std::isfinite(collider.radius) && collider.radius > 0.0f, element, "radius must be finite and > 0");
+    require(collider.radius > 0.0f && collider.radius <= 1e6f, element, "radius must be in (0, 1e6]");
   }
   inverse_bind_.assign(skeleton.inverse_bind_world().begin(), skeleton.inverse_bind_world().end());
   std::vector<std::int32_t> joint_of(bones, -1);
@@ -211,6 +212,15 @@ SpringChains::Oscillator SpringChains::oscillator(const Chain& chain, double h) 
   o.pg = float(f.position_from_start + f.position_from_end);
   o.vg = float(f.velocity_from_start + f.velocity_from_end);
   return o;
+}
+
+void SpringChains::place_at_rest(Chain& chain) noexcept {
+  const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+  for (std::size_t i = 0; i < chain.count; ++i) {
+    positions_[chain.first + i] = rests_[chain.first + i] = end_points_[point0 + i + 1];
+    velocities_[chain.first + i] = end_velocities_[point0 + i + 1];
+  }
+  chain.restart = false;
 }
 
 void SpringChains::sample_points(double tau, double dt) {
@@ -359,20 +369,28 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
     start_points_ = end_points_;
     start_velocities_ = end_velocities_;
     collider_start_radius_ = collider_end_radius_;
-    for (const Chain& chain : chains_) {
-      const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
-      for (std::size_t i = 0; i < chain.count; ++i) {
-        positions_[chain.first + i] = rests_[chain.first + i] = end_points_[point0 + i + 1];
-        velocities_[chain.first + i] = end_velocities_[point0 + i + 1];
-      }
-    }
+    for (Chain& chain : chains_) place_at_rest(chain);
     report_positions_ = positions_;
     report_velocities_ = velocities_;
     report_rests_ = rests_;
     owed_ = 0.0;
     started_ = true;
-  } else if (dt > 0.0f) {
-    advance(double(dt));
+  } else {
+    for (Chain& chain : chains_) {
+      if (!chain.restart) continue;
+      const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+      for (std::size_t k = point0; k <= point0 + chain.count; ++k) {
+        start_points_[k] = end_points_[k];
+        start_velocities_[k] = end_velocities_[k];
+      }
+      place_at_rest(chain);
+      for (std::size_t j = chain.first; j < chain.first + chain.count; ++j) {
+        report_positions_[j] = positions_[j];
+        report_velocities_[j] = velocities_[j];
+        report_rests_[j] = rests_[j];
+      }
+    }
+    if (dt > 0.0f) advance(double(dt));
   }
   // The bent pose: per joint the rigid map taking its animated bone onto its simulated one.
   for (const Chain& chain : chains_) {

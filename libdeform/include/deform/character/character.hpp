@@ -78,9 +78,9 @@ class DEFORM_CHARACTER_API Character {
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, the
-  // settings below (skinning, lattice_fields, ik, reach options, normals mode, max stretch) and the lattices' current
-  // elastic settings and shapes copied. Allocates that state only (about 218 KB for the built-in character;
-  // docs/performance.md, "Elasticity and the whole frame").
+  // settings below (skinning, lattice_fields, ik, reach options, normals mode, max stretch), the lattices' current
+  // elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
+  // 218 KB for the built-in character; docs/performance.md, "Elasticity and the whole frame").
   Character instance() const;
 
   const Model& model() const noexcept { return bind_->model; }
@@ -147,6 +147,10 @@ class DEFORM_CHARACTER_API Character {
   // chain's lattices. Refuses (result.status), changing nothing, an effector out of range or the root, a non-finite
   // target, a chain longer than max_chain_bones. No allocation: the chain is rebuilt in storage reserved at
   // construction when the effector changes. Cost: up to 17 CCD solves of the chain (microseconds), no full FK.
+  // Called again each frame while the body moves (after each set_pose), it re-solves on the new pose: a reach held so
+  // (the same effector, not released) is solved without the stall escape's random restarts, so it follows its
+  // target smoothly. A reach that starts, and a release, move the limb at once: the next update() takes that as a
+  // jump, not as motion — the lattices and spring chains on the limb start again from the new pose.
   ReachResult reach(std::int32_t effector, glm::vec3 target);
   // Lets go: every stretch target back to zero; the pose reached stays.
   void release();
@@ -220,6 +224,8 @@ class DEFORM_CHARACTER_API Character {
   bool transported_current_ = false;  // the last update() transported point_normals_
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
+  bool reaching_ = false;         // a reach is held (reach() since the last release())
+  std::int32_t jumped_root_ = -1;  // the root of a limb a reach snapped or let go since the last update(), or -1
   std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)
   // reach()'s working storage, sized at construction: the chain (rebuilt when the effector changes), the pose being
   // solved, the IK scratch and the joints' model-space matrices for the deepest chain, the chain's lattices.

@@ -77,8 +77,8 @@ DEFORM_RUNTIME_API void validate_shape(const StretchShape& shape);
 // way, scaled.
 struct LatticeMotion {
   float inertia = 0.0f;          // λ in [0, 1]: 0 the bone carries the points rigidly, 1 they are free masses
-  glm::vec3 gravity{0.0f};       // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model
-  float units_per_metre = 1.0f;  // model units in a metre (100 for a model in centimetres), > 0
+  glm::vec3 gravity{0.0f};       // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model; at most 1e6 long
+  float units_per_metre = 1.0f;  // model units in a metre (100 for a model in centimetres), in (0, 1e6]
   bool active() const noexcept { return inertia != 0.0f || gravity != glm::vec3(0.0f); }
   bool operator==(const LatticeMotion&) const = default;
 };
@@ -156,6 +156,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid (validate_motion)
   // or the index is out of range.
   void set_motion(std::size_t lattice, const LatticeMotion& motion);
+  // The lattice's next step takes its bone's motion as it is then, with no jolt, as the first step does: for a bone
+  // that jumped (a reach that snapped the limb). Throws std::out_of_range for a bad index.
+  void restart_motion(std::size_t lattice) { lattices_.at(lattice).motion_known = false; }
 
   // Advances every lattice's springs by dt seconds (see ElasticLattice::step), the bones held still: no lattice
   // feels its bone's motion, gravity still pulls. Refuses, changing nothing, a dt that is negative or not finite.

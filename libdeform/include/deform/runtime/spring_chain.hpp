@@ -35,7 +35,7 @@ struct SpringCollider {
   std::int32_t bone = -1;  // moves with this bone's animated world matrix
   glm::vec3 start{0.0f};   // bone-local (bind units): a sphere's centre, a capsule's first end
   glm::vec3 end{0.0f};     // bone-local: a capsule's second end
-  float radius = 0.0f;     // bone-local units, > 0
+  float radius = 0.0f;     // bone-local units, in (0, 1e6]
   bool operator==(const SpringCollider&) const = default;
 };
 
@@ -45,11 +45,11 @@ struct SpringChainSpec {
   std::vector<std::int32_t> bones;   // root first, each bone the parent of the next; at least one
   glm::vec3 tip{0.0f};               // the last bone's tail in its local frame; zero: its first child's bind head,
                                      // else its own offset from its parent continued
-  float frequency = 2.0f;            // Hz, > 0: each tail's natural frequency toward the animated pose
-  float damping_ratio = 0.3f;        // >= 0: < 1 overshoots and settles, 1 returns without overshoot
-  glm::vec3 gravity{0.0f};           // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model
-  float units_per_metre = 1.0f;      // model units in a metre (100 for centimetres), > 0
-  float radius = 0.0f;               // each tail's collision radius, model units at bind scale, >= 0
+  float frequency = 2.0f;            // Hz, in (0, 1000]: each tail's natural frequency toward the animated pose
+  float damping_ratio = 0.3f;        // in [0, 1000]: < 1 overshoots and settles, 1 returns without overshoot
+  glm::vec3 gravity{0.0f};           // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model; at most 1e6 long
+  float units_per_metre = 1.0f;      // model units in a metre (100 for centimetres), in (0, 1e6]
+  float radius = 0.0f;               // each tail's collision radius, model units at bind scale, in [0, 1e6]
   std::vector<std::uint32_t> colliders;  // indices into the colliders the chains share
   bool operator==(const SpringChainSpec&) const = default;
 };
@@ -104,6 +104,9 @@ class DEFORM_RUNTIME_API SpringChains {
              std::span<glm::mat4> palette = {});
   // The next run() starts on the animated pose, at rest (after a teleport, say).
   void reset() noexcept { started_ = false; }
+  // The next run() starts this chain again on its animated pose, at rest; the others go on (a limb that jumped: a
+  // reach that starts or ends). Throws std::out_of_range for a bad index.
+  void restart(std::size_t chain) { chains_.at(chain).restart = true; }
 
   std::size_t chain_count() const noexcept { return chains_.size(); }
   const SpringChainSpec& spec(std::size_t chain) const { return chains_.at(chain).spec; }
@@ -128,6 +131,7 @@ class DEFORM_RUNTIME_API SpringChains {
     glm::vec3 tip{0.0f};     // the last bone's tail, bone-local
     float bind_scale = 1.0f;  // the first bone's scale in the bind pose
     float scale = 1.0f;       // ... and as of the last run
+    bool restart = false;     // restart(): at rest on the animated pose at the next run
   };
   struct Placed {  // a collider in world space
     glm::vec3 start{0.0f};
@@ -140,6 +144,7 @@ class DEFORM_RUNTIME_API SpringChains {
   void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
                glm::vec3* rests) const noexcept;
   void advance(double dt);
+  void place_at_rest(Chain& chain) noexcept;  // the chain's tails on end_points_, moving with them
 
   std::vector<Chain> chains_;
   std::vector<SpringCollider> colliders_;
