@@ -38,6 +38,12 @@ DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
 // and a bob of the hips; for SamplingJob, the benchmarks of a whole
 // frame and a crowd. Throws deform::Error when `model` lacks those bones.
 DEFORM_EXTRAS_API Animation builtin_walk(const Model& model);
+// Every clip of the built-in character, made like builtin_walk() (looping, cubic-spline keys with the motion's own
+// derivatives as tangents, 16 keys per swing or more, every angle within the bones' limits, so set_pose's clamp
+// leaves a sampled pose unchanged): "idle" (4 s: breathing, arms hanging), "walk" (builtin_walk()), "run" (0.7 s:
+// leaning forward, knees high, arms pumping) and "wave" (2 s: the right hand raised, waving at 1.5 Hz), in that
+// order. Throws deform::Error when `model` lacks their bones. Allocates the clips.
+DEFORM_EXTRAS_API std::vector<Animation> builtin_clips(const Model& model);
 // The built-in character with builtin_rig(): the Character every sample starts from.
 DEFORM_EXTRAS_API Character make_builtin_character();
 
