@@ -429,3 +429,41 @@ TEST_CASE("clips: idle, walk, run and wave, smooth loops within the limits") {
     CHECK(largest_jump < 0.05f * largest_speed);
   }
 }
+
+TEST_CASE("builtin_full_rig: builtin_rig's arm lattices, then the right arm and both legs, every one binding points") {
+  const Model& m = character();
+  const deform::Rig arm = deform::builtin_rig(m), full = deform::builtin_full_rig(m);
+  REQUIRE(arm.lattices.size() == 3);
+  REQUIRE(full.lattices.size() == 12);
+  for (std::size_t l = 0; l < 3; ++l) CHECK(full.lattices[l] == arm.lattices[l]);
+  const char* bones[] = {"upperarm_l", "forearm_l", "hand_l", "upperarm_r", "forearm_r", "hand_r",
+                         "thigh_l",    "shin_l",    "foot_l", "thigh_r",    "shin_r",    "foot_r"};
+  for (std::size_t l = 0; l < 12; ++l) {
+    INFO(bones[l]);
+    CHECK(full.lattices[l].name == bones[l]);
+    CHECK(full.lattices[l].bone == id(bones[l]));
+    CHECK(full.lattices[l].elastic == arm.lattices[0].elastic);
+  }
+  CHECK(full.reach_effector == arm.reach_effector);
+  CHECK(full.reach_root == arm.reach_root);
+  CHECK(full.model.builtin);
+
+  const deform::Character c(deform::builtin_character(), full);
+  REQUIRE(c.deformers().lattice_count() == 12);
+  for (std::size_t l = 0; l < 12; ++l) {
+    INFO(bones[l]);
+    CHECK(c.deformers().bound_count(l) > 20);
+  }
+  // Each limb's lattices nest like the left arm's: upper, then lower, then the end.
+  for (std::size_t limb = 0; limb < 4; ++limb) {
+    CHECK(c.deformers().parent(3 * limb) == -1);
+    CHECK(c.deformers().parent(3 * limb + 1) == std::int32_t(3 * limb));
+    CHECK(c.deformers().parent(3 * limb + 2) == std::int32_t(3 * limb + 1));
+  }
+  // The mirror: the right limbs bind about as many points as the left ones (the weights' ties go to the lower bone
+  // id, so not exactly as many).
+  for (const std::size_t l : {0, 1, 2, 6, 7, 8}) {
+    INFO(bones[l]);
+    CHECK(double(c.deformers().bound_count(l + 3)) == doctest::Approx(double(c.deformers().bound_count(l))).epsilon(0.05));
+  }
+}
