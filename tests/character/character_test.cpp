@@ -565,3 +565,65 @@ TEST_CASE("characters moved into a std::vector deform bit for bit as unmoved one
     springing += std::abs(moved[0].deformers().stretch(l));
   CHECK(springing > 1e-3f);
 }
+
+TEST_CASE("the full rig: each limb reaches a far target with its own lattices; nearest_reach_effector picks the limb") {
+  const deform::Model model = deform::builtin_character();
+  Character c(model, deform::builtin_full_rig(model));
+  const deform::Skeleton& s = c.skeleton();
+  const std::int32_t hand_l = s.find("hand_l"), hand_r = s.find("hand_r"), foot_l = s.find("foot_l"),
+                     foot_r = s.find("foot_r");
+  CHECK(deform::reach_effectors(c) == std::vector<std::int32_t>{hand_l, hand_r, foot_l, foot_r});
+  // The left-arm rig reaches with its one hand.
+  CHECK(deform::reach_effectors(deform::make_builtin_character()) == std::vector<std::int32_t>{hand_l});
+  CHECK(deform::reach_effectors(Character(deform::builtin_character())).empty());
+  CHECK(deform::nearest_reach_effector(Character(deform::builtin_character()), glm::vec3(1.0f)) == -1);
+
+  CHECK(deform::nearest_reach_effector(c, {1.3f, 1.6f, 0.4f}) == hand_l);
+  CHECK(deform::nearest_reach_effector(c, {-1.3f, 1.6f, 0.4f}) == hand_r);
+  CHECK(deform::nearest_reach_effector(c, {0.5f, 0.0f, 0.6f}) == foot_l);
+  CHECK(deform::nearest_reach_effector(c, {-0.5f, 0.2f, 0.6f}) == foot_r);
+  CHECK(deform::nearest_reach_effector(c, {0.0f, 3.0f, 0.0f}) == hand_l);  // a tie between the hands: the lower id
+  CHECK(deform::nearest_reach_effector(c, {NAN, 0.0f, 0.0f}) == -1);
+
+  struct Limb {
+    std::int32_t effector;
+    const char* top;     // the limb's first lattice bone
+    glm::vec3 direction;  // from the top of the limb toward the target
+  };
+  const Limb limbs[] = {{hand_l, "upperarm_l", {1.0f, 0.3f, 0.3f}},
+                        {hand_r, "upperarm_r", {-1.0f, 0.3f, 0.3f}},
+                        {foot_l, "thigh_l", {0.3f, -1.0f, 0.6f}},
+                        {foot_r, "thigh_r", {-0.3f, -1.0f, 0.6f}}};
+  for (const Limb& limb : limbs) {
+    CAPTURE(s.bone(limb.effector).name);
+    rest(c);
+    const glm::vec3 top = c.bone_position(s.find(limb.top));
+    const float length = glm::length(c.bone_position(limb.effector) - top);
+    const glm::vec3 target = top + 1.4f * length * glm::normalize(limb.direction);
+    CHECK(deform::nearest_reach_effector(c, target) == limb.effector);
+    const deform::ReachResult result = c.reach(limb.effector, target);
+    REQUIRE(result.status);
+    CHECK(result.residual > 0.05f);
+    CHECK(result.stretch > 0.0f);
+    CHECK(result.distance <= 0.01f * result.residual);
+    run_for(c, 4.0, 1.0f / 60.0f);
+    CHECK(glm::length(c.bone_position(limb.effector) - target) <= 0.01f * result.residual);
+    CHECK(c.stretch() == doctest::Approx(result.stretch).epsilon(0.01));
+    // The chain starts at the limb's top (the clavicle; a leg's at the thigh, not the hips): the body stays put.
+    CHECK(s.is_ancestor(c.reach_chain().front(), s.find(limb.top)));
+    CHECK(c.reach_chain().front() != 0);
+    CHECK(c.pose().rotations[0] == s.bind_pose().rotations[0]);
+    // Only this limb's two upper lattices stretch (the one on the effector itself does not).
+    for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l) {
+      const std::int32_t bone = c.deformers().spec(l).bone;
+      const bool stretched = bone != limb.effector && s.is_ancestor(bone, limb.effector);
+      CAPTURE(c.deformers().spec(l).name);
+      CHECK((c.deformers().stretch(l) > 1e-3f) == stretched);
+    }
+    // The chain's joints stay within their limits.
+    for (const std::int32_t b : c.reach_chain().first(c.reach_chain().size() - 1)) {
+      CHECK(deform::within_limits(deform::euler_from_quat(c.pose().rotations[std::size_t(b)]), s.bone(b).limits, 0.05f));
+    }
+    c.release();
+  }
+}

@@ -165,8 +165,30 @@ expect_equal("exit status of a clip and a target" "${rc}" 0)
 expect_between(1.14 1.26 samples 28 effector 0)
 expect_between(1.54 1.66 samples 28 effector 1)
 
+# Every built-in clip plays; the effector (the left hand) moves with it.
+foreach(name idle run wave)
+  deform(simulate --builtin --clip ${name} --inertia 0.5 --seconds 1 --dt 0.1)
+  expect_equal("exit status of the ${name} clip" "${rc}" 0)
+  string(JSON count LENGTH "${out}" samples)
+  expect_equal("sample count of the ${name} clip" "${count}" 11)
+endforeach()
+# A rig file on the built-in character has its clips too: the right arm's lattices (the full rig's right arm) wave
+# while the right hand reaches out to the right, beyond its length.
+file(WRITE "${WORK}/right-arm.rig.json" [=[
+{"rig": 1, "model": "builtin",
+ "reach": {"effector": "hand_r", "root": "clavicle_r"},
+ "lattices": [{"name": "upperarm_r", "bone": "upperarm_r"},
+              {"name": "forearm_r", "bone": "forearm_r"},
+              {"name": "hand_r", "bone": "hand_r"}]}
+]=])
+deform(simulate "${WORK}/right-arm.rig.json" --clip wave --target -1.2,1.6,0.3 --release-at 3 --seconds 2 --dt 0.05)
+expect_equal("exit status of a rig file on the built-in character with a clip" "${rc}" 0)
+expect_between(-1.26 -1.14 samples 40 effector 0)
+expect_between(1.54 1.66 samples 40 effector 1)
+expect_between(0.2 1 samples 40 stretch)
+
 # --- bad usage and bad input: exit 2 ---
-expect_invalid("no clip named 'run' (the model has 'walk')" --builtin --clip run)
+expect_invalid("no clip named 'jump' (the model has 'idle', 'walk', 'run', 'wave')" --builtin --clip jump)
 expect_invalid("--inertia" --builtin --clip walk --inertia 2)
 expect_invalid("--target" --builtin)
 expect_invalid("either --builtin or one RIG" --target 1,2,3)

@@ -49,6 +49,12 @@ std::vector<glm::mat4> world_of(const deform::Pose& pose) {
   return world;
 }
 
+// The angle between two rotations (radians), accurate near 0 (acos of their dot product is not, in float).
+float angle_between(glm::quat a, glm::quat b) {
+  const glm::quat d = glm::conjugate(a) * b;
+  return 2.0f * std::atan2(glm::length(glm::vec3(d.x, d.y, d.z)), std::abs(d.w));
+}
+
 std::string data_path(const char* file) { return std::string(DEFORM_SOURCE_DIR) + "/samples/data/" + file; }
 
 }  // namespace
@@ -329,4 +335,135 @@ TEST_CASE("samples/data/builtin.* hold exactly the character the library builds"
 #else
   CHECK(std::filesystem::file_size(data_path("builtin.png")) > 1000);
 #endif
+}
+
+TEST_CASE("clips: idle, walk, run and wave, smooth loops within the limits") {
+  const Model& m = character();
+  const deform::Skeleton& s = m.skeleton;
+  const std::vector<deform::Animation> clips = deform::builtin_clips(m);
+  REQUIRE(clips.size() == 4);
+  const char* names[] = {"idle", "walk", "run", "wave"};
+  for (std::size_t c = 0; c < clips.size(); ++c) CHECK(clips[c].name == names[c]);
+  CHECK(deform::find_clip(clips, "run") == 2);
+
+  // builtin_walk() is the list's walk, key for key (the benchmarks and tests that pin it keep their numbers).
+  const deform::Animation walk = deform::builtin_walk(m);
+  REQUIRE(walk.channels.size() == clips[1].channels.size());
+  for (std::size_t c = 0; c < walk.channels.size(); ++c) {
+    CHECK(walk.channels[c].bone == clips[1].channels[c].bone);
+    CHECK(walk.channels[c].rotation.values == clips[1].channels[c].rotation.values);
+    CHECK(walk.channels[c].rotation.out_tangents == clips[1].channels[c].rotation.out_tangents);
+    CHECK(walk.channels[c].translation.values == clips[1].channels[c].translation.values);
+  }
+
+  for (const deform::Animation& clip : clips) {
+    INFO(clip.name);
+    CHECK(clip.loop);
+    CHECK(clip.duration > 0.0f);
+    CHECK_NOTHROW(clip.validate(s.bone_count(), m.name));
+    CHECK(clip.channels.size() >= 7);
+    for (const deform::Channel& channel : clip.channels) {
+      INFO(s.bone(channel.bone).name);
+      for (const auto* track : {&channel.rotation}) {
+        if (track->times.empty()) continue;
+        CHECK(track->interpolation == deform::Interpolation::cubic_spline);
+        CHECK(track->times.front() == 0.0f);
+        CHECK(track->times.back() == clip.duration);
+        // A loop: the last key is the first, tangents included, so the motion is C¹ across the wrap.
+        CHECK(track->values.front() == track->values.back());
+        CHECK(track->out_tangents.front() == track->in_tangents.back());
+        CHECK(track->times.size() >= 17);
+      }
+    }
+    // Sampled anywhere, the pose is within the limits: set_pose's clamp leaves it (to the clamp's own rounding;
+    // the walk's thigh touches its 110° limit at one key, the other clips keep a margin of a degree or more).
+    deform::Pose pose = s.bind_pose();
+    deform::SamplingJob sampling;
+    sampling.animation = &clip;
+    sampling.rotations = pose.rotations;
+    sampling.translations = pose.translations;
+    float largest_change = 0.0f, largest_motion = 0.0f;
+    const deform::Pose first = [&] {
+      sampling.time = 0.0f;
+      REQUIRE(sampling.run());
+      return pose;
+    }();
+    for (int n = 0; n <= 400; ++n) {
+      sampling.time = clip.duration * float(n) / 400.0f;
+      REQUIRE(sampling.run());
+      deform::Pose clamped = pose;
+      for (const deform::Channel& channel : clip.channels) {
+        const auto b = std::size_t(channel.bone);
+        s.clamp_to_limits(clamped, channel.bone);
+        const float change = angle_between(clamped.rotations[b], pose.rotations[b]);
+        largest_change = std::max(largest_change, change);
+        const float motion = angle_between(first.rotations[b], pose.rotations[b]);
+        largest_motion = std::max(largest_motion, motion);
+        CHECK(deform::within_limits(deform::euler_within_limits(pose.rotations[b], s.bone(channel.bone).limits),
+                                    s.bone(channel.bone).limits));
+      }
+    }
+    CHECK(glm::degrees(largest_change) < 0.01f);
+    CHECK(glm::degrees(largest_motion) > 5.0f);  // it moves
+    // Smooth: no kick at the keys or the wrap — the angular velocity just before and after any time agrees.
+    const float h = 1e-3f;
+    auto rotation_at = [&](float t, std::size_t b) {
+      sampling.time = t;
+      REQUIRE(sampling.run());
+      return pose.rotations[b];
+    };
+    float largest_jump = 0.0f, largest_speed = 0.0f;
+    for (const deform::Channel& channel : clip.channels) {
+      const auto b = std::size_t(channel.bone);
+      if (channel.rotation.times.empty()) continue;
+      for (const float t : channel.rotation.times) {
+        const glm::quat q = rotation_at(t, b);
+        glm::quat before = rotation_at(t - h, b), after = rotation_at(t + h, b);
+        if (glm::dot(before, q) < 0.0f) before = -before;
+        if (glm::dot(after, q) < 0.0f) after = -after;
+        const glm::quat in = (q - before) / h, out = (after - q) / h;
+        largest_jump = std::max(largest_jump, glm::length(glm::vec4(out.x - in.x, out.y - in.y, out.z - in.z, out.w - in.w)));
+        largest_speed = std::max(largest_speed, glm::length(glm::vec4(out.x, out.y, out.z, out.w)));
+      }
+    }
+    CHECK(largest_jump < 0.05f * largest_speed);
+  }
+}
+
+TEST_CASE("builtin_full_rig: builtin_rig's arm lattices, then the right arm and both legs, every one binding points") {
+  const Model& m = character();
+  const deform::Rig arm = deform::builtin_rig(m), full = deform::builtin_full_rig(m);
+  REQUIRE(arm.lattices.size() == 3);
+  REQUIRE(full.lattices.size() == 12);
+  for (std::size_t l = 0; l < 3; ++l) CHECK(full.lattices[l] == arm.lattices[l]);
+  const char* bones[] = {"upperarm_l", "forearm_l", "hand_l", "upperarm_r", "forearm_r", "hand_r",
+                         "thigh_l",    "shin_l",    "foot_l", "thigh_r",    "shin_r",    "foot_r"};
+  for (std::size_t l = 0; l < 12; ++l) {
+    INFO(bones[l]);
+    CHECK(full.lattices[l].name == bones[l]);
+    CHECK(full.lattices[l].bone == id(bones[l]));
+    CHECK(full.lattices[l].elastic == arm.lattices[0].elastic);
+  }
+  CHECK(full.reach_effector == arm.reach_effector);
+  CHECK(full.reach_root == arm.reach_root);
+  CHECK(full.model.builtin);
+
+  const deform::Character c(deform::builtin_character(), full);
+  REQUIRE(c.deformers().lattice_count() == 12);
+  for (std::size_t l = 0; l < 12; ++l) {
+    INFO(bones[l]);
+    CHECK(c.deformers().bound_count(l) > 20);
+  }
+  // Each limb's lattices nest like the left arm's: upper, then lower, then the end.
+  for (std::size_t limb = 0; limb < 4; ++limb) {
+    CHECK(c.deformers().parent(3 * limb) == -1);
+    CHECK(c.deformers().parent(3 * limb + 1) == std::int32_t(3 * limb));
+    CHECK(c.deformers().parent(3 * limb + 2) == std::int32_t(3 * limb + 1));
+  }
+  // The mirror: the right limbs bind about as many points as the left ones (the weights' ties go to the lower bone
+  // id, so not exactly as many).
+  for (const std::size_t l : {0, 1, 2, 6, 7, 8}) {
+    INFO(bones[l]);
+    CHECK(double(c.deformers().bound_count(l + 3)) == doctest::Approx(double(c.deformers().bound_count(l))).epsilon(0.05));
+  }
 }

@@ -38,8 +38,9 @@ constexpr const char* usage =
     "  --builtin            the built-in character with its default rig (three lattices on the left arm)\n"
     "  RIG                  a rig file (docs/formats.md) whose \"model\" names the model\n"
     "  --target X,Y,Z       world-space target of the effector (metres for the built-in character)\n"
-    "  --clip NAME          play this clip of the model from t = 0 (the built-in character has \"walk\"; an\n"
-    "                       imported model, its file's clips), looping as the clip says\n"
+    "  --clip NAME          play this clip of the model from t = 0, looping as the clip says: the built-in\n"
+    "                       character (--builtin, or a rig file on it) has \"idle\", \"walk\", \"run\" and \"wave\";\n"
+    "                       an imported model, its file's clips\n"
     "  --release-at T       seconds after the reach when the stretch is released (default 1.5); a step that\n"
     "                       crosses T is split there\n"
     "  --seconds S          length of the simulation (default 3)\n"
@@ -87,13 +88,14 @@ int run(const std::vector<std::string>& argv) {
     model_loading::LoadedModel loaded = model_loading::load_model({});
     rig = model_loading::starting_rig(loaded);
     model = std::move(loaded.model);
-    clips.push_back(deform::builtin_walk(model));
+    clips = deform::builtin_clips(model);
   } else {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
-    model_loading::LoadedModel loaded = load_rig_model(deform::parse_rig_model(text, path), path);
+    const deform::RigModel named = deform::parse_rig_model(text, path);
+    model_loading::LoadedModel loaded = load_rig_model(named, path);
     model = std::move(loaded.model);
-    clips = std::move(loaded.clips);
+    clips = named.builtin ? deform::builtin_clips(model) : std::move(loaded.clips);
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
   }
   const deform::Animation* clip = nullptr;

@@ -197,8 +197,9 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   }
 
   // The chain, rebuilt only for another effector or setting (its root depends on the effector alone): two bones up
-  // for the two-bone solver; else the rig's root, else the parent of the topmost lattice bone above the effector, else
-  // two bones up.
+  // for the two-bone solver; else the rig's root, else the parent of the topmost lattice bone above the effector —
+  // that bone itself when its parent is the skeleton's root, which places the whole body (a leg's chain starts at the
+  // thigh, not the hips: turning the hips would spin the character to point the leg) — else two bones up.
   const bool two_bone = reach_solver == ReachSolver::two_bone;
   if (effector != chain_effector_ || reach_limits != chain_limits_ || reach_solver != chain_solver_) {
     std::int32_t root = effector == rig_.reach_effector && !two_bone ? rig_.reach_root : -1;
@@ -215,7 +216,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
           if (hierarchy_.spec(l).bone == b) root = b;
         }
       }
-      if (root > 0) root = skel.bone(root).parent;
+      if (root > 0 && skel.bone(root).parent > 0) root = skel.bone(root).parent;
       if (root < 0) {
         root = skel.bone(effector).parent;
         if (skel.bone(root).parent >= 0) root = skel.bone(root).parent;

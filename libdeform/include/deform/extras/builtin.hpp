@@ -31,13 +31,25 @@ DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
 
 // The rig of the built-in character (builtin_character(); model.builtin set): three lattices on the left arm — upper
 // arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l. Throws deform::Error when `model`
-// lacks those bones.
+// lacks those bones. Tests, benchmarks and docs pin numbers from it: builtin_full_rig() is the rig with every limb.
 DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
+// The built-in rig on every limb: builtin_rig()'s three left-arm lattices first (same names, same order), then the
+// same three mirrored on the right arm (upperarm_r, forearm_r, hand_r) and three on each leg (thigh, shin, foot: _l,
+// then _r), every one with builtin_rig()'s springs; reach chain clavicle_l → hand_l as there. Character::reach with
+// hand_l, hand_r, foot_l or foot_r stretches that limb's two upper lattices (nearest_reach_effector picks the limb
+// for a target); a foot's chain starts at the hips, the root. Throws deform::Error when `model` lacks those bones.
+DEFORM_EXTRAS_API Rig builtin_full_rig(const Model& model);
 // A walk for the built-in character (builtin_character()): "walk", 1 s, looping, cubic-spline keys every 1/16 s
 // (tangents from the swing itself: smooth through the keys) on the spine, neck, arms and legs (within their limits)
 // and a bob of the hips; for SamplingJob, the benchmarks of a whole
 // frame and a crowd. Throws deform::Error when `model` lacks those bones.
 DEFORM_EXTRAS_API Animation builtin_walk(const Model& model);
+// Every clip of the built-in character, made like builtin_walk() (looping, cubic-spline keys with the motion's own
+// derivatives as tangents, 16 keys per swing or more, every angle within the bones' limits, so set_pose's clamp
+// leaves a sampled pose unchanged): "idle" (4 s: breathing, arms hanging), "walk" (builtin_walk()), "run" (0.7 s:
+// leaning forward, knees high, arms pumping) and "wave" (2 s: the right hand raised, waving at 1.5 Hz), in that
+// order. Throws deform::Error when `model` lacks their bones. Allocates the clips.
+DEFORM_EXTRAS_API std::vector<Animation> builtin_clips(const Model& model);
 // The built-in character with builtin_rig(): the Character every sample starts from.
 DEFORM_EXTRAS_API Character make_builtin_character();
 
