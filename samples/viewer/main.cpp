@@ -63,7 +63,7 @@ const char* usage =
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
     "elbow's hint); right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
-    "L the lattices, G the GPU lattices, R resets, Esc quits.\n";
+    "L the lattices, G the GPU lattices, R resets, C resets the camera, Esc quits.\n";
 
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, weight_map;
@@ -225,6 +225,8 @@ class Viewer {
     camera_.distance = extent * 1.6f;
     camera_.yaw = 0.35f;
     camera_.pitch = 0.12f;
+    camera_.floor = b.min.y + 0.01f * height;  // the eye stays just above the floor
+    start_camera_ = camera_;
     pick_radius_ = extent;
 
     floor_renderer_.create(floor_mesh_);
@@ -496,6 +498,7 @@ class Viewer {
     if (key == GLFW_KEY_L) show_lattices_ = !show_lattices_;
     if (key == GLFW_KEY_R) rebuild_character();
     if (key == GLFW_KEY_G) set_gpu(!gpu_);
+    if (key == GLFW_KEY_C) camera_ = start_camera_;
   }
 
   // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
@@ -711,6 +714,7 @@ class Viewer {
   std::vector<std::unique_ptr<sample::MeshRenderer>> prop_renderers_;
   sample::OverlayRenderer overlay_;
   sample::OrbitCamera camera_;
+  sample::OrbitCamera start_camera_;  // C returns here
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
   bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
