@@ -279,6 +279,12 @@ class Viewer {
     if (reaching_) character_->release();
     reaching_ = false;
   }
+  // A frame that took `took` seconds was simulated as `simulated` (the main loop's clamp): the panel says so.
+  void frame_clamped(float took, float simulated) {
+    long_frame_ms_ = 1000.0f * took;
+    long_frame_simulated_ms_ = 1000.0f * simulated;
+    long_frame_at_ = Clock::now();
+  }
   glm::vec3 effector_position() const {
     return effector_ >= 0 ? transform_point(character_world(), character_->bone_position(effector_)) : glm::vec3(0.0f);
   }
@@ -291,6 +297,10 @@ class Viewer {
     ImGui::Text("%s: %zu points, %zu bones", base_model_.name.c_str(), base_model_.mesh.point_count(),
                 base_model_.skeleton.bone_count());
     ImGui::Text("frame %.2f ms, deformation %.3f ms", frame_ms, deform_ms_);
+    // A frame longer than the clamp is simulated short: say so for a while rather than show it as slow motion.
+    if (Clock::now() - long_frame_at_ < std::chrono::seconds(2))
+      ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "frame took %.0f ms: simulated %.0f ms", long_frame_ms_,
+                         long_frame_simulated_ms_);
     ImGui::TextWrapped("Left click/drag: reach. Right drag: orbit. Wheel: zoom.");
     ImGui::Separator();
     int method = character_->skinning == deform::SkinningMethod::dqs;
@@ -729,6 +739,8 @@ class Viewer {
   float soften_ = 0.0f;
   std::vector<glm::quat> world_rotations_;  // draw_swing_twist_cones' scratch
   int clip_ = -1;
+  Clock::time_point long_frame_at_{};  // the last frame longer than the clamp: when, how long, simulated as
+  float long_frame_ms_ = 0.0f, long_frame_simulated_ms_ = 0.0f;
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;
   glm::vec3 target_{0.0f};
@@ -772,15 +784,20 @@ int main(int argc, char** argv) {
                   viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z);
       return 0;
     }
+    // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one
+    // big jump of the clip and the springs; the panel reports each such frame instead of it passing as slow motion.
+    constexpr float max_dt = 0.1f;
     auto last = Clock::now();
     float frame_ms = 16.0f;
     while (!window.should_close()) {
       const auto now = Clock::now();
-      const float dt = std::min(0.1f, std::chrono::duration<float>(now - last).count());
+      const float took = std::chrono::duration<float>(now - last).count();
+      const float dt = std::min(max_dt, took);
       last = now;
-      frame_ms = 0.95f * frame_ms + 0.05f * dt * 1000.0f;
+      frame_ms = 0.95f * frame_ms + 0.05f * took * 1000.0f;
       window.begin_frame();
       if (window.input().key_pressed == GLFW_KEY_ESCAPE) break;
+      if (took > max_dt) viewer.frame_clamped(took, dt);
       viewer.frame(dt);
       viewer.panel(frame_ms);
       window.end_frame();
