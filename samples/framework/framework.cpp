@@ -1,6 +1,7 @@
 #include "framework.hpp"  // epoxy first: it must precede every other GL header
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -174,6 +175,10 @@ void OrbitCamera::handle(const Input& input, glm::ivec2 viewport) {
     pitch = std::clamp(pitch + input.mouse_delta.y * scale * 3.0f, -1.5f, 1.5f);
   }
   if (input.scroll != 0.0f) distance = std::clamp(distance * std::pow(0.88f, input.scroll), 0.1f, 100.0f);
+  // Above the floor: the target first, then the eye (target.y + distance · sin(pitch) >= floor, which a target on
+  // or above it always allows), after every kind of move, since zooming in can lift a low eye's bound too.
+  target.y = std::max(target.y, floor);
+  pitch = std::max(pitch, std::asin(std::clamp((floor - target.y) / distance, -1.0f, 0.0f)));
 }
 
 glm::vec3 OrbitCamera::eye() const {

@@ -4,6 +4,7 @@
 // interleaved buffer (position, normal, UV), line/point overlays, and offscreen PNG screenshots for headless runs.
 // All OpenGL of the project lives here and in deform::gpu (libdeform/src/gpu), which the GPU paths use.
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -81,6 +82,9 @@ struct OrbitCamera {
   float yaw = 0.5f;     // radians about +Y
   float pitch = 0.15f;  // radians above the horizon
   float fov_y = 0.8f;   // radians
+  // The height (world y) the eye and target stay above: handle() lowers the pitch no further than keeps the eye
+  // there (a scene with a floor is never seen from under it) and pans the target no lower. -inf: no floor.
+  float floor = -std::numeric_limits<float>::infinity();
 
   void handle(const Input& input, glm::ivec2 viewport);
   glm::vec3 eye() const;

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Smoke test of the viewer under Xvfb with Mesa's software renderer: a frame before a reach and one after it,
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
-# (non-bare) screenshot; one with a bone's weight map; a reach with a pole and one with swing-twist limits; the frame after the reach again with the lattices on the GPU (--gpu), which must be the same
-# picture (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are
-# there).  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
+# (non-bare) screenshot; the built-in walk (--clip walk) alone, with a reach and in full with a spring chain; one
+# with a bone's weight map; a reach with a pole and one with swing-twist limits; the frame after the reach again with
+# the lattices on the GPU (--gpu), which must be the same picture (skipped without OpenGL 4.3); and the up axis a
+# Z-up FBX declares (when Debian's assimp-testmodels are there).  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
 mkdir -p "$work"
@@ -21,6 +22,19 @@ run --bare --screenshot "$work/near_pole.png" --frames 40 --reach 0.3,1.15,0.3 -
 run --screenshot "$work/swing_twist.png" --frames 30 --reach 0.3,1.15,0.3 --at 2 --pole 0.3,0.6,1.5 \
   --limits swing-twist >/dev/null
 test -s "$work/swing_twist.png"
+
+# The built-in walk with the jiggle (lattices with inertia): another pose than the bind pose and another picture
+# than the rigid walk (--inertia 0); with a reach while walking, another again (png_check's coverage bound also
+# catches a flung, exploded arm); and in full, the rig's spring chain (right fingers) drawn and a reach held.
+rig=$(cd "$(dirname "$0")/../data" && pwd)/walk.rig.json
+run --bare --screenshot "$work/walk.png" --frames 40 --clip walk
+"$check" "$work/before.png" "$work/walk.png"
+run --bare --screenshot "$work/walk_rigid.png" --frames 40 --clip walk --inertia 0  # the jiggle shows
+"$check" "$work/walk_rigid.png" "$work/walk.png"
+run --bare --screenshot "$work/walk_reach.png" --frames 40 --clip walk --reach 1.3,1.6,0.4 --at 2
+"$check" "$work/walk.png" "$work/walk_reach.png"
+run --screenshot "$work/walk_full.png" --frames 40 --clip walk --rig "$rig" --reach 1.3,1.6,0.4 --at 2 >/dev/null
+test -s "$work/walk_full.png"
 
 # The weight map of one bone (points coloured by its weights, over the full picture).
 run --screenshot "$work/weight_map.png" --frames 5 --weight-map upperarm_l >/dev/null

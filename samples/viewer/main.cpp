@@ -2,8 +2,13 @@
 // IK and, when it is out of reach, stretches elastically; let go and it springs back. Everything deforming is the
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
-//   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--prop P.obj]... [--gpu] [--up y|z]
+//   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
+//                 [--prop P.obj]... [--gpu] [--up y|z]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
+//
+// Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
+// the clip now and a millisecond later (Character::set_pose(pose, later, lead)), so the lattices' inertia and the
+// rig's spring chains follow the motion between frames; a reach is solved again on every frame's pose.
 //
 // GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
 // (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
@@ -49,12 +54,16 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 const char* usage =
-    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json] [--clip NAME|#N]] [--prop P.obj]...\n"
+    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]\n"
+    "                     [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
+    "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
+    "its files in samples/data), an imported file's own. --inertia F: how much the lattices lag behind the\n"
+    "playing clip, [0, 1] (default 1; the panel's \"jiggle\").\n"
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
@@ -63,12 +72,13 @@ const char* usage =
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
     "elbow's hint); right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
-    "L the lattices, G the GPU lattices, R resets, Esc quits.\n";
+    "L the lattices, G the GPU lattices, R resets, C resets the camera, Esc quits.\n";
 
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, weight_map;
   std::vector<std::string> props;
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
+  float inertia = 1.0f;  // the lattices' inertia while a clip plays
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;   // start with the lattices evaluated on the GPU
   bool swing_twist = false;  // reach with swing-twist joint limits
@@ -110,6 +120,12 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--rig") o.rig = next();
     else if (a == "--prop") o.props.push_back(next());
     else if (a == "--clip") o.clip = next();
+    else if (a == "--inertia") {
+      const std::string text = next();
+      char* end = nullptr;
+      o.inertia = std::strtof(text.c_str(), &end);
+      if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f)) fail("--inertia: '" + text + "' is not in [0, 1]");
+    }
     else if (a == "--weight-map") o.weight_map = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
@@ -183,6 +199,17 @@ class Viewer {
         gpu_available_(window.has_compute() && deform::GpuBezierLattice::supported()) {
     model_loading::LoadedModel loaded = load(options);
     clips_ = std::move(loaded.clips);
+    // A model with no clips of its own but the built-in character's bones (it, or its files in samples/data) gets the
+    // built-in walk; builtin_walk refuses any other skeleton, which then simply has no clip.
+    if (clips_.empty() && !loaded.imported) {
+      try {
+        clips_.push_back(deform::builtin_walk(loaded.model));
+      } catch (const deform::Error&) {
+      }
+    }
+    clip_names_.push_back("(none)");  // the panel's list, made once
+    for (const deform::Animation& c : clips_) clip_names_.push_back(c.name.empty() ? "(unnamed)" : c.name.c_str());
+    inertia_ = options.inertia;
     base_model_ = loaded.model;
     rig_ = options.rig.empty()
                ? model_loading::starting_rig(loaded)
@@ -194,9 +221,10 @@ class Viewer {
       weight_bone_ = base_model_.skeleton.find(options.weight_map);
       if (weight_bone_ < 0) fail("--weight-map: no bone '" + options.weight_map + "'");
     }
-    if (!options.clip.empty()) {  // play an imported clip from the start: by name, or "#N" for the N-th
-      clip_ = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
-      if (clip_ < 0 || clip_ >= int(clips_.size())) fail(options.model + ": no clip '" + options.clip + "'");
+    if (!options.clip.empty()) {  // play a clip from the start: by name, or "#N" for the N-th
+      const int clip = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
+      if (clip < 0 || clip >= int(clips_.size())) fail(loaded.source + ": no clip '" + options.clip + "'");
+      select_clip(clip);
     }
 
     // The scene (the thesis' version 1): the world holds the floor, the character and the props. The character node
@@ -225,6 +253,8 @@ class Viewer {
     camera_.distance = extent * 1.6f;
     camera_.yaw = 0.35f;
     camera_.pitch = 0.12f;
+    camera_.floor = b.min.y + 0.01f * height;  // the eye stays just above the floor
+    start_camera_ = camera_;
     pick_radius_ = extent;
 
     floor_renderer_.create(floor_mesh_);
@@ -252,17 +282,30 @@ class Viewer {
     camera_.handle(in, window_.framebuffer_size());
     handle_keys(in.key_pressed);
     handle_mouse(in);
-    if (playing_ && clip_ >= 0) {
-      clip_time_ += dt;
-      deform::Pose pose = character_->skeleton().bind_pose();
-      deform::SamplingJob sampling;
-      sampling.animation = &clips_[std::size_t(clip_)];
-      sampling.time = clip_time_;
-      sampling.rotations = pose.rotations;
-      sampling.translations = pose.translations;
-      sampling.run();
-      character_->set_pose(pose);
-      if (reaching_) character_->reach(effector_, target_);
+    if (clip_ >= 0) {
+      // The pose now and where it heads a millisecond later (paused: nowhere, so the still body gets no velocity);
+      // then the reach again, on this frame's pose.
+      constexpr float lead = 1e-3f;
+      const deform::Animation& clip = clips_[std::size_t(clip_)];
+      const float rate = playing_ ? speed_ : 0.0f;
+      clip_time_ = clip.local_time(clip_time_ + dt * rate);  // kept within the clip: a small float stays precise
+      sample_clip(clip_time_, pose_);
+      sample_clip(clip_time_ + lead * rate, later_);
+      character_->set_pose(pose_, later_, lead);
+      if (reaching_) {
+        // Without the stall escape: its random restarts land on another arm pose from one frame to the next (joints
+        // turning by up to 1.7 rad between frames of the walk), a flicker that lattices with inertia turn into a
+        // flung, exploding arm. Solved afresh on each frame's pose, CCD alone moves the arm smoothly.
+        const bool escape = character_->ik.escape_stalls;
+        character_->ik.escape_stalls = false;
+        last_reach_ = character_->reach(effector_, target_);
+        character_->ik.escape_stalls = escape;
+      }
+    }
+    if (cut_) {  // a new clip, a rebuilt character, a reach begun or let go: the pose jumps, which a zero step takes
+                 // as a cut, not motion
+      character_->update(0.0f);
+      cut_ = false;
     }
     const auto start = Clock::now();
     character_->update(dt);
@@ -274,8 +317,14 @@ class Viewer {
   // Headless scripting: reach for a world point, let go.
   void reach_world(glm::vec3 world_target) { begin_reach(world_target); }
   void release() {
-    if (reaching_) character_->release();
+    if (reaching_) character_->release(), cut_ = true;  // the arm goes back to the clip's pose at once (see begin_reach)
     reaching_ = false;
+  }
+  // A frame that took `took` seconds was simulated as `simulated` (the main loop's clamp): the panel says so.
+  void frame_clamped(float took, float simulated) {
+    long_frame_ms_ = 1000.0f * took;
+    long_frame_simulated_ms_ = 1000.0f * simulated;
+    long_frame_at_ = Clock::now();
   }
   glm::vec3 effector_position() const {
     return effector_ >= 0 ? transform_point(character_world(), character_->bone_position(effector_)) : glm::vec3(0.0f);
@@ -289,6 +338,10 @@ class Viewer {
     ImGui::Text("%s: %zu points, %zu bones", base_model_.name.c_str(), base_model_.mesh.point_count(),
                 base_model_.skeleton.bone_count());
     ImGui::Text("frame %.2f ms, deformation %.3f ms", frame_ms, deform_ms_);
+    // A frame longer than the clamp is simulated short: say so for a while rather than show it as slow motion.
+    if (Clock::now() - long_frame_at_ < std::chrono::seconds(2))
+      ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "frame took %.0f ms: simulated %.0f ms", long_frame_ms_,
+                         long_frame_simulated_ms_);
     ImGui::TextWrapped("Left click/drag: reach. Right drag: orbit. Wheel: zoom.");
     ImGui::Separator();
     int method = character_->skinning == deform::SkinningMethod::dqs;
@@ -368,15 +421,44 @@ class Viewer {
     }
     if (!clips_.empty()) {
       ImGui::Separator();
-      std::vector<const char*> names{"(bind pose)"};
-      for (const auto& c : clips_) names.push_back(c.name.empty() ? "(unnamed)" : c.name.c_str());
       int selected = clip_ + 1;
-      if (ImGui::Combo("clip", &selected, names.data(), int(names.size()))) {
-        clip_ = selected - 1;
-        clip_time_ = 0.0f;
-        if (clip_ < 0) character_->set_pose(character_->skeleton().bind_pose());
+      if (ImGui::Combo("clip", &selected, clip_names_.data(), int(clip_names_.size()))) select_clip(selected - 1);
+      ImGui::BeginDisabled(clip_ < 0);
+      if (ImGui::Button(playing_ ? "pause" : "play")) playing_ = !playing_;
+      ImGui::SameLine();
+      ImGui::Text("%.2f s", clip_ >= 0 ? clip_time_ : 0.0f);
+      ImGui::SliderFloat("speed", &speed_, 0.0f, 2.0f, "%.2fx", ImGuiSliderFlags_AlwaysClamp);
+      // The jiggle: the lattices lag behind their bones while the clip plays (LatticeMotion::inertia).
+      bool motion = ImGui::Checkbox("jiggle", &jiggle_);
+      ImGui::SameLine();
+      ImGui::BeginDisabled(!jiggle_);
+      ImGui::SetNextItemWidth(140.0f);
+      motion |= ImGui::SliderFloat("inertia", &inertia_, 0.0f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+      ImGui::EndDisabled();
+      if (motion) apply_motion();
+      ImGui::EndDisabled();
+    }
+    deform::SpringChains& springs = character_->springs();
+    if (springs.chain_count() > 0) {  // the rig's spring chains, drawn in green with the skeleton
+      ImGui::Separator();
+      ImGui::Text("Spring chains (%zu)", springs.chain_count());
+      for (std::size_t c = 0; c < springs.chain_count(); ++c) {
+        // Tuned in the viewer's copy of the rig, so a rebuilt character keeps the settings; clamped, since
+        // set_settings throws on a value out of range (a ctrl+click can type one).
+        deform::SpringChainSpec& spec = rig_.spring_chains[c];
+        float gravity = glm::length(spec.gravity);
+        ImGui::PushID(int(c));
+        ImGui::TextDisabled("%s", spec.name.c_str());
+        bool tuned = ImGui::SliderFloat("frequency", &spec.frequency, 0.1f, 10.0f, "%.2f Hz",
+                                          ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);
+        tuned |= ImGui::SliderFloat("damping", &spec.damping_ratio, 0.0f, 2.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        if (ImGui::SliderFloat("gravity", &gravity, 0.0f, 20.0f, "%.2f m/s2", ImGuiSliderFlags_AlwaysClamp)) {
+          spec.gravity = -gravity * up_;  // pulls toward the model's down
+          tuned = true;
+        }
+        if (tuned) springs.set_settings(c, spec);
+        ImGui::PopID();
       }
-      ImGui::Checkbox("play", &playing_);
     }
     ImGui::Separator();
     ImGui::Text("Scene");
@@ -443,10 +525,46 @@ class Viewer {
     }
     reaching_ = false;
     effector_ = -1;
+    bind_pose_ = character_->skeleton().bind_pose();
+    pose_ = later_ = bind_pose_;  // sized once: sample_clip copies into them
+    cut_ = true;
+    apply_motion();
     if (max_stretch_ < 0.0f) max_stretch_ = character_->rig().max_stretch;
     apply_shape();
     apply_reach_settings();
     set_gpu(gpu_);
+  }
+
+  // Plays clip `clip` (-1: none, the bind pose) from its start.
+  void select_clip(int clip) {
+    clip_ = clip;
+    clip_time_ = 0.0f;
+    if (clip_ < 0) character_->set_pose(bind_pose_);
+    cut_ = true;
+    apply_motion();
+  }
+
+  // The clip at time t over the bind pose (bones without a channel keep it). No allocation: `into` is sized.
+  void sample_clip(float t, deform::Pose& into) const {
+    std::copy(bind_pose_.rotations.begin(), bind_pose_.rotations.end(), into.rotations.begin());
+    std::copy(bind_pose_.translations.begin(), bind_pose_.translations.end(), into.translations.begin());
+    deform::SamplingJob sampling;
+    sampling.animation = &clips_[std::size_t(clip_)];
+    sampling.time = t;
+    sampling.rotations = into.rotations;
+    sampling.translations = into.translations;
+    (void)sampling.run();  // cannot fail: the clips were validated against this skeleton when loaded
+  }
+
+  // The lattices' inertia: the panel's while a clip is chosen and jiggle is on, else none, so a reach on a still
+  // body is the plain rubber arm. The rig's gravity on the lattices is kept.
+  void apply_motion() {
+    const float inertia = clip_ >= 0 && jiggle_ ? inertia_ : 0.0f;
+    for (std::size_t l = 0; l < character_->deformers().lattice_count(); ++l) {
+      deform::LatticeMotion motion = character_->deformers().spec(l).motion;
+      motion.inertia = inertia;
+      character_->deformers().set_motion(l, motion);
+    }
   }
 
   // The panel's shape for every lattice (DeformerHierarchy::set_shape).
@@ -496,6 +614,7 @@ class Viewer {
     if (key == GLFW_KEY_L) show_lattices_ = !show_lattices_;
     if (key == GLFW_KEY_R) rebuild_character();
     if (key == GLFW_KEY_G) set_gpu(!gpu_);
+    if (key == GLFW_KEY_C) camera_ = start_camera_;
   }
 
   // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
@@ -545,6 +664,9 @@ class Viewer {
       last_reach_ = character_->reach(effector_, target_);
     }
     reaching_ = last_reach_.status.ok();
+    // The arm swings to the target within one frame: a cut, not motion. Taken as motion, a swing that fast flings
+    // lattices with inertia (a walking character's arm) far off their bones.
+    cut_ = true;
   }
 
   void handle_mouse(const sample::Input& in) {
@@ -635,6 +757,18 @@ class Viewer {
         overlay_.point(head, std::int32_t(b) == effector_ ? glm::vec3(1, 0.3f, 0.2f) : glm::vec3(1, 1, 1), 7.0f);
       }
     }
+    if (show_skeleton_) {  // the spring chains as simulated: first head, then each bone's tail
+      const deform::SpringChains& springs = character_->springs();
+      const glm::vec3 green(0.3f, 1.0f, 0.4f);
+      for (std::size_t c = 0; c < springs.chain_count(); ++c) {
+        const auto chain = springs.points(c);
+        for (std::size_t i = 0; i < chain.size(); ++i) {
+          const glm::vec3 p = transform_point(to_world, chain[i]);
+          if (i > 0) overlay_.line(transform_point(to_world, chain[i - 1]), p, green);
+          overlay_.point(p, green, 6.0f);
+        }
+      }
+    }
     if (reaching_) overlay_.point(transform_point(to_world, target_), glm::vec3(1.0f, 0.5f, 0.0f), 12.0f);
     if (show_skeleton_ && !options_.bare) draw_swing_twist_cones(to_world);
     if (use_pole_ && !options_.bare) {  // the pole gizmo: a point, and a line to the chain's middle while reaching
@@ -711,6 +845,7 @@ class Viewer {
   std::vector<std::unique_ptr<sample::MeshRenderer>> prop_renderers_;
   sample::OverlayRenderer overlay_;
   sample::OrbitCamera camera_;
+  sample::OrbitCamera start_camera_;  // C returns here
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
   bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
@@ -725,6 +860,14 @@ class Viewer {
   float soften_ = 0.0f;
   std::vector<glm::quat> world_rotations_;  // draw_swing_twist_cones' scratch
   int clip_ = -1;
+  Clock::time_point long_frame_at_{};  // the last frame longer than the clamp: when, how long, simulated as
+  float long_frame_ms_ = 0.0f, long_frame_simulated_ms_ = 0.0f;
+  std::vector<const char*> clip_names_;  // "(none)", then each clip's name (the panel's list)
+  deform::Pose bind_pose_, pose_, later_;  // the clip sampled now and a millisecond later, over the bind pose
+  float speed_ = 1.0f;                   // playback rate
+  bool jiggle_ = true;                   // lattices with inertia while a clip plays
+  float inertia_ = 1.0f;
+  bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;
   glm::vec3 target_{0.0f};
@@ -768,15 +911,20 @@ int main(int argc, char** argv) {
                   viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z);
       return 0;
     }
+    // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one
+    // big jump of the clip and the springs; the panel reports each such frame instead of it passing as slow motion.
+    constexpr float max_dt = 0.1f;
     auto last = Clock::now();
     float frame_ms = 16.0f;
     while (!window.should_close()) {
       const auto now = Clock::now();
-      const float dt = std::min(0.1f, std::chrono::duration<float>(now - last).count());
+      const float took = std::chrono::duration<float>(now - last).count();
+      const float dt = std::min(max_dt, took);
       last = now;
-      frame_ms = 0.95f * frame_ms + 0.05f * dt * 1000.0f;
+      frame_ms = 0.95f * frame_ms + 0.05f * took * 1000.0f;
       window.begin_frame();
       if (window.input().key_pressed == GLFW_KEY_ESCAPE) break;
+      if (took > max_dt) viewer.frame_clamped(took, dt);
       viewer.frame(dt);
       viewer.panel(frame_ms);
       window.end_frame();
