@@ -292,18 +292,11 @@ class Viewer {
       sample_clip(clip_time_, pose_);
       sample_clip(clip_time_ + lead * rate, later_);
       character_->set_pose(pose_, later_, lead);
-      if (reaching_) {
-        // Without the stall escape: its random restarts land on another arm pose from one frame to the next (joints
-        // turning by up to 1.7 rad between frames of the walk), a flicker that lattices with inertia turn into a
-        // flung, exploding arm. Solved afresh on each frame's pose, CCD alone moves the arm smoothly.
-        const bool escape = character_->ik.escape_stalls;
-        character_->ik.escape_stalls = false;
-        last_reach_ = character_->reach(effector_, target_);
-        character_->ik.escape_stalls = escape;
-      }
+      // The reach again, on this frame's pose: a reach held so follows its target smoothly (Character::reach).
+      if (reaching_) last_reach_ = character_->reach(effector_, target_);
     }
-    if (cut_) {  // a new clip, a rebuilt character, a reach begun or let go: the pose jumps, which a zero step takes
-                 // as a cut, not motion
+    if (cut_) {  // a new clip, a rebuilt character: the pose jumps, which a zero step takes as a cut, not motion
+                 // (a reach that begins or ends is one the character takes care of itself)
       character_->update(0.0f);
       cut_ = false;
     }
@@ -317,7 +310,7 @@ class Viewer {
   // Headless scripting: reach for a world point, let go.
   void reach_world(glm::vec3 world_target) { begin_reach(world_target); }
   void release() {
-    if (reaching_) character_->release(), cut_ = true;  // the arm goes back to the clip's pose at once (see begin_reach)
+    if (reaching_) character_->release();
     reaching_ = false;
   }
   // A frame that took `took` seconds was simulated as `simulated` (the main loop's clamp): the panel says so.
@@ -664,9 +657,6 @@ class Viewer {
       last_reach_ = character_->reach(effector_, target_);
     }
     reaching_ = last_reach_.status.ok();
-    // The arm swings to the target within one frame: a cut, not motion. Taken as motion, a swing that fast flings
-    // lattices with inertia (a walking character's arm) far off their bones.
-    cut_ = true;
   }
 
   void handle_mouse(const sample::Input& in) {
