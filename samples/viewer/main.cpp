@@ -200,10 +200,10 @@ class Viewer {
     model_loading::LoadedModel loaded = load(options);
     clips_ = std::move(loaded.clips);
     // A model with no clips of its own but the built-in character's bones (it, or its files in samples/data) gets the
-    // built-in walk; builtin_walk refuses any other skeleton, which then simply has no clip.
+    // built-in clips (idle, walk, run, wave); builtin_clips refuses any other skeleton, which then simply has none.
     if (clips_.empty() && !loaded.imported) {
       try {
-        clips_.push_back(deform::builtin_walk(loaded.model));
+        clips_ = deform::builtin_clips(loaded.model);
       } catch (const deform::Error&) {
       }
     }
@@ -211,9 +211,10 @@ class Viewer {
     for (const deform::Animation& c : clips_) clip_names_.push_back(c.name.empty() ? "(unnamed)" : c.name.c_str());
     inertia_ = options.inertia;
     base_model_ = loaded.model;
-    rig_ = options.rig.empty()
-               ? model_loading::starting_rig(loaded)
-               : deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count());
+    // The built-in character stretches whichever limb is nearest the click: its rig with lattices on every limb.
+    rig_ = !options.rig.empty() ? deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count())
+           : loaded.builtin     ? deform::builtin_full_rig(loaded.model)
+                                : model_loading::starting_rig(loaded);
     if (options.pole) pole_ = *options.pole, use_pole_ = true;
     if (options.swing_twist) reach_limits_ = deform::Character::JointLimits::swing_twist;
     rebuild_character();
@@ -637,16 +638,19 @@ class Viewer {
 
   void begin_reach(glm::vec3 world_target) {
     const glm::vec3 local = transform_point(glm::inverse(character_world()), world_target);
-    // The nearest hand reaches; a rig's reach effector is the fallback (and the one with lattices to stretch).
-    std::int32_t best = character_->rig().reach_effector;
-    float best_distance = std::numeric_limits<float>::infinity();
-    const deform::Skeleton& sk = character_->skeleton();
-    for (std::size_t b = 0; b < sk.bone_count(); ++b) {
-      std::string name = sk.bone(std::int32_t(b)).name;
-      std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-      if (name.find("hand") == std::string::npos) continue;
-      const float d = glm::length(character_->bone_position(std::int32_t(b)) - local);
-      if (d < best_distance) best_distance = d, best = std::int32_t(b);
+    // The nearest limb whose lattices stretch reaches (the rig's reach effector among them); without lattices, the
+    // nearest hand.
+    std::int32_t best = deform::nearest_reach_effector(*character_, local);
+    if (best < 0) {
+      float best_distance = std::numeric_limits<float>::infinity();
+      const deform::Skeleton& sk = character_->skeleton();
+      for (std::size_t b = 0; b < sk.bone_count(); ++b) {
+        std::string name = sk.bone(std::int32_t(b)).name;
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        if (name.find("hand") == std::string::npos) continue;
+        const float d = glm::length(character_->bone_position(std::int32_t(b)) - local);
+        if (d < best_distance) best_distance = d, best = std::int32_t(b);
+      }
     }
     if (best < 0) return;
     effector_ = best;
