@@ -177,8 +177,19 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
   second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
   const double second_outside = outside(limits, second.angle);
-  euler = second_outside < first_outside ? second : first;
+  const bool take_second = second_outside < first_outside;
+  euler = take_second ? second : first;
   if (second_outside == 0.0) return false;
+  if (!angles_needed) {
+    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
+    // lengths are known without the division: |raw[0]| = |raw[2]| = cos_b (norm2 and 1 at gimbal lock), |raw[1]| =
+    // norm2.
+    euler.length = glm::dvec3(regular ? cos_b : norm2, norm2, regular ? cos_b : 1.0);
+    const double flip = take_second ? -1.0 : 1.0;
+    euler.dir[0] = raw[0] * flip;
+    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
+    euler.dir[2] = raw[2] * flip;
+  }
   // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
   for (int axis = 0; axis < 3; ++axis) {
     const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
@@ -190,6 +201,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     } else {
       euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
     }
+    euler.length[axis] = 1.0;
   }
   return true;
 }
@@ -205,12 +217,18 @@ EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
 }
 
 glm::quat to_quat(const EulerAngles& euler) noexcept {
-  const glm::dvec2 x = scaled_half_angle(euler.dir[0], 1.0), y = scaled_half_angle(euler.dir[1], 1.0);
-  const glm::dvec2 z = scaled_half_angle(euler.dir[2], 1.0);
-  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once.
+  const glm::dvec3 r = euler.length;
+  const glm::dvec2 x = scaled_half_angle(euler.dir[0], r.x), y = scaled_half_angle(euler.dir[1], r.y);
+  const glm::dvec2 z = scaled_half_angle(euler.dir[2], r.z);
+  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once. The norm of a
+  // product is the product of the norms, and a factor's is known from its direction, |scaled_half_angle(d, r)|² =
+  // 2r (r + |d.x|) for |d| = r: so the square root and division run beside the products, not after them.
+  auto norm2 = [](glm::dvec2 d, double length) { return 2.0 * length * (length + std::abs(d.x)); };
+  const double inverse_norm =
+      1.0 / std::sqrt(norm2(euler.dir[0], r.x) * norm2(euler.dir[1], r.y) * norm2(euler.dir[2], r.z));
   const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
   const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
-  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
+  return glm::quat(q * inverse_norm);
 }
 
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
@@ -247,7 +265,10 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
     local = glm::normalize(local);
     return false;
   }
-  if (reaim) reaim_euler(limits, euler, carried, wanted);
+  if (reaim) {
+    make_unit(euler);
+    reaim_euler(limits, euler, carried, wanted);
+  }
   local = to_quat(euler);
   return true;
 }
