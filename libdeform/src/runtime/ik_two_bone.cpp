@@ -55,11 +55,11 @@ glm::quat slerp(glm::quat rotation, glm::quat solved, float weight) noexcept {
 }
 
 // The quaternion (not normalised) of the turn about unit `axis` whose cosine and sine, both times `length`, are
-// `turn`.
-glm::quat turn_quat(glm::vec3 axis, glm::dvec2 turn, double length) noexcept {
+// `turn`. `axis` may instead be the unit axis times `axis_length` > 0: the quaternion is then that much larger.
+glm::quat turn_quat(glm::vec3 axis, glm::dvec2 turn, double length, float axis_length = 1.0f) noexcept {
   const glm::dvec2 half = detail::scaled_half_angle(turn, length);
   const glm::vec3 v = axis * static_cast<float>(half.y);
-  return glm::quat(static_cast<float>(half.x), v.x, v.y, v.z);
+  return glm::quat(static_cast<float>(half.x) * axis_length, v.x, v.y, v.z);
 }
 
 // The solve at full weight: the joints' new local rotations (unit), the stretch factor, the unstretched limb root →
@@ -81,8 +81,8 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   const EulerLimits* limits = job.chain->limits.data();  // root, middle
   Solved out;
   // 1. The limb's root–effector distance c: the target's, softened near full extension, at least the folded limb's.
-  const double r = glm::length(glm::dvec3(to_target));
-  const double reach = a + b, fold = std::abs(a - b);
+  const double r2 = glm::dot(glm::dvec3(to_target), glm::dvec3(to_target)), r = std::sqrt(r2);
+  const double reach = a + b, fold = std::abs(a - b), inverse_ab = 1.0 / (a * b);
   double c = std::min(r, reach);
   if (job.soften > 0.0f) {
     const double zone = static_cast<double>(job.soften) * reach, start = reach - zone;
@@ -90,6 +90,9 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
     if (r > start) c = start - zone * std::expm1((start - r) / zone);
   }
   c = std::max(c, fold);
+  // c² for the law of cosines: unsoftened, min(r², reach²) kept at least fold², which is c · c to rounding without
+  // waiting for the square root of r² (the longest path into the bend).
+  const double c2 = job.soften > 0.0f ? c * c : std::max(std::min(r2, reach * reach), fold * fold);
   if (job.max_stretch > 1.0f && r > c && c > 0.0)
     out.stretch = std::min(r / c, static_cast<double>(job.max_stretch));
 
@@ -98,7 +101,9 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   glm::vec3 v = lower * lower_offset;  // middle → effector, upper's frame
   const glm::dvec3 cross = glm::cross(glm::dvec3(u), glm::dvec3(v));
   const double sine = glm::length(cross);  // a · b · sin(interior angle)
-  glm::vec3 axis;
+  glm::vec3 axis;                // unit
+  glm::vec3 turn_axis;           // axis times turn_axis_length: the turn's quaternion need not wait for the division
+  float turn_axis_length = 1.0f;
   if (sine < 1e-7 * a * b) {  // straight or folded: bend toward the pole, or about any perpendicular
     const glm::vec3 upper_pole = glm::conjugate(upper) * pole;
     axis = glm::cross(u, upper_pole);
@@ -106,17 +111,20 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
     axis = axis_length > 1e-6f * static_cast<float>(a) * glm::length(upper_pole) && axis_length > tiny
                ? axis / axis_length
                : hinge_axis(limits[1], u);
+    turn_axis = axis;
   } else {
-    axis = glm::vec3(cross / sine);
+    axis = glm::vec3(cross * (1.0 / sine));
+    turn_axis = glm::vec3(cross);
+    turn_axis_length = static_cast<float>(sine);
   }
   const glm::dvec2 current(-glm::dot(glm::dvec3(u), glm::dvec3(v)), sine);  // (cos, sin) · a · b
-  const double cos_wanted = std::clamp((a * a + b * b - c * c) / (2.0 * a * b), -1.0, 1.0);
+  const double cos_wanted = std::clamp((a * a + b * b - c2) * (0.5 * inverse_ab), -1.0, 1.0);
   const glm::dvec2 wanted(cos_wanted, std::sqrt(1.0 - cos_wanted * cos_wanted));
   const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
-  lower = turn_quat(axis, turn, a * b) * lower;
+  lower = turn_quat(turn_axis, turn, a * b, turn_axis_length) * lower;
   // v turned (Rodrigues, v ⊥ axis), or from the pose again when the limit moved the joint (the clamp normalises).
-  const glm::vec3 turned_v = static_cast<float>(turn.x / (a * b)) * v +
-                             static_cast<float>(turn.y / (a * b)) * glm::cross(axis, v);
+  const glm::vec3 turned_v = static_cast<float>(turn.x * inverse_ab) * v +
+                             static_cast<float>(turn.y * inverse_ab) * glm::cross(axis, v);
   out.clamped = clamp_joint(limits[1], lower);
   v = out.clamped ? lower * lower_offset : turned_v;
   // The bend plane's normal, u × v, or the turn's axis where the limb ends straight or folded.
@@ -135,11 +143,12 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   }
   //    Then it twists about that line, turning the middle joint's direction across it (d × normal) onto the
   //    reference: the pole's part across the line, blended into the limb's own direction inside the cone.
-  glm::vec3 bend = glm::cross(d, upper * normal);
+  //    (bend is the unit direction times bend_length, left unscaled: the twist below is then that much longer, which
+  //    it is told; only the blend inside the cone divides.)
+  const glm::vec3 bend = glm::cross(d, upper * normal);
   const float bend_length = glm::length(bend);
   if (bend_length > tiny) {
-    bend /= bend_length;
-    glm::vec3 reference = bend;
+    glm::vec3 reference = bend * (1.0f / bend_length);  // (not on the path of a pole outside the cone)
     bool unit_reference = true;
     const float pole2 = glm::dot(pole, pole);
     if (pole2 > 0.0f) {
@@ -152,7 +161,7 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
         const float across_length = std::sqrt(across2);
         const float t = across_length / (std::sqrt(pole2) * two_bone_pole_cone_sine);
         const float blend = t * t * (3.0f - 2.0f * t);
-        reference = across * (blend / across_length) + bend * (1.0f - blend);
+        reference = across * (blend / across_length) + bend * ((1.0f - blend) / bend_length);
         unit_reference = false;
       }
     }
@@ -160,11 +169,11 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
       const float angle = job.swivel_degrees * (std::numbers::pi_v<float> / 180.0f);
       reference = reference * std::cos(angle) + glm::cross(d, reference) * std::sin(angle);
     }
-    // (cos, sin) of the twist times |reference|, which is 1 to rounding outside the cone: the clamp below
-    // normalises what that leaves.
+    // (cos, sin) of the twist times bend_length · |reference|, |reference| being 1 to rounding outside the cone: the
+    // clamp below normalises what that leaves.
     const glm::dvec2 twist(glm::dot(bend, reference), glm::dot(glm::cross(bend, reference), d));
-    const double twist_length = unit_reference ? 1.0 : glm::length(twist);
-    if (twist_length > 1e-6) upper = turn_quat(d, twist, twist_length) * upper;
+    const double twist_length = unit_reference ? static_cast<double>(bend_length) : glm::length(twist);
+    if (twist_length > 1e-6 * bend_length) upper = turn_quat(d, twist, twist_length) * upper;
   }
   if (clamp_joint(limits[0], upper)) out.clamped = true;  // (normalises)
   out.upper = upper;
