@@ -94,7 +94,7 @@ inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& c
 }
 
 // A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its direction (cos, sin) times length[axis]
-// (1 unless limit_euler says otherwise; make_unit divides it out).
+// (1 unless limit_euler was asked for raw directions).
 struct EulerAngles {
   glm::dvec3 angle{0.0};
   glm::dvec2 dir[3]{};
@@ -103,17 +103,12 @@ struct EulerAngles {
 
 // The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
 // limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it. Without
-// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent), and a
-// clamped one leaves the angles unset and its unclamped axes' directions unnormalised (length: the rotation matrix's
-// entries, as they come): to_quat takes them as they are, and the clamp's result no longer waits for their square
-// root and division (its critical path is a chain of them). Otherwise every direction is unit.
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true) noexcept;
-
-// `euler`'s directions made unit (reaim_euler turns vectors by them).
-inline void make_unit(EulerAngles& euler) noexcept {
-  for (int axis = 0; axis < 3; ++axis) euler.dir[axis] *= 1.0 / euler.length[axis];
-  euler.length = glm::dvec3(1.0);
-}
+// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent). With
+// `raw_directions` as well, a clamped one's unclamped axes keep the rotation matrix's unnormalised directions, with
+// their lengths: for to_quat alone, which then no longer waits for their square root and division (the clamp's
+// critical path is a chain of them). Otherwise every direction is unit.
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true,
+                 bool raw_directions = false) noexcept;
 
 // Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
 // direction, the others a polynomial (cos, sin) within 1e-12.

@@ -124,7 +124,7 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
   // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
   // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) {
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false, true)) {
     rotation = glm::normalize(rotation);
     return false;
   }
@@ -134,7 +134,8 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
 
 namespace detail {
 
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed) noexcept {
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed,
+                 bool raw_directions) noexcept {
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
   // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
   // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
@@ -142,7 +143,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const glm::dquat q(rotation);
   const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
   if (!(norm2 > 1e-24) || !std::isfinite(norm2))
-    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed);
+    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed, raw_directions);
   const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
@@ -180,7 +181,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const bool take_second = second_outside < first_outside;
   euler = take_second ? second : first;
   if (second_outside == 0.0) return false;
-  if (!angles_needed) {
+  if (!angles_needed && raw_directions) {
     // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
     // lengths are known without the division: |raw[0]| = |raw[2]| = cos_b (norm2 and 1 at gimbal lock), |raw[1]| =
     // norm2.
@@ -261,14 +262,11 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false)) {  // (reads `local` up to scale)
+  if (limits.free || !limit_euler(limits, local, euler, false, !reaim)) {  // (reads `local` up to scale)
     local = glm::normalize(local);
     return false;
   }
-  if (reaim) {
-    make_unit(euler);
-    reaim_euler(limits, euler, carried, wanted);
-  }
+  if (reaim) reaim_euler(limits, euler, carried, wanted);
   local = to_quat(euler);
   return true;
 }
