@@ -95,6 +95,23 @@ glm::dvec2 direction(double angle) {
   }
 }
 
+// detail::to_quat, defined here so that it inlines into the clamps below: their Euler angles then stay in registers
+// instead of going through memory between two calls (~3 ns per clamp on the critical path of a two-bone solve).
+inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
+  const glm::dvec3 r = euler.length;
+  const glm::dvec2 x = detail::scaled_half_angle(euler.dir[0], r.x), y = detail::scaled_half_angle(euler.dir[1], r.y);
+  const glm::dvec2 z = detail::scaled_half_angle(euler.dir[2], r.z);
+  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once. The norm of a
+  // product is the product of the norms, and a factor's is known from its direction, |scaled_half_angle(d, r)|² =
+  // 2r (r + |d.x|) for |d| = r: so the square root and division run beside the products, not after them.
+  auto norm2 = [](glm::dvec2 d, double length) { return 2.0 * length * (length + std::abs(d.x)); };
+  const double inverse_norm =
+      1.0 / std::sqrt(norm2(euler.dir[0], r.x) * norm2(euler.dir[1], r.y) * norm2(euler.dir[2], r.z));
+  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
+  const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
+  return glm::quat(q * inverse_norm);
+}
+
 }  // namespace
 
 EulerLimits prepare_limits(const DofLimits& limits) noexcept {
@@ -128,7 +145,7 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
     rotation = glm::normalize(rotation);
     return false;
   }
-  rotation = detail::to_quat(euler);
+  rotation = quaternion_of(euler);
   return true;
 }
 
@@ -217,20 +234,7 @@ EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
   return euler;
 }
 
-glm::quat to_quat(const EulerAngles& euler) noexcept {
-  const glm::dvec3 r = euler.length;
-  const glm::dvec2 x = scaled_half_angle(euler.dir[0], r.x), y = scaled_half_angle(euler.dir[1], r.y);
-  const glm::dvec2 z = scaled_half_angle(euler.dir[2], r.z);
-  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once. The norm of a
-  // product is the product of the norms, and a factor's is known from its direction, |scaled_half_angle(d, r)|² =
-  // 2r (r + |d.x|) for |d| = r: so the square root and division run beside the products, not after them.
-  auto norm2 = [](glm::dvec2 d, double length) { return 2.0 * length * (length + std::abs(d.x)); };
-  const double inverse_norm =
-      1.0 / std::sqrt(norm2(euler.dir[0], r.x) * norm2(euler.dir[1], r.y) * norm2(euler.dir[2], r.z));
-  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
-  const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
-  return glm::quat(q * inverse_norm);
-}
+glm::quat to_quat(const EulerAngles& euler) noexcept { return quaternion_of(euler); }
 
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
   for (int axis = 0; axis < 3; ++axis) {
@@ -267,7 +271,7 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
     return false;
   }
   if (reaim) reaim_euler(limits, euler, carried, wanted);
-  local = to_quat(euler);
+  local = quaternion_of(euler);
   return true;
 }
 
