@@ -18,7 +18,8 @@ constexpr double tan_pi_8 = 0.41421356237309503;  // √2 − 1
 
 // atan2(y, x) in (-π, π], to within 7e-9 rad. The angle of (|x|, |y|) is reduced by 0, π/4 or π/2 to
 // |atan t| <= π/8, where atan t = t · P(t²), P interpolating atan(√s)/√s at 5 Chebyshev nodes of [0, tan²(π/8)]
-// (near-minimax). Written with selects rather than branches, which random angles would mispredict.
+// (near-minimax). Written with selects, which GCC 12 compiles to branches; a branch-free form (min, max, sign
+// copies and a second division) made the clamp slower (docs/performance.md, 2026-11-24).
 inline double polynomial_atan2(double y, double x) {
   const double ax = std::abs(x), ay = std::abs(y);
   const bool low = ay <= tan_pi_8 * ax, high = ax < tan_pi_8 * ay;
