@@ -201,9 +201,11 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   if (second_outside == 0.0) return false;
   if (!angles_needed && raw_directions) {
     // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
-    // lengths are known without the division: |raw[0]| = |raw[2]| = cos_b (norm2 and 1 at gimbal lock), |raw[1]| =
-    // norm2.
-    euler.length = glm::dvec3(regular ? cos_b : norm2, norm2, regular ? cos_b : 1.0);
+    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
+    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
+    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
+    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
+    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
     const double flip = take_second ? -1.0 : 1.0;
     euler.dir[0] = raw[0] * flip;
     euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
