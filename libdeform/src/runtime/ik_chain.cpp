@@ -113,11 +113,17 @@ Status chain_base(const IkChain& chain, std::span<const glm::quat> rotations, st
                   RigidTransform& base) noexcept {
   if (!spans_fit(chain, rotations.size(), translations.size()))
     return Status::failure("pose spans do not hold every chain bone");
+  // The first ancestor's transform is its local one (bone 0 has no parent): the products start from it rather than
+  // from the identity.
   RigidTransform frame;
-  for (const std::int32_t id : chain.ancestors) {
-    const auto b = static_cast<std::size_t>(id);
-    frame.translation += frame.rotation * translations[b];
-    frame.rotation = frame.rotation * rotations[b];
+  if (!chain.ancestors.empty()) {
+    const auto first = static_cast<std::size_t>(chain.ancestors.front());
+    frame = {rotations[first], translations[first]};
+    for (std::size_t k = 1; k < chain.ancestors.size(); ++k) {
+      const auto b = static_cast<std::size_t>(chain.ancestors[k]);
+      frame.translation += frame.rotation * translations[b];
+      frame.rotation = frame.rotation * rotations[b];
+    }
   }
   base = frame;
   return {};

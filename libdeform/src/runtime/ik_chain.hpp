@@ -93,16 +93,22 @@ inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& c
   return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
 }
 
-// A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its unit direction (cos, sin).
+// A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its direction (cos, sin) times length[axis]
+// (1 unless limit_euler was asked for raw directions).
 struct EulerAngles {
   glm::dvec3 angle{0.0};
   glm::dvec2 dir[3]{};
+  glm::dvec3 length{1.0};
 };
 
 // The Euler triple of `rotation` that `limits` mean — of its two triples, angles in (-π, π], the one nearer the
 // limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it. Without
-// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent).
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true) noexcept;
+// `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent). With
+// `raw_directions` as well, a clamped one's unclamped axes keep the rotation matrix's unnormalised directions, with
+// their lengths: for to_quat alone, which then no longer waits for their square root and division (the clamp's
+// critical path is a chain of them). Otherwise every direction is unit.
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true,
+                 bool raw_directions = false) noexcept;
 
 // Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
 // direction, the others a polynomial (cos, sin) within 1e-12.
@@ -116,7 +122,7 @@ inline glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
   return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
 }
 
-// The unit quaternion qx · qy · qz of the directions of `euler` (its angles are not read).
+// The unit quaternion qx · qy · qz of the directions of `euler`, of any lengths (its angles are not read).
 glm::quat to_quat(const EulerAngles& euler) noexcept;
 
 // Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its

@@ -18,7 +18,8 @@ constexpr double tan_pi_8 = 0.41421356237309503;  // √2 − 1
 
 // atan2(y, x) in (-π, π], to within 7e-9 rad. The angle of (|x|, |y|) is reduced by 0, π/4 or π/2 to
 // |atan t| <= π/8, where atan t = t · P(t²), P interpolating atan(√s)/√s at 5 Chebyshev nodes of [0, tan²(π/8)]
-// (near-minimax). Written with selects rather than branches, which random angles would mispredict.
+// (near-minimax). Written with selects, which GCC 12 compiles to branches; a branch-free form (min, max, sign
+// copies and a second division) made the clamp slower (docs/performance.md, 2026-11-24).
 inline double polynomial_atan2(double y, double x) {
   const double ax = std::abs(x), ay = std::abs(y);
   const bool low = ay <= tan_pi_8 * ax, high = ax < tan_pi_8 * ay;
@@ -95,6 +96,23 @@ glm::dvec2 direction(double angle) {
   }
 }
 
+// detail::to_quat, defined here so that it inlines into the clamps below: their Euler angles then stay in registers
+// instead of going through memory between two calls (~3 ns per clamp on the critical path of a two-bone solve).
+inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
+  const glm::dvec3 r = euler.length;
+  const glm::dvec2 x = detail::scaled_half_angle(euler.dir[0], r.x), y = detail::scaled_half_angle(euler.dir[1], r.y);
+  const glm::dvec2 z = detail::scaled_half_angle(euler.dir[2], r.z);
+  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once. The norm of a
+  // product is the product of the norms, and a factor's is known from its direction, |scaled_half_angle(d, r)|² =
+  // 2r (r + |d.x|) for |d| = r: so the square root and division run beside the products, not after them.
+  auto norm2 = [](glm::dvec2 d, double length) { return 2.0 * length * (length + std::abs(d.x)); };
+  const double inverse_norm =
+      1.0 / std::sqrt(norm2(euler.dir[0], r.x) * norm2(euler.dir[1], r.y) * norm2(euler.dir[2], r.z));
+  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
+  const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
+  return glm::quat(q * inverse_norm);
+}
+
 }  // namespace
 
 EulerLimits prepare_limits(const DofLimits& limits) noexcept {
@@ -124,17 +142,18 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
   // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
   // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false)) {
+  if (limits.free || !detail::limit_euler(limits, rotation, euler, false, true)) {
     rotation = glm::normalize(rotation);
     return false;
   }
-  rotation = detail::to_quat(euler);
+  rotation = quaternion_of(euler);
   return true;
 }
 
 namespace detail {
 
-bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed) noexcept {
+bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed,
+                 bool raw_directions) noexcept {
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
   // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
   // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
@@ -142,7 +161,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   const glm::dquat q(rotation);
   const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
   if (!(norm2 > 1e-24) || !std::isfinite(norm2))
-    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed);
+    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed, raw_directions);
   const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
   const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
   const double r22 = ww - xx - yy + zz;
@@ -177,8 +196,21 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
   // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
   second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
   const double second_outside = outside(limits, second.angle);
-  euler = second_outside < first_outside ? second : first;
+  const bool take_second = second_outside < first_outside;
+  euler = take_second ? second : first;
   if (second_outside == 0.0) return false;
+  if (!angles_needed && raw_directions) {
+    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
+    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
+    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
+    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
+    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
+    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
+    const double flip = take_second ? -1.0 : 1.0;
+    euler.dir[0] = raw[0] * flip;
+    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
+    euler.dir[2] = raw[2] * flip;
+  }
   // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
   for (int axis = 0; axis < 3; ++axis) {
     const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
@@ -190,6 +222,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
     } else {
       euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
     }
+    euler.length[axis] = 1.0;
   }
   return true;
 }
@@ -204,14 +237,7 @@ EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
   return euler;
 }
 
-glm::quat to_quat(const EulerAngles& euler) noexcept {
-  const glm::dvec2 x = scaled_half_angle(euler.dir[0], 1.0), y = scaled_half_angle(euler.dir[1], 1.0);
-  const glm::dvec2 z = scaled_half_angle(euler.dir[2], 1.0);
-  // qx · qy = (w, i, j, k), then · qz; the product of the three scaled factors, normalised once.
-  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
-  const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
-  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
-}
+glm::quat to_quat(const EulerAngles& euler) noexcept { return quaternion_of(euler); }
 
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
   for (int axis = 0; axis < 3; ++axis) {
@@ -243,12 +269,12 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false)) {  // (reads `local` up to scale)
+  if (limits.free || !limit_euler(limits, local, euler, false, !reaim)) {  // (reads `local` up to scale)
     local = glm::normalize(local);
     return false;
   }
   if (reaim) reaim_euler(limits, euler, carried, wanted);
-  local = to_quat(euler);
+  local = quaternion_of(euler);
   return true;
 }
 
