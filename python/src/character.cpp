@@ -56,6 +56,40 @@ void bind_character(py::module_& m) {
           "pose", [](const deform::Character& c) { return c.pose(); },
           [](deform::Character& c, const deform::Pose& p) { check(c.set_pose(p)); },
           "The held pose (get: a copy; set: clamped into the DOF limits, raises deform.Error when refused).")
+      .def(
+          "set_pose",
+          [](deform::Character& c, const deform::Pose& pose, const std::optional<deform::Pose>& later, float lead) {
+            check(later ? c.set_pose(pose, *later, lead) : c.set_pose(pose));
+          },
+          py::arg("pose"), py::arg("later") = py::none(), py::arg("lead") = 1e-3f,
+          "Holds `pose`; with `later`, the same motion `lead` seconds later (a clip sampled a millisecond ahead), from "
+          "which update() takes the bones' velocities for the lattices' inertia and the spring chains: the same "
+          "motion at any frame rate. Raises deform.Error when refused.")
+      .def(
+          "set_lattice_motion",
+          [](deform::Character& c, float inertia, const std::optional<FloatArray>& gravity, float units_per_metre,
+             std::optional<std::size_t> lattice) {
+            deform::LatticeMotion motion{inertia, gravity ? to_vec3(*gravity, "gravity") : glm::vec3(0.0f), units_per_metre};
+            const std::size_t count = c.deformers().lattice_count();
+            if (lattice && *lattice >= count)
+              throw deform::Error::invalid_argument("lattice " + std::to_string(*lattice), "lattice out of range");
+            for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
+              c.deformers().set_motion(l, motion);
+          },
+          py::arg("inertia"), py::arg("gravity") = py::none(), py::arg("units_per_metre") = 1.0f,
+          py::arg("lattice") = py::none(),
+          "Secondary motion of one lattice (or every one, lattice=None): inertia in [0, 1] (how much its control "
+          "points lag behind their bone's motion), gravity in m/s² (model space; default none).")
+      .def_property_readonly("spring_chain_count", [](const deform::Character& c) { return c.springs().chain_count(); })
+      .def(
+          "spring_points",
+          [](py::object self, std::size_t chain) {
+            auto& c = self.cast<deform::Character&>();
+            if (chain >= c.springs().chain_count())
+              throw deform::Error::invalid_argument("chain " + std::to_string(chain), "spring chain out of range");
+            return vec3_view(c.springs().points(chain), self, false);
+          },
+          py::arg("chain"), "(B + 1, 3) read-only view of a spring chain's first head and tails, as of update().")
       .def_property(
           "skinning", [](const deform::Character& c) { return method_name(c.skinning); },
           [](deform::Character& c, const std::string& name) { c.skinning = parse_method(name); }, "'lbs' or 'dqs'.")

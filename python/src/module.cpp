@@ -269,7 +269,13 @@ PYBIND11_MODULE(deform, m) {
       py::arg("model"), py::arg("effector") = py::none(), "Three lattices on the limb ending at `effector` (default: a hand).");
   m.def(
       "builtin_rig", [](const deform::Model& md) { return deform::builtin_rig(md); }, py::arg("model"),
-      "The rig of the built-in character.");
+      "The rig of the built-in character (three lattices on the left arm).");
+  m.def(
+      "builtin_full_rig", [](const deform::Model& md) { return deform::builtin_full_rig(md); }, py::arg("model"),
+      "The built-in character's rig with lattices on every limb (both arms and both legs).");
+  m.def(
+      "builtin_clips", [](const deform::Model& md) { return deform::builtin_clips(md); }, py::arg("model"),
+      "The built-in character's clips: idle, walk, run and wave (a list of Animation).");
   m.def(
       "read_rig", [](const std::string& path, const deform::Model& md) {
         return deform::read_rig_json(path, md.skeleton, md.mesh.point_count());
@@ -285,6 +291,34 @@ PYBIND11_MODULE(deform, m) {
                              })
       .def_readwrite("reach_effector", &deform::Rig::reach_effector)
       .def_readwrite("max_stretch", &deform::Rig::max_stretch)
+      .def_property_readonly("spring_chain_names",
+                             [](const deform::Rig& r) {
+                               std::vector<std::string> names;
+                               for (const auto& c : r.spring_chains) names.push_back(c.name);
+                               return names;
+                             })
+      .def(
+          "add_spring_chain",
+          [](deform::Rig& r, const deform::Model& md, const std::string& name, const std::vector<py::object>& bones,
+             float frequency, float damping_ratio, const std::optional<FloatArray>& gravity, float units_per_metre,
+             float radius) {
+            deform::SpringChainSpec chain;
+            chain.name = name;
+            for (const py::object& bone : bones) chain.bones.push_back(bone_id(md.skeleton, bone));
+            chain.frequency = frequency;
+            chain.damping_ratio = damping_ratio;
+            chain.gravity = gravity ? to_vec3(*gravity, "gravity") : glm::vec3(0.0f);
+            chain.units_per_metre = units_per_metre;
+            chain.radius = radius;
+            deform::validate_chain_settings(chain);
+            r.spring_chains.push_back(std::move(chain));
+          },
+          py::arg("model"), py::arg("name"), py::arg("bones"), py::arg("frequency") = 2.0f,
+          py::arg("damping_ratio") = 0.3f, py::arg("gravity") = py::none(), py::arg("units_per_metre") = 1.0f,
+          py::arg("radius") = 0.0f,
+          "Adds a spring chain over `bones` (ids or names of `model`'s skeleton, root first, each the parent of the "
+          "next): frequency in Hz, damping ratio, gravity in m/s² (model space; default none). A Character built "
+          "with the rig checks the bones and raises deform.Error for a chain it cannot bind.")
       .def(
           "save", [](const deform::Rig& r, const std::string& path, const deform::Model& md) {
             deform::write_rig_json(path, r, md.skeleton);
