@@ -271,9 +271,12 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   solve.target = target;
   solve.settings = ik;
   solve.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
-  // A reach held frame after frame (the same effector, not released) is solved without the random restarts of the
-  // stall escape, so that the solution moves with its target instead of flipping between solutions.
-  const bool continuing = reaching_ && effector == effector_;
+  // A reach held frame after frame (the same effector, not released, the target within a tenth of the chain's length
+  // of the last one) is solved without the random restarts of the stall escape, so that the solution moves with its
+  // target instead of flipping between solutions.
+  const bool continuing =
+      reaching_ && effector == effector_ && glm::length(target - reach_target_) <= 0.1f * reach_length;
+  reach_target_ = target;
   if (continuing) solve.settings.escape_stalls = false;
   solve.scratch = ik_scratch_;
   solve.random_state = &random_state;

@@ -148,8 +148,8 @@ class DEFORM_CHARACTER_API Character {
   // target, a chain longer than max_chain_bones. No allocation: the chain is rebuilt in storage reserved at
   // construction when the effector changes. Cost: up to 17 CCD solves of the chain (microseconds), no full FK.
   // Called again each frame while the body moves (after each set_pose), it re-solves on the new pose: a reach held so
-  // (the same effector, not released) is solved without the stall escape's random restarts, so it follows its
-  // target smoothly. A reach that starts, and a release, move the limb at once: the next update() takes that as a
+  // (the same effector, not released, a target within a tenth of the chain's length of the last) is solved without
+  // the stall escape's random restarts, so it follows its target smoothly. A reach that starts, and a release, move the limb at once: the next update() takes that as a
   // jump, not as motion — the lattices and spring chains on the limb start again from the new pose.
   ReachResult reach(std::int32_t effector, glm::vec3 target);
   // Lets go: every stretch target back to zero; the pose reached stays.
@@ -225,6 +225,7 @@ class DEFORM_CHARACTER_API Character {
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
   bool reaching_ = false;         // a reach is held (reach() since the last release())
+  glm::vec3 reach_target_{0.0f};  // the last reach's target
   std::int32_t jumped_root_ = -1;  // the root of a limb a reach snapped or let go since the last update(), or -1
   std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)
   // reach()'s working storage, sized at construction: the chain (rebuilt when the effector changes), the pose being
