@@ -1,5 +1,6 @@
 // The C API (deform/c/deform.h): each function turns deform::Error and Status into a deform_status plus a per-thread
 // message, and never lets a C++ exception cross into C.
+#include <algorithm>
 #include "deform/c/deform.h"
 
 #include <cmath>
@@ -21,7 +22,8 @@
 
 struct deform_character {
   deform::Character character;
-  deform::Pose pose;  // set_pose's staging, sized once so that the call allocates nothing
+  deform::Pose pose;   // set_pose's staging, sized once so that the call allocates nothing
+  deform::Pose later;  // set_pose_moving's second pose, likewise
 };
 
 struct deform_lattice {
@@ -61,15 +63,24 @@ deform_status guarded(Body&& body) noexcept {
   }
 }
 
+// Copies C arrays (quaternions x, y, z, w; translations) into a pose sized for them.
+void stage(deform::Pose& pose, const float* rotations_xyzw, const float* translations) {
+  for (std::size_t b = 0; b < pose.rotations.size(); ++b) {
+    const float* q = rotations_xyzw + 4 * b;
+    pose.rotations[b] = glm::quat(q[3], q[0], q[1], q[2]);
+    const float* t = translations + 3 * b;
+    pose.translations[b] = glm::vec3(t[0], t[1], t[2]);
+  }
+}
+
 deform_status refused(const deform::Status& status) {
   return status ? DEFORM_OK : fail(DEFORM_ERROR_REFUSED, status.reason());
 }
 
 deform_status adopt(deform::Character character, deform_character** out) {
-  auto* handle = new deform_character{std::move(character), {}};
-  const std::size_t bones = handle->character.skeleton().bone_count();
-  handle->pose.rotations.resize(bones);
-  handle->pose.translations.resize(bones);
+  auto* handle = new deform_character{std::move(character), {}, {}};
+  handle->pose = handle->character.skeleton().bind_pose();
+  handle->later = handle->pose;
   *out = handle;
   return DEFORM_OK;
 }
@@ -122,13 +133,64 @@ deform_status deform_character_set_pose(deform_character* character, const float
     return fail_argument("deform_character_set_pose: a handle or array is NULL");
   if (bone_count != character->pose.rotations.size())
     return fail_argument("deform_character_set_pose: bone_count differs from the skeleton's");
-  for (std::size_t b = 0; b < bone_count; ++b) {
-    const float* q = rotations_xyzw + 4 * b;
-    character->pose.rotations[b] = glm::quat(q[3], q[0], q[1], q[2]);
-    const float* t = translations + 3 * b;
-    character->pose.translations[b] = glm::vec3(t[0], t[1], t[2]);
-  }
+  stage(character->pose, rotations_xyzw, translations);
   return refused(character->character.set_pose(character->pose));
+}
+
+deform_status deform_character_set_pose_moving(deform_character* character, const float* rotations_xyzw,
+                                               const float* translations, const float* later_rotations_xyzw,
+                                               const float* later_translations, float lead, size_t bone_count) {
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr ||
+      later_rotations_xyzw == nullptr || later_translations == nullptr)
+    return fail_argument("deform_character_set_pose_moving: a handle or array is NULL");
+  if (bone_count != character->pose.rotations.size())
+    return fail_argument("deform_character_set_pose_moving: bone_count differs from the skeleton's");
+  stage(character->pose, rotations_xyzw, translations);
+  stage(character->later, later_rotations_xyzw, later_translations);
+  return refused(character->character.set_pose(character->pose, character->later, lead));
+}
+
+deform_status deform_character_bind_pose(const deform_character* character, float* rotations_xyzw, float* translations,
+                                        size_t bone_count) {
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr)
+    return fail_argument("deform_character_bind_pose: a handle or array is NULL");
+  const deform::Skeleton& skeleton = character->character.skeleton();
+  if (bone_count != skeleton.bone_count())
+    return fail_argument("deform_character_bind_pose: bone_count differs from the skeleton's");
+  for (std::size_t b = 0; b < bone_count; ++b) {
+    const deform::Bone& bone = skeleton.bones()[b];
+    const glm::quat q = deform::quat_from_euler(bone.bind_rotation);
+    const float rotation[4] = {q.x, q.y, q.z, q.w};
+    const float translation[3] = {bone.bind_translation.x, bone.bind_translation.y, bone.bind_translation.z};
+    std::copy(rotation, rotation + 4, rotations_xyzw + 4 * b);
+    std::copy(translation, translation + 3, translations + 3 * b);
+  }
+  return DEFORM_OK;
+}
+
+size_t deform_character_lattice_count(const deform_character* character) {
+  return character != nullptr ? character->character.deformers().lattice_count() : 0;
+}
+
+size_t deform_character_spring_chain_count(const deform_character* character) {
+  return character != nullptr ? character->character.springs().chain_count() : 0;
+}
+
+deform_status deform_character_set_lattice_motion(deform_character* character, size_t lattice, float inertia,
+                                                  const float gravity[3], float units_per_metre) {
+  if (character == nullptr) return fail_argument("deform_character_set_lattice_motion: the handle is NULL");
+  deform::DeformerHierarchy& lattices = character->character.deformers();
+  const bool all = lattice == DEFORM_ALL_LATTICES;
+  if (!all && lattice >= lattices.lattice_count())
+    return fail_argument("deform_character_set_lattice_motion: lattice out of range");
+  const deform::LatticeMotion motion{
+      inertia, gravity != nullptr ? glm::vec3(gravity[0], gravity[1], gravity[2]) : glm::vec3(0.0f), units_per_metre};
+  return guarded([&] {
+    deform::validate_motion(motion);  // before any lattice changes
+    for (std::size_t l = all ? 0 : lattice; l < (all ? lattices.lattice_count() : lattice + 1); ++l)
+      lattices.set_motion(l, motion);
+    return DEFORM_OK;
+  });
 }
 
 deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],

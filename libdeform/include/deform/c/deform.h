@@ -62,6 +62,32 @@ DEFORM_C_API int32_t deform_character_find_bone(const deform_character* characte
 DEFORM_C_API deform_status deform_character_set_pose(deform_character* character, const float* rotations_xyzw,
                                                      const float* translations, size_t bone_count);
 
+/* The skeleton's bind pose, the pose to start a clip's sampling from: each bone's local rotation (x, y, z, w) and
+ * translation into the caller's arrays (bone_count * 4 and bone_count * 3 floats). */
+DEFORM_C_API deform_status deform_character_bind_pose(const deform_character* character, float* rotations_xyzw,
+                                                      float* translations, size_t bone_count);
+/* The held pose and where it is heading: the same arrays for the pose `lead` seconds later (`later_*`: the clip
+ * sampled a millisecond ahead; lead > 0). update() takes the bones' velocities from the two, which the lattices'
+ * inertia and the rig's spring chains follow between frames: the same motion at any frame rate
+ * (Character::set_pose(pose, later, lead), docs/elasticity.md "Secondary motion"). DEFORM_ERROR_REFUSED for a pose
+ * set_pose refuses or a lead that is not finite and > 0. No allocation. */
+DEFORM_C_API deform_status deform_character_set_pose_moving(deform_character* character, const float* rotations_xyzw,
+                                                            const float* translations,
+                                                            const float* later_rotations_xyzw,
+                                                            const float* later_translations, float lead,
+                                                            size_t bone_count);
+/* The character's elastic lattices (the rig's) and spring chains (the rig's "springs"). */
+DEFORM_C_API size_t deform_character_lattice_count(const deform_character* character);
+DEFORM_C_API size_t deform_character_spring_chain_count(const deform_character* character);
+/* Secondary motion of lattice `lattice`, or of every lattice when `lattice` is DEFORM_ALL_LATTICES: `inertia` in
+ * [0, 1] (how much its control points lag behind their bone's motion), `gravity` in m/s² in model space (3 floats;
+ * NULL: none), `units_per_metre` > 0 (model units in a metre). DEFORM_ERROR_ARGUMENT for a value out of its range
+ * or a lattice out of range, changing nothing. */
+#define DEFORM_ALL_LATTICES ((size_t)-1)
+DEFORM_C_API deform_status deform_character_set_lattice_motion(deform_character* character, size_t lattice,
+                                                               float inertia, const float gravity[3],
+                                                               float units_per_metre);
+
 typedef struct deform_reach_result {
   float residual; /* |target - effector| after IK alone (model units) */
   float stretch;  /* stretch asked of the chain's lattices (model units) */
