@@ -274,15 +274,37 @@ TEST_CASE("two calls build the same character") {
   CHECK(deform::builtin_texture(64) == deform::builtin_texture(64));
 }
 
-TEST_CASE("the texture") {
+TEST_CASE("the texture: painted skin, clothes and a face, without grid lines") {
   const std::vector<std::uint8_t> t = deform::builtin_texture(512);
   REQUIRE(t.size() == 512u * 512u * 3u);
-  // Row 0 is the top: the torso's cell (part 0) is the bottom-left, at the last rows.
-  const std::size_t torso = ((511u - 5u) * 512u + 69u) * 3u;
-  CHECK(t[torso] > 100);
-  // Squares alternate: two neighbouring squares of one cell differ.
-  const std::size_t a = ((511u - 20u) * 512u + 20u) * 3u, b = ((511u - 20u) * 512u + 36u) * 3u;
-  CHECK(t[a] != t[b]);
+  // The texel of body part `part` (atlas cell, row by row from the bottom left) at its own (u, v); row 0 is the top.
+  auto texel = [&](int part, float u, float v) {
+    const float cell = 128.0f, margin = 0.04f, inner = 1.0f - 2.0f * margin;
+    const auto column = static_cast<std::size_t>(static_cast<float>(part % 4) * cell + cell * (margin + inner * u));
+    const auto from_bottom = static_cast<std::size_t>(static_cast<float>(part / 4) * cell + cell * (margin + inner * v));
+    const std::size_t i = ((511u - from_bottom) * 512u + column) * 3u;
+    return glm::ivec3(t[i], t[i + 1], t[i + 2]);
+  };
+  const glm::ivec3 face = texel(2, 0.75f, 0.47f), hair = texel(2, 0.25f, 0.8f), shirt = texel(0, 0.75f, 0.6f);
+  const glm::ivec3 trousers = texel(9, 0.25f, 0.5f), hand = texel(5, 0.0f, 0.5f), eye = texel(2, 0.705f, 0.54f);
+  INFO(face.x << " " << face.y << " " << face.z << " / shirt " << shirt.x << " " << shirt.y << " " << shirt.z);
+  CHECK(face.x > 180);  // skin: warm and light
+  CHECK(face.x > face.y);
+  CHECK(face.y > face.z);
+  CHECK(hand.x > hand.z + 40);
+  CHECK(shirt.z > shirt.x);  // the shirt is blue
+  CHECK(trousers.x + trousers.y + trousers.z < face.x + face.y + face.z - 200);
+  CHECK(hair.x + hair.y + hair.z < 300);
+  CHECK(eye.x + eye.y + eye.z < face.x + face.y + face.z - 200);
+  // Painted, not a checker: neighbouring texels inside a cell never differ by a grid line's step.
+  int steepest = 0;
+  for (std::size_t row = 0; row < 512; ++row)
+    for (std::size_t column = 0; column + 1 < 512; ++column) {
+      if ((column + 1) % 128 == 0) continue;  // the border between two cells
+      for (std::size_t k = 0; k < 3; ++k)
+        steepest = std::max(steepest, std::abs(int(t[(row * 512 + column) * 3 + k]) - int(t[(row * 512 + column + 1) * 3 + k])));
+    }
+  CHECK(steepest < 120);  // 108 here (the belt, the hairline); a checker's grid line steps by 150 or more
   CHECK_THROWS_AS(deform::builtin_texture(100), deform::Error);
   CHECK_THROWS_AS(deform::builtin_texture(8), deform::Error);
   CHECK_THROWS_AS(deform::builtin_texture(8192), deform::Error);

@@ -343,32 +343,114 @@ Model builtin_character() {
   return model;
 }
 
+namespace {
+
+// Value noise on a periodic lattice: smooth (smoothstep between hashed lattice values), in [0, 1], deterministic.
+float lattice_value(int x, int y, int period) {
+  auto h = static_cast<std::uint32_t>(((x % period) + period) % period) * 73856093u ^
+           static_cast<std::uint32_t>(((y % period) + period) % period) * 19349663u;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
+  return static_cast<float>(h & 0xffffu) / 65535.0f;
+}
+
+float value_noise(float x, float y, int period) {
+  const auto xi = static_cast<int>(std::floor(x)), yi = static_cast<int>(std::floor(y));
+  const float fx = x - static_cast<float>(xi), fy = y - static_cast<float>(yi);
+  const float sx = fx * fx * (3.0f - 2.0f * fx), sy = fy * fy * (3.0f - 2.0f * fy);
+  const float a = lattice_value(xi, yi, period), b = lattice_value(xi + 1, yi, period);
+  const float c = lattice_value(xi, yi + 1, period), d = lattice_value(xi + 1, yi + 1, period);
+  return (a + sx * (b - a)) + sy * ((c + sx * (d - c)) - (a + sx * (b - a)));
+}
+
+float smooth_band(float x, float from, float to, float soft) {  // 1 inside [from, to], soft edges
+  auto step = [](float e0, float e1, float v) {
+    const float t = std::clamp((v - e0) / (e1 - e0), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+  };
+  return step(from - soft, from + soft, x) * (1.0f - step(to - soft, to + soft, x));
+}
+
+glm::vec3 mix3(glm::vec3 a, glm::vec3 b, float t) { return a + std::clamp(t, 0.0f, 1.0f) * (b - a); }
+
+// The painted colour (linear 0..1 RGB) of body part `part` at atlas coordinates (u around the part, v along it).
+glm::vec3 painted(int part, float u, float v) {
+  const glm::vec3 skin(0.93f, 0.74f, 0.62f), skin_shadow(0.80f, 0.55f, 0.47f), blush(0.92f, 0.58f, 0.54f);
+  const glm::vec3 shirt(0.36f, 0.55f, 0.66f), shirt_dark(0.26f, 0.42f, 0.53f);
+  const glm::vec3 trousers(0.30f, 0.30f, 0.40f), belt(0.33f, 0.22f, 0.15f), shoe(0.38f, 0.25f, 0.18f);
+  const glm::vec3 hair(0.33f, 0.21f, 0.13f), eye(0.16f, 0.12f, 0.10f), lips(0.78f, 0.45f, 0.42f);
+  constexpr float tau = 2.0f * std::numbers::pi_v<float>;
+  // Brush strokes: stretched noise along u (around the part), plus a softer large-scale wash.
+  const float strokes = value_noise(u * 24.0f, v * 6.0f, 24) - 0.5f;
+  const float wash = value_noise(u * 6.0f + 3.0f * static_cast<float>(part), v * 3.0f, 64) - 0.5f;
+  glm::vec3 c = skin;
+  switch (part) {
+    case 0: {  // torso: trousers, a belt, a shirt with a skin neckline; u = 0.75 is the front, 0.25 the back
+      c = mix3(trousers, belt, smooth_band(v, 0.20f, 0.25f, 0.01f));
+      c = mix3(c, shirt, smooth_band(v, 0.25f, 2.0f, 0.01f));
+      c = mix3(c, shirt_dark, 0.35f * smooth_band(v, 0.25f, 0.45f, 0.08f));  // folds above the belt
+      c = mix3(c, skin, smooth_band(v, 0.90f, 2.0f, 0.02f));
+      break;
+    }
+    case 1: c = mix3(skin, skin_shadow, 0.5f * (1.0f - v)); break;  // the neck: darker under the chin
+    case 2: {  // the head: a face in front (u = 0.75), hair on top and at the back
+      const float du = u - 0.75f;
+      auto dot = [&](float cu, float cv, float ru, float rv) {
+        const float x = (u - cu) / ru, y = (v - cv) / rv;
+        return std::exp(-(x * x + y * y) * 1.2f);
+      };
+      c = mix3(skin, blush, 0.45f * (dot(0.67f, 0.44f, 0.04f, 0.05f) + dot(0.83f, 0.44f, 0.04f, 0.05f)));
+      c = mix3(c, eye, std::min(1.0f, 1.6f * (dot(0.705f, 0.54f, 0.018f, 0.025f) + dot(0.795f, 0.54f, 0.018f, 0.025f))));
+      c = mix3(c, lips, 0.9f * dot(0.75f, 0.37f, 0.04f, 0.015f));
+      const float hairline = 0.66f + 0.22f * std::cos(tau * du) * (std::abs(du) < 0.25f ? 1.0f : 0.5f);
+      c = mix3(c, hair, smooth_band(v + 0.03f * strokes, hairline, 2.0f, 0.05f));
+      break;
+    }
+    case 3:
+    case 4: c = mix3(skin, shirt, smooth_band(v, -1.0f, 0.30f, 0.015f)); break;  // arms: short sleeves
+    case 9:
+    case 10: c = mix3(trousers, shoe, smooth_band(v, 0.93f, 2.0f, 0.01f)); break;  // legs: trousers
+    case 11:
+    case 12: c = shoe; break;
+    case 5:
+    case 6:
+    case 7:
+    case 8: c = mix3(skin, blush, 0.2f); break;  // hands and thumbs: a little pinker
+    default: c = glm::vec3(0.75f); break;
+  }
+  // Painted shading: darker towards the ends of a part (where it meets its neighbours) and on its underside
+  // (a cosine around u; for the limbs u = 0.5 is underneath, for the trunk the back), then the brush texture.
+  const float ends = 1.0f - 0.22f * (1.0f - smooth_band(v, 0.12f, 0.88f, 0.1f));
+  const float around = 0.92f + 0.08f * std::cos(tau * u);
+  c *= ends * around;
+  c *= 1.0f + 0.06f * strokes + 0.08f * wash;
+  return glm::clamp(c, glm::vec3(0.0f), glm::vec3(1.0f));
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> builtin_texture(int size) {
   if (size < 16 || size > 4096 || (size & (size - 1)) != 0)
     throw Error::in_file("builtin texture", "size " + std::to_string(size), "must be a power of two from 16 to 4096");
-  // One tint per atlas cell (part), RGB.
-  static constexpr std::array<std::array<int, 3>, 16> tints = {{
-      {236, 188, 150}, {226, 176, 140}, {240, 200, 165}, {120, 160, 220}, {220, 120, 120}, {150, 200, 140},
-      {210, 150, 200}, {110, 190, 190}, {230, 190, 100}, {100, 130, 200}, {200, 100, 100}, {90, 150, 110},
-      {170, 110, 160}, {200, 200, 200}, {200, 200, 200}, {200, 200, 200},
-  }};
   const auto n = static_cast<std::size_t>(size);
   std::vector<std::uint8_t> pixels(n * n * 3);
-  const int cell = size / atlas_cells;
-  const int square = std::max(cell / 8, 1);
+  const float cell = 1.0f / atlas_cells;
+  const float inner = 1.0f - 2.0f * atlas_margin;
   for (int row = 0; row < size; ++row)
     for (int column = 0; column < size; ++column) {
-      const int v_pixel = size - 1 - row;  // row 0 is the top of the image, v = 1
-      const int part = (v_pixel / cell) * atlas_cells + column / cell;
-      const bool dark = ((column % cell) / square + (v_pixel % cell) / square) % 2 == 1;
-      const bool line = (column % square) == 0 || (v_pixel % square) == 0;
-      for (int c = 0; c < 3; ++c) {
-        int value = tints[static_cast<std::size_t>(part)][static_cast<std::size_t>(c)];
-        if (dark) value = value * 3 / 4;
-        if (line) value = value / 3;
-        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 + static_cast<std::size_t>(c)] =
-            static_cast<std::uint8_t>(value);
-      }
+      // Texel centre in UV space (row 0 is the top of the image, v = 1), then the cell and the part's own (u, v),
+      // continued into the margin so that bilinear filtering at a cell's edge sees the same colours.
+      const float s = (static_cast<float>(column) + 0.5f) / static_cast<float>(size);
+      const float t = 1.0f - (static_cast<float>(row) + 0.5f) / static_cast<float>(size);
+      const int cx = std::min(static_cast<int>(s / cell), atlas_cells - 1);
+      const int cy = std::min(static_cast<int>(t / cell), atlas_cells - 1);
+      const float u = std::clamp(((s - static_cast<float>(cx) * cell) / cell - atlas_margin) / inner, 0.0f, 1.0f);
+      const float v = std::clamp(((t - static_cast<float>(cy) * cell) / cell - atlas_margin) / inner, 0.0f, 1.0f);
+      const glm::vec3 c = painted(cy * atlas_cells + cx, u, v);
+      for (int k = 0; k < 3; ++k)
+        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 + static_cast<std::size_t>(k)] =
+            static_cast<std::uint8_t>(std::lround(255.0f * c[k]));
     }
   return pixels;
 }
