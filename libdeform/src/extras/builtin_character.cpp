@@ -469,7 +469,7 @@ glm::vec3 painted(int part, float u, float v) {
     case 2: {  // the head: a face in front (u = 0), hair on the crown and at the back
       c = mix3(skin, blush, 0.45f * dot(0.17f, 0.38f, 0.05f, 0.05f));
       c = mix3(c, eye, std::min(1.0f, 1.6f * dot(0.095f, 0.50f, 0.025f, 0.025f)));
-      c = mix3(c, lips, 0.9f * dot(0.0f, 0.27f, 0.06f, 0.018f));
+      c = mix3(c, lips, 0.9f * dot(0.0f, 0.30f, 0.10f, 0.03f));
       const float hairline = 0.80f - 0.48f * smooth_band(u, 0.55f, 2.0f, 0.2f);
       c = mix3(c, hair, smooth_band(v + 0.03f * strokes, hairline, 2.0f, 0.04f));
       break;

@@ -26,7 +26,7 @@ DEFORM_EXTRAS_API Model builtin_character();
 
 // The texture the material names: `size` × `size` RGB pixels (row 0 = top, i.e. v = 1), 8 bits per channel, painted
 // by code per body-part atlas cell: skin tones and a face, hair, a shirt with short sleeves, trousers and shoes, soft
-// shading towards each part's ends and underside, value-noise brush strokes (docs/builtin-character.md).
+// shading (lighter in front or on top), value-noise brush strokes (docs/builtin-character.md).
 // `size` must be a power of two from 16 to 4096 (throws deform::Error otherwise). Cost O(size²).
 DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
 
