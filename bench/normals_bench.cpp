@@ -1,4 +1,4 @@
-// normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,554 points, 3,036
+// normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,530 points, 2,732
 // render vertices, 5,056 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
 // UV seams), with the points warped so that no two frames are alike to the caches' eyes. Items are render vertices.
 //   normals/builtin, normals/100k                    VertexNormalsJob::run, the kernel copy the CPU gets (isa_best)

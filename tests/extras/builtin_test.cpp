@@ -164,7 +164,7 @@ TEST_CASE("DOF limits are anatomical") {
   CHECK(head(world_of(pose)[static_cast<std::size_t>(id("shin_l"))]).z > 0.3f);
 }
 
-TEST_CASE("the body: closed parts wound outward, 1.8 m tall, UVs in [0, 1], unit normals") {
+TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1], unit normals") {
   const deform::Mesh& mesh = character().mesh;
   const deform::Bounds bounds = deform::compute_bounds(mesh.positions);
   CHECK(bounds.max.y == doctest::Approx(1.8f).epsilon(0.02));
@@ -173,25 +173,43 @@ TEST_CASE("the body: closed parts wound outward, 1.8 m tall, UVs in [0, 1], unit
   CHECK(bounds.max.x == doctest::Approx(-bounds.min.x).epsilon(1e-5));
   CHECK(bounds.max.x == doctest::Approx(0.9f).epsilon(0.03));  // arm span ≈ height
 
-  CHECK(mesh.submeshes.size() == 13);
-  for (const deform::Submesh& part : mesh.submeshes) {
-    INFO(part.group);
-    // Every edge of a part is used exactly twice, once in each direction: closed and consistently oriented.
-    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-    double volume = 0.0;
-    for (std::uint32_t t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
-      std::uint32_t p[3];
-      for (int k = 0; k < 3; ++k) p[k] = mesh.vertex_point[mesh.triangles[3 * t + static_cast<std::uint32_t>(k)]];
-      for (int k = 0; k < 3; ++k) ++edges[{p[k], p[(k + 1) % 3]}];
-      volume += glm::dot(glm::dvec3(mesh.positions[p[0]]),
-                         glm::cross(glm::dvec3(mesh.positions[p[1]]), glm::dvec3(mesh.positions[p[2]]))) / 6.0;
+  // Thirteen parts (groups, atlas cells) of one surface.
+  REQUIRE(mesh.submeshes.size() == 13);
+  const char* names[] = {"torso", "neck", "head", "arm_l", "arm_r", "hand_l", "hand_r",
+                         "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r"};
+  for (std::size_t i = 0; i < 13; ++i) CHECK(mesh.submeshes[i].group == names[i]);
+  // Every edge of the body is used exactly twice, once in each direction: closed and consistently oriented; the
+  // enclosed volume is positive (outward) and the surface is one connected piece.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  double volume = 0.0;
+  std::vector<std::uint32_t> component(mesh.point_count());
+  for (std::uint32_t i = 0; i < component.size(); ++i) component[i] = i;
+  auto find = [&](std::uint32_t i) {
+    while (component[i] != i) i = component[i] = component[component[i]];
+    return i;
+  };
+  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    std::uint32_t p[3];
+    for (int k = 0; k < 3; ++k) p[k] = mesh.vertex_point[mesh.triangles[3 * t + static_cast<std::uint32_t>(k)]];
+    for (int k = 0; k < 3; ++k) {
+      ++edges[{p[k], p[(k + 1) % 3]}];
+      component[find(p[k])] = find(p[(k + 1) % 3]);
     }
-    bool closed = true;
-    for (const auto& [edge, count] : edges)
-      if (count != 1 || edges.count({edge.second, edge.first}) != 1) closed = false;
-    CHECK(closed);
-    CHECK(volume > 0.0);  // outward
+    volume += glm::dot(glm::dvec3(mesh.positions[p[0]]),
+                       glm::cross(glm::dvec3(mesh.positions[p[1]]), glm::dvec3(mesh.positions[p[2]]))) / 6.0;
   }
+  bool closed = true;
+  for (const auto& [edge, count] : edges)
+    if (count != 1 || edges.count({edge.second, edge.first}) != 1) closed = false;
+  CHECK(closed);
+  CHECK(volume > 0.05);  // outward; a person of 1.8 m holds about 0.07 m³
+  CHECK(volume < 0.1);
+  std::size_t pieces = 0;
+  for (std::uint32_t i = 0; i < component.size(); ++i) pieces += find(i) == i ? 1 : 0;
+  CHECK(pieces == 1);
+  // Euler characteristic 2: a sphere's topology (no handles, no pinches).
+  CHECK(static_cast<long>(mesh.point_count()) - static_cast<long>(edges.size() / 2) +
+            static_cast<long>(mesh.triangle_count()) == 2);
 
   REQUIRE(mesh.vertex_uvs.size() == mesh.vertex_count());
   REQUIRE(mesh.vertex_normals.size() == mesh.vertex_count());
@@ -228,6 +246,7 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
       const deform::BoneSegment& seg = segments[m.weights.bones[i][k]];
       const glm::vec3 axis = seg.tail - seg.head;
       const float t = glm::dot(axis, axis) > 0 ? std::clamp(glm::dot(p - seg.head, axis) / glm::dot(axis, axis), 0.f, 1.f) : 0.f;
+      INFO("point " << i << " (" << p.x << ", " << p.y << ", " << p.z << "), bone " << s.bone(m.weights.bones[i][k]).name);
       REQUIRE(glm::length(p - (seg.head + t * axis)) < 0.35f);
     }
     for (const char* side : {"_l", "_r"}) {
@@ -274,15 +293,38 @@ TEST_CASE("two calls build the same character") {
   CHECK(deform::builtin_texture(64) == deform::builtin_texture(64));
 }
 
-TEST_CASE("the texture") {
+TEST_CASE("the texture: painted skin, clothes and a face, without grid lines") {
   const std::vector<std::uint8_t> t = deform::builtin_texture(512);
   REQUIRE(t.size() == 512u * 512u * 3u);
-  // Row 0 is the top: the torso's cell (part 0) is the bottom-left, at the last rows.
-  const std::size_t torso = ((511u - 5u) * 512u + 69u) * 3u;
-  CHECK(t[torso] > 100);
-  // Squares alternate: two neighbouring squares of one cell differ.
-  const std::size_t a = ((511u - 20u) * 512u + 20u) * 3u, b = ((511u - 20u) * 512u + 36u) * 3u;
-  CHECK(t[a] != t[b]);
+  // The texel of body part `part` (atlas cell, row by row from the bottom left) at its own (u, v); row 0 is the top.
+  auto texel = [&](int part, float u, float v) {
+    const float cell = 128.0f, margin = 0.04f, inner = 1.0f - 2.0f * margin;
+    const auto column = static_cast<std::size_t>(static_cast<float>(part % 4) * cell + cell * (margin + inner * u));
+    const auto from_bottom = static_cast<std::size_t>(static_cast<float>(part / 4) * cell + cell * (margin + inner * v));
+    const std::size_t i = ((511u - from_bottom) * 512u + column) * 3u;
+    return glm::ivec3(t[i], t[i + 1], t[i + 2]);
+  };
+  // u = 0 is a part's front (or top), 1 its back (or underside); v runs along the part (docs/builtin-character.md).
+  const glm::ivec3 face = texel(2, 0.0f, 0.42f), hair = texel(2, 0.9f, 0.8f), shirt = texel(0, 0.0f, 0.6f);
+  const glm::ivec3 trousers = texel(9, 0.0f, 0.5f), hand = texel(5, 0.0f, 0.5f), eye = texel(2, 0.095f, 0.50f);
+  INFO(face.x << " " << face.y << " " << face.z << " / shirt " << shirt.x << " " << shirt.y << " " << shirt.z);
+  CHECK(face.x > 180);  // skin: warm and light
+  CHECK(face.x > face.y);
+  CHECK(face.y > face.z);
+  CHECK(hand.x > hand.z + 40);
+  CHECK(shirt.z > shirt.x);  // the shirt is blue
+  CHECK(trousers.x + trousers.y + trousers.z < face.x + face.y + face.z - 200);
+  CHECK(hair.x + hair.y + hair.z < 300);
+  CHECK(eye.x + eye.y + eye.z < face.x + face.y + face.z - 200);
+  // Painted, not a checker: neighbouring texels inside a cell never differ by a grid line's step.
+  int steepest = 0;
+  for (std::size_t row = 0; row < 512; ++row)
+    for (std::size_t column = 0; column + 1 < 512; ++column) {
+      if ((column + 1) % 128 == 0) continue;  // the border between two cells
+      for (std::size_t k = 0; k < 3; ++k)
+        steepest = std::max(steepest, std::abs(int(t[(row * 512 + column) * 3 + k]) - int(t[(row * 512 + column + 1) * 3 + k])));
+    }
+  CHECK(steepest < 120);  // 89 here (the eyes); a checker's grid line steps by 150 or more
   CHECK_THROWS_AS(deform::builtin_texture(100), deform::Error);
   CHECK_THROWS_AS(deform::builtin_texture(8), deform::Error);
   CHECK_THROWS_AS(deform::builtin_texture(8192), deform::Error);

@@ -1,7 +1,9 @@
-// The built-in character: skeleton, body (generalised cylinders swept along the bones), atlas UVs, texture, weights.
+// The built-in character: skeleton, body (a box-modelled cage, Catmull–Clark subdivided), atlas UVs, texture, weights.
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
+#include <utility>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -79,150 +81,260 @@ std::vector<Bone> character_bones() {
 }
 
 // ----------------------------------------------------------------------------------------------------------------
-// Body: 13 closed tubes. A tube runs straight from `start` to `end`; its cross-section is an ellipse with radius r1
-// along e1 and r2 along e2 = t × e1, interpolated between profile keys; both ends are closed by two cap rings and a
-// pole (a rounded end). Rings crowd around the joints so that elbows and knees bend smoothly.
+// Body: one closed, connected surface. A coarse quad cage is box-modelled in code — an octagonal torso whose side,
+// top and bottom faces are extruded into the arms, the neck and head, and the legs; hands (mittens with a thumb) and
+// feet are extruded from those — and refined by two Catmull–Clark subdivisions into a smooth, organic limit-like
+// surface (every cage quad becomes 16). Every face keeps the body part (OBJ group, atlas cell) of its cage face.
 
-struct ProfileKey {
-  float t;              // 0 at start, 1 at end
-  float r1, r2;         // metres
-  glm::vec3 shift{0.0f};  // world offset of the ring centre (mirrored with the part)
-};
+enum BodyPart : int { torso, neck, head_part, arm_l, arm_r, hand_l, hand_r, thumb_l, thumb_r, leg_l, leg_r, foot_l, foot_r };
+constexpr int body_part_count = 13;
+const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",    "arm_l",   "arm_r", "hand_l", "hand_r",
+                                                     "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r"};
 
-struct Part {
-  std::string name;
-  glm::vec3 start, end, e1;
-  int rings;      // body rings, caps not counted
-  int segments;   // points per ring
-  std::vector<ProfileKey> keys;
-  std::vector<float> joints;  // t of the joints the rings crowd around
-  float cap_start = 1.0f, cap_end = 1.0f;  // cap length / mean end radius
-};
+struct Cage {
+  std::vector<glm::vec3> points;
+  std::vector<std::array<std::uint32_t, 4>> faces;  // counter-clockwise seen from outside
+  std::vector<int> parts;                           // body part of each face
 
-ProfileKey profile(const Part& part, float t) {
-  const std::vector<ProfileKey>& k = part.keys;
-  if (t <= k.front().t) return k.front();
-  for (std::size_t i = 1; i < k.size(); ++i)
-    if (t <= k[i].t) {
-      const float s = (t - k[i - 1].t) / (k[i].t - k[i - 1].t);
-      const float f = s * s * (3.0f - 2.0f * s);  // smoothstep: no creases at the keys
-      return {t, k[i - 1].r1 + f * (k[i].r1 - k[i - 1].r1), k[i - 1].r2 + f * (k[i].r2 - k[i - 1].r2),
-              k[i - 1].shift + f * (k[i].shift - k[i - 1].shift)};
+  std::uint32_t add(glm::vec3 p) {
+    points.push_back(p);
+    return static_cast<std::uint32_t>(points.size() - 1);
+  }
+  // A loop of the extrusion: centre, the two cross-section axes and the half-widths along them.
+  struct Loop {
+    glm::vec3 centre;
+    float r1, r2;
+  };
+  // Extrudes face `f` through `loops` (one ring of 4 points each): side quads for each loop, the last loop's quad
+  // replaces the face. A new corner lies at its loop's centre ± r1·e1 ± r2·e2 with the signs of the old corner's
+  // offset from the face's centre. Returns the index of the cap face (the last loop's quad).
+  std::size_t extrude(std::size_t f, glm::vec3 e1, glm::vec3 e2, const std::vector<Loop>& loops, int part) {
+    std::array<std::uint32_t, 4> ring = faces[f];
+    glm::vec3 centre(0.0f);
+    for (std::uint32_t p : ring) centre += 0.25f * points[p];
+    std::array<glm::vec2, 4> sign{};
+    for (int k = 0; k < 4; ++k) {
+      const glm::vec3 o = points[ring[static_cast<std::size_t>(k)]] - centre;
+      sign[static_cast<std::size_t>(k)] = {glm::dot(o, e1) >= 0.0f ? 1.0f : -1.0f, glm::dot(o, e2) >= 0.0f ? 1.0f : -1.0f};
     }
-  return k.back();
+    for (std::size_t l = 0; l < loops.size(); ++l) {
+      std::array<std::uint32_t, 4> next{};
+      for (std::size_t k = 0; k < 4; ++k)
+        next[k] = add(loops[l].centre + sign[k].x * loops[l].r1 * e1 + sign[k].y * loops[l].r2 * e2);
+      for (std::size_t k = 0; k < 4; ++k) {
+        faces.push_back({ring[k], ring[(k + 1) % 4], next[(k + 1) % 4], next[k]});
+        parts.push_back(part);
+      }
+      ring = next;
+    }
+    faces[f] = ring;
+    parts[f] = part;
+    return f;
+  }
+};
+
+// The left half's extrusions are mirrored for the right one; `side` is +1 (left, +X) or -1.
+Cage body_cage() {
+  Cage cage;
+  // Torso: octagonal rings (flat faces at x = ±rx and z = ±rz), bottom to top.
+  struct TorsoRing {
+    float y, rx, rz, dz;
+  };
+  const TorsoRing torso_rings[] = {
+      {0.80f, 0.160f, 0.115f, 0.000f}, {0.98f, 0.165f, 0.120f, -0.005f}, {1.18f, 0.150f, 0.115f, 0.005f},
+      {1.37f, 0.185f, 0.120f, 0.000f}, {1.535f, 0.170f, 0.095f, 0.000f}};
+  const float c = std::tan(std::numbers::pi_v<float> / 8.0f);  // 0.414: octagon corners on the flat faces
+  const glm::vec2 octagon[8] = {{1, c}, {c, 1}, {-c, 1}, {-1, c}, {-1, -c}, {-c, -1}, {c, -1}, {1, -c}};
+  std::vector<std::array<std::uint32_t, 8>> rings;
+  for (const TorsoRing& r : torso_rings) {
+    std::array<std::uint32_t, 8> ring{};
+    for (std::size_t k = 0; k < 8; ++k)
+      ring[k] = cage.add({r.rx * octagon[k].x, r.y, r.rz * octagon[k].y + r.dz});
+    rings.push_back(ring);
+  }
+  // Angles grow from +X towards +Z, so seen from outside (+Y is up) a side quad runs k → k+1 on the upper ring first.
+  std::size_t arm_face[2] = {0, 0};
+  for (std::size_t i = 0; i + 1 < rings.size(); ++i)
+    for (std::size_t k = 0; k < 8; ++k) {
+      const std::size_t k1 = (k + 1) % 8;
+      if (i == 3 && k == 7) arm_face[0] = cage.faces.size();  // the +X face between the two top rings
+      if (i == 3 && k == 3) arm_face[1] = cage.faces.size();  // the -X face
+      cage.faces.push_back({rings[i][k], rings[i + 1][k], rings[i + 1][k1], rings[i][k1]});
+      cage.parts.push_back(torso);
+    }
+  // Caps: the octagon as three quads (left, middle, right); wound outward (top seen from +Y, bottom from -Y).
+  const auto& top = rings.back();
+  const auto& bottom = rings.front();
+  cage.faces.push_back({top[1], top[0], top[7], top[6]});
+  const std::size_t neck_face = cage.faces.size();
+  cage.faces.push_back({top[6], top[5], top[2], top[1]});
+  cage.faces.push_back({top[5], top[4], top[3], top[2]});
+  const std::size_t leg_face[2] = {cage.faces.size(), cage.faces.size() + 2};
+  cage.faces.push_back({bottom[6], bottom[7], bottom[0], bottom[1]});
+  cage.faces.push_back({bottom[1], bottom[2], bottom[5], bottom[6]});
+  cage.faces.push_back({bottom[2], bottom[3], bottom[4], bottom[5]});
+  for (int i = 0; i < 6; ++i) cage.parts.push_back(torso);
+
+  const glm::vec3 x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  // Neck and head.
+  const std::size_t head_top = cage.extrude(neck_face, x, z, {{{0.0f, 1.62f, 0.000f}, 0.050f, 0.055f}}, neck);
+  cage.extrude(head_top, x, z,
+               {{{0.0f, 1.665f, 0.012f}, 0.075f, 0.085f},
+                {{0.0f, 1.75f, 0.010f}, 0.092f, 0.105f},
+                {{0.0f, 1.815f, 0.000f}, 0.070f, 0.085f}},
+               head_part);
+  for (int s = 0; s < 2; ++s) {
+    const float side = s == 0 ? 1.0f : -1.0f;
+    const glm::vec3 out = side * x;  // along the arm
+    // Arm: shoulder, elbow, wrist (y and z half-widths).
+    const std::size_t wrist = cage.extrude(arm_face[s], y, z,
+                                           {{{side * 0.25f, 1.45f, 0.0f}, 0.078f, 0.074f},
+                                            {{side * 0.45f, 1.45f, 0.0f}, 0.056f, 0.058f},
+                                            {{side * 0.71f, 1.45f, 0.0f}, 0.030f, 0.038f}},
+                                           s == 0 ? arm_l : arm_r);
+    // Hand: a mitten, flat (thin along y, wide along z), then the fingers' tip.
+    cage.extrude(wrist, y, z,
+                 {{{side * 0.79f, 1.45f, 0.0f}, 0.030f, 0.062f}, {{side * 0.93f, 1.45f, 0.0f}, 0.020f, 0.054f}},
+                 s == 0 ? hand_l : hand_r);
+    // Thumb: from the palm's front (+Z) face, towards the front and out.
+    std::size_t front = cage.faces.size();
+    for (std::size_t f = 0; f < cage.faces.size(); ++f) {
+      if (cage.parts[f] != (s == 0 ? hand_l : hand_r)) continue;
+      glm::vec3 centre(0.0f);
+      for (std::uint32_t p : cage.faces[f]) centre += 0.25f * cage.points[p];
+      if (centre.z > 0.03f && side * centre.x < 0.76f) front = f;
+    }
+    const glm::vec3 thumb_dir = glm::normalize(out + z);
+    cage.extrude(front, y, glm::normalize(out - z),
+                 {{glm::vec3(side * 0.745f, 1.445f, 0.075f) + 0.035f * thumb_dir, 0.015f, 0.016f}},
+                 s == 0 ? thumb_l : thumb_r);
+    // Leg: two thigh loops, knee, calf, ankle, heel.
+    const float lx = side * 0.095f;
+    const std::size_t sole = cage.extrude(leg_face[s], x, z,
+                                          {{{lx, 0.72f, 0.008f}, 0.074f, 0.072f},
+                                           {{lx, 0.61f, 0.004f}, 0.054f, 0.054f},
+                                           {{lx, 0.47f, 0.005f}, 0.050f, 0.054f},
+                                           {{lx, 0.30f, -0.010f}, 0.058f, 0.062f},
+                                           {{lx, 0.12f, -0.005f}, 0.040f, 0.045f},
+                                           {{lx, -0.005f, -0.010f}, 0.048f, 0.058f}},
+                                          s == 0 ? leg_l : leg_r);
+    cage.parts[sole] = s == 0 ? foot_l : foot_r;
+    // Foot: from the front face of the heel block, forward; flat underneath.
+    std::size_t instep = cage.faces.size();
+    for (std::size_t f = 0; f < cage.faces.size(); ++f) {
+      if (cage.parts[f] != (s == 0 ? leg_l : leg_r)) continue;
+      glm::vec3 centre(0.0f);
+      for (std::uint32_t p : cage.faces[f]) centre += 0.25f * cage.points[p];
+      if (centre.y < 0.1f && centre.z > 0.03f) instep = f;
+    }
+    cage.parts[instep] = s == 0 ? foot_l : foot_r;
+    cage.extrude(instep, x, y,
+                 {{{lx, 0.040f, 0.19f}, 0.048f, 0.040f}},
+                 s == 0 ? foot_l : foot_r);
+  }
+  return cage;
 }
 
-// Ring parameters in [0, 1]: equal steps of a density that is three times higher near each joint.
-std::vector<float> ring_positions(const Part& part) {
-  constexpr int samples = 1024;
-  std::vector<float> cumulative(samples + 1, 0.0f);
-  for (int i = 0; i < samples; ++i) {
-    const float t = (static_cast<float>(i) + 0.5f) / samples;
-    float density = 1.0f;
-    for (float j : part.joints) density += 2.0f * std::exp(-(t - j) * (t - j) / (0.07f * 0.07f));
-    cumulative[static_cast<std::size_t>(i) + 1] = cumulative[static_cast<std::size_t>(i)] + density;
+// One Catmull–Clark step of a closed quad mesh.
+Cage subdivide(const Cage& in) {
+  Cage out;
+  const std::size_t n = in.points.size();
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_index;  // → edge number
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  std::vector<std::vector<std::size_t>> edge_faces;
+  auto edge = [&](std::uint32_t a, std::uint32_t b) {
+    const auto key = std::minmax(a, b);
+    const auto [it, inserted] = edge_index.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(edges.size()));
+    if (inserted) {
+      edges.push_back({key.first, key.second});
+      edge_faces.emplace_back();
+    }
+    return it->second;
+  };
+  std::vector<glm::vec3> face_point(in.faces.size());
+  for (std::size_t f = 0; f < in.faces.size(); ++f) {
+    glm::vec3 c(0.0f);
+    for (std::uint32_t p : in.faces[f]) c += 0.25f * in.points[p];
+    face_point[f] = c;
+    for (std::size_t k = 0; k < 4; ++k) edge_faces[edge(in.faces[f][k], in.faces[f][(k + 1) % 4])].push_back(f);
   }
-  std::vector<float> rings;
-  std::size_t i = 0;
-  for (int r = 0; r < part.rings; ++r) {
-    const float target = cumulative.back() * static_cast<float>(r) / static_cast<float>(part.rings - 1);
-    while (i + 1 < samples && cumulative[i + 1] < target) ++i;
-    const float span = cumulative[i + 1] - cumulative[i];
-    const float within = span > 0.0f ? std::clamp((target - cumulative[i]) / span, 0.0f, 1.0f) : 0.0f;
-    rings.push_back((static_cast<float>(i) + within) / samples);
+  // Vertex points: (F + 2R + (valence - 3)·P) / valence.
+  std::vector<glm::vec3> face_sum(n, glm::vec3(0.0f)), mid_sum(n, glm::vec3(0.0f));
+  std::vector<float> valence(n, 0.0f), face_count(n, 0.0f);
+  for (std::size_t f = 0; f < in.faces.size(); ++f)
+    for (std::uint32_t p : in.faces[f]) {
+      face_sum[p] += face_point[f];
+      face_count[p] += 1.0f;
+    }
+  for (const auto& e : edges) {
+    const glm::vec3 mid = 0.5f * (in.points[e[0]] + in.points[e[1]]);
+    for (std::uint32_t p : e) {
+      mid_sum[p] += mid;
+      valence[p] += 1.0f;
+    }
   }
-  return rings;
+  for (std::size_t p = 0; p < n; ++p) {
+    const float v = valence[p];
+    out.points.push_back((face_sum[p] / face_count[p] + 2.0f * mid_sum[p] / v + (v - 3.0f) * in.points[p]) / v);
+  }
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto& f = edge_faces[e];
+    if (f.size() != 2) throw Error::in_file("builtin character", "body cage", "is not a closed 2-manifold");
+    out.points.push_back(0.25f * (in.points[edges[e][0]] + in.points[edges[e][1]] + face_point[f[0]] + face_point[f[1]]));
+  }
+  const auto face_base = static_cast<std::uint32_t>(out.points.size());
+  for (const glm::vec3& c : face_point) out.points.push_back(c);
+  for (std::size_t f = 0; f < in.faces.size(); ++f) {
+    const auto& q = in.faces[f];
+    for (std::size_t k = 0; k < 4; ++k) {
+      const std::uint32_t next = static_cast<std::uint32_t>(n) + edge(q[k], q[(k + 1) % 4]);
+      const std::uint32_t previous = static_cast<std::uint32_t>(n) + edge(q[(k + 3) % 4], q[k]);
+      out.faces.push_back({q[k], next, face_base + static_cast<std::uint32_t>(f), previous});
+      out.parts.push_back(in.parts[f]);
+    }
+  }
+  return out;
 }
 
-Part mirror_part(Part part) {
-  part.name.back() = 'r';
-  auto s = [](glm::vec3 v) { return glm::vec3(-v.x, v.y, v.z); };
-  part.start = s(part.start);
-  part.end = s(part.end);
-  part.e1 = s(part.e1);
-  for (ProfileKey& k : part.keys) k.shift = s(k.shift);
-  return part;
+// UVs: a 4 × 4 atlas, one cell per body part. Around a part's axis, u is the angle from the part's `front`
+// direction over π (0 in front or on top, 1 behind or underneath: the two sides share the texture, so no part has a
+// seam); v runs along the axis from `start` (0) to `end` (1).
+struct PartAxis {
+  glm::vec3 start, end, front;
+};
+
+PartAxis part_axis(int part) {
+  const glm::vec3 y(0, 1, 0), z(0, 0, 1);
+  auto mirror = [](PartAxis a) {
+    a.start.x = -a.start.x;
+    a.end.x = -a.end.x;
+    return a;
+  };
+  switch (part) {
+    case torso: return {{0.0f, 0.80f, 0.0f}, {0.0f, 1.52f, 0.0f}, z};
+    case neck: return {{0.0f, 1.50f, 0.0f}, {0.0f, 1.63f, 0.0f}, z};
+    case head_part: return {{0.0f, 1.60f, 0.0f}, {0.0f, 1.80f, 0.0f}, z};
+    case arm_l: return {{0.17f, 1.45f, 0.0f}, {0.71f, 1.45f, 0.0f}, y};
+    case hand_l: return {{0.71f, 1.45f, 0.0f}, {0.90f, 1.45f, 0.0f}, y};
+    case thumb_l: return {{0.73f, 1.445f, 0.03f}, {0.79f, 1.445f, 0.11f}, y};
+    case leg_l: return {{0.09f, 0.86f, 0.0f}, {0.09f, 0.04f, 0.0f}, z};
+    case foot_l: return {{0.09f, 0.03f, -0.06f}, {0.09f, 0.03f, 0.22f}, y};
+    default: return mirror(part_axis(part - 1));  // the _r parts follow their _l ones
+  }
 }
 
-std::vector<Part> character_parts() {
-  const glm::vec3 x(1, 0, 0), y(0, 1, 0);
-  std::vector<Part> parts;
-  parts.push_back({"torso", {0.0f, 0.83f, 0.0f}, {0.0f, 1.50f, 0.0f}, x, 18, 20,
-                   {{0.00f, 0.120f, 0.090f},
-                    {0.10f, 0.160f, 0.105f},
-                    {0.21f, 0.165f, 0.105f, {0.0f, 0.0f, -0.010f}},
-                    {0.36f, 0.140f, 0.095f},
-                    {0.51f, 0.145f, 0.100f},
-                    {0.67f, 0.160f, 0.110f, {0.0f, 0.0f, 0.010f}},
-                    {0.85f, 0.170f, 0.100f},
-                    {1.00f, 0.100f, 0.070f}},
-                   {0.33f, 0.63f},
-                   0.6f,
-                   0.5f});
-  parts.push_back({"neck", {0.0f, 1.46f, -0.005f}, {0.0f, 1.64f, 0.0f}, x, 4, 12,
-                   {{0.0f, 0.055f, 0.060f}, {1.0f, 0.050f, 0.055f}}, {}, 0.5f, 0.5f});
-  parts.push_back({"head", {0.0f, 1.60f, 0.01f}, {0.0f, 1.75f, 0.01f}, x, 10, 16,
-                   {{0.00f, 0.055f, 0.060f},
-                    {0.20f, 0.080f, 0.090f, {0.0f, 0.0f, 0.010f}},
-                    {0.45f, 0.090f, 0.105f},
-                    {0.75f, 0.085f, 0.100f},
-                    {1.00f, 0.050f, 0.060f}},
-                   {},
-                   0.6f,
-                   1.0f});
-  const Part arm{"arm_l", {0.10f, 1.45f, 0.0f}, {0.71f, 1.45f, 0.0f}, y, 18, 12,
-                 {{0.000f, 0.060f, 0.060f},
-                  {0.115f, 0.062f, 0.065f},
-                  {0.328f, 0.050f, 0.052f},
-                  {0.525f, 0.043f, 0.045f},
-                  {0.574f, 0.042f, 0.044f},
-                  {0.689f, 0.044f, 0.047f},
-                  {0.902f, 0.032f, 0.038f},
-                  {1.000f, 0.025f, 0.033f}},
-                 {0.115f, 0.574f, 1.0f},
-                 0.6f,
-                 0.6f};
-  const Part hand{"hand_l", {0.69f, 1.45f, 0.0f}, {0.88f, 1.45f, 0.0f}, y, 7, 10,
-                  {{0.00f, 0.022f, 0.035f},
-                   {0.26f, 0.022f, 0.045f},
-                   {0.58f, 0.018f, 0.045f},
-                   {0.84f, 0.015f, 0.040f},
-                   {1.00f, 0.012f, 0.032f}},
-                  {0.58f},
-                  0.6f,
-                  0.8f};
-  // Along the thumb bones (45° between +X and +Z), from just behind thumb1's head to near thumb2's tip.
-  const glm::vec3 thumb_direction = glm::normalize(glm::vec3(1.0f, 0.0f, 1.0f));
-  const glm::vec3 thumb_head(0.73f, 1.445f, 0.03f);
-  const Part thumb{"thumb_l", thumb_head - 0.01f * thumb_direction, thumb_head + 0.07f * thumb_direction, y, 4, 8,
-                   {{0.0f, 0.013f, 0.016f}, {0.6f, 0.012f, 0.014f}, {1.0f, 0.010f, 0.012f}}, {0.625f}, 1.0f, 1.0f};
-  const Part leg{"leg_l", {0.09f, 0.98f, 0.0f}, {0.09f, 0.07f, 0.0f}, x, 20, 14,
-                 {{0.000f, 0.075f, 0.080f},
-                  {0.088f, 0.085f, 0.090f},
-                  {0.253f, 0.075f, 0.080f},
-                  {0.440f, 0.055f, 0.060f},
-                  {0.527f, 0.050f, 0.055f},
-                  {0.615f, 0.052f, 0.060f, {0.0f, 0.0f, -0.010f}},
-                  {0.747f, 0.045f, 0.050f, {0.0f, 0.0f, -0.005f}},
-                  {0.912f, 0.035f, 0.038f},
-                  {1.000f, 0.033f, 0.035f}},
-                 {0.088f, 0.527f, 0.99f},
-                 0.5f,
-                 0.6f};
-  const Part foot{"foot_l", {0.09f, 0.04f, -0.05f}, {0.09f, 0.02f, 0.17f}, x, 7, 10,
-                  {{0.00f, 0.035f, 0.040f},
-                   {0.25f, 0.040f, 0.045f, {0.0f, 0.015f, 0.0f}},
-                   {0.55f, 0.045f, 0.035f, {0.0f, 0.005f, 0.0f}},
-                   {0.76f, 0.047f, 0.022f},
-                   {1.00f, 0.040f, 0.016f}},
-                  {0.77f},
-                  0.8f,
-                  0.8f};
-  for (const Part& p : {arm, hand, thumb, leg, foot}) {
-    parts.push_back(p);
-    parts.push_back(mirror_part(p));
-  }
-  return parts;
+glm::vec2 part_uv(int part, glm::vec3 p) {
+  const PartAxis a = part_axis(part);
+  const glm::vec3 t = glm::normalize(a.end - a.start);
+  const float length = glm::length(a.end - a.start);
+  const glm::vec3 d = p - a.start;
+  const float v = std::clamp(glm::dot(d, t) / length, 0.0f, 1.0f);
+  const glm::vec3 radial = d - glm::dot(d, t) * t;
+  const glm::vec3 front = glm::normalize(a.front - glm::dot(a.front, t) * t);
+  const float r = glm::length(radial);
+  const float u = r > 1e-6f ? std::acos(std::clamp(glm::dot(radial / r, front), -1.0f, 1.0f)) / std::numbers::pi_v<float>
+                            : 0.5f;
+  return {u, v};
 }
 
 // Atlas: a 4 × 4 grid of cells, one per part (part index = cell index, row-major from the bottom-left).
@@ -236,83 +348,39 @@ glm::vec2 atlas_uv(std::size_t part, float u, float v) {
   return origin + cell * glm::vec2(atlas_margin + inner * u, atlas_margin + inner * v);
 }
 
-// Appends one tube: its points, its render vertices (a seam column duplicated for u = 1, one pole vertex per fan
-// triangle) and its triangles, wound counter-clockwise seen from outside.
-void add_part(Mesh& mesh, const Part& part, std::size_t part_index) {
-  const glm::vec3 t = glm::normalize(part.end - part.start);
-  const glm::vec3 e1 = glm::normalize(part.e1 - glm::dot(part.e1, t) * t);
-  const glm::vec3 e2 = glm::cross(t, e1);
-  const float length = glm::length(part.end - part.start);
-
-  struct Ring {
-    glm::vec3 centre;
-    float r1, r2;
-  };
-  std::vector<Ring> rings;
-  const std::vector<float> body = ring_positions(part);
-  auto body_ring = [&](float s) {
-    const ProfileKey k = profile(part, s);
-    return Ring{part.start + s * length * t + k.shift, k.r1, k.r2};
-  };
-  // Caps: rings at 35° and 65° of a quarter ellipse whose length is cap × the mean end radius, then the pole.
-  const float cap_angles[2] = {35.0f, 65.0f};
-  auto cap_ring = [&](const Ring& end, float direction, float cap, float degrees) {
-    const float a = degrees * std::numbers::pi_v<float> / 180.0f;
-    const float cap_length = cap * 0.5f * (end.r1 + end.r2);
-    return Ring{end.centre + direction * cap_length * std::sin(a) * t, end.r1 * std::cos(a), end.r2 * std::cos(a)};
-  };
-  const Ring first = body_ring(body.front()), last = body_ring(body.back());
-  for (int i = 1; i >= 0; --i) rings.push_back(cap_ring(first, -1.0f, part.cap_start, cap_angles[i]));
-  for (float s : body) rings.push_back(body_ring(s));
-  for (int i = 0; i < 2; ++i) rings.push_back(cap_ring(last, 1.0f, part.cap_end, cap_angles[i]));
-  const glm::vec3 pole_start = first.centre - part.cap_start * 0.5f * (first.r1 + first.r2) * t;
-  const glm::vec3 pole_end = last.centre + part.cap_end * 0.5f * (last.r1 + last.r2) * t;
-
-  const auto segments = static_cast<std::uint32_t>(part.segments);
-  const auto ring_count = static_cast<std::uint32_t>(rings.size());
-  const auto point_base = static_cast<std::uint32_t>(mesh.positions.size());
-  const auto vertex_base = static_cast<std::uint32_t>(mesh.vertex_point.size());
-  const float v_step = 1.0f / static_cast<float>(ring_count + 1);  // poles at v = 0 and 1
-
-  // Points: pole_start, the rings, pole_end.
-  mesh.positions.push_back(pole_start);
-  for (const Ring& ring : rings)
-    for (std::uint32_t j = 0; j < segments; ++j) {
-      const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(j) / static_cast<float>(segments);
-      mesh.positions.push_back(ring.centre + ring.r1 * std::cos(a) * e1 + ring.r2 * std::sin(a) * e2);
+// The subdivided body as the model's mesh: triangles grouped by part (one submesh and OBJ group each), one render
+// vertex per point and part it touches.
+void build_body(Mesh& mesh) {
+  Cage body = body_cage();
+  for (int level = 0; level < 2; ++level) body = subdivide(body);
+  mesh.positions = body.points;
+  std::map<std::pair<std::uint32_t, int>, std::uint32_t> vertex_of;
+  for (int part = 0; part < body_part_count; ++part) {
+    const auto first = static_cast<std::uint32_t>(mesh.triangle_count());
+    for (std::size_t f = 0; f < body.faces.size(); ++f) {
+      if (body.parts[f] != part) continue;
+      std::array<std::uint32_t, 4> v{};
+      for (std::size_t k = 0; k < 4; ++k) {
+        const std::uint32_t p = body.faces[f][k];
+        const auto [it, inserted] = vertex_of.try_emplace({p, part}, static_cast<std::uint32_t>(mesh.vertex_point.size()));
+        if (inserted) {
+          mesh.vertex_point.push_back(p);
+          const glm::vec2 uv = part_uv(part, mesh.positions[p]);
+          mesh.vertex_uvs.push_back(atlas_uv(static_cast<std::size_t>(part), uv.x, uv.y));
+        }
+        v[k] = it->second;
+      }
+      // Split along the shorter diagonal.
+      const auto& P = mesh.positions;
+      const auto& q = body.faces[f];
+      if (glm::length(P[q[0]] - P[q[2]]) <= glm::length(P[q[1]] - P[q[3]]))
+        mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
+      else
+        mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[3], v[1], v[2], v[3]});
     }
-  mesh.positions.push_back(pole_end);
-  const std::uint32_t pole_end_point = point_base + 1 + ring_count * segments;
-
-  // Render vertices: `segments` for the start pole, (segments + 1) per ring, `segments` for the end pole.
-  auto add_vertex = [&](std::uint32_t point, float u, float v) {
-    mesh.vertex_point.push_back(point);
-    mesh.vertex_uvs.push_back(atlas_uv(part_index, u, v));
-  };
-  const float u_step = 1.0f / static_cast<float>(segments);
-  for (std::uint32_t j = 0; j < segments; ++j) add_vertex(point_base, (static_cast<float>(j) + 0.5f) * u_step, 0.0f);
-  for (std::uint32_t r = 0; r < ring_count; ++r)
-    for (std::uint32_t j = 0; j <= segments; ++j)
-      add_vertex(point_base + 1 + r * segments + j % segments, static_cast<float>(j) * u_step,
-                 static_cast<float>(r + 1) * v_step);
-  for (std::uint32_t j = 0; j < segments; ++j) add_vertex(pole_end_point, (static_cast<float>(j) + 0.5f) * u_step, 1.0f);
-
-  auto ring_vertex = [&](std::uint32_t r, std::uint32_t j) { return vertex_base + segments + r * (segments + 1) + j; };
-  auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    mesh.triangles.insert(mesh.triangles.end(), {a, b, c});
-  };
-  const auto first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
-  for (std::uint32_t j = 0; j < segments; ++j) triangle(vertex_base + j, ring_vertex(0, j + 1), ring_vertex(0, j));
-  for (std::uint32_t r = 0; r + 1 < ring_count; ++r)
-    for (std::uint32_t j = 0; j < segments; ++j) {
-      triangle(ring_vertex(r, j), ring_vertex(r, j + 1), ring_vertex(r + 1, j + 1));
-      triangle(ring_vertex(r, j), ring_vertex(r + 1, j + 1), ring_vertex(r + 1, j));
-    }
-  const std::uint32_t end_pole_vertex = vertex_base + segments + ring_count * (segments + 1);
-  for (std::uint32_t j = 0; j < segments; ++j)
-    triangle(ring_vertex(ring_count - 1, j), ring_vertex(ring_count - 1, j + 1), end_pole_vertex + j);
-  mesh.submeshes.push_back(
-      {first_triangle, static_cast<std::uint32_t>(mesh.triangle_count()) - first_triangle, 0, "builtin", part.name});
+    mesh.submeshes.push_back(
+        {first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0, "builtin", body_part_names[part]});
+  }
 }
 
 }  // namespace
@@ -323,8 +391,7 @@ Model builtin_character() {
   model.skeleton = Skeleton(character_bones(), "builtin");
 
   Mesh& mesh = model.mesh;
-  const std::vector<Part> parts = character_parts();
-  for (std::size_t i = 0; i < parts.size(); ++i) add_part(mesh, parts[i], i);
+  build_body(mesh);
   mesh.face_sizes.assign(mesh.triangle_count(), 3);
   mesh.face_corners = mesh.triangles;
   Material skin;
@@ -343,32 +410,111 @@ Model builtin_character() {
   return model;
 }
 
+namespace {
+
+// Value noise on a periodic lattice: smooth (smoothstep between hashed lattice values), in [0, 1], deterministic.
+float lattice_value(int x, int y, int period) {
+  auto h = static_cast<std::uint32_t>(((x % period) + period) % period) * 73856093u ^
+           static_cast<std::uint32_t>(((y % period) + period) % period) * 19349663u;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
+  return static_cast<float>(h & 0xffffu) / 65535.0f;
+}
+
+float value_noise(float x, float y, int period) {
+  const auto xi = static_cast<int>(std::floor(x)), yi = static_cast<int>(std::floor(y));
+  const float fx = x - static_cast<float>(xi), fy = y - static_cast<float>(yi);
+  const float sx = fx * fx * (3.0f - 2.0f * fx), sy = fy * fy * (3.0f - 2.0f * fy);
+  const float a = lattice_value(xi, yi, period), b = lattice_value(xi + 1, yi, period);
+  const float c = lattice_value(xi, yi + 1, period), d = lattice_value(xi + 1, yi + 1, period);
+  return (a + sx * (b - a)) + sy * ((c + sx * (d - c)) - (a + sx * (b - a)));
+}
+
+float smooth_band(float x, float from, float to, float soft) {  // 1 inside [from, to], soft edges
+  auto step = [](float e0, float e1, float v) {
+    const float t = std::clamp((v - e0) / (e1 - e0), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+  };
+  return step(from - soft, from + soft, x) * (1.0f - step(to - soft, to + soft, x));
+}
+
+glm::vec3 mix3(glm::vec3 a, glm::vec3 b, float t) { return a + std::clamp(t, 0.0f, 1.0f) * (b - a); }
+
+// The painted colour (linear 0..1 RGB) of body part `part` at atlas coordinates (u around the part, v along it).
+glm::vec3 painted(int part, float u, float v) {
+  const glm::vec3 skin(0.93f, 0.74f, 0.62f), skin_shadow(0.80f, 0.55f, 0.47f), blush(0.92f, 0.58f, 0.54f);
+  const glm::vec3 shirt(0.36f, 0.55f, 0.66f), shirt_dark(0.26f, 0.42f, 0.53f);
+  const glm::vec3 trousers(0.30f, 0.30f, 0.40f), belt(0.33f, 0.22f, 0.15f), shoe(0.38f, 0.25f, 0.18f);
+  const glm::vec3 hair(0.33f, 0.21f, 0.13f), eye(0.16f, 0.12f, 0.10f), lips(0.78f, 0.45f, 0.42f);
+  // Brush strokes: stretched noise along u (around the part), plus a softer large-scale wash.
+  const float strokes = value_noise(u * 24.0f, v * 6.0f, 24) - 0.5f;
+  const float wash = value_noise(u * 6.0f + 3.0f * static_cast<float>(part), v * 3.0f, 64) - 0.5f;
+  glm::vec3 c = skin;
+  // u = 0 is the part's front (trunk, head, legs) or top (arms, hands, feet), u = 1 its back or underside; both
+  // sides of a part share its cell (docs/builtin-character.md).
+  auto dot = [&](float cu, float cv, float ru, float rv) {
+    const float x = (u - cu) / ru, y = (v - cv) / rv;
+    return std::exp(-(x * x + y * y) * 1.2f);
+  };
+  switch (part) {
+    case 0: {  // torso: trousers, a belt, a shirt, folds above the belt, a collar line at the neck
+      c = mix3(trousers, belt, smooth_band(v, 0.20f, 0.245f, 0.012f));
+      c = mix3(c, shirt, smooth_band(v, 0.245f, 2.0f, 0.012f));
+      c = mix3(c, shirt_dark, 0.35f * smooth_band(v, 0.25f, 0.45f, 0.08f));
+      c = mix3(c, shirt_dark, 0.5f * smooth_band(v, 0.985f, 2.0f, 0.01f));
+      break;
+    }
+    case 1: c = mix3(skin, skin_shadow, 0.45f * (1.0f - v) * (1.0f - v)); break;  // the neck: darker at the collar
+    case 2: {  // the head: a face in front (u = 0), hair on the crown and at the back
+      c = mix3(skin, blush, 0.45f * dot(0.17f, 0.38f, 0.05f, 0.05f));
+      c = mix3(c, eye, std::min(1.0f, 1.6f * dot(0.095f, 0.50f, 0.025f, 0.025f)));
+      c = mix3(c, lips, 0.9f * dot(0.0f, 0.30f, 0.10f, 0.03f));
+      const float hairline = 0.80f - 0.48f * smooth_band(u, 0.55f, 2.0f, 0.2f);
+      c = mix3(c, hair, smooth_band(v + 0.03f * strokes, hairline, 2.0f, 0.04f));
+      break;
+    }
+    case 3:
+    case 4: c = mix3(skin, shirt, smooth_band(v, -1.0f, 0.25f, 0.015f)); break;  // arms: short sleeves
+    case 9:
+    case 10: c = mix3(trousers, shoe, smooth_band(v, 0.95f, 2.0f, 0.012f)); break;  // legs: trousers to the ankle
+    case 11:
+    case 12: c = mix3(shoe, shoe * 0.6f, smooth_band(u, 0.85f, 2.0f, 0.04f)); break;  // shoes, darker soles
+    case 5:
+    case 6:
+    case 7:
+    case 8: c = mix3(skin, blush, 0.2f); break;  // hands and thumbs: a little pinker
+    default: c = glm::vec3(0.75f); break;
+  }
+  // Painted shading: lighter in front or on top, darker behind or underneath, then the brush texture.
+  c *= 0.92f + 0.08f * std::cos(std::numbers::pi_v<float> * u);
+  c *= 1.0f + 0.06f * strokes + 0.08f * wash;
+  return glm::clamp(c, glm::vec3(0.0f), glm::vec3(1.0f));
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> builtin_texture(int size) {
   if (size < 16 || size > 4096 || (size & (size - 1)) != 0)
     throw Error::in_file("builtin texture", "size " + std::to_string(size), "must be a power of two from 16 to 4096");
-  // One tint per atlas cell (part), RGB.
-  static constexpr std::array<std::array<int, 3>, 16> tints = {{
-      {236, 188, 150}, {226, 176, 140}, {240, 200, 165}, {120, 160, 220}, {220, 120, 120}, {150, 200, 140},
-      {210, 150, 200}, {110, 190, 190}, {230, 190, 100}, {100, 130, 200}, {200, 100, 100}, {90, 150, 110},
-      {170, 110, 160}, {200, 200, 200}, {200, 200, 200}, {200, 200, 200},
-  }};
   const auto n = static_cast<std::size_t>(size);
   std::vector<std::uint8_t> pixels(n * n * 3);
-  const int cell = size / atlas_cells;
-  const int square = std::max(cell / 8, 1);
+  const float cell = 1.0f / atlas_cells;
+  const float inner = 1.0f - 2.0f * atlas_margin;
   for (int row = 0; row < size; ++row)
     for (int column = 0; column < size; ++column) {
-      const int v_pixel = size - 1 - row;  // row 0 is the top of the image, v = 1
-      const int part = (v_pixel / cell) * atlas_cells + column / cell;
-      const bool dark = ((column % cell) / square + (v_pixel % cell) / square) % 2 == 1;
-      const bool line = (column % square) == 0 || (v_pixel % square) == 0;
-      for (int c = 0; c < 3; ++c) {
-        int value = tints[static_cast<std::size_t>(part)][static_cast<std::size_t>(c)];
-        if (dark) value = value * 3 / 4;
-        if (line) value = value / 3;
-        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 + static_cast<std::size_t>(c)] =
-            static_cast<std::uint8_t>(value);
-      }
+      // Texel centre in UV space (row 0 is the top of the image, v = 1), then the cell and the part's own (u, v),
+      // continued into the margin so that bilinear filtering at a cell's edge sees the same colours.
+      const float s = (static_cast<float>(column) + 0.5f) / static_cast<float>(size);
+      const float t = 1.0f - (static_cast<float>(row) + 0.5f) / static_cast<float>(size);
+      const int cx = std::min(static_cast<int>(s / cell), atlas_cells - 1);
+      const int cy = std::min(static_cast<int>(t / cell), atlas_cells - 1);
+      const float u = std::clamp(((s - static_cast<float>(cx) * cell) / cell - atlas_margin) / inner, 0.0f, 1.0f);
+      const float v = std::clamp(((t - static_cast<float>(cy) * cell) / cell - atlas_margin) / inner, 0.0f, 1.0f);
+      const glm::vec3 c = painted(cy * atlas_cells + cx, u, v);
+      for (int k = 0; k < 3; ++k)
+        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 + static_cast<std::size_t>(k)] =
+            static_cast<std::uint8_t>(std::lround(255.0f * c[k]));
     }
   return pixels;
 }
