@@ -76,13 +76,15 @@ std::vector<Bone> character_bones() {
   append(left_leg, false);
   append(left_leg, true);
   // Ponytail (29–32), appended so the limbs keep their ids: from the back of the skull, backward then down behind
-  // the neck (world X angles -120°, -170°, -180°, -180°), 0.45 m to its tip (the spring chain's, builtin_rig.cpp).
+  // the neck (world X angles -120°, -160°, -175°, -180°), 0.30 m to its tip (the spring chain's, builtin_rig.cpp),
+  // which stays above the shoulders: hanging lower, it would lie nearer the upper back than the chest bone does and
+  // take the back's weights.
   // Each bone points along its local +Y. Its first bone is the head's only child, so the head's weight segment
   // (docs/builtin-character.md, "Automatic weights") runs from the head to the ponytail's root.
   bones.push_back({"ponytail1", 4, {}, {0.0f, 0.16f, -0.085f}, {-120.0f, 0.0f, 0.0f}, limits({-170, -45, -45}, {-70, 45, 45})});
-  bones.push_back({"ponytail2", 29, {}, {0.0f, 0.10f, 0.0f}, {-50.0f, 0.0f, 0.0f}, limits({-100, -45, -45}, {0, 45, 45})});
-  bones.push_back({"ponytail3", 30, {}, {0.0f, 0.12f, 0.0f}, {-10.0f, 0.0f, 0.0f}, limits({-60, -45, -45}, {40, 45, 45})});
-  bones.push_back({"ponytail4", 31, {}, {0.0f, 0.12f, 0.0f}, {0.0f, 0.0f, 0.0f}, limits({-50, -45, -45}, {50, 45, 45})});
+  bones.push_back({"ponytail2", 29, {}, {0.0f, 0.10f, 0.0f}, {-40.0f, 0.0f, 0.0f}, limits({-90, -45, -45}, {10, 45, 45})});
+  bones.push_back({"ponytail3", 30, {}, {0.0f, 0.07f, 0.0f}, {-15.0f, 0.0f, 0.0f}, limits({-65, -45, -45}, {35, 45, 45})});
+  bones.push_back({"ponytail4", 31, {}, {0.0f, 0.07f, 0.0f}, {-5.0f, 0.0f, 0.0f}, limits({-55, -45, -45}, {45, 45, 45})});
   for (std::size_t b = 1; b < bones.size(); ++b)
     bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
   return bones;
@@ -224,7 +226,7 @@ Cage body_cage() {
                 {{0.0f, 1.815f, 0.000f}, 0.070f, 0.085f}},
                head_part);
   // Ponytail: from the upper back face of the head (between the loops at y = 1.75 and 1.815), a tube that leaves the
-  // skull backward and bends down behind the neck to y ≈ 1.37, its loops following the ponytail bones.
+  // skull backward and bends down behind the neck to y ≈ 1.51, its loops following the ponytail bones.
   {
     std::size_t back = cage.faces.size();
     for (std::size_t f = 0; f < cage.faces.size(); ++f) {
@@ -240,10 +242,10 @@ Cage body_cage() {
     };
     cage.extrude_tube(back, x, y,
                       {loop({0.0f, 1.775f, -0.140f}, -100.0f, 0.034f, 0.032f),
-                       loop({0.0f, 1.705f, -0.182f}, -135.0f, 0.028f, 0.027f),
-                       loop({0.0f, 1.590f, -0.195f}, -172.0f, 0.031f, 0.029f),
-                       loop({0.0f, 1.470f, -0.194f}, -180.0f, 0.025f, 0.023f),
-                       loop({0.0f, 1.360f, -0.192f}, -180.0f, 0.013f, 0.012f)},
+                       loop({0.0f, 1.705f, -0.178f}, -135.0f, 0.028f, 0.027f),
+                       loop({0.0f, 1.632f, -0.200f}, -165.0f, 0.030f, 0.028f),
+                       loop({0.0f, 1.567f, -0.205f}, -178.0f, 0.024f, 0.022f),
+                       loop({0.0f, 1.515f, -0.205f}, -180.0f, 0.012f, 0.011f)},
                       hair_part);
   }
   for (int s = 0; s < 2; ++s) {
@@ -382,7 +384,7 @@ PartAxis part_axis(int part) {
     case thumb_l: return {{0.73f, 1.445f, 0.03f}, {0.79f, 1.445f, 0.11f}, y};
     case leg_l: return {{0.09f, 0.86f, 0.0f}, {0.09f, 0.04f, 0.0f}, z};
     case foot_l: return {{0.09f, 0.03f, -0.06f}, {0.09f, 0.03f, 0.22f}, y};
-    case hair_part: return {{0.0f, 1.79f, -0.09f}, {0.0f, 1.35f, -0.19f}, -z};
+    case hair_part: return {{0.0f, 1.79f, -0.09f}, {0.0f, 1.50f, -0.205f}, -z};
     default: return mirror(part_axis(part - 1));  // the _r parts follow their _l ones
   }
 }

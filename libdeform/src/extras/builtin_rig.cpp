@@ -39,7 +39,7 @@ Rig rig_on(const Model& model, std::initializer_list<const char*> bones) {
   SpringChainSpec ponytail;
   ponytail.name = "ponytail";
   ponytail.bones = {bone("ponytail1"), bone("ponytail2"), bone("ponytail3"), bone("ponytail4")};
-  ponytail.tip = {0.0f, 0.11f, 0.0f};
+  ponytail.tip = {0.0f, 0.06f, 0.0f};
   ponytail.frequency = 2.75f;
   ponytail.damping_ratio = 0.4f;
   ponytail.gravity = {0.0f, -9.81f, 0.0f};
