@@ -1,5 +1,6 @@
-// frame/builtin_3_lattices: one whole frame of the thesis' scene on one thread — the built-in character (2,530
-// points) reaching far, its three arm lattices stretched and springing: elastic step, FK, skinning, lattices.
+// frame/builtin_3_lattices: one whole frame of the thesis' scene on one thread — the built-in character (2,850
+// points) reaching far, its three arm lattices stretched and springing: elastic step, FK, the ponytail's spring
+// chain, skinning, lattices.
 // The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
 // frame/builtin_lattices_step_update and frame/builtin_3_lattices_shape: the cost of the stretch shape.
 // frame/builtin_3_lattices_normals: the frame and normals() (transported, the default); frame/builtin_whole below.

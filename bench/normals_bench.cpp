@@ -1,5 +1,5 @@
-// normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,530 points, 2,732
-// render vertices, 5,056 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
+// normals/*: per-frame vertex normals (angle-weighted, mesh.hpp) of the built-in character (2,850 points, 3,068
+// render vertices, 5,696 triangles) and of a 100,000-point torus (200,000 triangles, render vertices split along its
 // UV seams), with the points warped so that no two frames are alike to the caches' eyes. Items are render vertices.
 //   normals/builtin, normals/100k                    VertexNormalsJob::run, the kernel copy the CPU gets (isa_best)
 //   normals/builtin_threads, normals/100k_threads    the same split over all threads (run_parallel)

@@ -53,12 +53,13 @@ def test_a_spring_chain_settles_where_gravity_and_its_spring_balance():
     model = deform.builtin_character()
     rig = deform.builtin_rig(model)
     rig.add_spring_chain(model, "finger", ["fingers2_l"], frequency=2.0, damping_ratio=0.7, gravity=(0, -9.81, 0))
-    assert rig.spring_chain_names == ["finger"]
+    assert rig.spring_chain_names == ["ponytail", "finger"]  # the built-in rig's ponytail comes first
     hero = deform.Character(model, rig)
-    assert hero.spring_chain_count == 1
+    assert hero.spring_chain_count == 2
     for _ in range(600):
         hero.update(1 / 60)
-    points = hero.spring_points(0)
+    assert hero.spring_points(0).shape == (5, 3)  # the ponytail: its root and four tails
+    points = hero.spring_points(1)
     assert points.shape == (2, 3) and not points.flags.writeable
     bone = points[1] - points[0]
     length = np.linalg.norm(bone)
@@ -79,5 +80,6 @@ def test_bad_secondary_motion_is_refused():
     rig = deform.builtin_rig(model)
     with pytest.raises(deform.Error):
         rig.add_spring_chain(model, "x", ["neck"], frequency=0.0)
+    assert hero.spring_chain_count == 1  # the ponytail
     with pytest.raises(deform.Error):
-        hero.spring_points(0)
+        hero.spring_points(1)

@@ -95,11 +95,11 @@ def test_other_layouts_are_converted():
 def test_forward_kinematics_of_the_bind_pose(builtin_model):
     skeleton = builtin_model.skeleton
     world, palette = deform.forward_kinematics(skeleton, skeleton.bind_pose())
-    assert world.shape == (29, 4, 4)
+    assert world.shape == (33, 4, 4)
     np.testing.assert_allclose(world, skeleton.bind_world, atol=1e-5)
     np.testing.assert_allclose(palette, np.broadcast_to(np.eye(4), palette.shape), atol=1e-5)
     # Row-major convention: the translation is the last column, the bottom row is 0 0 0 1.
-    np.testing.assert_allclose(world[:, 3], np.broadcast_to([0, 0, 0, 1], (29, 4)))
+    np.testing.assert_allclose(world[:, 3], np.broadcast_to([0, 0, 0, 1], (33, 4)))
 
 
 def test_model_skinned_by_a_posed_skeleton_matches_reference(model):
@@ -125,9 +125,9 @@ def test_model_arrays_are_views(model):
 def test_pose_arrays_are_writeable_views(builtin_model):
     pose = builtin_model.skeleton.bind_pose()
     rotations = pose.rotations
-    assert rotations.shape == (29, 4) and np.shares_memory(rotations, pose.rotations)
+    assert rotations.shape == (33, 4) and np.shares_memory(rotations, pose.rotations)
     before = rotations[4].copy()
     builtin_model.skeleton.set_euler(pose, "head", [0, 30, 0])
     assert not np.allclose(rotations[4], before)  # the view sees the change
     np.testing.assert_allclose(np.linalg.norm(rotations, axis=1), 1, atol=1e-6)
-    assert pose.translations.shape == (29, 3)
+    assert pose.translations.shape == (33, 3)

@@ -17,6 +17,7 @@ namespace {
 
 // Angular error statistics, degrees, over render vertices whose recomputed normal is not zero.
 struct AngleStats {
+  std::vector<bool> skip;  // per render vertex, when not empty: left out
   double sum = 0.0;
   double max = 0.0;
   long count = 0;
@@ -25,6 +26,7 @@ struct AngleStats {
     REQUIRE(fast.size() == exact.size());
     for (std::size_t v = 0; v < fast.size(); ++v) {
       if (glm::dot(exact[v], exact[v]) < 0.5f) continue;
+      if (!skip.empty() && skip[v]) continue;
       const double c = std::clamp(double(glm::dot(fast[v], exact[v])) /
                                       std::sqrt(double(glm::dot(fast[v], fast[v])) * double(glm::dot(exact[v], exact[v]))),
                                   -1.0, 1.0);
@@ -42,6 +44,25 @@ struct AngleStats {
   }
 };
 
+// Per render vertex: whether a ponytail bone (the spring chain, swinging and settling under gravity) moves it.
+std::vector<bool> ponytail_vertices(const Character& c) {
+  const deform::Model& m = c.model();
+  const std::int32_t first = m.skeleton.find("ponytail1");
+  REQUIRE(first >= 0);
+  std::vector<bool> out(m.mesh.vertex_count(), false);
+  for (std::size_t v = 0; v < out.size(); ++v) {
+    const std::uint32_t p = m.mesh.vertex_point[v];
+    for (int k = 0; k < 4; ++k)
+      if (m.weights.weights[p][k] > 0.0f && std::int32_t(m.weights.bones[p][k]) >= first) out[v] = true;
+  }
+  return out;
+}
+
+std::vector<bool> negated(std::vector<bool> v) {
+  v.flip();
+  return v;
+}
+
 }  // namespace
 
 TEST_CASE("transported normals stay near the recomputed ones over a reach, release and walk") {
@@ -57,7 +78,11 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
   sampling.translations = pose.translations;
   REQUIRE(sampling.validate());
 
-  AngleStats bind, reach, walking;
+  // The body (the ponytail's vertices left out) against the bounds measured before it had one; the ponytail's own.
+  AngleStats bind, reach, walking, hair;
+  const std::vector<bool> ponytail = ponytail_vertices(fast);
+  reach.skip = walking.skip = ponytail;
+  hair.skip = negated(ponytail);
   bind.add(fast.normals(), exact.normals());
   const std::int32_t hand = fast.skeleton().find("hand_l");
   const glm::vec3 target = fast.bone_position(fast.skeleton().find("clavicle_l")) + glm::vec3(0.9f, 0.2f, 0.3f);
@@ -73,6 +98,7 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
     for (std::size_t p = 0; p < fast.positions().size(); p += 97)
       REQUIRE(glm::length(fast.positions()[p] - exact.positions()[p]) < 1e-5f);
     reach.add(fast.normals(), exact.normals());
+    hair.add(fast.normals(), exact.normals());
   }
   // The walk, with the arm stretched again.
   REQUIRE(fast.reach(hand, target).status);
@@ -85,13 +111,18 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
     REQUIRE(fast.update(dt));
     REQUIRE(exact.update(dt));
     walking.add(fast.normals(), exact.normals());
+    hair.add(fast.normals(), exact.normals());
   }
   MESSAGE("degrees: bind mean " << bind.mean() << " max " << bind.max << "; reach/release mean " << reach.mean()
                                 << " p99 " << reach.percentile(0.99) << " max " << reach.max << "; walk mean "
-                                << walking.mean() << " p99 " << walking.percentile(0.99) << " max " << walking.max);
-  // Measured (GCC 12, x86-64): reach/release mean 0.37°, 99th percentile 7.3°, max 18.4° (where skin weights blend
-  // at the bent elbow and the selection weights at the shoulder); walk mean 1.88°, 99th percentile 26.7°, max 50.4°
-  // (linear blend skinning at the hips and knees, where the body's one surface runs from the torso into the legs).
+                                << walking.mean() << " p99 " << walking.percentile(0.99) << " max " << walking.max
+                                << "; ponytail mean " << hair.mean() << " p99 " << hair.percentile(0.99) << " max "
+                                << hair.max);
+  // Measured (GCC 12, x86-64), the body without the ponytail's vertices: reach/release mean 0.41°, 99th percentile
+  // 7.8°, max 18.4° (where skin weights blend at the bent elbow and the selection weights at the shoulder); walk mean
+  // 2.07°, 99th percentile 27.4°, max 50.4° (linear blend skinning at the hips and knees, where the body's one surface
+  // runs from the torso into the legs). The ponytail, bent by its spring chain at its root and joints: mean 0.71°,
+  // 99th percentile 4.4°, max 15.5°.
   // The bounds leave room for rounding across compilers and CPUs.
   CHECK(bind.max < 1e-3);  // the bind normals are the recomputed ones
   CHECK(reach.mean() < 0.5);
@@ -100,6 +131,9 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
   CHECK(walking.mean() < 2.2);
   CHECK(walking.percentile(0.99) < 30.0);
   CHECK(walking.max < 55.0);
+  CHECK(hair.mean() < 1.2);
+  CHECK(hair.percentile(0.99) < 8.0);
+  CHECK(hair.max < 35.0);
 }
 
 TEST_CASE("transported normals with dual quaternion skinning") {
@@ -113,13 +147,14 @@ TEST_CASE("transported normals with dual quaternion skinning") {
   REQUIRE(fast.reach(hand, target).status);
   REQUIRE(exact.reach(hand, target).status);
   AngleStats stats;
+  stats.skip = ponytail_vertices(fast);  // the body, as measured before it had a ponytail
   for (int frame = 0; frame < 60; ++frame) {
     REQUIRE(fast.update(1.0f / 60.0f));
     REQUIRE(exact.update(1.0f / 60.0f));
     stats.add(fast.normals(), exact.normals());
   }
   MESSAGE("DQS reach, degrees: mean " << stats.mean() << " p99 " << stats.percentile(0.99) << " max " << stats.max);
-  // Measured: mean 0.44°, 99th percentile 8.1°, max 17.9° (the blends of the elbow and the shoulder, as with LBS).
+  // Measured: mean 0.48°, 99th percentile 8.5°, max 17.9° (the blends of the elbow and the shoulder, as with LBS).
   CHECK(stats.mean() < 0.7);
   CHECK(stats.percentile(0.99) < 12.0);
   CHECK(stats.max < 35.0);
@@ -147,6 +182,20 @@ TEST_CASE("instances share the bind data and deform like a character of their ow
   const auto n1 = crowd[0].normals();
   CHECK(std::equal(n0.begin(), n0.end(), n1.begin()));
   CHECK(crowd[1].stretch() == 0.0f);
-  for (std::size_t p = 0; p < crowd[1].positions().size(); ++p)
-    REQUIRE(glm::length(crowd[1].positions()[p] - first.model().mesh.positions[p]) < 1e-5f);
+  // ... but for the ponytail, which settles under gravity (a spring chain starts at rest on the bind pose).
+  const deform::Model& m = first.model();
+  const std::int32_t ponytail = m.skeleton.find("ponytail1");
+  float settled = 0.0f;
+  for (std::size_t p = 0; p < crowd[1].positions().size(); ++p) {
+    bool moved_by_ponytail = false;
+    for (int k = 0; k < 4; ++k)
+      moved_by_ponytail |= m.weights.weights[p][k] > 0.0f && std::int32_t(m.weights.bones[p][k]) >= ponytail;
+    const float d = glm::length(crowd[1].positions()[p] - m.mesh.positions[p]);
+    if (moved_by_ponytail)
+      settled = std::max(settled, d);
+    else
+      REQUIRE(d < 1e-5f);
+  }
+  CHECK(settled > 0.0f);
+  CHECK(settled < 0.08f);
 }

@@ -129,3 +129,69 @@ TEST_CASE("set_pose with a lead refuses what set_pose refuses, and a lead that i
   REQUIRE(copy.springs().chain_count() == 1);
   CHECK(copy.springs().spec(0).frequency == 5.0f);
 }
+
+namespace {
+
+// Distance from p to the segment a–b.
+float segment_distance(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
+  const glm::vec3 ab = b - a;
+  const float t = std::clamp(glm::dot(p - a, ab) / glm::dot(ab, ab), 0.0f, 1.0f);
+  return glm::length(p - (a + t * ab));
+}
+
+}  // namespace
+
+TEST_CASE("the built-in ponytail swings behind the walking head, stays out of the body, and settles when still") {
+  const deform::Model model = deform::builtin_character();
+  const deform::Rig rig = deform::builtin_rig(model);
+  REQUIRE(rig.spring_chains.size() == 1);
+  deform::Rig rigid_rig = rig;  // the same walk without the chain: where the ponytail is carried rigidly
+  rigid_rig.spring_chains.clear();
+  Walk walk(rig), rigid(rigid_rig);
+  const deform::Skeleton& sk = walk.character.skeleton();
+  const std::int32_t chest = sk.find("chest"), neck = sk.find("neck"), head = sk.find("head");
+  const std::int32_t last = sk.find("ponytail4");
+  REQUIRE(walk.character.springs().chain_count() == 1);
+  float swing = 0.0f, nearest_chest = 1e9f, nearest_neck = 1e9f, nearest_head = 1e9f;
+  for (int n = 0; n <= 180; ++n) {  // 3 s at 60 Hz
+    const double t = n / 60.0;
+    walk.frame(t, n == 0 ? 0.0f : 1.0f / 60.0f, true);
+    rigid.frame(t, n == 0 ? 0.0f : 1.0f / 60.0f, true);
+    const auto points = walk.character.springs().points(0);
+    REQUIRE(points.size() == 5);
+    if (t > 1.0) swing = std::max(swing, glm::length(points[3] - rigid.character.bone_position(last)));
+    const glm::vec3 c = walk.character.bone_position(chest), k = walk.character.bone_position(neck),
+                    h = walk.character.bone_position(head);
+    const glm::vec3 up = glm::normalize(h - k);
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      nearest_chest = std::min(nearest_chest, segment_distance(points[i], c + 0.2f * (k - c), k));
+      nearest_neck = std::min(nearest_neck, segment_distance(points[i], k, h));
+      nearest_head = std::min(nearest_head, segment_distance(points[i], h + 0.07f * up, h + 0.15f * up));
+    }
+  }
+  MESSAGE("ponytail swing " << swing << " m; nearest chest " << nearest_chest << ", neck " << nearest_neck << ", head "
+                            << nearest_head);
+  CHECK(swing > 0.01f);   // centimetres off the rigidly carried ponytail
+  CHECK(swing < 0.15f);   // ... a swing, not a flail
+  CHECK(nearest_chest >= 0.11f + 0.02f - 1e-3f);  // the capsules' radii plus the chain's
+  CHECK(nearest_neck >= 0.055f + 0.02f - 1e-3f);
+  CHECK(nearest_head >= 0.085f + 0.02f - 0.01f);  // the head's capsule, its axis estimated from neck → head
+
+  // Still in the bind pose: it sags under gravity at first, then keeps still.
+  Walk still(rig);
+  const deform::Pose bind = still.character.skeleton().bind_pose();
+  std::vector<glm::vec3> tips;
+  for (int n = 0; n <= 180; ++n) {
+    REQUIRE(still.character.set_pose(bind, bind, 1e-3f));
+    REQUIRE(still.character.update(n == 0 ? 0.0f : 1.0f / 60.0f));
+    tips.push_back(still.character.springs().points(0).back());
+  }
+  const float sag = glm::length(tips.back() - tips.front());
+  float late = 0.0f;
+  for (std::size_t n = 150; n < tips.size(); ++n) late = std::max(late, glm::length(tips[n] - tips.back()));
+  MESSAGE("still: sag " << sag << " m, movement over the last half second " << late << " m");
+  CHECK(sag > 1e-3f);
+  CHECK(sag < 0.08f);  // 6.1 cm at the tip: g/ω² ≈ 3.3 cm per tail, along the chain
+  CHECK(late < 1e-3f);
+  CHECK(tips.back().y < tips.front().y);
+}

@@ -63,11 +63,11 @@ TEST_CASE("counts are those of the thesis' test character, give or take") {
   const Model& m = character();
   CHECK(m.name == "builtin");
   CHECK(m.mesh.point_count() >= 2300);
-  CHECK(m.mesh.point_count() <= 2700);
+  CHECK(m.mesh.point_count() <= 2900);  // 2,850 with the ponytail
   CHECK(m.mesh.triangle_count() >= 4500);
-  CHECK(m.mesh.triangle_count() <= 5500);
+  CHECK(m.mesh.triangle_count() <= 5800);  // 5,696
   CHECK(m.skeleton.bone_count() >= 24);
-  CHECK(m.skeleton.bone_count() <= 32);
+  CHECK(m.skeleton.bone_count() <= 36);  // 33: 29 for the body, 4 for the ponytail
   CHECK(m.weights.size() == m.mesh.point_count());
   REQUIRE(m.mesh.materials.size() == 1);
   CHECK(m.mesh.materials[0].name == "skin");
@@ -90,6 +90,13 @@ TEST_CASE("skeleton: names, a valid tree, bones along their local +Y") {
                            "fingers1_l", "fingers2_l", "thumb1_l", "thumb2_l", "thigh_l", "shin_l", "foot_l", "toe_l",
                            "clavicle_r", "upperarm_r", "forearm_r", "hand_r", "thigh_r", "shin_r", "foot_r", "toe_r"})
     CHECK(s.find(name) >= 0);
+  // The ponytail's bones come after the body's 29, so the body's ids stay those of the 29-bone character.
+  REQUIRE(s.bone_count() == 33);
+  CHECK(s.find("toe_r") == 28);
+  for (int i = 0; i < 4; ++i) {
+    CHECK(s.find(("ponytail" + std::to_string(i + 1)).c_str()) == 29 + i);
+    CHECK(s.bone(29 + i).parent == (i == 0 ? s.find("head") : 28 + i));
+  }
   // Re-validating the bones succeeds (one root, consistent child lists, limits ordered).
   CHECK_NOTHROW(deform::Skeleton(std::vector<deform::Bone>(s.bones().begin(), s.bones().end())));
   for (std::size_t b = 0; b < s.bone_count(); ++b) {
@@ -98,6 +105,13 @@ TEST_CASE("skeleton: names, a valid tree, bones along their local +Y") {
     const glm::vec3 t = s.bone(bone.children.front()).bind_translation;
     INFO(bone.name);
     if (b == 0) continue;  // the root's +Y is forward (documented)
+    if (bone.name == "head") {  // the ponytail branches off the back of the skull (documented): 16 cm up, 8.5 cm back
+      CHECK(s.bone(bone.children.front()).name == "ponytail1");
+      CHECK(std::abs(t.x) < 1e-6f);
+      CHECK(t.y == doctest::Approx(0.16f));
+      CHECK(t.z == doctest::Approx(-0.085f));
+      continue;
+    }
     CHECK(std::abs(t.x) < 1e-6f);
     CHECK(std::abs(t.z) < 1e-6f);
     CHECK(t.y > 0.02f);
@@ -173,11 +187,11 @@ TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1]
   CHECK(bounds.max.x == doctest::Approx(-bounds.min.x).epsilon(1e-5));
   CHECK(bounds.max.x == doctest::Approx(0.9f).epsilon(0.03));  // arm span ≈ height
 
-  // Thirteen parts (groups, atlas cells) of one surface.
-  REQUIRE(mesh.submeshes.size() == 13);
+  // Fourteen parts (groups, atlas cells) of one surface.
+  REQUIRE(mesh.submeshes.size() == 14);
   const char* names[] = {"torso", "neck", "head", "arm_l", "arm_r", "hand_l", "hand_r",
-                         "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r"};
-  for (std::size_t i = 0; i < 13; ++i) CHECK(mesh.submeshes[i].group == names[i]);
+                         "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
+  for (std::size_t i = 0; i < 14; ++i) CHECK(mesh.submeshes[i].group == names[i]);
   // Every edge of the body is used exactly twice, once in each direction: closed and consistently oriented; the
   // enclosed volume is positive (outward) and the surface is one connected piece.
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
@@ -227,7 +241,13 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
   const Model& m = character();
   const deform::Skeleton& s = m.skeleton;
   const auto& world = s.bind_world();
-  std::size_t checked_hand = 0, checked_foot = 0, checked_head = 0;
+  std::size_t checked_hand = 0, checked_foot = 0, checked_head = 0, checked_hair = 0;
+  // The ponytail's points (the "hair" part's, borders included) belong to the ponytail, and the skull's to the head.
+  std::vector<bool> hair(m.mesh.point_count(), false);
+  for (const deform::Submesh& sub : m.mesh.submeshes)
+    if (sub.group == "hair")
+      for (std::uint32_t c = 3 * sub.first_triangle; c < 3 * (sub.first_triangle + sub.triangle_count); ++c)
+        hair[m.mesh.vertex_point[m.mesh.triangles[c]]] = true;
   for (std::size_t i = 0; i < m.mesh.point_count(); ++i) {
     float sum = 0.0f;
     for (int k = 0; k < 4; ++k) {
@@ -263,9 +283,14 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
         ++checked_foot;
       }
     }
-    if (p.y > 1.7f) {
+    if (p.y > 1.7f && !hair[i]) {
+      INFO("point " << i << " (" << p.x << ", " << p.y << ", " << p.z << ")");
       CHECK(strongest == id("head"));
       ++checked_head;
+    }
+    if (hair[i] && p.y < 1.7f) {  // below the root: the ponytail's own bones
+      CHECK(strongest >= id("ponytail1"));
+      ++checked_hair;
     }
     // The arms beyond the elbow belong to the forearm chain; the hips' side of the body never to an arm.
     if (std::abs(p.x) > 0.5f) CHECK(s.is_ancestor(id(p.x > 0 ? "forearm_l" : "forearm_r"), strongest));
@@ -277,6 +302,7 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
   CHECK(checked_hand > 50);
   CHECK(checked_foot > 50);
   CHECK(checked_head > 50);
+  CHECK(checked_hair > 100);
 }
 
 TEST_CASE("two calls build the same character") {

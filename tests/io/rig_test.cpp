@@ -70,7 +70,7 @@ deform::Rig everything() {
 }  // namespace
 
 TEST_CASE("rig JSON round trip: text, file, every field") {
-  for (const deform::Rig& rig : {deform::builtin_rig(model()), everything()}) {
+  for (const deform::Rig& rig : {deform::builtin_rig(model()), deform::builtin_full_rig(model()), everything()}) {
     const std::string text = deform::format_rig_json(rig, model().skeleton);
     CHECK(parse(text) == rig);
     CHECK(deform::format_rig_json(parse(text), model().skeleton) == text);
@@ -104,7 +104,12 @@ TEST_CASE("the written form: hierarchy, names, model") {
     CHECK_FALSE(lattice.contains("volume"));
     CHECK_FALSE(lattice.contains("motion"));
   }
-  CHECK_FALSE(doc.contains("springs"));
+  // The built-in rig's ponytail chain and its colliders are written; a rig without chains has no springs block.
+  REQUIRE(doc.contains("springs"));
+  deform::Rig no_springs = deform::builtin_rig(model());
+  no_springs.spring_chains.clear();
+  no_springs.colliders.clear();
+  CHECK_FALSE(nlohmann::json::parse(deform::format_rig_json(no_springs, model().skeleton)).contains("springs"));
 }
 
 TEST_CASE("the stretch shape: written where it differs from the default, read back exactly") {

@@ -75,6 +75,16 @@ std::vector<Bone> character_bones() {
   append(left_arm, true);
   append(left_leg, false);
   append(left_leg, true);
+  // Ponytail (29–32), appended so the limbs keep their ids: from the back of the skull, backward then down behind
+  // the neck (world X angles -120°, -160°, -175°, -180°), 0.30 m to its tip (the spring chain's, builtin_rig.cpp),
+  // which stays above the shoulders: hanging lower, it would lie nearer the upper back than the chest bone does and
+  // take the back's weights.
+  // Each bone points along its local +Y. Its first bone is the head's only child, so the head's weight segment
+  // (docs/builtin-character.md, "Automatic weights") runs from the head to the ponytail's root.
+  bones.push_back({"ponytail1", 4, {}, {0.0f, 0.16f, -0.085f}, {-120.0f, 0.0f, 0.0f}, limits({-170, -45, -45}, {-70, 45, 45})});
+  bones.push_back({"ponytail2", 29, {}, {0.0f, 0.10f, 0.0f}, {-40.0f, 0.0f, 0.0f}, limits({-90, -45, -45}, {10, 45, 45})});
+  bones.push_back({"ponytail3", 30, {}, {0.0f, 0.07f, 0.0f}, {-15.0f, 0.0f, 0.0f}, limits({-65, -45, -45}, {35, 45, 45})});
+  bones.push_back({"ponytail4", 31, {}, {0.0f, 0.07f, 0.0f}, {-5.0f, 0.0f, 0.0f}, limits({-55, -45, -45}, {45, 45, 45})});
   for (std::size_t b = 1; b < bones.size(); ++b)
     bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
   return bones;
@@ -86,10 +96,12 @@ std::vector<Bone> character_bones() {
 // feet are extruded from those — and refined by two Catmull–Clark subdivisions into a smooth, organic limit-like
 // surface (every cage quad becomes 16). Every face keeps the body part (OBJ group, atlas cell) of its cage face.
 
-enum BodyPart : int { torso, neck, head_part, arm_l, arm_r, hand_l, hand_r, thumb_l, thumb_r, leg_l, leg_r, foot_l, foot_r };
-constexpr int body_part_count = 13;
-const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",    "arm_l",   "arm_r", "hand_l", "hand_r",
-                                                     "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r"};
+enum BodyPart : int {
+  torso, neck, head_part, arm_l, arm_r, hand_l, hand_r, thumb_l, thumb_r, leg_l, leg_r, foot_l, foot_r, hair_part
+};
+constexpr int body_part_count = 14;
+const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",  "arm_l", "arm_r",  "hand_l", "hand_r",
+                                                     "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
 
 struct Cage {
   std::vector<glm::vec3> points;
@@ -121,6 +133,36 @@ struct Cage {
       std::array<std::uint32_t, 4> next{};
       for (std::size_t k = 0; k < 4; ++k)
         next[k] = add(loops[l].centre + sign[k].x * loops[l].r1 * e1 + sign[k].y * loops[l].r2 * e2);
+      for (std::size_t k = 0; k < 4; ++k) {
+        faces.push_back({ring[k], ring[(k + 1) % 4], next[(k + 1) % 4], next[k]});
+        parts.push_back(part);
+      }
+      ring = next;
+    }
+    faces[f] = ring;
+    parts[f] = part;
+    return f;
+  }
+  // A loop of a bending extrusion: its centre, its own cross-section axes and the half-widths along them.
+  struct TubeLoop {
+    glm::vec3 centre, a1, a2;
+    float r1, r2;
+  };
+  // As extrude(), but each loop has its own axes (turning continuously from e1, e2, so the winding is kept): the
+  // corner with signs (s1, s2) relative to e1, e2 on the face goes to centre + s1·r1·a1 + s2·r2·a2.
+  std::size_t extrude_tube(std::size_t f, glm::vec3 e1, glm::vec3 e2, const std::vector<TubeLoop>& loops, int part) {
+    std::array<std::uint32_t, 4> ring = faces[f];
+    glm::vec3 centre(0.0f);
+    for (std::uint32_t p : ring) centre += 0.25f * points[p];
+    std::array<glm::vec2, 4> sign{};
+    for (std::size_t k = 0; k < 4; ++k) {
+      const glm::vec3 o = points[ring[k]] - centre;
+      sign[k] = {glm::dot(o, e1) >= 0.0f ? 1.0f : -1.0f, glm::dot(o, e2) >= 0.0f ? 1.0f : -1.0f};
+    }
+    for (const TubeLoop& loop : loops) {
+      std::array<std::uint32_t, 4> next{};
+      for (std::size_t k = 0; k < 4; ++k)
+        next[k] = add(loop.centre + sign[k].x * loop.r1 * loop.a1 + sign[k].y * loop.r2 * loop.a2);
       for (std::size_t k = 0; k < 4; ++k) {
         faces.push_back({ring[k], ring[(k + 1) % 4], next[(k + 1) % 4], next[k]});
         parts.push_back(part);
@@ -183,6 +225,29 @@ Cage body_cage() {
                 {{0.0f, 1.75f, 0.010f}, 0.092f, 0.105f},
                 {{0.0f, 1.815f, 0.000f}, 0.070f, 0.085f}},
                head_part);
+  // Ponytail: from the upper back face of the head (between the loops at y = 1.75 and 1.815), a tube that leaves the
+  // skull backward and bends down behind the neck to y ≈ 1.51, its loops following the ponytail bones.
+  {
+    std::size_t back = cage.faces.size();
+    for (std::size_t f = 0; f < cage.faces.size(); ++f) {
+      if (cage.parts[f] != head_part) continue;
+      glm::vec3 centre(0.0f);
+      for (std::uint32_t p : cage.faces[f]) centre += 0.25f * cage.points[p];
+      if (centre.z < -0.05f && centre.y > 1.76f) back = f;
+    }
+    // Cross-section axes: x, and the tube's direction d turned +90° about x (+Y where the tube leaves backward).
+    auto loop = [&](glm::vec3 centre, float angle_deg, float r1, float r2) {
+      const float a = glm::radians(angle_deg);  // the tube's direction (0, cos a, sin a), as a bone's Euler X
+      return Cage::TubeLoop{centre, x, {0.0f, -std::sin(a), std::cos(a)}, r1, r2};
+    };
+    cage.extrude_tube(back, x, y,
+                      {loop({0.0f, 1.775f, -0.140f}, -100.0f, 0.034f, 0.032f),
+                       loop({0.0f, 1.705f, -0.178f}, -135.0f, 0.028f, 0.027f),
+                       loop({0.0f, 1.632f, -0.200f}, -165.0f, 0.030f, 0.028f),
+                       loop({0.0f, 1.567f, -0.205f}, -178.0f, 0.024f, 0.022f),
+                       loop({0.0f, 1.515f, -0.205f}, -180.0f, 0.012f, 0.011f)},
+                      hair_part);
+  }
   for (int s = 0; s < 2; ++s) {
     const float side = s == 0 ? 1.0f : -1.0f;
     const glm::vec3 out = side * x;  // along the arm
@@ -319,6 +384,7 @@ PartAxis part_axis(int part) {
     case thumb_l: return {{0.73f, 1.445f, 0.03f}, {0.79f, 1.445f, 0.11f}, y};
     case leg_l: return {{0.09f, 0.86f, 0.0f}, {0.09f, 0.04f, 0.0f}, z};
     case foot_l: return {{0.09f, 0.03f, -0.06f}, {0.09f, 0.03f, 0.22f}, y};
+    case hair_part: return {{0.0f, 1.79f, -0.09f}, {0.0f, 1.50f, -0.205f}, -z};
     default: return mirror(part_axis(part - 1));  // the _r parts follow their _l ones
   }
 }
@@ -484,6 +550,7 @@ glm::vec3 painted(int part, float u, float v) {
     case 6:
     case 7:
     case 8: c = mix3(skin, blush, 0.2f); break;  // hands and thumbs: a little pinker
+    case 13: c = mix3(hair, hair * 0.75f, 0.5f + strokes); break;  // the ponytail: hair, streaked along its length
     default: c = glm::vec3(0.75f); break;
   }
   // Painted shading: lighter in front or on top, darker behind or underneath, then the brush texture.

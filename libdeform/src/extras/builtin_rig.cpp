@@ -29,6 +29,23 @@ Rig rig_on(const Model& model, std::initializer_list<const char*> bones) {
   }
   rig.reach_effector = bone("hand_l");
   rig.reach_root = bone("clavicle_l");
+  // The ponytail swings: a spring chain (about 2.75 Hz, under-damped, under gravity) kept out of the head, the neck
+  // and the upper back by three capsules on those bones (bone-local, bind pose; docs/builtin-character.md).
+  rig.colliders = {
+      {bone("head"), {0.0f, 0.07f, 0.01f}, {0.0f, 0.15f, 0.0f}, 0.085f},
+      {bone("neck"), {0.0f, 0.0f, 0.0f}, {0.0f, 0.10f, 0.0f}, 0.055f},
+      {bone("chest"), {0.0f, 0.05f, 0.0f}, {0.0f, 0.25f, 0.0f}, 0.11f},
+  };
+  SpringChainSpec ponytail;
+  ponytail.name = "ponytail";
+  ponytail.bones = {bone("ponytail1"), bone("ponytail2"), bone("ponytail3"), bone("ponytail4")};
+  ponytail.tip = {0.0f, 0.06f, 0.0f};
+  ponytail.frequency = 2.75f;
+  ponytail.damping_ratio = 0.4f;
+  ponytail.gravity = {0.0f, -9.81f, 0.0f};
+  ponytail.radius = 0.02f;
+  ponytail.colliders = {0, 1, 2};
+  rig.spring_chains.push_back(std::move(ponytail));
   return rig;
 }
 

@@ -18,8 +18,9 @@
 
 namespace deform {
 
-// The character: name "builtin", 2,530 points and 5,056 triangles, one closed surface (a box-modelled cage refined by
-// two Catmull–Clark subdivisions) in 13 body parts (triangles only, UVs in an atlas, normals), one material "skin" with map_Kd "builtin.png", 29 bones with anatomical DOF limits, and the weights
+// The character: name "builtin", 2,850 points and 5,696 triangles, one closed surface (a box-modelled cage refined by
+// two Catmull–Clark subdivisions) in 14 body parts (triangles only, UVs in an atlas, normals), one material "skin" with
+// map_Kd "builtin.png", 33 bones with anatomical DOF limits (the body's 29, then a ponytail's 4: ids 29–32), and the weights
 // compute_automatic_weights() gives with default options. Deterministic: every call gives the same values (across
 // platforms, to within the rounding of their sin/exp/pow). Cost: about 4 ms; allocates the model.
 DEFORM_EXTRAS_API Model builtin_character();
@@ -31,12 +32,14 @@ DEFORM_EXTRAS_API Model builtin_character();
 DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
 
 // The rig of the built-in character (builtin_character(); model.builtin set): three lattices on the left arm — upper
-// arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l. Throws deform::Error when `model`
+// arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l — and the ponytail as a spring chain
+// (2.75 Hz, damping ratio 0.4, gravity) kept out of capsules on the head, neck and chest. Throws deform::Error when `model`
 // lacks those bones. Tests, benchmarks and docs pin numbers from it: builtin_full_rig() is the rig with every limb.
 DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
 // The built-in rig on every limb: builtin_rig()'s three left-arm lattices first (same names, same order), then the
 // same three mirrored on the right arm (upperarm_r, forearm_r, hand_r) and three on each leg (thigh, shin, foot: _l,
-// then _r), every one with builtin_rig()'s springs; reach chain clavicle_l → hand_l as there. Character::reach with
+// then _r), every one with builtin_rig()'s springs; reach chain clavicle_l → hand_l and the ponytail's spring chain
+// and colliders as there. Character::reach with
 // hand_l, hand_r, foot_l or foot_r stretches that limb's two upper lattices (nearest_reach_effector picks the limb
 // for a target); a foot's chain starts at the hips, the root. Throws deform::Error when `model` lacks those bones.
 DEFORM_EXTRAS_API Rig builtin_full_rig(const Model& model);

@@ -78,7 +78,7 @@ DEFORM_RUNTIME_API VertexNormalsBinding bind_vertex_normals(const Mesh& mesh);
 // and corners' slots of `scratch` and its own points' render vertices: disjoint ranges run on different threads with
 // one shared scratch, no locks, no atomics (run_parallel in parallel.hpp). Work: on one thread, each triangle once (as
 // a scatter over triangles would; a gather per point would compute each three times); split, the triangles spanning
-// two ranges twice. Per frame on the built-in character (5,056 triangles) and a 200,000-triangle torus: normals/* in
+// two ranges twice. Per frame on the built-in character (5,696 triangles) and a 200,000-triangle torus: normals/* in
 // bench/normals_bench.cpp.
 struct DEFORM_RUNTIME_API VertexNormalsJob {
   const VertexNormalsBinding* binding = nullptr;
