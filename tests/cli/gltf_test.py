@@ -168,7 +168,7 @@ def expect_only(folder, names):
 os.makedirs(os.path.join(work, "gltf"))
 out = run("export", "--builtin", "--format", "gltf", "--out", "gltf/builtin.gltf")
 if out:
-    check(out["bin"] == "gltf/builtin.bin" and out["bones"] == 29 and out["clips"] == [], f"export builtin: {out}")
+    check(out["bin"] == "gltf/builtin.bin" and out["bones"] == 33 and out["clips"] == [], f"export builtin: {out}")
 expect_only(os.path.join(work, "gltf"), ["builtin.gltf", "builtin.bin"])
 run("export", "--builtin", "--format", "gltf", "--out", "builtin.glb")
 written += ["gltf/builtin.gltf", "builtin.glb"]
@@ -183,7 +183,7 @@ source = obj_points(os.path.join(work, "native", "builtin.obj"))
 for name in ("gltf/builtin.gltf", "builtin.glb"):
     back = run("export", name, "--out", "back-" + name.replace("/", "-"))
     if back:
-        check(back["bones"] == 29, f"{name} re-imported: {back['bones']} bones, not 29")
+        check(back["bones"] == 33, f"{name} re-imported: {back['bones']} bones, not 33")
         correspondence(name + " (bind pose)", source, obj_points(os.path.join(work, back["obj"])))
 
 # A .gltf whose name a URI cannot hold as it is: the .bin's name is made safe, and the importer finds it.
