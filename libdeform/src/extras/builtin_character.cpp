@@ -112,44 +112,15 @@ struct Cage {
     points.push_back(p);
     return static_cast<std::uint32_t>(points.size() - 1);
   }
-  // A loop of the extrusion: centre, the two cross-section axes and the half-widths along them.
-  struct Loop {
-    glm::vec3 centre;
-    float r1, r2;
-  };
-  // Extrudes face `f` through `loops` (one ring of 4 points each): side quads for each loop, the last loop's quad
-  // replaces the face. A new corner lies at its loop's centre ± r1·e1 ± r2·e2 with the signs of the old corner's
-  // offset from the face's centre. Returns the index of the cap face (the last loop's quad).
-  std::size_t extrude(std::size_t f, glm::vec3 e1, glm::vec3 e2, const std::vector<Loop>& loops, int part) {
-    std::array<std::uint32_t, 4> ring = faces[f];
-    glm::vec3 centre(0.0f);
-    for (std::uint32_t p : ring) centre += 0.25f * points[p];
-    std::array<glm::vec2, 4> sign{};
-    for (int k = 0; k < 4; ++k) {
-      const glm::vec3 o = points[ring[static_cast<std::size_t>(k)]] - centre;
-      sign[static_cast<std::size_t>(k)] = {glm::dot(o, e1) >= 0.0f ? 1.0f : -1.0f, glm::dot(o, e2) >= 0.0f ? 1.0f : -1.0f};
-    }
-    for (std::size_t l = 0; l < loops.size(); ++l) {
-      std::array<std::uint32_t, 4> next{};
-      for (std::size_t k = 0; k < 4; ++k)
-        next[k] = add(loops[l].centre + sign[k].x * loops[l].r1 * e1 + sign[k].y * loops[l].r2 * e2);
-      for (std::size_t k = 0; k < 4; ++k) {
-        faces.push_back({ring[k], ring[(k + 1) % 4], next[(k + 1) % 4], next[k]});
-        parts.push_back(part);
-      }
-      ring = next;
-    }
-    faces[f] = ring;
-    parts[f] = part;
-    return f;
-  }
   // A loop of a bending extrusion: its centre, its own cross-section axes and the half-widths along them.
   struct TubeLoop {
     glm::vec3 centre, a1, a2;
     float r1, r2;
   };
-  // As extrude(), but each loop has its own axes (turning continuously from e1, e2, so the winding is kept): the
-  // corner with signs (s1, s2) relative to e1, e2 on the face goes to centre + s1·r1·a1 + s2·r2·a2.
+  // Extrudes face `f` through `loops` (one ring of 4 points each): side quads for each loop, the last loop's quad
+  // replaces the face. Each loop has its own axes (turning continuously from e1, e2, so the winding is kept): the
+  // corner with signs (s1, s2) of its offset from the face's centre along e1, e2 goes to centre + s1·r1·a1 + s2·r2·a2.
+  // Returns the index of the cap face (the last loop's quad).
   std::size_t extrude_tube(std::size_t f, glm::vec3 e1, glm::vec3 e2, const std::vector<TubeLoop>& loops, int part) {
     std::array<std::uint32_t, 4> ring = faces[f];
     glm::vec3 centre(0.0f);
@@ -172,6 +143,17 @@ struct Cage {
     faces[f] = ring;
     parts[f] = part;
     return f;
+  }
+  // A loop of a straight extrusion: centre and the half-widths along the face's own axes.
+  struct Loop {
+    glm::vec3 centre;
+    float r1, r2;
+  };
+  // extrude_tube() with every loop on the face's own axes: a new corner lies at its loop's centre ± r1·e1 ± r2·e2.
+  std::size_t extrude(std::size_t f, glm::vec3 e1, glm::vec3 e2, const std::vector<Loop>& loops, int part) {
+    std::vector<TubeLoop> tube;
+    for (const Loop& loop : loops) tube.push_back({loop.centre, e1, e2, loop.r1, loop.r2});
+    return extrude_tube(f, e1, e2, tube, part);
   }
 };
 
