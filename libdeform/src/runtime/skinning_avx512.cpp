@@ -153,7 +153,10 @@ struct Avx512 {
 
   void blend_matrices(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
     if (use_tables) {
-      if (wide) {
+      // A wide table's block whose sixteen vertices all have bones below 32 (bit 5 clear in all four 16-bit ids)
+      // takes the narrow lookups: with bones ordered root first, most blocks of a 33- to 64-bone character do.
+      const __m512i any = _mm512_or_si512(raw_bone_ids(job, i, 0), raw_bone_ids(job, i, 2));
+      if (wide && _mm512_test_epi32_mask(any, _mm512_set1_epi32(0x00200020)) != 0) {
         blend_from_tables<true>(job, i, w, a);
       } else {
         blend_from_tables<false>(job, i, w, a);
