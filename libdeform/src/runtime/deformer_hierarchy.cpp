@@ -354,21 +354,32 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
       }
     }
     lattice.far_displacement = linear * (far + lattice.axis * slices.shift[last]);
-    lattice.active = glm::length(lattice.far_displacement) > still;
-    for (const glm::vec3& d : lattice.world_displacements) lattice.active = lattice.active || glm::length(d) > still;
+    const float still2 = still * still;
+    bool active = glm::dot(lattice.far_displacement, lattice.far_displacement) > still2;
+    for (const glm::vec3& d : lattice.world_displacements) active = active || glm::dot(d, d) > still2;
+    lattice.active = active;
+    lattice.bone_world = world[std::size_t(lattice.spec.bone)];
     std::span<glm::vec3> field = lattice.field.control_points();
     std::copy(lattice.world_displacements.begin(), lattice.world_displacements.end(), field.begin());
   }
-  // Drawing positions, once every lattice's field is known (a lattice is carried by those above it).
-  for (Lattice& lattice : lattices_) {
-    const std::size_t bone = std::size_t(lattice.spec.bone);
-    const glm::vec3 carried = point_displacement(lattice.spec.bone, glm::vec3(lattice.bind_world[3]));
-    const std::span<const glm::vec3> rest = lattice.rest.control_points();
-    for (std::size_t n = 0; n < rest.size(); ++n) {
-      lattice.world_points[n] = transform_point(world[bone], rest[n]) + lattice.world_displacements[n] + carried;
-    }
-  }
+  drawing_current_ = false;  // control_points() computes them when asked: an engine frame never draws lattices
   return {};
+}
+
+std::span<const glm::vec3> DeformerHierarchy::control_points(std::size_t index) const {
+  const Lattice& wanted = lattices_.at(index);
+  if (!drawing_current_) {
+    // Every lattice's field is known, so each can be carried by those above it.
+    for (const Lattice& lattice : lattices_) {
+      const glm::vec3 carried = point_displacement(lattice.spec.bone, glm::vec3(lattice.bind_world[3]));
+      const std::span<const glm::vec3> rest = lattice.rest.control_points();
+      for (std::size_t n = 0; n < rest.size(); ++n) {
+        lattice.world_points[n] = transform_point(lattice.bone_world, rest[n]) + lattice.world_displacements[n] + carried;
+      }
+    }
+    drawing_current_ = true;
+  }
+  return wanted.world_points;
 }
 
 Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
