@@ -90,6 +90,14 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.world_displacements.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.world_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.mapped_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    // A rest lattice on its frame's regular grid is the affine map X(u, v, w) of the frame, whose Jacobian is the
+    // frame's edges: apply() with normals then needs one evaluation, not two.
+    lattice.regular_rest = true;
+    for (int k = 0; k < counts.z; ++k)
+      for (int j = 0; j < counts.y; ++j)
+        for (int i = 0; i < counts.x; ++i)
+          lattice.regular_rest = lattice.regular_rest &&
+                                 lattice.rest.control_points()[lattice.rest.index(i, j, k)] == lattice.rest.rest_point(i, j, k);
     lattice.rest_velocity.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_start.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_end.assign(lattice.rest.point_count(), glm::vec3(0.0f));
@@ -439,10 +447,6 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     if (!lattice.active) continue;
     // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
     // skinned neighbourhood's (linear) times the field's (I + ∂D_local/∂x).
-    const std::span<const glm::vec3> rest = lattice.rest.control_points();
-    for (std::size_t n = 0; n < rest.size(); ++n) {
-      lattice.mapped_points[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
-    }
     // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse
     // of its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
     const glm::mat3 to_bind = glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));
@@ -451,13 +455,31 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[lanes[n]] = to_bind * normals[lanes[n]];
     }
-    // The positions exactly as apply() moves them; then the normals (the mapped job's positions, overwriting the
-    // consumed displacements, are not used).
-    field_job(lattice).run();
-    for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+    if (lattice.regular_rest) {
+      // One evaluation: the field's positions (the same bits as apply()'s: the kernel's sums do not depend on the
+      // normals) and the normals of linear · X + D, the Jacobian of linear · X added as an offset.
+      const LatticeFrame& frame = lattice.rest.frame();
+      LatticeEvaluateJob job = field_job(lattice);
+      job.normals_in = normal_scratch_;
+      job.normals_out = normal_scratch_;
+      job.normals_jacobian_offset = lattice.linear * glm::mat3(frame.u_axis, frame.v_axis, frame.w_axis);
+      job.run();
+      for (std::size_t n = 0; n < lanes.size(); ++n) {
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+      }
+    } else {
+      const std::span<const glm::vec3> rest = lattice.rest.control_points();
+      for (std::size_t n = 0; n < rest.size(); ++n) {
+        lattice.mapped_points[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
+      }
+      // The positions exactly as apply() moves them; then the normals (the mapped job's positions, overwriting the
+      // consumed displacements, are not used).
+      field_job(lattice).run();
+      for (std::size_t n = 0; n < lanes.size(); ++n) {
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+      }
+      mapped_job(lattice).run();
     }
-    mapped_job(lattice).run();
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       const std::uint32_t p = lanes[n];
       if (p == LatticeBinding::no_vertex) continue;

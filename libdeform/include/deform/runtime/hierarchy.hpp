@@ -255,6 +255,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> accel_start;
     std::vector<glm::vec3> accel_end;
     std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
+    bool regular_rest = false;             // rest control points on the frame's grid (one evaluation for normals)
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
