@@ -9,6 +9,7 @@
 #include "deform/io/model_files.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/pose_json.hpp"
+#include "deform/io/text.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/blending.hpp"
 #include "deform/runtime/error.hpp"
@@ -281,7 +282,7 @@ int run(const std::vector<std::string> &argv) {
   if (!blend.empty()) {
     nlohmann::ordered_json items = nlohmann::ordered_json::array();
     for (const BlendItem &item : blend)
-      items.push_back({{"clip", item.clip}, {"weight", item.weight}});
+      items.push_back({{"clip", item.clip}, {"weight", deform::shortest_double(item.weight)}});
     out["blend"] = std::move(items);
   }
   print_json_in_order(out);

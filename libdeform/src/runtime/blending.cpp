@@ -133,7 +133,10 @@ Status BlendingJob::run(std::size_t begin, std::size_t end) const noexcept {
       const float w = bone_weight(layer, b);
       if (!(w > 0.0f))
         continue;
-      q = normalized_or(q * power(layer.rotations[b], w), q);
+      // Weight 1 (the common case) is the delta itself: no trigonometry.
+      q = normalized_or(
+          q * (w == 1.0f ? layer.rotations[b] : power(layer.rotations[b], w)),
+          q);
       t += w * layer.translations[b];
     }
     rotations[b] = q;
