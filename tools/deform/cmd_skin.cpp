@@ -1,5 +1,4 @@
-// deform skin: deform a rigged mesh by a pose, LBS or DQS (docs/cli.md,
-// docs/cli.md).
+// deform skin: deform a rigged mesh by a pose, LBS or DQS (docs/cli.md, docs/cli.md).
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -22,61 +21,43 @@
 namespace cli {
 namespace {
 
-// Skins one stream of the model: `positions` (and `normals` when not empty)
-// with the given per-entry weights.
-void skin(deform::SkinningJob job, std::span<const glm::u16vec4> bones,
-          std::span<const glm::vec4> weights,
-          std::span<const glm::vec3> positions,
-          std::span<glm::vec3> out_positions,
-          std::span<const glm::vec3> normals, std::span<glm::vec3> out_normals,
-          const std::string &source) {
+// Skins one stream of the model: `positions` (and `normals` when not empty) with the given per-entry weights.
+void skin(deform::SkinningJob job, std::span<const glm::u16vec4> bones, std::span<const glm::vec4> weights,
+          std::span<const glm::vec3> positions, std::span<glm::vec3> out_positions, std::span<const glm::vec3> normals,
+          std::span<glm::vec3> out_normals, const std::string& source) {
   job.bone_indices = bones;
   job.bone_weights = weights;
   job.in_positions = deform::as_floats(positions);
   job.out_positions = deform::as_floats(out_positions);
   job.in_normals = deform::as_floats(normals);
   job.out_normals = deform::as_floats(out_normals);
-  if (!job.validate())
-    throw deform::Error::in_file(
-        source, "", "the weights do not fit the skeleton or the mesh");
+  if (!job.validate()) throw deform::Error::in_file(source, "", "the weights do not fit the skeleton or the mesh");
   job.run();
 }
 
-// The clips a model offers by name: an import's own, or the built-in
-// character's (builtin_clips). `flag` names the option asking, for the message
-// when the model has none (native files carry no clips).
-std::vector<deform::Animation> model_clips(const LoadedModel &loaded,
-                                           const std::string &flag) {
-  if (loaded.builtin)
-    return deform::builtin_clips(loaded.model);
+// The clips a model offers by name: an import's own, or the built-in character's (builtin_clips). `flag` names the
+// option asking, for the message when the model has none (native files carry no clips).
+std::vector<deform::Animation> model_clips(const LoadedModel& loaded, const std::string& flag) {
+  if (loaded.builtin) return deform::builtin_clips(loaded.model);
   if (!loaded.imported)
-    throw UsageError(flag +
-                     " needs the built-in character or an imported model "
-                     "(glTF, FBX, .x, ...), not " +
+    throw UsageError(flag + " needs the built-in character or an imported model (glTF, FBX, .x, ...), not " +
                      loaded.source);
   return loaded.clips;
 }
 
-// The clip named `name` among `clips`, or a deform::Error (exit 2) naming the
-// model, the clip and the names there are.
-const deform::Animation &named_clip(const std::vector<deform::Animation> &clips,
-                                    const std::string &name,
-                                    const LoadedModel &loaded) {
+// The clip named `name` among `clips`, or a deform::Error (exit 2) naming the model, the clip and the names there are.
+const deform::Animation& named_clip(const std::vector<deform::Animation>& clips, const std::string& name,
+                                    const LoadedModel& loaded) {
   const std::int32_t found = deform::find_clip(clips, name);
-  if (found >= 0)
-    return clips[static_cast<std::size_t>(found)];
+  if (found >= 0) return clips[static_cast<std::size_t>(found)];
   std::string names;
-  for (const deform::Animation &c : clips)
-    names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
-  throw deform::Error::in_file(
-      loaded.source, "clip '" + name + "'",
-      "no clip of that name (" +
-          (names.empty() ? "it has none" : "it has " + names) + ")");
+  for (const deform::Animation& c : clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
+  throw deform::Error::in_file(loaded.source, "clip '" + name + "'",
+                               "no clip of that name (" + (names.empty() ? "it has none" : "it has " + names) + ")");
 }
 
 // `clip` sampled at `seconds` (clips loop as they say) over the bind pose.
-deform::Pose sample_clip(const deform::Animation &clip, float seconds,
-                         const LoadedModel &loaded) {
+deform::Pose sample_clip(const deform::Animation& clip, float seconds, const LoadedModel& loaded) {
   deform::Pose pose = loaded.model.skeleton.bind_pose();
   deform::SamplingJob sampling;
   sampling.animation = &clip;
@@ -84,20 +65,16 @@ deform::Pose sample_clip(const deform::Animation &clip, float seconds,
   sampling.rotations = pose.rotations;
   sampling.translations = pose.translations;
   if (const deform::Status status = sampling.run(); !status)
-    throw deform::Error::in_file(loaded.source, "clip '" + clip.name + "'",
-                                 status.reason());
+    throw deform::Error::in_file(loaded.source, "clip '" + clip.name + "'", status.reason());
   return pose;
 }
 
 // The pose of the model's clip NAME at T seconds, over the bind pose.
-deform::Pose clip_pose(const Args &args, const LoadedModel &loaded) {
-  if (args.has("--pose"))
-    throw UsageError("--clip and --pose exclude each other");
+deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
+  if (args.has("--pose")) throw UsageError("--clip and --pose exclude each other");
   const std::vector<deform::Animation> clips = model_clips(loaded, "--clip");
-  const auto seconds =
-      static_cast<float>(parse_number(args.required("--time"), "--time"));
-  return sample_clip(named_clip(clips, args.required("--clip"), loaded),
-                     seconds, loaded);
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+  return sample_clip(named_clip(clips, args.required("--clip"), loaded), seconds, loaded);
 }
 
 // One CLIP:WEIGHT item of --blend.
@@ -106,51 +83,38 @@ struct BlendItem {
   float weight = 0.0f;
 };
 
-// "walk:0.7,run:0.3" -> items. The weight follows the last ':' (a clip name may
-// hold ':'); each must be a finite number >= 0 and at most 1e6 (so the sum
-// stays a normal float). UsageError naming the item otherwise.
-std::vector<BlendItem> parse_blend(const std::string &text) {
+// "walk:0.7,run:0.3" -> items. The weight follows the last ':' (a clip name may hold ':'); each must be a finite number
+// >= 0 and at most 1e6 (so the sum stays a normal float). UsageError naming the item otherwise.
+std::vector<BlendItem> parse_blend(const std::string& text) {
   std::vector<BlendItem> items;
   std::size_t start = 0;
   for (;;) {
     const std::size_t comma = text.find(',', start);
-    const std::string item = text.substr(
-        start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     const std::size_t colon = item.rfind(':');
-    if (colon == std::string::npos || colon == 0)
-      throw UsageError("--blend: item '" + item + "' is not CLIP:WEIGHT");
-    const double weight = parse_number(item.substr(colon + 1),
-                                       "--blend: item '" + item + "': weight");
-    if (weight < 0.0 || weight > 1e6)
-      throw UsageError("--blend: item '" + item +
-                       "': weight must be within [0, 1e6]");
+    if (colon == std::string::npos || colon == 0) throw UsageError("--blend: item '" + item + "' is not CLIP:WEIGHT");
+    const double weight = parse_number(item.substr(colon + 1), "--blend: item '" + item + "': weight");
+    if (weight < 0.0 || weight > 1e6) throw UsageError("--blend: item '" + item + "': weight must be within [0, 1e6]");
     items.push_back({item.substr(0, colon), static_cast<float>(weight)});
-    if (comma == std::string::npos)
-      break;
+    if (comma == std::string::npos) break;
     start = comma + 1;
   }
   return items;
 }
 
-// The blend of the --blend clips at T seconds (BlendingJob: normalised weights,
-// the bind pose where they sum to less than 0.1; docs/animation.md), each clip
-// sampled at the same time.
-deform::Pose blend_pose(const Args &args, const LoadedModel &loaded,
-                        const std::vector<BlendItem> &items) {
-  if (args.has("--pose") || args.has("--clip"))
-    throw UsageError("--blend excludes --pose and --clip");
+// The blend of the --blend clips at T seconds (BlendingJob: normalised weights, the bind pose where they sum to less
+// than 0.1; docs/animation.md), each clip sampled at the same time.
+deform::Pose blend_pose(const Args& args, const LoadedModel& loaded, const std::vector<BlendItem>& items) {
+  if (args.has("--pose") || args.has("--clip")) throw UsageError("--blend excludes --pose and --clip");
   const std::vector<deform::Animation> clips = model_clips(loaded, "--blend");
-  const auto seconds =
-      static_cast<float>(parse_number(args.required("--time"), "--time"));
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
   std::vector<deform::Pose> poses;
   poses.reserve(items.size());
-  for (const BlendItem &item : items)
-    poses.push_back(
-        sample_clip(named_clip(clips, item.clip, loaded), seconds, loaded));
+  for (const BlendItem& item : items)
+    poses.push_back(sample_clip(named_clip(clips, item.clip, loaded), seconds, loaded));
   std::vector<deform::BlendLayer> layers;
   for (std::size_t i = 0; i < items.size(); ++i)
-    layers.push_back(
-        {poses[i].rotations, poses[i].translations, items[i].weight, {}});
+    layers.push_back({poses[i].rotations, poses[i].translations, items[i].weight, {}});
   const deform::Pose bind = loaded.model.skeleton.bind_pose();
   deform::Pose pose = bind;
   deform::BlendingJob job;
@@ -165,37 +129,30 @@ deform::Pose blend_pose(const Args &args, const LoadedModel &loaded,
   return pose;
 }
 
-int run(const std::vector<std::string> &argv) {
+int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out",
-                                         "--clip", "--time", "--blend"});
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);
 
   const std::string method_name = args.value("--method").value_or("lbs");
-  if (method_name != "lbs" && method_name != "dqs")
-    throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
+  if (method_name != "lbs" && method_name != "dqs") throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
   const bool animated = args.has("--clip") || args.has("--blend");
-  const std::string pose_path =
-      animated ? std::string() : args.required("--pose");
+  const std::string pose_path = animated ? std::string() : args.required("--pose");
   // Parsed before the model loads, so a malformed item fails fast.
-  const std::vector<BlendItem> blend = args.has("--blend")
-                                           ? parse_blend(*args.value("--blend"))
-                                           : std::vector<BlendItem>{};
-  if (!animated && args.has("--time"))
-    throw UsageError("--time needs --clip or --blend");
+  const std::vector<BlendItem> blend =
+      args.has("--blend") ? parse_blend(*args.value("--blend")) : std::vector<BlendItem>{};
+  if (!animated && args.has("--time")) throw UsageError("--time needs --clip or --blend");
   const std::string out_path = args.required("--out");
   const bool limits = !args.has("--no-limits");
 
   const LoadedModel loaded = load_model(args);
-  const deform::Model &model = loaded.model;
-  const deform::Skeleton &skeleton = model.skeleton;
-  const deform::Pose pose =
-      args.has("--blend") ? blend_pose(args, loaded, blend)
-      : args.has("--clip")
-          ? clip_pose(args, loaded)
-          : deform::read_pose_json(pose_path, skeleton, limits);
+  const deform::Model& model = loaded.model;
+  const deform::Skeleton& skeleton = model.skeleton;
+  const deform::Pose pose = args.has("--blend")  ? blend_pose(args, loaded, blend)
+                            : args.has("--clip") ? clip_pose(args, loaded)
+                                                 : deform::read_pose_json(pose_path, skeleton, limits);
 
   const std::size_t bone_count = skeleton.bone_count();
   std::vector<glm::mat4> world(bone_count), palette(bone_count);
@@ -205,40 +162,30 @@ int run(const std::vector<std::string> &argv) {
   fk.translations = pose.translations;
   fk.world = world;
   fk.palette = palette;
-  if (!fk.run())
-    throw deform::Error::in_file(pose_path, "",
-                                 "the pose does not fit the skeleton");
+  if (!fk.run()) throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
 
   deform::SkinningJob job;
-  job.method = method_name == "dqs" ? deform::SkinningMethod::dqs
-                                    : deform::SkinningMethod::lbs;
+  job.method = method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
   job.matrices = palette;
   std::vector<deform::DualQuat> dual_quats(bone_count);
   std::vector<glm::mat3> scales(bone_count);
   if (job.method == deform::SkinningMethod::dqs) {
     bool has_scale = false;
-    if (!deform::compute_dual_quat_palette(palette, dual_quats, scales,
-                                           has_scale))
-      throw deform::Error::in_file(pose_path, "",
-                                   "the pose gives a singular bone transform");
+    if (!deform::compute_dual_quat_palette(palette, dual_quats, scales, has_scale))
+      throw deform::Error::in_file(pose_path, "", "the pose gives a singular bone transform");
     job.dual_quats = dual_quats;
-    if (has_scale)
-      job.scales = scales;
+    if (has_scale) job.scales = scales;
   }
 
-  // Points (the OBJ's `v`, in order) carry the weights; render vertices carry
-  // the normals, so they are skinned with their point's weights.
-  const deform::Mesh &mesh = model.mesh;
+  // Points (the OBJ's `v`, in order) carry the weights; render vertices carry the normals, so they are skinned with
+  // their point's weights.
+  const deform::Mesh& mesh = model.mesh;
   std::vector<glm::vec3> positions(mesh.point_count());
-  skin(job, model.weights.bones, model.weights.weights, mesh.positions,
-       positions, {}, {}, loaded.source);
-  const std::size_t render_vertices =
-      mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count()
-                                                        : 0;
+  skin(job, model.weights.bones, model.weights.weights, mesh.positions, positions, {}, {}, loaded.source);
+  const std::size_t render_vertices = mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count() : 0;
   std::vector<glm::u16vec4> vertex_bones(render_vertices);
   std::vector<glm::vec4> vertex_weights(render_vertices);
-  std::vector<glm::vec3> vertex_positions(render_vertices),
-      normals(render_vertices), scratch(render_vertices);
+  std::vector<glm::vec3> vertex_positions(render_vertices), normals(render_vertices), scratch(render_vertices);
   for (std::size_t r = 0; r < render_vertices; ++r) {
     const std::uint32_t point = mesh.vertex_point[r];
     vertex_bones[r] = model.weights.bones[point];
@@ -246,25 +193,20 @@ int run(const std::vector<std::string> &argv) {
     vertex_positions[r] = mesh.positions[point];
   }
   if (render_vertices > 0)
-    skin(job, vertex_bones, vertex_weights, vertex_positions, scratch,
-         mesh.vertex_normals, normals, loaded.source);
+    skin(job, vertex_bones, vertex_weights, vertex_positions, scratch, mesh.vertex_normals, normals, loaded.source);
 
-  // The output names the input's MTL files (relative to its own folder), so it
-  // opens with its materials.
-  deform::write_obj(out_path, mesh, positions, normals,
-                    {.mtllib = deform::material_libraries_for(mesh, out_path)});
+  // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
+  deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
 
   const deform::Pose bind = skeleton.bind_pose();
   int posed = 0;
   for (std::size_t b = 0; b < bone_count; ++b)
-    if (std::abs(glm::dot(pose.rotations[b], bind.rotations[b])) <
-            1.0f - 1e-7f ||
+    if (std::abs(glm::dot(pose.rotations[b], bind.rotations[b])) < 1.0f - 1e-7f ||
         pose.translations[b] != bind.translations[b])
       ++posed;
   float max_displacement = 0.0f;
   for (std::size_t i = 0; i < positions.size(); ++i)
-    max_displacement = std::max(max_displacement,
-                                glm::length(positions[i] - mesh.positions[i]));
+    max_displacement = std::max(max_displacement, glm::length(positions[i] - mesh.positions[i]));
   const deform::Bounds bounds = deform::compute_bounds(positions);
 
   nlohmann::ordered_json out;
@@ -281,7 +223,7 @@ int run(const std::vector<std::string> &argv) {
   out["out"] = out_path;
   if (!blend.empty()) {
     nlohmann::ordered_json items = nlohmann::ordered_json::array();
-    for (const BlendItem &item : blend)
+    for (const BlendItem& item : blend)
       items.push_back({{"clip", item.clip}, {"weight", deform::shortest_double(item.weight)}});
     out["blend"] = std::move(items);
   }
@@ -289,33 +231,23 @@ int run(const std::vector<std::string> &argv) {
   return exit_ok;
 }
 
-} // namespace
+}  // namespace
 
 const Command skin_command = {
     "skin", "deform a mesh by a pose (LBS or DQS)",
-    "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) "
-    "--pose P.json [--method lbs|dqs]\n"
+    "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
     "                   [--no-limits] --out OUT.obj\n"
-    "       deform skin MODEL (--pose P.json | --clip NAME --time T) ... "
-    "(MODEL: an import: glTF, FBX, .x, ...)\n"
-    "       deform skin (--builtin | MODEL) --blend "
-    "CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
-    "Poses the skeleton (bones not in P.json keep their bind pose; angles "
-    "clamped into the DOF limits unless\n"
-    "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) "
-    "or dual quaternion skinning (dqs).\n"
-    "OUT.obj keeps the input's `v` lines in order and count, its UVs and "
-    "faces; normals are skinned too.\n"
-    "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, "
-    "ry, rz], \"translation\": [x, y, z]}}}.\n"
-    "--clip samples a clip of the model (the built-in character's: idle, walk, "
-    "run, wave) at T seconds; --blend\n"
-    "samples several at T and blends them by weight (>= 0, normalised; below a "
-    "sum of 0.1 the bind pose joins in).\n"
-    "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", "
-    "\"bones_posed\", \"limits\",\n"
-    "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", "
-    "\"out\"} (and \"blend\": [{\"clip\", \"weight\"}]).\n",
+    "       deform skin MODEL (--pose P.json | --clip NAME --time T) ... (MODEL: an import: glTF, FBX, .x, ...)\n"
+    "       deform skin (--builtin | MODEL) --blend CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
+    "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
+    "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
+    "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
+    "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
+    "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
+    "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"
+    "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", \"bones_posed\", \"limits\",\n"
+    "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", \"out\"}; with --blend also\n"
+    "\"blend\": [{\"clip\", \"weight\"}].\n",
     run};
 
-} // namespace cli
+}  // namespace cli
