@@ -1,6 +1,7 @@
 // Blending, masks, additive layers and root motion (blending.hpp): a plain double-precision reference of the blend,
 // seeded random properties over thousands of cases, and the jobs' refusals.
 #include "deform/runtime/blending.hpp"
+#include "deform/runtime/parallel.hpp"
 
 #include <doctest/doctest.h>
 
@@ -426,6 +427,16 @@ TEST_CASE("run(begin, end) over disjoint ranges equals run(); outputs may be a l
   CHECK(pieces.rotations == whole.rotations);
   CHECK(pieces.translations == whole.translations);
   CHECK(job.run(3, 41).reason() == std::string("range outside the job"));
+  // run_parallel over two threads, in chunks of 16 bones: the same bits.
+  Pose parallel = identity_pose(bones);
+  job.rotations = parallel.rotations;
+  job.translations = parallel.translations;
+  deform::ThreadPool pool(2);
+  REQUIRE(deform::run_parallel(job, pool, 16).ok());
+  CHECK(parallel.rotations == whole.rotations);
+  CHECK(parallel.translations == whole.translations);
+  job.rotations = pieces.rotations;
+  job.translations = pieces.translations;
   // In place: the output is layer a's arrays.
   Pose in_place = a;
   const std::vector<BlendLayer> aliased{layer_of(in_place, 0.7f), layer_of(b, 0.4f, mask)};

@@ -56,6 +56,13 @@ struct DEFORM_RUNTIME_API BlendingJob {
   std::span<glm::quat> rotations;                // out: one per bone (the bone count)
   std::span<glm::vec3> translations;             // out: as many
 
+  // For run_parallel (parallel.hpp): ranges cut at multiples of 16 bones (whole cache lines of both outputs when
+  // the arrays start on one), in chunks of at least 4096 bones by default: a bone costs a few nanoseconds per layer
+  // and a thread wake-up several microseconds, so a skeleton (tens to hundreds of bones) stays on one thread, and a
+  // crowd's poses laid end to end are what splitting is for.
+  static constexpr std::size_t split_multiple = 16;
+  static constexpr std::size_t min_parallel_chunk = 4096;
+
   // Ok when the call is well formed, else why not: "threshold is not finite and > 0", "rest pose size differs",
   // "output sizes differ", "layer pose size differs", "layer weight is not finite and >= 0", "layer mask size
   // differs", "layer mask weight is not finite and >= 0", "layer pose is not finite", "rest pose is not finite".
