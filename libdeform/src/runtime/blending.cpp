@@ -11,14 +11,17 @@ namespace {
 
 constexpr float pi = 3.14159265358979323846f;
 
-bool weight_ok(float w) noexcept { return std::isfinite(w) && w >= 0.0f; }
+// Weights and the threshold stay within ranges where every weighted sum of finite poses stays finite and the
+// threshold's share of the rest pose stays a normal float.
+constexpr float max_weight = 1e6f, min_threshold = 1e-6f;
+bool weight_ok(float w) noexcept { return w >= 0.0f && w <= max_weight; }  // false for NaN
 
 // What run() checks (O(layers)): sizes and weights, never the per-bone values.
 Status layer_checks(std::span<const BlendLayer> layers, std::size_t bones) noexcept {
   for (const BlendLayer& layer : layers) {
     if (layer.rotations.size() != bones || layer.translations.size() != bones)
       return Status::failure("layer pose size differs");
-    if (!weight_ok(layer.weight)) return Status::failure("layer weight is not finite and >= 0");
+    if (!weight_ok(layer.weight)) return Status::failure("layer weight is not within [0, 1e6]");
     if (!layer.bone_weights.empty() && layer.bone_weights.size() != bones)
       return Status::failure("layer mask size differs");
   }
@@ -27,8 +30,8 @@ Status layer_checks(std::span<const BlendLayer> layers, std::size_t bones) noexc
 
 Status run_checks(const BlendingJob& job, std::size_t begin, std::size_t end) noexcept {
   const std::size_t bones = job.rotations.size();
-  if (!std::isfinite(job.threshold) || !(job.threshold > 0.0f))
-    return Status::failure("threshold is not finite and > 0");
+  if (!(job.threshold >= min_threshold && job.threshold <= max_weight))
+    return Status::failure("threshold is not within [1e-6, 1e6]");
   if (job.translations.size() != bones) return Status::failure("output sizes differ");
   if (job.rest_rotations.size() != bones || job.rest_translations.size() != bones)
     return Status::failure("rest pose size differs");
@@ -81,7 +84,7 @@ Status BlendingJob::validate() const noexcept {
   for (const std::span<const BlendLayer> group : {layers, additive_layers})
     for (const BlendLayer& layer : group) {
       for (const float w : layer.bone_weights)
-        if (!weight_ok(w)) return Status::failure("layer mask weight is not finite and >= 0");
+        if (!weight_ok(w)) return Status::failure("layer mask weight is not within [0, 1e6]");
       for (std::size_t b = 0; b < bones; ++b)
         if (!finite(layer.rotations[b]) || !finite(layer.translations[b]))
           return Status::failure("layer pose is not finite");

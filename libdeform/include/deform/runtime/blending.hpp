@@ -26,8 +26,8 @@ namespace deform {
 struct BlendLayer {
   std::span<const glm::quat> rotations;
   std::span<const glm::vec3> translations;
-  float weight = 1.0f;                  // finite, >= 0
-  std::span<const float> bone_weights;  // empty, or one finite value >= 0 per bone
+  float weight = 1.0f;                  // within [0, 1e6]
+  std::span<const float> bone_weights;  // empty, or one value within [0, 1e6] per bone
 };
 
 // Blends layers of local poses into one (the per-frame job). For bone b, with w_i = layer weight · mask of layer i
@@ -50,7 +50,7 @@ struct BlendLayer {
 struct DEFORM_RUNTIME_API BlendingJob {
   std::span<const BlendLayer> layers;            // normal layers (may be empty: the rest pose, then additive layers)
   std::span<const BlendLayer> additive_layers;   // delta poses applied on top, may be empty
-  float threshold = 0.1f;                        // finite, > 0: below this accumulated weight the rest pose joins
+  float threshold = 0.1f;                        // [1e-6, 1e6]: below this accumulated weight the rest pose joins
   std::span<const glm::quat> rest_rotations;     // one per bone
   std::span<const glm::vec3> rest_translations;  // one per bone
   std::span<glm::quat> rotations;                // out: one per bone (the bone count)
@@ -63,9 +63,10 @@ struct DEFORM_RUNTIME_API BlendingJob {
   static constexpr std::size_t split_multiple = 16;
   static constexpr std::size_t min_parallel_chunk = 4096;
 
-  // Ok when the call is well formed, else why not: "threshold is not finite and > 0", "rest pose size differs",
-  // "output sizes differ", "layer pose size differs", "layer weight is not finite and >= 0", "layer mask size
-  // differs", "layer mask weight is not finite and >= 0", "layer pose is not finite", "rest pose is not finite".
+  // Ok when the call is well formed, else why not: "threshold is not within [1e-6, 1e6]", "rest pose size differs",
+  // "output sizes differ", "layer pose size differs", "layer weight is not within [0, 1e6]", "layer mask size
+  // differs", "layer mask weight is not within [0, 1e6]", "layer pose is not finite", "rest pose is not finite".
+  // (The ranges keep every weighted sum of finite poses finite.)
   // O(bones · layers): at bind time, or after the inputs may have gone wrong.
   Status validate() const noexcept;
   // Checks what is O(layers) (sizes, weights, the threshold, the range: "range outside the job") and refuses,
