@@ -44,7 +44,7 @@ void validate_motion(const LatticeMotion& motion) {
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
                                      std::size_t point_count)
-    : scratch_(point_count, glm::vec3(0.0f)), normal_scratch_(point_count, glm::vec3(0.0f)) {
+    : point_count_(point_count) {
   bone_parents_.reserve(skeleton.bone_count());
   for (const Bone& bone : skeleton.bones()) bone_parents_.push_back(bone.parent);
   lattices_.reserve(lattices.size());
@@ -101,6 +101,18 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.rest_velocity.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_start.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_end.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    // The same binding writing lane n's result to entry n: the frame's scratch arrays are then a few hundred
+    // entries, written in order, instead of a mesh-sized array written at scattered points (per character
+    // instance, 70 KB less memory and a fraction of the cache lines a crowd's frame touches).
+    lattice.lane_binding = lattice.binding;
+    std::vector<std::uint32_t>& lane_of = lattice.lane_binding.vertices;
+    for (std::size_t n = 0; n < lane_of.size(); ++n)
+      if (lane_of[n] != LatticeBinding::no_vertex) lane_of[n] = std::uint32_t(n);
+    lattice.lane_binding.max_vertex = lane_of.empty() ? 0 : std::uint32_t(lane_of.size() - 1);
+    if (scratch_.size() < lane_of.size()) {
+      scratch_.assign(lane_of.size(), glm::vec3(0.0f));
+      normal_scratch_.assign(lane_of.size(), glm::vec3(0.0f));
+    }
     lattices_.push_back(std::move(lattice));
   }
 
@@ -391,7 +403,7 @@ std::span<const glm::vec3> DeformerHierarchy::control_points(std::size_t index) 
 }
 
 Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
-  if (positions.size() != scratch_.size()) return Status::failure("positions do not have one entry per point");
+  if (positions.size() != point_count_) return Status::failure("positions do not have one entry per point");
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
     for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
@@ -403,14 +415,14 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
 
 LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice) {
   LatticeEvaluateJob job;
-  job.binding = &lattice.binding;
+  job.binding = &lattice.lane_binding;
   job.control_points = lattice.world_displacements;
   job.positions = scratch_;
   return job;
 }
 
 Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
-  if (positions.size() != scratch_.size()) return Status::failure("positions do not have one entry per point");
+  if (positions.size() != point_count_) return Status::failure("positions do not have one entry per point");
   // The constructor checked every binding against its lattice and the points, so no field is refused; checked all
   // the same before anything is written.
   for (const Lattice& lattice : lattices_)
@@ -421,18 +433,18 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
     field_job(lattice).run();
     const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
     }
   }
   return {};
 }
 
 Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::vec3> normals) {
-  if (positions.size() != scratch_.size() || normals.size() != scratch_.size())
+  if (positions.size() != point_count_ || normals.size() != point_count_)
     return Status::failure("positions and normals do not have one entry per point");
   const auto mapped_job = [this](Lattice& lattice) {
     LatticeEvaluateJob job;
-    job.binding = &lattice.binding;
+    job.binding = &lattice.lane_binding;
     job.control_points = lattice.mapped_points;
     job.positions = scratch_;
     job.normals_in = normal_scratch_;
@@ -453,7 +465,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     const LatticeBinding& binding = lattice.binding;
     const std::vector<std::uint32_t>& lanes = binding.vertices;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[lanes[n]] = to_bind * normals[lanes[n]];
+      if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[n] = to_bind * normals[lanes[n]];
     }
     if (lattice.regular_rest) {
       // One evaluation: the field's positions (the same bits as apply()'s: the kernel's sums do not depend on the
@@ -465,7 +477,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       job.normals_jacobian_offset = lattice.linear * glm::mat3(frame.u_axis, frame.v_axis, frame.w_axis);
       job.run();
       for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
       }
     } else {
       const std::span<const glm::vec3> rest = lattice.rest.control_points();
@@ -476,7 +488,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       // consumed displacements, are not used).
       field_job(lattice).run();
       for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[lanes[n]];
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
       }
       mapped_job(lattice).run();
     }
@@ -484,7 +496,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       const std::uint32_t p = lanes[n];
       if (p == LatticeBinding::no_vertex) continue;
       const float weight = lattice.lane_weights[n];
-      const glm::vec3 blended = normals[p] + weight * (normal_scratch_[p] - normals[p]);
+      const glm::vec3 blended = normals[p] + weight * (normal_scratch_[n] - normals[p]);
       const float length2 = glm::dot(blended, blended);
       if (length2 > 1e-12f) normals[p] = blended / std::sqrt(length2);
     }

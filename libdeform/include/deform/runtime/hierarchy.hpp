@@ -256,6 +256,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> accel_end;
     std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
     bool regular_rest = false;             // rest control points on the frame's grid (one evaluation for normals)
+    LatticeBinding lane_binding;           // `binding` writing lane n to scratch entry n (apply's evaluations)
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
@@ -274,8 +275,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
   std::vector<Lattice> lattices_;
   mutable bool drawing_current_ = false;  // world_points as of the last update()
-  std::vector<glm::vec3> scratch_;  // per mesh point: Bézier displacements of the lattice being applied
-  std::vector<glm::vec3> normal_scratch_;  // per mesh point: bound normals of the lattice being applied (with normals)
+  std::size_t point_count_ = 0;            // the mesh's points, which apply() takes
+  std::vector<glm::vec3> scratch_;         // per binding lane: displacements of the lattice being applied
+  std::vector<glm::vec3> normal_scratch_;  // per binding lane: its normals (apply with normals)
 };
 
 }  // namespace deform
