@@ -70,7 +70,15 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
       if (p >= point_count) throw Error::invalid_argument(element, "a carried point is out of range");
     }
     Lattice lattice;
-    static_cast<BoundLattice&>(lattice) = std::move(bound);
+    lattice.spec = std::move(bound.spec);
+    lattice.rest = std::move(bound.rest);
+    lattice.axis = bound.axis;
+    lattice.length = bound.length;
+    auto shared = std::make_shared<Binding>();
+    shared->binding = std::move(bound.binding);
+    shared->lane_weights = std::move(bound.lane_weights);
+    shared->carried_points = std::move(bound.carried_points);
+    shared->carried_weights = std::move(bound.carried_weights);
     lattice.bind_world = skeleton.bind_world()[std::size_t(lattice.spec.bone)];
     lattice.inverse_bind_world = skeleton.inverse_bind_world()[std::size_t(lattice.spec.bone)];
     lattice.field = lattice.rest;
@@ -104,15 +112,16 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     // The same binding writing lane n's result to entry n: the frame's scratch arrays are then a few hundred
     // entries, written in order, instead of a mesh-sized array written at scattered points (per character
     // instance, 70 KB less memory and a fraction of the cache lines a crowd's frame touches).
-    lattice.lane_binding = lattice.binding;
-    std::vector<std::uint32_t>& lane_of = lattice.lane_binding.vertices;
+    shared->lane_binding = shared->binding;
+    std::vector<std::uint32_t>& lane_of = shared->lane_binding.vertices;
     for (std::size_t n = 0; n < lane_of.size(); ++n)
       if (lane_of[n] != LatticeBinding::no_vertex) lane_of[n] = std::uint32_t(n);
-    lattice.lane_binding.max_vertex = lane_of.empty() ? 0 : std::uint32_t(lane_of.size() - 1);
+    shared->lane_binding.max_vertex = lane_of.empty() ? 0 : std::uint32_t(lane_of.size() - 1);
     if (scratch_.size() < lane_of.size()) {
       scratch_.assign(lane_of.size(), glm::vec3(0.0f));
       normal_scratch_.assign(lane_of.size(), glm::vec3(0.0f));
     }
+    lattice.bound = std::move(shared);
     lattices_.push_back(std::move(lattice));
   }
 
@@ -406,8 +415,9 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
   if (positions.size() != point_count_) return Status::failure("positions do not have one entry per point");
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
-    for (std::size_t n = 0; n < lattice.carried_points.size(); ++n) {
-      positions[lattice.carried_points[n]] += lattice.carried_weights[n] * lattice.far_displacement;
+    const Binding& bound = *lattice.bound;
+    for (std::size_t n = 0; n < bound.carried_points.size(); ++n) {
+      positions[bound.carried_points[n]] += bound.carried_weights[n] * lattice.far_displacement;
     }
   }
   return {};
@@ -415,7 +425,7 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
 
 LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice) {
   LatticeEvaluateJob job;
-  job.binding = &lattice.lane_binding;
+  job.binding = &lattice.bound->lane_binding;
   job.control_points = lattice.world_displacements;
   job.positions = scratch_;
   return job;
@@ -431,9 +441,10 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
     field_job(lattice).run();
-    const std::vector<std::uint32_t>& lanes = lattice.binding.vertices;
+    const std::vector<std::uint32_t>& lanes = lattice.bound->binding.vertices;
+    const std::vector<float>& weights = lattice.bound->lane_weights;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
+      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
     }
   }
   return {};
@@ -444,7 +455,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     return Status::failure("positions and normals do not have one entry per point");
   const auto mapped_job = [this](Lattice& lattice) {
     LatticeEvaluateJob job;
-    job.binding = &lattice.lane_binding;
+    job.binding = &lattice.bound->lane_binding;
     job.control_points = lattice.mapped_points;
     job.positions = scratch_;
     job.normals_in = normal_scratch_;
@@ -462,8 +473,8 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse
     // of its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
     const glm::mat3 to_bind = glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));
-    const LatticeBinding& binding = lattice.binding;
-    const std::vector<std::uint32_t>& lanes = binding.vertices;
+    const std::vector<std::uint32_t>& lanes = lattice.bound->binding.vertices;
+    const std::vector<float>& weights = lattice.bound->lane_weights;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[n] = to_bind * normals[lanes[n]];
     }
@@ -477,7 +488,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       job.normals_jacobian_offset = lattice.linear * glm::mat3(frame.u_axis, frame.v_axis, frame.w_axis);
       job.run();
       for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
       }
     } else {
       const std::span<const glm::vec3> rest = lattice.rest.control_points();
@@ -488,14 +499,14 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       // consumed displacements, are not used).
       field_job(lattice).run();
       for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += lattice.lane_weights[n] * scratch_[n];
+        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
       }
       mapped_job(lattice).run();
     }
     for (std::size_t n = 0; n < lanes.size(); ++n) {
       const std::uint32_t p = lanes[n];
       if (p == LatticeBinding::no_vertex) continue;
-      const float weight = lattice.lane_weights[n];
+      const float weight = weights[n];
       const glm::vec3 blended = normals[p] + weight * (normal_scratch_[n] - normals[p]);
       const float length2 = glm::dot(blended, blended);
       if (length2 > 1e-12f) normals[p] = blended / std::sqrt(length2);

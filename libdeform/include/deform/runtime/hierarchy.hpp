@@ -24,6 +24,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <memory>
 #include <vector>
 
 #include "deform/runtime/elastic.hpp"
@@ -136,8 +137,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // Its length along the bone, |U|, model units.
   float length(std::size_t lattice) const { return lattices_.at(lattice).length; }
   // Points moved by the lattice's Bézier field, and points it carries (beyond its far face).
-  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).binding.vertex_count; }
-  std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).carried_points.size(); }
+  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).bound->binding.vertex_count; }
+  std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).bound->carried_points.size(); }
 
   // The stretch the lattice springs toward, model units along its bone (negative squashes). Refuses, changing
   // nothing, a lattice index out of range or a stretch that is not finite and > -length(). O(control points), no
@@ -208,9 +209,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // What evaluating a lattice's field takes, for callers of apply_carried():
   // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
   // lanes LatticeBinding::no_vertex) and their (u, v, w) in the lattice's rest frame (bone bind space).
-  const LatticeBinding& binding(std::size_t lattice) const { return lattices_.at(lattice).binding; }
+  const LatticeBinding& binding(std::size_t lattice) const { return lattices_.at(lattice).bound->binding; }
   // One selection weight per binding lane (binding(l).vertices.size() entries, 0 in padding lanes): in (0, 1].
-  std::span<const float> bound_weights(std::size_t lattice) const { return lattices_.at(lattice).lane_weights; }
+  std::span<const float> bound_weights(std::size_t lattice) const { return lattices_.at(lattice).bound->lane_weights; }
   // As of update(): the control points of the lattice's displacement field, world space, i-fastest (point_counts of
   // rest_lattice(l)); evaluating binding(l) with them gives each bound point's displacement before its weight.
   std::span<const glm::vec3> displacements(std::size_t lattice) const {
@@ -229,7 +230,21 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::span<const glm::vec3> control_points(std::size_t lattice) const;
 
  private:
-  struct Lattice : BoundLattice {
+  // What bind_hierarchy computed for a lattice and no frame changes: shared by the copies of a hierarchy (a
+  // character's instances), so a crowd keeps one copy in memory and in the caches.
+  struct Binding {
+    LatticeBinding binding;                     // BoundLattice::binding, by mesh point
+    LatticeBinding lane_binding;                // the same writing lane n to scratch entry n (apply's evaluations)
+    std::vector<float> lane_weights;            // BoundLattice's
+    std::vector<std::uint32_t> carried_points;  // BoundLattice's
+    std::vector<float> carried_weights;         // BoundLattice's
+  };
+  struct Lattice {
+    LatticeSpec spec;  // per copy: its settings may change (set_shape, set_elastic, set_motion)
+    BezierLattice rest{LatticeFrame{}};
+    glm::vec3 axis{0.0f, 1.0f, 0.0f};
+    float length = 0.0f;
+    std::shared_ptr<const Binding> bound;
     std::int32_t parent = -1;
     glm::mat4 bind_world{1.0f};           // the bone's bind world matrix and its inverse
     glm::mat4 inverse_bind_world{1.0f};
@@ -256,7 +271,6 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> accel_end;
     std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
     bool regular_rest = false;             // rest control points on the frame's grid (one evaluation for normals)
-    LatticeBinding lane_binding;           // `binding` writing lane n to scratch entry n (apply's evaluations)
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
