@@ -149,12 +149,17 @@ class DEFORM_GPU_API GpuLatticeFields {
   GpuLatticeFields& operator=(const GpuLatticeFields&) = delete;
   ~GpuLatticeFields() = default;
 
-  // Creates one additive lattice per hierarchy lattice (`vertex_point`: the mesh's Mesh::vertex_point). Refuses,
-  // keeping nothing, as GpuBezierLattice::create_additive does. Call again after the hierarchy is rebuilt.
-  // Bind time: allocates.
+  // Creates one additive lattice per hierarchy lattice (`vertex_point`: the mesh's Mesh::vertex_point), and one for
+  // its carried points (a degree-1 lattice that binds them all at (0, 0, 0), where the field is exactly its first
+  // control point: apply_into() makes them all the far face's displacement). Refuses, keeping nothing, as
+  // GpuBezierLattice::create_additive does. Call again after the hierarchy is rebuilt. Bind time: allocates.
   Status create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point);
   // Deletes every lattice's GL objects (needs the context current).
-  void clear() noexcept { lattices_.clear(); }
+  void clear() noexcept {
+    lattices_.clear();
+    carried_.clear();
+    carried_points_.clear();
+  }
   std::size_t lattice_count() const noexcept { return lattices_.size(); }
 
   // Per frame, after the hierarchy's update() and the positions' upload: uploads each active lattice's displacements
@@ -162,9 +167,18 @@ class DEFORM_GPU_API GpuLatticeFields {
   // lattice in index order. Refuses, adding nothing, when the hierarchy's lattice count differs from create()'s or
   // a lattice would refuse (validate_into: a displacement count, the layout, a buffer too small). No allocation.
   Status add_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
+  // What DeformerHierarchy::apply() adds, all on the GPU: first every active lattice's carried points (render
+  // vertices of carried_points(l), + carried_weights(l) · far_displacement(l)), then the fields as add_into() does.
+  // For a buffer the GPU skinned (GpuSkinning::skin_into, whose barrier orders it before these), with
+  // Character::deform_on_cpu = false: the CPU then uploads only the palette and the control points. Normals stay as
+  // skinned (the CPU's transported normals also turn by the lattices' Jacobians: docs/gpu.md). Refuses, adding
+  // nothing, as add_into() does. No allocation.
+  Status apply_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
 
  private:
   std::vector<GpuBezierLattice> lattices_;
+  std::vector<GpuBezierLattice> carried_;     // per lattice: its carried points (see create())
+  std::vector<glm::vec3> carried_points_;     // per lattice, 8 control points (the far displacement), per frame
 };
 
 }  // namespace deform

@@ -216,6 +216,15 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::span<const glm::vec3> displacements(std::size_t lattice) const {
     return lattices_.at(lattice).world_displacements;
   }
+  // What apply_carried() adds, for callers that add it themselves (e.g. on a GPU, GpuLatticeFields::apply_into): the
+  // points beyond the lattice's far face (mesh point indices, made at construction), their selection weights (one
+  // per point, in (0, 1]), and, as of update(), the far face's displacement δ, world space: apply_carried() adds
+  // carried_weights(l)[n] · far_displacement(l) to point carried_points(l)[n] for every active lattice l.
+  std::span<const std::uint32_t> carried_points(std::size_t lattice) const {
+    return lattices_.at(lattice).carried_points;
+  }
+  std::span<const float> carried_weights(std::size_t lattice) const { return lattices_.at(lattice).carried_weights; }
+  glm::vec3 far_displacement(std::size_t lattice) const { return lattices_.at(lattice).far_displacement; }
   // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
   // length), which apply() skips.
   bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
