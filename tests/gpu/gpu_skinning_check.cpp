@@ -9,7 +9,8 @@
 //  - the built-in character reaching out of reach with its lattices stretching and springing back (degree 3, and 5
 //    with neighbour springs), LBS and DQS: one Character deforming on the CPU, a twin posing only (deform_on_cpu =
 //    false) whose deformation is skinned and lattice-added on the GPU; normals against a third twin with
-//    lattice_fields = false (the GPU's normals are the skinned ones);
+//    lattice_fields = false (the GPU's normals are the skinned ones); the same under the walk with the full rig's
+//    lattices on every limb jiggling (inertia);
 //  - the refusals (bind errors, wrong palette size, buffer 0 or too small, a layout that does not fit, scales of
 //    another count, an OpenGL ES context: no compute on desktop GL) and moves.
 // Bounds: positions within 1e-5 of the model's (deformed) bounding-box diagonal; normals within 1e-3 rad where the
@@ -471,6 +472,79 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs) {
   return ok;
 }
 
+// The whole deformation under a clip: the full rig (lattices on every limb, with inertia, so the walk makes them
+// jiggle: non-affine fields on both arms and legs at once) and the walk sampled with a lead, every frame.
+bool check_walk(deform::SkinningMethod method) {
+  const deform::Model model = deform::builtin_character();
+  const deform::Rig rig = deform::builtin_full_rig(model);
+  const deform::Animation walk = deform::builtin_walk(model);
+  deform::Character cpu(model, rig);
+  cpu.skinning = method;
+  for (std::size_t l = 0; l < cpu.deformers().lattice_count(); ++l) {
+    deform::LatticeMotion motion = cpu.deformers().spec(l).motion;
+    motion.inertia = 1.0f;
+    cpu.deformers().set_motion(l, motion);
+  }
+  deform::Character skinned = cpu.instance();
+  skinned.lattice_fields = false;
+  deform::Character gpu_pose = cpu.instance();
+  gpu_pose.deform_on_cpu = false;
+  const deform::Mesh& mesh = model.mesh;
+  std::vector<glm::vec3> bind_normals;
+  deform::GpuSkinning skinning;
+  deform::GpuLatticeFields fields;
+  if (!skinning.create(character_bind(gpu_pose, bind_normals)) ||
+      !fields.create(gpu_pose.deformers(), mesh.vertex_point)) {
+    std::printf("FAIL walk: create refused\n");
+    return false;
+  }
+  Buffer buffer(mesh.vertex_count(), layout);
+  deform::Pose pose = cpu.skeleton().bind_pose(), later = pose;
+  const auto sample = [&](deform::Pose& p, float t) {
+    deform::SamplingJob job;
+    job.animation = &walk;
+    job.time = t;
+    job.rotations = p.rotations;
+    job.translations = p.translations;
+    return job.run();
+  };
+  // The clip's first pose as a cut (a zero step), as the viewer starts a clip: the twins made by instance() and the
+  // constructed one then start alike, with no jump taken as motion.
+  if (!sample(pose, 0.0f) || !sample(later, 1e-3f)) return false;
+  for (deform::Character* c : {&cpu, &skinned, &gpu_pose}) {
+    c->set_pose(pose, later, 1e-3f);
+    c->update(0.0f);
+  }
+  bool ok = true;
+  double largest_field = 0.0;
+  for (int frame = 1; frame <= 40; ++frame) {
+    const float t = float(frame) / 60.0f;
+    if (!sample(pose, t) || !sample(later, t + 1e-3f)) return false;
+    for (deform::Character* c : {&cpu, &skinned, &gpu_pose}) {
+      c->set_pose(pose, later, 1e-3f);
+      c->update(1.0f / 60.0f);
+    }
+    if (frame % 13 != 0) continue;
+    if (!skinning.skin_into(method, gpu_pose.palette(), buffer.name()) ||
+        !fields.apply_into(gpu_pose.deformers(), buffer.name())) {
+      std::printf("FAIL walk: refused\n");
+      return false;
+    }
+    double moved = 0.0;
+    for (std::size_t p = 0; p < mesh.point_count(); ++p)
+      moved = std::max(moved, double(glm::length(cpu.positions()[p] - skinned.positions()[p])));
+    largest_field = std::max(largest_field, moved);
+    const std::string what = std::string(method == deform::SkinningMethod::dqs ? "DQS" : "LBS") +
+                             " walk, full rig with inertia, frame " + std::to_string(frame);
+    ok = compare(what.c_str(), buffer, mesh, cpu.positions(), skinned.normals(), &moved) && ok;
+  }
+  if (!(largest_field > 1e-3 * diagonal(cpu.positions()))) {
+    std::printf("FAIL walk: the lattices moved nothing, the check proves nothing\n");
+    ok = false;
+  }
+  return ok;
+}
+
 // ---- Refusals ------------------------------------------------------------------------------------------------------
 
 bool check_refusals() {
@@ -651,6 +725,7 @@ int main(int argc, char** argv) {
         for (const deform::SkinningMethod method : {deform::SkinningMethod::lbs, deform::SkinningMethod::dqs}) {
           ok = check_whole(method, 3, false) && ok;
           ok = check_whole(method, 5, true) && ok;
+          ok = check_walk(method) && ok;
         }
         ok = check_es_context() && ok;
         return ok ? 0 : 1;
