@@ -529,7 +529,7 @@ class Viewer {
       bind.normals = gpu_bind_normals_;
       bind.bone_count = character_->skeleton().bone_count();
       deform::Status status = gpu_skinning_.create(bind);
-      if (status) status = gpu_fields_.create(character_->deformers(), mesh.vertex_point);
+      if (status) status = gpu_fields_.create(character_->deformers(), mesh.vertex_point, true);
       if (!status) {
         std::fprintf(stderr, "deform_viewer: GPU deformation refused: %s; deforming on the CPU\n", status.reason());
         gpu_fields_.clear();

@@ -8,9 +8,10 @@
 //    vertex, with its bind normals, against Character::positions() and normals();
 //  - the built-in character reaching out of reach with its lattices stretching and springing back (degree 3, and 5
 //    with neighbour springs), LBS and DQS: one Character deforming on the CPU, a twin posing only (deform_on_cpu =
-//    false) whose deformation is skinned and lattice-added on the GPU; normals against a third twin with
-//    lattice_fields = false (the GPU's normals are the skinned ones); the same under the walk with the full rig's
-//    lattices on every limb jiggling (inertia);
+//    false) whose deformation is skinned and lattice-added on the GPU, normals turned by the lattices too
+//    (GpuLatticeFields with normals) against the CPU's transported normals, or, without, against a third twin's with
+//    lattice_fields = false (the skinned ones); the same under the walk with the full rig's lattices on every limb
+//    jiggling (inertia);
 //  - the refusals (bind errors, wrong palette size, buffer 0 or too small, a layout that does not fit, scales of
 //    another count, an OpenGL ES context: no compute on desktop GL) and moves.
 // Bounds: positions within 1e-5 of the model's (deformed) bounding-box diagonal; normals within 1e-3 rad where the
@@ -331,7 +332,7 @@ std::vector<glm::vec3> gathered(std::span<const glm::vec3> per_point, const std:
 
 // Compares the buffer's positions with `positions` (per point) and its normals with `normals` (per render vertex).
 bool compare(const char* what, const Buffer& buffer, const deform::Mesh& mesh, std::span<const glm::vec3> positions,
-             std::span<const glm::vec3> normals, double* moved = nullptr) {
+             std::span<const glm::vec3> normals, double* moved = nullptr, double turned = -1.0) {
   const std::vector<float> data = buffer.read();
   const double size = diagonal(positions);
   double worst_p = 0.0, worst_n = 0.0;
@@ -344,8 +345,17 @@ bool compare(const char* what, const Buffer& buffer, const deform::Mesh& mesh, s
   std::printf("%s %s: positions %.2e of the size, normals %.2e rad, %zu other floats changed", pass ? "ok  " : "FAIL",
               what, worst_p, worst_n, others);
   if (moved) std::printf(", lattices moved points by up to %.2e of the size", *moved / size);
+  if (turned >= 0.0) std::printf(" and turned normals by up to %.3f rad", turned);
   std::printf("\n");
   return pass;
+}
+
+// The largest angle between two normal lists (per render vertex), zero normals left out.
+double largest_angle(std::span<const glm::vec3> a, std::span<const glm::vec3> b) {
+  double largest = 0.0;
+  for (std::size_t r = 0; r < a.size(); ++r)
+    if (glm::length(a[r]) > 0.5f && glm::length(b[r]) > 0.5f) largest = std::max(largest, angle_between(a[r], b[r]));
+  return largest;
 }
 
 deform::GpuSkinningBind character_bind(const deform::Character& character, std::vector<glm::vec3>& normals) {
@@ -402,7 +412,7 @@ bool check_clips() {
 }
 
 // The whole deformation: skinning, carried points and lattice fields on the GPU, the CPU only posing.
-bool check_whole(deform::SkinningMethod method, int degree, bool springs) {
+bool check_whole(deform::SkinningMethod method, int degree, bool springs, bool lattice_normals) {
   const deform::Model model = deform::builtin_character();
   deform::Rig rig = deform::builtin_rig(model);
   for (deform::LatticeSpec& spec : rig.lattices) {
@@ -426,7 +436,7 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs) {
     std::printf("FAIL whole: GpuSkinning::create refused: %s\n", s.reason());
     return false;
   }
-  if (const deform::Status s = fields.create(gpu_pose.deformers(), mesh.vertex_point); !s) {
+  if (const deform::Status s = fields.create(gpu_pose.deformers(), mesh.vertex_point, lattice_normals); !s) {
     std::printf("FAIL whole: GpuLatticeFields::create refused: %s\n", s.reason());
     return false;
   }
@@ -439,7 +449,7 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs) {
       return false;
     }
   bool ok = true;
-  double largest_field = 0.0;
+  double largest_field = 0.0, largest_turn = 0.0;
   for (int frame = 1; frame <= 50; ++frame) {
     if (frame == 30)
       for (deform::Character* c : {&cpu, &skinned, &gpu_pose}) c->release();
@@ -461,12 +471,16 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs) {
     largest_field = std::max(largest_field, moved);
     const std::string what = std::string(method == deform::SkinningMethod::dqs ? "DQS" : "LBS") + " degree " +
                              std::to_string(degree) + (springs ? " + springs" : "") + " frame " + std::to_string(frame) +
-                             " whole deformation";
-    // Positions against the full CPU deformation, normals against the skinned surface's.
-    ok = compare(what.c_str(), buffer, mesh, cpu.positions(), skinned.normals(), &moved) && ok;
+                             " whole deformation" + (lattice_normals ? ", lattice normals" : "");
+    // Positions against the full CPU deformation; normals against its transported ones (turned by the lattices), or
+    // without lattice normals, against the skinned surface's.
+    const double turned = lattice_normals ? largest_angle(cpu.normals(), skinned.normals()) : -1.0;
+    largest_turn = std::max(largest_turn, turned);
+    ok = compare(what.c_str(), buffer, mesh, cpu.positions(), lattice_normals ? cpu.normals() : skinned.normals(),
+                 &moved, turned) && ok;
   }
-  if (!(largest_field > 1e-2 * diagonal(cpu.positions()))) {
-    std::printf("FAIL whole: the lattices moved nothing, the check proves nothing\n");
+  if (!(largest_field > 1e-2 * diagonal(cpu.positions())) || (lattice_normals && !(largest_turn > 1e-2))) {
+    std::printf("FAIL whole: the lattices moved or turned nothing, the check proves nothing\n");
     ok = false;
   }
   return ok;
@@ -494,7 +508,7 @@ bool check_walk(deform::SkinningMethod method) {
   deform::GpuSkinning skinning;
   deform::GpuLatticeFields fields;
   if (!skinning.create(character_bind(gpu_pose, bind_normals)) ||
-      !fields.create(gpu_pose.deformers(), mesh.vertex_point)) {
+      !fields.create(gpu_pose.deformers(), mesh.vertex_point, true)) {
     std::printf("FAIL walk: create refused\n");
     return false;
   }
@@ -516,7 +530,7 @@ bool check_walk(deform::SkinningMethod method) {
     c->update(0.0f);
   }
   bool ok = true;
-  double largest_field = 0.0;
+  double largest_field = 0.0, largest_turn = 0.0;
   for (int frame = 1; frame <= 40; ++frame) {
     const float t = float(frame) / 60.0f;
     if (!sample(pose, t) || !sample(later, t + 1e-3f)) return false;
@@ -536,10 +550,12 @@ bool check_walk(deform::SkinningMethod method) {
     largest_field = std::max(largest_field, moved);
     const std::string what = std::string(method == deform::SkinningMethod::dqs ? "DQS" : "LBS") +
                              " walk, full rig with inertia, frame " + std::to_string(frame);
-    ok = compare(what.c_str(), buffer, mesh, cpu.positions(), skinned.normals(), &moved) && ok;
+    const double turned = largest_angle(cpu.normals(), skinned.normals());
+    largest_turn = std::max(largest_turn, turned);
+    ok = compare(what.c_str(), buffer, mesh, cpu.positions(), cpu.normals(), &moved, turned) && ok;
   }
-  if (!(largest_field > 1e-3 * diagonal(cpu.positions()))) {
-    std::printf("FAIL walk: the lattices moved nothing, the check proves nothing\n");
+  if (!(largest_field > 1e-3 * diagonal(cpu.positions())) || !(largest_turn > 1e-2)) {
+    std::printf("FAIL walk: the lattices moved or turned nothing, the check proves nothing\n");
     ok = false;
   }
   return ok;
@@ -616,6 +632,26 @@ bool check_refusals() {
   deform::GpuSkinning moved = std::move(gpu);
   ok = ok && !gpu.created() && moved.created() && moved.skin_into(deform::SkinningMethod::lbs, palette, big.name());
   expect("moved from", gpu.skin_into(deform::SkinningMethod::lbs, palette, big.name()), "nothing was created");
+  // The additive lattices with normals take their mapped points through their own overload only.
+  {
+    const deform::Character hero = deform::make_builtin_character();
+    const deform::DeformerHierarchy& h = hero.deformers();
+    const deform::Mesh& mesh = hero.model().mesh;
+    Buffer vertices(mesh.vertex_count(), layout);
+    std::vector<glm::vec3> mapped(h.rest_lattice(0).point_count());
+    h.mapped_points(0, mapped);
+    deform::GpuBezierLattice with, without;
+    ok = ok && with.create_additive(h.binding(0), h.bound_weights(0), mesh.vertex_point, true) && with.has_normals();
+    ok = ok && without.create_additive(h.binding(0), h.bound_weights(0), mesh.vertex_point);
+    expect("normals, plain call", with.evaluate_into(h.displacements(0), vertices.name()),
+           "an additive lattice with normals also takes its mapped points and to_bind");
+    expect("mapped count", with.evaluate_into(h.displacements(0), std::span(mapped).first(3), glm::mat3(1.0f),
+                                              vertices.name()),
+           "the mapped point count differs from the binding's");
+    expect("no normals", without.evaluate_into(h.displacements(0), mapped, glm::mat3(1.0f), vertices.name()),
+           "not an additive lattice with normals");
+    ok = ok && vertices.read() == vertices.initial();
+  }
   std::printf("%s refusals\n", ok ? "ok  " : "FAIL");
   return ok;
 }
@@ -723,8 +759,9 @@ int main(int argc, char** argv) {
         for (const unsigned seed : {1u, 2u, 3u}) ok = check_random(seed) && ok;
         ok = check_clips() && ok;
         for (const deform::SkinningMethod method : {deform::SkinningMethod::lbs, deform::SkinningMethod::dqs}) {
-          ok = check_whole(method, 3, false) && ok;
-          ok = check_whole(method, 5, true) && ok;
+          ok = check_whole(method, 3, false, true) && ok;
+          ok = check_whole(method, 5, true, true) && ok;
+          ok = check_whole(method, 3, false, false) && ok;
           ok = check_walk(method) && ok;
         }
         ok = check_es_context() && ok;

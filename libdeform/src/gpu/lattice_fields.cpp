@@ -28,12 +28,18 @@ LatticeBinding carried_binding(const DeformerHierarchy& hierarchy, std::size_t l
 
 }  // namespace
 
-Status GpuLatticeFields::create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point) {
+Status GpuLatticeFields::create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point,
+                                bool normals) {
   clear();
+  normals_ = normals;
   lattices_.resize(hierarchy.lattice_count());
   carried_.resize(hierarchy.lattice_count());
+  std::size_t largest = 0;
   for (std::size_t l = 0; l < lattices_.size(); ++l) {
-    Status status = lattices_[l].create_additive(hierarchy.binding(l), hierarchy.bound_weights(l), vertex_point);
+    largest = std::max(largest, hierarchy.rest_lattice(l).point_count());
+    // Carried points only translate: their normals stay as skinned, so the carried lattices take none.
+    Status status =
+        lattices_[l].create_additive(hierarchy.binding(l), hierarchy.bound_weights(l), vertex_point, normals);
     if (status) status = carried_[l].create_additive(carried_binding(hierarchy, l), hierarchy.carried_weights(l),
                                                      vertex_point);
     if (!status) {
@@ -42,6 +48,7 @@ Status GpuLatticeFields::create(const DeformerHierarchy& hierarchy, std::span<co
     }
   }
   carried_points_.assign(lattices_.size() * carried_point_count, glm::vec3(0.0f));
+  if (normals) mapped_points_.assign(largest, glm::vec3(0.0f));
   return {};
 }
 
@@ -54,9 +61,23 @@ Status GpuLatticeFields::add_into(const DeformerHierarchy& hierarchy, unsigned i
     if (hierarchy.active(l))
       if (const Status status = lattices_[l].validate_into(hierarchy.displacements(l), vertex_buffer, layout); !status)
         return status;
-  for (std::size_t l = 0; l < lattices_.size(); ++l)
-    if (hierarchy.active(l)) lattices_[l].evaluate_into(hierarchy.displacements(l), vertex_buffer, layout);
+  add_fields(hierarchy, vertex_buffer, layout);
   return {};
+}
+
+void GpuLatticeFields::add_fields(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer,
+                                  const GpuVertexLayout& layout) {
+  for (std::size_t l = 0; l < lattices_.size(); ++l) {
+    if (!hierarchy.active(l)) continue;
+    if (!normals_) {
+      lattices_[l].evaluate_into(hierarchy.displacements(l), vertex_buffer, layout);
+      continue;
+    }
+    const std::span<glm::vec3> mapped(mapped_points_.data(), hierarchy.rest_lattice(l).point_count());
+    hierarchy.mapped_points(l, mapped);
+    lattices_[l].evaluate_into(hierarchy.displacements(l), mapped, hierarchy.normals_to_bind(l), vertex_buffer,
+                               layout);
+  }
 }
 
 Status GpuLatticeFields::apply_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer,
@@ -79,8 +100,7 @@ Status GpuLatticeFields::apply_into(const DeformerHierarchy& hierarchy, unsigned
       carried_[l].evaluate_into(std::span<const glm::vec3>(carried_points_.data() + l * carried_point_count,
                                                            carried_point_count),
                                 vertex_buffer, layout);
-  for (std::size_t l = 0; l < lattices_.size(); ++l)
-    if (hierarchy.active(l)) lattices_[l].evaluate_into(hierarchy.displacements(l), vertex_buffer, layout);
+  add_fields(hierarchy, vertex_buffer, layout);
   return {};
 }
 

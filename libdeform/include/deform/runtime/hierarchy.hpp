@@ -225,6 +225,16 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   }
   std::span<const float> carried_weights(std::size_t lattice) const { return lattices_.at(lattice).carried_weights; }
   glm::vec3 far_displacement(std::size_t lattice) const { return lattices_.at(lattice).far_displacement; }
+  // What apply(positions, normals) turns the normals by, for callers that do it themselves (GpuLatticeFields with
+  // normals), as of update(): the lattice's map without its translation as control points, linear · rest +
+  // displacements(l), written into `out` (rest_lattice(l).point_count() entries; nothing is written otherwise), and
+  // the matrix that takes a skinned normal back into the bind pose the binding's normal_basis expects. A bound
+  // point's normal n becomes normalise(n + w · (n_l − n)) (kept when that is shorter than 1e-6), w its bound weight
+  // and n_l the LatticeEvaluateJob normal of binding(l) with those control points for the input normal
+  // normals_to_bind(l) · n (apply() itself, for a rest lattice on its frame's regular grid, gets the same Jacobian to
+  // rounding in one evaluation of the displacements, the frame's edges mapped by the bone as an offset). No allocation.
+  void mapped_points(std::size_t lattice, std::span<glm::vec3> out) const;
+  glm::mat3 normals_to_bind(std::size_t lattice) const;
   // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
   // length), which apply() skips.
   bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
