@@ -690,7 +690,71 @@ bool check_es_context() {
 
 // ---- Indicative timings (--bench) ----------------------------------------------------------------------------------
 
+// Mean milliseconds per call of `frame` over about a second.
+template <class Frame>
+double time_ms(Frame&& frame) {
+  using clock = std::chrono::steady_clock;
+  int frames = 0;
+  const auto start = clock::now();
+  double elapsed = 0.0;
+  do {
+    frame();
+    ++frames;
+    elapsed = std::chrono::duration<double>(clock::now() - start).count();
+  } while (elapsed < 1.0);
+  return elapsed / frames * 1e3;
+}
+
+// A whole frame of the built-in character with the full rig (lattices on every limb, jiggling under the walk): the CPU
+// deforming (Character::update, transported normals) against the CPU posing and the GPU deforming.
+void bench_character() {
+  const deform::Model model = deform::builtin_character();
+  const deform::Animation walk = deform::builtin_walk(model);
+  deform::Character cpu(model, deform::builtin_full_rig(model));
+  deform::Character gpu_pose = cpu.instance();
+  gpu_pose.deform_on_cpu = false;
+  std::vector<glm::vec3> bind_normals;
+  deform::GpuSkinning skinning;
+  deform::GpuLatticeFields fields;
+  if (!skinning.create(character_bind(gpu_pose, bind_normals)) ||
+      !fields.create(gpu_pose.deformers(), model.mesh.vertex_point, true))
+    return;
+  Buffer buffer(model.mesh.vertex_count(), layout);
+  deform::Pose pose = cpu.skeleton().bind_pose();
+  float t = 0.0f;
+  const auto pose_next = [&](deform::Character& c) {
+    t += 1.0f / 60.0f;
+    deform::SamplingJob job;
+    job.animation = &walk;
+    job.time = t;
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    job.run();
+    c.set_pose(pose);
+  };
+  const double cpu_ms = time_ms([&] {
+    pose_next(cpu);
+    cpu.update(1.0f / 60.0f);
+    cpu.normals();
+  });
+  const double pose_ms = time_ms([&] {
+    pose_next(gpu_pose);
+    gpu_pose.update(1.0f / 60.0f);
+  });
+  const double gpu_ms = time_ms([&] {
+    pose_next(gpu_pose);
+    gpu_pose.update(1.0f / 60.0f);
+    skinning.skin_into(gpu_pose.skinning, gpu_pose.palette(), buffer.name());
+    fields.apply_into(gpu_pose.deformers(), buffer.name());
+    glFinish();
+  });
+  std::printf("built-in character, full rig, walk (%zu render vertices): CPU update + normals %.3f ms; CPU posing "
+              "only %.3f ms; posing + GPU skinning and lattices + glFinish %.3f ms\n",
+              model.mesh.vertex_count(), cpu_ms, pose_ms, gpu_ms);
+}
+
 int bench() {
+  bench_character();
   std::mt19937 rng(7);
   for (const std::size_t points : {std::size_t{10000}, std::size_t{100000}}) {
     const int bones = 64;
@@ -707,21 +771,9 @@ int bench() {
     Buffer buffer(points, layout);
     std::vector<glm::vec3> out_p(points), out_n(points);
     for (const deform::SkinningMethod method : {deform::SkinningMethod::lbs, deform::SkinningMethod::dqs}) {
-      const auto time = [](auto&& frame) {
-        using clock = std::chrono::steady_clock;
-        int frames = 0;
-        const auto start = clock::now();
-        double elapsed = 0.0;
-        do {
-          frame();
-          ++frames;
-          elapsed = std::chrono::duration<double>(clock::now() - start).count();
-        } while (elapsed < 1.0);
-        return elapsed / frames * 1e3;
-      };
       std::vector<deform::DualQuat> dq(bones);
       std::vector<glm::mat3> scales(bones);
-      const double cpu_ms = time([&] {
+      const double cpu_ms = time_ms([&] {
         deform::SkinningJob job;
         job.method = method;
         job.matrices = palette;
@@ -736,7 +788,7 @@ int bench() {
         job.out_normals = deform::as_floats(out_n);
         job.run();
       });
-      const double gpu_ms = time([&] {
+      const double gpu_ms = time_ms([&] {
         gpu.skin_into(method, palette, buffer.name());
         glFinish();
       });

@@ -18,8 +18,8 @@
 //    Mesh::vertex_point), with the render vertex normals as the rest normals.
 //
 // Additive lattices (create_additive) serve a deform::DeformerHierarchy, whose control points are displacements: they
-// add weight · Q(u, v, w) to positions already in the vertex buffer (skinned on the CPU) and map the hierarchy's mesh
-// points to render vertices themselves. GpuLatticeFields runs one per lattice of a character.
+// add weight · Q(u, v, w) to positions already in the vertex buffer (skinned on the CPU or by GpuSkinning) and map
+// the hierarchy's mesh points to render vertices themselves. GpuLatticeFields runs one per lattice of a character.
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -148,10 +148,14 @@ class DEFORM_GPU_API GpuBezierLattice {
 };
 
 // The Bézier fields of a character's lattices on the GPU: one additive GpuBezierLattice per lattice of a
-// DeformerHierarchy. With deform::Character::lattice_fields = false the CPU skins (and adds the carried
-// translations); the application uploads those positions into its vertex buffer; add_into() then adds every moving
-// lattice's field there, which gives the Character's full deformation to float rounding. Normals stay those the
-// application uploaded (of the surface before the fields). docs/gpu.md. Movable, not copyable.
+// DeformerHierarchy (and one for its carried points). Two splits (docs/gpu.md):
+//  - deform::Character::lattice_fields = false: the CPU skins and adds the carried translations, the application
+//    uploads those positions into its vertex buffer, add_into() adds every moving lattice's field there;
+//  - deform::Character::deform_on_cpu = false: GpuSkinning writes the skinned buffer, apply_into() adds the carried
+//    translations and the fields: the whole deformation on the GPU.
+// Either gives the Character's full deformation to float rounding. Normals stay those in the buffer (of the surface
+// before the fields) unless created with normals, which turns them as the CPU's transported normals are turned.
+// Movable, not copyable.
 class DEFORM_GPU_API GpuLatticeFields {
  public:
   GpuLatticeFields() noexcept = default;
