@@ -314,8 +314,9 @@ Status GpuSkinning::skin_into(SkinningMethod method, std::span<const glm::mat4> 
     bool has_scale = false;
     if (const Status status = compute_dual_quat_palette(palette, dual_quats_, scales_, has_scale); !status)
       return status;
-    return skin_into(dual_quats_, has_scale ? std::span<const glm::mat3>(scales_) : std::span<const glm::mat3>{},
-                     vertex_buffer, layout);
+    upload_dqs(dual_quats_, has_scale ? std::span<const glm::mat3>(scales_) : std::span<const glm::mat3>{});
+    dispatch(true, has_scale, vertex_buffer, layout);
+    return {};
   }
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, palette_);
   glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(palette.size_bytes()), palette.data());
@@ -329,6 +330,12 @@ Status GpuSkinning::skin_into(std::span<const DualQuat> dual_quats, std::span<co
   if (const Status status = validate_into(dual_quats.size(), vertex_buffer, layout); !status) return status;
   if (!scales.empty() && scales.size() != dual_quats.size())
     return Status::failure("scales and dual quaternions differ in count");
+  upload_dqs(dual_quats, scales);
+  dispatch(true, !scales.empty(), vertex_buffer, layout);
+  return {};
+}
+
+void GpuSkinning::upload_dqs(std::span<const DualQuat> dual_quats, std::span<const glm::mat3> scales) {
   // glm::quat's member order depends on GLM_FORCE_QUAT_DATA_WXYZ: written out by name, x y z w.
   float* out = staging_.data();
   for (const DualQuat& q : dual_quats) {
@@ -343,8 +350,6 @@ Status GpuSkinning::skin_into(std::span<const DualQuat> dual_quats, std::span<co
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, palette_);
   glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr((out - staging_.data()) * sizeof(float)), staging_.data());
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-  dispatch(true, !scales.empty(), vertex_buffer, layout);
-  return {};
 }
 
 void GpuSkinning::dispatch(bool dqs, bool scaled, unsigned int vertex_buffer, const GpuVertexLayout& layout) {

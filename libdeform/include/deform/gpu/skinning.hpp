@@ -98,6 +98,8 @@ class DEFORM_GPU_API GpuSkinning {
     int first_vertex = -1, vertex_count = -1, method = -1, scaled = -1, with_normals = -1, bones = -1, stride = -1,
         position_offset = -1, normal_offset = -1;
   };
+  // The DQS palette into the palette buffer (8 floats per bone, then 9 per bone of scales when given).
+  void upload_dqs(std::span<const DualQuat> dual_quats, std::span<const glm::mat3> scales);
   void dispatch(bool dqs, bool scaled, unsigned int vertex_buffer, const GpuVertexLayout& layout);
 
   unsigned int program_ = 0;
