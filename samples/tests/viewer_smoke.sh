@@ -3,8 +3,8 @@
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
 # (non-bare) screenshot; the built-in walk (--clip walk) alone, with a reach, in full with a spring chain and blended
 # with the run (--blend run); one with a bone's weight map; a reach with a pole and one with swing-twist limits; the
-# frame after the reach again with the lattices on the GPU (--gpu), which must be the same picture (skipped without
-# OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are there).
+# frame after the reach again with the deformation on the GPU (--gpu), LBS and DQS, which must be the same pictures
+# (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are there).
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -44,9 +44,16 @@ run --bare --screenshot "$work/walk_run.png" --frames 40 --clip walk --blend run
 run --screenshot "$work/weight_map.png" --frames 5 --weight-map upperarm_l >/dev/null
 test -s "$work/weight_map.png"
 
+# The whole deformation on the GPU (skinning, lattices and their normals; the CPU only poses): the same pictures as
+# the CPU's, LBS and DQS, for the reach and for the walk whose lattices jiggle while it reaches.
 run --bare --gpu --screenshot "$work/after_gpu.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 > "$work/gpu.json"
 if grep -q '"gpu_lattices": true' "$work/gpu.json"; then
   "$check" --same-picture "$work/after.png" "$work/after_gpu.png"
+  run --bare --dqs --screenshot "$work/after_dqs.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 >/dev/null
+  run --bare --dqs --gpu --screenshot "$work/after_dqs_gpu.png" --frames 40 --reach 1.3,1.6,0.4 --at 2 >/dev/null
+  "$check" --same-picture "$work/after_dqs.png" "$work/after_dqs_gpu.png"
+  run --bare --gpu --screenshot "$work/walk_reach_gpu.png" --frames 40 --clip walk --reach 1.3,1.6,0.4 --at 2 >/dev/null
+  "$check" --same-picture "$work/walk_reach.png" "$work/walk_reach_gpu.png"
 else
   echo "GPU lattices skipped: no OpenGL 4.3"
 fi

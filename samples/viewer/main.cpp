@@ -3,7 +3,7 @@
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
-//                 [--blend NAME|#N [--blend-weight W]] [--prop P.obj]... [--gpu] [--up y|z]
+//                 [--blend NAME|#N [--blend-weight W]] [--prop P.obj]... [--gpu] [--dqs] [--up y|z]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
@@ -12,8 +12,9 @@
 // clip blends with the first (deform::BlendingJob, the panel's "blend with" and its weight), following the first
 // clip's phase so that clips of different lengths (a walk and a run) stay in step.
 //
-// GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
-// (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
+// Deformation on the GPU (--gpu, the panel or G; OpenGL 4.3): the character only poses on the CPU
+// (Character::deform_on_cpu = false); deform::GpuSkinning skins it into the vertex buffer from the palette and
+// deform::GpuLatticeFields::apply_into adds the lattices' carried points and fields there. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 #include <algorithm>
 #include <chrono>
@@ -35,6 +36,7 @@
 #include "deform/deform.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/gpu/lattice.hpp"
+#include "deform/gpu/skinning.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/offline/picking.hpp"
@@ -61,7 +63,7 @@ const char* usage =
     "                     [--blend NAME|#N [--blend-weight W]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
-    "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
+    "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
@@ -72,12 +74,12 @@ const char* usage =
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
-    "--gpu: evaluate the lattices on the GPU (OpenGL 4.3). --up z: the model's up axis is +Z (default: +Y, or what\n"
-    "an imported file's metadata says).\n"
+    "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
+    "skinning. --up z: the model's up axis is +Z (default: +Y, or what an imported file's metadata says).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
     "elbow's hint); right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
-    "L the lattices, G the GPU lattices, R resets, C resets the camera, Esc quits.\n";
+    "L the lattices, G the GPU deformation, R resets, C resets the camera, Esc quits.\n";
 
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
@@ -86,7 +88,8 @@ struct Options {
   float inertia = 1.0f;  // the lattices' inertia while a clip plays
   float blend_weight = 0.5f;  // the second clip's weight
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
-  bool gpu = false;   // start with the lattices evaluated on the GPU
+  bool gpu = false;   // start with the deformation (skinning and lattices) on the GPU
+  bool dqs = false;   // start with dual quaternion skinning
   bool swing_twist = false;  // reach with swing-twist joint limits
   char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   std::optional<glm::vec3> reach, pole;
@@ -149,6 +152,7 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
     else if (a == "--bare") o.bare = true;
     else if (a == "--gpu") o.gpu = true;
+    else if (a == "--dqs") o.dqs = true;
     else if (a == "--limits") {
       const std::string limits = next();
       if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
@@ -290,9 +294,10 @@ class Viewer {
     }
     overlay_.create();
     scene_.update();
+    if (options.dqs) character_->skinning = deform::SkinningMethod::dqs;
     if (options.gpu) {
       if (gpu_available_) set_gpu(true);
-      else std::fprintf(stderr, "deform_viewer: --gpu: %s; lattices on the CPU\n", gpu_missing().c_str());
+      else std::fprintf(stderr, "deform_viewer: --gpu: %s; deforming on the CPU\n", gpu_missing().c_str());
     }
   }
 
@@ -324,7 +329,7 @@ class Viewer {
     }
     const auto start = Clock::now();
     character_->update(dt);
-    const auto normals = character_->normals();
+    const auto normals = gpu_ ? std::span<const glm::vec3>{} : character_->normals();
     deform_ms_ = 0.9f * deform_ms_ + 0.1f * std::chrono::duration<float, std::milli>(Clock::now() - start).count();
     draw(normals);
   }
@@ -382,10 +387,11 @@ class Viewer {
     if (ImGui::SliderInt("lattice degree", &degree_, 1, 6)) rebuild_character();
     bool gpu = gpu_;
     ImGui::BeginDisabled(!gpu_available_);
-    if (ImGui::Checkbox("GPU lattices", &gpu)) set_gpu(gpu);
+    if (ImGui::Checkbox("GPU deformation", &gpu)) set_gpu(gpu);
     ImGui::EndDisabled();
     if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
-      ImGui::SetTooltip("%s", gpu_available_ ? "Bezier fields in a compute shader, added in the vertex buffer"
+      ImGui::SetTooltip("%s", gpu_available_ ? "skinning and Bezier fields in compute shaders, into the vertex "
+                                               "buffer; the CPU only poses (deformation time: the CPU's part)"
                                              : gpu_missing().c_str());
     }
     if (reaching_ || character_->stretch() != 0.0f)
@@ -504,12 +510,52 @@ class Viewer {
            std::to_string(version % 10) + " (" + window_.renderer_name() + ")";
   }
 
-  // The lattice fields on the GPU (on) or the CPU (off): the character leaves them out and the GPU adds them.
+  // The whole deformation on the GPU (on) or the CPU (off): the character only poses, GpuSkinning skins from its
+  // palette and GpuLatticeFields adds its lattices, all in the renderer's vertex buffer (whose UVs stay as created).
   void set_gpu(bool on) {
     gpu_ = on && gpu_available_;
     gpu_fields_.clear();
-    if (gpu_ && !gpu_fields_.create(character_->deformers(), character_->model().mesh.vertex_point)) gpu_ = false;
-    character_->lattice_fields = !gpu_;
+    gpu_skinning_.release();
+    if (gpu_) {
+      const deform::Mesh& mesh = character_->model().mesh;
+      const auto normals = character_->bind_normals();
+      gpu_bind_normals_.resize(mesh.vertex_count());
+      for (std::size_t r = 0; r < mesh.vertex_count(); ++r) gpu_bind_normals_[r] = normals[mesh.vertex_point[r]];
+      deform::GpuSkinningBind bind;
+      bind.positions = mesh.positions;
+      bind.bone_indices = character_->model().weights.bones;
+      bind.bone_weights = character_->model().weights.weights;
+      bind.vertex_point = mesh.vertex_point;
+      bind.normals = gpu_bind_normals_;
+      bind.bone_count = character_->skeleton().bone_count();
+      deform::Status status = gpu_skinning_.create(bind);
+      if (status) status = gpu_fields_.create(character_->deformers(), mesh.vertex_point, true);
+      if (!status) {
+        std::fprintf(stderr, "deform_viewer: GPU deformation refused: %s; deforming on the CPU\n", status.reason());
+        gpu_fields_.clear();
+        gpu_skinning_.release();
+        gpu_ = false;
+      }
+    }
+    character_->deform_on_cpu = !gpu_;
+  }
+
+  // The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer
+  // (for picking and the weight map only: a GPU-to-CPU copy, not done for drawing).
+  std::span<const glm::vec3> drawn_points() {
+    if (!gpu_) return character_->positions();
+    const deform::Mesh& mesh = character_->model().mesh;
+    constexpr deform::GpuVertexLayout layout{};
+    std::vector<float> data(mesh.vertex_count() * std::size_t(layout.floats_per_vertex));
+    glBindBuffer(GL_ARRAY_BUFFER, renderer_->vertex_buffer());
+    glGetBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    gpu_points_.resize(mesh.point_count());
+    for (std::size_t r = 0; r < mesh.vertex_count(); ++r) {
+      const float* p = data.data() + r * std::size_t(layout.floats_per_vertex) + layout.position_offset;
+      gpu_points_[mesh.vertex_point[r]] = glm::vec3(p[0], p[1], p[2]);
+    }
+    return gpu_points_;
   }
 
   void rebuild_character() {
@@ -672,7 +718,7 @@ class Viewer {
     // The character's triangles live in its node's frame: carry the ray there.
     const glm::mat4 to_local = glm::inverse(character_world());
     deform::Ray local{transform_point(to_local, ray.origin), glm::vec3(to_local * glm::vec4(ray.direction, 0.0f))};
-    bvh_.refit(character_->positions());
+    bvh_.refit(drawn_points());
     const deform::RayHit hit = bvh_.intersect(local);
     if (hit.hit) {
       const glm::vec3 p = transform_point(character_world(), local.origin + hit.distance * local.direction);
@@ -755,11 +801,22 @@ class Viewer {
     }
 
     const deform::Mesh& mesh = character_->model().mesh;
-    render_positions_.resize(mesh.vertex_count());
-    const auto points = character_->positions();
-    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) render_positions_[v] = points[mesh.vertex_point[v]];
-    renderer_->upload(render_positions_, normals);
-    if (gpu_) gpu_fields_.add_into(character_->deformers(), renderer_->vertex_buffer());
+    if (gpu_) {
+      // Only the palette and the lattices' control points travel; the vertices never leave the GPU.
+      const GLuint vertex_buffer = renderer_->vertex_buffer();
+      deform::Status status = gpu_skinning_.skin_into(character_->skinning, character_->palette(), vertex_buffer);
+      if (status) status = gpu_fields_.apply_into(character_->deformers(), vertex_buffer);
+      if (!status) {
+        std::fprintf(stderr, "deform_viewer: GPU deformation refused: %s; deforming on the CPU\n", status.reason());
+        set_gpu(false);
+      }
+    }
+    if (!gpu_) {
+      render_positions_.resize(mesh.vertex_count());
+      const auto points = character_->positions();
+      for (std::size_t v = 0; v < mesh.vertex_count(); ++v) render_positions_[v] = points[mesh.vertex_point[v]];
+      renderer_->upload(render_positions_, normals.empty() ? character_->normals() : normals);
+    }
     renderer_->draw(character_world(), view, projection, eye);
     if (options_.bare) return;
     if (reaching_) ball_renderer_.draw(scene_.node(ball_node_).world, view, projection, eye);
@@ -785,6 +842,7 @@ class Viewer {
       overlay_.flush(projection * view, false);
     }
     if (weight_bone_ >= 0 && std::size_t(weight_bone_) < character_->skeleton().bone_count()) {
+      const auto points = drawn_points();
       const deform::SkinWeights& w = character_->model().weights;
       for (std::size_t i = 0; i < points.size() && i < w.size(); ++i)
         for (int k = 0; k < deform::max_influences; ++k)
@@ -876,8 +934,11 @@ class Viewer {
   std::unique_ptr<sample::MeshRenderer> renderer_;
   glm::vec3 up_{0.0f, 1.0f, 0.0f};  // the model's up direction, turned onto +Y by the model node
   const bool gpu_available_;
-  bool gpu_ = false;  // lattice fields on the GPU
+  bool gpu_ = false;  // skinning and lattices on the GPU
+  deform::GpuSkinning gpu_skinning_;
   deform::GpuLatticeFields gpu_fields_;
+  std::vector<glm::vec3> gpu_bind_normals_;  // the character's bind normals per render vertex (set_gpu)
+  std::vector<glm::vec3> gpu_points_;        // drawn_points()' read back
   std::vector<std::uint32_t> triangle_points_;
   std::vector<glm::vec3> render_positions_;
   deform::TriangleBvh bvh_;

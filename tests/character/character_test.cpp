@@ -10,6 +10,7 @@
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/skeleton.hpp"
+#include "deform/runtime/skinning.hpp"
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -469,6 +470,49 @@ TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them g
     whole.release();
     split.release();
   }
+}
+
+TEST_CASE("deform_on_cpu = false only poses: skinning palette() and applying the hierarchy gives the deformation") {
+  Character whole = deform::make_builtin_character(), posing = deform::make_builtin_character();
+  CHECK(whole.deform_on_cpu);
+  posing.deform_on_cpu = false;
+  CHECK_FALSE(posing.instance().deform_on_cpu);  // instance() copies the setting
+  const std::vector<glm::vec3> before(posing.positions().begin(), posing.positions().end());
+  const deform::Model& model = posing.model();
+  REQUIRE(posing.bind_normals().size() == model.mesh.point_count());
+  const Arm arm = left_arm(whole);
+  std::mt19937 rng(78);
+  const glm::vec3 target = far_target(whole, rng);
+  REQUIRE(whole.reach(arm.hand, target).status);
+  REQUIRE(posing.reach(arm.hand, target).status);
+  std::vector<glm::vec3> positions(model.mesh.point_count()), normals(model.mesh.point_count());
+  for (int frame = 0; frame < 15; ++frame) {  // mid-stretch
+    REQUIRE(whole.update(1.0f / 60.0f));
+    REQUIRE(posing.update(1.0f / 60.0f));
+  }
+  // The posing character's points did not move; its bones and lattices did, as the deforming one's.
+  CHECK(std::equal(before.begin(), before.end(), posing.positions().begin()));
+  CHECK(posing.bone_position(arm.hand) == whole.bone_position(arm.hand));
+  CHECK(posing.stretch() == whole.stretch());
+  CHECK(posing.stretch() > 0.05f);
+  // What a GPU does, on the CPU: skin from palette() and bind_normals(), then the hierarchy's carried points and
+  // fields (the transported normals along): the deforming character's positions to the bit.
+  deform::SkinningJob job;
+  job.matrices = posing.palette();
+  job.bone_indices = model.weights.bones;
+  job.bone_weights = model.weights.weights;
+  job.in_positions = deform::as_floats(model.mesh.positions);
+  job.out_positions = deform::as_floats(positions);
+  job.in_normals = deform::as_floats(posing.bind_normals());
+  job.out_normals = deform::as_floats(normals);
+  REQUIRE(job.run());
+  REQUIRE(posing.deformers().apply(positions, normals));
+  for (std::size_t p = 0; p < positions.size(); ++p) {
+    CAPTURE(p);
+    CHECK(positions[p] == whole.positions()[p]);
+  }
+  const auto whole_normals = whole.normals();
+  for (std::size_t r = 0; r < whole_normals.size(); ++r) CHECK(normals[model.mesh.vertex_point[r]] == whole_normals[r]);
 }
 
 TEST_CASE("set_pose clamps into the limits; bad arguments change nothing") {

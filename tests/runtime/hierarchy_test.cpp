@@ -377,6 +377,18 @@ TEST_CASE("apply is apply_carried plus the fields a caller evaluates from bindin
     split = skinned;
     REQUIRE(h.apply(whole));
     REQUIRE(h.apply_carried(split));
+    // apply_carried is exactly each active lattice's carried points moved by weight · far displacement, from the
+    // accessors a caller adding them itself reads (GpuLatticeFields::apply_into).
+    std::vector<glm::vec3> carried = skinned;
+    std::size_t carried_points = 0;
+    for (std::size_t l = 0; l < h.lattice_count(); ++l) {
+      REQUIRE(h.carried_points(l).size() == h.carried_weights(l).size());
+      carried_points += h.carried_points(l).size();
+      for (std::size_t n = 0; n < h.carried_points(l).size(); ++n)
+        carried[h.carried_points(l)[n]] += h.carried_weights(l)[n] * h.far_displacement(l);
+    }
+    CHECK(carried_points > 0);
+    CHECK(carried == split);
     float fields = 0.0f;  // what the fields move, to be sure the split leaves something to the caller
     for (std::size_t p = 0; p < split.size(); ++p) fields = std::max(fields, glm::length(whole[p] - split[p]));
     CHECK(fields > 0.01f);

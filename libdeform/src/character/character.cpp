@@ -143,6 +143,7 @@ Character Character::instance() const {
   Character copy(bind_, rig_, hierarchy_);
   copy.skinning = skinning;
   copy.lattice_fields = lattice_fields;
+  copy.deform_on_cpu = deform_on_cpu;
   copy.ik = ik;
   copy.reach_pole = reach_pole;
   copy.use_reach_pole = use_reach_pole;
@@ -426,6 +427,8 @@ Status Character::update(float dt) {
   }
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
   if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
+  // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
+  if (!deform_on_cpu) return hierarchy_.update(world_);
   const bool transport = normals_mode_ == NormalsMode::transported;
   SkinningJob job;
   job.method = skinning;

@@ -30,6 +30,7 @@ layout(std430, binding = 2) readonly buffer RestNormals { float normal_in[]; }; 
 layout(std430, binding = 3) readonly buffer Points { float point[]; };         // control points, i-fastest, x y z
 layout(std430, binding = 4) buffer Output { float result[]; };
 layout(std430, binding = 5) readonly buffer Weights { float weight[]; };       // per vertex (additive only)
+layout(std430, binding = 6) readonly buffer Mapped { float mapped[]; };        // additive with normals: the map's points
 
 uniform uint first_vertex;
 uniform uint vertex_count;
@@ -37,6 +38,9 @@ uniform mat3 normal_basis;
 uniform bool with_normals;
 uniform bool scatter;  // write at target[] (an interleaved vertex buffer) or at the vertex's own slot (read back)
 uniform bool additive;  // add weight[] · Q to the position there instead of writing Q (control points = displacements)
+// Additive with normals (with_normals && additive): turn the buffer's normal n by the map whose control points are
+// mapped[] — n_l = cofactor(J)·(G·to_bind·n) normalised — blended by the weight: normalise(n + weight (n_l − n)).
+uniform mat3 to_bind;
 uniform uint stride, position_offset, normal_offset;
 
 const int max_points = 17;  // deform::max_bezier_degree + 1
@@ -62,50 +66,81 @@ void basis(int n, float t, out float b[max_points], out float d[max_points]) {
   d[n] = lower[n - 1] * fn;
 }
 
-vec3 control_point(int index) {
-  return vec3(point[3 * index], point[3 * index + 1], point[3 * index + 2]);
+vec3 control_point(bool from_mapped, int index) {
+  return from_mapped ? vec3(mapped[3 * index], mapped[3 * index + 1], mapped[3 * index + 2])
+                     : vec3(point[3 * index], point[3 * index + 1], point[3 * index + 2]);
 }
 
-void main() {
-  uint e = first_vertex + gl_GlobalInvocationID.x;
-  if (e >= vertex_count) return;
-  float bu[max_points], bv[max_points], bw[max_points], du[max_points], dv[max_points], dw[max_points];
-  basis(degree.x, param[3 * e], bu, du);
-  basis(degree.y, param[3 * e + 1], bv, dv);
-  basis(degree.z, param[3 * e + 2], bw, dw);
+float bu[max_points], bv[max_points], bw[max_points], du[max_points], dv[max_points], dw[max_points];
 
+// Q and, with derivatives, ∂Q/∂u, ∂Q/∂v, ∂Q/∂w of the control points point[] (or mapped[]).
+void contract(bool from_mapped, bool derivatives, out vec3 q, out vec3 qu, out vec3 qv, out vec3 qw) {
   int nu = degree.x + 1, nv = degree.y + 1;
-  vec3 q = vec3(0.0), qu = vec3(0.0), qv = vec3(0.0), qw = vec3(0.0);
+  q = vec3(0.0), qu = vec3(0.0), qv = vec3(0.0), qw = vec3(0.0);
   for (int k = 0; k <= degree.z; ++k) {
     vec3 s = vec3(0.0), su = vec3(0.0), sv = vec3(0.0);
     for (int j = 0; j <= degree.y; ++j) {
       int row = nu * (j + nv * k);
       vec3 r = vec3(0.0), rd = vec3(0.0);
       for (int i = 0; i <= degree.x; ++i) {
-        vec3 p = control_point(row + i);
+        vec3 p = control_point(from_mapped, row + i);
         r += bu[i] * p;
-        if (with_normals) rd += du[i] * p;
+        if (derivatives) rd += du[i] * p;
       }
       s += bv[j] * r;
-      if (with_normals) {
+      if (derivatives) {
         sv += dv[j] * r;
         su += bv[j] * rd;
       }
     }
     q += bw[k] * s;
-    if (with_normals) {
+    if (derivatives) {
       qw += dw[k] * s;
       qv += bw[k] * sv;
       qu += bw[k] * su;
     }
   }
+}
+
+// n' = cofactor(J)·(G·n) normalised; `fallback` where the Jacobian is degenerate (a collapsed lattice).
+vec3 jacobian_normal(vec3 n_in, vec3 qu, vec3 qv, vec3 qw, vec3 fallback) {
+  vec3 m = normal_basis * n_in;
+  vec3 n = m.x * cross(qv, qw) + m.y * cross(qw, qu) + m.z * cross(qu, qv);
+  float len2 = dot(n, n);
+  return len2 > 0.0 && len2 <= 3.0e38 ? n * (1.0 / sqrt(len2)) : fallback;
+}
+
+void main() {
+  uint e = first_vertex + gl_GlobalInvocationID.x;
+  if (e >= vertex_count) return;
+  basis(degree.x, param[3 * e], bu, du);
+  basis(degree.y, param[3 * e + 1], bv, dv);
+  basis(degree.z, param[3 * e + 2], bw, dw);
+
+  vec3 q, qu, qv, qw;
+  contract(false, with_normals && !additive, q, qu, qv, qw);
 
   uint base = (scatter ? target[e] : e) * stride;
   if (additive) {
-    q *= weight[e];
+    float we = weight[e];
+    q *= we;
     result[base + position_offset] += q.x;
     result[base + position_offset + 1u] += q.y;
     result[base + position_offset + 2u] += q.z;
+    if (!with_normals) return;
+    // DeformerHierarchy::apply(positions, normals)'s normal, per render vertex.
+    vec3 unused;
+    contract(true, true, unused, qu, qv, qw);
+    vec3 n0 = vec3(result[base + normal_offset], result[base + normal_offset + 1u], result[base + normal_offset + 2u]);
+    vec3 n_bind = to_bind * n0;
+    vec3 blended = n0 + we * (jacobian_normal(n_bind, qu, qv, qw, n_bind) - n0);
+    float length2 = dot(blended, blended);
+    if (length2 > 1.0e-12) {
+      blended = blended / sqrt(length2);
+      result[base + normal_offset] = blended.x;
+      result[base + normal_offset + 1u] = blended.y;
+      result[base + normal_offset + 2u] = blended.z;
+    }
     return;
   }
   result[base + position_offset] = q.x;
@@ -113,11 +148,8 @@ void main() {
   result[base + position_offset + 2u] = q.z;
   if (with_normals) {
     vec3 n_in = vec3(normal_in[3 * e], normal_in[3 * e + 1], normal_in[3 * e + 2]);
-    vec3 m = normal_basis * n_in;
-    vec3 n = m.x * cross(qv, qw) + m.y * cross(qw, qu) + m.z * cross(qu, qv);
-    float len2 = dot(n, n);
     // A degenerate Jacobian (a collapsed lattice) has no normal to give: the input normal is kept.
-    n = len2 > 0.0 && len2 <= 3.0e38 ? n * (1.0 / sqrt(len2)) : n_in;
+    vec3 n = jacobian_normal(n_in, qu, qv, qw, n_in);
     result[base + normal_offset] = n.x;
     result[base + normal_offset + 1u] = n.y;
     result[base + normal_offset + 2u] = n.z;
@@ -196,6 +228,7 @@ GpuBezierLattice& GpuBezierLattice::operator=(GpuBezierLattice&& other) noexcept
   points_ = std::exchange(other.points_, 0);
   results_ = std::exchange(other.results_, 0);
   weights_ = std::exchange(other.weights_, 0);
+  mapped_ = std::exchange(other.mapped_, 0);
   uniforms_ = std::exchange(other.uniforms_, Uniforms{});
   count_ = std::exchange(other.count_, 0);
   max_target_ = std::exchange(other.max_target_, 0);
@@ -215,11 +248,11 @@ GpuBezierLattice& GpuBezierLattice::operator=(GpuBezierLattice&& other) noexcept
 GpuBezierLattice::~GpuBezierLattice() { release(); }
 
 void GpuBezierLattice::release() noexcept {
-  const GLuint buffers[] = {targets_, params_, normals_, points_, results_, weights_};
+  const GLuint buffers[] = {targets_, params_, normals_, points_, results_, weights_, mapped_};
   for (GLuint b : buffers)
     if (b) glDeleteBuffers(1, &b);
   if (program_) glDeleteProgram(program_);
-  program_ = targets_ = params_ = normals_ = points_ = results_ = weights_ = 0;
+  program_ = targets_ = params_ = normals_ = points_ = results_ = weights_ = mapped_ = 0;
   uniforms_ = Uniforms{};
   count_ = 0;
   max_target_ = 0;
@@ -254,7 +287,7 @@ Status GpuBezierLattice::create(const LatticeBinding& binding, std::span<const g
 }
 
 Status GpuBezierLattice::create_additive(const LatticeBinding& binding, std::span<const float> weights,
-                                         std::span<const std::uint32_t> vertex_point) {
+                                         std::span<const std::uint32_t> vertex_point, bool normals) {
   release();
   shader_log_.clear();
   if (const Status status = check_binding(binding); !status) return status;
@@ -278,6 +311,11 @@ Status GpuBezierLattice::create_additive(const LatticeBinding& binding, std::spa
   }
   const Status status = upload(binding.point_counts, binding.normal_basis, params, {}, weight_list);
   additive_ = status.ok();
+  if (status && normals) {  // the normals are the buffer's own: only the mapped points' storage is needed
+    has_normals_ = true;
+    mapped_ = storage_buffer(nullptr, binding.control_point_count() * sizeof(glm::vec3), GL_STREAM_DRAW);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  }
   return status;
 }
 
@@ -294,7 +332,8 @@ Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal
   const auto location = [&](const char* name) { return glGetUniformLocation(program_, name); };
   uniforms_ = {location("first_vertex"), location("vertex_count"), location("normal_basis"),
                location("with_normals"), location("scatter"),      location("additive"),
-               location("stride"),       location("position_offset"), location("normal_offset")};
+               location("stride"),       location("position_offset"), location("normal_offset"),
+               location("to_bind")};
 
   count_ = target_list_.size();
   max_target_ = count_ ? *std::max_element(target_list_.begin(), target_list_.end()) : 0;
@@ -315,10 +354,16 @@ Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal
 }
 
 void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsigned int output, bool scatter,
-                                const GpuVertexLayout& layout) {
+                                const GpuVertexLayout& layout, std::span<const glm::vec3> mapped_points,
+                                const glm::mat3& to_bind) {
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, points_);
   glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(control_points.size() * sizeof(glm::vec3)),
                   control_points.data());
+  if (!mapped_points.empty()) {
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, mapped_);
+    glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(mapped_points.size() * sizeof(glm::vec3)),
+                    mapped_points.data());
+  }
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   if (count_ == 0) return;
 
@@ -331,8 +376,10 @@ void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsig
   glUniform1ui(uniforms_.stride, GLuint(layout.floats_per_vertex));
   glUniform1ui(uniforms_.position_offset, GLuint(layout.position_offset));
   glUniform1ui(uniforms_.normal_offset, GLuint(layout.normal_offset));
-  const GLuint buffers[] = {targets_, params_, normals_, points_, output, weights_};
-  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);
+  glUniformMatrix3fv(uniforms_.to_bind, 1, GL_FALSE, glm::value_ptr(to_bind));
+  // An unused binding still gets a buffer (the points): every declared block is backed.
+  const GLuint buffers[] = {targets_, params_, normals_, points_, output, weights_, mapped_ ? mapped_ : points_};
+  for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);
 
   // Dispatches of at most 65,535 groups (the least every 4.3 driver allows), 4 million vertices each.
   const std::size_t per_dispatch = std::size_t{65535} * group_size;
@@ -341,7 +388,7 @@ void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsig
     glUniform1ui(uniforms_.first_vertex, GLuint(first));
     glDispatchCompute(GLuint((n + group_size - 1) / group_size), 1, 1);
   }
-  for (GLuint i = 0; i < 6; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
+  for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, 0);
   glUseProgram(0);
 }
 
@@ -395,8 +442,34 @@ Status GpuBezierLattice::validate_into(std::span<const glm::vec3> control_points
 
 Status GpuBezierLattice::evaluate_into(std::span<const glm::vec3> control_points, unsigned int vertex_buffer,
                                        const GpuVertexLayout& layout) {
+  if (additive_ && has_normals_)
+    return Status::failure("an additive lattice with normals also takes its mapped points and to_bind");
   if (const Status status = validate_into(control_points, vertex_buffer, layout); !status) return status;
   dispatch(control_points, vertex_buffer, true, layout);
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  return {};
+}
+
+}  // namespace deform
+
+namespace deform {
+
+Status GpuBezierLattice::validate_into(std::span<const glm::vec3> displacements,
+                                       std::span<const glm::vec3> mapped_points, unsigned int vertex_buffer,
+                                       const GpuVertexLayout& layout) const {
+  if (!program_) return Status::failure("nothing was created");
+  if (!additive_ || !has_normals_) return Status::failure("not an additive lattice with normals");
+  if (mapped_points.size() != displacements.size())
+    return Status::failure("the mapped point count differs from the binding's");
+  return validate_into(displacements, vertex_buffer, layout);
+}
+
+Status GpuBezierLattice::evaluate_into(std::span<const glm::vec3> displacements,
+                                       std::span<const glm::vec3> mapped_points, const glm::mat3& to_bind,
+                                       unsigned int vertex_buffer, const GpuVertexLayout& layout) {
+  if (const Status status = validate_into(displacements, mapped_points, vertex_buffer, layout); !status)
+    return status;
+  dispatch(displacements, vertex_buffer, true, layout, mapped_points, to_bind);
   glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   return {};
 }

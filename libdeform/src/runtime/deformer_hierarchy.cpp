@@ -466,13 +466,11 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
   // sized with the lattice, so neither job can refuse: their O(bound points) validate() stays out of the frame.
   // Only the points' count is the caller's, checked above.
   apply_carried(positions);
-  for (Lattice& lattice : lattices_) {
+  for (std::size_t l = 0; l < lattices_.size(); ++l) {
+    Lattice& lattice = lattices_[l];
     if (!lattice.active) continue;
-    // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
-    // skinned neighbourhood's (linear) times the field's (I + ∂D_local/∂x).
-    // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse
-    // of its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
-    const glm::mat3 to_bind = glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));
+    // The binding takes normals in the bind pose's model space (normals_to_bind).
+    const glm::mat3 to_bind = normals_to_bind(l);
     const std::vector<std::uint32_t>& lanes = lattice.bound->binding.vertices;
     const std::vector<float>& weights = lattice.bound->lane_weights;
     for (std::size_t n = 0; n < lanes.size(); ++n) {
@@ -491,10 +489,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
         if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
       }
     } else {
-      const std::span<const glm::vec3> rest = lattice.rest.control_points();
-      for (std::size_t n = 0; n < rest.size(); ++n) {
-        lattice.mapped_points[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
-      }
+      mapped_points(l, lattice.mapped_points);
       // The positions exactly as apply() moves them; then the normals (the mapped job's positions, overwriting the
       // consumed displacements, are not used).
       field_job(lattice).run();
@@ -513,6 +508,22 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
     }
   }
   return {};
+}
+
+void DeformerHierarchy::mapped_points(std::size_t index, std::span<glm::vec3> out) const {
+  const Lattice& lattice = lattices_.at(index);
+  const std::span<const glm::vec3> rest = lattice.rest.control_points();
+  if (out.size() != rest.size()) return;
+  // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
+  // skinned neighbourhood's (linear) times the field's (I + ∂D_local/∂x).
+  for (std::size_t n = 0; n < rest.size(); ++n) out[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
+}
+
+glm::mat3 DeformerHierarchy::normals_to_bind(std::size_t index) const {
+  const Lattice& lattice = lattices_.at(index);
+  // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse of
+  // its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
+  return glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));
 }
 
 glm::vec3 DeformerHierarchy::point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept {

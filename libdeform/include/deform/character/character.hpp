@@ -78,8 +78,8 @@ class DEFORM_CHARACTER_API Character {
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, the
-  // settings below (skinning, lattice_fields, ik, reach options, normals mode, max stretch), the lattices' current
-  // elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
+  // settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max stretch), the
+  // lattices' current elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
   // 218 KB for the built-in character; docs/performance.md, "Elasticity and the whole frame").
   Character instance() const;
 
@@ -113,6 +113,13 @@ class DEFORM_CHARACTER_API Character {
   // from deformers().binding(l), bound_weights(l) and displacements(l); positions() and normals() are then those of
   // the skinned, carried surface, and adding the fields to positions() gives what true gives.
   bool lattice_fields = true;
+  // true (the default): update() deforms on the CPU (skinning, then the lattices as lattice_fields says). false:
+  // update() only poses — forward kinematics, the spring chains, the lattices' springs and DeformerHierarchy::update —
+  // for a caller that deforms elsewhere, e.g. the whole deformation on a GPU: deform::GpuSkinning from palette() and
+  // bind_normals(), then deform::GpuLatticeFields::apply_into from deformers() (docs/gpu.md). positions() and
+  // normals() then keep what the last deforming update() gave (the bind pose before any); bone_position() and
+  // control_points() follow the pose as always. Takes effect at the next update().
+  bool deform_on_cpu = true;
   IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
   // A pole for reach() (IkJob::pole), used when `use_reach_pole`: a model-space point the chain's middle bends toward
   // (a knee or elbow hint), applied without losing the target.
@@ -177,6 +184,12 @@ class DEFORM_CHARACTER_API Character {
   // update(), O(render vertices)) or recomputed from positions() on the first call after update() (VertexNormalsJob
   // over a binding made at construction: O(triangles)), by normals_mode().
   std::span<const glm::vec3> normals();
+  // The skinning palette of the last update() (T_W · T_B⁻¹ per bone, the spring chains' bending included): what
+  // SkinningJob::matrices gets, for a caller that skins elsewhere (deform_on_cpu = false). Identity before any.
+  std::span<const glm::mat4> palette() const noexcept { return palette_; }
+  // The bind-pose unit normals the transported mode skins, one per mesh point (angle-weighted over the bind
+  // positions): a GPU skinning that should give normals() gathers them per render vertex (Mesh::vertex_point).
+  std::span<const glm::vec3> bind_normals() const noexcept { return bind_->point_normals; }
   // A lattice's control points in world space (for drawing), i-fastest.
   std::span<const glm::vec3> control_points(std::size_t lattice) const { return hierarchy_.control_points(lattice); }
   // World head of a bone including what the lattices above it carry it by.

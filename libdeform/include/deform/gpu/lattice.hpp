@@ -18,8 +18,8 @@
 //    Mesh::vertex_point), with the render vertex normals as the rest normals.
 //
 // Additive lattices (create_additive) serve a deform::DeformerHierarchy, whose control points are displacements: they
-// add weight · Q(u, v, w) to positions already in the vertex buffer (skinned on the CPU) and map the hierarchy's mesh
-// points to render vertices themselves. GpuLatticeFields runs one per lattice of a character.
+// add weight · Q(u, v, w) to positions already in the vertex buffer (skinned on the CPU or by GpuSkinning) and map
+// the hierarchy's mesh points to render vertices themselves. GpuLatticeFields runs one per lattice of a character.
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -72,9 +72,11 @@ class DEFORM_GPU_API GpuBezierLattice {
   // vertex_point[r] the binding holds, and leaves its normal and everything else alone. `weights`: one per binding
   // lane (DeformerHierarchy::bound_weights); `vertex_point`: Mesh::vertex_point. Refuses as create() does, or when
   // weights.size() differs from the lane count. evaluate() and read_back() refuse an additive lattice.
-  // Bind time: allocates, O(lanes + render vertices).
+  // With `normals`, it also turns each such vertex's normal in the buffer as DeformerHierarchy::apply(positions,
+  // normals) does: per frame it then takes the lattice's mapped points and normals_to_bind matrix too (the
+  // evaluate_into overload below; the plain one refuses). Bind time: allocates, O(lanes + render vertices).
   Status create_additive(const LatticeBinding& binding, std::span<const float> weights,
-                         std::span<const std::uint32_t> vertex_point);
+                         std::span<const std::uint32_t> vertex_point, bool normals = false);
 
   // Deletes the GL objects; the lattice then holds nothing (as default-constructed). Needs the context current when
   // it holds anything.
@@ -109,20 +111,30 @@ class DEFORM_GPU_API GpuBezierLattice {
   // What evaluate_into() would refuse, changing nothing (it asks GL for the buffer's size).
   Status validate_into(std::span<const glm::vec3> control_points, unsigned int vertex_buffer,
                        const GpuVertexLayout& layout = {}) const;
+  // An additive lattice created with normals: adds the weighted field of `displacements` to each vertex's position
+  // and turns its normal (in the buffer) by the map whose control points are `mapped_points`, the normal taken into
+  // the binding's space by `to_bind` (DeformerHierarchy::mapped_points, normals_to_bind). Refuses, writing nothing,
+  // as evaluate_into() does, when the lattice is not an additive one with normals, or the mapped point count differs.
+  Status evaluate_into(std::span<const glm::vec3> displacements, std::span<const glm::vec3> mapped_points,
+                       const glm::mat3& to_bind, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
+  Status validate_into(std::span<const glm::vec3> displacements, std::span<const glm::vec3> mapped_points,
+                       unsigned int vertex_buffer, const GpuVertexLayout& layout = {}) const;
 
  private:
   struct Uniforms {
     int first_vertex = -1, vertex_count = -1, normal_basis = -1, with_normals = -1, scatter = -1, additive = -1,
-        stride = -1, position_offset = -1, normal_offset = -1;
+        stride = -1, position_offset = -1, normal_offset = -1, to_bind = -1;
   };
 
   Status upload(glm::ivec3 point_counts, const glm::mat3& normal_basis, std::span<const float> params,
                 std::span<const float> normals, std::span<const float> weights);
   void dispatch(std::span<const glm::vec3> control_points, unsigned int output, bool scatter,
-                const GpuVertexLayout& layout);
+                const GpuVertexLayout& layout, std::span<const glm::vec3> mapped_points = {},
+                const glm::mat3& to_bind = glm::mat3(1.0f));
 
   unsigned int program_ = 0;
-  unsigned int targets_ = 0, params_ = 0, normals_ = 0, points_ = 0, results_ = 0, weights_ = 0;  // storage buffers
+  unsigned int targets_ = 0, params_ = 0, normals_ = 0, points_ = 0, results_ = 0, weights_ = 0,
+               mapped_ = 0;  // storage buffers
   Uniforms uniforms_;
   std::size_t count_ = 0;
   std::uint32_t max_target_ = 0;
@@ -136,10 +148,14 @@ class DEFORM_GPU_API GpuBezierLattice {
 };
 
 // The Bézier fields of a character's lattices on the GPU: one additive GpuBezierLattice per lattice of a
-// DeformerHierarchy. With deform::Character::lattice_fields = false the CPU skins (and adds the carried
-// translations); the application uploads those positions into its vertex buffer; add_into() then adds every moving
-// lattice's field there, which gives the Character's full deformation to float rounding. Normals stay those the
-// application uploaded (of the surface before the fields). docs/gpu.md. Movable, not copyable.
+// DeformerHierarchy (and one for its carried points). Two splits (docs/gpu.md):
+//  - deform::Character::lattice_fields = false: the CPU skins and adds the carried translations, the application
+//    uploads those positions into its vertex buffer, add_into() adds every moving lattice's field there;
+//  - deform::Character::deform_on_cpu = false: GpuSkinning writes the skinned buffer, apply_into() adds the carried
+//    translations and the fields: the whole deformation on the GPU.
+// Either gives the Character's full deformation to float rounding. Normals stay those in the buffer (of the surface
+// before the fields) unless created with normals, which turns them as the CPU's transported normals are turned.
+// Movable, not copyable.
 class DEFORM_GPU_API GpuLatticeFields {
  public:
   GpuLatticeFields() noexcept = default;
@@ -149,12 +165,24 @@ class DEFORM_GPU_API GpuLatticeFields {
   GpuLatticeFields& operator=(const GpuLatticeFields&) = delete;
   ~GpuLatticeFields() = default;
 
-  // Creates one additive lattice per hierarchy lattice (`vertex_point`: the mesh's Mesh::vertex_point). Refuses,
-  // keeping nothing, as GpuBezierLattice::create_additive does. Call again after the hierarchy is rebuilt.
-  // Bind time: allocates.
-  Status create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point);
+  // Creates one additive lattice per hierarchy lattice (`vertex_point`: the mesh's Mesh::vertex_point), and one for
+  // its carried points (a degree-1 lattice that binds them all at (0, 0, 0), where the field is exactly its first
+  // control point: apply_into() makes them all the far face's displacement). Refuses, keeping nothing, as
+  // GpuBezierLattice::create_additive does. Call again after the hierarchy is rebuilt. Bind time: allocates.
+  // With `normals`, add_into() and apply_into() also turn the normals in the buffer by the lattices' maps, as
+  // DeformerHierarchy::apply(positions, normals) does (Character's transported normals): the buffer's normals must
+  // then be the skinned ones (GpuSkinning with normals, or the CPU's). Per frame that costs a second contraction per
+  // vertex and the upload of each active lattice's mapped points.
+  Status create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point,
+                bool normals = false);
   // Deletes every lattice's GL objects (needs the context current).
-  void clear() noexcept { lattices_.clear(); }
+  void clear() noexcept {
+    lattices_.clear();
+    carried_.clear();
+    carried_points_.clear();
+    mapped_points_.clear();
+  }
+  bool has_normals() const noexcept { return normals_; }
   std::size_t lattice_count() const noexcept { return lattices_.size(); }
 
   // Per frame, after the hierarchy's update() and the positions' upload: uploads each active lattice's displacements
@@ -162,9 +190,23 @@ class DEFORM_GPU_API GpuLatticeFields {
   // lattice in index order. Refuses, adding nothing, when the hierarchy's lattice count differs from create()'s or
   // a lattice would refuse (validate_into: a displacement count, the layout, a buffer too small). No allocation.
   Status add_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
+  // What DeformerHierarchy::apply() adds, all on the GPU: first every active lattice's carried points (render
+  // vertices of carried_points(l), + carried_weights(l) · far_displacement(l)), then the fields as add_into() does.
+  // For a buffer the GPU skinned (GpuSkinning::skin_into, whose barrier orders it before these), with
+  // Character::deform_on_cpu = false: the CPU then uploads only the palette and the control points. Normals stay as
+  // skinned (the CPU's transported normals also turn by the lattices' Jacobians: docs/gpu.md). Refuses, adding
+  // nothing, as add_into() does. No allocation.
+  Status apply_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
 
  private:
+  // The fields of the active lattices, in index order (checked by the caller).
+  void add_fields(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout);
+
   std::vector<GpuBezierLattice> lattices_;
+  std::vector<GpuBezierLattice> carried_;     // per lattice: its carried points (see create())
+  std::vector<glm::vec3> carried_points_;     // per lattice, 8 control points (the far displacement), per frame
+  std::vector<glm::vec3> mapped_points_;      // with normals: the largest lattice's mapped points, per frame
+  bool normals_ = false;
 };
 
 }  // namespace deform

@@ -217,6 +217,27 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::span<const glm::vec3> displacements(std::size_t lattice) const {
     return lattices_.at(lattice).world_displacements;
   }
+  // What apply_carried() adds, for callers that add it themselves (e.g. on a GPU, GpuLatticeFields::apply_into): the
+  // points beyond the lattice's far face (mesh point indices, made at construction), their selection weights (one
+  // per point, in (0, 1]), and, as of update(), the far face's displacement δ, world space: apply_carried() adds
+  // carried_weights(l)[n] · far_displacement(l) to point carried_points(l)[n] for every active lattice l.
+  std::span<const std::uint32_t> carried_points(std::size_t lattice) const {
+    return lattices_.at(lattice).bound->carried_points;
+  }
+  std::span<const float> carried_weights(std::size_t lattice) const {
+    return lattices_.at(lattice).bound->carried_weights;
+  }
+  glm::vec3 far_displacement(std::size_t lattice) const { return lattices_.at(lattice).far_displacement; }
+  // What apply(positions, normals) turns the normals by, for callers that do it themselves (GpuLatticeFields with
+  // normals), as of update(): the lattice's map without its translation as control points, linear · rest +
+  // displacements(l), written into `out` (rest_lattice(l).point_count() entries; nothing is written otherwise), and
+  // the matrix that takes a skinned normal back into the bind pose the binding's normal_basis expects. A bound
+  // point's normal n becomes normalise(n + w · (n_l − n)) (kept when that is shorter than 1e-6), w its bound weight
+  // and n_l the LatticeEvaluateJob normal of binding(l) with those control points for the input normal
+  // normals_to_bind(l) · n (apply() itself, for a rest lattice on its frame's regular grid, gets the same Jacobian to
+  // rounding in one evaluation of the displacements, the frame's edges mapped by the bone as an offset). No allocation.
+  void mapped_points(std::size_t lattice, std::span<glm::vec3> out) const;
+  glm::mat3 normals_to_bind(std::size_t lattice) const;
   // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
   // length), which apply() skips.
   bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
