@@ -110,6 +110,18 @@ int run(const std::vector<std::string>& argv) {
       }
       info["clips"] = std::move(clips);
     }
+    if (imported.rigged || !imported.model.morph_targets.empty()) {
+      // New keys only (the ones above are fixed): morph targets by name and mesh, and the most influences a point has.
+      Json morphs = Json::array();
+      for (const deform::MorphTarget& t : imported.model.morph_targets)
+        morphs.push_back({{"name", t.name}, {"mesh", t.mesh}, {"default_weight", deform::shortest_double(t.default_weight)},
+                          {"points", t.points.size()}});
+      info["morph_targets"] = std::move(morphs);
+      std::size_t most = 0;
+      for (std::size_t p = 0; p < imported.model.weights.size(); ++p)
+        most = std::max(most, deform::influence_count(imported.model.weights, p));
+      info["max_influences"] = most;
+    }
 #endif
   } else {
     throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
@@ -134,7 +146,9 @@ const Command info_command = {
     "  MODEL     any format the importer reads (glTF, FBX, .x, ...; builds with deform::import): the mesh keys\n"
     "            (\"vertices\": distinct points) and, when rigged, \"bones\": B and \"clips\": [{\"name\",\n"
     "            \"duration\" (seconds), \"channels\", \"interpolation\": the samplers its tracks use, of step,\n"
-    "            linear, cubic_spline}]. Importer warnings go to stderr.\n"
+    "            linear, cubic_spline}], then \"morph_targets\": [{\"name\", \"mesh\", \"default_weight\",\n"
+    "            \"points\" (the points it moves)}] (for `deform skin --morph NAME:W`) and \"max_influences\" (the\n"
+    "            most bones one point is skinned by). Importer warnings go to stderr.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
     "line, and the bone or element); 1 any other failure.\n",
