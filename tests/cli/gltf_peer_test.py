@@ -413,6 +413,22 @@ generated.append((morph_skin("morph_skin_linear.gltf", "LINEAR", False), None))
 generated.append((morph_skin("morph_skin_step_sparse.gltf", "STEP", True), None))
 generated.append((morph_skin("morph_skin_cubic.gltf", "CUBICSPLINE", True), None))
 
+# `deform export --format gltf` of the eight-influence import writes the extras as JOINTS_1 / WEIGHTS_1: it skins as
+# three.js skins the original (the exported clip is named as the import's).
+exported = os.path.join(work, "eight_exported.gltf")
+p = subprocess.run([deform, "export", os.path.join(work, "eight_influences.gltf"), "--format", "gltf", "--out", exported],
+                   capture_output=True, text=True, timeout=120)
+if p.returncode != 0:
+    failures.append("deform export eight_influences.gltf --format gltf: exit %d, %s" % (p.returncode, p.stderr.strip()))
+else:
+    generated.append((exported, None))
+# `deform export` to the native files (.skw holds four influences) says what it drops.
+p = subprocess.run([deform, "export", os.path.join(work, "eight_influences.gltf"), "--out", os.path.join(work, "native")],
+                   capture_output=True, text=True, timeout=120)
+if p.returncode != 0 or "more than 4 influences, which .skw cannot hold" not in p.stderr:
+    failures.append("deform export eight_influences.gltf (native): exit %d, no .skw warning: %s" %
+                    (p.returncode, p.stderr.strip()))
+
 for path, _ in generated:
     compare(os.path.basename(path), path)
 # --morph overrides a target's weight, as three's morphTargetInfluences does, over the clip's animated weights.
@@ -429,6 +445,16 @@ for name, expected in (("step.gltf", ["step"]), ("cubic.gltf", ["cubic_spline"])
     got = [c.get("interpolation") for c in json.loads(p.stdout).get("clips", [])] if p.returncode == 0 else p.stderr
     if got != [expected]:
         failures.append("deform info %s: clip interpolation %s, expected %s" % (name, got, [expected]))
+
+# `deform info` lists the morph targets (name, mesh) and the most influences a point has.
+for name, targets, most in (("morph_skin_linear.gltf", [["bulge", "bar"], ["lean", "bar"]], 2),
+                            ("eight_influences.gltf", [], 8)):
+    p = subprocess.run([deform, "info", os.path.join(work, name)], capture_output=True, text=True, timeout=120)
+    got = json.loads(p.stdout) if p.returncode == 0 else {}
+    listed = [[t.get("name"), t.get("mesh")] for t in got.get("morph_targets", [])]
+    if listed != targets or got.get("max_influences") != most:
+        failures.append("deform info %s: morph_targets %s, max_influences %s; expected %s, %d" %
+                        (name, listed, got.get("max_influences"), targets, most))
 
 # --- the glTF 2.0 models Debian's assimp-testmodels ships ---
 for path in sorted(glob.glob(os.path.join(models, "glTF2", "**", "*.gl*"), recursive=True)):

@@ -288,7 +288,22 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
            buffer36 + extra + "}";
   };
   const std::string good_positions = R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})";
+  // The triangle with one morph target whose POSITION displacements are accessor 2.
+  auto morph_doc = [&](const std::string& target) {
+    std::string morphed = triangle;
+    const std::string plain = R"("indices": 1})";
+    morphed.replace(morphed.find(plain), plain.size(), R"("indices": 1, "targets": [{"POSITION": 2}]})");
+    return R"({"asset": {"version": "2.0"}, )" + morphed + ", " + view + R"("accessors": [)" + good_positions +
+           R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}, )" + target + "], " +
+           buffer36 + "}";
+  };
   const Case cases[] = {
+      {"morph_count.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"})"),
+       "meshes[0].primitives[0].targets[0].POSITION: has not as many elements as POSITION"},
+      {"morph_type.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"})"),
+       "accessors[2] (meshes[0].primitives[0].targets[0] POSITION): element type"},
+      {"morph_ok.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})"),
+       "meshes[0].primitives[0].indices: index 1"},  // a well-formed target: the import goes on to the indices
       {"past_view.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},)"
                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "accessors[0] (meshes[0].primitives[0] POSITION): 4 elements from byte 0 run past the end of bufferView 0"},
