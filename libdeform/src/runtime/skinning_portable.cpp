@@ -92,27 +92,29 @@ void skin_extra_vertex(const SkinningJob& job, std::size_t j) noexcept {
   const std::size_t first = job.extra_offsets[j], last = job.extra_offsets[j + 1];
   const glm::u16vec4 b4 = job.bone_indices[i];
   const glm::vec4 w4 = job.bone_weights[i];
-  // Influence k of the vertex: the four slots, then its extras.
-  auto bone = [&](std::size_t k) -> std::size_t { return k < 4 ? b4[int(k)] : job.extra_bones[first + k - 4]; };
-  auto weight = [&](std::size_t k) -> float { return k < 4 ? w4[int(k)] : job.extra_weights[first + k - 4]; };
-  const std::size_t n = 4 + (last - first);
-  float sum = 0.0f;
-  for (std::size_t k = 0; k < n; ++k) sum += weight(k);
-  const float inverse_sum = 1.0f / sum;
   const bool normals = !job.in_normals.empty();
   glm::vec3 p = load3(stream_at(job.in_positions, job.in_positions_stride, i));
   glm::vec3 nrm(0.0f);
   if (normals) nrm = load3(stream_at(job.in_normals, job.in_normals_stride, i));
+  // Influence k: the four slots, then the extras. `visit(bone, weight)` for each with a positive weight; the sum is
+  // over all of them, as the four-influence kernels divide by theirs.
+  float sum = 0.0f;
+  auto each = [&](auto&& visit) {
+    for (int k = 0; k < 4; ++k)
+      if (w4[k] > 0.0f) visit(std::size_t(b4[k]), w4[k]);
+    for (std::size_t e = first; e < last; ++e)
+      if (job.extra_weights[e] > 0.0f) visit(std::size_t(job.extra_bones[e]), job.extra_weights[e]);
+  };
   if (job.method == SkinningMethod::lbs) {
-    glm::vec3 a0(0.0f), a1(0.0f), a2(0.0f), t(0.0f);
-    for (std::size_t k = 0; k < n; ++k) {
-      const float w = weight(k);
-      if (w == 0.0f) continue;
-      const glm::mat4& m = job.matrices[bone(k)];
-      a0 += w * glm::vec3(m[0]), a1 += w * glm::vec3(m[1]), a2 += w * glm::vec3(m[2]);
-      t += w * glm::vec3(m[3]);
-    }
-    store3(stream_at(job.out_positions, job.out_positions_stride, i), (a0 * p.x + a1 * p.y + a2 * p.z + t) * inverse_sum);
+    // Whole vec4 columns, so the compiler blends each with one vector multiply-add.
+    glm::vec4 c0(0.0f), c1(0.0f), c2(0.0f), c3(0.0f);
+    each([&](std::size_t bone, float w) {
+      const glm::mat4& m = job.matrices[bone];
+      c0 += w * m[0], c1 += w * m[1], c2 += w * m[2], c3 += w * m[3];
+      sum += w;
+    });
+    const glm::vec3 a0(c0), a1(c1), a2(c2), t(c3);
+    store3(stream_at(job.out_positions, job.out_positions_stride, i), (a0 * p.x + a1 * p.y + a2 * p.z + t) * (1.0f / sum));
     if (normals)
       store3(stream_at(job.out_normals, job.out_normals_stride, i), normalize_or_zero(cofactor_times(a0, a1, a2, nrm)));
     return;
@@ -121,21 +123,20 @@ void skin_extra_vertex(const SkinningJob& job, std::size_t j) noexcept {
   const glm::vec4 pivot = as_vec4(job.dual_quats[b4[0]].real);
   glm::vec4 real(0.0f), dual(0.0f);
   glm::mat3 scale(0.0f);
-  for (std::size_t k = 0; k < n; ++k) {
-    const float w = weight(k);
-    if (w == 0.0f) continue;
-    const DualQuat& q = job.dual_quats[bone(k)];
+  each([&](std::size_t bone, float w) {
+    const DualQuat& q = job.dual_quats[bone];
     const float signed_weight = glm::dot(as_vec4(q.real), pivot) < 0.0f ? -w : w;
     real += signed_weight * as_vec4(q.real);
     dual += signed_weight * as_vec4(q.dual);
-    if (scaled) scale += w * job.scales[bone(k)];
-  }
+    if (scaled) scale += w * job.scales[bone];
+    sum += w;
+  });
   const float inverse_length = 1.0f / std::sqrt(glm::dot(real, real));
   real *= inverse_length, dual *= inverse_length;
   const glm::vec3 r(real.x, real.y, real.z), d(dual.x, dual.y, dual.z);
   const glm::vec3 translation = 2.0f * (real.w * d - dual.w * r + glm::cross(r, d));
   if (scaled) {
-    scale *= inverse_sum;
+    scale *= 1.0f / sum;
     p = scale * p;
     nrm = cofactor_times(scale[0], scale[1], scale[2], nrm);
   }
