@@ -438,6 +438,12 @@ p = subprocess.run([deform, "skin", os.path.join(work, "morph_skin_linear.gltf")
                     "--clip", "move", "--time", "0.2", "--morph", "nose:1"], capture_output=True, text=True, timeout=120)
 if p.returncode != 2 or "nose" not in p.stderr:
     failures.append("deform skin --morph nose:1 (no such target): exit %d, %s" % (p.returncode, p.stderr.strip()))
+for bad, says in (("bulge", "is not NAME:WEIGHT"), ("bulge:nan", "is not a finite number"),
+                  ("bulge:1e39", "out of float range"), ("bulge:1,", "is not NAME:WEIGHT")):
+    p = subprocess.run([deform, "skin", os.path.join(work, "morph_skin_linear.gltf"), "--out", os.path.join(work, "x.obj"),
+                        "--clip", "move", "--time", "0.2", "--morph", bad], capture_output=True, text=True, timeout=120)
+    if p.returncode != 2 or says not in p.stderr:
+        failures.append("deform skin --morph %s: exit %d, %s" % (bad, p.returncode, p.stderr.strip()))
 
 # `deform info` names the samplers each clip uses.
 for name, expected in (("step.gltf", ["step"]), ("cubic.gltf", ["cubic_spline"]), ("two_rigs.gltf", ["linear"])):

@@ -105,6 +105,7 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded) {
         throw UsageError("--morph: '" + item + "' is not NAME:WEIGHT");
       const std::string name = item.substr(0, colon);
       const auto weight = static_cast<float>(parse_number(item.substr(colon + 1), "--morph " + name));
+      if (!std::isfinite(weight)) throw UsageError("--morph " + name + ": '" + item.substr(colon + 1) + "' is out of float range");
       bool found = false;
       for (std::size_t k = 0; k < targets.size(); ++k)
         if (targets[k].name == name) weights[k] = weight, found = true;
@@ -177,6 +178,11 @@ int run(const std::vector<std::string>& argv) {
     if (const deform::Status status = morph.validate(); !status)
       throw deform::Error::in_file(loaded.source, "morph targets", status.reason());
     morph.run();
+    for (std::size_t p = 0; p < rest.size(); ++p)
+      if (!std::isfinite(rest[p].x) || !std::isfinite(rest[p].y) || !std::isfinite(rest[p].z) ||
+          !std::isfinite(normal_deltas[p].x) || !std::isfinite(normal_deltas[p].y) || !std::isfinite(normal_deltas[p].z))
+        throw deform::Error::in_file(loaded.source, "morph targets",
+                                     "the weights move point " + std::to_string(p) + " beyond float range");
   }
   std::vector<glm::vec3> positions(mesh.point_count());
   skin(job, model.weights, rest, positions, {}, {}, loaded.source);
