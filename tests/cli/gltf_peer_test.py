@@ -422,6 +422,12 @@ if p.returncode != 0:
     failures.append("deform export eight_influences.gltf --format gltf: exit %d, %s" % (p.returncode, p.stderr.strip()))
 else:
     generated.append((exported, None))
+    v = subprocess.run(["node", os.path.join(node_dir, "validate_gltf.js"), exported], capture_output=True, text=True,
+                       timeout=120)
+    report = json.loads(v.stdout.splitlines()[0]) if v.returncode == 0 and v.stdout.strip() else {"errors": "?"}
+    if report.get("errors") != 0:
+        failures.append("eight_exported.gltf: the Khronos validator reports %s errors: %s" %
+                        (report.get("errors"), report.get("messages", v.stderr.strip())))
 # `deform export` to the native files (.skw holds four influences) says what it drops.
 p = subprocess.run([deform, "export", os.path.join(work, "eight_influences.gltf"), "--out", os.path.join(work, "native")],
                    capture_output=True, text=True, timeout=120)
