@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Smoke test of the viewer under Xvfb with Mesa's software renderer: a frame before a reach and one after it,
 # both non-blank, the character covering a plausible share of pixels, and the two different. Also one full
-# (non-bare) screenshot; the built-in walk (--clip walk) alone, with a reach and in full with a spring chain; one
-# with a bone's weight map; a reach with a pole and one with swing-twist limits; the frame after the reach again with
-# the lattices on the GPU (--gpu), which must be the same picture (skipped without OpenGL 4.3); and the up axis a
-# Z-up FBX declares (when Debian's assimp-testmodels are there).  usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
+# (non-bare) screenshot; the built-in walk (--clip walk) alone, with a reach, in full with a spring chain and blended
+# with the run (--blend run); one with a bone's weight map; a reach with a pole and one with swing-twist limits; the
+# frame after the reach again with the lattices on the GPU (--gpu), which must be the same picture (skipped without
+# OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are there).
+# usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
 mkdir -p "$work"
@@ -35,6 +36,9 @@ run --bare --screenshot "$work/walk_reach.png" --frames 40 --clip walk --reach 1
 "$check" "$work/walk.png" "$work/walk_reach.png"
 run --screenshot "$work/walk_full.png" --frames 40 --clip walk --rig "$rig" --reach 1.3,1.6,0.4 --at 2 >/dev/null
 test -s "$work/walk_full.png"
+# The walk blended half and half with the run (in step with the walk's phase): another picture than the walk.
+run --bare --screenshot "$work/walk_run.png" --frames 40 --clip walk --blend run --blend-weight 0.5
+"$check" "$work/walk.png" "$work/walk_run.png"
 
 # The weight map of one bone (points coloured by its weights, over the full picture).
 run --screenshot "$work/weight_map.png" --frames 5 --weight-map upperarm_l >/dev/null

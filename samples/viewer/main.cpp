@@ -3,12 +3,14 @@
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
-//                 [--prop P.obj]... [--gpu] [--up y|z]
+//                 [--blend NAME|#N [--blend-weight W]] [--prop P.obj]... [--gpu] [--up y|z]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
 // the clip now and a millisecond later (Character::set_pose(pose, later, lead)), so the lattices' inertia and the
-// rig's spring chains follow the motion between frames; a reach is solved again on every frame's pose.
+// rig's spring chains follow the motion between frames; a reach is solved again on every frame's pose. A second
+// clip blends with the first (deform::BlendingJob, the panel's "blend with" and its weight), following the first
+// clip's phase so that clips of different lengths (a walk and a run) stay in step.
 //
 // GPU lattices (--gpu, the panel or G; OpenGL 4.3): the character is skinned on the CPU without its lattice fields
 // (Character::lattice_fields = false) and deform::GpuLatticeFields adds them in the vertex buffer. --up z stands a
@@ -38,6 +40,7 @@
 #include "deform/offline/picking.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
+#include "deform/runtime/blending.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
@@ -55,7 +58,7 @@ using Clock = std::chrono::steady_clock;
 
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]\n"
-    "                     [--prop P.obj]...\n"
+    "                     [--blend NAME|#N [--blend-weight W]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--up y|z]\n"
@@ -64,6 +67,8 @@ const char* usage =
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
     "its files in samples/data), an imported file's own. --inertia F: how much the lattices lag behind the\n"
     "playing clip, [0, 1] (default 1; the panel's \"jiggle\").\n"
+    "--blend NAME|#N: blend a second clip with the --clip one, in step with its phase; --blend-weight W: the second\n"
+    "clip's weight, [0, 1] (default 0.5; the first has 1 - W; the panel's \"blend with\" and \"blend\").\n"
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
@@ -75,10 +80,11 @@ const char* usage =
     "L the lattices, G the GPU lattices, R resets, C resets the camera, Esc quits.\n";
 
 struct Options {
-  std::string model, skeleton, weights, rig, screenshot, clip, weight_map;
+  std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
   std::vector<std::string> props;
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   float inertia = 1.0f;  // the lattices' inertia while a clip plays
+  float blend_weight = 0.5f;  // the second clip's weight
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;   // start with the lattices evaluated on the GPU
   bool swing_twist = false;  // reach with swing-twist joint limits
@@ -120,6 +126,14 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--rig") o.rig = next();
     else if (a == "--prop") o.props.push_back(next());
     else if (a == "--clip") o.clip = next();
+    else if (a == "--blend") o.blend_clip = next();
+    else if (a == "--blend-weight") {
+      const std::string text = next();
+      char* end = nullptr;
+      o.blend_weight = std::strtof(text.c_str(), &end);
+      if (text.empty() || *end || !(o.blend_weight >= 0.0f && o.blend_weight <= 1.0f))
+        fail("--blend-weight: '" + text + "' is not in [0, 1]");
+    }
     else if (a == "--inertia") {
       const std::string text = next();
       char* end = nullptr;
@@ -222,11 +236,18 @@ class Viewer {
       weight_bone_ = base_model_.skeleton.find(options.weight_map);
       if (weight_bone_ < 0) fail("--weight-map: no bone '" + options.weight_map + "'");
     }
-    if (!options.clip.empty()) {  // play a clip from the start: by name, or "#N" for the N-th
-      const int clip = options.clip[0] == '#' ? std::atoi(options.clip.c_str() + 1) : deform::find_clip(clips_, options.clip);
-      if (clip < 0 || clip >= int(clips_.size())) fail(loaded.source + ": no clip '" + options.clip + "'");
-      select_clip(clip);
+    // A clip by name, or "#N" for the N-th.
+    auto find = [&](const std::string& name) {
+      const int clip = name[0] == '#' ? std::atoi(name.c_str() + 1) : deform::find_clip(clips_, name);
+      if (clip < 0 || clip >= int(clips_.size())) fail(loaded.source + ": no clip '" + name + "'");
+      return clip;
+    };
+    if (!options.clip.empty()) select_clip(find(options.clip));  // play a clip from the start
+    if (!options.blend_clip.empty()) {
+      if (options.clip.empty()) fail("--blend needs --clip");
+      blend_clip_ = find(options.blend_clip);
     }
+    blend_weight_ = options.blend_weight;
 
     // The scene (the thesis' version 1): the world holds the floor, the character and the props. The character node
     // (moved and turned from the panel) holds the model node, which stands the model upright (its up axis onto +Y)
@@ -422,6 +443,12 @@ class Viewer {
       ImGui::SameLine();
       ImGui::Text("%.2f s", clip_ >= 0 ? clip_time_ : 0.0f);
       ImGui::SliderFloat("speed", &speed_, 0.0f, 2.0f, "%.2fx", ImGuiSliderFlags_AlwaysClamp);
+      // A second clip blended with the first by weight, following its phase (BlendingJob).
+      int with = blend_clip_ + 1;
+      if (ImGui::Combo("blend with", &with, clip_names_.data(), int(clip_names_.size()))) blend_clip_ = with - 1;
+      ImGui::BeginDisabled(blend_clip_ < 0);
+      ImGui::SliderFloat("blend", &blend_weight_, 0.0f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+      ImGui::EndDisabled();
       // The jiggle: the lattices lag behind their bones while the clip plays (LatticeMotion::inertia).
       bool motion = ImGui::Checkbox("jiggle", &jiggle_);
       ImGui::SameLine();
@@ -520,7 +547,7 @@ class Viewer {
     reaching_ = false;
     effector_ = -1;
     bind_pose_ = character_->skeleton().bind_pose();
-    pose_ = later_ = bind_pose_;  // sized once: sample_clip copies into them
+    pose_ = later_ = first_ = second_ = bind_pose_;  // sized once: sample_clip copies into them
     cut_ = true;
     apply_motion();
     if (max_stretch_ < 0.0f) max_stretch_ = character_->rig().max_stretch;
@@ -538,12 +565,36 @@ class Viewer {
     apply_motion();
   }
 
-  // The clip at time t over the bind pose (bones without a channel keep it). No allocation: `into` is sized.
-  void sample_clip(float t, deform::Pose& into) const {
+  // The clip at time t over the bind pose (bones without a channel keep it), blended with the second clip at the
+  // same phase when one is chosen. No allocation: `into` and the scratch poses are sized.
+  void sample_clip(float t, deform::Pose& into) {
+    if (blend_clip_ < 0) {
+      sample_one(clips_[std::size_t(clip_)], t, into);
+      return;
+    }
+    const deform::Animation& first = clips_[std::size_t(clip_)];
+    const deform::Animation& second = clips_[std::size_t(blend_clip_)];
+    // The second clip's time at the first's phase (its own time when either has no length).
+    const float t2 = first.duration > 0.0f && second.duration > 0.0f
+                         ? first.local_time(t) / first.duration * second.duration : t;
+    sample_one(first, t, first_);
+    sample_one(second, t2, second_);
+    const deform::BlendLayer layers[] = {{first_.rotations, first_.translations, 1.0f - blend_weight_, {}},
+                                         {second_.rotations, second_.translations, blend_weight_, {}}};
+    deform::BlendingJob blend;
+    blend.layers = layers;
+    blend.rest_rotations = bind_pose_.rotations;
+    blend.rest_translations = bind_pose_.translations;
+    blend.rotations = into.rotations;
+    blend.translations = into.translations;
+    (void)blend.run();  // cannot fail: every pose has the skeleton's size, the weights are within [0, 1]
+  }
+
+  void sample_one(const deform::Animation& clip, float t, deform::Pose& into) const {
     std::copy(bind_pose_.rotations.begin(), bind_pose_.rotations.end(), into.rotations.begin());
     std::copy(bind_pose_.translations.begin(), bind_pose_.translations.end(), into.translations.begin());
     deform::SamplingJob sampling;
-    sampling.animation = &clips_[std::size_t(clip_)];
+    sampling.animation = &clip;
     sampling.time = t;
     sampling.rotations = into.rotations;
     sampling.translations = into.translations;
@@ -858,6 +909,9 @@ class Viewer {
   float long_frame_ms_ = 0.0f, long_frame_simulated_ms_ = 0.0f;
   std::vector<const char*> clip_names_;  // "(none)", then each clip's name (the panel's list)
   deform::Pose bind_pose_, pose_, later_;  // the clip sampled now and a millisecond later, over the bind pose
+  deform::Pose first_, second_;            // the two clips of a blend, before blending (sample_clip's scratch)
+  int blend_clip_ = -1;                    // the clip blended with clip_ (-1: none)
+  float blend_weight_ = 0.5f;              // its weight; clip_ has 1 - blend_weight_
   float speed_ = 1.0f;                   // playback rate
   bool jiggle_ = true;                   // lattices with inertia while a clip plays
   float inertia_ = 1.0f;

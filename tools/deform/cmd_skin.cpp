@@ -4,10 +4,13 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "deform/extras/builtin.hpp"
 #include "deform/io/model_files.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/pose_json.hpp"
+#include "deform/io/text.hpp"
 #include "deform/runtime/animation.hpp"
+#include "deform/runtime/blending.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
@@ -38,22 +41,97 @@ void skin(deform::SkinningJob job, const deform::SkinWeights& weights, std::span
   job.run();
 }
 
-// The pose of an imported model's clip NAME at T seconds (clips loop), over the bind pose.
-deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
-  if (args.has("--pose")) throw UsageError("--clip and --pose exclude each other");
-  if (!loaded.imported) throw UsageError("--clip needs an imported model (glTF, FBX, .x, ...), not " + loaded.source);
-  const std::string name = args.required("--clip");
-  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
-  const std::int32_t clip = deform::find_clip(loaded.clips, name);
-  if (clip < 0) throw deform::Error::in_file(loaded.source, "clip '" + name + "'", "no clip of that name");
+// The clips a model offers by name: an import's own, or the built-in character's (builtin_clips). `flag` names the
+// option asking, for the message when the model has none (native files carry no clips).
+std::vector<deform::Animation> model_clips(const LoadedModel& loaded, const std::string& flag) {
+  if (loaded.builtin) return deform::builtin_clips(loaded.model);
+  if (!loaded.imported)
+    throw UsageError(flag + " needs the built-in character or an imported model (glTF, FBX, .x, ...), not " +
+                     loaded.source);
+  return loaded.clips;
+}
+
+// The clip named `name` among `clips`, or a deform::Error (exit 2) naming the model, the clip and the names there are.
+const deform::Animation& named_clip(const std::vector<deform::Animation>& clips, const std::string& name,
+                                    const LoadedModel& loaded) {
+  const std::int32_t found = deform::find_clip(clips, name);
+  if (found >= 0) return clips[static_cast<std::size_t>(found)];
+  std::string names;
+  for (const deform::Animation& c : clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
+  throw deform::Error::in_file(loaded.source, "clip '" + name + "'",
+                               "no clip of that name (" + (names.empty() ? "it has none" : "it has " + names) + ")");
+}
+
+// `clip` sampled at `seconds` (clips loop as they say) over the bind pose.
+deform::Pose sample_clip(const deform::Animation& clip, float seconds, const LoadedModel& loaded) {
   deform::Pose pose = loaded.model.skeleton.bind_pose();
   deform::SamplingJob sampling;
-  sampling.animation = &loaded.clips[static_cast<std::size_t>(clip)];
+  sampling.animation = &clip;
   sampling.time = seconds;
   sampling.rotations = pose.rotations;
   sampling.translations = pose.translations;
   if (const deform::Status status = sampling.run(); !status)
-    throw deform::Error::in_file(loaded.source, "clip '" + name + "'", status.reason());
+    throw deform::Error::in_file(loaded.source, "clip '" + clip.name + "'", status.reason());
+  return pose;
+}
+
+// The pose of the model's clip NAME at T seconds, over the bind pose.
+deform::Pose clip_pose(const Args& args, const LoadedModel& loaded) {
+  if (args.has("--pose")) throw UsageError("--clip and --pose exclude each other");
+  const std::vector<deform::Animation> clips = model_clips(loaded, "--clip");
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+  return sample_clip(named_clip(clips, args.required("--clip"), loaded), seconds, loaded);
+}
+
+// One CLIP:WEIGHT item of --blend.
+struct BlendItem {
+  std::string clip;
+  float weight = 0.0f;
+};
+
+// "walk:0.7,run:0.3" -> items. The weight follows the last ':' (a clip name may hold ':'); each must be a finite number
+// >= 0 and at most 1e6 (so the sum stays a normal float). UsageError naming the item otherwise.
+std::vector<BlendItem> parse_blend(const std::string& text) {
+  std::vector<BlendItem> items;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::size_t colon = item.rfind(':');
+    if (colon == std::string::npos || colon == 0) throw UsageError("--blend: item '" + item + "' is not CLIP:WEIGHT");
+    const double weight = parse_number(item.substr(colon + 1), "--blend: item '" + item + "': weight");
+    if (weight < 0.0 || weight > 1e6) throw UsageError("--blend: item '" + item + "': weight must be within [0, 1e6]");
+    items.push_back({item.substr(0, colon), static_cast<float>(weight)});
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return items;
+}
+
+// The blend of the --blend clips at T seconds (BlendingJob: normalised weights, the bind pose where they sum to less
+// than 0.1; docs/animation.md), each clip sampled at the same time.
+deform::Pose blend_pose(const Args& args, const LoadedModel& loaded, const std::vector<BlendItem>& items) {
+  if (args.has("--pose") || args.has("--clip")) throw UsageError("--blend excludes --pose and --clip");
+  const std::vector<deform::Animation> clips = model_clips(loaded, "--blend");
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+  std::vector<deform::Pose> poses;
+  poses.reserve(items.size());
+  for (const BlendItem& item : items)
+    poses.push_back(sample_clip(named_clip(clips, item.clip, loaded), seconds, loaded));
+  std::vector<deform::BlendLayer> layers;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    layers.push_back({poses[i].rotations, poses[i].translations, items[i].weight, {}});
+  const deform::Pose bind = loaded.model.skeleton.bind_pose();
+  deform::Pose pose = bind;
+  deform::BlendingJob job;
+  job.layers = layers;
+  job.rest_rotations = bind.rotations;
+  job.rest_translations = bind.translations;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  if (const deform::Status status = job.validate(); !status)
+    throw deform::Error::in_file(loaded.source, "--blend", status.reason());
+  job.run();
   return pose;
 }
 
@@ -120,22 +198,28 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded) {
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--morph"});
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);
 
   const std::string method_name = args.value("--method").value_or("lbs");
   if (method_name != "lbs" && method_name != "dqs") throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
-  const std::string pose_path = args.has("--clip") ? std::string() : args.required("--pose");
+  const bool animated = args.has("--clip") || args.has("--blend");
+  const std::string pose_path = animated ? std::string() : args.required("--pose");
+  // Parsed before the model loads, so a malformed item fails fast.
+  const std::vector<BlendItem> blend =
+      args.has("--blend") ? parse_blend(*args.value("--blend")) : std::vector<BlendItem>{};
+  if (!animated && args.has("--time")) throw UsageError("--time needs --clip or --blend");
   const std::string out_path = args.required("--out");
   const bool limits = !args.has("--no-limits");
 
   const LoadedModel loaded = load_model(args);
   const deform::Model& model = loaded.model;
   const deform::Skeleton& skeleton = model.skeleton;
-  const deform::Pose pose =
-      args.has("--clip") ? clip_pose(args, loaded) : deform::read_pose_json(pose_path, skeleton, limits);
+  const deform::Pose pose = args.has("--blend")  ? blend_pose(args, loaded, blend)
+                            : args.has("--clip") ? clip_pose(args, loaded)
+                                                 : deform::read_pose_json(pose_path, skeleton, limits);
 
   const std::size_t bone_count = skeleton.bone_count();
   std::vector<glm::mat4> world(bone_count), palette(bone_count);
@@ -225,6 +309,12 @@ int run(const std::vector<std::string>& argv) {
   out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
   out["kernel"] = deform::isa_name(deform::isa_best());
   out["out"] = out_path;
+  if (!blend.empty()) {
+    nlohmann::ordered_json items = nlohmann::ordered_json::array();
+    for (const BlendItem& item : blend)
+      items.push_back({{"clip", item.clip}, {"weight", deform::shortest_double(item.weight)}});
+    out["blend"] = std::move(items);
+  }
   print_json_in_order(out);
   return exit_ok;
 }
@@ -236,15 +326,19 @@ const Command skin_command = {
     "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
     "                   [--no-limits] --out OUT.obj\n"
     "       deform skin MODEL (--pose P.json | --clip NAME --time T) [--morph NAME:W[,NAME:W...]] ...\n"
-    "                   (MODEL: an import: glTF, FBX, .x, ...)\n\n"
+    "                   (MODEL: an import: glTF, FBX, .x, ...)\n"
+    "       deform skin (--builtin | MODEL) --blend CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
     "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
     "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
     "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
     "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights, or\n"
     "the weights --morph gives by target name (`deform info` lists them).\n"
     "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
+    "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
+    "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"
     "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", \"bones_posed\", \"limits\",\n"
-    "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", \"out\"}.\n",
+    "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", \"out\"}; with --blend also\n"
+    "\"blend\": [{\"clip\", \"weight\"}].\n",
     run};
 
 }  // namespace cli

@@ -86,7 +86,8 @@ Status LatticeEvaluateJob::run(std::size_t begin, std::size_t end) const noexcep
                                 normals ? normals_in.data() : nullptr,
                                 normals ? normals_out.data() : nullptr,
                                 begin,
-                                end};
+                                end,
+                                normals_jacobian_offset};
   if (begin < end) kernel_for(isa)(args);
   return {};
 }

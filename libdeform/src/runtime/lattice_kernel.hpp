@@ -18,6 +18,7 @@ struct KernelArgs {
   glm::vec3* normals_out;
   std::size_t begin_block;
   std::size_t end_block;
+  glm::mat3 jacobian_offset;  // LatticeEvaluateJob::normals_jacobian_offset
 };
 
 // One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,

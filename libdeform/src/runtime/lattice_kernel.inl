@@ -282,15 +282,16 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
       in[0][lane] = nrm.x, in[1][lane] = nrm.y, in[2][lane] = nrm.z;
     }
     const glm::mat3& g = bind.normal_basis;
+    const glm::mat3& o = a.jacobian_offset;  // added to (Qu, Qv, Qw)
     const Lane16 *qu = sums.du, *qv = sums.dv, *qw = sums.dw;
     for (int lane = 0; lane < lanes; ++lane) {
       const float ix = in[0][lane], iy = in[1][lane], iz = in[2][lane];
       const float mx = ix * g[0][0] + iy * g[1][0] + iz * g[2][0];
       const float my = ix * g[0][1] + iy * g[1][1] + iz * g[2][1];
       const float mz = ix * g[0][2] + iy * g[1][2] + iz * g[2][2];
-      const float ux = qu[0][lane], uy = qu[1][lane], uz = qu[2][lane];
-      const float vx = qv[0][lane], vy = qv[1][lane], vz = qv[2][lane];
-      const float wx = qw[0][lane], wy = qw[1][lane], wz = qw[2][lane];
+      const float ux = qu[0][lane] + o[0][0], uy = qu[1][lane] + o[0][1], uz = qu[2][lane] + o[0][2];
+      const float vx = qv[0][lane] + o[1][0], vy = qv[1][lane] + o[1][1], vz = qv[2][lane] + o[1][2];
+      const float wx = qw[0][lane] + o[2][0], wy = qw[1][lane] + o[2][1], wz = qw[2][lane] + o[2][2];
       const float nx = mx * (vy * wz - vz * wy) + my * (wy * uz - wz * uy) + mz * (uy * vz - uz * vy);
       const float ny = mx * (vz * wx - vx * wz) + my * (wz * ux - wx * uz) + mz * (uz * vx - ux * vz);
       const float nz = mx * (vx * wy - vy * wx) + my * (wx * uy - wy * ux) + mz * (ux * vy - uy * vx);

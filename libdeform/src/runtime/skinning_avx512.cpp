@@ -1,9 +1,11 @@
 // Skinning kernels for AVX-512 (F, DQ, VL, BW): 16 vertices per step. Compiled with -mavx512f -mavx512dq -mavx512vl
 // -mavx512bw -mfma; only reached when the CPU reports those features (skinning.cpp).
 //
-// Palettes of at most 32 bones (a character, or one draw-call's bone subset) are first transposed into per-component
-// tables of 32 floats (two registers each), so fetching a component for 16 vertices is one two-table permute
-// (vpermt2ps) indexed by their bone ids: no gathers, no transposes. Larger palettes take the general path: LBS blends
+// Palettes of at most 64 bones (a game character, or one draw-call's bone subset) are first transposed into
+// per-component tables, so fetching a component for 16 vertices is one two-register permute (vpermt2ps) indexed by
+// their bone ids when the palette has at most 32 bones, and two permutes and a blend on the id's bit 5 up to 64: no
+// gathers, no transposes. (The built-in character has 33 bones; through the general path its skinning took twice as
+// long.) Larger palettes take the general path: LBS blends
 // each vertex's four matrices in one register (a mat4 is 16 floats) and transposes the 16 blended matrices to SoA
 // (16×16, 4 shuffle stages); DQS loads each influence's dual quaternions two vertices per register and transposes
 // them (two 8×8 at once). Either way the antipodality test, the blend and the transform run on 16 lanes.
@@ -60,39 +62,47 @@ __m512i lane_offsets(std::size_t stride) {
 struct Avx512 {
   using V = F16;
   static constexpr std::size_t width = 16;
-  static constexpr std::size_t max_table_bones = 32;
+  static constexpr std::size_t max_table_bones = 64;
+  static constexpr std::size_t narrow_table_bones = 32;  // one two-register permute per component
   static constexpr bool can_stream = true;
   static constexpr bool has_component_tables = true;
-  using Ids = __m512i;
   static void fence() { _mm_sfence(); }  // streamed lines reach memory before what the caller writes next
 
   // Component tables: table[c][b] = component c of bone b (LBS: columns 0..2 rows 0..2, then the translation; DQS:
-  // real xyzw, dual xyzw). Used when the palette has at most 32 bones.
+  // real xyzw, dual xyzw). Used when the palette has at most 64 bones; `wide` when it has more than 32. Columns past
+  // the palette up to 32 (or 64) are zero, the rest are never loaded; the array is not cleared as a whole because the
+  // kernel builds it on every call.
   bool use_tables = false;
-  alignas(64) float table[12][max_table_bones] = {};
+  bool wide = false;
+  alignas(64) float table[12][max_table_bones];
 
   explicit Avx512(const SkinningJob& job) {
     const bool lbs = job.method == SkinningMethod::lbs;
     const std::size_t bones = lbs ? job.matrices.size() : job.dual_quats.size();
     if (bones > max_table_bones) return;
     use_tables = true;
+    wide = bones > narrow_table_bones;
+    const std::size_t columns = wide ? max_table_bones : narrow_table_bones;
+    const int components = lbs ? 12 : 8;
     for (std::size_t b = 0; b < bones; ++b) {
       if (lbs) {
         for (int c = 0; c < 12; ++c) table[c][b] = job.matrices[b][c / 3][c % 3];
       } else {
         const DualQuat& q = job.dual_quats[b];
-        const float components[8] = {q.real.x, q.real.y, q.real.z, q.real.w, q.dual.x, q.dual.y, q.dual.z, q.dual.w};
-        for (int c = 0; c < 8; ++c) table[c][b] = components[c];
+        const float values[8] = {q.real.x, q.real.y, q.real.z, q.real.w, q.dual.x, q.dual.y, q.dual.z, q.dual.w};
+        for (int c = 0; c < 8; ++c) table[c][b] = values[c];
       }
     }
+    for (int c = 0; c < components; ++c)
+      for (std::size_t b = bones; b < columns; ++b) table[c][b] = 0.0f;
   }
 
   static V splat(float x) { return {_mm512_set1_ps(x)}; }
 
   // Bone ids of influence k of vertices i .. i+15 as 32-bit lanes, in their low 16 bits (for even k the high bits
-  // hold influence k + 1: the table lookups read only the low 5 bits). As 32-bit words, vertex l's four 16-bit ids
+  // hold influence k + 1: the table lookups read only the low 6 bits). As 32-bit words, vertex l's four 16-bit ids
   // are words 2l (influences 0, 1) and 2l + 1 (influences 2, 3).
-  static __m512i bone_ids(const SkinningJob& job, std::size_t i, int k) {
+  static __m512i raw_bone_ids(const SkinningJob& job, std::size_t i, int k) {
     const __m512i* p = reinterpret_cast<const __m512i*>(&job.bone_indices[i]);
     const __m512i words = _mm512_add_epi32(
         _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30), _mm512_set1_epi32(k >> 1));
@@ -100,20 +110,56 @@ struct Avx512 {
     return (k & 1) != 0 ? _mm512_srli_epi32(pair, 16) : pair;
   }
 
-  V component(int c, __m512i ids) const { return {lookup(c, ids)}; }
+  // Ids ready for lookup: the permute index (its low 5 bits) and, for a wide table, the lanes whose bone is 32..63.
+  struct Ids {
+    __m512i index;
+    __mmask16 upper;
+  };
+  template <bool wide_table>
+  static Ids ids_for(__m512i raw) {
+    return {raw, wide_table ? _mm512_test_epi32_mask(raw, _mm512_set1_epi32(32)) : __mmask16(0)};
+  }
+  Ids bone_ids(const SkinningJob& job, std::size_t i, int k) const {
+    const __m512i raw = raw_bone_ids(job, i, k);
+    return wide ? ids_for<true>(raw) : ids_for<false>(raw);
+  }
 
-  __m512 lookup(int component, __m512i ids) const {
-    return _mm512_permutex2var_ps(_mm512_load_ps(table[component]), ids, _mm512_load_ps(table[component] + 16));
+  V component(int c, Ids ids) const { return {wide ? lookup<true>(c, ids) : lookup<false>(c, ids)}; }
+
+  template <bool wide_table>
+  __m512 lookup(int component, Ids ids) const {
+    const float* row = table[component];
+    const __m512 low = _mm512_permutex2var_ps(_mm512_load_ps(row), ids.index, _mm512_load_ps(row + 16));
+    if constexpr (!wide_table) {
+      return low;
+    } else {
+      const __m512 high = _mm512_permutex2var_ps(_mm512_load_ps(row + 32), ids.index, _mm512_load_ps(row + 48));
+      return _mm512_mask_blend_ps(ids.upper, low, high);
+    }
+  }
+
+  // Σₖ wₖ Mₖ from the tables, one SoA component at a time.
+  template <bool wide_table>
+  void blend_from_tables(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
+    const __m512i low = raw_bone_ids(job, i, 0), high = raw_bone_ids(job, i, 2);
+    const Ids ids[4] = {ids_for<wide_table>(low), ids_for<wide_table>(_mm512_srli_epi32(low, 16)),
+                        ids_for<wide_table>(high), ids_for<wide_table>(_mm512_srli_epi32(high, 16))};
+    for (int c = 0; c < 12; ++c) {
+      __m512 sum = _mm512_mul_ps(w[0].v, lookup<wide_table>(c, ids[0]));
+      for (int k = 1; k < 4; ++k) sum = _mm512_fmadd_ps(w[k].v, lookup<wide_table>(c, ids[k]), sum);
+      a[c].v = sum;
+    }
   }
 
   void blend_matrices(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
     if (use_tables) {
-      const __m512i low = bone_ids(job, i, 0), high = bone_ids(job, i, 2);
-      const __m512i ids[4] = {low, _mm512_srli_epi32(low, 16), high, _mm512_srli_epi32(high, 16)};
-      for (int c = 0; c < 12; ++c) {
-        __m512 sum = _mm512_mul_ps(w[0].v, lookup(c, ids[0]));
-        for (int k = 1; k < 4; ++k) sum = _mm512_fmadd_ps(w[k].v, lookup(c, ids[k]), sum);
-        a[c].v = sum;
+      // A wide table's block whose sixteen vertices all have bones below 32 (bit 5 clear in all four 16-bit ids)
+      // takes the narrow lookups: with bones ordered root first, most blocks of a 33- to 64-bone character do.
+      const __m512i any = _mm512_or_si512(raw_bone_ids(job, i, 0), raw_bone_ids(job, i, 2));
+      if (wide && _mm512_test_epi32_mask(any, _mm512_set1_epi32(0x00200020)) != 0) {
+        blend_from_tables<true>(job, i, w, a);
+      } else {
+        blend_from_tables<false>(job, i, w, a);
       }
       return;
     }
@@ -162,8 +208,8 @@ struct Avx512 {
 
   void load_dual_quat(const SkinningJob& job, std::size_t i, int k, V q[8]) const {
     if (use_tables) {
-      const __m512i ids = bone_ids(job, i, k);
-      for (int c = 0; c < 8; ++c) q[c].v = lookup(c, ids);
+      const Ids ids = bone_ids(job, i, k);
+      for (int c = 0; c < 8; ++c) q[c] = component(c, ids);
       return;
     }
     const float* palette = &job.dual_quats[0].real.x;

@@ -199,9 +199,11 @@ class DEFORM_CHARACTER_API Character {
     Model model;
     VertexNormalsBinding vertex_normals;
     std::vector<glm::vec3> point_normals;  // bind-pose unit normals, one per point (angle-weighted)
+    std::vector<EulerLimits> limits;       // each bone's DOF limits prepared for set_pose's clamp
   };
   Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy);
   void allocate_frame_state();
+  void clamp_pose(Pose& pose) const noexcept;
 
   std::shared_ptr<const BindData> bind_;
   Rig rig_;

@@ -223,8 +223,10 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // weight: e.g. a bone's head, an IK effector. O(lattices).
   glm::vec3 point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept;
   // The lattice's control points in world space as of update(), i-fastest (for drawing): the bone-carried,
-  // elastically displaced points, plus what the lattices above carry them by.
-  std::span<const glm::vec3> control_points(std::size_t lattice) const { return lattices_.at(lattice).world_points; }
+  // elastically displaced points, plus what the lattices above carry them by. Computed for every lattice at the first
+  // call after an update() (O(control points · lattices)), which keeps them out of a frame that does not draw them;
+  // like the other calls, not to be made from two threads at once. The span is valid until the next update().
+  std::span<const glm::vec3> control_points(std::size_t lattice) const;
 
  private:
   struct Lattice : BoundLattice {
@@ -239,7 +241,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     // Per frame (update): world displacements of the control points, the far face's, world control points.
     std::vector<glm::vec3> world_displacements;
     glm::vec3 far_displacement{0.0f};
-    std::vector<glm::vec3> world_points;
+    mutable std::vector<glm::vec3> world_points;  // for drawing, computed by control_points()
+    glm::mat4 bone_world{1.0f};            // the bone's world matrix as of update()
     glm::mat3 linear{1.0f};                // the bone's world 3×3 (rotation, with any scale)
     // Secondary motion (step with world): the bone's matrix and rate at the last step, each control point's world
     // rest velocity over the last step (linear motion), and this step's accelerations in the bone's frame.
@@ -252,6 +255,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> accel_start;
     std::vector<glm::vec3> accel_end;
     std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
+    bool regular_rest = false;             // rest control points on the frame's grid (one evaluation for normals)
+    LatticeBinding lane_binding;           // `binding` writing lane n to scratch entry n (apply's evaluations)
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
@@ -269,8 +274,10 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
 
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
   std::vector<Lattice> lattices_;
-  std::vector<glm::vec3> scratch_;  // per mesh point: Bézier displacements of the lattice being applied
-  std::vector<glm::vec3> normal_scratch_;  // per mesh point: bound normals of the lattice being applied (with normals)
+  mutable bool drawing_current_ = false;  // world_points as of the last update()
+  std::size_t point_count_ = 0;            // the mesh's points, which apply() takes
+  std::vector<glm::vec3> scratch_;         // per binding lane: displacements of the lattice being applied
+  std::vector<glm::vec3> normal_scratch_;  // per binding lane: its normals (apply with normals)
 };
 
 }  // namespace deform

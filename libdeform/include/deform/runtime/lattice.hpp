@@ -173,6 +173,11 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   // transpose of the map's Jacobian up to a positive scale). May alias. Size > binding->max_vertex.
   std::span<const glm::vec3> normals_in;
   std::span<glm::vec3> normals_out;
+  // Added to the map's Jacobian ∂Q/∂(u, v, w) (as columns) before the normals are made; the positions do not see it.
+  // Zero by default. With the Jacobian of an affine map x ↦ A·X(u, v, w), it gives the normals of A·X + Q from the
+  // evaluation of Q alone: a displacement field over a skinned limb gives the limb's displacements and its deformed
+  // normals in one pass (DeformerHierarchy::apply with normals).
+  glm::mat3 normals_jacobian_offset{0.0f};
   Isa isa = Isa::automatic;  // the kernel copy: isa.hpp
 
   // run_parallel cuts ranges anywhere (blocks write disjoint points), in chunks of at least 64 blocks (1,024 points)

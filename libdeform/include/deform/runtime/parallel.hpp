@@ -55,9 +55,9 @@ class DEFORM_RUNTIME_API ThreadPool {
 // elements (small jobs stay on the calling thread) cut at multiples of Job::split_multiple (so that no two threads
 // write the same cache line). The job's O(1) checks run first, as job.run(0, 0): when they refuse, that Status is
 // returned and nothing is written. Each job of libdeform gives every element the same bits wherever its range begins,
-// so the result is bit-identical to job.run(). Allocates nothing. For SkinningJob, LatticeEvaluateJob and
-// VertexNormalsJob; Job::min_parallel_chunk is the default chunk, below which a thread wake-up costs more than it
-// saves (measured per job).
+// so the result is bit-identical to job.run(). Allocates nothing. For SkinningJob, LatticeEvaluateJob,
+// VertexNormalsJob and BlendingJob; Job::min_parallel_chunk is the default chunk, below which a thread wake-up costs
+// more than it saves (measured per job; estimated for BlendingJob, see blending.hpp).
 template <class Job>
 Status run_parallel(const Job& job, ThreadPool& pool, std::size_t min_chunk = Job::min_parallel_chunk) {
   if (const Status checked = job.run(0, 0); !checked) return checked;
