@@ -677,3 +677,57 @@ TEST_CASE("the full rig: each limb reaches a far target with its own lattices; n
     c.release();
   }
 }
+
+TEST_CASE("a Character skins with every influence: extras beyond four as SkinningJob's general path") {
+  deform::Model model = deform::builtin_character();
+  model.name = "builtin";
+  // Every 7th point gets two more influences (an import keeps them: docs/import.md); sums need not be one.
+  deform::SkinWeights& w = model.weights;
+  const auto bones = static_cast<std::uint16_t>(model.skeleton.bone_count());
+  for (std::uint32_t p = 3; p < w.size(); p += 7) {
+    if (w.extra_offsets.empty()) w.extra_offsets.push_back(0);
+    w.extra_points.push_back(p);
+    w.extra_bones.insert(w.extra_bones.end(), {std::uint16_t((p + 5) % bones), std::uint16_t((p + 11) % bones)});
+    w.extra_weights.insert(w.extra_weights.end(), {0.3f, 0.2f});
+    w.extra_offsets.push_back(static_cast<std::uint32_t>(w.extra_bones.size()));
+  }
+  deform::Model four = model;
+  deform::drop_extra_influences(four.weights);
+  deform::Pose pose = model.skeleton.bind_pose();
+  for (std::int32_t b = 1; b < std::int32_t(bones); b += 3) model.skeleton.set_euler(pose, b, glm::vec3(20.0f, -15.0f, 10.0f));
+  // The expected positions: forward kinematics and one SkinningJob with the extras.
+  std::vector<glm::mat4> world(bones), palette(bones);
+  deform::LocalToWorldJob fk;
+  fk.skeleton = &model.skeleton;
+  fk.rotations = pose.rotations;
+  fk.translations = pose.translations;
+  fk.world = world;
+  fk.palette = palette;
+  REQUIRE(fk.run());
+  std::vector<glm::vec3> expected(model.mesh.point_count());
+  deform::SkinningJob job;
+  job.matrices = palette;
+  job.bone_indices = w.bones;
+  job.bone_weights = w.weights;
+  job.extra_vertices = w.extra_points;
+  job.extra_offsets = w.extra_offsets;
+  job.extra_bones = w.extra_bones;
+  job.extra_weights = w.extra_weights;
+  job.in_positions = deform::as_floats(model.mesh.positions);
+  job.out_positions = deform::as_floats(expected);
+  REQUIRE(job.validate());
+  REQUIRE(job.run());
+  Character c(std::move(model));
+  Character c4(std::move(four));
+  REQUIRE(c.set_pose(pose));
+  REQUIRE(c.update(0.0f));
+  REQUIRE(c4.set_pose(pose));
+  REQUIRE(c4.update(0.0f));
+  float worst = 0.0f, moved = 0.0f;
+  for (std::size_t p = 0; p < expected.size(); ++p) {
+    worst = std::max(worst, glm::length(c.positions()[p] - expected[p]));
+    moved = std::max(moved, glm::length(c.positions()[p] - c4.positions()[p]));
+  }
+  CHECK(worst <= 1e-5f);
+  CHECK(moved > 1e-3f);  // the extras change the result: they are not dropped
+}

@@ -163,7 +163,7 @@ TEST_CASE("two rigs with the same joint names each skin their own mesh with thei
   CHECK(repeated_names_warned);
 }
 
-TEST_CASE("quantised positions, sparse accessors, cubic splines; dropped influences and morphs are warned") {
+TEST_CASE("quantised positions, sparse accessors, cubic splines; every influence and the morph targets are kept") {
   Doc doc;
   // Normalised shorts (16384 / 32767 ≈ 0.5), 6 bytes per element padded to 8 as the spec requires (byteStride 8).
   int positions = 0;
@@ -226,11 +226,28 @@ TEST_CASE("quantised positions, sparse accessors, cubic splines; dropped influen
   REQUIRE(imported.model.mesh.point_count() == 3);
   CHECK(imported.model.mesh.positions[0].x == doctest::Approx(-16384.0f / 32767.0f));
   CHECK(imported.model.mesh.positions[2].y == doctest::Approx(16384.0f / 32767.0f));
+  const deform::SkinWeights& sw = imported.model.weights;
+  REQUIRE(sw.extra_points == std::vector<std::uint32_t>{0, 1, 2});
+  REQUIRE(sw.extra_offsets == std::vector<std::uint32_t>{0, 2, 4, 6});
   for (std::size_t p = 0; p < 3; ++p) {
-    const glm::vec4 w = imported.model.weights.weights[p];
-    CHECK(w.x + w.y + w.z + w.w == doctest::Approx(1.0f));
-    CHECK(w.x == doctest::Approx(0.3f / 0.8f));
+    const glm::vec4 w = sw.weights[p];
+    // Six influences summing to 1: 0.3, 0.2, 0.15, 0.15 in the slots, 0.1 and 0.1 (joints 4, 5) as extras.
+    CHECK(w.x + w.y + w.z + w.w + sw.extra_weights[2 * p] + sw.extra_weights[2 * p + 1] == doctest::Approx(1.0f));
+    CHECK(w.x == doctest::Approx(0.3f));
+    CHECK(sw.extra_weights[2 * p] == doctest::Approx(0.1f));
+    CHECK(deform::influence_count(sw, p) == 6);
   }
+  CHECK(sw.extra_bones[0] == imported.model.skeleton.find("j4"));
+  CHECK(sw.extra_bones[1] == imported.model.skeleton.find("j5"));
+  // The morph target: +1 in z on every point, named target0 (no extras.targetNames), default weight 0.
+  REQUIRE(imported.model.morph_targets.size() == 1);
+  const deform::MorphTarget& morph = imported.model.morph_targets[0];
+  CHECK(morph.name == "target0");
+  CHECK(morph.mesh == "blob");
+  CHECK(morph.default_weight == 0.0f);
+  CHECK(morph.points == std::vector<std::uint32_t>{0, 1, 2});
+  CHECK(morph.position_deltas[1] == glm::vec3(0.0f, 0.0f, 1.0f));
+  CHECK(morph.normal_deltas.empty());
   REQUIRE(imported.clips.size() == 1);
   for (const deform::Channel& channel : imported.clips[0].channels) {
     if (channel.bone == imported.model.skeleton.find("j0")) {
@@ -247,10 +264,12 @@ TEST_CASE("quantised positions, sparse accessors, cubic splines; dropped influen
   std::string warnings;
   for (const std::string& w : imported.warnings) warnings += w + "\n";
   CAPTURE(warnings);
-  CHECK(warnings.find("3 vertices have more than 4 influences") != std::string::npos);
-  CHECK(warnings.find("largest weight dropped: 0.1") != std::string::npos);
-  CHECK(warnings.find("mesh 'blob'") != std::string::npos);
-  CHECK(warnings.find("morph targets are not read") != std::string::npos);
+  CHECK(warnings.find("influences") == std::string::npos);
+  CHECK(warnings.find("morph") == std::string::npos);
+  // The isolated import carries the extras and the targets over the wire unchanged.
+  const deform::ImportedModel isolated = deform::import_model_isolated(write("quantised.gltf", doc.json(body)));
+  CHECK(isolated.model.weights == imported.model.weights);
+  CHECK(isolated.model.morph_targets == imported.model.morph_targets);
 }
 
 TEST_CASE("malformed glTF files are errors naming the file and the JSON path or accessor") {
@@ -269,7 +288,22 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
            buffer36 + extra + "}";
   };
   const std::string good_positions = R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})";
+  // The triangle with one morph target whose POSITION displacements are accessor 2.
+  auto morph_doc = [&](const std::string& target) {
+    std::string morphed = triangle;
+    const std::string plain = R"("indices": 1})";
+    morphed.replace(morphed.find(plain), plain.size(), R"("indices": 1, "targets": [{"POSITION": 2}]})");
+    return R"({"asset": {"version": "2.0"}, )" + morphed + ", " + view + R"("accessors": [)" + good_positions +
+           R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}, )" + target + "], " +
+           buffer36 + "}";
+  };
   const Case cases[] = {
+      {"morph_count.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"})"),
+       "meshes[0].primitives[0].targets[0].POSITION: has not as many elements as POSITION"},
+      {"morph_type.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"})"),
+       "accessors[2] (meshes[0].primitives[0].targets[0] POSITION): element type"},
+      {"morph_ok.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})"),
+       "meshes[0].primitives[0].indices: index 1"},  // a well-formed target: the import goes on to the indices
       {"past_view.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},)"
                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "accessors[0] (meshes[0].primitives[0] POSITION): 4 elements from byte 0 run past the end of bufferView 0"},

@@ -204,3 +204,50 @@ TEST_CASE("write_gltf: the built-in character's texture is embedded only from in
   CHECK(outside.textures == 0);
   CHECK(outside.warnings.size() == 1);
 }
+
+TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; model morph targets are warned") {
+  const Folder folder("deform_gltf_extra_test");
+  deform::Model model = quad();
+  std::vector<deform::Bone> bones(6);
+  for (int b = 0; b < 6; ++b) {
+    bones[std::size_t(b)].name = "b" + std::to_string(b);
+    bones[std::size_t(b)].parent = b - 1;
+    if (b > 0) bones[std::size_t(b)].bind_translation = {0, 0.2f, 0};
+    if (b < 5) bones[std::size_t(b)].children = {b + 1};
+  }
+  model.skeleton = deform::Skeleton(bones);
+  model.weights = {};
+  const std::uint16_t six[] = {0, 1, 2, 3, 4, 5};
+  const float w6[] = {6, 5, 4, 3, 2, 1};
+  const std::uint16_t one[] = {2};
+  const float w1[] = {1};
+  deform::append_influences(model.weights, one, w1);
+  deform::append_influences(model.weights, six, w6);
+  deform::append_influences(model.weights, one, w1);
+  deform::append_influences(model.weights, one, w1);
+  model.morph_targets.push_back({"smile", "quad", 0.0f, {1}, {glm::vec3(0, 0, 1)}, {}});
+  const std::string path = (folder.path / "extra.gltf").string();
+  const deform::GltfWritten written = deform::write_gltf(path, model);
+  REQUIRE(written.warnings.size() == 1);
+  CHECK(written.warnings[0].find("1 morph targets of the model are not written") != std::string::npos);
+  const Json doc = Json::parse(deform::read_file_text(path));
+  const std::vector<std::uint8_t> bin = deform::read_file_bytes((folder.path / "extra.bin").string());
+  const Json& attributes = doc["meshes"][0]["primitives"][0]["attributes"];
+  REQUIRE(attributes.contains("WEIGHTS_1"));
+  CHECK(!attributes.contains("WEIGHTS_2"));
+  const std::vector<float> w0 = floats(doc, bin, attributes["WEIGHTS_0"].get<int>());
+  const std::vector<float> w1s = floats(doc, bin, attributes["WEIGHTS_1"].get<int>());
+  // Vertex 1: 6/21 ... 1/21 over both sets; the others have all their weight on one bone and nothing in set 1.
+  CHECK(w0[4] == doctest::Approx(6.0 / 21));
+  CHECK(w1s[4] == doctest::Approx(2.0 / 21));
+  CHECK(w1s[5] == doctest::Approx(1.0 / 21));
+  CHECK(w1s[6] == 0.0f);
+  CHECK(w1s[0] == 0.0f);
+  CHECK(w0[0] == 1.0f);
+  const Json& joints1 = doc["accessors"][attributes["JOINTS_1"].get<int>()];
+  const Json& view = doc["bufferViews"][joints1["bufferView"].get<int>()];
+  std::uint16_t j[8];
+  std::memcpy(j, bin.data() + view["byteOffset"].get<std::size_t>(), sizeof j);
+  CHECK(j[4] == 4);
+  CHECK(j[5] == 5);
+}

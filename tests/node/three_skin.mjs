@@ -1,5 +1,5 @@
 // Skinned positions of a glTF file as three.js computes them (the peer of tests/cli/gltf_peer_test.py).
-// Usage: node three_skin.mjs MODEL.gltf|MODEL.glb [ANIMATION_INDEX TIME]
+// Usage: [MORPHS='{"NAME": W}'] node three_skin.mjs MODEL.gltf|MODEL.glb [ANIMATION_INDEX TIME]
 // Prints {"corners": [[x, y, z], ...], "animations": [names]}: the world position of every triangle corner of every
 // mesh, in scene order (three's traversal, the glTF node order), posed by AnimationMixer at TIME seconds when an
 // animation index is given, else at the node tree's rest. Textures and materials are dropped before loading (there
@@ -47,6 +47,52 @@ delete json.samplers;
 delete json.materials;
 for (const mesh of json.meshes || []) for (const primitive of mesh.primitives) delete primitive.material;
 
+// three.js skins with four influences (JOINTS_0 / WEIGHTS_0); glTF allows more sets (JOINTS_1 / WEIGHTS_1, ...),
+// which GLTFLoader keeps as the attributes joints_1 / weights_1. For such meshes the weights are normalised over all
+// sets (as three's normalizeSkinWeights does over one) and each vertex is skinned by three's own bone matrices,
+// bind matrix and morphed position (Mesh.getVertexPosition), summed over every set — applyBoneTransform's loop,
+// extended from 4 influences to all of them.
+function extraSets(geometry) {
+  const sets = [];
+  for (let n = 1; geometry.attributes['joints_' + n] && geometry.attributes['weights_' + n]; ++n)
+    sets.push([geometry.attributes['joints_' + n], geometry.attributes['weights_' + n]]);
+  return sets;
+}
+const normalizeFour = THREE.SkinnedMesh.prototype.normalizeSkinWeights;
+THREE.SkinnedMesh.prototype.normalizeSkinWeights = function () {
+  const sets = extraSets(this.geometry);
+  if (sets.length === 0) return normalizeFour.call(this);
+  const all = [[this.geometry.attributes.skinIndex, this.geometry.attributes.skinWeight], ...sets];
+  const w = new THREE.Vector4();
+  for (let i = 0; i < all[1][1].count; ++i) {
+    let total = 0;
+    for (const [, weights] of all) total += w.fromBufferAttribute(weights, i).manhattanLength();
+    if (!(total > 0)) continue;
+    for (const [, weights] of all) {
+      w.fromBufferAttribute(weights, i).multiplyScalar(1 / total);
+      weights.setXYZW(i, w.x, w.y, w.z, w.w);
+    }
+  }
+};
+const skinAllSets = function (index, target) {
+  const sets = [[this.geometry.attributes.skinIndex, this.geometry.attributes.skinWeight], ...extraSets(this.geometry)];
+  const base = target.clone().applyMatrix4(this.bindMatrix);
+  const j = new THREE.Vector4(), w = new THREE.Vector4(), m = new THREE.Matrix4(), p = new THREE.Vector3();
+  target.set(0, 0, 0);
+  for (const [joints, weights] of sets) {
+    j.fromBufferAttribute(joints, index);
+    w.fromBufferAttribute(weights, index);
+    for (let k = 0; k < 4; ++k) {
+      const weight = w.getComponent(k);
+      if (weight === 0) continue;
+      const bone = j.getComponent(k);
+      m.multiplyMatrices(this.skeleton.bones[bone].matrixWorld, this.skeleton.boneInverses[bone]);
+      target.addScaledVector(p.copy(base).applyMatrix4(m), weight);
+    }
+  }
+  return target.applyMatrix4(this.bindMatrixInverse);
+};
+
 const loader = new GLTFLoader();
 const gltf = await new Promise((resolve, reject) => loader.parse(JSON.stringify(json), '', resolve, reject));
 const scene = gltf.scene;
@@ -69,7 +115,19 @@ if (animationArg !== undefined) {
   mixer.clipAction(gltf.animations[Number(animationArg)]).play();
   mixer.update(Number(timeArg));
 }
+// MORPHS='{"NAME": weight, ...}' sets those morph targets' influences (by mesh.extras.targetNames) after the pose.
+if (process.env.MORPHS) {
+  const morphs = JSON.parse(process.env.MORPHS);
+  scene.traverse((object) => {
+    if (!object.morphTargetDictionary) return;
+    for (const [name, weight] of Object.entries(morphs))
+      if (name in object.morphTargetDictionary) object.morphTargetInfluences[object.morphTargetDictionary[name]] = weight;
+  });
+}
 scene.updateMatrixWorld(true);
+scene.traverse((object) => {
+  if (object.isSkinnedMesh && extraSets(object.geometry).length > 0) object.applyBoneTransform = skinAllSets;
+});
 const corners = [];
 const v = new THREE.Vector3();
 scene.traverse((object) => {

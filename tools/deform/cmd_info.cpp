@@ -101,14 +101,29 @@ int run(const std::vector<std::string>& argv) {
           if (channel.translation.times.size() > 1) used[static_cast<int>(channel.translation.interpolation)] = true;
           if (channel.rotation.times.size() > 1) used[static_cast<int>(channel.rotation.interpolation)] = true;
         }
+        for (const deform::MorphChannel& channel : clip.morph_channels)
+          if (channel.weight.times.size() > 1) used[static_cast<int>(channel.weight.interpolation)] = true;
         Json interpolation = Json::array();
         const char* names[3] = {"step", "linear", "cubic_spline"};
         for (int i = 0; i < 3; ++i)
           if (used[i]) interpolation.push_back(names[i]);
         clips.push_back({{"name", clip.name}, {"duration", deform::shortest_double(clip.duration)},
-                         {"channels", clip.channels.size()}, {"interpolation", std::move(interpolation)}});
+                         {"channels", clip.channels.size()}, {"interpolation", std::move(interpolation)},
+                         {"morph_channels", clip.morph_channels.size()}});
       }
       info["clips"] = std::move(clips);
+    }
+    if (imported.rigged || !imported.model.morph_targets.empty()) {
+      // New keys only (the ones above are fixed): morph targets by name and mesh, and the most influences a point has.
+      Json morphs = Json::array();
+      for (const deform::MorphTarget& t : imported.model.morph_targets)
+        morphs.push_back({{"name", t.name}, {"mesh", t.mesh}, {"default_weight", deform::shortest_double(t.default_weight)},
+                          {"points", t.points.size()}});
+      info["morph_targets"] = std::move(morphs);
+      std::size_t most = 0;
+      for (std::size_t p = 0; p < imported.model.weights.size(); ++p)
+        most = std::max(most, deform::influence_count(imported.model.weights, p));
+      info["max_influences"] = most;
     }
 #endif
   } else {
@@ -134,7 +149,9 @@ const Command info_command = {
     "  MODEL     any format the importer reads (glTF, FBX, .x, ...; builds with deform::import): the mesh keys\n"
     "            (\"vertices\": distinct points) and, when rigged, \"bones\": B and \"clips\": [{\"name\",\n"
     "            \"duration\" (seconds), \"channels\", \"interpolation\": the samplers its tracks use, of step,\n"
-    "            linear, cubic_spline}]. Importer warnings go to stderr.\n"
+    "            linear, cubic_spline, \"morph_channels\": the morph targets it animates}], then \"morph_targets\": [{\"name\", \"mesh\", \"default_weight\",\n"
+    "            \"points\" (the points it moves)}] (for `deform skin --morph NAME:W`) and \"max_influences\" (the\n"
+    "            most bones one point is skinned by). Importer warnings go to stderr.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
     "line, and the bone or element); 1 any other failure.\n",

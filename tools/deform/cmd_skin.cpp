@@ -14,6 +14,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
+#include "deform/runtime/morph.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "model_loader.hpp"
@@ -21,12 +22,17 @@
 namespace cli {
 namespace {
 
-// Skins one stream of the model: `positions` (and `normals` when not empty) with the given per-entry weights.
-void skin(deform::SkinningJob job, std::span<const glm::u16vec4> bones, std::span<const glm::vec4> weights,
-          std::span<const glm::vec3> positions, std::span<glm::vec3> out_positions, std::span<const glm::vec3> normals,
-          std::span<glm::vec3> out_normals, const std::string& source) {
-  job.bone_indices = bones;
-  job.bone_weights = weights;
+// Skins one stream of the model: `positions` (and `normals` when not empty) with the given per-entry weights (their
+// extra influences included).
+void skin(deform::SkinningJob job, const deform::SkinWeights& weights, std::span<const glm::vec3> positions,
+          std::span<glm::vec3> out_positions, std::span<const glm::vec3> normals, std::span<glm::vec3> out_normals,
+          const std::string& source) {
+  job.bone_indices = weights.bones;
+  job.bone_weights = weights.weights;
+  job.extra_vertices = weights.extra_points;
+  job.extra_offsets = weights.extra_offsets;
+  job.extra_bones = weights.extra_bones;
+  job.extra_weights = weights.extra_weights;
   job.in_positions = deform::as_floats(positions);
   job.out_positions = deform::as_floats(out_positions);
   job.in_normals = deform::as_floats(normals);
@@ -129,9 +135,70 @@ deform::Pose blend_pose(const Args& args, const LoadedModel& loaded, const std::
   return pose;
 }
 
+// The point weights carried to render vertices (vertex r gets point vertex_point[r]'s influences, extras too).
+deform::SkinWeights vertex_weights_of(const deform::SkinWeights& w, std::span<const std::uint32_t> vertex_point) {
+  deform::SkinWeights out;
+  out.bones.reserve(vertex_point.size());
+  out.weights.reserve(vertex_point.size());
+  for (std::size_t r = 0; r < vertex_point.size(); ++r) {
+    const std::uint32_t p = vertex_point[r];
+    out.bones.push_back(w.bones[p]);
+    out.weights.push_back(w.weights[p]);
+    const auto it = std::lower_bound(w.extra_points.begin(), w.extra_points.end(), p);
+    if (it == w.extra_points.end() || *it != p) continue;
+    const auto j = static_cast<std::size_t>(it - w.extra_points.begin());
+    if (out.extra_offsets.empty()) out.extra_offsets.push_back(0);
+    out.extra_points.push_back(static_cast<std::uint32_t>(r));
+    for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e) {
+      out.extra_bones.push_back(w.extra_bones[e]);
+      out.extra_weights.push_back(w.extra_weights[e]);
+    }
+    out.extra_offsets.push_back(static_cast<std::uint32_t>(out.extra_bones.size()));
+  }
+  return out;
+}
+
+// The morph-target weights: each target's default, then the clip's morph channels at --time (with --clip), then
+// --morph NAME:W[,NAME:W...] (every target of that name; an unknown name is a usage error naming it).
+std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded) {
+  const std::vector<deform::MorphTarget>& targets = loaded.model.morph_targets;
+  std::vector<float> weights;
+  for (const deform::MorphTarget& t : targets) weights.push_back(t.default_weight);
+  if (args.has("--clip")) {
+    const std::int32_t clip = deform::find_clip(loaded.clips, args.required("--clip"));
+    const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+    if (clip >= 0)
+      if (const deform::Status status =
+              deform::sample_morph_weights(loaded.clips[static_cast<std::size_t>(clip)], seconds, weights);
+          !status)
+        throw deform::Error::in_file(loaded.source, "clip '" + args.required("--clip") + "'", status.reason());
+  }
+  if (const auto list = args.value("--morph")) {
+    std::size_t at = 0;
+    while (at <= list->size()) {
+      const std::size_t comma = std::min(list->find(',', at), list->size());
+      const std::string item = list->substr(at, comma - at);
+      const std::size_t colon = item.rfind(':');
+      if (colon == std::string::npos || colon == 0)
+        throw UsageError("--morph: '" + item + "' is not NAME:WEIGHT");
+      const std::string name = item.substr(0, colon);
+      const auto weight = static_cast<float>(parse_number(item.substr(colon + 1), "--morph " + name));
+      if (!std::isfinite(weight)) throw UsageError("--morph " + name + ": '" + item.substr(colon + 1) + "' is out of float range");
+      bool found = false;
+      for (std::size_t k = 0; k < targets.size(); ++k)
+        if (targets[k].name == name) weights[k] = weight, found = true;
+      if (!found)
+        throw UsageError("--morph: the model has no morph target '" + name + "'" +
+                         (targets.empty() ? std::string(" (it has none)") : std::string()));
+      at = comma + 1;
+    }
+  }
+  return weights;
+}
+
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend"});
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);
@@ -180,20 +247,41 @@ int run(const std::vector<std::string>& argv) {
   // Points (the OBJ's `v`, in order) carry the weights; render vertices carry the normals, so they are skinned with
   // their point's weights.
   const deform::Mesh& mesh = model.mesh;
+  // Morph targets first (in bind space, as glTF and three.js do), then skinning of the morphed points.
+  const std::vector<float> weights = morph_weights(args, loaded);
+  std::vector<glm::vec3> rest = mesh.positions, normal_deltas(mesh.point_count(), glm::vec3(0.0f));
+  if (!model.morph_targets.empty()) {
+    const std::vector<glm::vec3> zeros(mesh.point_count(), glm::vec3(0.0f));
+    deform::MorphJob morph;
+    morph.targets = model.morph_targets;
+    morph.weights = weights;
+    morph.rest_positions = mesh.positions;
+    morph.out_positions = rest;
+    morph.rest_normals = zeros;  // the normal deltas alone, added to each render vertex's normal below
+    morph.out_normals = normal_deltas;
+    if (const deform::Status status = morph.validate(); !status)
+      throw deform::Error::in_file(loaded.source, "morph targets", status.reason());
+    morph.run();
+    for (std::size_t p = 0; p < rest.size(); ++p)
+      if (!std::isfinite(rest[p].x) || !std::isfinite(rest[p].y) || !std::isfinite(rest[p].z) ||
+          !std::isfinite(normal_deltas[p].x) || !std::isfinite(normal_deltas[p].y) || !std::isfinite(normal_deltas[p].z))
+        throw deform::Error::in_file(loaded.source, "morph targets",
+                                     "the weights move point " + std::to_string(p) + " beyond float range");
+  }
   std::vector<glm::vec3> positions(mesh.point_count());
-  skin(job, model.weights.bones, model.weights.weights, mesh.positions, positions, {}, {}, loaded.source);
+  skin(job, model.weights, rest, positions, {}, {}, loaded.source);
   const std::size_t render_vertices = mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count() : 0;
-  std::vector<glm::u16vec4> vertex_bones(render_vertices);
-  std::vector<glm::vec4> vertex_weights(render_vertices);
-  std::vector<glm::vec3> vertex_positions(render_vertices), normals(render_vertices), scratch(render_vertices);
+  const deform::SkinWeights vertex_weights =
+      vertex_weights_of(model.weights, std::span(mesh.vertex_point).first(render_vertices));
+  std::vector<glm::vec3> vertex_positions(render_vertices), vertex_normals(render_vertices), normals(render_vertices),
+      scratch(render_vertices);
   for (std::size_t r = 0; r < render_vertices; ++r) {
     const std::uint32_t point = mesh.vertex_point[r];
-    vertex_bones[r] = model.weights.bones[point];
-    vertex_weights[r] = model.weights.weights[point];
-    vertex_positions[r] = mesh.positions[point];
+    vertex_positions[r] = rest[point];
+    vertex_normals[r] = mesh.vertex_normals[r] + normal_deltas[point];
   }
   if (render_vertices > 0)
-    skin(job, vertex_bones, vertex_weights, vertex_positions, scratch, mesh.vertex_normals, normals, loaded.source);
+    skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
 
   // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
   deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
@@ -237,11 +325,14 @@ const Command skin_command = {
     "skin", "deform a mesh by a pose (LBS or DQS)",
     "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
     "                   [--no-limits] --out OUT.obj\n"
-    "       deform skin MODEL (--pose P.json | --clip NAME --time T) ... (MODEL: an import: glTF, FBX, .x, ...)\n"
+    "       deform skin MODEL (--pose P.json | --clip NAME --time T) [--morph NAME:W[,NAME:W...]] ...\n"
+    "                   (MODEL: an import: glTF, FBX, .x, ...)\n"
     "       deform skin (--builtin | MODEL) --blend CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
     "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
     "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
     "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
+    "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights, or\n"
+    "the weights --morph gives by target name (`deform info` lists them).\n"
     "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
     "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"

@@ -94,6 +94,10 @@ Character::Character(Model model, const Rig& rig)
   job.matrices = palette_;
   job.bone_indices = bound.weights.bones;
   job.bone_weights = bound.weights.weights;
+  job.extra_vertices = bound.weights.extra_points;
+  job.extra_offsets = bound.weights.extra_offsets;
+  job.extra_bones = bound.weights.extra_bones;
+  job.extra_weights = bound.weights.extra_weights;
   job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
@@ -435,6 +439,10 @@ Status Character::update(float dt) {
   job.matrices = palette_;
   job.bone_indices = bound.weights.bones;
   job.bone_weights = bound.weights.weights;
+  job.extra_vertices = bound.weights.extra_points;
+  job.extra_offsets = bound.weights.extra_offsets;
+  job.extra_bones = bound.weights.extra_bones;
+  job.extra_weights = bound.weights.extra_weights;
   job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (transport) {

@@ -636,8 +636,11 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
 
   // --- mesh: one submesh per primitive instance; points merged by (exact bind position, influences) ---
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
-  std::size_t unweighted = 0, over_four = 0, skipped_primitives = 0, morph_meshes = 0;
-  double max_dropped = 0.0;
+  std::size_t unweighted = 0, over_four = 0, skipped_primitives = 0;
+  std::uint32_t apart_serial = 0;  // PointKey word 11 of vertices that must not merge
+  // Per node holding a morphed mesh: its first target in model.morph_targets and its target count.
+  std::vector<std::pair<std::size_t, std::size_t>> targets_of_node(node_count, {0, 0});
+  std::vector<MorphTarget>& morph_targets = result.model.morph_targets;
   bool any_uvs = false;
   for (const Instance& instance : instances)
     for (const tinygltf::Primitive& p : gltf.meshes[static_cast<std::size_t>(instance.mesh)].primitives)
@@ -652,11 +655,36 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     const std::uint16_t rigid_bone =
         rigged && instance.skin < 0 ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(instance.node)])
                                     : 0;
-    bool has_morphs = false;
+    // Morph targets: every primitive of a mesh has the same number (glTF 2.0 §3.7.2.2); this instance's targets are
+    // appended to the model's, named by mesh.extras.targetNames, weighted by node.weights or else mesh.weights.
+    std::size_t target_count = 0;
+    for (const tinygltf::Primitive& primitive : source.primitives)
+      target_count = std::max(target_count, primitive.targets.size());
+    const std::size_t first_target = morph_targets.size();
+    if (target_count > 0) {
+      const tinygltf::Node& gnode = gltf.nodes[static_cast<std::size_t>(instance.node)];
+      const std::vector<double>& defaults = !gnode.weights.empty() ? gnode.weights : source.weights;
+      const tinygltf::Value names = source.extras.IsObject() ? source.extras.Get("targetNames") : tinygltf::Value();
+      for (std::size_t k = 0; k < target_count; ++k) {
+        MorphTarget target;
+        target.mesh = source.name;
+        if (names.IsArray() && k < names.ArrayLen() && names.Get(static_cast<int>(k)).IsString())
+          target.name = names.Get(static_cast<int>(k)).Get<std::string>();
+        else
+          target.name = "target" + std::to_string(k);
+        if (k < defaults.size()) {
+          if (!std::isfinite(defaults[k]))
+            reader.fail(mesh_element + ".weights", "weight " + std::to_string(k) + " is not finite");
+          target.default_weight = static_cast<float>(defaults[k]);
+        }
+        morph_targets.push_back(std::move(target));
+      }
+      targets_of_node[static_cast<std::size_t>(instance.node)] = {first_target, target_count};
+    }
+    const glm::dmat3 delta_matrix(to_world);
     for (std::size_t pi = 0; pi < source.primitives.size(); ++pi) {
       const tinygltf::Primitive& primitive = source.primitives[pi];
       const std::string element = mesh_element + ".primitives[" + std::to_string(pi) + "]";
-      has_morphs = has_morphs || !primitive.targets.empty();
       const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         ++skipped_primitives;
@@ -691,10 +719,29 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         }
       }
       const SkinInfo* skin = instance.skin >= 0 ? &skins[static_cast<std::size_t>(instance.skin)] : nullptr;
+      if (!primitive.targets.empty() && primitive.targets.size() != target_count)
+        reader.fail(element + ".targets", "has " + std::to_string(primitive.targets.size()) +
+                                              " targets where another primitive of the mesh has " +
+                                              std::to_string(target_count));
+      // Each target's POSITION and NORMAL displacements (sparse accessors applied by read), empty when absent.
+      std::vector<std::vector<double>> target_positions(primitive.targets.size()), target_normals(primitive.targets.size());
+      for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
+        const std::string target_element = element + ".targets[" + std::to_string(k) + "]";
+        for (const auto& [name, accessor] : primitive.targets[k]) {
+          if (name != "POSITION" && name != "NORMAL") continue;  // TANGENT and others do not move points
+          std::vector<double> values = reader.read(accessor, {3}, target_element + " " + name);
+          if (values.size() != count * 3) reader.fail(target_element + "." + name, "has not as many elements as POSITION");
+          for (const double d : values)
+            if (!std::isfinite(d)) reader.fail(target_element + "." + name, "a displacement is not finite");
+          (name == "POSITION" ? target_positions[k] : target_normals[k]) = std::move(values);
+        }
+      }
 
       const std::size_t first_vertex = mesh.vertex_point.size();
       if (first_vertex + count > 0xFFFFFFFFull) reader.fail(element, "too many vertices");
       std::vector<std::pair<std::uint16_t, double>> influences_of;
+      std::vector<std::uint16_t> extra_bones;
+      std::vector<float> extra_weights;
       for (std::size_t v = 0; v < count; ++v) {
         Influences influences;
         influences_of.clear();
@@ -725,29 +772,54 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
                                                 : rigid_bone;
           influences.weights[0] = 1.0f;
         } else {
-          double total = 0.0, kept = 0.0;
+          // Every influence is kept: the four strongest in the slots, the rest as extras (SkinWeights).
+          double total = 0.0;
           for (const auto& i : influences_of) total += i.second;
-          for (std::size_t k = 0; k < influences_of.size() && k < 4; ++k) kept += influences_of[k].second;
-          if (influences_of.size() > 4) {
-            ++over_four;
-            max_dropped = std::max(max_dropped, influences_of[4].second / total);
-          }
+          if (influences_of.size() > 4) ++over_four;
           for (std::size_t k = 0; k < influences_of.size() && k < 4; ++k) {
             influences.bones[k] = influences_of[k].first;
-            influences.weights[k] = static_cast<float>(influences_of[k].second / kept);
+            influences.weights[k] = static_cast<float>(influences_of[k].second / total);
           }
         }
         const glm::dvec3 raw{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
         const glm::vec3 position = reader.narrow(glm::dvec3(to_world * glm::dvec4(raw, 1.0)),
                                                  element + " POSITION: vertex " + std::to_string(v));
-        const auto [found, inserted] =
-            point_of_key.emplace(point_key(position, influences), static_cast<std::uint32_t>(mesh.positions.size()));
+        // Vertices with extras, or moved by morph targets, keep points of their own (their key would need the rest).
+        const bool apart = influences_of.size() > 4 || !primitive.targets.empty();
+        const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, apart ? ++apart_serial : 0),
+                                                            static_cast<std::uint32_t>(mesh.positions.size()));
         if (inserted) {
+          const auto point = static_cast<std::uint32_t>(mesh.positions.size());
           mesh.positions.push_back(position);
-          result.model.weights.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2],
-                                                  influences.bones[3]);
-          result.model.weights.weights.emplace_back(influences.weights[0], influences.weights[1],
-                                                    influences.weights[2], influences.weights[3]);
+          SkinWeights& sw = result.model.weights;
+          sw.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2], influences.bones[3]);
+          sw.weights.emplace_back(influences.weights[0], influences.weights[1], influences.weights[2],
+                                  influences.weights[3]);
+          if (influences_of.size() > 4) {
+            if (sw.extra_offsets.empty()) sw.extra_offsets.push_back(0);
+            sw.extra_points.push_back(point);
+            double total = 0.0;
+            for (const auto& i : influences_of) total += i.second;
+            for (std::size_t k = 4; k < influences_of.size(); ++k) {
+              sw.extra_bones.push_back(influences_of[k].first);
+              sw.extra_weights.push_back(static_cast<float>(influences_of[k].second / total));
+            }
+            sw.extra_offsets.push_back(static_cast<std::uint32_t>(sw.extra_bones.size()));
+          }
+          for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
+            MorphTarget& target = morph_targets[first_target + k];
+            glm::dvec3 dp(0.0), dn(0.0);
+            if (!target_positions[k].empty())
+              dp = delta_matrix * glm::dvec3(target_positions[k][3 * v], target_positions[k][3 * v + 1],
+                                             target_positions[k][3 * v + 2]);
+            if (!target_normals[k].empty())
+              dn = normal_matrix * glm::dvec3(target_normals[k][3 * v], target_normals[k][3 * v + 1],
+                                              target_normals[k][3 * v + 2]);
+            if (dp == glm::dvec3(0.0) && dn == glm::dvec3(0.0)) continue;  // sparse: only the points it moves
+            target.points.push_back(point);
+            target.position_deltas.push_back(reader.narrow(dp, element + " target " + std::to_string(k)));
+            target.normal_deltas.push_back(reader.narrow(dn, element + " target " + std::to_string(k)));
+          }
         }
         mesh.vertex_point.push_back(found->second);
         glm::dvec3 normal = normals.empty() ? glm::dvec3(0.0)
@@ -798,29 +870,21 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
       mesh.submeshes.push_back(std::move(submesh));
     }
-    if (has_morphs) {
-      ++morph_meshes;
-      warnings.push_back("mesh '" + source.name + "' (" + mesh_element +
-                         "): morph targets are not read; the mesh keeps its base shape and animated weights are "
-                         "ignored");
-    }
   }
+  // A target without normal deltas anywhere keeps none (MorphJob then leaves normals to the rest).
+  for (MorphTarget& target : morph_targets)
+    if (std::all_of(target.normal_deltas.begin(), target.normal_deltas.end(),
+                    [](glm::vec3 d) { return d == glm::vec3(0.0f); }))
+      target.normal_deltas.clear();
   if (mesh.triangles.empty()) reader.fail("", "the scene has no triangles");
   mesh.face_sizes.assign(mesh.triangle_count(), 3);
   mesh.face_corners = mesh.triangles;
   if (unweighted > 0)
     warnings.push_back(std::to_string(unweighted) +
                        " skinned vertices have no weight: bound rigidly to their skin's first joint");
-  if (over_four > 0) {
-    char dropped[32];
-    std::snprintf(dropped, sizeof dropped, "%.4g", max_dropped);
-    warnings.push_back(std::to_string(over_four) +
-                       " vertices have more than 4 influences: the strongest 4 kept, renormalised (largest weight "
-                       "dropped: " + std::string(dropped) + " of the vertex's total)");
-  }
+  (void)over_four;  // every influence is kept (SkinWeights extras); nothing to warn about
   if (skipped_primitives > 0)
     warnings.push_back(std::to_string(skipped_primitives) + " primitives of points or lines skipped");
-  (void)morph_meshes;
   if (!rigged) return result;
 
   // --- clips ---
@@ -850,7 +914,6 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   }
 
   std::vector<std::string> clip_names;
-  std::size_t morph_clips = 0;
   for (std::size_t a = 0; a < gltf.animations.size(); ++a) {
     const tinygltf::Animation& source = gltf.animations[a];
     const std::string animation_element = "animations[" + std::to_string(a) + "]";
@@ -862,7 +925,6 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     clip.loop = options.loop_clips;
     std::vector<std::int32_t> channel_of_bone(bones.size(), -1);
     std::size_t dropped = 0, scaled_bones = 0;
-    bool animates_weights = false;
     float duration = 0.0f;
     for (std::size_t c = 0; c < source.channels.size(); ++c) {
       const tinygltf::AnimationChannel& channel = source.channels[c];
@@ -874,11 +936,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       const tinygltf::AnimationSampler& sampler = source.samplers[static_cast<std::size_t>(channel.sampler)];
       const std::string sampler_element = animation_element + ".samplers[" + std::to_string(channel.sampler) + "]";
       const std::string& target = channel.target_path;
-      if (target == "weights") {
-        animates_weights = true;
-        continue;
-      }
-      if (target != "translation" && target != "rotation" && target != "scale")
+      if (target != "translation" && target != "rotation" && target != "scale" && target != "weights")
         reader.fail(element + ".target.path", "'" + target + "' is not a glTF target");
       const std::int32_t bone = bone_of_node[static_cast<std::size_t>(channel.target_node)];
       Interpolation interpolation = Interpolation::linear;
@@ -888,6 +946,48 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         reader.fail(sampler_element + ".interpolation", "'" + sampler.interpolation + "' is not a glTF interpolation");
       const std::vector<double> times = reader.read(sampler.input, {1}, sampler_element + ".input");
       if (!times.empty()) duration = std::max(duration, static_cast<float>(times.back()));
+      if (target == "weights") {
+        // One float per target per key; a cubic spline has, per key, the in-tangents of every target, then the
+        // values, then the out-tangents (glTF 2.0 appendix C).
+        const auto [first, n] = targets_of_node[static_cast<std::size_t>(channel.target_node)];
+        if (n == 0) continue;  // the node has no morphed mesh in the scene
+        const std::vector<double> values = reader.read(sampler.output, {1}, sampler_element + ".output");
+        const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
+        if (values.size() != times.size() * n * per_key)
+          reader.fail(sampler_element + ".output", std::to_string(values.size()) + " weights for " +
+                                                       std::to_string(times.size()) + " key times of " +
+                                                       std::to_string(n) + " morph targets");
+        for (const double w : values)
+          if (!std::isfinite(w)) reader.fail(sampler_element + ".output", "a weight is not finite");
+        for (std::size_t t = 0; t < n; ++t) {
+          const auto global = static_cast<std::int32_t>(first + t);
+          auto existing = std::find_if(clip.morph_channels.begin(), clip.morph_channels.end(),
+                                       [&](const MorphChannel& m) { return m.target == global; });
+          if (existing != clip.morph_channels.end()) continue;  // a second channel for the node: the first wins
+          MorphChannel out;
+          out.target = global;
+          out.weight.interpolation = interpolation;
+          double last = -std::numeric_limits<double>::infinity();
+          for (std::size_t k = 0; k < times.size(); ++k) {
+            if (!(times[k] > last)) {
+              ++dropped;
+              continue;
+            }
+            last = times[k];
+            out.weight.times.push_back(static_cast<float>(times[k]));
+            auto at = [&](std::size_t part) { return static_cast<float>(values[(k * per_key + part) * n + t]); };
+            if (per_key == 3) {
+              out.weight.in_tangents.push_back(at(0));
+              out.weight.values.push_back(at(1));
+              out.weight.out_tangents.push_back(at(2));
+            } else {
+              out.weight.values.push_back(at(0));
+            }
+          }
+          clip.morph_channels.push_back(std::move(out));
+        }
+        continue;
+      }
       if (bone < 0) continue;  // the node moves nothing the skeleton holds
       const auto b = static_cast<std::size_t>(bone);
       const std::size_t width = target == "rotation" ? 4 : 3;
@@ -972,12 +1072,9 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     if (scaled_bones > 0)
       warnings.push_back(element + ": " + std::to_string(scaled_bones) +
                          " bones animate scale, which a Pose cannot hold (ignored)");
-    if (animates_weights) ++morph_clips;
     clip.validate(bones.size(), path);
     result.clips.push_back(std::move(clip));
   }
-  if (morph_clips > 0)
-    warnings.push_back(std::to_string(morph_clips) + " clips animate morph target weights, which are ignored");
   return result;
 }
 

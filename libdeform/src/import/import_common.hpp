@@ -105,8 +105,10 @@ struct Influences {
   std::array<float, 4> weights{};
 };
 
+// Word 11 is 0 for a vertex that may merge with others of the same position and influences, else a serial that
+// keeps it apart (a vertex with more than four influences, or one that morph targets move).
 struct PointKey {
-  std::array<std::uint32_t, 11> bits;
+  std::array<std::uint32_t, 12> bits;
   bool operator==(const PointKey&) const = default;
 };
 struct PointKeyHash {
@@ -117,8 +119,9 @@ struct PointKeyHash {
   }
 };
 
-inline PointKey point_key(glm::vec3 position, const Influences& influences) {
+inline PointKey point_key(glm::vec3 position, const Influences& influences, std::uint32_t apart = 0) {
   PointKey key{};
+  key.bits[11] = apart;
   std::memcpy(key.bits.data(), &position, sizeof(float) * 3);
   for (int i = 0; i < 4; ++i) {
     key.bits[static_cast<std::size_t>(3 + i)] = influences.bones[static_cast<std::size_t>(i)];

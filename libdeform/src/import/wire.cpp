@@ -12,7 +12,7 @@ namespace deform::wire {
 namespace {
 
 constexpr char magic[8] = {'D', 'F', 'I', 'M', 'P', 'O', 'R', 'T'};
-constexpr std::uint32_t version = 1;
+constexpr std::uint32_t version = 2;  // 2: extra influences, morph targets and channels
 
 class Writer {
  public:
@@ -142,6 +142,16 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
   }
   w.array(model.weights.bones);
   w.array(model.weights.weights);
+  w.array(model.weights.extra_points);
+  w.array(model.weights.extra_offsets);
+  w.array(model.weights.extra_bones);
+  w.array(model.weights.extra_weights);
+  w.count(model.morph_targets.size());
+  for (const MorphTarget& t : model.morph_targets) {
+    w.text(t.name), w.text(t.mesh);
+    w.raw(t.default_weight);
+    w.array(t.points), w.array(t.position_deltas), w.array(t.normal_deltas);
+  }
   w.count(imported.clips.size());
   for (const Animation& clip : imported.clips) {
     w.text(clip.name);
@@ -153,6 +163,11 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
       w.track(c.translation);
       w.track(c.rotation);
       w.track(c.scale);
+    }
+    w.count(clip.morph_channels.size());
+    for (const MorphChannel& m : clip.morph_channels) {
+      w.raw(m.target);
+      w.track(m.weight);
     }
   }
   w.count(imported.warnings.size());
@@ -205,6 +220,18 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
   model.skeleton = Skeleton(std::move(bones), source);  // validates the hierarchy
   model.weights.bones = r.array<glm::u16vec4>();
   model.weights.weights = r.array<glm::vec4>();
+  model.weights.extra_points = r.array<std::uint32_t>();
+  model.weights.extra_offsets = r.array<std::uint32_t>();
+  model.weights.extra_bones = r.array<std::uint16_t>();
+  model.weights.extra_weights = r.array<float>();
+  model.morph_targets.resize(r.count(8 + 8 + sizeof(float) + 3 * 8));
+  for (MorphTarget& t : model.morph_targets) {
+    t.name = r.text(), t.mesh = r.text();
+    t.default_weight = r.raw<float>();
+    t.points = r.array<std::uint32_t>();
+    t.position_deltas = r.array<glm::vec3>();
+    t.normal_deltas = r.array<glm::vec3>();
+  }
   imported.clips.resize(r.count(8 + sizeof(float) + 1 + 8));
   for (Animation& clip : imported.clips) {
     clip.name = r.text();
@@ -216,6 +243,13 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
       c.translation = r.track<glm::vec3>();
       c.rotation = r.track<glm::quat>();
       c.scale = r.track<glm::vec3>();
+    }
+    clip.morph_channels.resize(r.count(sizeof(std::int32_t) + 1 + 4 * 8));
+    for (MorphChannel& m : clip.morph_channels) {
+      m.target = r.raw<std::int32_t>();
+      m.weight = r.track<float>();
+      if (m.target < 0 || static_cast<std::size_t>(m.target) >= model.morph_targets.size())
+        r.fail("a morph channel names a target out of range");
     }
     clip.validate(model.skeleton.bone_count(), source);
   }
@@ -246,6 +280,22 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
       if (ids[k] >= model.skeleton.bone_count()) r.fail("a skin weight names a bone out of range");
   for (const glm::vec3& p : mesh.positions)
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) r.fail("a position is not finite");
+  // The extra influences as SkinningJob::validate wants them (sizes, order, bones); morph targets as MorphJob does.
+  const SkinWeights& sw = model.weights;
+  if (sw.extra_points.empty() ? !(sw.extra_offsets.empty() && sw.extra_bones.empty() && sw.extra_weights.empty())
+                              : sw.extra_offsets.size() != sw.extra_points.size() + 1 || sw.extra_offsets.front() != 0 ||
+                                    sw.extra_offsets.back() != sw.extra_bones.size() ||
+                                    sw.extra_bones.size() != sw.extra_weights.size())
+    r.fail("extra influences are inconsistent");
+  for (std::size_t j = 0; j < sw.extra_points.size(); ++j)
+    if (sw.extra_points[j] >= points || (j > 0 && sw.extra_points[j] <= sw.extra_points[j - 1]) ||
+        sw.extra_offsets[j + 1] < sw.extra_offsets[j])
+      r.fail("extra influences are inconsistent");
+  for (std::size_t e = 0; e < sw.extra_bones.size(); ++e)
+    if (sw.extra_bones[e] >= model.skeleton.bone_count() || !(sw.extra_weights[e] >= 0.0f) ||
+        !std::isfinite(sw.extra_weights[e]))
+      r.fail("an extra influence is out of range");
+  validate_morph_targets(model.morph_targets, points, source);
   return imported;
 }
 

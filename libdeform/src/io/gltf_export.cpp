@@ -266,26 +266,44 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   for (std::size_t r = 0; r < vertices; ++r) base_positions[r] = mesh.positions.at(mesh.vertex_point[r]);
   std::vector<glm::vec3> base_normals(vertices, glm::vec3(0.0f, 0.0f, 1.0f));
   for (std::size_t r = 0; r < vertices && r < mesh.vertex_normals.size(); ++r) base_normals[r] = unit_or_z(mesh.vertex_normals[r]);
-  std::vector<glm::u16vec4> vertex_joints;
-  std::vector<glm::vec4> vertex_weights;
+  // Influence set s of render vertex r is vertex_joints[s][r] / vertex_weights[s][r]: set 0 the point's four slots,
+  // sets 1, 2, ... its extra influences four at a time (JOINTS_1 / WEIGHTS_1, ...), all normalised to sum 1 together.
+  std::vector<std::vector<glm::u16vec4>> vertex_joints;
+  std::vector<std::vector<glm::vec4>> vertex_weights;
   if (skinned) {
-    vertex_joints.resize(vertices);
-    vertex_weights.resize(vertices);
+    const SkinWeights& sw = model.weights;
+    std::size_t most_extras = 0;
+    for (std::size_t j = 0; j + 1 < sw.extra_offsets.size(); ++j)
+      most_extras = std::max<std::size_t>(most_extras, sw.extra_offsets[j + 1] - sw.extra_offsets[j]);
+    const std::size_t sets = 1 + (most_extras + 3) / 4;
+    vertex_joints.assign(sets, std::vector<glm::u16vec4>(vertices, glm::u16vec4(0)));
+    vertex_weights.assign(sets, std::vector<glm::vec4>(vertices, glm::vec4(0.0f)));
+    std::vector<std::pair<std::uint16_t, float>> list;
     for (std::size_t r = 0; r < vertices; ++r) {
       const std::uint32_t p = mesh.vertex_point[r];
-      glm::u16vec4 bone = model.weights.bones[p];
-      glm::vec4 w = model.weights.weights[p];
-      float sum = 0.0f;
-      for (int i = 0; i < 4; ++i) {
-        if (!(w[i] > 0.0f) || bone[i] >= skeleton.bone_count()) w[i] = 0.0f, bone[i] = 0;  // glTF: unused = (0, 0)
-        sum += w[i];
+      list.clear();
+      for (int i = 0; i < 4; ++i) list.emplace_back(sw.bones[p][i], sw.weights[p][i]);
+      const auto it = std::lower_bound(sw.extra_points.begin(), sw.extra_points.end(), p);
+      if (it != sw.extra_points.end() && *it == p) {
+        const auto j = static_cast<std::size_t>(it - sw.extra_points.begin());
+        for (std::uint32_t e = sw.extra_offsets[j]; e < sw.extra_offsets[j + 1]; ++e)
+          list.emplace_back(sw.extra_bones[e], sw.extra_weights[e]);
       }
-      if (sum > 0.0f) w /= sum;
-      else w = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f), bone = glm::u16vec4(0);
-      vertex_joints[r] = bone;
-      vertex_weights[r] = w;
+      float sum = 0.0f;
+      for (auto& [bone, w] : list) {
+        if (!(w > 0.0f) || bone >= skeleton.bone_count()) w = 0.0f, bone = 0;  // glTF: unused = (0, 0)
+        sum += w;
+      }
+      if (!(sum > 0.0f)) list.assign(1, {0, 1.0f}), sum = 1.0f;
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        vertex_joints[k / 4][r][int(k % 4)] = list[k].first;
+        vertex_weights[k / 4][r][int(k % 4)] = list[k].second / sum;
+      }
     }
   }
+  if (!model.morph_targets.empty())
+    written.warnings.push_back(std::to_string(model.morph_targets.size()) +
+                               " morph targets of the model are not written (only baked frames become targets)");
   // Per frame, the displacement of every render vertex from the rest shape.
   const auto displacements = [&](std::size_t k, const std::vector<std::uint32_t>& used, bool normals) {
     const BakedFrames& baked = *options.baked;
@@ -364,18 +382,20 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
       for (const std::uint32_t r : used) uvs.insert(uvs.end(), {mesh.vertex_uvs[r].x, 1.0f - mesh.vertex_uvs[r].y});  // glTF's v runs down
       attributes["TEXCOORD_0"] = b.floats(uvs, 2, "VEC2", array_buffer, false);
     }
-    if (skinned) {
+    for (std::size_t set = 0; set < vertex_joints.size(); ++set) {
       std::vector<std::uint16_t> joint_data;
       std::vector<float> weight_data;
       joint_data.reserve(used.size() * 4);
       weight_data.reserve(used.size() * 4);
       for (const std::uint32_t r : used) {
-        joint_data.insert(joint_data.end(), {vertex_joints[r][0], vertex_joints[r][1], vertex_joints[r][2], vertex_joints[r][3]});
-        weight_data.insert(weight_data.end(), {vertex_weights[r][0], vertex_weights[r][1], vertex_weights[r][2], vertex_weights[r][3]});
+        const glm::u16vec4 j = vertex_joints[set][r];
+        const glm::vec4 w = vertex_weights[set][r];
+        joint_data.insert(joint_data.end(), {j[0], j[1], j[2], j[3]});
+        weight_data.insert(weight_data.end(), {w[0], w[1], w[2], w[3]});
       }
       const int jv = b.view(joint_data.data(), joint_data.size() * sizeof(std::uint16_t), array_buffer);
-      attributes["JOINTS_0"] = b.push({{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
-      attributes["WEIGHTS_0"] = b.floats(weight_data, 4, "VEC4", array_buffer, false);
+      attributes["JOINTS_" + std::to_string(set)] = b.push({{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
+      attributes["WEIGHTS_" + std::to_string(set)] = b.floats(weight_data, 4, "VEC4", array_buffer, false);
     }
     const int iv = b.view(indices.data(), indices.size() * sizeof(std::uint32_t), element_array_buffer);
     Json primitive = {{"attributes", std::move(attributes)},

@@ -163,9 +163,17 @@ SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size
   return parse_skw(read_file_text(path), point_count, bone_count, path);
 }
 
-std::string format_skw(const SkinWeights& weights) {
-  if (weights.weights.size() != weights.bones.size())
+std::string format_skw(const SkinWeights& given) {
+  if (given.weights.size() != given.bones.size())
     throw Error::invalid_argument("", "bones and weights differ in size");
+  // .skw holds four influences per vertex (its spec is fixed): extras are dropped and the four renormalised
+  // (callers that write an import warn about it: export_native).
+  SkinWeights folded;
+  if (given.has_extra()) {
+    folded = given;
+    drop_extra_influences(folded);
+  }
+  const SkinWeights& weights = given.has_extra() ? folded : given;
   std::string text = "skw 1\nvertices " + std::to_string(weights.size()) + "\n";
   for (std::size_t v = 0; v < weights.size(); ++v) {
     text += std::to_string(v);

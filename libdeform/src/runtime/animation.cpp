@@ -100,6 +100,31 @@ glm::quat sample_track(const Track<glm::quat>& track, float seconds, glm::quat f
   return length > 0.0f ? q / length : a;
 }
 
+float sample_track(const Track<float>& track, float seconds, float fallback) noexcept {
+  if (track.empty()) return fallback;
+  const Segment s = find_segment(track.times, seconds);
+  if (s.dt == 0.0f || track.interpolation == Interpolation::step) return track.values[s.k];
+  if (track.interpolation == Interpolation::linear)
+    return track.values[s.k] + (track.values[s.k + 1] - track.values[s.k]) * s.u;
+  return hermite(track.values[s.k], track.out_tangents[s.k], track.values[s.k + 1], track.in_tangents[s.k + 1], s.u,
+                 s.dt);
+}
+
+Status sample_morph_weights(const Animation& clip, float seconds, std::span<float> weights) noexcept {
+  if (!std::isfinite(seconds)) return Status::failure("time is not finite");
+  for (const MorphChannel& channel : clip.morph_channels) {
+    if (channel.target < 0 || static_cast<std::size_t>(channel.target) >= weights.size())
+      return Status::failure("morph channel target out of range");
+    if (!track_fits(channel.weight)) return Status::failure("track values or tangents do not match its times");
+  }
+  const float t = clip.local_time(seconds);
+  for (const MorphChannel& channel : clip.morph_channels) {
+    float& w = weights[static_cast<std::size_t>(channel.target)];
+    w = sample_track(channel.weight, t, w);
+  }
+  return {};
+}
+
 float Animation::local_time(float seconds) const noexcept {
   if (!(duration > 0.0f)) return 0.0f;
   if (!loop) return std::clamp(seconds, 0.0f, duration);
@@ -148,6 +173,16 @@ void Animation::validate(std::size_t bone_count, const std::string& source) cons
     validate_track(channel.rotation, "rotation", source, element);
     validate_track(channel.scale, "scale", source, element);
   }
+  std::vector<std::int32_t> targets;
+  for (const MorphChannel& channel : morph_channels) {
+    const std::string element = clip + ": morph target " + std::to_string(channel.target);
+    if (channel.target < 0) throw Error::in_file(source, element, "morph target out of range");
+    targets.push_back(channel.target);
+    validate_track(channel.weight, "weight", source, element);
+  }
+  std::sort(targets.begin(), targets.end());
+  if (std::adjacent_find(targets.begin(), targets.end()) != targets.end())
+    throw Error::in_file(source, clip, "two morph channels for one target");
 }
 
 std::int32_t find_clip(const std::vector<Animation>& clips, const std::string& name) noexcept {

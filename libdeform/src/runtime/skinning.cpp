@@ -38,6 +38,15 @@ Status layout_ok(const SkinningJob& job) noexcept {
   if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   const std::size_t count = job.bone_indices.size();
   if (job.bone_weights.size() != count) return Status::failure("bone weights and bone indices differ in count");
+  if (job.extra_vertices.empty()) {
+    if (!job.extra_bones.empty() || !job.extra_weights.empty() || job.extra_offsets.size() > 1 ||
+        (job.extra_offsets.size() == 1 && job.extra_offsets[0] != 0))
+      return Status::failure("extra influences are inconsistent");
+  } else if (job.extra_offsets.size() != job.extra_vertices.size() + 1 ||
+             job.extra_bones.size() != job.extra_weights.size() || job.extra_offsets.back() != job.extra_bones.size() ||
+             job.extra_offsets.front() != 0 || job.extra_vertices.back() >= count) {
+    return Status::failure("extra influences are inconsistent");
+  }
   if (Status s = stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count,
                            "in_positions stride invalid", "in_positions too short");
       !s)
@@ -94,6 +103,7 @@ Status SkinningJob::validate() const noexcept {
         if (!all_finite<glm::vec3, 3>(m[c])) return Status::failure("scale matrix is not finite");
   }
   const std::size_t bones = palette_size(*this);
+  std::size_t extra = 0;  // the next entry of extra_vertices
   for (std::size_t i = 0; i < bone_indices.size(); ++i) {
     const glm::u16vec4 b = bone_indices[i];
     const glm::vec4 w = bone_weights[i];
@@ -106,8 +116,25 @@ Status SkinningJob::validate() const noexcept {
       if (w[k] > 0.0f && w[k] < std::numeric_limits<float>::min()) return Status::failure("weight is denormal");
       sum += w[k];
     }
+    if (extra < extra_vertices.size() && extra_vertices[extra] == i) {
+      if (extra > 0 && !(extra_vertices[extra] > extra_vertices[extra - 1]))
+        return Status::failure("extra influences are inconsistent");
+      const std::uint32_t first = extra_offsets[extra], last = extra_offsets[extra + 1];
+      if (last < first || last > extra_bones.size()) return Status::failure("extra influences are inconsistent");
+      for (std::uint32_t e = first; e < last; ++e) {
+        const float we = extra_weights[e];
+        if (extra_bones[e] >= bones) return Status::failure("bone index out of range");
+        if (!std::isfinite(we)) return Status::failure("weight is not finite");
+        if (we < 0.0f) return Status::failure("weight is negative");
+        if (we > 0.0f && we < std::numeric_limits<float>::min()) return Status::failure("weight is denormal");
+        sum += we;
+      }
+      ++extra;
+    }
     if (!(sum >= min_skin_weight_sum && sum <= max_skin_weight_sum)) return Status::failure("weight sum out of range");
   }
+  // Every listed vertex was met in order: none left over (unsorted or repeated entries are).
+  if (extra != extra_vertices.size()) return Status::failure("extra influences are inconsistent");
   return {};
 }
 
@@ -117,7 +144,36 @@ Status SkinningJob::run(std::size_t begin, std::size_t end) const noexcept {
   if (Status s = layout_ok(*this); !s) return s;
   if (begin > end || end > bone_indices.size()) return Status::failure("range outside the job");
   // A vertex's result does not depend on where its range begins: partial blocks run the block code.
-  if (begin < end) select_kernel(*this)(*this, begin, end);
+  if (begin >= end) return {};
+  const detail::SkinKernel kernel = select_kernel(*this);
+  if (extra_vertices.empty()) {
+    kernel(*this, begin, end);
+    return {};
+  }
+  const auto j = static_cast<std::size_t>(std::lower_bound(extra_vertices.begin(), extra_vertices.end(), begin) -
+                                          extra_vertices.begin());
+  const auto j_end = static_cast<std::size_t>(std::lower_bound(extra_vertices.begin() + std::ptrdiff_t(j),
+                                                         extra_vertices.end(), end) -
+                                        extra_vertices.begin());
+  const bool in_place = out_positions.data() == in_positions.data() ||
+                        (!in_normals.empty() && out_normals.data() == in_normals.data());
+  if (!in_place) {
+    // Outputs apart from inputs: the four-influence kernel over the whole range (whole blocks, the fast way), then
+    // the general kernel over the listed vertices, which reads their untouched inputs and overwrites their results.
+    // Splitting the range instead costs a partial block per run (3x the whole on a mesh with a tenth of its
+    // vertices listed: docs/performance.md).
+    kernel(*this, begin, end);
+  } else {
+    // In place, a vertex must be read before it is written and written once: the four-influence kernel takes the
+    // runs between listed vertices only.
+    std::size_t at = begin;
+    for (std::size_t k = j; k < j_end; ++k) {
+      if (extra_vertices[k] > at) kernel(*this, at, extra_vertices[k]);
+      at = std::size_t(extra_vertices[k]) + 1;
+    }
+    if (at < end) kernel(*this, at, end);
+  }
+  detail::skin_extra_vertices(*this, j, j_end);
   return {};
 }
 

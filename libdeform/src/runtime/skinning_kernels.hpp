@@ -13,6 +13,10 @@ using SkinKernel = void (*)(const SkinningJob& job, std::size_t begin, std::size
 void skin_lbs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 void skin_dqs_portable(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 
+// The general path (skinning_portable.cpp): vertices extra_vertices[j_begin, j_end) with their four slots and their
+// extra influences, LBS or DQS (rigid or scaled), several vertices side by side.
+void skin_extra_vertices(const SkinningJob& job, std::size_t j_begin, std::size_t j_end) noexcept;
+
 // 8 vertices per step (skinning_avx2.cpp, compiled with -mavx2 -mfma); scaled DQS goes to the portable kernel. A range
 // that is not a whole number of blocks ends (and, streaming, may begin) with a partial block run through the same
 // block code, so every vertex gets the same bits wherever a range starts.

@@ -46,12 +46,22 @@ struct Channel {
   Track<glm::vec3> scale;
 };
 
+// The weight of one morph target over time (glTF `weights` channels, one track per target). `target` indexes
+// Model::morph_targets.
+struct MorphChannel {
+  std::int32_t target = -1;
+  Track<float> weight;
+};
+
 // A clip: named channels over [0, duration] seconds. Bones without a channel are not touched by SamplingJob.
 struct DEFORM_RUNTIME_API Animation {
   std::string name;
   float duration = 0.0f;  // seconds, >= 0
   bool loop = true;       // sampling wraps time into [0, duration) when true, clamps into [0, duration] otherwise
   std::vector<Channel> channels;
+  // Morph-target weights (blend shapes), sampled by sample_morph_weights; empty for skeleton-only clips.
+  // validate() checks their tracks as it checks the bones' (target >= 0, at most one channel per target).
+  std::vector<MorphChannel> morph_channels;
 
   // Checks the clip against a skeleton with `bone_count` bones: duration finite and >= 0, bones in range and at most
   // one channel per bone, every track with times finite and strictly increasing, values (and tangents, sized as
@@ -87,6 +97,14 @@ struct DEFORM_RUNTIME_API SamplingJob {
 // One track's value at clip-local time `seconds` (no wrapping). `fallback` is returned for an empty track.
 DEFORM_RUNTIME_API glm::vec3 sample_track(const Track<glm::vec3>& track, float seconds, glm::vec3 fallback) noexcept;
 DEFORM_RUNTIME_API glm::quat sample_track(const Track<glm::quat>& track, float seconds, glm::quat fallback) noexcept;
+
+DEFORM_RUNTIME_API float sample_track(const Track<float>& track, float seconds, float fallback) noexcept;
+
+// Samples the clip's morph channels at `seconds` (mapped by Animation::local_time) into `weights` (one per morph
+// target): each animated target's weight is written, the others are left as they are (start from the targets'
+// default weights). Refuses, writing nothing, when the time is not finite or a channel's target is not below
+// weights.size() ("morph channel target out of range"). O(channels · log keys), no allocation.
+DEFORM_RUNTIME_API Status sample_morph_weights(const Animation& clip, float seconds, std::span<float> weights) noexcept;
 
 // Index of the clip named `name` in `clips`, or -1.
 DEFORM_RUNTIME_API std::int32_t find_clip(const std::vector<Animation>& clips, const std::string& name) noexcept;

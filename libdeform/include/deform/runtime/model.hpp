@@ -2,7 +2,9 @@
 // Model: a rigged mesh — the mesh, its skeleton and per-point skin weights — as one value.
 // What the OBJ + .sk + .skw triple, the built-in character and the importer all produce.
 #include <string>
+#include <vector>
 #include "deform/runtime/mesh.hpp"
+#include "deform/runtime/morph.hpp"
 #include "deform/runtime/skeleton.hpp"
 
 namespace deform {
@@ -12,5 +14,8 @@ struct Model {
   Mesh mesh;
   Skeleton skeleton;
   SkinWeights weights;   // one entry per mesh point (mesh.point_count())
+  // Morph targets over the mesh's points, applied before skinning (MorphJob); an Animation's morph channels name
+  // them by index. Empty for models without blend shapes.
+  std::vector<MorphTarget> morph_targets;
 };
 }  // namespace deform

@@ -141,14 +141,37 @@ struct DEFORM_RUNTIME_API LocalToWorldJob {
   std::size_t count() const noexcept;
 };
 
-// Up to four influences per point, strongest first, weights normalised to sum 1; unused slots have weight 0 and
-// bone 0. Index = point (OBJ `v`) index.
+// Skin weights, index = point (OBJ `v`) index. Every point has four slots, strongest first; unused slots have weight
+// 0 and bone 0. A point with more than four influences keeps its four strongest in the slots and the rest in the
+// `extra_*` arrays (compressed sparse rows over the few points that need them): extra_points lists those points in
+// ascending order, and the influences of extra_points[j] past the fourth are extra_bones / extra_weights
+// [extra_offsets[j], extra_offsets[j + 1]). The four slots and the extras together sum to 1 (importers normalise);
+// without extras the slots alone do. SkinningJob takes the extras as they are (its general path, skinning.hpp).
+// Formats that hold four influences (.skw) keep only the slots: see drop_extra_influences.
 inline constexpr int max_influences = 4;
 struct SkinWeights {
   std::vector<glm::u16vec4> bones;
   std::vector<glm::vec4> weights;
+  std::vector<std::uint32_t> extra_points;   // ascending; empty when every point has at most four influences
+  std::vector<std::uint32_t> extra_offsets;  // extra_points.size() + 1 entries, starting at 0; empty with no extras
+  std::vector<std::uint16_t> extra_bones;
+  std::vector<float> extra_weights;
   std::size_t size() const noexcept { return bones.size(); }
+  bool has_extra() const noexcept { return !extra_points.empty(); }
   bool operator==(const SkinWeights&) const = default;
 };
+
+// Appends one point's influences (any number, any order, weights >= 0, not necessarily normalised; a bone listed
+// twice has its weights summed): sorted strongest first (ties: lower bone first), zero weights dropped, normalised
+// to sum 1; the first four go to the slots, the rest to the extras. A point with no positive weight gets bone
+// `fallback_bone` with weight 1. Returns the number of influences kept.
+DEFORM_RUNTIME_API std::size_t append_influences(SkinWeights& weights, std::span<const std::uint16_t> bones,
+                                                 std::span<const float> values, std::uint16_t fallback_bone = 0);
+// Keeps the four strongest influences of every point, renormalised to sum 1, and clears the extras (for formats and
+// consumers that hold four). Returns the number of points that lost influences and, in `largest_dropped`, the
+// largest weight dropped (as a fraction of its point's total).
+DEFORM_RUNTIME_API std::size_t drop_extra_influences(SkinWeights& weights, float* largest_dropped = nullptr);
+// The number of influences of point `p` with a positive weight, extras included.
+DEFORM_RUNTIME_API std::size_t influence_count(const SkinWeights& weights, std::size_t p) noexcept;
 
 }  // namespace deform

@@ -9,9 +9,11 @@
 //
 // Per frame:  world matrices (LocalToWorldJob) -> palette T_C = T_W · T_B⁻¹ (LocalToWorldJob::palette)
 //             -> for DQS, compute_dual_quat_palette once -> SkinningJob::run.
-// Influences: four per vertex (bone index + weight). Models with more keep the four strongest and renormalise at
-// import (the importer and read_skw do). The kernels divide by each vertex's weight sum, so weights that do not sum to
-// one are renormalised on the fly; validate() asks for sums within [min_skin_weight_sum, max_skin_weight_sum].
+// Influences: four per vertex (bone index + weight) in the fast kernels. Vertices with more list the rest in the
+// optional `extra_*` spans (SkinWeights' compressed rows); run() gives those vertices a general kernel that sums
+// every influence, and the four-influence kernels the runs of vertices between them. The kernels divide by each
+// vertex's weight sum (all its influences), so weights that do not sum to one are renormalised on the fly;
+// validate() asks for sums within [min_skin_weight_sum, max_skin_weight_sum].
 // Normals: LBS maps each normal by the cofactor of the blended 3×3 matrix (det · M⁻ᵀ: the inverse-transpose rule,
 // exact for non-uniform scale and equal in direction to M itself for a rotation), DQS by the blended rotation (and
 // the inverse-transpose of the blended scale, see DualQuat); both renormalise the result (a zero normal stays zero).
@@ -79,6 +81,18 @@ struct DEFORM_RUNTIME_API SkinningJob {
   // unused slot has weight 0 and any index in range).
   std::span<const glm::u16vec4> bone_indices;
   std::span<const glm::vec4> bone_weights;
+  // Influences past the fourth, optional (all four empty when no vertex has more than four; SkinWeights::extra_*):
+  // the vertices that have them, strictly ascending and < count(); extra_offsets has one entry more, starts at 0,
+  // never decreases and ends at extra_bones.size() == extra_weights.size(); vertex extra_vertices[j]'s further
+  // influences are extra_bones / extra_weights [extra_offsets[j], extra_offsets[j + 1]), with the rules of the four
+  // (indices in the palette, weights finite, >= 0, not denormal; the sum over all of a vertex's influences in range).
+  // For DQS the first slot is the antipodality pivot, as in the four-influence kernels. Cost: each such vertex takes
+  // the general kernel (portable, one vertex at a time: docs/performance.md has the figures); the vertices between
+  // them run the four-influence kernels in runs, so a vertex's result never depends on the range it is run in.
+  std::span<const std::uint32_t> extra_vertices;
+  std::span<const std::uint32_t> extra_offsets;
+  std::span<const std::uint16_t> extra_bones;
+  std::span<const float> extra_weights;
 
   // Positions, required. Byte strides: multiples of 4, from 12 to max_skinning_stride.
   std::span<const float> in_positions;
@@ -103,7 +117,8 @@ struct DEFORM_RUNTIME_API SkinningJob {
   static constexpr std::size_t split_multiple = 16;
   static constexpr std::size_t min_parallel_chunk = 16384;
 
-  // Ok when the call is well formed, else why not: a palette of 1 to 65536 bones for the chosen method ("palette is
+  // Ok when the call is well formed, else why not: the extra influences consistent ("extra influences are
+  // inconsistent": sizes, offsets, vertex order), a palette of 1 to 65536 bones for the chosen method ("palette is
   // empty", "palette has more than 65536 bones"; scales empty or of the same size), every palette entry finite
   // ("palette matrix is not finite", "dual quaternion is not finite", "scale matrix is not finite"), matching index and
   // weight counts, every index < palette size ("bone index out of range"), every weight finite ("weight is not
