@@ -262,7 +262,7 @@ TEST_CASE("with extra influences a vertex's result does not depend on the range 
       job.in_normals = as_floats(place_n);
       job.out_positions = as_floats(place_p);
       job.out_normals = as_floats(place_n);
-      for (std::size_t at = 0; at < count;) {
+      for (at = 0; at < count;) {
         const std::size_t next = std::min(count, at + 1 + rng() % 40);
         REQUIRE(job.run(at, next));
         at = next;
