@@ -129,6 +129,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   const auto size = fs::file_size(path, error);
   if (error || size > max_file_bytes) throw Error::in_file(path, "", "cannot be read or larger than 1 GiB");
   if (is_gltf_path(path)) return import_gltf(path, options);
+  if (is_iqm_path(path)) return import_iqm(path, options);
 
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // no $AssimpFbx$ helper nodes
