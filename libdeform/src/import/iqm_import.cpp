@@ -235,7 +235,12 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
     const std::string element = "vertexarrays[" + std::to_string(a) + "]";
     const std::uint32_t type = file.u32(record, element), format = file.u32(record + 8, element),
                         size = file.u32(record + 12, element), offset = file.u32(record + 16, element);
-    if (type >= arrays.size() || type == 3) continue;  // tangents, colours and custom arrays are not used
+    if (type == 3) continue;  // tangents: a Mesh holds none (normals are kept; tangents follow from them and the UVs)
+    if (type >= arrays.size()) {  // colours and custom arrays: a Mesh has no place for them
+      warnings.push_back(element + (type == 6 ? ": vertex colours" : ": a custom vertex array") +
+                         " not read (a Mesh holds positions, normals and UVs)");
+      continue;
+    }
     const std::uint64_t component = format_bytes(format);
     if (component == 0) file.fail(record + 8, element, "unknown component format " + std::to_string(format));
     const std::uint32_t needed = type == texcoord ? 2 : type == position || type == normal ? 3 : 4;
