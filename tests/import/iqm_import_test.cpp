@@ -297,3 +297,65 @@ TEST_CASE("hostile IQM files: truncated, corrupted or lying headers give a model
   CHECK(models + errors == 3000);
   fs::remove_all(folder);
 }
+
+TEST_CASE("a looping IQM clip wraps from its last frame to its first; several root joints get an added root") {
+  // tests/fuzz/corpus/iqm_import/two_joints.iqm: a bar of 4 vertices on joints `base` and `tip` (tip's last vertex
+  // 128/127 between them), clip `bend`: 3 frames at 10 fps, marked looping, tip's rotation x and w animated.
+  const fs::path seed = fs::path(DEFORM_SOURCE_DIR) / "tests/fuzz/corpus/iqm_import/two_joints.iqm";
+  const deform::ImportedModel imported = deform::import_model(seed.string());
+  REQUIRE(imported.rigged);
+  REQUIRE(imported.model.skeleton.bone_count() == 2);
+  CHECK(imported.model.skeleton.bones()[1].name == "tip");
+  REQUIRE(imported.clips.size() == 1);
+  const deform::Animation& clip = imported.clips[0];
+  CHECK(clip.name == "bend");
+  CHECK(clip.duration == doctest::Approx(0.3));  // 3 frames and the wrap back to the first
+  auto tip_rotation = [&](float t) {
+    deform::Pose pose = imported.model.skeleton.bind_pose();
+    deform::SamplingJob job;
+    job.animation = &clip;
+    job.time = t;
+    job.rotations = pose.rotations;
+    job.translations = pose.translations;
+    REQUIRE(job.run());
+    return pose.rotations[1];
+  };
+  // Frame 1: x = 32768 · 0.5 / 65535, w = 0.9 + 32768 · 0.1 / 65535, normalised.
+  const glm::quat frame1 = glm::normalize(glm::quat(0.9f + 32768.0f * 0.1f / 65535.0f, 32768.0f * 0.5f / 65535.0f, 0, 0));
+  CHECK(std::fabs(glm::dot(tip_rotation(0.1f), frame1)) == doctest::Approx(1.0).epsilon(1e-6));
+  deform::Animation once = clip;
+  once.loop = false;
+  const glm::quat start = tip_rotation(0.0f);
+  deform::Pose end_pose = imported.model.skeleton.bind_pose();
+  deform::SamplingJob end;
+  end.animation = &once;
+  end.time = 0.3f;
+  end.rotations = end_pose.rotations;
+  end.translations = end_pose.translations;
+  REQUIRE(end.run());
+  CHECK(std::fabs(glm::dot(end_pose.rotations[1], start)) == doctest::Approx(1.0).epsilon(1e-6));
+  // The split vertex: 128 / 255 and 127 / 255.
+  bool split = false;
+  for (const glm::vec4& w : imported.model.weights.weights)
+    split = split || (std::fabs(w.x - 128.0f / 255.0f) < 1e-6f && std::fabs(w.y - 127.0f / 255.0f) < 1e-6f);
+  CHECK(split);
+
+  // Make `tip` a second root (its joint's and its pose's parent -1): an added bone `root` holds both.
+  std::vector<unsigned char> bytes = read_bytes(seed);
+  std::uint32_t joints;
+  std::memcpy(&joints, bytes.data() + 28 + 44, 4);
+  const std::int32_t none = -1;
+  std::memcpy(bytes.data() + joints + 48 + 4, &none, 4);
+  const fs::path two_roots = fs::temp_directory_path() / "deform_iqm_two_roots.iqm";
+  std::ofstream(two_roots, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  const deform::ImportedModel rooted = deform::import_model(two_roots.string());
+  REQUIRE(rooted.model.skeleton.bone_count() == 3);
+  CHECK(rooted.model.skeleton.bones()[0].name == "root");
+  CHECK(rooted.model.skeleton.bones()[1].parent == 0);
+  CHECK(rooted.model.skeleton.bones()[2].parent == 0);
+  // The pose record still names `base` as tip's parent: the joints' hierarchy is used, with a warning.
+  CHECK(std::any_of(rooted.warnings.begin(), rooted.warnings.end(),
+                    [](const std::string& w) { return w.find("another parent") != std::string::npos; }));
+  fs::remove(two_roots);
+}
