@@ -352,7 +352,11 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       out.name = material;
       for (char& c : out.name)
         if (std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20) c = '_';
-      if (out.name.empty()) out.name = "material" + std::to_string(mesh.materials.size());
+      // Names are unique (an MTL refers to materials by name): an empty name, or one that whitespace replacement
+      // made equal to an earlier one, becomes materialN.
+      if (out.name.empty() || std::any_of(mesh.materials.begin(), mesh.materials.end(),
+                                          [&](const Material& m) { return m.name == out.name; }))
+        out.name = "material" + std::to_string(mesh.materials.size());
       if (!material.empty()) {
         std::string texture = material;
         std::replace(texture.begin(), texture.end(), '\\', '/');
