@@ -284,10 +284,7 @@ class Viewer {
     camera_.yaw = 0.35f;
     camera_.pitch = 0.12f;
     camera_.floor = b.min.y + 0.01f * height;  // the eye stays just above the floor
-    if (clip_ >= 0) {  // --clip chose a clip before the floor existed
-      scene_.node(floor_node_).translation.y = clip_floors_[std::size_t(clip_)];
-      camera_.floor = clip_floors_[std::size_t(clip_)] + floor_height_;
-    }
+    place_floor();  // --clip and --blend chose clips before the floor existed
     start_camera_ = camera_;
     pick_radius_ = extent;
 
@@ -323,6 +320,7 @@ class Viewer {
     camera_.handle(in, window_.framebuffer_size());
     handle_keys(in.key_pressed);
     handle_mouse(in);
+    place_floor();
     if (clip_ >= 0) {
       // The pose now and where it heads a millisecond later (paused: nowhere, so the still body gets no velocity);
       // then the reach again, on this frame's pose.
@@ -575,15 +573,23 @@ class Viewer {
     set_gpu(gpu_);
   }
 
+  // The floor under what plays: the bind pose's lowest point with no clip, else the clip's floor, the lower of the
+  // two clips' floors while a second one is blended in (a blend of two poses stays close to their range). Cheap:
+  // called on every frame, as the panel can change the clips at any time. Before the scene exists it does nothing.
+  void place_floor() {
+    if (floor_node_ < 0) return;
+    float floor = clip_ < 0 ? rest_floor_ : clip_floors_[std::size_t(clip_)];
+    if (clip_ >= 0 && blend_clip_ >= 0 && blend_weight_ > 0.0f)
+      floor = std::min(floor, clip_floors_[std::size_t(blend_clip_)]);
+    scene_.node(floor_node_).translation.y = floor;
+    camera_.floor = floor + floor_height_;
+  }
+
   // Plays clip `clip` (-1: none, the bind pose) from its start.
   void select_clip(int clip) {
     clip_ = clip;
     clip_time_ = 0.0f;
-    if (floor_node_ >= 0) {  // (the floor exists once the scene is built; --clip selects before that, see below)
-      const float floor = clip_ < 0 ? rest_floor_ : clip_floors_[std::size_t(clip_)];
-      scene_.node(floor_node_).translation.y = floor;
-      camera_.floor = floor + floor_height_;
-    }
+    place_floor();
     if (clip_ < 0) character_->set_pose(bind_pose_);
     cut_ = true;
     apply_motion();
