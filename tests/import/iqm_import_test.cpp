@@ -1,7 +1,7 @@
 // The IQM reader (iqm_import.cpp) on assimp-testmodels' mrfixit.iqm, checked against the format's own definition
 // evaluated here independently in double precision (iqm.txt: joint and pose channels, output = T · R · S · input,
-// world = parent world · local, skin matrix = animated world · bind world⁻¹, weights / 255), and on hostile copies:
-// truncated and corrupted files give a model or a deform::Error naming the file, never a crash.
+// world = parent world · local, skin matrix = animated world · inverse bind world, weights / 255), and on hostile
+// copies: truncated and corrupted files give a model or a deform::Error naming the file, never a crash.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -321,7 +321,8 @@ TEST_CASE("a looping IQM clip wraps from its last frame to its first; several ro
     return pose.rotations[1];
   };
   // Frame 1: x = 32768 · 0.5 / 65535, w = 0.9 + 32768 · 0.1 / 65535, normalised.
-  const glm::quat frame1 = glm::normalize(glm::quat(0.9f + 32768.0f * 0.1f / 65535.0f, 32768.0f * 0.5f / 65535.0f, 0, 0));
+  const glm::quat frame1 =
+      glm::normalize(glm::quat(0.9f + 32768.0f * 0.1f / 65535.0f, 32768.0f * 0.5f / 65535.0f, 0.0f, 0.0f));
   CHECK(std::fabs(glm::dot(tip_rotation(0.1f), frame1)) == doctest::Approx(1.0).epsilon(1e-6));
   deform::Animation once = clip;
   once.loop = false;

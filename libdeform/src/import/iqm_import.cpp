@@ -191,7 +191,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
   Reader file(path, std::move(bytes));
   const std::string hdr = "header";
   file.range(0, 1, header_bytes, hdr);
-  if (std::memcmp(file.data(), "INTERQUAKEMODEL\0", 16) != 0) file.fail(0, hdr, "not an IQM file (no INTERQUAKEMODEL magic)");
+  if (std::memcmp(file.data(), "INTERQUAKEMODEL\0", 16) != 0)
+    file.fail(0, hdr, "not an IQM file (no INTERQUAKEMODEL magic)");
   if (const std::uint32_t version = file.u32(16, hdr); version != 2)
     file.fail(16, hdr, "IQM version " + std::to_string(version) + " (only version 2 is read)");
   if (const std::uint32_t declared = file.u32(20, hdr); declared > file.size())
@@ -311,7 +312,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
   std::size_t not_similar = 0;
   for (std::size_t b = 0; b < bones.size(); ++b) {
     const glm::mat4 world(bind_world[b]);
-    if (!finite(world)) throw Error::in_file(path, "joints", "bind transform of joint '" + bones[b].name + "' overflows");
+    if (!finite(world))
+      throw Error::in_file(path, "joints", "bind transform of joint '" + bones[b].name + "' overflows");
     bind_split[b] = split(world);
     if (!bind_split[b].similarity) ++not_similar;
     result.file_bind_world.push_back(world);
@@ -355,7 +357,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       // Names are unique (an MTL refers to materials by name): an empty name, or one that whitespace replacement
       // made equal to an earlier one, becomes materialN.
       if (out.name.empty() || std::any_of(mesh.materials.begin(), mesh.materials.end(),
-                                          [&](const Material& m) { return m.name == out.name; }))
+                                          [&](const Material& earlier) { return earlier.name == out.name; }))
         out.name = "material" + std::to_string(mesh.materials.size());
       if (!material.empty()) {
         std::string texture = material;
@@ -402,7 +404,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       std::array<std::pair<double, std::uint32_t>, 4> pairs{};
       double total = 0.0;
       for (std::uint32_t i = 0; i < 4; ++i) {
-        const double joint = read(arrays[blend_indexes], v, i), weight = read(arrays[blend_weights], v, i) / weight_unit;
+        const double joint = read(arrays[blend_indexes], v, i);
+        const double weight = read(arrays[blend_weights], v, i) / weight_unit;
         const std::uint64_t at = arrays[blend_weights].offset + std::uint64_t{v} * arrays[blend_weights].size;
         if (!std::isfinite(weight) || weight < 0.0)
           file.fail(at, "vertex " + std::to_string(v) + " BLENDWEIGHTS", "weight is negative or not finite");
@@ -459,7 +462,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       if (std::isfinite(length) && length > 0.0f) vertex_normal[v] = n / length;
     }
     if (arrays[texcoord].present) {
-      // IQM's texture origin is the top left (the convention of its exporters); libdeform's, like OBJ's, the bottom left.
+      // IQM's texture origin is the top left (the convention of its exporters); libdeform's, like OBJ's, the bottom
+      // left.
       const auto u = static_cast<float>(read(arrays[texcoord], v, 0)),
                  t = static_cast<float>(read(arrays[texcoord], v, 1));
       vertex_uv[v] = {std::isfinite(u) ? u : 0.0f, std::isfinite(t) ? 1.0f - t : 0.0f};
@@ -578,7 +582,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       const PoseRecord& pose = poses[j];
       Channel channel;
       channel.bone = static_cast<std::int32_t>(first + j);
-      const bool moves_t = (pose.mask & 0x7) != 0, moves_r = (pose.mask & 0x78) != 0, moves_s = (pose.mask & 0x380) != 0;
+      const bool moves_t = (pose.mask & 0x7) != 0, moves_r = (pose.mask & 0x78) != 0;
+      const bool moves_s = (pose.mask & 0x380) != 0;
       const std::uint64_t before = channels_before[j];
       bool scaled = false;
       for (std::uint32_t key = 0; key < std::max<std::uint32_t>(keys, 1); ++key) {
@@ -588,7 +593,8 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
         for (int c = 0; c < 10; ++c) {
           value[static_cast<std::size_t>(c)] = pose.offset[static_cast<std::size_t>(c)];
           if (frames > 0 && (pose.mask >> c) & 1u) {
-            value[static_cast<std::size_t>(c)] += static_cast<double>(file.u16(at)) * pose.scale[static_cast<std::size_t>(c)];
+            value[static_cast<std::size_t>(c)] +=
+                static_cast<double>(file.u16(at)) * pose.scale[static_cast<std::size_t>(c)];
             at += 2;
           }
         }
