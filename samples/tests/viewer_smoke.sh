@@ -4,7 +4,8 @@
 # (non-bare) screenshot; the built-in walk (--clip walk) alone, with a reach, in full with a spring chain and blended
 # with the run (--blend run); one with a bone's weight map; a reach with a pole and one with swing-twist limits; the
 # frame after the reach again with the deformation on the GPU (--gpu), LBS and DQS, which must be the same pictures
-# (skipped without OpenGL 4.3); and the up axis a Z-up FBX declares (when Debian's assimp-testmodels are there).
+# (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
+# (when Debian's assimp-testmodels are there).
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -67,5 +68,22 @@ if [ -f "$fbx" ]; then
     grep -q '"up": \[0, 0, 1\]' <<<"$declared" || { echo "$declared"; exit 1; }
     run "$fbx" --bare --frames 1 --screenshot "$work/box.png" --up y 2>/dev/null | grep -q '"up": \[0, 1, 0\]'
   fi
+fi
+# An imported character stands on the floor in its clip: mrfixit.iqm's idle crouches below its bind pose's feet, so
+# the floor is the lowest height the clip reaches (sampled at load), not the bind pose's; the character drawn
+# mid-clip never sinks below it.
+iqm=/usr/share/assimp/models/IQM/mrfixit.iqm
+if [ -f "$iqm" ] && ! grep -q "no importer" <<<"${declared:-}"; then
+  rest=$(run "$iqm" --bare --frames 1 --screenshot "$work/mrfixit.png" 2>/dev/null)
+  for frames in 10 40 70; do
+    idle=$(run "$iqm" --bare --clip idle --inertia 0 --frames $frames --screenshot "$work/mrfixit_idle.png" 2>/dev/null)
+    python3 - "$rest" "$idle" <<'PY'
+import json, sys
+rest, idle = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+assert abs(rest["floor"] - rest["lowest"]) < 1e-5, rest            # unposed: the floor under the bind pose's feet
+assert idle["floor"] < rest["floor"] - 1e-3, (rest, idle)          # the clip's floor, lower than the bind pose's
+assert idle["lowest"] >= idle["floor"] - 1e-5, idle                 # standing on it, never through it
+PY
+  done
 fi
 echo "viewer smoke test passed"

@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -269,6 +270,13 @@ class Viewer {
     const float height = std::max(1e-3f, b.max.y - b.min.y);
     const float extent = std::max({b.max.x - b.min.x, height, b.max.z - b.min.z});
     scene_.node(floor_node_).translation = glm::vec3(0.5f * (b.min.x + b.max.x), b.min.y, 0.5f * (b.min.z + b.max.z));
+    // The floor under each clip is the lowest any point reaches while it plays (sampled once here), not the bind
+    // pose's lowest point: an imported file's bind pose can stand elsewhere than its animated stance (mrfixit.iqm's
+    // idle crouches below its bind pose's feet), and the character must stand on the floor, never sink into it.
+    rest_floor_ = b.min.y;
+    floor_height_ = 0.01f * height;
+    for (const deform::Animation& clip : clips_)
+      clip_floors_.push_back(model_loading::lowest_height(base_model_, clip, up_));
     floor_mesh_ = sample::make_floor(extent * 4.0f, 16);
     ball_mesh_ = sample::make_sphere(extent * 0.025f, 12, 24, glm::vec3(1.0f, 0.55f, 0.1f));
     for (const std::string& path : options.props) {
@@ -280,6 +288,7 @@ class Viewer {
     camera_.yaw = 0.35f;
     camera_.pitch = 0.12f;
     camera_.floor = b.min.y + 0.01f * height;  // the eye stays just above the floor
+    place_floor();  // --clip and --blend chose clips before the floor existed
     start_camera_ = camera_;
     pick_radius_ = extent;
 
@@ -302,6 +311,13 @@ class Viewer {
   }
 
   bool gpu_lattices() const { return gpu_; }
+  // The floor's height, and the lowest height of the character as drawn now (both along the upright +Y).
+  float floor_y() const { return scene_.node(floor_node_).translation.y; }
+  float lowest_y() const {
+    float lowest = std::numeric_limits<float>::infinity();
+    for (const glm::vec3& p : character_->positions()) lowest = std::min(lowest, glm::dot(p, up_));
+    return lowest;
+  }
   glm::vec3 up() const { return up_; }
 
   void frame(float dt) {
@@ -309,6 +325,7 @@ class Viewer {
     camera_.handle(in, window_.framebuffer_size());
     handle_keys(in.key_pressed);
     handle_mouse(in);
+    place_floor();
     if (clip_ >= 0) {
       // The pose now and where it heads a millisecond later (paused: nowhere, so the still body gets no velocity);
       // then the reach again, on this frame's pose.
@@ -602,10 +619,23 @@ class Viewer {
     set_gpu(gpu_);
   }
 
+  // The floor under what plays: the bind pose's lowest point with no clip, else the clip's floor, the lower of the
+  // two clips' floors while a second one is blended in (a blend of two poses stays close to their range). Cheap:
+  // called on every frame, as the panel can change the clips at any time. Before the scene exists it does nothing.
+  void place_floor() {
+    if (floor_node_ < 0) return;
+    float floor = clip_ < 0 ? rest_floor_ : clip_floors_[std::size_t(clip_)];
+    if (clip_ >= 0 && blend_clip_ >= 0 && blend_weight_ > 0.0f)
+      floor = std::min(floor, clip_floors_[std::size_t(blend_clip_)]);
+    scene_.node(floor_node_).translation.y = floor;
+    camera_.floor = floor + floor_height_;
+  }
+
   // Plays clip `clip` (-1: none, the bind pose) from its start.
   void select_clip(int clip) {
     clip_ = clip;
     clip_time_ = 0.0f;
+    place_floor();
     if (clip_ < 0) character_->set_pose(bind_pose_);
     cut_ = true;
     apply_motion();
@@ -977,6 +1007,8 @@ class Viewer {
   bool jiggle_ = true;                   // lattices with inertia while a clip plays
   float inertia_ = 1.0f;
   bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
+  float rest_floor_ = 0.0f, floor_height_ = 0.0f;  // the floor under the bind pose; the eye's height above a floor
+  std::vector<float> clip_floors_;                 // the floor under each clip (lowest_height)
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;
   glm::vec3 target_{0.0f};
@@ -1015,9 +1047,10 @@ int main(int argc, char** argv) {
       const glm::vec3 e = viewer.effector_position();
       const glm::vec3 up = viewer.up();
       std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
-                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f]}\n",
+                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f}\n",
                   options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
-                  viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z);
+                  viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z,
+                  double(viewer.floor_y()), double(viewer.lowest_y()));
       return 0;
     }
     // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one

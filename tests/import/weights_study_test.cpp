@@ -21,10 +21,7 @@ struct Expected {
 
 void check_model(const Expected& e) {
   const std::filesystem::path path = std::filesystem::path("/usr/share/assimp/models") / e.path;
-  if (!std::filesystem::exists(path)) {
-    MESSAGE("skipped: " << path.string() << " is missing (install Debian's assimp-testmodels)");
-    return;
-  }
+  REQUIRE_MESSAGE(std::filesystem::exists(path), path.string() << " is missing: install Debian's assimp-testmodels");
   const deform::ImportedModel imported = deform::import_model(path.string());
   const std::vector<std::uint8_t> deforming = weights_study::painted_bones(imported.model);
   deform::HeatWeightsOptions heat_options;

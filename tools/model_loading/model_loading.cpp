@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <limits>
+#include <span>
 #include <utility>
 
 #include "deform/extras/builtin.hpp"
@@ -12,6 +14,7 @@
 #include "deform/io/sk.hpp"
 #include "deform/offline/heat_weights.hpp"
 #include "deform/runtime/error.hpp"
+#include "deform/runtime/skinning.hpp"
 #ifdef DEFORM_HAVE_IMPORT
 #include "deform/import/import.hpp"
 #endif
@@ -95,6 +98,42 @@ LoadedModel load_model(const ModelRequest& request) {
 
 deform::Rig starting_rig(const LoadedModel& loaded) {
   return loaded.builtin ? deform::builtin_rig(loaded.model) : deform::default_rig(loaded.model);
+}
+
+float lowest_height(const deform::Model& model, const deform::Animation& clip, glm::vec3 up, int samples) {
+  const std::size_t bones = model.skeleton.bone_count();
+  std::vector<glm::mat4> world(bones), palette(bones);
+  std::vector<glm::vec3> points(model.mesh.point_count());
+  float lowest = std::numeric_limits<float>::infinity();
+  samples = std::max(samples, 2);
+  for (int s = 0; s < samples; ++s) {
+    deform::Pose pose = model.skeleton.bind_pose();
+    deform::Animation once = clip;
+    once.loop = false;  // the last sample is the clip's end, not its start again
+    deform::SamplingJob sampling;
+    sampling.animation = &once;
+    sampling.time = clip.duration * static_cast<float>(s) / static_cast<float>(samples - 1);
+    sampling.rotations = pose.rotations;
+    sampling.translations = pose.translations;
+    deform::LocalToWorldJob fk;
+    fk.skeleton = &model.skeleton;
+    fk.rotations = pose.rotations;
+    fk.translations = pose.translations;
+    fk.world = world;
+    fk.palette = palette;
+    deform::SkinningJob skin;
+    skin.matrices = palette;
+    skin.bone_indices = model.weights.bones;
+    skin.bone_weights = model.weights.weights;
+    skin.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
+    skin.out_positions = deform::as_floats(std::span<glm::vec3>(points));
+    deform::Status status = sampling.run();
+    if (status) status = fk.run();
+    if (status) status = skin.run();
+    if (!status) throw deform::Error::in_file(model.name, "clip '" + clip.name + "'", status.reason());
+    for (const glm::vec3& p : points) lowest = std::min(lowest, glm::dot(p, up));
+  }
+  return lowest;
 }
 
 }  // namespace model_loading

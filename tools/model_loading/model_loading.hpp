@@ -53,4 +53,11 @@ LoadedModel load_model(const ModelRequest& request);
 // (the heuristic arm rig) for any other. Throws deform::Error as those do.
 deform::Rig starting_rig(const LoadedModel& loaded);
 
+// The lowest height along `up` (a unit vector) that the model's skinned points reach over `samples` (at least 2)
+// evenly spaced times of `clip`, both ends included: LBS of the mesh with the clip sampled over the bind pose. A floor
+// at that height carries the character through the whole clip without a foot sinking into it, where a floor under
+// the bind pose would not (a clip that crouches, or a file whose bind pose is not its animated stance). Allocates;
+// for load time. Throws what the jobs report for a clip that does not fit the model (validated clips always do).
+float lowest_height(const deform::Model& model, const deform::Animation& clip, glm::vec3 up, int samples = 48);
+
 }  // namespace model_loading

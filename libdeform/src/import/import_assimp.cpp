@@ -129,6 +129,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   const auto size = fs::file_size(path, error);
   if (error || size > max_file_bytes) throw Error::in_file(path, "", "cannot be read or larger than 1 GiB");
   if (is_gltf_path(path)) return import_gltf(path, options);
+  if (is_iqm_path(path)) return import_iqm(path, options);
 
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // no $AssimpFbx$ helper nodes
@@ -291,7 +292,53 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   if (shortened > 0)
     warnings.push_back(std::to_string(shortened) + " bone names longer than 79 bytes shortened to fit .sk");
 
-  // Bind world transforms: mesh-node · offset⁻¹ for bones with an offset (the pose the mesh was bound in).
+  // The frame each mesh instance's vertices are bound in. Assimp draws a skinned vertex at Σ w · G_bone · offset · v,
+  // whatever its mesh node holds; when every bone of a fully weighted mesh agrees on G_bone · offset at rest (the
+  // node tree at rest is the pose the mesh was bound in) that common matrix is where the file shows the mesh. It
+  // can differ from the mesh node's transform: DirectX .x files keep a frame transform on the mesh that D3DX skinning
+  // ignores (BCN_Epileptic.X has its torso, head and legs under three differently turned frames, which drawn with
+  // the frame transform fall apart). Otherwise (no consensus: the node tree is posed away from the bind, or some
+  // vertices are carried by the node itself) the mesh node's transform is the bind frame.
+  auto close = [](const glm::mat4& a, const glm::mat4& b) {
+    float difference = 0.0f;
+    for (int c = 0; c < 4; ++c) difference = std::max(difference, glm::length(a[c] - b[c]));
+    return difference <= 1e-4f * std::max(1.0f, std::max(glm::length(glm::vec3(a[3])), glm::length(glm::vec3(b[3]))));
+  };
+  std::vector<glm::mat4> mesh_frame(instances.size());
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    const aiMesh& source = *instances[i].mesh;
+    const glm::mat4& node_world = nodes[static_cast<std::size_t>(instances[i].node)].global;
+    mesh_frame[i] = node_world;
+    if (source.mNumBones == 0) continue;
+    std::vector<bool> weighted(source.mNumVertices, false);
+    bool consensus = true, first = true;
+    glm::mat4 common(1.0f);
+    for (unsigned b = 0; b < source.mNumBones && consensus; ++b) {
+      const aiBone* bone = source.mBones[b];
+      for (unsigned w = 0; w < bone->mNumWeights; ++w)
+        if (bone->mWeights[w].mVertexId < weighted.size() && bone->mWeights[w].mWeight > 0.0f)
+          weighted[bone->mWeights[w].mVertexId] = true;
+      const auto found = node_by_name.find(bone->mName.C_Str());
+      if (found == node_by_name.end()) {
+        consensus = false;  // an orphan bone has no node-tree transform to agree with
+        continue;
+      }
+      const glm::mat4 drawn = nodes[static_cast<std::size_t>(found->second)].global * to_glm(bone->mOffsetMatrix);
+      if (first) {
+        common = drawn;
+        first = false;
+      } else {
+        consensus = close(drawn, common);
+      }
+    }
+    consensus = consensus && !first && std::find(weighted.begin(), weighted.end(), false) == weighted.end();
+    if (consensus && finite(common) && std::fabs(glm::determinant(glm::mat3(common))) > 0.0f &&
+        !close(common, node_world)) {
+      mesh_frame[i] = common;
+    }
+  }
+
+  // Bind world transforms: mesh frame · offset⁻¹ for bones with an offset (the pose the mesh was bound in).
   std::size_t inconsistent_binds = 0;
   auto bone_id_of = [&](const aiBone* bone) {
     const auto found = node_by_name.find(bone->mName.C_Str());
@@ -299,12 +346,13 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
                                        : orphan_bone.at(bone->mName.C_Str());
   };
   if (rigged) {
-    for (const Instance& instance : instances)
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+      const Instance& instance = instances[i];
       for (unsigned b = 0; b < instance.mesh->mNumBones; ++b) {
         const aiBone* bone = instance.mesh->mBones[b];
         const auto id = static_cast<std::size_t>(bone_id_of(bone));
         const glm::mat4 offset = to_glm(bone->mOffsetMatrix);
-        const glm::mat4 world = nodes[static_cast<std::size_t>(instance.node)].global * glm::inverse(offset);
+        const glm::mat4 world = mesh_frame[i] * glm::inverse(offset);
         if (!finite(world))
           throw Error::in_file(path, "bone '" + std::string(bone->mName.C_Str()) + "'",
                                "offset matrix is singular or not finite");
@@ -318,6 +366,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
           if (difference > 1e-4f * std::max(1.0f, glm::length(glm::vec3(world[3])))) ++inconsistent_binds;
         }
       }
+    }
   }
   // A bone without an offset binds at its node-tree transform: that is where Assimp draws what hangs rigidly on it.
   for (std::size_t b = 0; b < bones.size(); ++b)
@@ -362,11 +411,13 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
     float weight;
   };
   std::vector<Weight> vertex_weights;
-  for (const Instance& instance : instances) {
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    const Instance& instance = instances[i];
     const aiMesh& source = *instance.mesh;
     const Node& node = nodes[static_cast<std::size_t>(instance.node)];
+    const glm::mat4& frame = mesh_frame[i];
     const std::string element = "mesh '" + std::string(source.mName.C_Str()) + "'";
-    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(node.global)));
+    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(frame)));
     const std::uint16_t rigid_bone =
         rigged ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(instance.node)] < 0
                                                 ? 0
@@ -412,7 +463,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
       } else {
         for (float& w : influences.weights) w /= total;
       }
-      const glm::vec3 position = glm::vec3(node.global * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
+      const glm::vec3 position = glm::vec3(frame * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
       if (!finite(position))
         throw Error::in_file(path, element + ": vertex " + std::to_string(v), "position is not finite");
       const auto [found, inserted] =

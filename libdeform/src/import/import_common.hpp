@@ -135,4 +135,10 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
 
 bool is_gltf_path(const std::string& path);
 
+// The ImportedModel of an Inter-Quake Model (.iqm, version 2), read by iqm_import.cpp: joints, skin and animations,
+// which Assimp 5.2's IQM importer drops. Same contract as import_model.
+ImportedModel import_iqm(const std::string& path, const ImportOptions& options);
+
+bool is_iqm_path(const std::string& path);
+
 }  // namespace deform::import_detail

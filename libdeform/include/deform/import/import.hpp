@@ -1,17 +1,20 @@
 #pragma once
 // Importer (optional component deform::import, link deform::import): rigged characters from glTF 2.0 (.gltf, .glb:
-// a reader of our own on tinygltf, skins bound by node index, samplers kept) and from any other format Assimp reads
-// (FBX, Collada, DirectX .x, IQM, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md explains every
-// conversion (glTF's differences in its own section); in short:
+// a reader of our own on tinygltf, skins bound by node index, samplers kept), from Inter-Quake Models (.iqm: a reader
+// of our own, as Assimp 5.2 drops their joints and clips) and from any other format Assimp reads (FBX, Collada,
+// DirectX .x, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md explains every conversion (glTF's
+// and IQM's differences in their own sections); in short:
 //  - all meshes merge into one Mesh in the scene's world space (node transforms applied), one submesh per mesh
 //    instance, with its materials; texture paths are resolved relative to the model's folder.
 //  - a *point* (Mesh::positions, .skw line, OBJ `v`) is a unique (exact bind position, skin influences) pair: Assimp
 //    vertices that differ only by normal or UV share one point; each Assimp vertex is one render vertex.
 //  - bones are the nodes skinning needs (those named by the meshes' bones, the nodes of meshes with unweighted
 //    vertices) and every node on the paths between them, rooted at their lowest common ancestor (raised to the
-//    topmost animated ancestor). A bone's bind world transform is mesh-node · offset⁻¹ (the file's inverse bind
-//    matrix), so the rest pose reproduces the file's mesh exactly; a node without an offset binds at its node-tree
-//    world transform. Clips hold every bone whose node-tree rest differs from its bind at the node-tree value.
+//    topmost animated ancestor). A bone's bind world transform is F · offset⁻¹ (the file's inverse bind matrix), F
+//    the frame the mesh is bound in: where its bones agree on G_bone · offset with the node tree at rest (where
+//    Assimp draws it), else the mesh node's world transform; the mesh is stored as F · v, so the rest pose
+//    reproduces the file's rest mesh exactly. A node without an offset binds at its node-tree world transform.
+//    Clips hold every bone whose node-tree rest differs from its bind at the node-tree value.
 //  - a Skeleton has no scale: uniform scale is folded into child translations (exact for skinning while the scale
 //    is not animated); non-uniform or animated scale is approximated and reported in `warnings`.
 //  - weights: the strongest 4 per vertex, renormalised; a vertex with no weight is bound rigidly to its mesh's node.
