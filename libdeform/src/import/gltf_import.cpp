@@ -949,7 +949,9 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       if (target == "weights") {
         // One float per target per key; a cubic spline has, per key, the in-tangents of every target, then the
         // values, then the out-tangents (glTF 2.0 appendix C).
-        const auto [first, n] = targets_of_node[static_cast<std::size_t>(channel.target_node)];
+        // (Plain variables, not a structured binding: Clang 14 cannot capture one in the lambda below.)
+        const std::size_t first = targets_of_node[static_cast<std::size_t>(channel.target_node)].first;
+        const std::size_t n = targets_of_node[static_cast<std::size_t>(channel.target_node)].second;
         if (n == 0) continue;  // the node has no morphed mesh in the scene
         const std::vector<double> values = reader.read(sampler.output, {1}, sampler_element + ".output");
         const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
