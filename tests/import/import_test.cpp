@@ -271,7 +271,7 @@ const Expected rigged_models[] = {
     {"X/BCN_Epileptic.X", 54, 1},
     {"X/Testwuson.X", 37, 3},
     {"X/anim_test.x", 4, 1},
-    {"FBX/animation_with_skeleton.fbx", 13, 1},
+    {"FBX/animation_with_skeleton.fbx", 14, 1},  // one bone weighs only as a fifth or later influence
     {"FBX/huesitos.fbx", 8, 1},  // 9 skin bones, one of them without any weight
     {"glTF2/simple_skin/simple_skin.gltf", 2, 1},
     {"Collada/box_nested_animation.dae", 1, 1},
@@ -318,10 +318,23 @@ TEST_CASE("rigged models import: bone and weight counts, normalised weights, bin
     REQUIRE(imported.file_bind_world.size() == model.skeleton.bone_count());
 
     std::vector<bool> weighted(model.skeleton.bone_count(), false);
+    // Every influence is kept: the four slots, strongest first, and past them the extras, which with the slots sum
+    // to 1 and are no stronger than the fourth.
+    const deform::SkinWeights& sw = model.weights;
+    std::vector<float> extra_sum(sw.size(), 0.0f), extra_max(sw.size(), 0.0f);
+    for (std::size_t j = 0; j < sw.extra_points.size(); ++j) {
+      REQUIRE(sw.extra_points[j] < sw.size());
+      for (std::uint32_t e = sw.extra_offsets[j]; e < sw.extra_offsets[j + 1]; ++e) {
+        REQUIRE(sw.extra_bones[e] < model.skeleton.bone_count());
+        extra_sum[sw.extra_points[j]] += sw.extra_weights[e];
+        extra_max[sw.extra_points[j]] = std::max(extra_max[sw.extra_points[j]], sw.extra_weights[e]);
+        weighted[sw.extra_bones[e]] = true;
+      }
+    }
     for (std::size_t p = 0; p < model.weights.size(); ++p) {
       const glm::vec4 w = model.weights.weights[p];
-      CHECK(std::fabs(w.x + w.y + w.z + w.w - 1.0f) < 1e-5f);
-      CHECK((w.x >= w.y && w.y >= w.z && w.z >= w.w && w.w >= 0.0f));
+      CHECK(std::fabs(w.x + w.y + w.z + w.w + extra_sum[p] - 1.0f) < 1e-5f);
+      CHECK((w.x >= w.y && w.y >= w.z && w.z >= w.w && w.w >= extra_max[p] && extra_max[p] >= 0.0f));
       for (int i = 0; i < 4; ++i) {
         REQUIRE(model.weights.bones[p][i] < model.skeleton.bone_count());
         if (w[i] > 0.0f) weighted[model.weights.bones[p][i]] = true;

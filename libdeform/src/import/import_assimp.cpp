@@ -404,7 +404,8 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   const bool any_uvs =
       std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.mesh->HasTextureCoords(0); });
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
-  std::size_t unweighted = 0, over_four = 0, skipped_faces = 0;
+  std::size_t unweighted = 0, skipped_faces = 0;
+  std::uint32_t apart_serial = 0;  // keys of vertices kept apart from the merge
   struct Weight {
     std::uint32_t vertex;
     std::uint16_t bone;
@@ -446,34 +447,43 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
     for (unsigned v = 0; v < source.mNumVertices; ++v) {
       Influences influences;
       float total = 0.0f;
-      int count = 0;
-      for (; cursor < vertex_weights.size() && vertex_weights[cursor].vertex == v; ++cursor) {
-        if (count < 4) {
-          influences.bones[static_cast<std::size_t>(count)] = vertex_weights[cursor].bone;
-          influences.weights[static_cast<std::size_t>(count)] = vertex_weights[cursor].weight;
-          total += vertex_weights[cursor].weight;
-        }
-        ++count;
-      }
-      if (count > 4) ++over_four;
+      const std::size_t begin = cursor;
+      for (; cursor < vertex_weights.size() && vertex_weights[cursor].vertex == v; ++cursor)
+        total += vertex_weights[cursor].weight;
+      const std::size_t count = cursor - begin;  // strongest first (sorted above)
       if (count == 0) {
         if (rigged) ++unweighted;
         influences.bones[0] = rigid_bone;
         influences.weights[0] = 1.0f;
       } else {
-        for (float& w : influences.weights) w /= total;
+        // Every influence is kept: the four strongest in the slots, the rest as extras (SkinWeights).
+        for (std::size_t k = 0; k < count && k < 4; ++k) {
+          influences.bones[k] = vertex_weights[begin + k].bone;
+          influences.weights[k] = vertex_weights[begin + k].weight / total;
+        }
       }
       const glm::vec3 position = glm::vec3(frame * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
       if (!finite(position))
         throw Error::in_file(path, element + ": vertex " + std::to_string(v), "position is not finite");
-      const auto [found, inserted] =
-          point_of_key.emplace(point_key(position, influences), static_cast<std::uint32_t>(mesh.positions.size()));
+      // A vertex with extras keeps a point of its own (its key would need every influence).
+      const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, count > 4 ? ++apart_serial : 0),
+                                                          static_cast<std::uint32_t>(mesh.positions.size()));
       if (inserted) {
+        const auto point = static_cast<std::uint32_t>(mesh.positions.size());
         mesh.positions.push_back(position);
-        result.model.weights.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2],
-                                                influences.bones[3]);
-        result.model.weights.weights.emplace_back(influences.weights[0], influences.weights[1], influences.weights[2],
-                                                  influences.weights[3]);
+        SkinWeights& sw = result.model.weights;
+        sw.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2], influences.bones[3]);
+        sw.weights.emplace_back(influences.weights[0], influences.weights[1], influences.weights[2],
+                                influences.weights[3]);
+        if (count > 4) {
+          if (sw.extra_offsets.empty()) sw.extra_offsets.push_back(0);
+          sw.extra_points.push_back(point);
+          for (std::size_t k = 4; k < count; ++k) {
+            sw.extra_bones.push_back(vertex_weights[begin + k].bone);
+            sw.extra_weights.push_back(vertex_weights[begin + k].weight / total);
+          }
+          sw.extra_offsets.push_back(static_cast<std::uint32_t>(sw.extra_bones.size()));
+        }
       }
       mesh.vertex_point.push_back(found->second);
       glm::vec3 normal = source.HasNormals() ? normal_matrix * to_glm(source.mNormals[v]) : glm::vec3(0.0f);
@@ -513,9 +523,6 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   if (unweighted > 0)
     warnings.push_back(std::to_string(unweighted) +
                        " vertices have no bone weight: bound rigidly to their mesh's node");
-  if (over_four > 0)
-    warnings.push_back(std::to_string(over_four) +
-                       " vertices have more than 4 influences: the strongest 4 kept, renormalised");
   if (skipped_faces > 0) warnings.push_back(std::to_string(skipped_faces) + " faces that are not triangles skipped");
   if (!orphans.empty())
     warnings.push_back(std::to_string(orphans.size()) + " bones have no node in the hierarchy (first: '" + orphans[0] +
