@@ -53,6 +53,24 @@ inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)
   return true;
 }
 
+// directions_within for directions of known lengths, `dir` times `flip` per axis as the triples take them (the
+// second triple, flip −1, negates the x and z directions and the cosine of y): the sines' signs do not depend on the
+// length and the cosine bound scales with it, so the test needs no division.
+inline bool raw_directions_within(const EulerLimits& limits, const glm::dvec2 (&raw)[3], glm::dvec3 length,
+                                  double flip) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const glm::dvec2 d = axis == 1 ? glm::dvec2(flip * raw[1].x, raw[1].y) : flip * raw[axis];
+    const glm::dvec2 lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double c = limits.cos_width[axis] * length[axis];
+    if (!limits.wide[axis]) {
+      if (!(lo.x * d.y - lo.y * d.x >= 0.0 && glm::dot(lo, d) >= c)) return false;
+    } else if (hi.x * d.y - hi.y * d.x > 0.0 && glm::dot(hi, d) > c) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // How far an angle in (-π, π] lies outside [min, max] (within [-π, π]) around the circle: 0 within, else the
 // distance to the nearer limit, one of them possibly across ±π.
 inline double outside(double angle, double min, double max) {
@@ -113,6 +131,95 @@ inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
   return glm::quat(q * inverse_norm);
 }
 
+// detail::limit_euler, inlined into the clamps below (its result then stays in registers instead of going through
+// memory to quaternion_of; the options are constants there).
+template <bool angles_needed, bool raw_directions>
+[[gnu::always_inline]] inline bool limit_euler_inline(const EulerLimits& limits, glm::quat rotation,
+                                                      detail::EulerAngles& euler) noexcept {
+  using detail::EulerAngles;
+  // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
+  // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
+  // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
+  // the small ones keep their precision.
+  glm::dquat q(rotation);
+  double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
+  if (!(norm2 > 1e-24) || !std::isfinite(norm2)) {  // read as the identity
+    q = glm::dquat(1.0, 0.0, 0.0, 0.0);
+    ww = 1.0, xx = yy = zz = 0.0, norm2 = 1.0;
+  }
+  const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
+  const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
+  const double r22 = ww - xx - yy + zz;
+  const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
+  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
+  // for the square root and division.
+  const bool regular = cos_b > 1e-9 * norm2;
+  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
+                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
+  EulerAngles first, second;
+  if constexpr (!angles_needed && raw_directions) {
+    // Only the raw directions are returned (below): no unit ones, no division (|raw[1]| = norm2, R's first row being
+    // unit; |raw[0]| = |raw[2]| = cos_b, or at gimbal lock norm2 and 1).
+    const glm::dvec3 raw_length(regular ? cos_b : norm2, norm2, regular ? cos_b : 1.0);
+    if (raw_directions_within(limits, raw, raw_length, 1.0) || raw_directions_within(limits, raw, raw_length, -1.0))
+      return false;
+  } else {
+    const double inverse_norm2 = 1.0 / norm2;
+    first.dir[1] = raw[1] * inverse_norm2;
+    if (regular) {
+      const double scale = 1.0 / cos_b;
+      first.dir[0] = raw[0] * scale;
+      first.dir[2] = raw[2] * scale;
+    } else {
+      first.dir[0] = raw[0] * inverse_norm2;
+      first.dir[2] = raw[2];
+    }
+    second.dir[0] = -first.dir[0];
+    second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
+    second.dir[2] = -first.dir[2];
+    if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir)))
+      return false;
+  }
+  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
+  const double first_outside = outside(limits, first.angle);
+  if (first_outside == 0.0) {
+    euler = first;
+    return false;
+  }
+  // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
+  second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
+  const double second_outside = outside(limits, second.angle);
+  const bool take_second = second_outside < first_outside;
+  euler = take_second ? second : first;
+  if (second_outside == 0.0) return false;
+  if constexpr (!angles_needed && raw_directions) {
+    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
+    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
+    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
+    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
+    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
+    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
+    const double flip = take_second ? -1.0 : 1.0;
+    euler.dir[0] = raw[0] * flip;
+    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
+    euler.dir[2] = raw[2] * flip;
+  }
+  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
+  for (int axis = 0; axis < 3; ++axis) {
+    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
+    if (angle >= min && angle <= max) continue;
+    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
+    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
+    if (to_min <= to_max) {
+      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    } else {
+      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+    }
+    euler.length[axis] = 1.0;
+  }
+  return true;
+}
+
 }  // namespace
 
 EulerLimits prepare_limits(const DofLimits& limits) noexcept {
@@ -142,7 +249,7 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
   // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
   // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false, true)) {
+  if (limits.free || !limit_euler_inline<false, true>(limits, rotation, euler)) {
     rotation = glm::normalize(rotation);
     return false;
   }
@@ -154,77 +261,9 @@ namespace detail {
 
 bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed,
                  bool raw_directions) noexcept {
-  // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
-  // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
-  // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
-  // the small ones keep their precision.
-  const glm::dquat q(rotation);
-  const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
-  if (!(norm2 > 1e-24) || !std::isfinite(norm2))
-    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed, raw_directions);
-  const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
-  const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
-  const double r22 = ww - xx - yy + zz;
-  const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
-  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
-  // for the square root and division.
-  const bool regular = cos_b > 1e-9 * norm2;
-  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
-                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
-  EulerAngles first;
-  const double inverse_norm2 = 1.0 / norm2;
-  first.dir[1] = raw[1] * inverse_norm2;
-  if (regular) {
-    const double scale = 1.0 / cos_b;
-    first.dir[0] = raw[0] * scale;
-    first.dir[2] = raw[2] * scale;
-  } else {
-    first.dir[0] = raw[0] * inverse_norm2;
-    first.dir[2] = raw[2];
-  }
-  EulerAngles second;
-  second.dir[0] = -first.dir[0];
-  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
-  second.dir[2] = -first.dir[2];
-  if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
-  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
-  const double first_outside = outside(limits, first.angle);
-  if (first_outside == 0.0) {
-    euler = first;
-    return false;
-  }
-  // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
-  second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
-  const double second_outside = outside(limits, second.angle);
-  const bool take_second = second_outside < first_outside;
-  euler = take_second ? second : first;
-  if (second_outside == 0.0) return false;
-  if (!angles_needed && raw_directions) {
-    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
-    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
-    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
-    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
-    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
-    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
-    const double flip = take_second ? -1.0 : 1.0;
-    euler.dir[0] = raw[0] * flip;
-    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
-    euler.dir[2] = raw[2] * flip;
-  }
-  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
-  for (int axis = 0; axis < 3; ++axis) {
-    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
-    if (angle >= min && angle <= max) continue;
-    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
-    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
-    if (to_min <= to_max) {
-      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
-    } else {
-      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
-    }
-    euler.length[axis] = 1.0;
-  }
-  return true;
+  if (angles_needed) return limit_euler_inline<true, false>(limits, rotation, euler);
+  return raw_directions ? limit_euler_inline<false, true>(limits, rotation, euler)
+                        : limit_euler_inline<false, false>(limits, rotation, euler);
 }
 
 EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
@@ -269,7 +308,9 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false, !reaim)) {  // (reads `local` up to scale)
+  const bool within = limits.free || (reaim ? !limit_euler_inline<false, false>(limits, local, euler)
+                                            : !limit_euler_inline<false, true>(limits, local, euler));
+  if (within) {  // (limit_euler reads `local` up to scale)
     local = glm::normalize(local);
     return false;
   }
