@@ -27,6 +27,7 @@ struct Scratch {
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
   std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
   std::span<glm::quat> first;     // the first solve's joint rotations, while a pole seeds a second
+  std::span<glm::vec4> axis_dirs;  // per joint, the X and Y Euler directions a least-squares step left (the next's)
 };
 
 // The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
@@ -156,13 +157,14 @@ void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
 // pseudoinverse and damped least squares methods") on the joints' Euler angles: Δθ = Jᵀ (J Jᵀ + λ² I)⁻¹ (target −
 // effector), a 3×3 solve, then each joint is clamped into its limits. `heads` and `frames` hold the chain's FK for
-// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles; with
-// `angles_current` it holds their current ones on entry (the previous step was this one), which saves reading them
-// from the pose. `columns` (3 × joint_count()) is scratch.
+// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles and
+// `axis_dirs` (joint_count()) the (cos, sin) of their X and Y angles, as floats (x.x, x.y, y.x, y.y); with
+// `angles_current` both hold the current ones on entry (the previous step was this one), which saves reading the
+// angles from the pose and evaluating their directions again. `columns` (3 × joint_count()) is scratch.
 void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
                                float lambda, bool angles_current, std::span<glm::dvec3> angles,
-                               std::span<glm::vec3> columns) noexcept;
+                               std::span<glm::vec4> axis_dirs, std::span<glm::vec3> columns) noexcept;
 
 // Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
 void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved) noexcept;
