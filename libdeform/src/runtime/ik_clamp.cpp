@@ -36,26 +36,13 @@ inline double polynomial_atan2(double y, double x) {
 
 inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
 
-// Whether the unit direction (cos a, sin a) of each axis lies within its limits, from dot and cross products with
-// the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at most the width;
-// for a wider one, the angle is outside when strictly within the complementary range from max to min (never for a
-// full circle, whose cos_width is 2). Agrees with comparing the angles except within rounding (1e-7 rad) of a limit.
-inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)[3]) {
-  for (int axis = 0; axis < 3; ++axis) {
-    const glm::dvec2 d = dir[axis], lo = limits.min_dir[axis], hi = limits.max_dir[axis];
-    const double c = limits.cos_width[axis];
-    if (!limits.wide[axis]) {
-      if (!(lo.x * d.y - lo.y * d.x >= 0.0 && glm::dot(lo, d) >= c)) return false;
-    } else if (hi.x * d.y - hi.y * d.x > 0.0 && glm::dot(hi, d) > c) {
-      return false;
-    }
-  }
-  return true;
-}
-
-// directions_within for directions of known lengths, `dir` times `flip` per axis as the triples take them (the
-// second triple, flip −1, negates the x and z directions and the cosine of y): the sines' signs do not depend on the
-// length and the cosine bound scales with it, so the test needs no division.
+// Whether the direction (cos a, sin a) · length of each axis, times `flip` as the triples take them (the second
+// triple, flip −1, negates the x and z directions and the cosine of y), lies within its limits, from dot and cross
+// products with the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at
+// most the width; for a wider one, the angle is outside when strictly within the complementary range from max to
+// min (never for a full circle, whose cos_width is 2). The sines' signs do not depend on the length and the cosine
+// bound scales with it, so no direction needs dividing by its length. Agrees with comparing the angles except within
+// rounding (1e-7 rad) of a limit.
 inline bool raw_directions_within(const EulerLimits& limits, const glm::dvec2 (&raw)[3], glm::dvec3 length,
                                   double flip) {
   for (int axis = 0; axis < 3; ++axis) {
@@ -157,13 +144,15 @@ template <bool angles_needed, bool raw_directions>
   const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
                              regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
   EulerAngles first, second;
-  if constexpr (!angles_needed && raw_directions) {
-    // Only the raw directions are returned (below): no unit ones, no division (|raw[1]| = norm2, R's first row being
-    // unit; |raw[0]| = |raw[2]| = cos_b, or at gimbal lock norm2 and 1).
+  if constexpr (!angles_needed) {
+    // A rotation within the limits returns here, before any division: the test takes the raw directions with their
+    // lengths (|raw[1]| = norm2, R's first row being unit; |raw[0]| = |raw[2]| = cos_b, or at gimbal lock norm2
+    // and 1).
     const glm::dvec3 raw_length(regular ? cos_b : norm2, norm2, regular ? cos_b : 1.0);
     if (raw_directions_within(limits, raw, raw_length, 1.0) || raw_directions_within(limits, raw, raw_length, -1.0))
       return false;
-  } else {
+  }
+  if constexpr (angles_needed || !raw_directions) {  // (raw directions are returned without the unit ones)
     const double inverse_norm2 = 1.0 / norm2;
     first.dir[1] = raw[1] * inverse_norm2;
     if (regular) {
@@ -177,8 +166,6 @@ template <bool angles_needed, bool raw_directions>
     second.dir[0] = -first.dir[0];
     second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
     second.dir[2] = -first.dir[2];
-    if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir)))
-      return false;
   }
   for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
   const double first_outside = outside(limits, first.angle);
