@@ -387,7 +387,7 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
   const glm::vec3 effector = heads[joints];
   glm::dmat3 jjt(lambda * lambda);
   for (std::size_t k = 0; k < joints; ++k) {
-    // (The previous step left the angles and their directions: euler_at of the same angles, kept.)
+    // (The previous step left the angles and their directions, which quat_at evaluated for them.)
     if (!angles_current) {
       EulerAngles euler;
       limit_euler(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])], euler);
@@ -424,16 +424,14 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
                                                   : std::clamp(angle, min, max);
     }
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
-    EulerAngles next = euler_at(limit, angles[k]);
-    rotation = to_quat(next);
+    rotation = quat_at(angles[k], axis_dirs[k]);
     // A swing-twist joint (free Euler entry) is projected; its angles follow the projected rotation.
     if (const SwingTwistLimits* cone = swing_twist_of(chain, k); cone != nullptr && clamp_swing_twist(*cone, rotation)) {
       EulerAngles euler;
       limit_euler(limit, rotation, euler);
       angles[k] = euler.angle;
-      next = euler_at(limit, angles[k]);
+      static_cast<void>(quat_at(angles[k], axis_dirs[k]));  // (the directions)
     }
-    axis_dirs[k] = glm::vec4(glm::vec2(next.dir[0]), glm::vec2(next.dir[1]));
   }
 }
 

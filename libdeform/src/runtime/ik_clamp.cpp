@@ -101,8 +101,9 @@ glm::dvec2 direction(double angle) {
   }
 }
 
-// detail::to_quat, defined here so that it inlines into the clamps below: their Euler angles then stay in registers
-// instead of going through memory between two calls (~3 ns per clamp on the critical path of a two-bone solve).
+// The unit quaternion qx · qy · qz of the directions of `euler`, of any lengths (its angles are not read), inlined
+// into the clamps below: their Euler angles then stay in registers instead of going through memory between two calls
+// (~3 ns per clamp on the critical path of a two-bone solve).
 inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
   const glm::dvec3 r = euler.length;
   const glm::dvec2 x = detail::scaled_half_angle(euler.dir[0], r.x), y = detail::scaled_half_angle(euler.dir[1], r.y);
@@ -183,7 +184,8 @@ template <bool angles_needed, bool raw_directions>
     // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
     // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
     // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
-    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
+    // quaternion_of's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured
+    // instead.
     const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
     euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
     const double flip = take_second ? -1.0 : 1.0;
@@ -233,7 +235,7 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
     clamp_rotation(limits, rotation);
     return true;
   }
-  // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
+  // limit_euler reads the rotation up to scale and quaternion_of returns a unit quaternion, so the normalisation is
   // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
   if (limits.free || !limit_euler_inline<false, true>(limits, rotation, euler)) {
@@ -253,17 +255,14 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
                         : limit_euler_inline<false, false>(limits, rotation, euler);
 }
 
-EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
-  EulerAngles euler;
-  euler.angle = angle;
-  for (int axis = 0; axis < 3; ++axis)
-    euler.dir[axis] = angle[axis] <= limits.min[axis]   ? limits.min_dir[axis]
-                      : angle[axis] >= limits.max[axis] ? limits.max_dir[axis]
-                                                        : direction(angle[axis]);
-  return euler;
+glm::quat quat_at(glm::dvec3 angle, glm::vec4& xy_dirs) noexcept {
+  // The factors' half-angle directions directly (unit: no normalisation after the product), and the X and Y
+  // directions from them by the double-angle formulas.
+  const glm::dvec2 x = direction(0.5 * angle.x), y = direction(0.5 * angle.y), z = direction(0.5 * angle.z);
+  xy_dirs = glm::vec4(glm::dvec4(x.x * x.x - x.y * x.y, 2.0 * x.x * x.y, y.x * y.x - y.y * y.y, 2.0 * y.x * y.y));
+  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
+  return glm::quat(glm::dquat(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x));
 }
-
-glm::quat to_quat(const EulerAngles& euler) noexcept { return quaternion_of(euler); }
 
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
   for (int axis = 0; axis < 3; ++axis) {
