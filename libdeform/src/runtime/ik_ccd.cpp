@@ -21,7 +21,7 @@ void sweep(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec
     const glm::vec3 reach = glm::conjugate(parent) * (effector - head);
     const glm::vec3 wanted = glm::conjugate(parent) * (target - head);
     const glm::vec3 carried = glm::conjugate(local) * reach;
-    local = rotation_between(reach, wanted, cap, false) * local;  // (not unit: the clamp normalises it)
+    local = rotation_between(reach, wanted, cap) * local;
     clamp_chain_joint(chain, k, local, reaim, carried, wanted);
     scratch.frames[k] = parent * local;
     effector = head + scratch.frames[k] * carried;

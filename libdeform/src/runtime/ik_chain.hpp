@@ -70,11 +70,7 @@ StepCap cap_for(float max_radians) noexcept;  // max_radians <= 0 or >= π: no c
 // The shortest-arc unit rotation turning direction `from` onto direction `to` (angle from the dot product, axis from
 // the cross product), its angle capped by `cap`; identity when either is (nearly) zero; a half turn (or the cap)
 // about a perpendicular axis when opposite.
-//
-// With `unit` false the rotation is returned up to a positive factor within (0, 2] (the quaternion divided by
-// |from| |to| instead of by its own norm: a division instead of a square root and a division), for a caller that
-// normalises after it anyway (CCD's clamp reads its rotation up to scale).
-inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}, bool unit = true) noexcept {
+inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& cap = {}) noexcept {
   // With |from| |to| = r: (r + from · to, from × to) normalised is the rotation by the angle between them about
   // their normal: two square roots, no trigonometry. In double so that r² neither underflows nor overflows.
   const glm::dvec3 a(from), b(to);
@@ -94,8 +90,8 @@ inline glm::quat rotation_between(glm::vec3 from, glm::vec3 to, const StepCap& c
     const glm::vec3 normal(axis * (static_cast<double>(cap.half.y) / std::sqrt(sine2)));
     return glm::quat(cap.half.x, normal.x, normal.y, normal.z);
   }
-  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);  // |q|² = 2r (r + cosine), up to 4r²
-  return glm::quat(q * (1.0 / (unit ? std::sqrt(glm::dot(q, q)) : r)));
+  const glm::dquat q(r + cosine, axis.x, axis.y, axis.z);
+  return glm::quat(q * (1.0 / std::sqrt(glm::dot(q, q))));
 }
 
 // A joint rotation as Euler angles X·Y·Z: per axis the angle (radians) and its direction (cos, sin) times length[axis]
