@@ -112,7 +112,7 @@ bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& eul
                  bool raw_directions = false) noexcept;
 
 // The unit quaternion qx · qy · qz of Euler angles (radians, each within [-π, π]), from polynomial (cos, sin) of
-// the half angles (within 1e-12, no trigonometric call, no normalisation), and in `xy_dirs` the (cos, sin) of the X
+// the half angles (within 2e-12, no trigonometric call, no normalisation), and in `xy_dirs` the (cos, sin) of the X
 // and Y angles as floats (x.x, x.y, y.x, y.y). An angle at a limit gives the limit's rotation to that precision,
 // far below the float rotation's rounding.
 glm::quat quat_at(glm::dvec3 angle, glm::vec4& xy_dirs) noexcept;
