@@ -60,7 +60,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
       point_segments_at(chain, pose, base.rotation, frames, heads, target);
     } else if (stage == 2) {
       damped_least_squares_step(chain, limits, pose, base.rotation, frames, heads, target, damping_fraction * length,
-                                angles_current, scratch.angles, scratch.columns);
+                                angles_current, scratch.angles, scratch.axis_dirs, scratch.columns);
     } else {
       sweep(chain, pose, scratch, target, base.rotation, max_step, settings.escape_stalls);
     }

@@ -202,6 +202,7 @@ Status IkJob::run() const noexcept {
   parts.lengths = carve<float>(bytes, joints);
   parts.input = carve<glm::quat>(bytes, joints);
   parts.first = carve<glm::quat>(bytes, joints);
+  parts.axis_dirs = carve<glm::vec4>(bytes, joints);
   const detail::PoseView pose{rotations, translations};
   if (weight == 0.0f) {  // nothing to apply: the input pose as it is, measured
     detail::chain_fk(*chain, pose, base, parts.frames, parts.heads);
@@ -381,21 +382,21 @@ constexpr double at_limit = 1e-6;  // radians
 void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
                                float lambda, bool angles_current, std::span<glm::dvec3> angles,
-                               std::span<glm::vec3> columns) noexcept {
+                               std::span<glm::vec4> axis_dirs, std::span<glm::vec3> columns) noexcept {
   const std::size_t joints = chain.joint_count();
   const glm::vec3 effector = heads[joints];
   glm::dmat3 jjt(lambda * lambda);
   for (std::size_t k = 0; k < joints; ++k) {
-    EulerAngles euler;
-    if (angles_current) {
-      euler = euler_at(limits[k], angles[k]);
-    } else {
+    // (The previous step left the angles and their directions, which quat_at evaluated for them.)
+    if (!angles_current) {
+      EulerAngles euler;
       limit_euler(limits[k], pose.rotations[static_cast<std::size_t>(chain.bones[k])], euler);
       angles[k] = euler.angle;
+      axis_dirs[k] = glm::vec4(glm::vec2(euler.dir[0]), glm::vec2(euler.dir[1]));
     }
     // Euler axis k turns about its world direction: the parent's frame times the rotations of the axes before it.
     const glm::mat3 parent = glm::mat3_cast(k == 0 ? base : frames[k - 1]);
-    const glm::vec2 x(euler.dir[0]), y(euler.dir[1]);
+    const glm::vec2 x(axis_dirs[k].x, axis_dirs[k].y), y(axis_dirs[k].z, axis_dirs[k].w);
     const glm::vec3 axes[3] = {parent[0], x.x * parent[1] + x.y * parent[2],
                                y.y * parent[0] + y.x * (x.x * parent[2] - x.y * parent[1])};
     for (int axis = 0; axis < 3; ++axis) {
@@ -403,7 +404,7 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
       // float rounding of a clamped rotation, 1e-6 rad) with the error pulling outward, take no part (an active set).
       glm::vec3 column = glm::cross(axes[axis], effector - heads[k]);
       const float pull = glm::dot(column, target - effector);
-      const double min = limits[k].min[axis], max = limits[k].max[axis], angle = euler.angle[axis];
+      const double min = limits[k].min[axis], max = limits[k].max[axis], angle = angles[k][axis];
       const bool bounded = max - min < 2.0 * std::numbers::pi;
       if (min == max ||
           (bounded && ((angle >= max - at_limit && pull > 0.0f) || (angle <= min + at_limit && pull < 0.0f))))
@@ -423,12 +424,13 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
                                                   : std::clamp(angle, min, max);
     }
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
-    rotation = to_quat(euler_at(limit, angles[k]));
+    rotation = quat_at(angles[k], axis_dirs[k]);
     // A swing-twist joint (free Euler entry) is projected; its angles follow the projected rotation.
     if (const SwingTwistLimits* cone = swing_twist_of(chain, k); cone != nullptr && clamp_swing_twist(*cone, rotation)) {
       EulerAngles euler;
       limit_euler(limit, rotation, euler);
       angles[k] = euler.angle;
+      static_cast<void>(quat_at(angles[k], axis_dirs[k]));  // (the directions)
     }
   }
 }

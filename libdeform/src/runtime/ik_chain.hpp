@@ -27,6 +27,7 @@ struct Scratch {
   std::span<float> lengths;       // FABRIK's segment lengths, per joint
   std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
   std::span<glm::quat> first;     // the first solve's joint rotations, while a pole seeds a second
+  std::span<glm::vec4> axis_dirs;  // per joint, the X and Y Euler directions a least-squares step left (the next's)
 };
 
 // The pole swivel (IkJob::pole): turns the root joint about the line root head → effector so that the chain's
@@ -105,14 +106,16 @@ struct EulerAngles {
 // limits (as Skeleton::clamp_to_limits) — clamped into them. Returns true when clamping changed it. Without
 // `angles_needed`, a rotation within the limits returns false at once, leaving `euler` unset (no arctangent). With
 // `raw_directions` as well, a clamped one's unclamped axes keep the rotation matrix's unnormalised directions, with
-// their lengths: for to_quat alone, which then no longer waits for their square root and division (the clamp's
-// critical path is a chain of them). Otherwise every direction is unit.
+// their lengths: for the clamp's quaternion alone, which then no longer waits for their square root and division
+// (the clamp's critical path is a chain of them). Otherwise every direction is unit.
 bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed = true,
                  bool raw_directions = false) noexcept;
 
-// Euler angles (radians, within `limits`) with their directions: an axis at a limit takes the limit's exact
-// direction, the others a polynomial (cos, sin) within 1e-12.
-EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept;
+// The unit quaternion qx · qy · qz of Euler angles (radians, each within [-π, π]), from polynomial (cos, sin) of
+// the half angles (within 2e-12, no trigonometric call, no normalisation), and in `xy_dirs` the (cos, sin) of the X
+// and Y angles as floats (x.x, x.y, y.x, y.y). An angle at a limit gives the limit's rotation to that precision,
+// far below the float rotation's rounding.
+glm::quat quat_at(glm::dvec3 angle, glm::vec4& xy_dirs) noexcept;
 
 // (cos, sin) of half the angle of the non-zero direction `d` of the given length, times a positive factor, the
 // half angle in (-90°, 90°]: the quaternion (h.x, h.y · axis) of a turn whose cosine and sine are known, without
@@ -122,14 +125,12 @@ inline glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
   return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
 }
 
-// The unit quaternion qx · qy · qz of the directions of `euler`, of any lengths (its angles are not read).
-glm::quat to_quat(const EulerAngles& euler) noexcept;
 
 // Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
 // limits, a 1-D problem with a closed form) so that `carried` — a point in the joint's own frame relative to its
 // head, such as the effector — comes as close to `wanted` — in the parent's frame, relative to the head — as the
 // limits allow. `euler` must be within the limits and its directions stay so; only the directions are updated (its
-// angles go stale: to_quat reads the directions alone), with no arctangent.
+// angles go stale: the clamp's quaternion reads the directions alone), with no arctangent.
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept;
 
 // Joint k's swing-twist limits when it has active ones, else null (its Euler entry applies).
@@ -156,13 +157,14 @@ void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
 // pseudoinverse and damped least squares methods") on the joints' Euler angles: Δθ = Jᵀ (J Jᵀ + λ² I)⁻¹ (target −
 // effector), a 3×3 solve, then each joint is clamped into its limits. `heads` and `frames` hold the chain's FK for
-// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles; with
-// `angles_current` it holds their current ones on entry (the previous step was this one), which saves reading them
-// from the pose. `columns` (3 × joint_count()) is scratch.
+// `pose` on entry (they are not updated). `angles` (joint_count()) receives the joints' new Euler angles and
+// `axis_dirs` (joint_count()) the (cos, sin) of their X and Y angles, as floats (x.x, x.y, y.x, y.y); with
+// `angles_current` both hold the current ones on entry (the previous step was this one), which saves reading the
+// angles from the pose and evaluating their directions again. `columns` (3 × joint_count()) is scratch.
 void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits> limits, PoseView pose, glm::quat base,
                                std::span<const glm::quat> frames, std::span<const glm::vec3> heads, glm::vec3 target,
                                float lambda, bool angles_current, std::span<glm::dvec3> angles,
-                               std::span<glm::vec3> columns) noexcept;
+                               std::span<glm::vec4> axis_dirs, std::span<glm::vec3> columns) noexcept;
 
 // Copies the chain joints' local rotations from `pose` to `saved` (joint_count() entries) or back.
 void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved) noexcept;

@@ -36,14 +36,19 @@ inline double polynomial_atan2(double y, double x) {
 
 inline double wrap(double a) { return a > pi ? a - 2.0 * pi : (a <= -pi ? a + 2.0 * pi : a); }
 
-// Whether the unit direction (cos a, sin a) of each axis lies within its limits, from dot and cross products with
-// the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at most the width;
-// for a wider one, the angle is outside when strictly within the complementary range from max to min (never for a
-// full circle, whose cos_width is 2). Agrees with comparing the angles except within rounding (1e-7 rad) of a limit.
-inline bool directions_within(const EulerLimits& limits, const glm::dvec2 (&dir)[3]) {
+// Whether the direction (cos a, sin a) · length of each axis, times `flip` as the triples take them (the second
+// triple, flip −1, negates the x and z directions and the cosine of y), lies within its limits, from dot and cross
+// products with the limits' directions: for a range of at most 180° the angle from min (its sine >= 0) may be at
+// most the width; for a wider one, the angle is outside when strictly within the complementary range from max to
+// min (never for a full circle, whose cos_width is 2). The sines' signs do not depend on the length and the cosine
+// bound scales with it, so no direction needs dividing by its length. Agrees with comparing the angles except within
+// rounding (1e-7 rad) of a limit.
+inline bool raw_directions_within(const EulerLimits& limits, const glm::dvec2 (&raw)[3], glm::dvec3 length,
+                                  double flip) {
   for (int axis = 0; axis < 3; ++axis) {
-    const glm::dvec2 d = dir[axis], lo = limits.min_dir[axis], hi = limits.max_dir[axis];
-    const double c = limits.cos_width[axis];
+    const glm::dvec2 d = axis == 1 ? glm::dvec2(flip * raw[1].x, raw[1].y) : flip * raw[axis];
+    const glm::dvec2 lo = limits.min_dir[axis], hi = limits.max_dir[axis];
+    const double c = limits.cos_width[axis] * length[axis];
     if (!limits.wide[axis]) {
       if (!(lo.x * d.y - lo.y * d.x >= 0.0 && glm::dot(lo, d) >= c)) return false;
     } else if (hi.x * d.y - hi.y * d.x > 0.0 && glm::dot(hi, d) > c) {
@@ -96,8 +101,9 @@ glm::dvec2 direction(double angle) {
   }
 }
 
-// detail::to_quat, defined here so that it inlines into the clamps below: their Euler angles then stay in registers
-// instead of going through memory between two calls (~3 ns per clamp on the critical path of a two-bone solve).
+// The unit quaternion qx · qy · qz of the directions of `euler`, of any lengths (its angles are not read), inlined
+// into the clamps below: their Euler angles then stay in registers instead of going through memory between two calls
+// (~3 ns per clamp on the critical path of a two-bone solve).
 inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
   const glm::dvec3 r = euler.length;
   const glm::dvec2 x = detail::scaled_half_angle(euler.dir[0], r.x), y = detail::scaled_half_angle(euler.dir[1], r.y);
@@ -111,6 +117,96 @@ inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
   const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
   const glm::dquat q(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x);
   return glm::quat(q * inverse_norm);
+}
+
+// detail::limit_euler, inlined into the clamps below (its result then stays in registers instead of going through
+// memory to quaternion_of; the options are constants there).
+template <bool angles_needed, bool raw_directions>
+[[gnu::always_inline]] inline bool limit_euler_inline(const EulerLimits& limits, glm::quat rotation,
+                                                      detail::EulerAngles& euler) noexcept {
+  using detail::EulerAngles;
+  // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
+  // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
+  // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
+  // the small ones keep their precision.
+  glm::dquat q(rotation);
+  double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
+  if (!(norm2 > 1e-24) || !std::isfinite(norm2)) {  // read as the identity
+    q = glm::dquat(1.0, 0.0, 0.0, 0.0);
+    ww = 1.0, xx = yy = zz = 0.0, norm2 = 1.0;
+  }
+  const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
+  const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
+  const double r22 = ww - xx - yy + zz;
+  const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
+  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
+  // for the square root and division.
+  const bool regular = cos_b > 1e-9 * norm2;
+  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
+                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
+  EulerAngles first, second;
+  if constexpr (!angles_needed) {
+    // A rotation within the limits returns here, before any division: the test takes the raw directions with their
+    // lengths (|raw[1]| = norm2, R's first row being unit; |raw[0]| = |raw[2]| = cos_b, or at gimbal lock norm2
+    // and 1).
+    const glm::dvec3 raw_length(regular ? cos_b : norm2, norm2, regular ? cos_b : 1.0);
+    if (raw_directions_within(limits, raw, raw_length, 1.0) || raw_directions_within(limits, raw, raw_length, -1.0))
+      return false;
+  }
+  if constexpr (angles_needed || !raw_directions) {  // (raw directions are returned without the unit ones)
+    const double inverse_norm2 = 1.0 / norm2;
+    first.dir[1] = raw[1] * inverse_norm2;
+    if (regular) {
+      const double scale = 1.0 / cos_b;
+      first.dir[0] = raw[0] * scale;
+      first.dir[2] = raw[2] * scale;
+    } else {
+      first.dir[0] = raw[0] * inverse_norm2;
+      first.dir[2] = raw[2];
+    }
+    second.dir[0] = -first.dir[0];
+    second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
+    second.dir[2] = -first.dir[2];
+  }
+  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
+  const double first_outside = outside(limits, first.angle);
+  if (first_outside == 0.0) {
+    euler = first;
+    return false;
+  }
+  // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
+  second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
+  const double second_outside = outside(limits, second.angle);
+  const bool take_second = second_outside < first_outside;
+  euler = take_second ? second : first;
+  if (second_outside == 0.0) return false;
+  if constexpr (!angles_needed && raw_directions) {
+    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
+    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
+    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
+    // quaternion_of's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured
+    // instead.
+    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
+    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
+    const double flip = take_second ? -1.0 : 1.0;
+    euler.dir[0] = raw[0] * flip;
+    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
+    euler.dir[2] = raw[2] * flip;
+  }
+  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
+  for (int axis = 0; axis < 3; ++axis) {
+    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
+    if (angle >= min && angle <= max) continue;
+    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
+    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
+    if (to_min <= to_max) {
+      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    } else {
+      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+    }
+    euler.length[axis] = 1.0;
+  }
+  return true;
 }
 
 }  // namespace
@@ -139,10 +235,10 @@ bool clamp_rotation(const EulerLimits& limits, glm::quat& rotation) noexcept {
     clamp_rotation(limits, rotation);
     return true;
   }
-  // limit_euler reads the rotation up to scale and to_quat returns a unit quaternion, so the normalisation is
+  // limit_euler reads the rotation up to scale and quaternion_of returns a unit quaternion, so the normalisation is
   // needed only on the unclamped path, and off the clamp's critical path there.
   detail::EulerAngles euler;
-  if (limits.free || !detail::limit_euler(limits, rotation, euler, false, true)) {
+  if (limits.free || !limit_euler_inline<false, true>(limits, rotation, euler)) {
     rotation = glm::normalize(rotation);
     return false;
   }
@@ -154,90 +250,35 @@ namespace detail {
 
 bool limit_euler(const EulerLimits& limits, glm::quat rotation, EulerAngles& euler, bool angles_needed,
                  bool raw_directions) noexcept {
-  // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
-  // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
-  // euler_from_quat). The entries below are R · |q|² (no normalisation needed), in double so that near gimbal lock
-  // the small ones keep their precision.
-  const glm::dquat q(rotation);
-  const double ww = q.w * q.w, xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, norm2 = ww + xx + yy + zz;
-  if (!(norm2 > 1e-24) || !std::isfinite(norm2))
-    return limit_euler(limits, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), euler, angles_needed, raw_directions);
-  const double r00 = ww + xx - yy - zz, r01 = 2.0 * (q.x * q.y - q.w * q.z), r02 = 2.0 * (q.x * q.z + q.w * q.y);
-  const double r11 = ww - xx + yy - zz, r12 = 2.0 * (q.y * q.z - q.w * q.x), r21 = 2.0 * (q.y * q.z + q.w * q.x);
-  const double r22 = ww - xx - yy + zz;
-  const double cos_b = std::sqrt(r00 * r00 + r01 * r01);
-  // The directions up to positive scale (all that polynomial_atan2 needs), then made unit: the angles do not wait
-  // for the square root and division.
-  const bool regular = cos_b > 1e-9 * norm2;
-  const glm::dvec2 raw[3] = {regular ? glm::dvec2(r22, -r12) : glm::dvec2(r11, r21), glm::dvec2(cos_b, r02),
-                             regular ? glm::dvec2(r00, -r01) : glm::dvec2(1.0, 0.0)};
-  EulerAngles first;
-  const double inverse_norm2 = 1.0 / norm2;
-  first.dir[1] = raw[1] * inverse_norm2;
-  if (regular) {
-    const double scale = 1.0 / cos_b;
-    first.dir[0] = raw[0] * scale;
-    first.dir[2] = raw[2] * scale;
-  } else {
-    first.dir[0] = raw[0] * inverse_norm2;
-    first.dir[2] = raw[2];
-  }
-  EulerAngles second;
-  second.dir[0] = -first.dir[0];
-  second.dir[1] = glm::dvec2(-first.dir[1].x, first.dir[1].y);
-  second.dir[2] = -first.dir[2];
-  if (!angles_needed && (directions_within(limits, first.dir) || directions_within(limits, second.dir))) return false;
-  for (int axis = 0; axis < 3; ++axis) first.angle[axis] = polynomial_atan2(raw[axis].y, raw[axis].x);
-  const double first_outside = outside(limits, first.angle);
-  if (first_outside == 0.0) {
-    euler = first;
-    return false;
-  }
-  // The same rotation's other triple (a + 180°, 180° − b, c + 180°).
-  second.angle = glm::dvec3(wrap(first.angle.x + pi), wrap(pi - first.angle.y), wrap(first.angle.z + pi));
-  const double second_outside = outside(limits, second.angle);
-  const bool take_second = second_outside < first_outside;
-  euler = take_second ? second : first;
-  if (second_outside == 0.0) return false;
-  if (!angles_needed && raw_directions) {
-    // The axes left unclamped below keep the raw directions (the second triple's with its sign changes), whose
-    // lengths are known without the division: |raw[2]| = cos_b (1 at gimbal lock), |raw[1]| = norm2 (R's first row
-    // is unit), |raw[0]| = cos_b too (R's third column is unit) — but only to rounding relative to cos_b, and
-    // to_quat's norm relies on the lengths: within 1e-4 of gimbal lock (and at it, norm2) it is measured instead.
-    const double length0 = regular && cos_b > 1e-4 * norm2 ? cos_b : glm::length(raw[0]);
-    euler.length = glm::dvec3(length0, norm2, regular ? cos_b : 1.0);
-    const double flip = take_second ? -1.0 : 1.0;
-    euler.dir[0] = raw[0] * flip;
-    euler.dir[1] = glm::dvec2(raw[1].x * flip, raw[1].y);
-    euler.dir[2] = raw[2] * flip;
-  }
-  // Each axis outside goes to its nearer limit around the circle (across ±π when that one is nearer).
+  if (angles_needed) return limit_euler_inline<true, false>(limits, rotation, euler);
+  return raw_directions ? limit_euler_inline<false, true>(limits, rotation, euler)
+                        : limit_euler_inline<false, false>(limits, rotation, euler);
+}
+
+glm::quat quat_at(glm::dvec3 angle, glm::vec4& xy_dirs) noexcept {
+  // The factors' half-angle directions directly (unit: no normalisation after the product), and the X and Y
+  // directions from them by the double-angle formulas. For |angle| <= π (every angle here but a limit beyond
+  // ±180°) the half angle's direction is the double angle of the quarter angle's, |quarter| <= π/4, where the
+  // series need no reduction (no quadrant branch); within 2e-12.
+  glm::dvec2 half[3];
   for (int axis = 0; axis < 3; ++axis) {
-    const double angle = euler.angle[axis], min = limits.min[axis], max = limits.max[axis];
-    if (angle >= min && angle <= max) continue;
-    const double to_min = angle < min ? min - angle : min + 2.0 * pi - angle;
-    const double to_max = angle > max ? angle - max : angle + 2.0 * pi - max;
-    if (to_min <= to_max) {
-      euler.angle[axis] = min, euler.dir[axis] = limits.min_dir[axis];
+    const double a = angle[axis];
+    if (std::abs(a) <= pi) {
+      const double r = 0.25 * a, r2 = r * r;
+      const double sine = r * (1.0 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 +
+                                    r2 * (-1.0 / 39916800 + r2 * (1.0 / 6227020800.0)))))));
+      const double cosine = 1.0 + r2 * (-1.0 / 2 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 +
+                                  r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+      half[axis] = glm::dvec2(cosine * cosine - sine * sine, 2.0 * cosine * sine);
     } else {
-      euler.angle[axis] = max, euler.dir[axis] = limits.max_dir[axis];
+      half[axis] = direction(0.5 * a);
     }
-    euler.length[axis] = 1.0;
   }
-  return true;
+  const glm::dvec2 x = half[0], y = half[1], z = half[2];
+  xy_dirs = glm::vec4(glm::dvec4(x.x * x.x - x.y * x.y, 2.0 * x.x * x.y, y.x * y.x - y.y * y.y, 2.0 * y.x * y.y));
+  const double w = x.x * y.x, i = x.y * y.x, j = x.x * y.y, k = x.y * y.y;
+  return glm::quat(glm::dquat(w * z.x - k * z.y, i * z.x + j * z.y, j * z.x - i * z.y, w * z.y + k * z.x));
 }
-
-EulerAngles euler_at(const EulerLimits& limits, glm::dvec3 angle) noexcept {
-  EulerAngles euler;
-  euler.angle = angle;
-  for (int axis = 0; axis < 3; ++axis)
-    euler.dir[axis] = angle[axis] <= limits.min[axis]   ? limits.min_dir[axis]
-                      : angle[axis] >= limits.max[axis] ? limits.max_dir[axis]
-                                                        : direction(angle[axis]);
-  return euler;
-}
-
-glm::quat to_quat(const EulerAngles& euler) noexcept { return quaternion_of(euler); }
 
 void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carried, glm::dvec3 wanted) noexcept {
   for (int axis = 0; axis < 3; ++axis) {
@@ -269,7 +310,9 @@ void reaim_euler(const EulerLimits& limits, EulerAngles& euler, glm::dvec3 carri
 bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::vec3 carried,
                  glm::vec3 wanted) noexcept {
   EulerAngles euler;
-  if (limits.free || !limit_euler(limits, local, euler, false, !reaim)) {  // (reads `local` up to scale)
+  const bool within = limits.free || (reaim ? !limit_euler_inline<false, false>(limits, local, euler)
+                                            : !limit_euler_inline<false, true>(limits, local, euler));
+  if (within) {  // (limit_euler reads `local` up to scale)
     local = glm::normalize(local);
     return false;
   }

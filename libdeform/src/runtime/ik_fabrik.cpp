@@ -78,7 +78,8 @@ IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, gl
     ++iterations;
     if (polishing) {
       damped_least_squares_step(chain, limits, pose, base.rotation, frames, heads, target,
-                                damping_fraction * reach_length, angles_current, scratch.angles, scratch.columns);
+                                damping_fraction * reach_length, angles_current, scratch.angles, scratch.axis_dirs,
+                                scratch.columns);
       chain_fk(chain, pose, base, frames, heads);
     } else {
       pass(chain, pose, scratch, target, base.rotation, reach_length, settings.escape_stalls);

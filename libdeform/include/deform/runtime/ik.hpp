@@ -226,8 +226,8 @@ struct DEFORM_RUNTIME_API IkJob {
   float weight = 1.0f;
 
   static constexpr std::size_t scratch_alignment = alignof(double);
-  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 152 per joint + 40.
-  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 152 * joint_count + 40; }
+  // Scratch bytes a solve of a chain of `joint_count` joints needs, either method: 168 per joint + 40.
+  static constexpr std::size_t scratch_size(std::size_t joint_count) noexcept { return 168 * joint_count + 40; }
   // scratch_size for this job's chain (0 without one).
   std::size_t scratch_size() const noexcept;
 
