@@ -380,7 +380,10 @@ std::string morph_skin_gltf() {
 }  // namespace
 
 TEST_CASE("a glTF morph + skin file through the Character gives what `deform skin --clip` gives") {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "deform_character_morph_test";
+  // A folder of this run's own (several builds may run the suite at once on one machine).
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("deform_character_morph_test_" + std::to_string(std::random_device{}()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "morph_skin.gltf").string();
   std::ofstream(path, std::ios::binary) << morph_skin_gltf();
@@ -420,5 +423,6 @@ TEST_CASE("a glTF morph + skin file through the Character gives what `deform ski
       if (time > 0.0f) CHECK(c.morphed_bind_positions().data() != c.model().mesh.positions.data());
     }
   }
+  std::filesystem::remove_all(dir);
 }
 #endif
