@@ -3,7 +3,8 @@
 // chain, skinning, lattices.
 // The same rig on the character's points repeated (jittered) to 100k and 1M points; and the frame plus normals.
 // frame/builtin_lattices_step_update and frame/builtin_3_lattices_shape: the cost of the stretch shape.
-// frame/builtin_3_lattices_normals: the frame and normals() (transported, the default); frame/builtin_whole below.
+// frame/builtin_3_lattices_normals: the frame and normals() (transported, the default); frame/builtin_whole and
+// frame/builtin_whole_morph below.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -118,11 +119,63 @@ void whole_frame(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
 }
 
+// frame/builtin_whole_morph: frame/builtin_whole (transported normals) on the built-in character given two morph
+// targets — one moving every point with normal deltas, one every third point — with every weight 0 (Arg 0: the
+// morph job skipped, what a model with idle targets costs) or animated by a clip's morph channel and set by name
+// each frame (Arg 1: MorphJob on the bind positions and normals before skinning).
+void whole_frame_morph(benchmark::State& state) {
+  deform::Model model = deform::builtin_character();
+  for (int k = 0; k < 2; ++k) {
+    deform::MorphTarget t;
+    t.name = k ? "swell" : "lift";
+    for (std::size_t p = 0; p < model.mesh.point_count(); p += k ? 3 : 1) {
+      t.points.push_back(std::uint32_t(p));
+      t.position_deltas.push_back(glm::vec3(0.0f, 0.01f * float(k + 1), 0.02f));
+      if (!k) t.normal_deltas.push_back(glm::vec3(0.0f, 0.1f, 0.0f));
+    }
+    model.morph_targets.push_back(std::move(t));
+  }
+  const deform::Rig rig = deform::builtin_rig(model);
+  deform::Character c(std::move(model), rig);
+  c.reach(c.skeleton().find("hand_l"),
+          c.bone_position(c.skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
+  const deform::Animation walk = deform::builtin_walk(c.model());
+  deform::Animation face;
+  face.duration = 1.0f;
+  deform::MorphChannel channel;
+  channel.target = 0;
+  channel.weight.times = {0.0f, 0.5f, 1.0f};
+  channel.weight.values = {0.2f, 1.0f, 0.2f};
+  face.morph_channels.push_back(channel);
+  deform::Pose pose = c.skeleton().bind_pose();
+  deform::SamplingJob sampling;
+  sampling.animation = &walk;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  if (!sampling.validate()) state.SkipWithError("walk does not fit");
+  const bool morphing = state.range(0) != 0;
+  float time = 0.0f;
+  for (auto _ : state) {
+    time += 1.0f / 60.0f;
+    sampling.time = time;
+    sampling.run();
+    c.set_pose(pose);
+    if (morphing) {
+      c.set_morph_weights(face, time);
+      c.set_morph_weight("swell", 0.5f);
+    }
+    c.update(1.0f / 60.0f);
+    benchmark::DoNotOptimize(c.normals().data());
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(c.positions().size()));
+}
+
 BENCHMARK(frame)->Name("frame/builtin_3_lattices")->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame)->Name("frame/3_lattices")->Arg(100000)->Arg(1000000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(hierarchy_update)->Name("frame/builtin_lattices_step_update")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame_shape)->Name("frame/builtin_3_lattices_shape")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(frame_with_normals)->Name("frame/builtin_3_lattices_normals")->Unit(benchmark::kMicrosecond);
 BENCHMARK(whole_frame)->Name("frame/builtin_whole")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(whole_frame_morph)->Name("frame/builtin_whole_morph")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -1,7 +1,11 @@
 // deform::Character: reach, release, update, and views of what it shows.
+#include <algorithm>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "common.hpp"
 #include "deform/character/character.hpp"
@@ -12,6 +16,24 @@ namespace deform_python {
 std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
 std::string method_name(deform::SkinningMethod method);
 deform::SkinningMethod parse_method(const std::string& name);
+
+namespace {
+
+// A morph target by index or by name (the first of that name); deform.Error when there is none.
+std::size_t morph_index(const deform::Character& c, const py::object& target) {
+  if (py::isinstance<py::str>(target)) {
+    const std::string name = target.cast<std::string>();
+    const std::int32_t k = deform::find_morph_target(c.model().morph_targets, name);
+    if (k < 0) throw deform::Error::invalid_argument("morph target '" + name + "'", "no morph target of that name");
+    return static_cast<std::size_t>(k);
+  }
+  const auto k = target.cast<std::int64_t>();
+  if (k < 0 || static_cast<std::size_t>(k) >= c.morph_target_count())
+    throw deform::Error::invalid_argument("morph target " + std::to_string(k), "morph target out of range");
+  return static_cast<std::size_t>(k);
+}
+
+}  // namespace
 
 void bind_character(py::module_& m) {
   py::class_<deform::ReachResult>(m, "ReachResult")
@@ -174,6 +196,57 @@ void bind_character(py::module_& m) {
             return py::make_tuple(p.x, p.y, p.z);
           },
           py::arg("bone"), "World head of a bone, lattices included.")
+      // --- morph targets (Model.morph_targets: an import's blend shapes), one weight per target ---
+      .def_property_readonly("morph_target_count", &deform::Character::morph_target_count)
+      .def_property_readonly(
+          "morph_target_names",
+          [](const deform::Character& c) {
+            std::vector<std::string> names;
+            for (const deform::MorphTarget& t : c.model().morph_targets) names.push_back(t.name);
+            return names;
+          },
+          "The targets' names, in index order (names may repeat across meshes).")
+      .def_property(
+          "morph_weights",
+          [](const deform::Character& c) {
+            const std::span<const float> w = c.morph_weights();
+            py::array_t<float> out(static_cast<py::ssize_t>(w.size()));
+            std::copy(w.begin(), w.end(), out.mutable_data());
+            return out;
+          },
+          [](deform::Character& c, const FloatArray& weights) {
+            if (weights.ndim() != 1)
+              throw deform::Error::invalid_argument("morph_weights", "expected a 1-D array, one weight per target");
+            check(c.set_morph_weights(std::span<const float>(weights.data(), static_cast<std::size_t>(weights.size()))));
+          },
+          "The morph weights update() applies (get: a copy; set: one finite weight per target). A new character "
+          "starts from the targets' default weights.")
+      .def(
+          "morph_weight",
+          [](const deform::Character& c, const py::object& target) {
+            return c.morph_weights()[morph_index(c, target)];
+          },
+          py::arg("target"), "A target's weight, by index or name (the first of that name).")
+      .def(
+          "set_morph_weight",
+          [](deform::Character& c, const py::object& target, float weight) {
+            if (py::isinstance<py::str>(target)) {
+              check(c.set_morph_weight(std::string_view(target.cast<std::string>()), weight));
+            } else {
+              check(c.set_morph_weight(morph_index(c, target), weight));
+            }
+          },
+          py::arg("target"), py::arg("weight"),
+          "Sets a target's weight by index, or every target of a name; raises deform.Error for an unknown target or "
+          "a weight that is not finite.")
+      .def(
+          "set_morph_weights_from_clip",
+          [](deform::Character& c, const deform::Animation& clip, float time) {
+            check(c.set_morph_weights(clip, time));
+          },
+          py::arg("clip"), py::arg("time"),
+          "The clip's animated morph weights at `time` seconds (the targets it does not animate keep theirs).")
+      .def("reset_morph_weights", &deform::Character::reset_morph_weights, "Every weight back to its default.")
       .def_property_readonly("stretch", &deform::Character::stretch, "The stretch the lattices have now (model units).")
       .def_property_readonly("effector", &deform::Character::effector);
 }

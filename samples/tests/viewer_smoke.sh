@@ -5,7 +5,7 @@
 # with the run (--blend run); one with a bone's weight map; a reach with a pole and one with swing-twist limits; the
 # frame after the reach again with the deformation on the GPU (--gpu), LBS and DQS, which must be the same pictures
 # (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
-# (when Debian's assimp-testmodels are there).
+# (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held.
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -84,6 +84,26 @@ assert abs(rest["floor"] - rest["lowest"]) < 1e-5, rest            # unposed: th
 assert idle["floor"] < rest["floor"] - 1e-3, (rest, idle)          # the clip's floor, lower than the bind pose's
 assert idle["lowest"] >= idle["floor"] - 1e-5, idle                 # standing on it, never through it
 PY
+  done
+fi
+# An imported model with morph targets morphs: AnimatedMorphCube's clip animates target0 (the summary's weights
+# follow it), --morph holds weights over the clip, and each picture differs from the one before.
+cube=/usr/share/assimp/models/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf
+if [ -f "$cube" ] && ! grep -q "no importer" <<<"${declared:-}"; then
+  rest=$(run "$cube" --bare --frames 1 --screenshot "$work/cube.png" 2>/dev/null)
+  played=$(run "$cube" --bare --clip Square --frames 60 --screenshot "$work/cube_square.png" 2>/dev/null)
+  held=$(run "$cube" --bare --clip Square --frames 60 --morph target0:1,target1:0.5 \
+         --screenshot "$work/cube_held.png" 2>/dev/null)
+  python3 - "$rest" "$played" "$held" <<'PY'
+import json, sys
+rest, played, held = (json.loads(a) for a in sys.argv[1:4])
+assert rest["morph_weights"] == [0, 0], rest                                      # the defaults
+assert played["morph_weights"][0] > 0.5 and played["morph_weights"][1] == 0, played  # the clip's, 1 s in
+assert held["morph_weights"] == [1, 0.5], held                                    # held over the clip
+PY
+  for pair in "cube.png cube_square.png" "cube_square.png cube_held.png"; do
+    set -- $pair
+    if cmp -s "$work/$1" "$work/$2"; then echo "morph targets: $1 and $2 are the same picture"; exit 1; fi
   done
 fi
 echo "viewer smoke test passed"

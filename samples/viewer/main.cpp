@@ -3,7 +3,8 @@
 // libdeform facade (deform::Character); this file only draws it and turns mouse and keys into calls.
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
-//                 [--blend NAME|#N [--blend-weight W]] [--prop P.obj]... [--gpu] [--dqs] [--up y|z]
+//                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
+//                 [--up y|z]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
@@ -12,18 +13,24 @@
 // clip blends with the first (deform::BlendingJob, the panel's "blend with" and its weight), following the first
 // clip's phase so that clips of different lengths (a walk and a run) stay in step.
 //
+// Morph targets (an imported file's blend shapes) morph the character (Character::set_morph_weights): each target's
+// weight follows the playing clip's morph channels (blended like the poses with a second clip), else its default;
+// the panel shows each weight as a slider, and moving one (or --morph NAME:W) holds it until "follow the clip".
+//
 // Deformation on the GPU (--gpu, the panel or G; OpenGL 4.3): the character only poses on the CPU
 // (Character::deform_on_cpu = false); deform::GpuSkinning skins it into the vertex buffer from the palette and
 // deform::GpuLatticeFields::apply_into adds the lattices' carried points and fields there. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "framework.hpp"  // epoxy before any other GL header
@@ -61,7 +68,7 @@ using Clock = std::chrono::steady_clock;
 
 const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]\n"
-    "                     [--blend NAME|#N [--blend-weight W]] [--prop P.obj]...\n"
+    "                     [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,NAME:W...]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z]\n"
@@ -72,6 +79,8 @@ const char* usage =
     "playing clip, [0, 1] (default 1; the panel's \"jiggle\").\n"
     "--blend NAME|#N: blend a second clip with the --clip one, in step with its phase; --blend-weight W: the second\n"
     "clip's weight, [0, 1] (default 0.5; the first has 1 - W; the panel's \"blend with\" and \"blend\").\n"
+    "--morph NAME:W: hold morph target NAME (every target of that name) at weight W over what the clip animates\n"
+    "(the panel's morph sliders; `deform info MODEL` lists the targets).\n"
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
@@ -85,6 +94,7 @@ const char* usage =
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
   std::vector<std::string> props;
+  std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
   float inertia = 1.0f;  // the lattices' inertia while a clip plays
   float blend_weight = 0.5f;  // the second clip's weight
@@ -143,6 +153,21 @@ Options parse_options(int argc, char** argv) {
       char* end = nullptr;
       o.inertia = std::strtof(text.c_str(), &end);
       if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f)) fail("--inertia: '" + text + "' is not in [0, 1]");
+    }
+    else if (a == "--morph") {
+      const std::string list = next();
+      std::size_t at = 0;
+      while (at <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        const std::string item = list.substr(at, comma - at);
+        const std::size_t colon = item.rfind(':');
+        char* end = nullptr;
+        const float w = colon == std::string::npos ? 0.0f : std::strtof(item.c_str() + colon + 1, &end);
+        if (colon == std::string::npos || colon == 0 || end == item.c_str() + colon + 1 || *end || !std::isfinite(w))
+          fail("--morph: '" + item + "' is not NAME:WEIGHT");
+        o.morphs.emplace_back(item.substr(0, colon), w);
+        at = comma + 1;
+      }
     }
     else if (a == "--weight-map") o.weight_map = next();
     else if (a == "--screenshot") o.screenshot = next();
@@ -253,6 +278,12 @@ class Viewer {
       blend_clip_ = find(options.blend_clip);
     }
     blend_weight_ = options.blend_weight;
+    for (const auto& [name, weight] : options.morphs) {
+      bool found = false;
+      for (std::size_t k = 0; k < base_model_.morph_targets.size(); ++k)
+        if (base_model_.morph_targets[k].name == name) morph_held_[k] = 1, morph_hold_[k] = weight, found = true;
+      if (!found) fail(loaded.source + ": --morph: no morph target '" + name + "'");
+    }
 
     // The scene (the thesis' version 1): the world holds the floor, the character and the props. The character node
     // (moved and turned from the panel) holds the model node, which stands the model upright (its up axis onto +Y)
@@ -319,6 +350,16 @@ class Viewer {
     return lowest;
   }
   glm::vec3 up() const { return up_; }
+  // The morph weights as applied now, comma-separated (the headless summary).
+  std::string morph_weights_text() const {
+    std::string text;
+    for (const float w : character_->morph_weights()) {
+      char number[32];
+      std::snprintf(number, sizeof number, "%s%.6g", text.empty() ? "" : ", ", double(w));
+      text += number;
+    }
+    return text;
+  }
 
   void frame(float dt) {
     const sample::Input& in = window_.input();
@@ -339,6 +380,7 @@ class Viewer {
       // The reach again, on this frame's pose: a reach held so follows its target smoothly (Character::reach).
       if (reaching_) last_reach_ = character_->reach(effector_, target_);
     }
+    apply_morph_weights();
     if (cut_) {  // a new clip, a rebuilt character: the pose jumps, which a zero step takes as a cut, not motion
                  // (a reach that begins or ends is one the character takes care of itself)
       character_->update(0.0f);
@@ -482,6 +524,30 @@ class Viewer {
       if (motion) apply_motion();
       ImGui::EndDisabled();
     }
+    if (character_->morph_target_count() > 0) {  // the morph targets' weights: the clip's, unless held here
+      ImGui::Separator();
+      ImGui::Text("Morph targets (%zu)", character_->morph_target_count());
+      ImGui::SameLine();
+      if (ImGui::SmallButton("follow the clip")) std::fill(morph_held_.begin(), morph_held_.end(), char(0));
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("every weight from the playing clip again (else its default)");
+      const std::vector<deform::MorphTarget>& targets = character_->model().morph_targets;
+      for (std::size_t k = 0; k < targets.size(); ++k) {
+        ImGui::PushID(int(k));
+        bool held = morph_held_[k] != 0;
+        float weight = character_->morph_weights()[k];
+        if (ImGui::Checkbox("##held", &held)) morph_held_[k] = held, morph_hold_[k] = weight;
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("held: the slider's weight; else the clip's (or the default)");
+        ImGui::SameLine();
+        const std::string label = targets[k].name.empty() ? "target " + std::to_string(k) : targets[k].name;
+        if (ImGui::SliderFloat(label.c_str(), &weight, 0.0f, 1.0f, "%.2f")) {
+          morph_held_[k] = 1;
+          morph_hold_[k] = weight;
+          apply_morph_weights();
+        }
+        if (ImGui::IsItemHovered() && !targets[k].mesh.empty()) ImGui::SetTooltip("mesh %s", targets[k].mesh.c_str());
+        ImGui::PopID();
+      }
+    }
     deform::SpringChains& springs = character_->springs();
     if (springs.chain_count() > 0) {  // the rig's spring chains, drawn in green with the skeleton
       ImGui::Separator();
@@ -530,6 +596,11 @@ class Viewer {
   // The whole deformation on the GPU (on) or the CPU (off): the character only poses, GpuSkinning skins from its
   // palette and GpuLatticeFields adds its lattices, all in the renderer's vertex buffer (whose UVs stay as created).
   void set_gpu(bool on) {
+    if (on && character_->morph_target_count() > 0) {  // GpuSkinning skins the bind positions, not the morphed ones
+      std::fprintf(stderr, "deform_viewer: the model has morph targets, which the GPU path does not apply; "
+                           "deforming on the CPU\n");
+      on = false;
+    }
     gpu_ = on && gpu_available_;
     gpu_fields_.clear();
     gpu_skinning_.release();
@@ -609,6 +680,10 @@ class Viewer {
     }
     reaching_ = false;
     effector_ = -1;
+    morph_held_.resize(character_->morph_target_count(), 0);  // kept over rebuilds: the panel's holds stay
+    morph_hold_.resize(character_->morph_target_count(), 0.0f);
+    morph_second_.resize(character_->morph_target_count(), 0.0f);
+    apply_morph_weights();
     bind_pose_ = character_->skeleton().bind_pose();
     pose_ = later_ = first_ = second_ = bind_pose_;  // sized once: sample_clip copies into them
     cut_ = true;
@@ -664,6 +739,31 @@ class Viewer {
     blend.rotations = into.rotations;
     blend.translations = into.translations;
     (void)blend.run();  // cannot fail: every pose has the skeleton's size, the weights are within [0, 1]
+  }
+
+  // The morph weights of this frame: the defaults, the playing clip's morph channels at its time (blended with the
+  // second clip's at the same phase, by the blend weight, as the poses are), then the panel's held weights.
+  void apply_morph_weights() {
+    if (!character_ || character_->morph_target_count() == 0) return;
+    character_->reset_morph_weights();
+    if (clip_ >= 0) {
+      const deform::Animation& first = clips_[std::size_t(clip_)];
+      (void)character_->set_morph_weights(first, clip_time_);  // cannot fail: the clip was validated on loading
+      if (blend_clip_ >= 0) {
+        const deform::Animation& second = clips_[std::size_t(blend_clip_)];
+        const float t2 = first.duration > 0.0f && second.duration > 0.0f
+                             ? first.local_time(clip_time_) / first.duration * second.duration : clip_time_;
+        const std::vector<deform::MorphTarget>& targets = character_->model().morph_targets;
+        for (std::size_t k = 0; k < targets.size(); ++k) morph_second_[k] = targets[k].default_weight;
+        (void)deform::sample_morph_weights(second, t2, morph_second_);
+        for (std::size_t k = 0; k < targets.size(); ++k) {
+          const float w = (1.0f - blend_weight_) * character_->morph_weights()[k] + blend_weight_ * morph_second_[k];
+          (void)character_->set_morph_weight(k, w);
+        }
+      }
+    }
+    for (std::size_t k = 0; k < morph_held_.size(); ++k)
+      if (morph_held_[k]) (void)character_->set_morph_weight(k, morph_hold_[k]);
   }
 
   void sample_one(const deform::Animation& clip, float t, deform::Pose& into) const {
@@ -1008,6 +1108,9 @@ class Viewer {
   float inertia_ = 1.0f;
   bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
   float rest_floor_ = 0.0f, floor_height_ = 0.0f;  // the floor under the bind pose; the eye's height above a floor
+  std::vector<char> morph_held_;     // per morph target: the panel (or --morph) holds its weight
+  std::vector<float> morph_hold_;    // ... at this weight
+  std::vector<float> morph_second_;  // the blended second clip's morph weights (sized once)
   std::vector<float> clip_floors_;                 // the floor under each clip (lowest_height)
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;
@@ -1047,10 +1150,11 @@ int main(int argc, char** argv) {
       const glm::vec3 e = viewer.effector_position();
       const glm::vec3 up = viewer.up();
       std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
-                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f}\n",
+                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
+                  "\"morph_weights\": [%s]}\n",
                   options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
                   viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z,
-                  double(viewer.floor_y()), double(viewer.lowest_y()));
+                  double(viewer.floor_y()), double(viewer.lowest_y()), viewer.morph_weights_text().c_str());
       return 0;
     }
     // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one

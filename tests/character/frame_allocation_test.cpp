@@ -173,6 +173,56 @@ TEST_CASE("1,000 frames of secondary motion allocate nothing: a clip with its le
   check(tally);
 }
 
+TEST_CASE("1,000 frames of a morphed character allocate nothing: weights from a clip, by name and index, reach, "
+          "update, normals (transported and recomputed)") {
+  deform::Model model = deform::builtin_character();
+  // Two targets: one over every point (with normal deltas), one sparse over every third point.
+  for (int k = 0; k < 2; ++k) {
+    deform::MorphTarget t;
+    t.name = k ? "swell" : "lift";
+    for (std::size_t p = 0; p < model.mesh.point_count(); p += k ? 3 : 1) {
+      t.points.push_back(std::uint32_t(p));
+      t.position_deltas.push_back(glm::vec3(0.0f, 0.01f * float(k + 1), 0.02f));
+      if (!k) t.normal_deltas.push_back(glm::vec3(0.0f, 0.1f, 0.0f));
+    }
+    model.morph_targets.push_back(std::move(t));
+  }
+  const deform::Rig rig = deform::builtin_rig(model);
+  std::vector<Character> characters;
+  characters.emplace_back(std::move(model), rig);
+  Character& c = characters.front();
+  c.set_normals_mode(Character::NormalsMode::recomputed);  // (its scratch at set-up)
+  c.set_normals_mode(Character::NormalsMode::transported);
+  deform::Animation clip;
+  clip.duration = 1.0f;
+  deform::MorphChannel channel;
+  channel.target = 0;
+  channel.weight.times = {0.0f, 0.5f, 1.0f};
+  channel.weight.values = {0.0f, 1.0f, 0.0f};
+  clip.morph_channels.push_back(channel);
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  const glm::vec3 shoulder = c.bone_position(c.skeleton().find("clavicle_l"));
+  Tally tally;
+  const long before = allocations.load();
+  for (int frame = 0; frame < frames; ++frame) {
+    tally.note(c.set_morph_weights(clip, float(frame) * dt));
+    tally.note(c.set_morph_weight("swell", 0.5f + 0.5f * std::sin(float(frame) * 0.1f)));
+    if (frame % 100 == 50) tally.note(c.set_morph_weight(std::size_t{1}, 0.0f));
+    if (frame == 600) c.set_normals_mode(Character::NormalsMode::recomputed);
+    if (frame >= 100 && frame < 500) {
+      tally.note(c.reach(hand, shoulder + glm::vec3(1.0f, 0.2f, 0.3f)).status);
+      ++tally.reaches;
+    }
+    if (frame == 500) c.release();
+    tally.note(c.update(dt));
+    tally.normals_checksum += c.normals()[std::size_t(frame) % 100].z;
+    tally.largest_stretch = std::max(tally.largest_stretch, c.stretch());
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+  CHECK(c.morphed_bind_positions().data() != c.model().mesh.positions.data());
+}
+
 #if defined(DEFORM_HAVE_IMPORT)
 TEST_CASE("1,000 frames of an imported character allocate nothing: clip, reach, release, update, normals") {
   const std::string path = "/usr/share/assimp/models/X/Testwuson.X";  // Debian's assimp-testmodels

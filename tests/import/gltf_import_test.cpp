@@ -270,6 +270,11 @@ TEST_CASE("quantised positions, sparse accessors, cubic splines; every influence
   const deform::ImportedModel isolated = deform::import_model_isolated(write("quantised.gltf", doc.json(body)));
   CHECK(isolated.model.weights == imported.model.weights);
   CHECK(isolated.model.morph_targets == imported.model.morph_targets);
+  // The skins' listing, over the wire too: the one skin, its six joints, the mesh "blob".
+  REQUIRE(imported.skins.size() == 1);
+  CHECK(imported.skins[0].joints == 6);
+  CHECK(imported.skins[0].meshes == std::vector<std::string>{"blob"});
+  CHECK(isolated.skins == imported.skins);
 }
 
 TEST_CASE("malformed glTF files are errors naming the file and the JSON path or accessor") {

@@ -125,6 +125,13 @@ int run(const std::vector<std::string>& argv) {
         most = std::max(most, deform::influence_count(imported.model.weights, p));
       info["max_influences"] = most;
     }
+    if (imported.rigged) {
+      // New key: the file's skins (glTF: every skin; other formats: one), each with the meshes it deforms.
+      Json skins = Json::array();
+      for (const deform::ImportedSkin& skin : imported.skins)
+        skins.push_back({{"name", skin.name}, {"joints", skin.joints}, {"meshes", skin.meshes}});
+      info["skins"] = std::move(skins);
+    }
 #endif
   } else {
     throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
@@ -151,7 +158,9 @@ const Command info_command = {
     "            \"duration\" (seconds), \"channels\", \"interpolation\": the samplers its tracks use, of step,\n"
     "            linear, cubic_spline, \"morph_channels\": the morph targets it animates}], then \"morph_targets\": [{\"name\", \"mesh\", \"default_weight\",\n"
     "            \"points\" (the points it moves)}] (for `deform skin --morph NAME:W`) and \"max_influences\" (the\n"
-    "            most bones one point is skinned by). Importer warnings go to stderr.\n"
+    "            most bones one point is skinned by), and when rigged \"skins\": [{\"name\", \"joints\", \"meshes\": the\n"
+    "            names of the meshes it deforms}] (glTF: every skin of the file; other formats: one). Importer\n"
+    "            warnings go to stderr.\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
     "line, and the bone or element); 1 any other failure.\n",

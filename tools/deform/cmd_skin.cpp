@@ -158,12 +158,42 @@ deform::SkinWeights vertex_weights_of(const deform::SkinWeights& w, std::span<co
   return out;
 }
 
-// The morph-target weights: each target's default, then the clip's morph channels at --time (with --clip), then
-// --morph NAME:W[,NAME:W...] (every target of that name; an unknown name is a usage error naming it).
-std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded) {
+// The morph-target weights of the --blend clips at T seconds: each clip's weights (the defaults, then its morph
+// channels) averaged with the blend's weights, as BlendingJob averages the poses: normalised by their sum W, and
+// below W = 0.1 the defaults join in with weight 0.1 - W (where the bind pose joins the poses).
+void blend_morph_weights(const Args& args, const LoadedModel& loaded, const std::vector<BlendItem>& items,
+                         std::vector<float>& weights) {
+  const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
+  const std::vector<float> defaults = weights;
+  std::vector<double> sum(weights.size(), 0.0);
+  double total = 0.0;
+  for (const BlendItem& item : items) {
+    const std::int32_t clip = deform::find_clip(loaded.clips, item.clip);
+    std::vector<float> clip_weights = defaults;
+    if (clip >= 0)
+      if (const deform::Status status =
+              deform::sample_morph_weights(loaded.clips[static_cast<std::size_t>(clip)], seconds, clip_weights);
+          !status)
+        throw deform::Error::in_file(loaded.source, "clip '" + item.clip + "'", status.reason());
+    for (std::size_t k = 0; k < weights.size(); ++k) sum[k] += double(item.weight) * double(clip_weights[k]);
+    total += double(item.weight);
+  }
+  constexpr double threshold = 0.1;  // BlendingJob's default, which blend_pose uses
+  if (total < threshold) {
+    for (std::size_t k = 0; k < weights.size(); ++k) sum[k] += (threshold - total) * double(defaults[k]);
+    total = threshold;
+  }
+  for (std::size_t k = 0; k < weights.size(); ++k) weights[k] = static_cast<float>(sum[k] / total);
+}
+
+// The morph-target weights: each target's default, then the clip's morph channels at --time (with --clip; with
+// --blend, the clips' weights blended as above), then --morph NAME:W[,NAME:W...] (every target of that name; an
+// unknown name is a usage error naming it).
+std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, const std::vector<BlendItem>& blend) {
   const std::vector<deform::MorphTarget>& targets = loaded.model.morph_targets;
   std::vector<float> weights;
   for (const deform::MorphTarget& t : targets) weights.push_back(t.default_weight);
+  if (!blend.empty() && !targets.empty()) blend_morph_weights(args, loaded, blend, weights);
   if (args.has("--clip")) {
     const std::int32_t clip = deform::find_clip(loaded.clips, args.required("--clip"));
     const auto seconds = static_cast<float>(parse_number(args.required("--time"), "--time"));
@@ -248,7 +278,7 @@ int run(const std::vector<std::string>& argv) {
   // their point's weights.
   const deform::Mesh& mesh = model.mesh;
   // Morph targets first (in bind space, as glTF and three.js do), then skinning of the morphed points.
-  const std::vector<float> weights = morph_weights(args, loaded);
+  const std::vector<float> weights = morph_weights(args, loaded, blend);
   std::vector<glm::vec3> rest = mesh.positions, normal_deltas(mesh.point_count(), glm::vec3(0.0f));
   if (!model.morph_targets.empty()) {
     const std::vector<glm::vec3> zeros(mesh.point_count(), glm::vec3(0.0f));
@@ -331,8 +361,9 @@ const Command skin_command = {
     "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
     "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
     "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
-    "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights, or\n"
-    "the weights --morph gives by target name (`deform info` lists them).\n"
+    "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights (with\n"
+    "--blend, the clips' weights averaged by the blend's weights), or the weights --morph gives by target name\n"
+    "(`deform info` lists them).\n"
     "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
     "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"

@@ -89,6 +89,12 @@ Character::Character(Model model, const Rig& rig)
   if (!(rig_.max_stretch >= 0.0f) || !std::isfinite(rig_.max_stretch)) {
     throw Error::in_file(bound.name, "rig", "max_stretch must be finite and >= 0");
   }
+  validate_morph_targets(bound.morph_targets, bound.mesh.point_count(), bound.name);
+  for (const MorphTarget& target : bound.morph_targets) {
+    if (!std::isfinite(target.default_weight)) {
+      throw Error::in_file(bound.name, "morph target '" + target.name + "'", "default weight is not finite");
+    }
+  }
   allocate_frame_state();
   SkinningJob job;
   job.matrices = palette_;
@@ -130,6 +136,12 @@ void Character::allocate_frame_state() {
   positions_ = bound.mesh.positions;
   point_normals_ = bind_->point_normals;
   normals_.assign(bound.mesh.vertex_count(), glm::vec3(0.0f));
+  morph_weights_.clear();
+  for (const MorphTarget& target : bound.morph_targets) morph_weights_.push_back(target.default_weight);
+  if (!bound.morph_targets.empty()) {
+    morphed_positions_ = bound.mesh.positions;
+    morphed_normals_ = bind_->point_normals;
+  }
   // reach()'s storage for the deepest chain any effector can have.
   const std::size_t depth = skeleton_depth(bound.skeleton);
   const std::size_t chain_bones = std::min(depth, max_chain_bones);
@@ -197,6 +209,42 @@ Status Character::set_pose(const Pose& pose, const Pose& later, float lead) {
   clamp_pose(later_);
   lead_ = lead;
   return {};
+}
+
+Status Character::set_morph_weight(std::size_t target, float weight) noexcept {
+  if (target >= morph_weights_.size()) return Status::failure("morph target out of range");
+  if (!std::isfinite(weight)) return Status::failure("morph weight is not finite");
+  morph_weights_[target] = weight;
+  return {};
+}
+
+Status Character::set_morph_weight(std::string_view name, float weight) noexcept {
+  if (!std::isfinite(weight)) return Status::failure("morph weight is not finite");
+  const std::vector<MorphTarget>& targets = model().morph_targets;
+  bool found = false;
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    if (targets[k].name == name) morph_weights_[k] = weight, found = true;
+  }
+  return found ? Status{} : Status::failure("no morph target of that name");
+}
+
+Status Character::set_morph_weights(std::span<const float> weights) noexcept {
+  if (weights.size() != morph_weights_.size()) return Status::failure("weights and morph targets differ in count");
+  for (const float w : weights) {
+    if (!std::isfinite(w)) return Status::failure("morph weight is not finite");
+  }
+  std::copy(weights.begin(), weights.end(), morph_weights_.begin());
+  return {};
+}
+
+Status Character::set_morph_weights(const Animation& clip, float seconds) noexcept {
+  // sample_morph_weights writes nothing when it refuses; the tracks were validated with the clip (finite keys).
+  return sample_morph_weights(clip, seconds, morph_weights_);
+}
+
+void Character::reset_morph_weights() noexcept {
+  const std::vector<MorphTarget>& targets = model().morph_targets;
+  for (std::size_t k = 0; k < targets.size(); ++k) morph_weights_[k] = targets[k].default_weight;
 }
 
 ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
@@ -434,6 +482,24 @@ Status Character::update(float dt) {
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
   if (!deform_on_cpu) return hierarchy_.update(world_);
   const bool transport = normals_mode_ == NormalsMode::transported;
+  // Morph targets, in bind space before skinning; skipped (the bind arrays skinned directly) when every weight is 0.
+  std::span<const glm::vec3> rest_positions = bound.mesh.positions;
+  std::span<const glm::vec3> rest_normals = bind_->point_normals;
+  morphed_ = std::any_of(morph_weights_.begin(), morph_weights_.end(), [](float w) { return w != 0.0f; });
+  if (morphed_) {
+    MorphJob morph;
+    morph.targets = bound.morph_targets;
+    morph.weights = morph_weights_;
+    morph.rest_positions = bound.mesh.positions;
+    morph.out_positions = morphed_positions_;
+    if (transport) {
+      morph.rest_normals = bind_->point_normals;
+      morph.out_normals = morphed_normals_;
+      rest_normals = morphed_normals_;
+    }
+    if (const Status status = morph.run(); !status) return status;
+    rest_positions = morphed_positions_;
+  }
   SkinningJob job;
   job.method = skinning;
   job.matrices = palette_;
@@ -443,10 +509,10 @@ Status Character::update(float dt) {
   job.extra_offsets = bound.weights.extra_offsets;
   job.extra_bones = bound.weights.extra_bones;
   job.extra_weights = bound.weights.extra_weights;
-  job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
+  job.in_positions = as_floats(rest_positions);
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (transport) {
-    job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
+    job.in_normals = as_floats(rest_normals);
     job.out_normals = as_floats(std::span<glm::vec3>(point_normals_));
   }
   if (skinning == SkinningMethod::dqs) {

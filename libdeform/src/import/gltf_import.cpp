@@ -434,6 +434,21 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   const bool any_skin = std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.skin >= 0; });
   const bool rigged = any_skin || any_animation;
   result.rigged = rigged;
+  // The listing of the file's skins (ImportedModel::skins): every skin, with the meshes instanced under it (an
+  // unnamed mesh by its JSON path).
+  for (std::size_t s = 0; s < gltf.skins.size(); ++s) {
+    ImportedSkin listed;
+    listed.name = gltf.skins[s].name;
+    listed.joints = gltf.skins[s].joints.size();
+    for (const Instance& i : instances) {
+      if (i.skin != static_cast<std::int32_t>(s)) continue;
+      const std::string& name = gltf.meshes[static_cast<std::size_t>(i.mesh)].name;
+      std::string mesh = name.empty() ? "meshes[" + std::to_string(i.mesh) + "]" : name;
+      if (std::find(listed.meshes.begin(), listed.meshes.end(), mesh) == listed.meshes.end())
+        listed.meshes.push_back(std::move(mesh));
+    }
+    result.skins.push_back(std::move(listed));
+  }
 
   // Skins: joints by node index; bind world = inverse(inverseBindMatrices[j]) (identity when none are given).
   struct SkinInfo {

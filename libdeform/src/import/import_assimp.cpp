@@ -185,6 +185,22 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
     }
   if (instances.empty()) throw Error::in_file(path, "", "the scene has no triangles");
   result.rigged = rigged;
+  if (rigged) {
+    // One skin for the listing (ImportedModel::skins): the distinct bones the meshes name, the meshes with bones.
+    ImportedSkin listed;
+    std::vector<std::string> joints;
+    for (const Instance& instance : instances) {
+      if (instance.mesh->mNumBones == 0) continue;
+      for (unsigned b = 0; b < instance.mesh->mNumBones; ++b)
+        if (instance.mesh->mBones[b] != nullptr) joints.emplace_back(instance.mesh->mBones[b]->mName.C_Str());
+      std::string name = instance.mesh->mName.C_Str();
+      if (std::find(listed.meshes.begin(), listed.meshes.end(), name) == listed.meshes.end())
+        listed.meshes.push_back(std::move(name));
+    }
+    std::sort(joints.begin(), joints.end());
+    listed.joints = static_cast<std::size_t>(std::unique(joints.begin(), joints.end()) - joints.begin());
+    result.skins.push_back(std::move(listed));
+  }
 
   // --- which nodes become bones ---
   // Skinning needs the bones' nodes and, for vertices with no weight, their mesh's node. Orphan aiBones (no node of

@@ -472,6 +472,16 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
   if (unweighted > 0)
     warnings.push_back(std::to_string(unweighted) + " vertices have no bone weight: bound to the first joint");
 
+  if (rigged) {
+    // One skin for the listing (ImportedModel::skins): the file's joints, every mesh (IQM skins them all).
+    ImportedSkin listed;
+    listed.joints = h.num_joints;
+    for (const Part& part : parts)
+      if (std::find(listed.meshes.begin(), listed.meshes.end(), part.name) == listed.meshes.end())
+        listed.meshes.push_back(part.name);
+    result.skins.push_back(std::move(listed));
+  }
+
   // --- triangles, per IQM mesh: render vertices are the mesh's vertices, IQM's clockwise front faces turned
   // counter-clockwise ---
   for (const Part& part : parts) {

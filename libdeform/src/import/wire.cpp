@@ -12,7 +12,7 @@ namespace deform::wire {
 namespace {
 
 constexpr char magic[8] = {'D', 'F', 'I', 'M', 'P', 'O', 'R', 'T'};
-constexpr std::uint32_t version = 2;  // 2: extra influences, morph targets and channels
+constexpr std::uint32_t version = 3;  // 2: extra influences, morph targets and channels; 3: skins
 
 class Writer {
  public:
@@ -175,6 +175,13 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
   w.raw(static_cast<std::uint8_t>(imported.rigged));
   w.array(imported.file_bind_world);
   w.raw(imported.up);
+  w.count(imported.skins.size());
+  for (const ImportedSkin& skin : imported.skins) {
+    w.text(skin.name);
+    w.count(skin.joints);
+    w.count(skin.meshes.size());
+    for (const std::string& name : skin.meshes) w.text(name);
+  }
   return std::move(w.bytes);
 }
 
@@ -258,6 +265,13 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
   imported.rigged = r.raw<std::uint8_t>() != 0;
   imported.file_bind_world = r.array<glm::mat4>();
   imported.up = r.raw<glm::vec3>();
+  imported.skins.resize(r.count(3 * 8));
+  for (ImportedSkin& skin : imported.skins) {
+    skin.name = r.text();
+    skin.joints = r.count(0);
+    skin.meshes.resize(r.count(8));
+    for (std::string& name : skin.meshes) name = r.text();
+  }
   if (!r.done()) r.fail("trailing bytes");
 
   // What the rest of libdeform relies on: indices in range, one weight entry per point, finite numbers.

@@ -27,6 +27,13 @@
 // by one lattice with full weight, and approximate where skin or selection weights blend (docs/performance.md,
 // "Vertex normals", states the error on the built-in character).
 //
+// Morph targets (Model::morph_targets, blend shapes): each character holds one weight per target (the targets'
+// default weights at construction), set by index, by name or from a clip's morph channels at a time
+// (set_morph_weights(clip, t): the engine's path, sample_morph_weights). update() runs MorphJob on the bind positions
+// (and, transporting normals, the bind normals) into per-character arrays sized at construction, then skins those:
+// morph in bind space, then skin, as glTF and three.js do. With no targets, or every weight 0, the job is skipped and
+// the frame costs what it did without morphs. The lattices deform the morphed, skinned points as any others.
+//
 // A crowd: instance() makes another character of the same model and rig that shares the immutable bind data
 // (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
 // positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
@@ -36,14 +43,17 @@
 #include <glm/glm.hpp>
 #include <memory>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "deform/character/export.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/model.hpp"
+#include "deform/runtime/morph.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "deform/runtime/spring_chain.hpp"
@@ -77,7 +87,7 @@ class DEFORM_CHARACTER_API Character {
   ~Character() = default;
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
-  // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, the
+  // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default morph weights, the
   // settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max stretch), the
   // lattices' current elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
   // 218 KB for the built-in character; docs/performance.md, "Elasticity and the whole frame").
@@ -102,6 +112,30 @@ class DEFORM_CHARACTER_API Character {
   // a lead that is not finite and > 0. No allocation.
   Status set_pose(const Pose& pose, const Pose& later, float lead);
   const Pose& pose() const noexcept { return pose_; }
+
+  // Morph-target weights, one per Model::morph_targets entry (empty without targets), as update() applies them.
+  // A new character (and an instance()) starts from the targets' default weights. The setters refuse, changing
+  // nothing, an index out of range ("morph target out of range"), a name no target has ("no morph target of that
+  // name") and a weight that is not finite; a name sets every target of that name (glTF meshes may repeat one).
+  // Take effect at the next update(). No allocation: O(1), O(targets) by name or span.
+  std::size_t morph_target_count() const noexcept { return morph_weights_.size(); }
+  std::span<const float> morph_weights() const noexcept { return morph_weights_; }
+  Status set_morph_weight(std::size_t target, float weight) noexcept;
+  Status set_morph_weight(std::string_view name, float weight) noexcept;
+  // All of them at once: as many weights as targets.
+  Status set_morph_weights(std::span<const float> weights) noexcept;
+  // The clip's morph channels at `seconds` (sample_morph_weights: the clip's local time): the targets the clip
+  // animates take its weights, the others keep theirs. Refuses, changing nothing, what sample_morph_weights refuses
+  // (a time not finite, a channel's target out of range). O(channels · log keys), no allocation.
+  Status set_morph_weights(const Animation& clip, float seconds) noexcept;
+  // Every weight back to its target's default.
+  void reset_morph_weights() noexcept;
+  // The morphed bind-pose positions the last deforming update() skinned, one per point: the bind positions when no
+  // weight was set (no targets, or all 0). A caller that deforms elsewhere (deform_on_cpu = false) morphs itself —
+  // MorphJob over model().morph_targets with morph_weights() — as update() then does not.
+  std::span<const glm::vec3> morphed_bind_positions() const noexcept {
+    return morphed_ ? std::span<const glm::vec3>(morphed_positions_) : std::span<const glm::vec3>(model().mesh.positions);
+  }
 
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
@@ -235,6 +269,12 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec3> point_normals_;     // transported: one per point, as of update()
   std::vector<glm::vec3> normals_;           // one per render vertex
   std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch (allocated for the recomputed mode only)
+  // Morph targets: one weight per target; the morphed bind positions and normals, one per point (allocated only when
+  // the model has targets); whether the last deforming update() morphed (a weight was not 0).
+  std::vector<float> morph_weights_;
+  std::vector<glm::vec3> morphed_positions_;
+  std::vector<glm::vec3> morphed_normals_;
+  bool morphed_ = false;
   NormalsMode normals_mode_ = NormalsMode::transported;
   bool transported_current_ = false;  // the last update() transported point_normals_
   bool normals_current_ = false;

@@ -34,6 +34,14 @@ struct ImportOptions {
   bool loop_clips = true;
 };
 
+// A skin of the file, for listings (`deform info`): the merged Model has one skeleton and one set of weights.
+struct ImportedSkin {
+  std::string name;                 // glTF: the skin's name (may be empty); other formats: empty
+  std::size_t joints = 0;           // glTF: the skin's joint count; other formats: the distinct bones the meshes name
+  std::vector<std::string> meshes;  // the names of the meshes it deforms, each once, in scene order (may be empty)
+  bool operator==(const ImportedSkin&) const = default;
+};
+
 struct ImportedModel {
   // mesh in bind pose (world space), skeleton, weights (one per point). model.name is the file's stem.
   Model model;
@@ -52,6 +60,9 @@ struct ImportedModel {
   // for files that declare none (glTF is +Y by definition). The data is left as the file has it: a viewer turns its
   // scene so that `up` points up.
   glm::vec3 up{0.0f, 1.0f, 0.0f};
+  // The file's skins: glTF's every skin, used or not, in file order; for other formats one entry when rigged (their
+  // meshes' bones taken as one skin), none when not.
+  std::vector<ImportedSkin> skins;
 };
 
 // Imports the model at `path` in this process. Throws deform::Error naming the file for a file Assimp cannot read
