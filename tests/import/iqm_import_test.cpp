@@ -231,7 +231,7 @@ TEST_CASE("isolated import of mrfixit.iqm gives the same model") {
 TEST_CASE("hostile IQM files: truncated, corrupted or lying headers give a model or an error naming the file") {
   const std::string path = require_model();
   const std::vector<unsigned char> original = read_bytes(path);
-  const fs::path folder = fs::temp_directory_path() / "deform_iqm_hostile";
+  const fs::path folder = fs::temp_directory_path() / ("deform_iqm_hostile_" + std::to_string(std::random_device{}()));
   fs::remove_all(folder);
   fs::create_directories(folder);
   const fs::path copy = folder / "model.iqm";
@@ -347,7 +347,8 @@ TEST_CASE("a looping IQM clip wraps from its last frame to its first; several ro
   std::memcpy(&joints, bytes.data() + 28 + 44, 4);
   const std::int32_t none = -1;
   std::memcpy(bytes.data() + joints + 48 + 4, &none, 4);
-  const fs::path two_roots = fs::temp_directory_path() / "deform_iqm_two_roots.iqm";
+  const fs::path two_roots =
+      fs::temp_directory_path() / ("deform_iqm_two_roots_" + std::to_string(std::random_device{}()) + ".iqm");
   std::ofstream(two_roots, std::ios::binary)
       .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   const deform::ImportedModel rooted = deform::import_model(two_roots.string());
