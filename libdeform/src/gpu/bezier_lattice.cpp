@@ -2,6 +2,7 @@
 #include <epoxy/gl.h>  // first: epoxy must precede every other GL header
 
 #include "deform/gpu/lattice.hpp"
+#include "gl_objects.hpp"
 
 #include <algorithm>
 #include <string>
@@ -11,6 +12,9 @@
 
 namespace deform {
 namespace {
+
+using gpu_detail::build_compute_program;
+using gpu_detail::storage_buffer;
 
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "control points are uploaded as packed float triples");
 static_assert(sizeof(GLuint) == sizeof(unsigned int), "GL object names are held as unsigned int");
@@ -156,55 +160,6 @@ void main() {
   }
 }
 )";
-GLuint storage_buffer(const void* data, std::size_t bytes, GLenum usage) {
-  GLuint buffer = 0;
-  glGenBuffers(1, &buffer);
-  glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
-  // Never zero bytes: an empty binding still binds valid storage.
-  glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(std::max<std::size_t>(bytes, 16)), nullptr, usage);
-  if (data && bytes) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
-  return buffer;
-}
-
-// The driver's message about a shader or a program (get_parameter: glGetShaderiv or glGetProgramiv; get_log: the
-// matching glGet...InfoLog).
-template <class GetParameter, class GetLog>
-std::string info_log(GLuint object, GetParameter get_parameter, GetLog get_log) {
-  GLint length = 0;
-  get_parameter(object, GL_INFO_LOG_LENGTH, &length);
-  std::string log(std::size_t(std::max(length, 1)), '\0');
-  get_log(object, GLsizei(log.size()), nullptr, log.data());
-  log.resize(std::min(log.find('\0'), log.size()));
-  return log;
-}
-
-// The compute program for `source`, or 0 with the driver's message in `log`.
-GLuint build_compute_program(const std::string& source, std::string& log) {
-  const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    log = info_log(shader, glGetShaderiv, glGetShaderInfoLog);
-    glDeleteShader(shader);
-    return 0;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, shader);
-  glLinkProgram(program);
-  glDetachShader(program, shader);
-  glDeleteShader(shader);
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    log = info_log(program, glGetProgramiv, glGetProgramInfoLog);
-    glDeleteProgram(program);
-    return 0;
-  }
-  return program;
-}
-
 Status check_binding(const LatticeBinding& binding) {
   if (!GpuBezierLattice::supported()) return Status::failure("the current context is not OpenGL 4.3");
   if (binding.kind != LatticeKind::bezier) return Status::failure("only Bezier bindings are evaluated on the GPU");
@@ -324,7 +279,7 @@ Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal
   const glm::ivec3 d = point_counts - 1;
   const std::string source = "#version 430\nconst ivec3 degree = ivec3(" + std::to_string(d.x) + ", " +
                              std::to_string(d.y) + ", " + std::to_string(d.z) + ");\n" + shader_body;
-  program_ = build_compute_program(source, shader_log_);
+  program_ = build_compute_program(source.c_str(), shader_log_);
   if (!program_) {
     release();
     return Status::failure("the driver rejected the compute shader (shader_log() has its message)");

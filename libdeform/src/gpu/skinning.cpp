@@ -3,6 +3,7 @@
 #include <epoxy/gl.h>  // first: epoxy must precede every other GL header
 
 #include "deform/gpu/skinning.hpp"
+#include "gl_objects.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -10,6 +11,8 @@
 
 namespace deform {
 namespace {
+
+using gpu_detail::storage_buffer;
 
 static_assert(sizeof(glm::mat4) == 16 * sizeof(float), "palettes are uploaded as packed column-major floats");
 static_assert(sizeof(glm::u16vec4) == 8, "bone indices are uploaded as two 16-bit pairs per vertex");
@@ -118,56 +121,6 @@ void main() {
 }
 )";
 
-GLuint storage_buffer(const void* data, std::size_t bytes, GLenum usage) {
-  GLuint buffer = 0;
-  glGenBuffers(1, &buffer);
-  glBindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
-  // Never zero bytes: an empty binding still binds valid storage.
-  glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(std::max<std::size_t>(bytes, 16)), nullptr, usage);
-  if (data && bytes) glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), data);
-  return buffer;
-}
-
-std::string info_log(GLuint object, bool program) {
-  GLint length = 0;
-  if (program)
-    glGetProgramiv(object, GL_INFO_LOG_LENGTH, &length);
-  else
-    glGetShaderiv(object, GL_INFO_LOG_LENGTH, &length);
-  std::string log(std::size_t(std::max(length, 1)), '\0');
-  if (program)
-    glGetProgramInfoLog(object, GLsizei(log.size()), nullptr, log.data());
-  else
-    glGetShaderInfoLog(object, GLsizei(log.size()), nullptr, log.data());
-  log.resize(std::min(log.find('\0'), log.size()));
-  return log;
-}
-
-GLuint build_program(std::string& log) {
-  const GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-  glShaderSource(shader, 1, &shader_source, nullptr);
-  glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    log = info_log(shader, false);
-    glDeleteShader(shader);
-    return 0;
-  }
-  const GLuint program = glCreateProgram();
-  glAttachShader(program, shader);
-  glLinkProgram(program);
-  glDetachShader(program, shader);
-  glDeleteShader(shader);
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    log = info_log(program, true);
-    glDeleteProgram(program);
-    return 0;
-  }
-  return program;
-}
-
 }  // namespace
 
 GpuSkinning::GpuSkinning(GpuSkinning&& other) noexcept { *this = std::move(other); }
@@ -262,7 +215,7 @@ Status GpuSkinning::create(const GpuSkinningBind& bind) {
     }
   }
 
-  program_ = build_program(shader_log_);
+  program_ = gpu_detail::build_compute_program(shader_source, shader_log_);
   if (!program_) {
     release();
     return Status::failure("the driver rejected the compute shader (shader_log() has its message)");
