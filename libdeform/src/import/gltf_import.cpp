@@ -652,7 +652,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   // --- mesh: one submesh per primitive instance; points merged by (exact bind position, influences) ---
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
   std::size_t unweighted = 0, over_four = 0, skipped_primitives = 0;
-  std::uint32_t apart_serial = 0;  // PointKey word 11 of vertices that must not merge
+  std::uint32_t apart_serial = 0;  // PointKey word 11 of vertices that must not merge (morph targets move them)
+  ExtraInfluenceIds extra_ids;     // ... and of vertices with more than four influences
   // Per node holding a morphed mesh: its first target in model.morph_targets and its target count.
   std::vector<std::pair<std::size_t, std::size_t>> targets_of_node(node_count, {0, 0});
   std::vector<MorphTarget>& morph_targets = result.model.morph_targets;
@@ -799,9 +800,19 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         const glm::dvec3 raw{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
         const glm::vec3 position = reader.narrow(glm::dvec3(to_world * glm::dvec4(raw, 1.0)),
                                                  element + " POSITION: vertex " + std::to_string(v));
-        // Vertices with extras, or moved by morph targets, keep points of their own (their key would need the rest).
-        const bool apart = influences_of.size() > 4 || !primitive.targets.empty();
-        const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, apart ? ++apart_serial : 0),
+        // Vertices moved by morph targets keep points of their own (their key would need every target's delta);
+        // vertices with extras merge with those of the same position and the same influences, extras too.
+        std::uint32_t apart = 0;
+        if (!primitive.targets.empty()) {
+          apart = ++apart_serial;
+        } else if (influences_of.size() > 4) {
+          double total = 0.0;
+          for (const auto& i : influences_of) total += i.second;
+          for (std::size_t k = 4; k < influences_of.size(); ++k)
+            extra_ids.add(influences_of[k].first, static_cast<float>(influences_of[k].second / total));
+          apart = extra_ids.take();
+        }
+        const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, apart),
                                                             static_cast<std::uint32_t>(mesh.positions.size()));
         if (inserted) {
           const auto point = static_cast<std::uint32_t>(mesh.positions.size());

@@ -421,7 +421,7 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
       std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.mesh->HasTextureCoords(0); });
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
   std::size_t unweighted = 0, skipped_faces = 0;
-  std::uint32_t apart_serial = 0;  // keys of vertices kept apart from the merge
+  ExtraInfluenceIds extra_ids;  // the point key's word for vertices with more than four influences
   struct Weight {
     std::uint32_t vertex;
     std::uint16_t bone;
@@ -481,9 +481,15 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
       const glm::vec3 position = glm::vec3(frame * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
       if (!finite(position))
         throw Error::in_file(path, element + ": vertex " + std::to_string(v), "position is not finite");
-      // A vertex with extras keeps a point of its own (its key would need every influence).
-      const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, count > 4 ? ++apart_serial : 0),
-                                                          static_cast<std::uint32_t>(mesh.positions.size()));
+      // A vertex with extras merges with the vertices of the same position and the same influences, extras too.
+      std::uint32_t extras = 0;
+      if (count > 4) {
+        for (std::size_t k = 4; k < count; ++k)
+          extra_ids.add(vertex_weights[begin + k].bone, vertex_weights[begin + k].weight / total);
+        extras = extra_ids.take();
+      }
+      const auto [found, inserted] =
+          point_of_key.emplace(point_key(position, influences, extras), static_cast<std::uint32_t>(mesh.positions.size()));
       if (inserted) {
         const auto point = static_cast<std::uint32_t>(mesh.positions.size());
         mesh.positions.push_back(position);

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -105,8 +106,9 @@ struct Influences {
   std::array<float, 4> weights{};
 };
 
-// Word 11 is 0 for a vertex that may merge with others of the same position and influences, else a serial that
-// keeps it apart (a vertex with more than four influences, or one that morph targets move).
+// Word 11 is 0 for a vertex that may merge with others of the same position and influences; for one with more than
+// four influences, the id of its extra influences (ExtraInfluenceIds: equal lists, equal ids, with the top bit set);
+// else a serial that keeps it apart (a vertex that morph targets move).
 struct PointKey {
   std::array<std::uint32_t, 12> bits;
   bool operator==(const PointKey&) const = default;
@@ -117,6 +119,29 @@ struct PointKeyHash {
     for (std::uint32_t word : key.bits) h = (h ^ word) * 1099511628211ull;
     return static_cast<std::size_t>(h);
   }
+};
+
+// Ids of the lists of influences past the fourth (bone, normalised weight) that vertices carry, equal for equal
+// lists: with the position and the four slots they decide which render vertices share a point, so that a vertex
+// with extras merges exactly as one without (a point is a distinct position with its skin, docs/import.md).
+class ExtraInfluenceIds {
+ public:
+  void add(std::uint16_t bone, float weight) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &weight, 4);
+    list_.push_back(bone);
+    list_.push_back(bits);
+  }
+  // The id of the list added since the last call (then cleared), 0x80000000 and up.
+  std::uint32_t take() {
+    const auto [found, inserted] = ids_.emplace(list_, 0x80000000u | static_cast<std::uint32_t>(ids_.size()));
+    list_.clear();
+    return found->second;
+  }
+
+ private:
+  std::vector<std::uint32_t> list_;
+  std::map<std::vector<std::uint32_t>, std::uint32_t> ids_;
 };
 
 inline PointKey point_key(glm::vec3 position, const Influences& influences, std::uint32_t apart = 0) {
