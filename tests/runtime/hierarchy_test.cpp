@@ -730,3 +730,26 @@ TEST_CASE("apply with normals: apply's positions to the bit, and the normals of 
   MESSAGE("apply with normals vs the composed map's evaluation: largest difference ", worst);
   CHECK(worst < 1e-5);
 }
+
+TEST_CASE("bind_hierarchy selects by the whole skin: influences past the fourth count toward a subtree") {
+  // Every point on five bones, the hand's (3) the weakest, so it lies past the four slots: the forearm's subtree
+  // (2 and 3) weighs 0.17 + 0.13.
+  Limb limb = make_limb();
+  deform::SkinWeights weights;
+  const std::uint16_t bones[5] = {0, 4, 1, 2, 3};
+  const float values[5] = {0.25f, 0.25f, 0.20f, 0.17f, 0.13f};
+  for (std::size_t p = 0; p < limb.points.size(); ++p) deform::append_influences(weights, bones, values);
+  REQUIRE(weights.has_extra());
+  const DeformerHierarchy h = deform::bind_hierarchy(limb.skeleton, limb.points, weights, {spec_on("fore", 2)});
+  REQUIRE(h.bound_count(0) > 0);
+  for (std::size_t n = 0; n < h.binding(0).vertices.size(); ++n) {
+    if (h.binding(0).vertices[n] == deform::LatticeBinding::no_vertex) continue;
+    CHECK(h.bound_weights(0)[n] == doctest::Approx(0.30f).epsilon(1e-5));
+  }
+
+  // A malformed extra layout is refused at bind time, naming the problem.
+  deform::SkinWeights broken = weights;
+  broken.extra_offsets.back() += 1;
+  CHECK_THROWS_WITH_AS(deform::bind_hierarchy(limb.skeleton, limb.points, broken, {spec_on("fore", 2)}),
+                       doctest::Contains("extra influences are malformed"), deform::Error);
+}

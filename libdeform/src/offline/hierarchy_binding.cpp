@@ -34,6 +34,18 @@ DeformerHierarchy bind_hierarchy(const Skeleton& skeleton, std::span<const glm::
   if (weights.size() != point_count) {
     throw Error::in_file(source, "", "skin weights do not match the point count");
   }
+  // The extra influences' layout (SkinWeights): ascending points in range, offsets from 0 that never decrease and
+  // end at the arrays' common size.
+  if (weights.has_extra()) {
+    const std::size_t rows = weights.extra_points.size();
+    bool ok = weights.extra_offsets.size() == rows + 1 && weights.extra_offsets.front() == 0 &&
+              weights.extra_offsets.back() == weights.extra_bones.size() &&
+              weights.extra_bones.size() == weights.extra_weights.size();
+    for (std::size_t j = 0; ok && j < rows; ++j)
+      ok = weights.extra_points[j] < point_count && weights.extra_offsets[j] <= weights.extra_offsets[j + 1] &&
+           (j == 0 || weights.extra_points[j - 1] < weights.extra_points[j]);
+    if (!ok) throw Error::in_file(source, "", "skin weights' extra influences are malformed");
+  }
   const std::vector<BoneSegment> segments = bone_segments(skeleton);
   std::vector<BoundLattice> lattices;
   lattices.reserve(specs.size());
@@ -81,12 +93,23 @@ DeformerHierarchy bind_hierarchy(const Skeleton& skeleton, std::span<const glm::
       for (std::size_t b = 0; b < in_subtree.size(); ++b) {
         in_subtree[b] = skeleton.is_ancestor(spec.bone, std::int32_t(b)) ? 1 : 0;
       }
+      // A point's weight on the subtree: its four slots and, past them, its extra influences (SkinWeights).
+      std::vector<float> subtree_weight(point_count, 0.0f);
       for (std::size_t p = 0; p < point_count; ++p) {
-        float sum = 0.0f;
         for (int slot = 0; slot < max_influences; ++slot) {
           const std::uint16_t bone = weights.bones[p][slot];
-          if (bone < in_subtree.size() && in_subtree[bone]) sum += weights.weights[p][slot];
+          if (bone < in_subtree.size() && in_subtree[bone]) subtree_weight[p] += weights.weights[p][slot];
         }
+      }
+      for (std::size_t j = 0; j < weights.extra_points.size(); ++j) {
+        const std::uint32_t p = weights.extra_points[j];
+        for (std::uint32_t e = weights.extra_offsets[j]; e < weights.extra_offsets[j + 1]; ++e) {
+          const std::uint16_t bone = weights.extra_bones[e];
+          if (bone < in_subtree.size() && in_subtree[bone]) subtree_weight[p] += weights.extra_weights[e];
+        }
+      }
+      for (std::size_t p = 0; p < point_count; ++p) {
+        const float sum = subtree_weight[p];
         selection[p] = sum > spec.weight_threshold ? std::min(sum, 1.0f) : 0.0f;
       }
     }
