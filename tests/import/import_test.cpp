@@ -13,6 +13,8 @@
 #include <assimp/scene.h>
 #include <doctest/doctest.h>
 
+#include "skin_model.hpp"
+
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cmath>
@@ -54,32 +56,12 @@ deform::Status sample(const deform::Animation& clip, float seconds, deform::Pose
   return job.run();
 }
 
-std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
-  const std::size_t bones = model.skeleton.bone_count();
-  std::vector<glm::mat4> world(bones), palette(bones);
-  deform::LocalToWorldJob fk;
-  fk.skeleton = &model.skeleton;
-  fk.rotations = pose.rotations;
-  fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
-  REQUIRE(fk.run());
-  std::vector<glm::vec3> out(model.mesh.point_count());
-  deform::SkinningJob job;
-  job.matrices = palette;
-  job.bone_indices = model.weights.bones;
-  job.bone_weights = model.weights.weights;
-  job.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
-  job.out_positions = deform::as_floats(std::span<glm::vec3>(out));
-  REQUIRE(job.validate());
-  REQUIRE(job.run());
-  return out;
-}
+using import_test::skin;
 
 // Assimp's own view of the file, read with the importer's flags so vertices line up: each instance's vertices are
 // the model's render vertices, in order. `positions(clip, seconds)` skins them the way Assimp's viewer does:
-// Σ w · G_bone(t) · offset · v with the node tree animated by the clip (lerp / slerp of the keys), the strongest 4
-// weights renormalised, unweighted vertices carried by their node.
+// Σ w · G_bone(t) · offset · v with the node tree animated by the clip (lerp / slerp of the keys), every weight
+// (normalised by their sum), unweighted vertices carried by their node.
 struct AssimpReference {
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
@@ -205,7 +187,7 @@ struct AssimpReference {
   }
 
   // Per render vertex, in double precision: Σ w · G_bone(t) · offset · v with the node tree animated by clip
-  // `clip` at `seconds` (the strongest 4 weights renormalised, as libdeform keeps them), unweighted vertices carried
+  // `clip` at `seconds` (every weight, normalised by their sum: libdeform keeps them all), unweighted vertices carried
   // by their node.
   std::vector<glm::vec3> positions(int clip, double seconds) const {
     const aiAnimation* animation = scene->mAnimations[clip];
@@ -233,8 +215,6 @@ struct AssimpReference {
           out.emplace_back(world[node] * p);
           continue;
         }
-        std::stable_sort(list_v.begin(), list_v.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-        list_v.resize(std::min<std::size_t>(list_v.size(), 4));
         double total = 0.0;
         glm::dvec4 sum(0.0);
         for (const auto& [w, g] : list_v) {

@@ -4,6 +4,8 @@
 // copies: truncated and corrupted files give a model or a deform::Error naming the file, never a crash.
 #include <doctest/doctest.h>
 
+#include "skin_model.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -123,26 +125,7 @@ struct Iqm {
   }
 };
 
-std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
-  const std::size_t bones = model.skeleton.bone_count();
-  std::vector<glm::mat4> world(bones), palette(bones);
-  deform::LocalToWorldJob fk;
-  fk.skeleton = &model.skeleton;
-  fk.rotations = pose.rotations;
-  fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
-  REQUIRE(fk.run());
-  std::vector<glm::vec3> out(model.mesh.point_count());
-  deform::SkinningJob job;
-  job.matrices = palette;
-  job.bone_indices = model.weights.bones;
-  job.bone_weights = model.weights.weights;
-  job.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
-  job.out_positions = deform::as_floats(std::span<glm::vec3>(out));
-  REQUIRE(job.run());
-  return out;
-}
+using import_test::skin;
 
 // Largest distance over render vertices (IQM vertex r is render vertex r: mrfixit's meshes are in vertex order).
 double worst(const deform::Model& model, const std::vector<glm::vec3>& points, const std::vector<glm::dvec3>& ref) {
