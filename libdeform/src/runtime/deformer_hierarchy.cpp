@@ -5,6 +5,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/prefetch.hpp"
 #include "finite.hpp"
 
 namespace deform {
@@ -223,7 +224,11 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
   const float volume = lattice.spec.shape.volume;
   for (std::size_t i = 0; i <= last; ++i) {
     const float s = i == 0 ? ratio[1] : i == last ? ratio[last] : 0.5f * (ratio[i] + ratio[i + 1]);
-    slices.scale[i] = volume > 0.0f ? std::pow(std::max(s, min_volume_ratio), -0.5f * volume) : 1.0f;
+    // s^(-volume/2); for full compensation (the default) 1/√s, to float rounding, without a pow.
+    const float ratio_s = std::max(s, min_volume_ratio);
+    slices.scale[i] = volume == 1.0f ? 1.0f / std::sqrt(ratio_s)
+                      : volume > 0.0f ? std::pow(ratio_s, -0.5f * volume)
+                                      : 1.0f;
   }
 }
 
@@ -354,6 +359,25 @@ void DeformerHierarchy::reset() {
     lattice.motion_known = false;
     lattice.rate_known = false;
   }
+}
+
+void DeformerHierarchy::prefetch() const noexcept {
+  prefetch_span(lattices_);
+  for (const Lattice& lattice : lattices_) {
+    lattice.elastic.prefetch();
+    prefetch_span(lattice.rest.control_points());
+    prefetch_span(lattice.field.control_points());
+    prefetch_span(lattice.far_face);
+    prefetch_span(lattice.target_points);
+    prefetch_span(lattice.world_displacements);
+    if (lattice.spec.motion.active()) {
+      prefetch_span(lattice.rest_velocity);
+      prefetch_span(lattice.accel_start);
+      prefetch_span(lattice.accel_end);
+    }
+  }
+  prefetch_span(scratch_);
+  prefetch_span(normal_scratch_);
 }
 
 Status DeformerHierarchy::update(std::span<const glm::mat4> world) {

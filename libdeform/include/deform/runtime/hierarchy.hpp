@@ -180,6 +180,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   Status step(float dt, std::span<const glm::mat4> world, std::span<const glm::mat4> world_rate = {});
   // Every control point back on the unstretched rest, at rest; stretch targets 0.
   void reset();
+  // Cache hints for the state the next step(), update() and apply() read and write (deform/runtime/prefetch.hpp):
+  // no effect on it.
+  void prefetch() const noexcept;
 
   // Per frame, after step(): carries the lattices into world space with the bones' current matrices (`world`, one per
   // bone, from LocalToWorldJob for the pose the points were skinned with). Refuses, changing nothing, a size
