@@ -561,7 +561,8 @@ Status Character::update(float dt) {
   if (!lattice_fields) {
     // The carried points only translate: their normals stay as skinned.
     if (const Status status = hierarchy_.apply_carried(positions_); !status) return status;
-  } else if (const Status status = transport ? hierarchy_.apply(positions_, point_normals()) : hierarchy_.apply(positions_);
+  } else if (const Status status =
+                 transport ? hierarchy_.apply(positions_, point_normals()) : hierarchy_.apply(positions_);
              !status) {
     return status;
   }

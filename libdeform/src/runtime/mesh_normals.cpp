@@ -221,8 +221,8 @@ InPlaceGather plan_in_place_gather(std::span<const std::uint32_t> map, std::size
   plan.destinations = count;
   // Slot s may be overwritten once every other destination reading it has been written (readers[s] = 0). Writing a
   // destination frees one read of its source. What is left when nothing is free are cycles (each slot read by the
-  // one before it): one slot's value is held (in the scratch slot), which frees that slot, and its cycle unwinds to the move from the
-  // held value before another cycle is broken, so one held value suffices.
+  // one before it): one slot's value is held (in the scratch slot), which frees that slot, and its cycle unwinds to
+  // the move from the held value before another cycle is broken, so one scratch slot suffices.
   std::vector<std::uint32_t> readers(count, 0);
   std::vector<std::uint8_t> pending(count, 0);
   std::size_t remaining = 0;
