@@ -175,6 +175,46 @@ TEST_CASE("heat weights: a hand resting against a thigh keeps its arm's weights 
   CHECK(leg_weight(voxel.weights) == 0.0f);
 }
 
+TEST_CASE("heat weights: more than four influences on request, in SkinWeights' extras") {
+  // A cylinder on a chain of eight short bones: a point sees several, and with max_influences 8 keeps them all.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.3f, 2.0f, 41);
+  std::vector<Bone> bones = {bone(-1, {0, 0, 0}, "b0")};
+  for (int b = 1; b < 8; ++b) bones.push_back(bone(b - 1, {0, 0.25f, 0}, "b" + std::to_string(b)));
+  const Skeleton skeleton = make_skeleton(bones);
+  deform::HeatWeightsOptions o;
+  const deform::WeightsResult four = deform::compute_heat_weights(mesh, skeleton, o);
+  CHECK_FALSE(four.weights.has_extra());
+  o.max_influences = 8;
+  const deform::WeightsResult eight = deform::compute_heat_weights(mesh, skeleton, o);
+  REQUIRE(eight.weights.has_extra());
+  REQUIRE(eight.weights.extra_offsets.size() == eight.weights.extra_points.size() + 1);
+  std::size_t most = 0;
+  for (std::size_t p = 0; p < mesh.point_count(); ++p) {
+    CAPTURE(p);
+    const std::size_t count = deform::influence_count(eight.weights, p);
+    most = std::max(most, count);
+    CHECK(count <= 8);
+    float sum = 0.0f, weakest_slot = 1.0f;
+    for (int k = 0; k < 4; ++k) {
+      sum += eight.weights.weights[p][k];
+      if (eight.weights.weights[p][k] > 0.0f) weakest_slot = std::min(weakest_slot, eight.weights.weights[p][k]);
+    }
+    for (std::size_t j = 0; j < eight.weights.extra_points.size(); ++j) {
+      if (eight.weights.extra_points[j] != p) continue;
+      for (std::uint32_t e = eight.weights.extra_offsets[j]; e < eight.weights.extra_offsets[j + 1]; ++e) {
+        sum += eight.weights.extra_weights[e];
+        CHECK(eight.weights.extra_weights[e] <= weakest_slot);  // the slots hold the strongest four
+      }
+    }
+    CHECK(sum == doctest::Approx(1.0f).epsilon(1e-5));
+    CHECK(eight.weights.bones[p][0] == four.weights.bones[p][0]);  // the same strongest bone either way
+  }
+  CHECK(most > 4);
+  o.max_influences = deform::max_requested_influences + 1;
+  CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+}
+
 TEST_CASE("heat weights: a bone beside the surface does not heat it, whichever way the triangles wind") {
   // A body (cylinder of radius 0.2 on lower -> upper) and a bone 'outside' of another part, running 0.1 beside the
   // body's surface: nearer to the body's points there than the body's own bones, and nothing between. Only bones

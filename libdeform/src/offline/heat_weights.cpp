@@ -32,8 +32,9 @@ constexpr std::size_t max_visibility_tries = 32;
 constexpr float max_facing = -0.2f;
 
 void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
-  auto fail = [](const char* what, const char* rule) { throw Error::invalid_argument(what, rule); };
-  if (o.max_influences < 1 || o.max_influences > max_influences) fail("max_influences", "must be 1 to 4");
+  auto fail = [](const char* what, const std::string& rule) { throw Error::invalid_argument(what, rule); };
+  if (o.max_influences < 1 || o.max_influences > max_requested_influences)
+    fail("max_influences", "must be 1 to " + std::to_string(max_requested_influences));
   if (!std::isfinite(o.heat) || o.heat <= 0.0f) fail("heat", "must be finite and > 0");
   if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
   if (!o.deforming.empty()) {
@@ -74,7 +75,7 @@ struct Influence {
 
 // The strongest few influences of one point, kept while bones are solved one by one.
 struct Strongest {
-  std::array<Influence, max_influences> slot{};
+  std::array<Influence, max_requested_influences> slot{};
   int used = 0;
   void offer(std::uint32_t bone, float weight, int keep) {
     if (used < keep) {
@@ -89,34 +90,22 @@ struct Strongest {
   }
 };
 
-// Normalised, strongest first, under min_weight dropped, unused slots (bone 0, weight 0). `fallback` when empty.
-void store(Strongest s, std::uint32_t fallback, glm::u16vec4& bones, glm::vec4& weights) {
-  // Insertion sort of at most four (std::sort here trips GCC 12's -Warray-bounds on its 16-element threshold).
-  for (int k = 1; k < s.used; ++k)
-    for (int m = k; m > 0; --m) {
-      Influence& a = s.slot[static_cast<std::size_t>(m - 1)];
-      Influence& b = s.slot[static_cast<std::size_t>(m)];
-      if (a.weight > b.weight || (a.weight == b.weight && a.bone < b.bone)) break;
-      std::swap(a, b);
-    }
+// Appends point's influences to `weights`: those under min_weight of the sum dropped, the rest normalised, strongest
+// first, past the fourth in the extras (append_influences). `fallback` alone when none is left.
+void store(const Strongest& s, std::uint32_t fallback, SkinWeights& weights) {
   float total = 0.0f;
   for (int k = 0; k < s.used; ++k) total += s.slot[static_cast<std::size_t>(k)].weight;
-  int kept = 0;
-  for (int k = 0; k < s.used; ++k)
-    if (s.slot[static_cast<std::size_t>(k)].weight >= min_weight * total && total > 0.0f) ++kept;
-  bones = glm::u16vec4(0);
-  weights = glm::vec4(0.0f);
-  if (kept == 0) {
-    bones[0] = static_cast<std::uint16_t>(fallback);
-    weights[0] = 1.0f;
-    return;
+  std::array<std::uint16_t, max_requested_influences> bones{};
+  std::array<float, max_requested_influences> values{};
+  std::size_t kept = 0;
+  for (int k = 0; k < s.used; ++k) {
+    const Influence& in = s.slot[static_cast<std::size_t>(k)];
+    if (!(total > 0.0f) || in.weight < min_weight * total) continue;
+    bones[kept] = static_cast<std::uint16_t>(in.bone);
+    values[kept++] = in.weight;
   }
-  total = 0.0f;
-  for (int k = 0; k < kept; ++k) total += s.slot[static_cast<std::size_t>(k)].weight;
-  for (int k = 0; k < kept; ++k) {
-    bones[k] = static_cast<std::uint16_t>(s.slot[static_cast<std::size_t>(k)].bone);
-    weights[k] = s.slot[static_cast<std::size_t>(k)].weight / total;
-  }
+  append_influences(weights, std::span(bones.data(), kept), std::span(values.data(), kept),
+                    static_cast<std::uint16_t>(fallback));
 }
 
 std::string bone_label(const Skeleton& skeleton, std::uint32_t bone) {
@@ -458,16 +447,18 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     }
   }
 
+  result.weights = {};
+  result.weights.bones.reserve(point_count);
+  result.weights.weights.reserve(point_count);
   for (std::uint32_t p = 0; p < point_count; ++p) {
     const std::uint32_t v = welded[p];
     const std::uint32_t i = island[v];
     if (!island_heated[i]) {
-      result.weights.bones[p] = glm::u16vec4(static_cast<std::uint16_t>(rigid_bone[i]), 0, 0, 0);
-      result.weights.weights[p] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+      append_influences(result.weights, {}, {}, static_cast<std::uint16_t>(rigid_bone[i]));
       continue;
     }
     const std::uint32_t fallback = heated_by[v] != UINT32_MAX ? heated_by[v] : nearest_any[v];
-    store(strongest[v], fallback, result.weights.bones[p], result.weights.weights[p]);
+    store(strongest[v], fallback, result.weights);
   }
   for (std::string& w : bones_without_vertices(result.weights, skeleton, options.deforming))
     result.warnings.push_back(std::move(w));

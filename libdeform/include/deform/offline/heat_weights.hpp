@@ -26,7 +26,7 @@
 //     tail: the body hides the bones) looks again past its own triangles only, with a warning naming it. An island
 //     that still sees none is bound rigidly to the bone nearest most of its points, with a warning naming it.
 //  5. The strongest `max_influences` weights are kept, those under 0.1% of their sum dropped, the rest normalised,
-//     strongest first.
+//     strongest first; past the fourth in SkinWeights' extras.
 // Cost: O(points × bones) for the nearest bones, a ray per point and tried bone (BVH, docs/performance.md), one
 // sparse factorisation (about O(points^1.5) for a surface) and one solve per heated bone.
 #include <cstdint>
@@ -39,7 +39,7 @@
 namespace deform {
 
 struct HeatWeightsOptions {
-  int max_influences = 4;     // 1 .. deform::max_influences
+  int max_influences = 4;     // 1 .. deform::max_requested_influences (16); past 4 in SkinWeights' extras
   float heat = 1.0f;          // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
   float leaf_length = 1.0f;   // >= 0: a leaf bone's length as a multiple of its distance to its parent
   bool visibility = true;     // false: the nearest bone heats each point whether it sees it or not
