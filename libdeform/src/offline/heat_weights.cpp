@@ -255,7 +255,9 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     }
   };
   // Heats v from its nearest bone that `bvh` (null: nothing) does not hide; with `facing`, only from a bone behind
-  // the surface (a point in no triangle has no side and takes any).
+  // the surface (a point in no triangle has no side and takes any). v's own triangles never hide a bone: the segment
+  // crosses them only at a sharp or creased corner of a coarse mesh, while what the test is for is another part of
+  // the body in between.
   auto heat_vertex = [&](std::uint32_t v, const TriangleBvh* bvh, bool facing) {
     const glm::vec3 p = position[v];
     for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -274,7 +276,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
       if (bvh != nullptr && bvh->triangle_count() > 0 && distance > 2.0f * offset) {
         const glm::vec3 direction = (nearest_point[bone] - p) / distance;
         if (facing && glm::dot(direction, normal[v]) > max_facing) continue;
-        visible = !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset).hit;
+        visible = !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset, v).hit;
       }
       if (visible) {
         heated_by[v] = bone;
