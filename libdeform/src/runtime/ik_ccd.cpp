@@ -77,7 +77,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
     // Clamped CCD crawls near the target (each joint moves the effector only across its own lever arm), creeps
     // toward the straight chain for a target out of reach, or sits in a local minimum with joints pinned at their
     // limits. Straightening, then least-squares steps that move all joints together, then a kick into another basin.
-    if (stage == 0 && gain < handover_gain * (previous - floor)) {
+    if (stage == 0 && gain < ccd_handover_gain * (previous - floor)) {
       stage = floor > 0.0f ? 1 : 2;
     } else if (stage == 1) {
       stage = 2;
