@@ -63,5 +63,9 @@ TEST_CASE("heat weights stay near the artists' on X/anim_test.x") { check_model(
 TEST_CASE("heat weights stay near the artists' on FBX/animation_with_skeleton.fbx") {
   check_model({"FBX/animation_with_skeleton.fbx", 0.46, 5.30, 5.55});
 }
-TEST_CASE("heat weights stay near the artists' on FBX/huesitos.fbx") { check_model({"FBX/huesitos.fbx", 0.78, 2.38, 3.01}); }
-TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") { check_model({"IQM/mrfixit.iqm", 0.25, 1.20, 1.87}); }
+TEST_CASE("heat weights stay near the artists' on FBX/huesitos.fbx") {
+  check_model({"FBX/huesitos.fbx", 0.78, 2.38, 3.01});
+}
+TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") {
+  check_model({"IQM/mrfixit.iqm", 0.25, 1.20, 1.87});
+}

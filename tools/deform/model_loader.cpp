@@ -23,7 +23,8 @@ LoadedModel load_model(const Args& args) {
       request.skeleton = *skeleton;
       request.weights = *weights;
       if (const auto n = args.value("--max-influences"))
-        request.influences = static_cast<int>(parse_integer(*n, "--max-influences", 1, deform::max_requested_influences));
+        request.influences =
+            static_cast<int>(parse_integer(*n, "--max-influences", 1, deform::max_requested_influences));
     } else if (!model_loading::importable(request.path)) {
       throw UsageError("'" + request.path + "': a mesh needs --skeleton S.sk and --weights W.skw (or use --builtin)");
     }

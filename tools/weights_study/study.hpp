@@ -49,7 +49,8 @@ inline glm::vec3 skin_point(const std::vector<glm::mat4>& palette, const deform:
   const auto row = std::lower_bound(w.extra_points.begin(), w.extra_points.end(), static_cast<std::uint32_t>(i));
   if (row != w.extra_points.end() && *row == i) {
     const std::size_t j = static_cast<std::size_t>(row - w.extra_points.begin());
-    for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e) add(w.extra_bones[e], w.extra_weights[e]);
+    for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e)
+      add(w.extra_bones[e], w.extra_weights[e]);
   }
   return total > 0.0f ? glm::vec3(sum) / total : p;
 }

@@ -61,7 +61,8 @@ class SkwParser {
     if (state_ == State::header) fail("", "missing header 'skw 1'");
     if (state_ == State::count) fail("", "missing 'vertices N' line");
     if (next_vertex_ < point_count_) fail(vertex(next_vertex_), "missing (the file ends before it)");
-    if (!weights_.extra_points.empty()) weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));
+    if (!weights_.extra_points.empty())  // the end of the last row
+      weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));
     return std::move(weights_);
   }
 
@@ -143,8 +144,7 @@ class SkwParser {
     }
     // Past the fourth (only when asked to keep more): SkinWeights' extras, one row per such vertex, in order.
     if (kept > slots && influences_[slots].weight > 0.0f) {
-      if (weights_.extra_points.empty()) weights_.extra_offsets.push_back(0);
-      else weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));
+      weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));  // the row's start
       weights_.extra_points.push_back(static_cast<std::uint32_t>(index));
       for (std::size_t k = slots; k < kept && influences_[k].weight > 0.0f; ++k) {
         weights_.extra_bones.push_back(static_cast<std::uint16_t>(influences_[k].bone));
@@ -184,10 +184,11 @@ SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size
 std::string format_skw(const SkinWeights& weights) {
   if (weights.weights.size() != weights.bones.size())
     throw Error::invalid_argument("", "bones and weights differ in size");
-  const bool extras_valid = weights.extra_offsets.size() == (weights.has_extra() ? weights.extra_points.size() + 1 : 0) &&
-                            weights.extra_bones.size() == weights.extra_weights.size() &&
-                            (!weights.has_extra() || weights.extra_offsets.back() == weights.extra_bones.size());
-  if (!extras_valid) throw Error::invalid_argument("extra influences", "offsets do not match the bones and weights");
+  const std::size_t rows = weights.extra_points.size();
+  if (weights.extra_offsets.size() != (rows > 0 ? rows + 1 : 0) ||
+      weights.extra_bones.size() != weights.extra_weights.size() ||
+      (rows > 0 && weights.extra_offsets.back() != weights.extra_bones.size()))
+    throw Error::invalid_argument("extra influences", "offsets do not match the bones and weights");
   std::string text = "skw 1\nvertices " + std::to_string(weights.size()) + "\n";
   std::size_t row = 0;  // the next point with extras
   for (std::size_t v = 0; v < weights.size(); ++v) {
@@ -210,7 +211,8 @@ std::string format_skw(const SkinWeights& weights) {
       const std::uint32_t end = weights.extra_offsets[row + 1];
       if (weights.extra_offsets[row] > end || end > weights.extra_bones.size())
         throw Error::invalid_argument("extra influences", "offsets do not match the bones and weights");
-      for (std::uint32_t e = weights.extra_offsets[row]; e < end; ++e) pair(weights.extra_bones[e], weights.extra_weights[e]);
+      for (std::uint32_t e = weights.extra_offsets[row]; e < end; ++e)
+        pair(weights.extra_bones[e], weights.extra_weights[e]);
     }
     if (!any) throw Error::invalid_argument("vertex " + std::to_string(v), "no positive weight");
     text += '\n';

@@ -225,7 +225,6 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   std::vector<std::uint32_t> nearest_any(n, 0);  // nearest deforming bone, seen or not
   std::vector<std::pair<float, std::uint32_t>> by_distance(candidates.size());
   std::vector<glm::vec3> nearest_point(bone_count);
-  // Heats v from its nearest bone that `bvh` (null: nothing) does not hide.
   // Outward vertex normals: area-weighted, each island turned so that most of its points have their nearest bone
   // behind them (a model may wind its triangles either way; a piece's winding is consistent more often than not).
   std::vector<glm::vec3> normal(n, glm::vec3(0.0f));
