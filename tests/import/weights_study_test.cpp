@@ -1,6 +1,7 @@
-// The weights study (docs/weights.md) on two of its characters, so that its figures cannot regress unnoticed: heat
-// weights stay within a tenth above the figures docs/weights.md reports and nearer the artists' weights than
-// distance weights. Skipped when Debian's assimp-testmodels are not installed.
+// The weights study (docs/weights.md) on every one of its characters, so that its figures cannot regress unnoticed:
+// heat weights stay within a tenth above the figures docs/weights.md reports, within the issue's targets where the
+// table says they are met, and nearer the artists' weights than distance weights in mean, 99th percentile and
+// largest distance. Fails when Debian's assimp-testmodels are not installed.
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -17,7 +18,12 @@ struct Expected {
   const char* path;       // under /usr/share/assimp/models
   double heat_mean;       // % of the diagonal, as docs/weights.md reports it
   double heat_p99;
+  double heat_max;
 };
+
+// The targets of the weights issue (docs/weights.md, "Against the targets").
+constexpr double target_mean = 0.5;
+constexpr double target_p99 = 2.0;
 
 void check_model(const Expected& e) {
   const std::filesystem::path path = std::filesystem::path("/usr/share/assimp/models") / e.path;
@@ -39,11 +45,27 @@ void check_model(const Expected& e) {
   REQUIRE(h.poses > 0);
   CHECK(h.mean_percent <= 1.1 * e.heat_mean);
   CHECK(h.p99_percent <= 1.1 * e.heat_p99);
+  CHECK(h.max_percent <= 1.1 * e.heat_max);
+  if (e.heat_mean <= target_mean) CHECK(h.mean_percent <= target_mean);
+  if (e.heat_p99 <= target_p99) CHECK(h.p99_percent <= target_p99);
   CHECK(h.mean_percent < d.mean_percent);
   CHECK(h.p99_percent < d.p99_percent);
+  CHECK(h.max_percent < d.max_percent);
 }
 
 }  // namespace
 
-TEST_CASE("heat weights stay near the artists' on X/anim_test.x") { check_model({"X/anim_test.x", 0.60, 4.23}); }
-TEST_CASE("heat weights stay near the artists' on X/Testwuson.X") { check_model({"X/Testwuson.X", 0.24, 3.03}); }
+TEST_CASE("heat weights stay near the artists' on X/Testwuson.X") { check_model({"X/Testwuson.X", 0.23, 2.85, 5.75}); }
+TEST_CASE("heat weights stay near the artists' on X/BCN_Epileptic.X") {
+  check_model({"X/BCN_Epileptic.X", 0.18, 1.97, 4.48});
+}
+TEST_CASE("heat weights stay near the artists' on X/anim_test.x") { check_model({"X/anim_test.x", 0.60, 4.23, 5.43}); }
+TEST_CASE("heat weights stay near the artists' on FBX/animation_with_skeleton.fbx") {
+  check_model({"FBX/animation_with_skeleton.fbx", 0.46, 5.30, 5.55});
+}
+TEST_CASE("heat weights stay near the artists' on FBX/huesitos.fbx") {
+  check_model({"FBX/huesitos.fbx", 0.78, 2.38, 3.01});
+}
+TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") {
+  check_model({"IQM/mrfixit.iqm", 0.25, 1.20, 1.87});
+}

@@ -84,6 +84,48 @@ TEST_CASE("format_skw / parse_skw round trip, and through files") {
   CHECK_THROWS_AS(deform::format_skw(empty_vertex), deform::Error);
 }
 
+TEST_CASE(".skw past four influences: kept on request as SkinWeights' extras, written on the same line") {
+  // Vertex 1 lists six influences, vertex 2 five; a reader keeps 4 unless asked for more.
+  const std::string text = "skw 1\nvertices 3\n0 1 1\n1 0 1 1 2 2 3 3 4 4 5 5 6\n2 6 1 5 1 4 1 3 1 2 1\n";
+  const deform::SkinWeights four = deform::parse_skw(text, 3, 7);
+  CHECK_FALSE(four.has_extra());
+  CHECK(four.bones[1] == glm::u16vec4(5, 4, 3, 2));
+  CHECK(four.weights[1].x == doctest::Approx(6.0f / 18.0f));
+  const deform::SkinWeights six = deform::parse_skw(text, 3, 7, "case.skw", 6);
+  REQUIRE(six.extra_points == std::vector<std::uint32_t>{1, 2});
+  CHECK(six.extra_offsets == std::vector<std::uint32_t>{0, 2, 3});
+  CHECK(six.extra_bones == std::vector<std::uint16_t>{1, 0, 6});  // strongest first; equal weights: lower bone first
+  CHECK(six.bones[1] == glm::u16vec4(5, 4, 3, 2));
+  CHECK(six.weights[1].x == doctest::Approx(6.0f / 21.0f));
+  CHECK(six.extra_weights[0] == doctest::Approx(2.0f / 21.0f));
+  CHECK(six.bones[2] == glm::u16vec4(2, 3, 4, 5));
+  for (std::size_t p = 0; p < 3; ++p) {
+    float sum = six.weights[p].x + six.weights[p].y + six.weights[p].z + six.weights[p].w;
+    for (std::size_t j = 0; j < six.extra_points.size(); ++j)
+      if (six.extra_points[j] == p)
+        for (std::uint32_t e = six.extra_offsets[j]; e < six.extra_offsets[j + 1]; ++e) sum += six.extra_weights[e];
+    CHECK(sum == doctest::Approx(1.0f));
+  }
+  CHECK(deform::parse_skw(text, 3, 7, "case.skw", 5).extra_bones == std::vector<std::uint16_t>{1, 6});
+  // Written back with every influence, read back the same.
+  const std::string written = deform::format_skw(six);
+  CHECK(written.find("\n1 5 ") != std::string::npos);
+  const deform::SkinWeights again = deform::parse_skw(written, 3, 7, "again.skw", deform::max_requested_influences);
+  CHECK(again.bones == six.bones);
+  CHECK(again.extra_points == six.extra_points);
+  CHECK(again.extra_offsets == six.extra_offsets);
+  CHECK(again.extra_bones == six.extra_bones);
+  for (std::size_t e = 0; e < six.extra_weights.size(); ++e)
+    CHECK(again.extra_weights[e] == doctest::Approx(six.extra_weights[e]).epsilon(1e-6));
+  CHECK(deform::format_skw(again) == written);
+  // Requests out of range, and extras that do not add up, are errors.
+  CHECK_THROWS_AS(deform::parse_skw(text, 3, 7, "case.skw", 0), deform::Error);
+  CHECK_THROWS_AS(deform::parse_skw(text, 3, 7, "case.skw", deform::max_requested_influences + 1), deform::Error);
+  deform::SkinWeights broken = six;
+  broken.extra_offsets.back() = 9;
+  CHECK_THROWS_AS(deform::format_skw(broken), deform::Error);
+}
+
 TEST_CASE("malformed .skw: each an error with the line and the vertex") {
   const std::string head = "skw 1\nvertices 3\n";
   Failure f = failure_of("");

@@ -175,6 +175,108 @@ TEST_CASE("heat weights: a hand resting against a thigh keeps its arm's weights 
   CHECK(leg_weight(voxel.weights) == 0.0f);
 }
 
+TEST_CASE("heat weights: more than four influences on request, in SkinWeights' extras") {
+  // A cylinder on a chain of eight short bones: a point sees several, and with max_influences 8 keeps them all.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.3f, 2.0f, 41);
+  std::vector<Bone> bones = {bone(-1, {0, 0, 0}, "b0")};
+  for (int b = 1; b < 8; ++b) bones.push_back(bone(b - 1, {0, 0.25f, 0}, "b" + std::to_string(b)));
+  const Skeleton skeleton = make_skeleton(bones);
+  deform::HeatWeightsOptions o;
+  const deform::WeightsResult four = deform::compute_heat_weights(mesh, skeleton, o);
+  CHECK_FALSE(four.weights.has_extra());
+  o.max_influences = 8;
+  const deform::WeightsResult eight = deform::compute_heat_weights(mesh, skeleton, o);
+  REQUIRE(eight.weights.has_extra());
+  REQUIRE(eight.weights.extra_offsets.size() == eight.weights.extra_points.size() + 1);
+  std::size_t most = 0;
+  for (std::size_t p = 0; p < mesh.point_count(); ++p) {
+    CAPTURE(p);
+    const std::size_t count = deform::influence_count(eight.weights, p);
+    most = std::max(most, count);
+    CHECK(count <= 8);
+    float sum = 0.0f, weakest_slot = 1.0f;
+    for (int k = 0; k < 4; ++k) {
+      sum += eight.weights.weights[p][k];
+      if (eight.weights.weights[p][k] > 0.0f) weakest_slot = std::min(weakest_slot, eight.weights.weights[p][k]);
+    }
+    for (std::size_t j = 0; j < eight.weights.extra_points.size(); ++j) {
+      if (eight.weights.extra_points[j] != p) continue;
+      for (std::uint32_t e = eight.weights.extra_offsets[j]; e < eight.weights.extra_offsets[j + 1]; ++e) {
+        sum += eight.weights.extra_weights[e];
+        CHECK(eight.weights.extra_weights[e] <= weakest_slot);  // the slots hold the strongest four
+      }
+    }
+    CHECK(sum == doctest::Approx(1.0f).epsilon(1e-5));
+    CHECK(eight.weights.bones[p][0] == four.weights.bones[p][0]);  // the same strongest bone either way
+  }
+  CHECK(most > 4);
+  o.max_influences = deform::max_requested_influences + 1;
+  CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+}
+
+TEST_CASE("heat weights: a bone beside the surface does not heat it, whichever way the triangles wind") {
+  // A body (cylinder of radius 0.2 on lower -> upper) and a bone 'outside' of another part, running 0.1 beside the
+  // body's surface: nearer to the body's points there than the body's own bones, and nothing between. Only bones
+  // behind the surface heat it, so 'outside' gets (almost) nothing; before that rule it took the body's side.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = make_skeleton({bone(-1, {0, 0, 0}, "lower"), bone(0, {0, 1, 0}, "upper"),
+                                           bone(1, {0.3f, -0.2f, 0}, "outside"), bone(2, {0, 0.4f, 0}, "end")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {1, 1, 1, 0};
+  for (const bool flipped : {false, true}) {
+    CAPTURE(flipped);
+    Mesh m = mesh;
+    if (flipped)
+      for (std::size_t t = 0; t < m.triangles.size(); t += 3) std::swap(m.triangles[t + 1], m.triangles[t + 2]);
+    const deform::WeightsResult r = deform::compute_heat_weights(m, skeleton, o);
+    check_contract(r.weights, m.point_count(), 4);
+    std::size_t beside = 0;
+    float most = 0.0f;
+    for (std::size_t i = 0; i < m.point_count(); ++i) {
+      const glm::vec3 p = m.positions[i];
+      if (p.x < 0.15f || std::abs(p.y - 1.0f) > 0.15f) continue;
+      ++beside;
+      CHECK(weight_of(r.weights, i, 2) < 0.01f);  // what diffuses from points that see it at a grazing angle
+      most = std::max(most, weight_of(r.weights, i, 2));
+    }
+    CHECK(beside >= 6);
+    MESSAGE("flipped " << flipped << ": most weight of 'outside' beside it " << most);
+  }
+}
+
+TEST_CASE("heat weights: a bone's segment toward a child placed outside the body stops where it leaves the body") {
+  // A body (lower -> upper) and an arm (upper -> arm -> hand) along +X at height 1.5, and an IK goal parented to
+  // the root and placed at the hand, as rigs do (mrfixit.iqm's HandGoal under Spine1). The root's segment toward
+  // the goal runs out of the body and into the arm's far end; ended where it leaves the body, it claims none of
+  // the arm.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const std::size_t arm = mesh.point_count();
+  add_cylinder(mesh, {0, 0, 0}, 0.15f, 1.8f);
+  for (std::size_t i = arm; i < mesh.point_count(); ++i) {  // laid along +X from the body's side
+    const glm::vec3 p = mesh.positions[i];
+    mesh.positions[i] = {0.2f + p.y, 1.5f + p.x, p.z};
+  }
+  const Skeleton skeleton =
+      make_skeleton({bone(-1, {0, 0, 0}, "lower"), bone(0, {0, 1, 0}, "upper"), bone(1, {0, 0.5f, 0}, "arm"),
+                     bone(2, {2.0f, 0, 0}, "hand"), bone(0, {2.0f, 1.5f, 0}, "goal")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {1, 1, 1, 1, 0};
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+  check_contract(r.weights, mesh.point_count(), 5);
+  std::size_t far = 0;
+  for (std::size_t i = arm; i < mesh.point_count(); ++i) {
+    if (mesh.positions[i].x < 1.0f) continue;
+    ++far;
+    CAPTURE(i);
+    CHECK(weight_of(r.weights, i, 0) == 0.0f);
+    CHECK(weight_of(r.weights, i, 2) + weight_of(r.weights, i, 3) > 0.99f);
+  }
+  CHECK(far >= 40);
+}
+
 TEST_CASE("voxel weights on a two-bone cylinder: sums of 1, monotone along the axis, each end on its bone") {
   Mesh mesh;
   add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
@@ -295,7 +397,7 @@ TEST_CASE("heat weights: points welded across a seam, the deforming mask, max_in
   }
   SUBCASE("invalid options and input throw") {
     deform::HeatWeightsOptions o;
-    o.max_influences = 5;
+    o.max_influences = 0;
     CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
     o = {};
     o.heat = 0.0f;

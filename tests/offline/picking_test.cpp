@@ -161,6 +161,39 @@ TEST_CASE("max_distance limits the BVH as it limits brute force") {
   }
 }
 
+TEST_CASE("skip_point: the BVH passes the triangles around one point, as brute force over the others does") {
+  std::mt19937 random(29);
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  random_mesh(random, 20, 100, positions, indices);
+  TriangleBvh bvh;
+  bvh.build(positions, indices);
+  int skipped = 0;
+  for (int r = 0; r < 3000; ++r) {
+    const Ray ray = random_ray(random);
+    const RayHit plain = bvh.intersect(ray);
+    if (!plain.hit) continue;
+    // Skip one corner of the triangle the ray hits first: brute force over the triangles without that corner.
+    const std::uint32_t point = indices[3 * std::size_t{plain.triangle} + std::size_t(r % 3)];
+    std::vector<std::uint32_t> others, original;  // the kept triangles, and their indices in `indices`
+    for (std::size_t t = 0; t < indices.size(); t += 3)
+      if (indices[t] != point && indices[t + 1] != point && indices[t + 2] != point) {
+        others.insert(others.end(), {indices[t], indices[t + 1], indices[t + 2]});
+        original.push_back(static_cast<std::uint32_t>(t / 3));
+      }
+    RayHit reference = brute_force(ray, positions, others);
+    if (reference.hit) reference.triangle = original[reference.triangle];
+    const RayHit hit = bvh.intersect(ray, std::numeric_limits<float>::infinity(), point);
+    check_same(hit, reference, positions, indices, ray);
+    if (hit.hit) {
+      const std::uint32_t* c = &indices[3 * std::size_t{hit.triangle}];
+      CHECK((c[0] != point && c[1] != point && c[2] != point));
+    }
+    ++skipped;
+  }
+  CHECK(skipped > 500);
+}
+
 TEST_CASE("build rejects bad triangles; an empty BVH never hits") {
   const std::vector<glm::vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   TriangleBvh bvh;

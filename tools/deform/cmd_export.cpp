@@ -110,6 +110,7 @@ const Command export_command = {
     "the same result as skinning MODEL with P.json. Clips are not exported (there is no native clip file).\n"
     "Prints {\"obj\", \"mtl\", \"sk\", \"skw\": paths, \"textures\": [paths], \"vertices\", \"triangles\", \"bones\"\n"
     "(0 for a static model), \"clips\": [names]}. Importer warnings go to stderr.\n"
+    "--max-influences N (1 to 16, default 4): influences kept per point from W.skw.\n"
     "\n"
     "--format gltf: writes FILE as glTF 2.0 (docs/gltf-export.md): FILE.glb as one binary file, FILE.gltf plus\n"
     "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation.\n"

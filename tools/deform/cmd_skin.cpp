@@ -364,6 +364,8 @@ const Command skin_command = {
     "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights (with\n"
     "--blend, the clips' weights averaged by the blend's weights), or the weights --morph gives by target name\n"
     "(`deform info` lists them).\n"
+    "--max-influences N (1 to 16, default 4): influences kept per point from W.skw (`deform weights --max-influences\n"
+    "N` writes up to 16).\n"
     "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
     "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"

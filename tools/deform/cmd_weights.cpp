@@ -32,7 +32,8 @@ constexpr const char* usage =
     "\"output\"}. Each warning (a bone that gets no vertex, an island of the mesh that sees no bone) goes to stderr.\n"
     "\n"
     "options:\n"
-    "  --max-influences N   bones per vertex, 1 to 4 (default 4)\n"
+    "  --max-influences N   bones per vertex, 1 to 4 (default 4); heat: up to 16, the pairs past the fourth on\n"
+    "                       the same .skw line (read them with deform skin --max-influences N)\n"
     "  --leaf-length L      a leaf bone's length as a multiple of its distance to its parent, >= 0 (default 1)\n"
     "heat only:\n"
     "  --heat C             heat constant of H = C / d^2, > 0 (default 1; higher = sharper joints)\n"
@@ -73,14 +74,18 @@ int run(const std::vector<std::string>& argv) {
   options.falloff_power = number_option(args, "--falloff", options.falloff_power, 0.0f, true);
   options.behind_head_penalty = number_option(args, "--behind-penalty", options.behind_head_penalty, 1.0f);
   options.leaf_length = number_option(args, "--leaf-length", options.leaf_length, 0.0f);
-  if (auto n = args.value("--max-influences"))
-    options.max_influences = static_cast<int>(parse_integer(*n, "--max-influences", 1, deform::max_influences));
+  int influences = deform::max_influences;
+  if (auto n = args.value("--max-influences")) {
+    const int most = method == "heat" ? deform::max_requested_influences : deform::max_influences;
+    influences = static_cast<int>(parse_integer(*n, "--max-influences", 1, most));
+  }
+  options.max_influences = std::min(influences, deform::max_influences);
   if (auto n = args.value("--smoothing"))
     options.smoothing_iterations = static_cast<int>(parse_integer(*n, "--smoothing", 0, 100));
   deform::HeatWeightsOptions heat_options;
   heat_options.heat = number_option(args, "--heat", heat_options.heat, 0.0f, true);
   heat_options.leaf_length = options.leaf_length;
-  heat_options.max_influences = options.max_influences;
+  heat_options.max_influences = influences;
   deform::VoxelWeightsOptions voxel_options;
   if (auto n = args.value("--resolution"))
     voxel_options.resolution = static_cast<int>(parse_integer(*n, "--resolution", 8, 1024));
@@ -122,12 +127,8 @@ int run(const std::vector<std::string>& argv) {
   deform::write_skw(out, weights);
   for (const std::string& w : result.warnings) note(w);
 
-  int most = 0;
-  for (const glm::vec4& w : weights.weights) {
-    int used = 0;
-    for (int k = 0; k < deform::max_influences; ++k) used += w[k] > 0.0f ? 1 : 0;
-    most = std::max(most, used);
-  }
+  std::size_t most = 0;
+  for (std::size_t p = 0; p < weights.size(); ++p) most = std::max(most, deform::influence_count(weights, p));
   print_json({{"method", method},
               {"mesh", source},
               {"vertices", mesh.point_count()},

@@ -22,10 +22,15 @@ LoadedModel load_model(const Args& args) {
       if (!weights) throw UsageError("--weights W.skw is required with --skeleton (`deform weights` computes them)");
       request.skeleton = *skeleton;
       request.weights = *weights;
+      if (const auto n = args.value("--max-influences"))
+        request.influences =
+            static_cast<int>(parse_integer(*n, "--max-influences", 1, deform::max_requested_influences));
     } else if (!model_loading::importable(request.path)) {
       throw UsageError("'" + request.path + "': a mesh needs --skeleton S.sk and --weights W.skw (or use --builtin)");
     }
   }
+  if (args.value("--max-influences") && request.weights.empty())
+    throw UsageError("--max-influences applies to --weights W.skw (an import keeps every influence)");
   LoadedModel loaded = model_loading::load_model(request);
   for (const std::string& message : loaded.warnings) note(message);
   return loaded;

@@ -15,7 +15,7 @@ namespace cli {
 using model_loading::LoadedModel;
 
 // Value flags a model-taking command must accept: --skeleton, --weights.  Switch: --builtin.
-inline const std::vector<std::string> model_value_flags = {"--skeleton", "--weights"};
+inline const std::vector<std::string> model_value_flags = {"--skeleton", "--weights", "--max-influences"};
 inline const std::vector<std::string> model_switch_flags = {"--builtin"};
 
 // Loads the model named by `args` (first positional, or --builtin) and prints its warnings (note()). Throws

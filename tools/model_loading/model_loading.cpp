@@ -36,7 +36,7 @@ LoadedModel load_native(const ModelRequest& request) {
   loaded.source = request.path;
   if (!request.weights.empty()) {
     deform::Warnings warnings;
-    loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings);
+    loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings, request.influences);
     loaded.warnings = std::move(warnings.messages);
     return loaded;
   }

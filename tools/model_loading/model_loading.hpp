@@ -23,6 +23,7 @@ struct ModelRequest {
   std::string path;      // the model file; empty: the built-in character
   std::string skeleton;  // with an OBJ `path`: its .sk (giving it, or `weights`, means "native files")
   std::string weights;   // with an OBJ `path`: its .skw; empty: see automatic_weights
+  int influences = deform::max_influences;  // kept per point from the .skw (deform::read_skw)
   // An OBJ with a skeleton but no weights gets compute_heat_weights() (default options, docs/weights.md; about a
   // second for 40k points), its warnings added to the loaded model's; false: such a request is an error.
   bool automatic_weights = false;

@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
     else if (a == "--all-bones") all_bones = true;
     else if (a == "--heat" && i + 1 < argc) heat_options.heat = std::strtof(argv[++i], nullptr);
     else if (a == "--no-visibility") heat_options.visibility = false;
+    else if (a == "--max-influences" && i + 1 < argc) heat_options.max_influences = std::atoi(argv[++i]);
     else if (a == "--detail") detail = true;
     else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
     else paths.push_back(a);
@@ -135,7 +136,7 @@ int main(int argc, char** argv) {
         for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: voxel: %s\n", file_name(path).c_str(), w.c_str());
         runs.push_back({"voxel", std::move(r.weights), took, r.warnings.size()});
       }
-      if (detail) print_worst(model, imported.clips, runs.back().weights, samples);
+      if (detail) print_worst(model, imported.clips, runs[1].weights, samples);  // heat, the default
       for (const Run& run : runs) {
         const weights_study::Figures f = weights_study::compare(model, imported.clips, run.weights, samples);
         std::printf("| %s | %zu | %zu (%zu) | %zu (%zu) | %s | %.2f%% | %.2f%% | %.2f%% | %.1f%% | %.3f s |\n",

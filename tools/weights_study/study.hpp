@@ -34,16 +34,23 @@ inline std::uint16_t strongest_bone(const deform::SkinWeights& w, std::size_t i)
   return w.bones[i][best];
 }
 
-// Linear blend skinning of one point (weights renormalised, as SkinningJob does).
+// Linear blend skinning of one point with every influence, the four slots and any past them (weights
+// renormalised, as SkinningJob does). An artist's rig may give a point more than four (the FBX models do).
 inline glm::vec3 skin_point(const std::vector<glm::mat4>& palette, const deform::SkinWeights& w, std::size_t i,
                             glm::vec3 p) {
   glm::vec4 sum(0.0f);
   float total = 0.0f;
-  for (int k = 0; k < deform::max_influences; ++k) {
-    const float x = w.weights[i][k];
-    if (x <= 0.0f) continue;
-    sum += x * (palette[w.bones[i][k]] * glm::vec4(p, 1.0f));
+  auto add = [&](std::uint16_t bone, float x) {
+    if (x <= 0.0f) return;
+    sum += x * (palette[bone] * glm::vec4(p, 1.0f));
     total += x;
+  };
+  for (int k = 0; k < deform::max_influences; ++k) add(w.bones[i][k], w.weights[i][k]);
+  const auto row = std::lower_bound(w.extra_points.begin(), w.extra_points.end(), static_cast<std::uint32_t>(i));
+  if (row != w.extra_points.end() && *row == i) {
+    const std::size_t j = static_cast<std::size_t>(row - w.extra_points.begin());
+    for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e)
+      add(w.extra_bones[e], w.extra_weights[e]);
   }
   return total > 0.0f ? glm::vec3(sum) / total : p;
 }
@@ -100,12 +107,14 @@ inline Figures compare(const deform::Model& model, const std::vector<deform::Ani
   return f;
 }
 
-// Per bone, 1 when the artist gave it weight on some point: the rig's deforming bones.
+// Per bone, 1 when the artist gave it weight on some point (in a slot or past the fourth): the rig's deforming bones.
 inline std::vector<std::uint8_t> painted_bones(const deform::Model& model) {
   std::vector<std::uint8_t> used(model.skeleton.bone_count(), 0);
   for (std::size_t i = 0; i < model.weights.size(); ++i)
     for (int k = 0; k < deform::max_influences; ++k)
       if (model.weights.weights[i][k] > 0.0f) used[model.weights.bones[i][k]] = 1;
+  for (std::size_t e = 0; e < model.weights.extra_bones.size(); ++e)
+    if (model.weights.extra_weights[e] > 0.0f) used[model.weights.extra_bones[e]] = 1;
   return used;
 }
 

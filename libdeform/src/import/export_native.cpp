@@ -113,22 +113,23 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   }
 
   write_file_atomic((staging.path / names[1]).string(), format_mtl(materials));
+  SkinWeights folded;  // .skw readers keep four influences by default: the file holds what reloads
   if (model.weights.has_extra()) {
-    SkinWeights folded = model.weights;
+    folded = model.weights;
     float largest = 0.0f;
     const std::size_t points = drop_extra_influences(folded, &largest);
     char dropped[32];
     std::snprintf(dropped, sizeof dropped, "%.4g", double(largest));
     files.warnings.push_back(names[3] + ": " + std::to_string(points) +
-                             " vertices have more than 4 influences, which .skw cannot hold: the strongest 4 kept, "
-                             "renormalised (largest weight dropped: " + std::string(dropped) +
+                             " vertices have more than 4 influences, more than .skw readers keep by default: the strongest 4 "
+                             "written, renormalised (largest weight dropped: " + std::string(dropped) +
                              " of the vertex's total); the model skins differently from the import there");
   }
   if (!model.morph_targets.empty())
     files.warnings.push_back(names[0] + ": " + std::to_string(model.morph_targets.size()) +
                              " morph targets are not written (OBJ, .sk and .skw have no blend shapes); the mesh is "
                              "the base shape");
-  write_skw((staging.path / names[3]).string(), model.weights);
+  write_skw((staging.path / names[3]).string(), model.weights.has_extra() ? folded : model.weights);
   write_sk((staging.path / names[2]).string(), model.skeleton);
   ObjWriteOptions obj_options;
   obj_options.mtllib = names[1];

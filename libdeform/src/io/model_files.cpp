@@ -9,14 +9,14 @@
 namespace deform {
 
 Model load_model(const std::string& obj_path, const std::string& sk_path, const std::string& skw_path,
-                 Warnings* warnings) {
+                 Warnings* warnings, int influences) {
   Model model;
   model.name = std::filesystem::path(obj_path).stem().string();
   model.mesh = read_obj(obj_path, warnings);
   model.skeleton = read_sk(sk_path);
   // read_skw rejects a vertex count other than the mesh's and bone ids outside the skeleton, naming the line; the
   // checks below hold the Model invariant whatever the reader does.
-  model.weights = read_skw(skw_path, model.mesh.point_count(), model.skeleton.bone_count());
+  model.weights = read_skw(skw_path, model.mesh.point_count(), model.skeleton.bone_count(), influences);
   if (model.weights.size() != model.mesh.point_count() || model.weights.weights.size() != model.weights.size())
     throw Error::in_file(skw_path, "", "has " + std::to_string(model.weights.size()) + " vertices, " + obj_path +
                                            " has " + std::to_string(model.mesh.point_count()));

@@ -42,8 +42,8 @@ struct Influence {
 
 class SkwParser {
  public:
-  SkwParser(const std::string& name, std::size_t point_count, std::size_t bone_count)
-      : name_(name), point_count_(point_count), bone_count_(bone_count) {}
+  SkwParser(const std::string& name, std::size_t point_count, std::size_t bone_count, int max_influences)
+      : name_(name), point_count_(point_count), bone_count_(bone_count), max_influences_(max_influences) {}
 
   SkinWeights parse(std::string_view text) {
     std::vector<std::string_view> tokens;
@@ -61,6 +61,8 @@ class SkwParser {
     if (state_ == State::header) fail("", "missing header 'skw 1'");
     if (state_ == State::count) fail("", "missing 'vertices N' line");
     if (next_vertex_ < point_count_) fail(vertex(next_vertex_), "missing (the file ends before it)");
+    if (!weights_.extra_points.empty())  // the end of the last row
+      weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));
     return std::move(weights_);
   }
 
@@ -128,16 +130,26 @@ class SkwParser {
     if (!(sum > 0.0)) fail(element, "no positive weight (every vertex must follow some bone)");
 
     // Strongest first; equal weights by bone id, so the choice does not depend on the order of the pairs.
-    const auto kept = std::min<std::size_t>(influences_.size(), max_influences);
+    const auto kept = std::min<std::size_t>(influences_.size(), static_cast<std::size_t>(max_influences_));
     std::partial_sort(influences_.begin(), influences_.begin() + static_cast<std::ptrdiff_t>(kept), influences_.end(),
                       [](const Influence& a, const Influence& b) {
                         return a.weight != b.weight ? a.weight > b.weight : a.bone < b.bone;
                       });
     double kept_sum = 0.0;
     for (std::size_t k = 0; k < kept; ++k) kept_sum += influences_[k].weight;
-    for (std::size_t k = 0; k < kept && influences_[k].weight > 0.0f; ++k) {
+    constexpr std::size_t slots = max_influences;
+    for (std::size_t k = 0; k < kept && k < slots && influences_[k].weight > 0.0f; ++k) {
       weights_.bones[index][static_cast<int>(k)] = static_cast<std::uint16_t>(influences_[k].bone);
       weights_.weights[index][static_cast<int>(k)] = static_cast<float>(influences_[k].weight / kept_sum);
+    }
+    // Past the fourth (only when asked to keep more): SkinWeights' extras, one row per such vertex, in order.
+    if (kept > slots && influences_[slots].weight > 0.0f) {
+      weights_.extra_offsets.push_back(static_cast<std::uint32_t>(weights_.extra_bones.size()));  // the row's start
+      weights_.extra_points.push_back(static_cast<std::uint32_t>(index));
+      for (std::size_t k = slots; k < kept && influences_[k].weight > 0.0f; ++k) {
+        weights_.extra_bones.push_back(static_cast<std::uint16_t>(influences_[k].bone));
+        weights_.extra_weights.push_back(static_cast<float>(influences_[k].weight / kept_sum));
+      }
     }
     ++next_vertex_;
   }
@@ -145,6 +157,7 @@ class SkwParser {
   const std::string& name_;
   std::size_t point_count_;
   std::size_t bone_count_;
+  int max_influences_;
   State state_ = State::header;
   std::int64_t line_ = 0;
   std::size_t next_vertex_ = 0;
@@ -155,39 +168,51 @@ class SkwParser {
 
 }  // namespace
 
-SkinWeights parse_skw(std::string_view text, std::size_t point_count, std::size_t bone_count, const std::string& name) {
-  return SkwParser(name, point_count, bone_count).parse(text);
+SkinWeights parse_skw(std::string_view text, std::size_t point_count, std::size_t bone_count, const std::string& name,
+                      int influences) {
+  if (influences < 1 || influences > max_requested_influences)
+    throw Error::invalid_argument("influences", "must be 1 to " + std::to_string(max_requested_influences));
+  return SkwParser(name, point_count, bone_count, influences).parse(text);
 }
 
-SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size_t bone_count) {
-  return parse_skw(read_file_text(path), point_count, bone_count, path);
+SkinWeights read_skw(const std::string& path, std::size_t point_count, std::size_t bone_count, int influences) {
+  if (influences < 1 || influences > max_requested_influences)
+    throw Error::invalid_argument("influences", "must be 1 to " + std::to_string(max_requested_influences));
+  return parse_skw(read_file_text(path), point_count, bone_count, path, influences);
 }
 
-std::string format_skw(const SkinWeights& given) {
-  if (given.weights.size() != given.bones.size())
+std::string format_skw(const SkinWeights& weights) {
+  if (weights.weights.size() != weights.bones.size())
     throw Error::invalid_argument("", "bones and weights differ in size");
-  // .skw holds four influences per vertex (its spec is fixed): extras are dropped and the four renormalised
-  // (callers that write an import warn about it: export_native).
-  SkinWeights folded;
-  if (given.has_extra()) {
-    folded = given;
-    drop_extra_influences(folded);
-  }
-  const SkinWeights& weights = given.has_extra() ? folded : given;
+  const std::size_t rows = weights.extra_points.size();
+  if (weights.extra_offsets.size() != (rows > 0 ? rows + 1 : 0) ||
+      weights.extra_bones.size() != weights.extra_weights.size() ||
+      (rows > 0 && weights.extra_offsets.back() != weights.extra_bones.size()))
+    throw Error::invalid_argument("extra influences", "offsets do not match the bones and weights");
   std::string text = "skw 1\nvertices " + std::to_string(weights.size()) + "\n";
+  std::size_t row = 0;  // the next point with extras
   for (std::size_t v = 0; v < weights.size(); ++v) {
     text += std::to_string(v);
     bool any = false;
-    for (int k = 0; k < max_influences; ++k) {
-      const float w = weights.weights[v][k];
+    auto pair = [&](std::uint16_t bone, float w) {
       if (!std::isfinite(w) || w < 0.0f)
         throw Error::invalid_argument("vertex " + std::to_string(v), "weight is negative or not finite");
-      if (w == 0.0f) continue;
+      if (w == 0.0f) return;
       any = true;
       text += ' ';
-      text += std::to_string(weights.bones[v][k]);
+      text += std::to_string(bone);
       text += ' ';
       detail::append_shortest(text, w);
+    };
+    for (int k = 0; k < max_influences; ++k) pair(weights.bones[v][k], weights.weights[v][k]);
+    // Influences past the fourth follow on the same line (.skw lines hold any number of pairs).
+    while (row < weights.extra_points.size() && weights.extra_points[row] < v) ++row;
+    if (row < weights.extra_points.size() && weights.extra_points[row] == v) {
+      const std::uint32_t end = weights.extra_offsets[row + 1];
+      if (weights.extra_offsets[row] > end || end > weights.extra_bones.size())
+        throw Error::invalid_argument("extra influences", "offsets do not match the bones and weights");
+      for (std::uint32_t e = weights.extra_offsets[row]; e < end; ++e)
+        pair(weights.extra_bones[e], weights.extra_weights[e]);
     }
     if (!any) throw Error::invalid_argument("vertex " + std::to_string(v), "no positive weight");
     text += '\n';

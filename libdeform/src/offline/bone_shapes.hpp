@@ -41,6 +41,7 @@ inline std::vector<std::uint32_t> checked_corners(const Mesh& mesh) {
 // (bone_segments()); a lone root is a point.
 struct BoneShape {
   std::vector<std::pair<glm::vec3, glm::vec3>> segments;
+  bool guessed = false;  // a leaf's made-up extension, or one of several segments: see clip_guessed_segments
 };
 
 inline std::vector<BoneShape> bone_shapes(const Skeleton& skeleton, float leaf_length) {
@@ -49,6 +50,7 @@ inline std::vector<BoneShape> bone_shapes(const Skeleton& skeleton, float leaf_l
   std::vector<BoneShape> shapes(skeleton.bone_count());
   for (std::size_t b = 0; b < shapes.size(); ++b) {
     const Bone& bone = skeleton.bones()[b];
+    shapes[b].guessed = bone.children.size() != 1;
     if (bone.children.empty()) {
       shapes[b].segments.emplace_back(single[b].head, single[b].tail);
       continue;
@@ -59,17 +61,20 @@ inline std::vector<BoneShape> bone_shapes(const Skeleton& skeleton, float leaf_l
   return shapes;
 }
 
-// A leaf ends where it leaves the mesh: its made-up extension must not reach into a neighbouring part (a fingertip
-// bone poking out of the hand into the hip it rests on).
-inline void clip_leaves(std::vector<BoneShape>& shapes, const Skeleton& skeleton, const TriangleBvh& mesh) {
+// Where a bone's segment is a guess, it ends where it leaves the mesh: a leaf's made-up extension must not reach
+// into a neighbouring part (a fingertip bone poking out of the hand into the hip it rests on), and a bone that
+// carries several bones is only certain to lie inside the body it moves: a spine bone that carries an IK goal
+// parented far out at the hand must not claim the arm on the way.
+inline void clip_guessed_segments(std::vector<BoneShape>& shapes, const TriangleBvh& mesh) {
   if (mesh.triangle_count() == 0) return;
-  for (std::size_t b = 0; b < shapes.size(); ++b) {
-    if (!skeleton.bones()[b].children.empty()) continue;
-    auto& [head, tail] = shapes[b].segments.front();
-    const float length = glm::length(tail - head);
-    if (!(length > 0.0f)) continue;
-    const RayHit hit = mesh.intersect({head, (tail - head) / length}, length);
-    if (hit.hit) tail = head + (tail - head) * (hit.distance / length);
+  for (BoneShape& shape : shapes) {
+    if (!shape.guessed) continue;
+    for (auto& [head, tail] : shape.segments) {
+      const float length = glm::length(tail - head);
+      if (!(length > 0.0f)) continue;
+      const RayHit hit = mesh.intersect({head, (tail - head) / length}, length);
+      if (hit.hit) tail = head + (tail - head) * (hit.distance / length);
+    }
   }
 }
 

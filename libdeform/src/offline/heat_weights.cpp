@@ -27,10 +27,14 @@ constexpr float min_weight = 1e-3f;
 constexpr double uniform_share = 1e-3;
 // Nearest bones tried for visibility per point before the point is declared to see none.
 constexpr std::size_t max_visibility_tries = 32;
+// A bone heats a point only from behind the surface: the direction to the bone at most 78° from the inward normal
+// (cos 78° ≈ 0.2). A bone beside or in front of the surface is another part's (a finger resting on the hip).
+constexpr float max_facing = -0.2f;
 
 void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
-  auto fail = [](const char* what, const char* rule) { throw Error::invalid_argument(what, rule); };
-  if (o.max_influences < 1 || o.max_influences > max_influences) fail("max_influences", "must be 1 to 4");
+  auto fail = [](const char* what, const std::string& rule) { throw Error::invalid_argument(what, rule); };
+  if (o.max_influences < 1 || o.max_influences > max_requested_influences)
+    fail("max_influences", "must be 1 to " + std::to_string(max_requested_influences));
   if (!std::isfinite(o.heat) || o.heat <= 0.0f) fail("heat", "must be finite and > 0");
   if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
   if (!o.deforming.empty()) {
@@ -71,7 +75,7 @@ struct Influence {
 
 // The strongest few influences of one point, kept while bones are solved one by one.
 struct Strongest {
-  std::array<Influence, max_influences> slot{};
+  std::array<Influence, max_requested_influences> slot{};
   int used = 0;
   void offer(std::uint32_t bone, float weight, int keep) {
     if (used < keep) {
@@ -86,34 +90,22 @@ struct Strongest {
   }
 };
 
-// Normalised, strongest first, under min_weight dropped, unused slots (bone 0, weight 0). `fallback` when empty.
-void store(Strongest s, std::uint32_t fallback, glm::u16vec4& bones, glm::vec4& weights) {
-  // Insertion sort of at most four (std::sort here trips GCC 12's -Warray-bounds on its 16-element threshold).
-  for (int k = 1; k < s.used; ++k)
-    for (int m = k; m > 0; --m) {
-      Influence& a = s.slot[static_cast<std::size_t>(m - 1)];
-      Influence& b = s.slot[static_cast<std::size_t>(m)];
-      if (a.weight > b.weight || (a.weight == b.weight && a.bone < b.bone)) break;
-      std::swap(a, b);
-    }
+// Appends point's influences to `weights`: those under min_weight of the sum dropped, the rest normalised, strongest
+// first, past the fourth in the extras (append_influences). `fallback` alone when none is left.
+void store(const Strongest& s, std::uint32_t fallback, SkinWeights& weights) {
   float total = 0.0f;
   for (int k = 0; k < s.used; ++k) total += s.slot[static_cast<std::size_t>(k)].weight;
-  int kept = 0;
-  for (int k = 0; k < s.used; ++k)
-    if (s.slot[static_cast<std::size_t>(k)].weight >= min_weight * total && total > 0.0f) ++kept;
-  bones = glm::u16vec4(0);
-  weights = glm::vec4(0.0f);
-  if (kept == 0) {
-    bones[0] = static_cast<std::uint16_t>(fallback);
-    weights[0] = 1.0f;
-    return;
+  std::array<std::uint16_t, max_requested_influences> bones{};
+  std::array<float, max_requested_influences> values{};
+  std::size_t kept = 0;
+  for (int k = 0; k < s.used; ++k) {
+    const Influence& in = s.slot[static_cast<std::size_t>(k)];
+    if (!(total > 0.0f) || in.weight < min_weight * total) continue;
+    bones[kept] = static_cast<std::uint16_t>(in.bone);
+    values[kept++] = in.weight;
   }
-  total = 0.0f;
-  for (int k = 0; k < kept; ++k) total += s.slot[static_cast<std::size_t>(k)].weight;
-  for (int k = 0; k < kept; ++k) {
-    bones[k] = static_cast<std::uint16_t>(s.slot[static_cast<std::size_t>(k)].bone);
-    weights[k] = s.slot[static_cast<std::size_t>(k)].weight / total;
-  }
+  append_influences(weights, std::span(bones.data(), kept), std::span(values.data(), kept),
+                    static_cast<std::uint16_t>(fallback));
 }
 
 std::string bone_label(const Skeleton& skeleton, std::uint32_t bone) {
@@ -233,8 +225,39 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   std::vector<std::uint32_t> nearest_any(n, 0);  // nearest deforming bone, seen or not
   std::vector<std::pair<float, std::uint32_t>> by_distance(candidates.size());
   std::vector<glm::vec3> nearest_point(bone_count);
-  // Heats v from its nearest bone that `bvh` (null: nothing) does not hide.
-  auto heat_vertex = [&](std::uint32_t v, const TriangleBvh* bvh) {
+  // Outward vertex normals: area-weighted, each island turned so that most of its points have their nearest bone
+  // behind them (a model may wind its triangles either way; a piece's winding is consistent more often than not).
+  std::vector<glm::vec3> normal(n, glm::vec3(0.0f));
+  auto orient_normals = [&] {
+    for (const auto& t : triangles) {
+      const glm::vec3 face = glm::cross(position[t[1]] - position[t[0]], position[t[2]] - position[t[0]]);
+      for (std::uint32_t c : t) normal[c] += face;
+    }
+    std::vector<std::int64_t> votes(island_count, 0);
+    for (std::uint32_t v = 0; v < n; ++v) {
+      float best = INFINITY;
+      glm::vec3 to_bone(0.0f);
+      for (std::uint32_t b : candidates) {
+        const glm::vec3 q = nearest_on_bone(position[v], shapes[b]);
+        const float d2 = glm::dot(q - position[v], q - position[v]);
+        if (d2 < best) {
+          best = d2;
+          to_bone = q - position[v];
+        }
+      }
+      const float side = glm::dot(to_bone, normal[v]);
+      votes[island[v]] += side < 0.0f ? 1 : side > 0.0f ? -1 : 0;
+    }
+    for (std::uint32_t v = 0; v < n; ++v) {
+      const float length = glm::length(normal[v]);
+      normal[v] = length > 0.0f ? normal[v] / (votes[island[v]] < 0 ? -length : length) : glm::vec3(0.0f);
+    }
+  };
+  // Heats v from its nearest bone that `bvh` (null: nothing) does not hide; with `facing`, only from a bone behind
+  // the surface (a point in no triangle has no side and takes any). v's own triangles never hide a bone: the segment
+  // crosses them only at a sharp or creased corner of a coarse mesh, while what the test is for is another part of
+  // the body in between.
+  auto heat_vertex = [&](std::uint32_t v, const TriangleBvh* bvh, bool facing) {
     const glm::vec3 p = position[v];
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       const glm::vec3 q = nearest_on_bone(p, shapes[candidates[c]]);
@@ -245,12 +268,14 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     std::partial_sort(by_distance.begin(), by_distance.begin() + static_cast<std::ptrdiff_t>(tries),
                       by_distance.end());
     nearest_any[v] = by_distance.front().second;
+    facing = facing && normal[v] != glm::vec3(0.0f);
     for (std::size_t k = 0; k < tries; ++k) {
       const auto [distance, bone] = by_distance[k];
       bool visible = true;
       if (bvh != nullptr && bvh->triangle_count() > 0 && distance > 2.0f * offset) {
         const glm::vec3 direction = (nearest_point[bone] - p) / distance;
-        visible = !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset).hit;
+        if (facing && glm::dot(direction, normal[v]) > max_facing) continue;
+        visible = !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset, v).hit;
       }
       if (visible) {
         heated_by[v] = bone;
@@ -263,8 +288,16 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   {
     TriangleBvh whole;
     build_bvh(whole, UINT32_MAX);
-    detail::clip_leaves(shapes, skeleton, whole);
-    for (std::uint32_t v = 0; v < n; ++v) heat_vertex(v, options.visibility ? &whole : nullptr);
+    detail::clip_guessed_segments(shapes, whole);
+    if (options.visibility) orient_normals();
+    for (std::uint32_t v = 0; v < n; ++v) heat_vertex(v, options.visibility ? &whole : nullptr, true);
+    // A piece with no bone behind any of its points (a lone sheet, a piece that lies beside the bones) takes the
+    // nearest visible bone on either side.
+    std::vector<std::uint8_t> heated(island_count, 0);
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (heated_by[v] != UINT32_MAX) heated[island[v]] = 1;
+    for (std::uint32_t v = 0; v < n; ++v)
+      if (!heated[island[v]]) heat_vertex(v, options.visibility ? &whole : nullptr, false);
   }
   std::vector<std::uint8_t> island_heated(island_count, 0);
   for (std::uint32_t v = 0; v < n; ++v)
@@ -296,7 +329,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
       if (island_heated[i]) continue;
       TriangleBvh own;
       build_bvh(own, i);
-      for (std::uint32_t v : members[i]) heat_vertex(v, &own);
+      for (std::uint32_t v : members[i]) heat_vertex(v, &own, false);
       for (std::uint32_t v : members[i])
         if (heated_by[v] != UINT32_MAX) island_heated[i] = 1;
       if (island_heated[i])
@@ -415,16 +448,18 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     }
   }
 
+  result.weights = {};
+  result.weights.bones.reserve(point_count);
+  result.weights.weights.reserve(point_count);
   for (std::uint32_t p = 0; p < point_count; ++p) {
     const std::uint32_t v = welded[p];
     const std::uint32_t i = island[v];
     if (!island_heated[i]) {
-      result.weights.bones[p] = glm::u16vec4(static_cast<std::uint16_t>(rigid_bone[i]), 0, 0, 0);
-      result.weights.weights[p] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+      append_influences(result.weights, {}, {}, static_cast<std::uint16_t>(rigid_bone[i]));
       continue;
     }
     const std::uint32_t fallback = heated_by[v] != UINT32_MAX ? heated_by[v] : nearest_any[v];
-    store(strongest[v], fallback, result.weights.bones[p], result.weights.weights[p]);
+    store(strongest[v], fallback, result.weights);
   }
   for (std::string& w : bones_without_vertices(result.weights, skeleton, options.deforming))
     result.warnings.push_back(std::move(w));

@@ -212,7 +212,7 @@ bool TriangleBvh::refit(std::span<const glm::vec3> positions) noexcept {
   return true;
 }
 
-RayHit TriangleBvh::intersect(const Ray& ray, float max_distance) const noexcept {
+RayHit TriangleBvh::intersect(const Ray& ray, float max_distance, std::uint32_t skip_point) const noexcept {
   RayHit best;
   glm::vec3 direction;
   if (nodes_.empty() || triangle_ids_.empty() || !unit_direction(ray, direction)) return best;
@@ -225,6 +225,9 @@ RayHit TriangleBvh::intersect(const Ray& ray, float max_distance) const noexcept
     const Node& node = nodes_[stack[--top]];
     if (node.count > 0) {
       for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
+        if (skip_point != no_point && (corner_points_[3 * s] == skip_point || corner_points_[3 * s + 1] == skip_point ||
+                                       corner_points_[3 * s + 2] == skip_point))
+          continue;
         float t, u, v;
         if (hit_triangle(ray.origin, direction, corners_[3 * s], corners_[3 * s + 1], corners_[3 * s + 2], t, u, v) &&
             (t < limit || (t == limit && best.hit && triangle_ids_[s] < best.triangle) || (t == limit && !best.hit))) {

@@ -167,7 +167,7 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
         flat.insert(flat.end(), {corners[t], corners[t + 1], corners[t + 2]});
     if (!flat.empty()) {
       bvh.build(mesh.positions, flat);
-      detail::clip_leaves(shapes, skeleton, bvh);
+      detail::clip_guessed_segments(shapes, bvh);
     }
   }
   auto seeds_of = [&](const detail::BoneShape& shape) {

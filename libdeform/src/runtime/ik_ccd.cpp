@@ -52,6 +52,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
   // (out-of-reach targets only), 2 damped least-squares steps while they gain; on their stall, a random kick and
   // back to 0.
   int stage = 0;
+  float handover = ccd_handover_gain;  // after a kick, ccd_kicked_handover_gain
   bool angles_current = false;  // scratch.angles hold the joints' Euler angles: the last step was a least-squares step
   // Within tolerance of the floor nothing better exists: an out-of-reach target stops there too.
   while (distance > floor + settings.tolerance && iterations < settings.max_iterations) {
@@ -77,7 +78,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
     // Clamped CCD crawls near the target (each joint moves the effector only across its own lever arm), creeps
     // toward the straight chain for a target out of reach, or sits in a local minimum with joints pinned at their
     // limits. Straightening, then least-squares steps that move all joints together, then a kick into another basin.
-    if (stage == 0 && gain < handover_gain * (previous - floor)) {
+    if (stage == 0 && gain < handover * (previous - floor)) {
       stage = floor > 0.0f ? 1 : 2;
     } else if (stage == 1) {
       stage = 2;
@@ -87,6 +88,7 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
       chain_fk(chain, pose, base, frames, heads);
       distance = glm::length(heads.back() - target);
       stage = 0;
+      handover = ccd_kicked_handover_gain;
       angles_current = false;
     }
   }

@@ -420,8 +420,12 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
       const double min = limit.min[axis], max = limit.max[axis];
       double& angle = angles[k][axis];
       angle += static_cast<double>(glm::dot(columns[3 * k + static_cast<std::size_t>(axis)], y));
-      angle = max - min >= 2.0 * std::numbers::pi ? std::remainder(angle, 2.0 * std::numbers::pi)
-                                                  : std::clamp(angle, min, max);
+      // A free axis wraps into [-π, π]; one already there is what remainder() returns for it (n = 0), without the
+      // libm call that most steps' free axes would otherwise pay.
+      if (max - min < 2.0 * std::numbers::pi)
+        angle = std::clamp(angle, min, max);
+      else if (std::abs(angle) > std::numbers::pi)
+        angle = std::remainder(angle, 2.0 * std::numbers::pi);
     }
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     rotation = quat_at(angles[k], axis_dirs[k]);

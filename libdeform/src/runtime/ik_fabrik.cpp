@@ -92,7 +92,7 @@ IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, gl
       save_joints(chain, pose, scratch.best);
     }
     if (settings.escape_stalls && distance > settings.tolerance &&
-        previous - distance < (polishing ? stall_gain : handover_gain) * (previous - floor)) {
+        previous - distance < (polishing ? stall_gain : fabrik_handover_gain) * (previous - floor)) {
       // As in solve_ccd: damped least-squares steps, then a random kick from the best pose.
       if (polishing) {
         load_joints(chain, scratch.best, pose);

@@ -5,12 +5,13 @@
 #include "deform/io/export.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/model.hpp"
+#include "deform/runtime/skeleton.hpp"
 
 namespace deform {
 
-// Loads OBJ + .sk + .skw and checks they belong together (weights per OBJ `v`, bone ids in the skeleton).
-// Throws deform::Error naming the offending file.
+// Loads OBJ + .sk + .skw and checks they belong together (weights per OBJ `v`, bone ids in the skeleton); keeps
+// `influences` per point from the .skw (read_skw: 4 by default). Throws deform::Error naming the offending file.
 DEFORM_IO_API Model load_model(const std::string& obj_path, const std::string& sk_path, const std::string& skw_path,
-                            Warnings* warnings = nullptr);
+                               Warnings* warnings = nullptr, int influences = max_influences);
 
 }  // namespace deform

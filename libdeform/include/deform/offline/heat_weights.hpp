@@ -8,11 +8,15 @@
 // points is one surface):
 //  1. Bones are segments in the bind pose: from the head to the head of *each* child (a bone that forks, such as a
 //     pelvis, is the union of its segments); a leaf continues its parent's direction for `leaf_length` times its
-//     distance to the parent (as bone_segments() does); a root without children is a point.
-//  2. Heat: among the bones, nearest first, the first one *visible* from the point (the straight segment from the
-//     point to the bone's nearest point crosses no triangle of the mesh) heats the point: p_j = that bone,
-//     H_jj = heat / d², d its distance. A point that sees no bone gets no heat (H_jj = 0) and takes its weights from
-//     its neighbours.
+//     distance to the parent (as bone_segments() does); a root without children is a point. A leaf's segment, and
+//     each segment of a bone that forks, ends where it leaves the mesh (an IK goal parented to the spine and placed
+//     at the hand must not make the spine reach along the arm).
+//  2. Heat: among the bones, nearest first, the first one *visible* from the point heats it: p_j = that bone,
+//     H_jj = heat / d². Visible: the bone lies behind the surface (the direction to its nearest point within 78° of
+//     the inward normal; normals are turned per island so that most points have their nearest bone behind them)
+//     and the straight segment from the point to it crosses no triangle of the mesh but the point's own. A point
+//     that sees no bone gets no heat (H_jj = 0) and takes its weights from its neighbours; an island where no point
+//     sees a bone behind it takes the nearest visible bone on either side.
 //  3. For each bone i, solve (L + A·H) w_i = A·H·p_i over the surface, L the cotangent Laplacian (negative
 //     cotangents clamped to 0, degenerate triangles skipped, plus 1e-3 of a uniform Laplacian over every edge so
 //     that a surface of slivers stays connected), A the barycentric point areas. The matrix is the same for every
@@ -20,8 +24,9 @@
 //     surface (island) is solved on its own; the weights of a piece sum to 1 at every point.
 //  4. An island where no point sees any bone past the rest of the mesh (a garment around a limb, a plate on a
 //     tail: the body hides the bones) looks again past its own triangles only, with a warning naming it. An island
-//     that still sees none is bound rigidly to the bone nearest most of its points, with a warning naming it. The strongest `max_influences` weights are kept, those under 0.1% of their sum dropped,
-//     the rest normalised, strongest first.
+//     that still sees none is bound rigidly to the bone nearest most of its points, with a warning naming it.
+//  5. The strongest `max_influences` weights are kept, those under 0.1% of their sum dropped, the rest normalised,
+//     strongest first; past the fourth in SkinWeights' extras.
 // Cost: O(points × bones) for the nearest bones, a ray per point and tried bone (BVH, docs/performance.md), one
 // sparse factorisation (about O(points^1.5) for a surface) and one solve per heated bone.
 #include <cstdint>
@@ -34,7 +39,7 @@
 namespace deform {
 
 struct HeatWeightsOptions {
-  int max_influences = 4;     // 1 .. deform::max_influences
+  int max_influences = 4;     // 1 .. deform::max_requested_influences (16); past 4 in SkinWeights' extras
   float heat = 1.0f;          // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
   float leaf_length = 1.0f;   // >= 0: a leaf bone's length as a multiple of its distance to its parent
   bool visibility = true;     // false: the nearest bone heats each point whether it sees it or not

@@ -60,8 +60,12 @@ class DEFORM_OFFLINE_API TriangleBvh {
   // No allocation, O(triangles).
   bool refit(std::span<const glm::vec3> positions) noexcept;
 
-  // The nearest hit, as intersect_triangles() gives it for the positions of the last build() or refit().
-  RayHit intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity()) const noexcept;
+  // The nearest hit, as intersect_triangles() gives it for the positions of the last build() or refit(). Triangles
+  // with a corner at point `skip_point` (an index into build()'s positions) are not hit: a ray cast from a vertex
+  // past its own triangles.
+  static constexpr std::uint32_t no_point = 0xFFFFFFFFu;
+  RayHit intersect(const Ray& ray, float max_distance = std::numeric_limits<float>::infinity(),
+                   std::uint32_t skip_point = no_point) const noexcept;
 
   std::size_t triangle_count() const noexcept { return triangle_ids_.size(); }
 

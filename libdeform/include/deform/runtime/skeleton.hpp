@@ -149,6 +149,8 @@ struct DEFORM_RUNTIME_API LocalToWorldJob {
 // without extras the slots alone do. SkinningJob takes the extras as they are (its general path, skinning.hpp).
 // Formats that hold four influences (.skw) keep only the slots: see drop_extra_influences.
 inline constexpr int max_influences = 4;
+// The most influences per point that the .skw reader and the heat weights keep when asked for more than four.
+inline constexpr int max_requested_influences = 16;
 struct SkinWeights {
   std::vector<glm::u16vec4> bones;
   std::vector<glm::vec4> weights;
