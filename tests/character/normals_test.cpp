@@ -199,3 +199,42 @@ TEST_CASE("instances share the bind data and deform like a character of their ow
   CHECK(settled > 0.0f);
   CHECK(settled < 0.08f);
 }
+
+// Transported normals are gathered in place when the mesh has no more points than render vertices (the built-in
+// character), else through a per-point array of their own. Points no render vertex uses, far from everything and
+// skinned to the root, push the built-in character to the second path without changing any render vertex's normal:
+// the two must agree to the bit, over a reach, a release and a few frames of springing.
+TEST_CASE("transported normals: in place and through a per-point array give the same bits") {
+  deform::Model more = deform::builtin_character();
+  const std::size_t vertices = more.mesh.vertex_count();
+  while (more.mesh.point_count() <= vertices + 7) {
+    more.mesh.positions.push_back(glm::vec3(0.0f, -100.0f, 0.0f) + 0.01f * float(more.mesh.point_count() % 13));
+    more.weights.bones.push_back(glm::u16vec4(0));
+    more.weights.weights.push_back(glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+  }
+  const deform::Rig more_rig = deform::builtin_rig(more);
+  Character separate(std::move(more), more_rig);
+  Character in_place = deform::make_builtin_character();
+  REQUIRE(separate.model().mesh.point_count() > separate.model().mesh.vertex_count());
+  REQUIRE(in_place.model().mesh.point_count() <= in_place.model().mesh.vertex_count());
+  for (std::size_t l = 0; l < in_place.deformers().lattice_count(); ++l)
+    REQUIRE(separate.deformers().bound_count(l) == in_place.deformers().bound_count(l));
+  const std::int32_t hand = in_place.skeleton().find("hand_l");
+  const glm::vec3 target = in_place.bone_position(in_place.skeleton().find("clavicle_l")) + glm::vec3(0.9f, 0.2f, 0.3f);
+  REQUIRE(in_place.reach(hand, target).status);
+  REQUIRE(separate.reach(hand, target).status);
+  bool same = true;
+  for (int frame = 0; frame < 40; ++frame) {
+    if (frame == 20) in_place.release(), separate.release();
+    REQUIRE(in_place.update(1.0f / 60.0f));
+    REQUIRE(separate.update(1.0f / 60.0f));
+    const auto a = in_place.normals(), b = separate.normals();
+    REQUIRE(a.size() == b.size());
+    for (std::size_t v = 0; v < a.size(); ++v) same = same && a[v] == b[v];
+    // A second call gathers nothing (gathering in place twice would scramble them).
+    const std::vector<glm::vec3> first(a.begin(), a.end());
+    const auto again = in_place.normals();
+    for (std::size_t v = 0; v < again.size(); ++v) same = same && again[v] == first[v];
+  }
+  CHECK(same);
+}

@@ -629,3 +629,73 @@ TEST_CASE("topology: non-manifold soups, isolated points and bad indices") {
   bad.triangles[0] = 99;
   CHECK_THROWS_AS(deform::build_point_topology(bad), deform::Error);
 }
+
+// The in-place gather (Character's transported normals without a per-point array) against the plain gather into a
+// second array: random maps of every shape — identity, permutations (cycles), many destinations per source, sources
+// no destination reads, more destinations than sources — thousands of seeded cases, and the built-in character's.
+TEST_CASE("in-place gather: equals the plain gather on seeded random maps and the built-in character's") {
+  const auto check = [](const std::vector<std::uint32_t>& map, std::size_t sources, std::mt19937& rng) {
+    std::uniform_real_distribution<float> any(-1.0f, 1.0f);
+    std::vector<glm::vec3> values(map.size() + 1);
+    for (glm::vec3& v : values) v = {any(rng), any(rng), any(rng)};
+    std::vector<glm::vec3> expected(map.size() + 1);
+    for (std::size_t v = 0; v < map.size(); ++v) expected[v] = values[map[v]];
+    const deform::InPlaceGather plan = deform::plan_in_place_gather(map, sources);
+    deform::InPlaceGatherJob job;
+    job.plan = &plan;
+    job.values = values;
+    REQUIRE(job.validate());
+    REQUIRE(job.run());
+    bool same = true;
+    for (std::size_t v = 0; v < map.size(); ++v) same = same && values[v] == expected[v];  // (not the scratch)
+    CHECK(same);
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < map.size(); ++v) moved += map[v] != v;
+    CHECK(plan.moves.size() % 2 == 0);
+    CHECK(plan.moves.size() / 2 >= moved);
+    CHECK(plan.moves.size() / 2 <= moved + moved / 2 + 1);  // at most one held value per cycle (of 2 or more)
+  };
+  std::mt19937 rng(18);
+  for (int round = 0; round < 4000; ++round) {
+    const std::size_t count = 1 + rng() % 64;
+    const std::size_t sources = 1 + rng() % count;
+    std::vector<std::uint32_t> map(count);
+    switch (round % 4) {
+      case 0:  // any source per destination
+        for (auto& m : map) m = std::uint32_t(rng() % sources);
+        break;
+      case 1: {  // a permutation of the sources, then random duplicates
+        std::vector<std::uint32_t> perm(sources);
+        for (std::size_t s = 0; s < sources; ++s) perm[s] = std::uint32_t(s);
+        std::shuffle(perm.begin(), perm.end(), rng);
+        for (std::size_t v = 0; v < count; ++v) map[v] = v < sources ? perm[v] : std::uint32_t(rng() % sources);
+        break;
+      }
+      case 2:  // mostly the identity, a few moved
+        for (std::size_t v = 0; v < count; ++v)
+          map[v] = v < sources && rng() % 4 ? std::uint32_t(v) : std::uint32_t(rng() % sources);
+        break;
+      default: {  // a render-vertex order: every source once in shuffled order, duplicates interleaved
+        std::vector<std::uint32_t> order;
+        for (std::size_t s = 0; s < sources; ++s) order.push_back(std::uint32_t(s));
+        while (order.size() < count) order.push_back(std::uint32_t(rng() % sources));
+        std::shuffle(order.begin(), order.end(), rng);
+        map = order;
+      }
+    }
+    check(map, sources, rng);
+  }
+  const deform::Mesh mesh = deform::builtin_character().mesh;
+  check(mesh.vertex_point, mesh.point_count(), rng);
+  std::vector<std::uint32_t> bad = {0, 2, 1};
+  CHECK_THROWS_AS(deform::plan_in_place_gather(bad, 2), deform::Error);
+  CHECK_THROWS_AS(deform::plan_in_place_gather(bad, 4), deform::Error);
+  deform::InPlaceGatherJob job;
+  CHECK(!job.validate());
+  const deform::InPlaceGather plan = deform::plan_in_place_gather(bad, 3);
+  std::vector<glm::vec3> short_values(3);
+  job.plan = &plan;
+  job.values = short_values;
+  CHECK(job.validate().reason() == std::string("values: one per destination and one more"));
+  CHECK(!job.run());
+}

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "deform/offline/hierarchy_binding.hpp"
+#include "deform/runtime/prefetch.hpp"
 
 namespace deform {
 namespace {
@@ -72,6 +73,8 @@ Character::Character(Model model, const Rig& rig)
           bind->point_normals[mesh.vertex_point[v]] = vertex_normals[v];
         }
         for (const Bone& bone : bind->model.skeleton.bones()) bind->limits.push_back(prepare_limits(bone.limits));
+        bind->normals_in_place = mesh.point_count() <= mesh.vertex_count();
+        if (bind->normals_in_place) bind->normals_gather = plan_in_place_gather(mesh.vertex_point, mesh.point_count());
         return std::shared_ptr<const BindData>(std::move(bind));
       }()),
       rig_(rig),
@@ -107,7 +110,7 @@ Character::Character(Model model, const Rig& rig)
   job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
-  job.out_normals = as_floats(std::span<glm::vec3>(point_normals_));
+  job.out_normals = as_floats(point_normals());
   if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
   if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
 }
@@ -134,8 +137,13 @@ void Character::allocate_frame_state() {
   dual_quats_.assign(bones, DualQuat{});
   scales_.assign(bones, glm::mat3(1.0f));
   positions_ = bound.mesh.positions;
-  point_normals_ = bind_->point_normals;
-  normals_.assign(bound.mesh.vertex_count(), glm::vec3(0.0f));
+  // In place: one entry more, the gather's scratch (normals() shows the first vertex_count()).
+  normals_.assign(bound.mesh.vertex_count() + (bind_->normals_in_place ? 1 : 0), glm::vec3(0.0f));
+  if (bind_->normals_in_place) {
+    std::copy(bind_->point_normals.begin(), bind_->point_normals.end(), normals_.begin());
+  } else {
+    point_normals_ = bind_->point_normals;
+  }
   morph_weights_.clear();
   for (const MorphTarget& target : bound.morph_targets) morph_weights_.push_back(target.default_weight);
   if (!bound.morph_targets.empty()) {
@@ -171,6 +179,11 @@ Character Character::instance() const {
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
   return copy;
+}
+
+std::span<glm::vec3> Character::point_normals() noexcept {
+  if (bind_->normals_in_place) return std::span<glm::vec3>(normals_).first(bind_->model.mesh.point_count());
+  return point_normals_;
 }
 
 void Character::set_normals_mode(NormalsMode mode) {
@@ -446,8 +459,27 @@ void Character::release() {
   reaching_ = false;
 }
 
+void Character::prefetch() const noexcept {
+  prefetch_span(pose_.rotations);
+  prefetch_span(pose_.translations);
+  prefetch_span(world_);
+  prefetch_span(palette_);
+  if (lead_ > 0.0f) {
+    prefetch_span(later_.rotations);
+    prefetch_span(later_.translations);
+    prefetch_span(world_later_);
+    prefetch_span(world_rate_);
+  }
+  springs_.prefetch();
+  hierarchy_.prefetch();
+}
+
 Status Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
+  // A crowd's characters are cold when their update starts: ask for every small array at once, so that their
+  // first lines arrive together rather than one wait each (the large per-point arrays the streaming hardware
+  // prefetcher fetches well once skinning runs through them).
+  prefetch();
   const Model& bound = bind_->model;
   const Skeleton& skel = bound.skeleton;
   LocalToWorldJob fk;
@@ -513,7 +545,7 @@ Status Character::update(float dt) {
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (transport) {
     job.in_normals = as_floats(rest_normals);
-    job.out_normals = as_floats(std::span<glm::vec3>(point_normals_));
+    job.out_normals = as_floats(point_normals());
   }
   if (skinning == SkinningMethod::dqs) {
     bool has_scale = false;
@@ -529,7 +561,8 @@ Status Character::update(float dt) {
   if (!lattice_fields) {
     // The carried points only translate: their normals stay as skinned.
     if (const Status status = hierarchy_.apply_carried(positions_); !status) return status;
-  } else if (const Status status = transport ? hierarchy_.apply(positions_, point_normals_) : hierarchy_.apply(positions_);
+  } else if (const Status status =
+                 transport ? hierarchy_.apply(positions_, point_normals()) : hierarchy_.apply(positions_);
              !status) {
     return status;
   }
@@ -539,20 +572,25 @@ Status Character::update(float dt) {
 
 std::span<const glm::vec3> Character::normals() {
   if (!normals_current_) {
-    if (transported_current_) {
+    if (transported_current_ && bind_->normals_in_place) {
+      InPlaceGatherJob gather;
+      gather.plan = &bind_->normals_gather;
+      gather.values = normals_;
+      gather.run();  // cannot refuse: the plan was made for this mesh, normals_ sized by it
+    } else if (transported_current_) {
       const std::vector<std::uint32_t>& vertex_point = bind_->model.mesh.vertex_point;
-      for (std::size_t v = 0; v < normals_.size(); ++v) normals_[v] = point_normals_[vertex_point[v]];
+      for (std::size_t v = 0; v < vertex_point.size(); ++v) normals_[v] = point_normals_[vertex_point[v]];
     } else if (!normals_scratch_.empty()) {
       VertexNormalsJob job;
       job.binding = &bind_->vertex_normals;
       job.positions = positions_;
-      job.normals = normals_;
+      job.normals = std::span<glm::vec3>(normals_).first(bind_->model.mesh.vertex_count());
       job.scratch = normals_scratch_;
       job.run();
     }
     normals_current_ = true;
   }
-  return normals_;
+  return std::span<const glm::vec3>(normals_).first(bind_->model.mesh.vertex_count());
 }
 
 glm::vec3 Character::bone_position(std::int32_t bone) const {

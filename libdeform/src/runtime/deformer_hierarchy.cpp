@@ -5,6 +5,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/prefetch.hpp"
 #include "finite.hpp"
 
 namespace deform {
@@ -95,7 +96,7 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.elastic = ElasticLattice(lattice.rest.control_points(), lattice.spec.elastic, counts);
     lattice.elastic.set_pinned(pinned);
     lattice.target_points.assign(lattice.rest.control_points().begin(), lattice.rest.control_points().end());
-    lattice.world_displacements.assign(lattice.rest.point_count(), glm::vec3(0.0f));
+    std::fill(lattice.field.control_points().begin(), lattice.field.control_points().end(), glm::vec3(0.0f));
     lattice.world_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.mapped_points.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     // A rest lattice on its frame's regular grid is the affine map X(u, v, w) of the frame, whose Jacobian is the
@@ -223,7 +224,11 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
   const float volume = lattice.spec.shape.volume;
   for (std::size_t i = 0; i <= last; ++i) {
     const float s = i == 0 ? ratio[1] : i == last ? ratio[last] : 0.5f * (ratio[i] + ratio[i + 1]);
-    slices.scale[i] = volume > 0.0f ? std::pow(std::max(s, min_volume_ratio), -0.5f * volume) : 1.0f;
+    // s^(-volume/2); for full compensation (the default) 1/√s, to float rounding, without a pow.
+    const float ratio_s = std::max(s, min_volume_ratio);
+    slices.scale[i] = volume == 1.0f ? 1.0f / std::sqrt(ratio_s)
+                      : volume > 0.0f ? std::pow(ratio_s, -0.5f * volume)
+                                      : 1.0f;
   }
 }
 
@@ -356,6 +361,24 @@ void DeformerHierarchy::reset() {
   }
 }
 
+void DeformerHierarchy::prefetch() const noexcept {
+  prefetch_span(lattices_);
+  for (const Lattice& lattice : lattices_) {
+    lattice.elastic.prefetch();
+    prefetch_span(lattice.rest.control_points());
+    prefetch_span(lattice.field.control_points());
+    prefetch_span(lattice.far_face);
+    prefetch_span(lattice.target_points);
+    if (lattice.spec.motion.active()) {
+      prefetch_span(lattice.rest_velocity);
+      prefetch_span(lattice.accel_start);
+      prefetch_span(lattice.accel_end);
+    }
+  }
+  prefetch_span(scratch_);
+  prefetch_span(normal_scratch_);
+}
+
 Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
   if (world.size() != bone_parents_.size()) return Status::failure("world does not have one entry per bone");
   SliceShape slices;
@@ -371,6 +394,7 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
     const glm::mat3 linear(world[std::size_t(lattice.spec.bone)]);
     lattice.linear = linear;
     const float still = 1e-7f * lattice.length;
+    const std::span<glm::vec3> displacements = lattice.field.control_points();
     for (int k = 0; k < counts.z; ++k) {
       for (int j = 0; j < counts.y; ++j) {
         for (std::size_t i = 0; i <= last; ++i) {
@@ -378,18 +402,16 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
           const glm::vec3 radial = rest[n] - lattice.axis * glm::dot(rest[n], lattice.axis);
           const glm::vec3 local = (i == last ? far : now[n] - rest[n]) + lattice.axis * slices.shift[i] +
                                   radial * (slices.scale[i] - 1.0f);
-          lattice.world_displacements[n] = linear * local;
+          displacements[n] = linear * local;
         }
       }
     }
     lattice.far_displacement = linear * (far + lattice.axis * slices.shift[last]);
     const float still2 = still * still;
     bool active = glm::dot(lattice.far_displacement, lattice.far_displacement) > still2;
-    for (const glm::vec3& d : lattice.world_displacements) active = active || glm::dot(d, d) > still2;
+    for (const glm::vec3& d : displacements) active = active || glm::dot(d, d) > still2;
     lattice.active = active;
     lattice.bone_world = world[std::size_t(lattice.spec.bone)];
-    std::span<glm::vec3> field = lattice.field.control_points();
-    std::copy(lattice.world_displacements.begin(), lattice.world_displacements.end(), field.begin());
   }
   drawing_current_ = false;  // control_points() computes them when asked: an engine frame never draws lattices
   return {};
@@ -403,7 +425,8 @@ std::span<const glm::vec3> DeformerHierarchy::control_points(std::size_t index) 
       const glm::vec3 carried = point_displacement(lattice.spec.bone, glm::vec3(lattice.bind_world[3]));
       const std::span<const glm::vec3> rest = lattice.rest.control_points();
       for (std::size_t n = 0; n < rest.size(); ++n) {
-        lattice.world_points[n] = transform_point(lattice.bone_world, rest[n]) + lattice.world_displacements[n] + carried;
+        lattice.world_points[n] =
+            transform_point(lattice.bone_world, rest[n]) + lattice.field.control_points()[n] + carried;
       }
     }
     drawing_current_ = true;
@@ -426,7 +449,7 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
 LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice) {
   LatticeEvaluateJob job;
   job.binding = &lattice.bound->lane_binding;
-  job.control_points = lattice.world_displacements;
+  job.control_points = lattice.field.control_points();
   job.positions = scratch_;
   return job;
 }
@@ -516,7 +539,7 @@ void DeformerHierarchy::mapped_points(std::size_t index, std::span<glm::vec3> ou
   if (out.size() != rest.size()) return;
   // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
   // skinned neighbourhood's (linear) times the field's (I + ∂D_local/∂x).
-  for (std::size_t n = 0; n < rest.size(); ++n) out[n] = lattice.linear * rest[n] + lattice.world_displacements[n];
+  for (std::size_t n = 0; n < rest.size(); ++n) out[n] = lattice.linear * rest[n] + lattice.field.control_points()[n];
 }
 
 glm::mat3 DeformerHierarchy::normals_to_bind(std::size_t index) const {

@@ -6,6 +6,7 @@
 
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
+#include "deform/runtime/prefetch.hpp"
 namespace deform {
 namespace {
 
@@ -241,10 +242,16 @@ Status ElasticLattice::step(float dt, std::span<const glm::vec3> rest, std::span
     }
   }
   if (!pinned_.empty()) {
+    // The Verlet history and the sub-step state only where the integrator reads them: set_settings() restarts them
+    // from positions_ and velocities_ when it starts reading them (a crowd's frame then leaves those lines alone).
+    const bool verlet = settings_.integrator == Integrator::verlet;
+    const bool substepping = !verlet && !springs_.empty();
     for (std::size_t i = 0; i < size(); ++i) {
       if (!pinned_[i]) continue;
-      positions_[i] = previous_[i] = sub_positions_[i] = rest_[i];
-      velocities_[i] = sub_velocities_[i] = glm::vec3(0.0f);
+      positions_[i] = rest_[i];
+      velocities_[i] = glm::vec3(0.0f);
+      if (verlet) previous_[i] = rest_[i];
+      if (substepping) sub_positions_[i] = rest_[i], sub_velocities_[i] = glm::vec3(0.0f);
     }
   }
   return {};
@@ -307,6 +314,25 @@ void ElasticLattice::step_verlet(float dt, const glm::vec3* accel_end) {
     velocities_[i] = (positions_[i] - p) / dt;
   }
   last_dt_ = dt;
+}
+
+}  // namespace deform
+
+namespace deform {
+
+void ElasticLattice::prefetch() const noexcept {
+  prefetch_span(positions_);
+  prefetch_span(velocities_);
+  prefetch_span(rest_);
+  prefetch_span(pinned_);
+  if (settings_.integrator == Integrator::verlet) prefetch_span(previous_);
+  if (!springs_.empty()) {
+    prefetch_span(springs_);
+    prefetch_span(sub_positions_);
+    prefetch_span(sub_velocities_);
+    prefetch_span(forces_);
+    prefetch_span(held_accel_);
+  }
 }
 
 }  // namespace deform

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <queue>
+#include <string>
 
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
@@ -199,6 +201,81 @@ Bounds compute_bounds(std::span<const glm::vec3> points) {
     bounds.max = glm::max(bounds.max, p);
   }
   return bounds;
+}
+
+}  // namespace deform
+
+namespace deform {
+
+InPlaceGather plan_in_place_gather(std::span<const std::uint32_t> map, std::size_t sources) {
+  const std::size_t count = map.size();
+  constexpr std::uint32_t none = 0xffffffffu;
+  if (count >= std::size_t(none)) throw Error::invalid_argument("map", "2^32 - 1 entries or more");
+  if (sources > count) throw Error::invalid_argument("map", "more sources than destinations");
+  for (std::size_t v = 0; v < count; ++v) {
+    if (map[v] >= sources)
+      throw Error::invalid_argument("map", "entry " + std::to_string(v) + " is not below the source count");
+  }
+  InPlaceGather plan;
+  plan.sources = sources;
+  plan.destinations = count;
+  // Slot s may be overwritten once every other destination reading it has been written (readers[s] = 0). Writing a
+  // destination frees one read of its source. What is left when nothing is free are cycles (each slot read by the
+  // one before it): one slot's value is held (in the scratch slot), which frees that slot, and its cycle unwinds to
+  // the move from the held value before another cycle is broken, so one scratch slot suffices.
+  std::vector<std::uint32_t> readers(count, 0);
+  std::vector<std::uint8_t> pending(count, 0);
+  std::size_t remaining = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    if (map[v] == v) continue;
+    ++readers[map[v]];
+    pending[v] = 1;
+    ++remaining;
+  }
+  // Ready destinations are taken lowest first, so that most writes go up through the array.
+  std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> ready;
+  for (std::size_t v = 0; v < count; ++v)
+    if (pending[v] && readers[v] == 0) ready.push(std::uint32_t(v));
+  plan.moves.reserve(2 * (remaining + remaining / 8 + 1));
+  const auto held = std::uint32_t(count);      // the slot past the destinations
+  std::uint32_t saved = none;                 // the slot whose value is held
+  std::size_t scan = 0;
+  while (remaining > 0) {
+    while (!ready.empty()) {
+      const std::uint32_t v = ready.top();
+      ready.pop();
+      const std::uint32_t s = map[v];
+      plan.moves.push_back(v);
+      plan.moves.push_back(s == saved ? held : s);
+      pending[v] = 0;
+      --remaining;
+      if (s != saved && --readers[s] == 0 && pending[s]) ready.push(s);
+    }
+    if (remaining == 0) break;
+    while (!pending[scan]) ++scan;
+    // Every pending slot is on a cycle now: hold this one's value and write it.
+    plan.moves.push_back(held);
+    plan.moves.push_back(std::uint32_t(scan));
+    saved = std::uint32_t(scan);
+    readers[scan] = 0;
+    ready.push(std::uint32_t(scan));
+  }
+  return plan;
+}
+
+Status InPlaceGatherJob::validate() const noexcept {
+  if (plan == nullptr) return Status::failure("no plan");
+  if (values.size() != plan->destinations + 1) return Status::failure("values: one per destination and one more");
+  return {};
+}
+
+Status InPlaceGatherJob::run() const noexcept {
+  if (const Status status = validate(); !status) return status;
+  glm::vec3* const out = values.data();
+  const std::uint32_t* move = plan->moves.data();
+  const std::uint32_t* const end = move + plan->moves.size();
+  for (; move != end; move += 2) out[move[0]] = out[move[1]];
+  return {};
 }
 
 }  // namespace deform

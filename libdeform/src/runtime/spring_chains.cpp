@@ -6,6 +6,7 @@
 #include <string>
 
 #include "deform/runtime/elastic.hpp"
+#include "deform/runtime/prefetch.hpp"
 #include "deform/runtime/spring_chain.hpp"
 #include "finite.hpp"
 
@@ -420,6 +421,27 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
   start_velocities_ = end_velocities_;
   collider_start_radius_ = collider_end_radius_;
   return {};
+}
+
+}  // namespace deform
+
+namespace deform {
+
+void SpringChains::prefetch() const noexcept {
+  prefetch_span(chains_);
+  prefetch_span(colliders_);
+  prefetch_span(point_bone_);
+  prefetch_span(point_local_);
+  prefetch_span(governed_);
+  prefetch_span(inverse_bind_);
+  for (const auto* points : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_,
+                             &sample_velocities_, &positions_, &velocities_, &rests_, &report_positions_,
+                             &report_velocities_, &report_rests_, &drawn_})
+    prefetch_span(*points);
+  prefetch_span(collider_start_radius_);
+  prefetch_span(collider_end_radius_);
+  prefetch_span(sample_colliders_);
+  prefetch_span(corrections_);
 }
 
 }  // namespace deform

@@ -90,7 +90,7 @@ class DEFORM_CHARACTER_API Character {
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default morph weights, the
   // settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max stretch), the
   // lattices' current elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
-  // 218 KB for the built-in character; docs/performance.md, "Elasticity and the whole frame").
+  // 142 KB for the built-in character; docs/performance.md, "2026-11-24, late").
   Character instance() const;
 
   const Model& model() const noexcept { return bind_->model; }
@@ -202,6 +202,11 @@ class DEFORM_CHARACTER_API Character {
   // O(bones + points + bound points · lattice cost).
   Status update(float dt);
 
+  // Cache hints for the state the next update() and normals() read and write (deform/runtime/prefetch.hpp): no
+  // effect on any result. update() issues them itself as it starts; a crowd's loop may call it on the next
+  // character while this one updates, so that its state is on its way before its update() starts. No allocation.
+  void prefetch() const noexcept;
+
   // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
   // How normals() gets its normals (see the top of this file).
@@ -216,7 +221,9 @@ class DEFORM_CHARACTER_API Character {
 
   // Deformed normals, one per render vertex, as of the last update(): transported (gathered on the first call after
   // update(), O(render vertices)) or recomputed from positions() on the first call after update() (VertexNormalsJob
-  // over a binding made at construction: O(triangles)), by normals_mode().
+  // over a binding made at construction: O(triangles)), by normals_mode(). The span stays valid for the character's
+  // life, but what it shows is the last update()'s normals only once normals() has been called after that update():
+  // transported normals are gathered in the same array (one per point first, then in place per render vertex).
   std::span<const glm::vec3> normals();
   // The skinning palette of the last update() (T_W · T_B⁻¹ per bone, the spring chains' bending included): what
   // SkinningJob::matrices gets, for a caller that skins elsewhere (deform_on_cpu = false). Identity before any.
@@ -247,10 +254,17 @@ class DEFORM_CHARACTER_API Character {
     VertexNormalsBinding vertex_normals;
     std::vector<glm::vec3> point_normals;  // bind-pose unit normals, one per point (angle-weighted)
     std::vector<EulerLimits> limits;       // each bone's DOF limits prepared for set_pose's clamp
+    // Transported normals in place (points no more than render vertices): update() puts the per-point normals in
+    // the first point_count() entries of normals_ and normals() gathers them there into render-vertex order, so an
+    // instance holds and writes no separate per-point array (34 KB less per built-in character).
+    bool normals_in_place = false;
+    InPlaceGather normals_gather;
   };
   Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy);
   void allocate_frame_state();
   void clamp_pose(Pose& pose) const noexcept;
+  // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
+  std::span<glm::vec3> point_normals() noexcept;
 
   std::shared_ptr<const BindData> bind_;
   Rig rig_;
@@ -266,8 +280,8 @@ class DEFORM_CHARACTER_API Character {
   std::vector<DualQuat> dual_quats_;
   std::vector<glm::mat3> scales_;
   std::vector<glm::vec3> positions_;
-  std::vector<glm::vec3> point_normals_;     // transported: one per point, as of update()
-  std::vector<glm::vec3> normals_;           // one per render vertex
+  std::vector<glm::vec3> point_normals_;     // transported: one per point, as of update() (empty when in place)
+  std::vector<glm::vec3> normals_;  // one per render vertex (in place: per point until normals(), and a scratch entry)
   std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch (allocated for the recomputed mode only)
   // Morph targets: one weight per target; the morphed bind positions and normals, one per point (allocated only when
   // the model has targets); whether the last deforming update() morphed (a weight was not 0).

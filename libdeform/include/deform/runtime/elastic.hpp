@@ -172,6 +172,9 @@ class DEFORM_RUNTIME_API ElasticLattice {
   // allocation.
   Status reset(std::span<const glm::vec3> rest);
 
+  // Cache hints for the state the next step() reads and writes (deform/runtime/prefetch.hpp): no effect on it.
+  void prefetch() const noexcept;
+
   std::size_t size() const noexcept { return positions_.size(); }
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
   std::span<const glm::vec3> velocities() const noexcept { return velocities_; }

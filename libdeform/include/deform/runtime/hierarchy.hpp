@@ -180,6 +180,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   Status step(float dt, std::span<const glm::mat4> world, std::span<const glm::mat4> world_rate = {});
   // Every control point back on the unstretched rest, at rest; stretch targets 0.
   void reset();
+  // Cache hints for the state the next step(), update() and apply() read and write (deform/runtime/prefetch.hpp):
+  // no effect on it.
+  void prefetch() const noexcept;
 
   // Per frame, after step(): carries the lattices into world space with the bones' current matrices (`world`, one per
   // bone, from LocalToWorldJob for the pose the points were skinned with). Refuses, changing nothing, a size
@@ -215,7 +218,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // As of update(): the control points of the lattice's displacement field, world space, i-fastest (point_counts of
   // rest_lattice(l)); evaluating binding(l) with them gives each bound point's displacement before its weight.
   std::span<const glm::vec3> displacements(std::size_t lattice) const {
-    return lattices_.at(lattice).world_displacements;
+    return lattices_.at(lattice).field.control_points();
   }
   // What apply_carried() adds, for callers that add it themselves (e.g. on a GPU, GpuLatticeFields::apply_into): the
   // points beyond the lattice's far face (mesh point indices, made at construction), their selection weights (one
@@ -269,13 +272,13 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::int32_t parent = -1;
     glm::mat4 bind_world{1.0f};           // the bone's bind world matrix and its inverse
     glm::mat4 inverse_bind_world{1.0f};
-    BezierLattice field{LatticeFrame{}};  // control points = world displacements (for point_displacement)
+    // Per frame (update): the control points are the world displacements (displacements(); point_displacement).
+    BezierLattice field{LatticeFrame{}};
     std::vector<std::uint32_t> far_face;  // control point indices with i = l
     ElasticLattice elastic;
     std::vector<glm::vec3> target_points;  // rest stretched by `target`, bone frame
     float target = 0.0f;
-    // Per frame (update): world displacements of the control points, the far face's, world control points.
-    std::vector<glm::vec3> world_displacements;
+    // Per frame (update): the far face's displacement; world control points.
     glm::vec3 far_displacement{0.0f};
     mutable std::vector<glm::vec3> world_points;  // for drawing, computed by control_points()
     glm::mat4 bone_world{1.0f};            // the bone's world matrix as of update()

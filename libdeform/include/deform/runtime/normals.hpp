@@ -115,4 +115,36 @@ struct DEFORM_RUNTIME_API VertexNormalsJob {
   Status run(std::size_t begin, std::size_t end) const noexcept;
 };
 
+
+// A gather done in place: after it, values[v] = (values before)[map[v]] for every v < map.size(), where every map
+// entry is < sources <= map.size() — one array holding first one value per source (e.g. per point) and then, once
+// gathered, one per destination (e.g. per render vertex), plus one entry of scratch at its end. What it saves over a
+// gather into a second array is that array: for a crowd of characters, each one's per-point normals (Character,
+// transported normals) need no memory of their own. plan_in_place_gather orders the moves once (a source is read by
+// all its destinations before its own slot is overwritten, the lowest ready destination first; each cycle of the
+// map goes through the scratch entry), InPlaceGatherJob replays them.
+struct DEFORM_RUNTIME_API InPlaceGather {
+  std::size_t sources = 0;
+  std::size_t destinations = 0;  // map.size(); the array has one entry more, the scratch, at index destinations
+  // Move k copies slot moves[2k + 1] into slot moves[2k], in order; entries with map[v] == v make no move.
+  std::vector<std::uint32_t> moves;
+};
+
+// The plan for `map` over `sources` values. Throws deform::Error (Error::invalid_argument, element "map") when
+// sources > map.size(), an entry is >= sources, or map.size() >= 2³² - 1. Allocates; O(map.size() · log + sources).
+DEFORM_RUNTIME_API InPlaceGather plan_in_place_gather(std::span<const std::uint32_t> map, std::size_t sources);
+
+// Per frame: replays a plan on `values` (plan->destinations + 1 entries: the first plan->sources hold the sources,
+// the last is scratch, left unspecified).
+struct DEFORM_RUNTIME_API InPlaceGatherJob {
+  const InPlaceGather* plan = nullptr;
+  std::span<glm::vec3> values;
+
+  // Ok when the job can run, else why not: a plan ("no plan"), `values` one per destination and the scratch entry
+  // ("values: one per destination and one more"). The plan's moves are plan_in_place_gather's to be right. O(1).
+  Status validate() const noexcept;
+  // Gathers; refuses, writing nothing, what validate() refuses. No allocation, no locks; O(destinations).
+  Status run() const noexcept;
+};
+
 }  // namespace deform

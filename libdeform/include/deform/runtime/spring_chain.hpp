@@ -108,6 +108,9 @@ class DEFORM_RUNTIME_API SpringChains {
   // reach that starts or ends). Throws std::out_of_range for a bad index.
   void restart(std::size_t chain) { chains_.at(chain).restart = true; }
 
+  // Cache hints for the state the next run() reads and writes (deform/runtime/prefetch.hpp): no effect on it.
+  void prefetch() const noexcept;
+
   std::size_t chain_count() const noexcept { return chains_.size(); }
   const SpringChainSpec& spec(std::size_t chain) const { return chains_.at(chain).spec; }
   std::span<const SpringCollider> colliders() const noexcept { return colliders_; }
