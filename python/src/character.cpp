@@ -179,7 +179,8 @@ void bind_character(py::module_& m) {
           "(N, 3) read-only view of the deformed positions (no copy; changes with each update()).")
       .def(
           "normals", [](py::object self) { return vec3_view(self.cast<deform::Character&>().normals(), self, false); },
-          "(V, 3) read-only view of the per-render-vertex normals, recomputed when stale (no copy).")
+          "(V, 3) read-only view of the per-render-vertex normals, brought up to date by this call (no copy): call it "
+          "again after each update(), which leaves the storage in per-point order until then.")
       .def(
           "control_points",
           [](py::object self, std::size_t lattice) {
