@@ -11,6 +11,7 @@
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
+#include "import/skin_model.hpp"
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -696,27 +697,7 @@ TEST_CASE("a Character skins with every influence: extras beyond four as Skinnin
   deform::Pose pose = model.skeleton.bind_pose();
   for (std::int32_t b = 1; b < std::int32_t(bones); b += 3) model.skeleton.set_euler(pose, b, glm::vec3(20.0f, -15.0f, 10.0f));
   // The expected positions: forward kinematics and one SkinningJob with the extras.
-  std::vector<glm::mat4> world(bones), palette(bones);
-  deform::LocalToWorldJob fk;
-  fk.skeleton = &model.skeleton;
-  fk.rotations = pose.rotations;
-  fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
-  REQUIRE(fk.run());
-  std::vector<glm::vec3> expected(model.mesh.point_count());
-  deform::SkinningJob job;
-  job.matrices = palette;
-  job.bone_indices = w.bones;
-  job.bone_weights = w.weights;
-  job.extra_vertices = w.extra_points;
-  job.extra_offsets = w.extra_offsets;
-  job.extra_bones = w.extra_bones;
-  job.extra_weights = w.extra_weights;
-  job.in_positions = deform::as_floats(model.mesh.positions);
-  job.out_positions = deform::as_floats(expected);
-  REQUIRE(job.validate());
-  REQUIRE(job.run());
+  const std::vector<glm::vec3> expected = import_test::skin(model, pose);
   Character c(std::move(model));
   Character c4(std::move(four));
   REQUIRE(c.set_pose(pose));
