@@ -699,3 +699,69 @@ TEST_CASE("in-place gather: equals the plain gather on seeded random maps and th
   CHECK(job.validate().reason() == std::string("values: one per destination and one more"));
   CHECK(!job.run());
 }
+
+// order_vertices_by_point on seeded random meshes (seam copies, unused points, more points than render vertices):
+// every corner draws the same point, normal and UV; point p's first render vertex is at p where p is used and below
+// the vertex count; the in-place gather then moves exactly the other render vertices. Bad input leaves the mesh as it
+// was. The built-in character is laid out so: one move per seam copy.
+TEST_CASE("order_vertices_by_point: draws the same, and gathers in place with a move per seam copy") {
+  std::mt19937 rng(2026);
+  for (int round = 0; round < 2000; ++round) {
+    Mesh mesh;
+    const std::size_t points = 1 + rng() % 40, vertices = 1 + rng() % 60;
+    mesh.positions.resize(points);
+    for (std::size_t v = 0; v < vertices; ++v) {
+      mesh.vertex_point.push_back(std::uint32_t(rng() % points));
+      mesh.vertex_normals.push_back({float(v), 1.0f, 0.0f});
+      if (round % 3) mesh.vertex_uvs.push_back({0.0f, float(v)});
+    }
+    for (std::size_t t = 0; t < 3 * (rng() % 30); ++t) mesh.triangles.push_back(std::uint32_t(rng() % vertices));
+    mesh.face_corners = mesh.triangles;
+    mesh.face_sizes.assign(mesh.triangle_count(), 3);
+    const Mesh before = mesh;
+    const std::vector<std::uint32_t> slot = deform::order_vertices_by_point(mesh);
+    REQUIRE(slot.size() == vertices);
+    REQUIRE(mesh.vertex_count() == vertices);
+    std::vector<std::uint32_t> sorted = slot;
+    std::sort(sorted.begin(), sorted.end());
+    bool permutation = true, same = true;
+    for (std::size_t v = 0; v < vertices; ++v) permutation = permutation && sorted[v] == v;
+    CHECK(permutation);
+    for (std::size_t v = 0; v < vertices; ++v) {
+      same = same && mesh.vertex_point[slot[v]] == before.vertex_point[v] &&
+             mesh.vertex_normals[slot[v]] == before.vertex_normals[v] &&
+             (mesh.vertex_uvs.empty() || mesh.vertex_uvs[slot[v]] == before.vertex_uvs[v]);
+    }
+    for (std::size_t c = 0; c < mesh.triangles.size(); ++c) {
+      same = same && mesh.triangles[c] == slot[before.triangles[c]] &&
+             mesh.face_corners[c] == slot[before.face_corners[c]];
+    }
+    CHECK(same);
+    CHECK(mesh.vertex_uvs.size() == before.vertex_uvs.size());
+    std::vector<std::uint8_t> used(points, 0);
+    for (const std::uint32_t p : before.vertex_point) used[p] = 1;
+    std::size_t at_home = 0, expected_home = 0;
+    for (std::size_t p = 0; p < std::min(points, vertices); ++p) {
+      expected_home += used[p];
+      at_home += mesh.vertex_point[p] == p;
+    }
+    CHECK(at_home == expected_home);
+    if (points <= vertices) {
+      const deform::InPlaceGather plan = deform::plan_in_place_gather(mesh.vertex_point, points);
+      CHECK(plan.moves.size() / 2 == vertices - at_home);
+    }
+  }
+  Mesh bad = deform::builtin_character().mesh;
+  const Mesh kept = bad;
+  bad.face_corners.back() = std::uint32_t(bad.vertex_count());
+  CHECK_THROWS_AS(deform::order_vertices_by_point(bad), deform::Error);
+  CHECK(bad.triangles == kept.triangles);
+  CHECK(bad.vertex_point == kept.vertex_point);
+  bad = kept;
+  bad.vertex_uvs.pop_back();
+  CHECK_THROWS_AS(deform::order_vertices_by_point(bad), deform::Error);
+
+  const Mesh& builtin = kept;
+  const deform::InPlaceGather plan = deform::plan_in_place_gather(builtin.vertex_point, builtin.point_count());
+  CHECK(plan.moves.size() / 2 == builtin.vertex_count() - builtin.point_count());  // 218 seam copies
+}

@@ -10,6 +10,7 @@
 
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/error.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/offline/weights.hpp"
 namespace deform {
 namespace {
@@ -442,6 +443,7 @@ Model builtin_character() {
   build_body(mesh);
   mesh.face_sizes.assign(mesh.triangle_count(), 3);
   mesh.face_corners = mesh.triangles;
+  order_vertices_by_point(mesh);  // render vertex p is point p's: normals() gathers in place with a move per seam copy
   Material skin;
   skin.name = "skin";
   skin.ambient = glm::vec3(0.2f);

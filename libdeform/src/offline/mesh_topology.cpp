@@ -2,6 +2,7 @@
 // equal keys give the boundary (edges used by exactly one triangle), and the distinct edges in both directions,
 // sorted, give the one-rings (CSR). Works on any triangle soup, manifold or not.
 #include <algorithm>
+#include <type_traits>
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -64,6 +65,47 @@ PointTopology build_point_topology(const Mesh& mesh) {
   }
   for (std::size_t p = 0; p < point_count; ++p) topology.neighbour_offsets[p + 1] += topology.neighbour_offsets[p];
   return topology;
+}
+
+std::vector<std::uint32_t> order_vertices_by_point(Mesh& mesh) {
+  const std::size_t points = mesh.point_count(), vertices = mesh.vertex_count();
+  const auto check = [&](bool ok, const char* what) {
+    if (!ok) throw Error::invalid_argument("mesh", what);
+  };
+  check(vertices < std::size_t(0xffffffffu), "2^32 - 1 render vertices or more");
+  check(mesh.vertex_normals.empty() || mesh.vertex_normals.size() == vertices, "vertex_normals: one per render vertex");
+  check(mesh.vertex_uvs.empty() || mesh.vertex_uvs.size() == vertices, "vertex_uvs: one per render vertex");
+  for (const std::uint32_t p : mesh.vertex_point) check(p < points, "vertex_point entry out of range");
+  for (const std::uint32_t v : mesh.triangles) check(v < vertices, "triangle corner out of range");
+  for (const std::uint32_t v : mesh.face_corners) check(v < vertices, "face corner out of range");
+
+  constexpr std::uint32_t none = 0xffffffffu;
+  std::vector<std::uint32_t> slot_of(vertices, none);  // previous render vertex -> new index
+  std::vector<std::uint8_t> taken(vertices, 0);  // new index in use
+  std::vector<std::uint8_t> placed(points, 0);   // the point has its render vertex p (p < vertices)
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const std::uint32_t p = mesh.vertex_point[v];
+    if (p < vertices && !placed[p]) slot_of[v] = p, taken[p] = 1, placed[p] = 1;
+  }
+  std::size_t free_slot = 0;
+  for (std::size_t v = 0; v < vertices; ++v) {
+    if (slot_of[v] != none) continue;
+    while (taken[free_slot]) ++free_slot;
+    slot_of[v] = std::uint32_t(free_slot);
+    taken[free_slot] = 1;
+  }
+  const auto permuted = [&](auto& values) {
+    if (values.empty()) return;
+    std::remove_reference_t<decltype(values)> out(values.size());
+    for (std::size_t v = 0; v < vertices; ++v) out[slot_of[v]] = values[v];
+    values = std::move(out);
+  };
+  permuted(mesh.vertex_point);
+  permuted(mesh.vertex_normals);
+  permuted(mesh.vertex_uvs);
+  for (std::uint32_t& v : mesh.triangles) v = slot_of[v];
+  for (std::uint32_t& v : mesh.face_corners) v = slot_of[v];
+  return slot_of;
 }
 
 }  // namespace deform
