@@ -17,6 +17,13 @@ glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m 
 
 float matrix_scale(const glm::mat4& m) { return std::cbrt(std::abs(glm::determinant(glm::mat3(m)))); }
 
+// q / |q| by one square root and one division (glm::normalize divides each component: a sub-step's chain spent more
+// time in divisions than in anything else).
+glm::quat unit(const glm::quat& q) noexcept {
+  const float inverse = 1.0f / std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  return glm::quat(q.w * inverse, q.x * inverse, q.y * inverse, q.z * inverse);
+}
+
 // The shortest rotation taking the direction of a to that of b; identity when either is zero. Opposite directions
 // turn half a turn about an axis perpendicular to a.
 glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
@@ -25,18 +32,10 @@ glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
   const float w = norms + glm::dot(a, b);
   if (w <= 1e-6f * norms) {
     const glm::vec3 axis = std::abs(a.x) > std::abs(a.z) ? glm::vec3(-a.y, a.x, 0.0f) : glm::vec3(0.0f, -a.z, a.y);
-    return glm::normalize(glm::quat(0.0f, axis.x, axis.y, axis.z));
+    return unit(glm::quat(0.0f, axis.x, axis.y, axis.z));
   }
   const glm::vec3 c = glm::cross(a, b);
-  return glm::normalize(glm::quat(w, c.x, c.y, c.z));
-}
-
-// The point of segment [a, b] nearest p.
-glm::vec3 nearest_on_segment(glm::vec3 a, glm::vec3 b, glm::vec3 p) noexcept {
-  const glm::vec3 ab = b - a;
-  const float length2 = glm::dot(ab, ab);
-  if (!(length2 > 0.0f)) return a;
-  return a + ab * std::clamp(glm::dot(p - a, ab) / length2, 0.0f, 1.0f);
+  return unit(glm::quat(w, c.x, c.y, c.z));
 }
 
 void require(bool ok, const std::string& element, const char* what) {
@@ -241,8 +240,9 @@ void SpringChains::sample_colliders(float blend) {
   // The ends ride with the points (sample_points); the radius, which only the bone's scale changes, linearly.
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     const float start = collider_start_radius_[c], end = collider_end_radius_[c];
-    sample_colliders_[c] = {sample_points_[collider_points_ + 2 * c], sample_points_[collider_points_ + 2 * c + 1],
-                            start + (end - start) * blend};
+    const glm::vec3 from = sample_points_[collider_points_ + 2 * c], to = sample_points_[collider_points_ + 2 * c + 1];
+    const float length2 = glm::dot(to - from, to - from);
+    sample_colliders_[c] = {from, to - from, length2 > 0.0f ? 1.0f / length2 : 0.0f, start + (end - start) * blend};
   }
 }
 
@@ -257,12 +257,13 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
   glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
   const glm::vec3 gravity = chain.spec.gravity * (chain.spec.units_per_metre * chain.scale);
   const float radius = chain.spec.radius * chain.scale;
+  const float inverse_h = 1.0f / h;
   for (std::size_t i = 0; i < chain.count; ++i) {
     const std::size_t j = chain.first + i;
     const glm::vec3 bone = bend * (sample_points_[point0 + i + 1] - sample_points_[point0 + i]);
     const float length = glm::length(bone);
     const glm::vec3 rest = head + bone;
-    const glm::vec3 rest_velocity = (rest - rests[j]) / h;
+    const glm::vec3 rest_velocity = (rest - rests[j]) * inverse_h;
     const glm::vec3 y = positions[j] - rests[j];
     const glm::vec3 u = velocities[j] - rest_velocity;
     glm::vec3 p = rest + m.py * y + m.pv * u + m.pg * gravity;
@@ -272,7 +273,9 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
     const auto keep_length = [&] {
       const glm::vec3 from_head = p - head;
       const float distance = glm::length(from_head);
-      const glm::vec3 along = distance > 1e-12f * length ? from_head / distance : length > 0.0f ? bone / length : bone;
+      const glm::vec3 along = distance > 1e-12f * length ? from_head * (1.0f / distance)
+                              : length > 0.0f             ? bone * (1.0f / length)
+                                                          : bone;
       p = head + along * length;
       v -= glm::dot(v - head_velocity, along) * along;
     };
@@ -280,13 +283,16 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
     for (int round = 0; round < 4; ++round) {
       bool pushed = false;
       for (const std::uint32_t c : chain.spec.colliders) {
+        // The capsule's nearest point; most tails are outside every capsule, decided without a square root.
         const Placed& collider = sample_colliders_[c];
-        const glm::vec3 nearest = nearest_on_segment(collider.start, collider.end, p);
+        const float t = std::clamp(glm::dot(p - collider.start, collider.axis) * collider.inverse_length2, 0.0f, 1.0f);
+        const glm::vec3 nearest = collider.start + collider.axis * t;
         const glm::vec3 out = p - nearest;
-        const float distance = glm::length(out);
         const float reach = collider.radius + radius;
-        if (distance >= reach) continue;
-        const glm::vec3 normal = distance > 1e-12f * reach ? out / distance : glm::normalize(rest - nearest + 1e-30f);
+        const float distance2 = glm::dot(out, out);
+        if (distance2 >= reach * reach) continue;
+        const float distance = std::sqrt(distance2);
+        const glm::vec3 normal = distance > 1e-12f * reach ? out * (1.0f / distance) : glm::normalize(rest - nearest + 1e-30f);
         p = nearest + normal * reach;
         const float inward = glm::dot(v, normal);
         if (inward < 0.0f) v -= inward * normal;

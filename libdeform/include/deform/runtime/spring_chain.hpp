@@ -138,7 +138,8 @@ class DEFORM_RUNTIME_API SpringChains {
   };
   struct Placed {  // a collider in world space
     glm::vec3 start{0.0f};
-    glm::vec3 end{0.0f};
+    glm::vec3 axis{0.0f};          // end - start
+    float inverse_length2 = 0.0f;  // 1 / |axis|², 0 for a sphere (start = end)
     float radius = 0.0f;
   };
   Oscillator oscillator(const Chain& chain, double h) const noexcept;
