@@ -527,7 +527,7 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
       const float weight = weights[n];
       const glm::vec3 blended = normals[p] + weight * (normal_scratch_[n] - normals[p]);
       const float length2 = glm::dot(blended, blended);
-      if (length2 > 1e-12f) normals[p] = blended / std::sqrt(length2);
+      if (length2 > 1e-12f) normals[p] = blended * (1.0f / std::sqrt(length2));  // one division, not three
     }
   }
   return {};
