@@ -2,7 +2,8 @@
 """`deform info` lists an import's skins and `deform skin --blend` blends the clips' morph weights, end to end on glTF
 files written here (and Testwuson.X from Debian's assimp-testmodels, when installed):
   - info: a glTF file with three skins (two meshes on the first, one on the second, one unused) lists all three with
-    their names, joint counts and meshes; an Assimp format lists one skin; a static file has no "skins" key;
+    their names, joint counts and meshes, and every bone (`skeleton`: ids, parents, bind-pose heads); an Assimp
+    format lists one skin; a static file has no "skins" or "skeleton" key;
   - skin --blend: two clips that animate only morph weights give, blended a:1,b:3, the points of --clip a with the
     weights set to their weighted average by --morph; below a summed weight of 0.1 the defaults join in (as the bind
     pose does for the poses); --morph still overrides a blended weight.
@@ -113,6 +114,18 @@ expected = [{"name": "main", "joints": 2, "meshes": ["bar"]}, {"name": "second",
 check(got.get("skins") == expected, f"info three_skins.gltf: skins {got.get('skins')}, expected {expected}")
 for key in ("kind", "vertices", "triangles", "materials", "bones"):
     check(key in got, f"info three_skins.gltf: the fixed key {key} is missing")
+# "skeleton": every imported bone as a .sk's info lists it, parents before children, heads in the bind pose.
+bones = got.get("skeleton", [])
+by_name = {b["name"]: b for b in bones}
+check(len(bones) == got.get("bones") and [b["id"] for b in bones] == list(range(len(bones))),
+      f"info three_skins.gltf: skeleton {bones} against bones {got.get('bones')}")
+check(all(-1 <= b["parent"] < b["id"] for b in bones), f"info three_skins.gltf: a parent after its child: {bones}")
+check({"hips", "spine", "base", "tip"} <= set(by_name), f"info three_skins.gltf: skeleton names {list(by_name)}")
+if {"spine", "tip"} <= set(by_name):
+    check(by_name["spine"]["head"] == [0.0, 1.0, 0.0] and by_name["tip"]["head"] == [3.0, 1.0, 0.0]
+          and bones[by_name["spine"]["parent"]]["name"] == "hips",
+          f"info three_skins.gltf: spine {by_name['spine']}, tip {by_name['tip']}")
+    check(set(by_name["tip"]["limits"]) == {"min", "max"}, f"info three_skins.gltf: tip limits {by_name['tip']}")
 
 # A static glTF file (no skin, no animation): no "skins" key.
 s = Gltf()
@@ -120,7 +133,7 @@ s.doc["meshes"].append({"name": "plain", "primitives": [{"attributes": {"POSITIO
     [0, 0, 0, 1, 0, 0, 0, 1, 0], "VEC3", extra={"min": [0, 0, 0], "max": [1, 1, 0]})}}]})
 s.doc["scenes"][0]["nodes"] = [s.node(name="plain", mesh=0)]
 got = info(s.save("static.gltf"))
-check("skins" not in got and got.get("kind") is not None, f"info static.gltf: {got}")
+check("skins" not in got and "skeleton" not in got and got.get("kind") is not None, f"info static.gltf: {got}")
 
 # An Assimp format: one skin, its joints the bones the meshes name.
 wuson = os.path.join(models, "X", "Testwuson.X") if models else ""

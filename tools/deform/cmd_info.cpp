@@ -28,7 +28,8 @@ Json vec3(glm::vec3 v) {
   return Json::array({deform::shortest_double(v.x), deform::shortest_double(v.y), deform::shortest_double(v.z)});
 }
 
-Json skeleton_info(const deform::Skeleton& skeleton) {
+// Every bone as a `.sk`'s info lists it: id, name, parent, bind-pose head, limits.
+Json bone_list(const deform::Skeleton& skeleton) {
   Json bones = Json::array();
   for (std::size_t i = 0; i < skeleton.bone_count(); ++i) {
     const deform::Bone& b = skeleton.bones()[i];
@@ -38,8 +39,10 @@ Json skeleton_info(const deform::Skeleton& skeleton) {
                      {"head", vec3(glm::vec3(skeleton.bind_world()[i][3]))},
                      {"limits", {{"min", vec3(b.limits.min)}, {"max", vec3(b.limits.max)}}}});
   }
-  return {{"kind", "skeleton"}, {"bones", std::move(bones)}};
+  return bones;
 }
+
+Json skeleton_info(const deform::Skeleton& skeleton) { return {{"kind", "skeleton"}, {"bones", bone_list(skeleton)}}; }
 
 Json mesh_info(const deform::Mesh& mesh) {
   Json materials = Json::array();
@@ -131,6 +134,9 @@ int run(const std::vector<std::string>& argv) {
       for (const deform::ImportedSkin& skin : imported.skins)
         skins.push_back({{"name", skin.name}, {"joints", skin.joints}, {"meshes", skin.meshes}});
       info["skins"] = std::move(skins);
+      // New key: the imported bones themselves, as a .sk's info lists them (the names a pose or a weights study
+      // addresses; "bones" above stays the count the contract fixes).
+      info["skeleton"] = bone_list(imported.model.skeleton);
     }
 #endif
   } else {
