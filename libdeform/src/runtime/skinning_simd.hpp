@@ -19,8 +19,6 @@
 //   can_stream, fence()          whether store3 honours `stream`; fence() ends a streaming call (store ordering)
 // The math below is skin_lbs_portable / skin_dqs_portable on lanes, to float rounding (its reciprocals and square roots
 // are refined estimates); the tests hold every path to the reference within 1e-5.
-#include <xmmintrin.h>
-
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -212,13 +210,13 @@ std::size_t first_streaming_vertex(const SkinningJob& job, std::size_t begin, st
 // integers).
 constexpr std::size_t prefetch_distance = 128;
 
-// The lines of `bytes` bytes from base + offset (for writing: `hint` _MM_HINT_ET0, PREFETCHW where the file is
-// compiled with -mprfchw, else an ordinary hint).
-template <std::size_t bytes, int hint = _MM_HINT_T0>
+// The lines of `bytes` bytes from base + offset, for reading or (`write`) for writing: PREFETCHW where the file is
+// compiled with -mprfchw, else an ordinary hint.
+template <std::size_t bytes, bool write = false>
 [[gnu::always_inline]] inline void prefetch_lines(const void* base, std::size_t offset) noexcept {
   const std::uintptr_t start = reinterpret_cast<std::uintptr_t>(base) + offset;
   for (std::size_t line = 0; line < bytes; line += 64)
-    _mm_prefetch(reinterpret_cast<const char*>(start + line), static_cast<_mm_hint>(hint));
+    __builtin_prefetch(reinterpret_cast<const char*>(start + line), write ? 1 : 0, 3);
 }
 
 // Branch-free: for a strided stream (a line per vertex) the first lines are asked for, for absent normals an
@@ -234,8 +232,8 @@ template <std::size_t width, bool stream>
   prefetch_lines<width * 12>(job.in_positions.data(), ahead * job.in_positions_stride);
   prefetch_lines<width * 12>(job.in_normals.data(), ahead * job.in_normals_stride);
   if constexpr (!stream) {
-    prefetch_lines<width * 12, _MM_HINT_ET0>(job.out_positions.data(), ahead * job.out_positions_stride);
-    prefetch_lines<width * 12, _MM_HINT_ET0>(job.out_normals.data(), ahead * job.out_normals_stride);
+    prefetch_lines<width * 12, true>(job.out_positions.data(), ahead * job.out_positions_stride);
+    prefetch_lines<width * 12, true>(job.out_normals.data(), ahead * job.out_normals_stride);
   }
 }
 
