@@ -229,7 +229,11 @@ Status explain(const TwoBoneIkJob& job, float& a, float& b) noexcept {
 // joined with & (no branch each) and the finiteness of the 28 numbers read as one sum (each times 0 is 0 when
 // finite, NaN when not; no -ffinite-math-only here). True only when explain() would succeed, with the same a and b
 // (it measures them alike); false sends run() to explain() for the verdict and its message. It was 11% of a free
-// solve as a chain of 30 tests.
+// solve as a chain of 30 tests. (Clang warns on & between bools; here it is the point.)
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wbitwise-instead-of-logical"
+#endif
 bool passes(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   const IkChain* chain = job.chain;
   if (chain == nullptr || chain->bones.size() != 3 || chain->limits.size() != 2 || !chain->swing_twist.empty())
@@ -255,6 +259,9 @@ bool passes(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   // (a + b) · 0 is NaN when the length overflows.
   return (zero.x + zero.y + zero.z + (a + b) * 0.0f == 0.0f) & (std::min(a, b) > zero_bone_fraction * (a + b));
 }
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
 
 glm::vec3 hinge_axis(const EulerLimits& middle, glm::vec3 bone) noexcept {
   const glm::vec3 along = glm::normalize(bone);
