@@ -292,7 +292,8 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
         const float distance2 = glm::dot(out, out);
         if (distance2 >= reach * reach) continue;
         const float distance = std::sqrt(distance2);
-        const glm::vec3 normal = distance > 1e-12f * reach ? out * (1.0f / distance) : glm::normalize(rest - nearest + 1e-30f);
+        const glm::vec3 normal =
+            distance > 1e-12f * reach ? out * (1.0f / distance) : glm::normalize(rest - nearest + 1e-30f);
         p = nearest + normal * reach;
         const float inward = glm::dot(v, normal);
         if (inward < 0.0f) v -= inward * normal;

@@ -221,8 +221,9 @@ class DEFORM_CHARACTER_API Character {
 
   // Deformed normals, one per render vertex, as of the last update(): transported (gathered on the first call after
   // update(): one move per render vertex that is not its point's own slot, so a mesh laid out by
-  // order_vertices_by_point, as the built-in character is, pays only for its seam copies) or recomputed from positions() on the first call after update() (VertexNormalsJob
-  // over a binding made at construction: O(triangles)), by normals_mode(). The span stays valid for the character's
+  // order_vertices_by_point, as the built-in character is, pays only for its seam copies) or recomputed from
+  // positions() on the first call after update() (VertexNormalsJob over a binding made at construction:
+  // O(triangles)), by normals_mode(). The span stays valid for the character's
   // life, but what it shows is the last update()'s normals only once normals() has been called after that update():
   // transported normals are gathered in the same array (one per point first, then in place per render vertex).
   std::span<const glm::vec3> normals();
