@@ -1,7 +1,7 @@
 // Checks deform::GpuBezierLattice (deform/gpu/lattice.hpp) against the CPU kernel (LatticeEvaluateJob):
 // seeded random frames and control point displacements for several degrees, a few thousand random points inside and
 // outside the box, positions and Jacobian normals through both outputs (read back, and written into an interleaved
-// vertex buffer). Prints the largest differences; exits 1 when one exceeds 1e-4 (positions relative to the lattice's
+// vertex buffer); and lattices collapsed to a point or onto a line, where both keep every input normal. Prints the largest differences; exits 1 when one exceeds 1e-4 (positions relative to the lattice's
 // size) or anything outside the bound vertices changed, 0 with "skipped" when the context lacks OpenGL 4.3.
 //
 // gpu_lattice_check --bench prints indicative per-frame times of both paths instead (not a test: docs/gpu.md).
@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,6 +34,7 @@ constexpr float tolerance = 1e-4f;
 struct Case {
   glm::ivec3 degree;
   unsigned seed;
+  enum Collapse { none, to_point, onto_line } collapse = none;  // collapsed lattices: no normal to give, both keep
 };
 
 bool same_bits(glm::vec3 a, glm::vec3 b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -72,6 +74,12 @@ bool check(const Case& c) {
   std::uniform_real_distribution<float> jitter(-amplitude, amplitude);
   for (glm::vec3& p : lattice.control_points())
     p += jitter(rng) * frame.u_axis + jitter(rng) * frame.v_axis + jitter(rng) * frame.w_axis;
+  if (c.collapse != Case::none) {
+    const glm::vec3 point = frame.to_world(glm::vec3(0.5f)), along = frame.u_axis + 0.5f * frame.v_axis;
+    const std::span<glm::vec3> control = lattice.control_points();
+    for (std::size_t n = 0; n < control.size(); ++n)
+      control[n] = point + (c.collapse == Case::onto_line ? 0.2f * float(n % 5) * along : glm::vec3(0.0f));
+  }
 
   // Random points in a box 25% larger than the lattice on every side, plus its 8 corners exactly.
   std::uniform_real_distribution<float> param(-0.25f, 1.25f);
@@ -133,7 +141,7 @@ bool check(const Case& c) {
   }
 
   const float size = std::max({glm::length(frame.u_axis), glm::length(frame.v_axis), glm::length(frame.w_axis)});
-  float position_error = 0.0f, normal_error = 0.0f, into_error = 0.0f;
+  float position_error = 0.0f, normal_error = 0.0f, into_error = 0.0f, kept_error = 0.0f;
   std::size_t changed_outside = 0;
   for (std::size_t p = 0; p < positions.size(); ++p) {
     const float* slot = interleaved.data() + p * stride;
@@ -145,6 +153,7 @@ bool check(const Case& c) {
       continue;
     }
     changed_outside += slot[0] != pattern[p * stride] || slot[1] != pattern[p * stride + 1];  // the UVs
+    if (c.collapse != Case::none) kept_error = std::max(kept_error, glm::length(cpu_normals[p] - normals[p]));
     position_error = std::max(position_error, glm::length(gpu_positions[p] - cpu_positions[p]) / size);
     normal_error = std::max(normal_error, glm::length(gpu_normals[p] - cpu_normals[p]));
     into_error = std::max({into_error, glm::length(into_position - cpu_positions[p]) / size,
@@ -152,11 +161,15 @@ bool check(const Case& c) {
     if (!std::isfinite(gpu_positions[p].x + gpu_positions[p].y + gpu_positions[p].z)) position_error = INFINITY;
   }
   const bool ok = position_error <= tolerance && normal_error <= tolerance && into_error <= tolerance &&
-                  changed_outside == 0 && binding.vertex_count > 1000 && outside > 1000;
-  std::printf("%s degree (%d,%d,%d) seed %u: %zu bound, %zu outside; max |GPU-CPU| position %.3g (of size), "
-              "normal %.3g, vertex buffer %.3g; changed outside %zu\n",
-              ok ? "ok  " : "FAIL", c.degree.x, c.degree.y, c.degree.z, c.seed, binding.vertex_count, outside,
-              double(position_error), double(normal_error), double(into_error), changed_outside);
+                  changed_outside == 0 && binding.vertex_count > 1000 && outside > 1000 && kept_error == 0.0f;
+  const char* collapse = c.collapse == Case::to_point    ? ", collapsed to a point"
+                         : c.collapse == Case::onto_line ? ", collapsed onto a line"
+                                                         : "";
+  std::printf("%s degree (%d,%d,%d) seed %u%s: %zu bound, %zu outside; max |GPU-CPU| position %.3g (of size), "
+              "normal %.3g, vertex buffer %.3g; changed outside %zu; normals not kept %.3g\n",
+              ok ? "ok  " : "FAIL", c.degree.x, c.degree.y, c.degree.z, c.seed, collapse, binding.vertex_count,
+              outside, double(position_error), double(normal_error), double(into_error), changed_outside,
+              double(kept_error));
   return ok;
 }
 
@@ -274,7 +287,9 @@ int main(int argc, char** argv) {
   }
   return gpu_test::run_in_context("gpu_lattice_check", [] {
     const Case cases[] = {{{1, 1, 1}, 1}, {{1, 1, 1}, 2}, {{3, 3, 3}, 3}, {{3, 3, 3}, 4}, {{2, 4, 5}, 5},
-                          {{2, 4, 5}, 6}, {{6, 6, 6}, 7}, {{6, 6, 6}, 8}, {{16, 2, 1}, 9}};
+                          {{2, 4, 5}, 6}, {{6, 6, 6}, 7}, {{6, 6, 6}, 8}, {{16, 2, 1}, 9},
+                          {{3, 3, 3}, 10, Case::to_point}, {{6, 6, 6}, 11, Case::onto_line},
+                          {{16, 2, 1}, 12, Case::onto_line}};
     bool ok = check_refusals();
     for (const Case& c : cases) ok = check(c) && ok;
     return ok ? 0 : 1;

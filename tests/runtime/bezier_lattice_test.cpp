@@ -70,6 +70,39 @@ TEST_CASE("a rest lattice is the identity to 1e-6 for every degree") {
   }
 }
 
+// A lattice collapsed to a point or onto a line has a Jacobian of rank 0 or 1: no normal to give (its cofactor is 0),
+// so every kernel copy keeps each input normal, bit for bit, while the positions follow the collapse.
+TEST_CASE("a collapsed lattice keeps the input normals on every kernel copy") {
+  std::mt19937 rng(12);
+  for (int d = 1; d <= deform::max_bezier_degree; d += 2) {
+    const LatticeFrame frame = random_frame(rng);
+    BezierLattice lattice(frame, glm::ivec3(d));
+    const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
+    const deform::LatticeBinding binding = deform::bind_lattice(lattice, in);
+    const glm::vec3 point = uniform3(rng, -2.0f, 2.0f), along = uniform3(rng, -1.0f, 1.0f);
+    for (const bool onto_line : {false, true}) {
+      const std::span<glm::vec3> control = lattice.control_points();
+      for (std::size_t n = 0; n < control.size(); ++n)
+        control[n] = point + (onto_line ? float(n % 5) * along : glm::vec3(0.0f));
+      std::vector<glm::vec3> normals(in.size());
+      for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 1e-3f));
+      const std::vector<glm::vec3> normals_in = normals;
+      const auto out = evaluate(binding, lattice.control_points(), in, &normals);
+      bool kept = true, on_the_collapse = true;
+      for (std::size_t i = 0; i < in.size(); ++i) {
+        kept = kept && normals[i] == normals_in[i];
+        const glm::vec3 offset = out[i] - point;
+        const float off_line = onto_line ? glm::length(glm::cross(offset, along)) / glm::length(along)
+                                         : glm::length(offset);
+        on_the_collapse = on_the_collapse && off_line < 1e-4f;
+      }
+      INFO("degree " << d << std::string(onto_line ? ", onto a line" : ", to a point"));
+      CHECK(kept);
+      CHECK(on_the_collapse);
+    }
+  }
+}
+
 TEST_CASE("affine precision: an affine map of the control points maps the vertices the same way, every degree") {
   std::mt19937 rng(12);
   for (int d = 1; d <= deform::max_bezier_degree; ++d) {

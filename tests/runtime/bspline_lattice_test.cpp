@@ -39,6 +39,30 @@ TEST_CASE("B-spline rest lattice: one cell of overhang on each side, identity to
   }
 }
 
+// As for Bézier lattices (bezier_lattice_test.cpp): collapsed to a point or onto a line, no normal to give; every
+// kernel copy keeps each input normal, bit for bit.
+TEST_CASE("a collapsed B-spline lattice keeps the input normals on every kernel copy") {
+  std::mt19937 rng(22);
+  for (int trial = 0; trial < 6; ++trial) {
+    const glm::ivec3 counts(4 + static_cast<int>(rng() % 8), 4 + static_cast<int>(rng() % 8), 4);
+    const LatticeFrame frame = random_frame(rng);
+    BsplineLattice lattice(frame, counts);
+    const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
+    const deform::LatticeBinding binding = deform::bind_lattice(lattice, in);
+    const glm::vec3 point = uniform3(rng, -2.0f, 2.0f), along = uniform3(rng, -1.0f, 1.0f);
+    const bool onto_line = trial % 2 == 1;
+    const std::span<glm::vec3> control = lattice.control_points();
+    for (std::size_t n = 0; n < control.size(); ++n)
+      control[n] = point + (onto_line ? float(n % 5) * along : glm::vec3(0.0f));
+    std::vector<glm::vec3> normals(in.size());
+    for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 1e-3f));
+    const std::vector<glm::vec3> normals_in = normals;
+    evaluate(binding, lattice.control_points(), in, &normals);
+    INFO("trial " << trial << std::string(onto_line ? ", onto a line" : ", to a point"));
+    CHECK(normals == normals_in);
+  }
+}
+
 TEST_CASE("B-spline affine precision and optimised = Cox-de Boor reference to 1e-5") {
   std::mt19937 rng(22);
   int compared = 0;

@@ -5,6 +5,7 @@
 #include "gl_objects.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -45,6 +46,7 @@ uniform bool additive;  // add weight[] · Q to the position there instead of wr
 // Additive with normals (with_normals && additive): turn the buffer's normal n by the map whose control points are
 // mapped[] — n_l = cofactor(J)·(G·to_bind·n) normalised — blended by the weight: normalise(n + weight (n_l − n)).
 uniform mat3 to_bind;
+uniform float noise_floor2;  // (1e-5 · the largest coordinate of the points the Jacobian is summed from)²
 uniform uint stride, position_offset, normal_offset;
 
 const int max_points = 17;  // deform::max_bezier_degree + 1
@@ -106,12 +108,15 @@ void contract(bool from_mapped, bool derivatives, out vec3 q, out vec3 qu, out v
   }
 }
 
-// n' = cofactor(J)·(G·n) normalised; `fallback` where the Jacobian is degenerate (a collapsed lattice).
+// n' = cofactor(J)·(G·n) normalised; `fallback` where the Jacobian is degenerate (a lattice collapsed to a point, onto
+// a line, or nearly: its second singular value, |cof(J)·m| / (|J|·|m|), below 1e-5 of the points' largest
+// coordinate, as the CPU kernel decides).
 vec3 jacobian_normal(vec3 n_in, vec3 qu, vec3 qv, vec3 qw, vec3 fallback) {
   vec3 m = normal_basis * n_in;
   vec3 n = m.x * cross(qv, qw) + m.y * cross(qw, qu) + m.z * cross(qu, qv);
   float len2 = dot(n, n);
-  return len2 > 0.0 && len2 <= 3.0e38 ? n * (1.0 / sqrt(len2)) : fallback;
+  float floor2 = noise_floor2 * (dot(qu, qu) + dot(qv, qv) + dot(qw, qw)) * dot(m, m);
+  return len2 > floor2 && len2 <= 3.0e38 ? n * (1.0 / sqrt(len2)) : fallback;
 }
 
 void main() {
@@ -288,7 +293,7 @@ Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal
   uniforms_ = {location("first_vertex"), location("vertex_count"), location("normal_basis"),
                location("with_normals"), location("scatter"),      location("additive"),
                location("stride"),       location("position_offset"), location("normal_offset"),
-               location("to_bind")};
+               location("to_bind"),      location("noise_floor2")};
 
   count_ = target_list_.size();
   max_target_ = count_ ? *std::max_element(target_list_.begin(), target_list_.end()) : 0;
@@ -332,6 +337,12 @@ void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsig
   glUniform1ui(uniforms_.position_offset, GLuint(layout.position_offset));
   glUniform1ui(uniforms_.normal_offset, GLuint(layout.normal_offset));
   glUniformMatrix3fv(uniforms_.to_bind, 1, GL_FALSE, glm::value_ptr(to_bind));
+  // The degenerate-normal floor of the CPU kernel (lattice_kernel.inl, degenerate_normal), from the points the
+  // normals' Jacobian is summed from: the mapped points when adding, else the control points.
+  float largest = 0.0f;
+  for (const glm::vec3& p : additive_ && !mapped_points.empty() ? mapped_points : control_points)
+    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  glUniform1f(uniforms_.noise_floor2, 1e-10f * largest * largest);
   // An unused binding still gets a buffer (the points): every declared block is backed.
   const GLuint buffers[] = {targets_, params_, normals_, points_, output, weights_, mapped_ ? mapped_ : points_};
   for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, buffers[i]);

@@ -11,6 +11,7 @@
 // outside and over the lanes inside, with the sums in memory: the same arithmetic, slower.
 // B-spline blocks first convert their cell's 4×4×4 B-spline points into the equivalent tricubic Bézier points
 // (uniform cubic B-spline → Bézier, per axis), then run the same Bézier contraction.
+#include <algorithm>
 #include <cmath>
 
 #include "lanes.hpp"
@@ -93,6 +94,24 @@ inline void basis(int runtime_n, const Lane16& t, Lane16* b, Lane16* d) {
         for (int lane = 0; lane < lanes; ++lane) d[i][lane] = (lower[i - 1][lane] - lower[i][lane]) * fn;
     }
   }
+}
+
+// When a Jacobian's normal is degenerate (bezier_block; the GPU shader decides alike): the Jacobian's second singular
+// value below degenerate_normal times the largest control point coordinate P. Derivatives summed from points of size
+// P carry about 2·degree·6e-8·P of rounding (2e-6·P at degree 16), so a lattice collapsed to a point or onto a line
+// leaves a second singular value below that, of no direction; a lattice of any thickness above 1e-5 of its
+// coordinates has its normals. The second singular value is measured as |cof(J)·m| / (|J|·|m|) (|J|² the sum of the
+// squared columns), the test done squared and without a division.
+constexpr float degenerate_normal = 1e-5f;
+
+// (degenerate_normal · the largest coordinate of `count` points, taken from `origin`)².
+inline float noise_floor2(const glm::vec3* points, std::size_t count, glm::vec3 origin = glm::vec3(0.0f)) {
+  float largest = 0.0f;
+  for (std::size_t i = 0; i < count; ++i) {
+    const glm::vec3 p = glm::abs(points[i] - origin);
+    largest = std::max(largest, std::max(p.x, std::max(p.y, p.z)));
+  }
+  return degenerate_normal * degenerate_normal * largest * largest;
 }
 
 // Per lane: Q = Σ_k B_k(w) Σ_j B_j(v) Σ_i B_i(u) P_ijk and, with normals, its derivatives ∂Q/∂u, ∂Q/∂v, ∂Q/∂w.
@@ -256,7 +275,7 @@ inline void add_slice(const glm::vec3* slice, int l, int m, int k, const BlockBa
 // `base` is added to the positions (the B-spline path evaluates relative to its cell, for precision).
 template <int L, int M, int N, bool Normals>
 inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block, const glm::vec3* points,
-                         glm::ivec3 degree, glm::vec3 base) {
+                         glm::ivec3 degree, glm::vec3 base, float noise2) {
   const int l = L > 0 ? L : degree.x, m = M > 0 ? M : degree.y, n = N > 0 ? N : degree.z;
   const std::size_t first = block * lanes;
   const deform::LatticeBinding& bind = *a.binding;
@@ -275,7 +294,7 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
   if constexpr (Normals) {
     // m = G·n (G = binding.normal_basis), then n' = m.x (Qv × Qw) + m.y (Qw × Qu) + m.z (Qu × Qv): cofactor(J)·m,
     // the inverse transpose up to the positive factor det(J); normalised. Padding lanes read a harmless (0, 0, 1).
-    alignas(64) float in[3][lanes], out[4][lanes];
+    alignas(64) float in[3][lanes], out[3][lanes];
     for (int lane = 0; lane < lanes; ++lane) {
       const glm::vec3 nrm = vertex[lane] != deform::LatticeBinding::no_vertex ? a.normals_in[vertex[lane]]
                                                                              : glm::vec3(0.0f, 0.0f, 1.0f);
@@ -295,19 +314,22 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
       const float nx = mx * (vy * wz - vz * wy) + my * (wy * uz - wz * uy) + mz * (uy * vz - uz * vy);
       const float ny = mx * (vz * wx - vx * wz) + my * (wz * ux - wx * uz) + mz * (uz * vx - ux * vz);
       const float nz = mx * (vx * wy - vy * wx) + my * (wx * uy - wy * ux) + mz * (ux * vy - uy * vx);
-      const float inverse_length = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
-      out[0][lane] = nx * inverse_length, out[1][lane] = ny * inverse_length, out[2][lane] = nz * inverse_length;
-      out[3][lane] = inverse_length;
+      const float length2 = nx * nx + ny * ny + nz * nz;
+      const float inverse_length = 1.0f / std::sqrt(length2);
+      const float rx = nx * inverse_length, ry = ny * inverse_length, rz = nz * inverse_length;
+      // A degenerate Jacobian (a lattice collapsed to a point, onto a line, or nearly: degenerate_normal) has no
+      // normal to give: the input normal is kept. Selected on the lanes, not tested per vertex in the scatter below:
+      // that loop was a tenth of the kernel.
+      const float scale2 = ux * ux + uy * uy + uz * uz + vx * vx + vy * vy + vz * vz + wx * wx + wy * wy + wz * wz;
+      const float floor2 = noise2 * scale2 * (mx * mx + my * my + mz * mz);
+      constexpr float largest = 3.40282347e38f;
+      const bool usable = length2 > floor2 && std::abs(rx) <= largest && std::abs(ry) <= largest &&
+                          std::abs(rz) <= largest;
+      out[0][lane] = usable ? rx : ix, out[1][lane] = usable ? ry : iy, out[2][lane] = usable ? rz : iz;
     }
-    for (int lane = 0; lane < lanes; ++lane) {
-      if (vertex[lane] == deform::LatticeBinding::no_vertex) continue;
-      const glm::vec3 result(out[0][lane], out[1][lane], out[2][lane]);
-      // A degenerate Jacobian (a collapsed lattice) has no normal to give: the input normal is kept.
-      if (std::isfinite(result.x) && std::isfinite(result.y) && std::isfinite(result.z) && out[3][lane] < 1e30f)
-        a.normals_out[vertex[lane]] = result;
-      else
-        a.normals_out[vertex[lane]] = glm::vec3(in[0][lane], in[1][lane], in[2][lane]);
-    }
+    for (int lane = 0; lane < lanes; ++lane)
+      if (vertex[lane] != deform::LatticeBinding::no_vertex)
+        a.normals_out[vertex[lane]] = glm::vec3(out[0][lane], out[1][lane], out[2][lane]);
   }
   for (int lane = 0; lane < lanes; ++lane)
     if (vertex[lane] != deform::LatticeBinding::no_vertex)
@@ -318,8 +340,10 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
 template <int L, int M, int N, bool Normals>
 void bezier_blocks(const deform::detail::KernelArgs& a) {
   const glm::ivec3 degree = a.binding->point_counts - 1;
+  const glm::ivec3 counts = a.binding->point_counts;
+  const float noise2 = Normals ? noise_floor2(a.control_points, std::size_t(counts.x * counts.y * counts.z)) : 0.0f;
   for (std::size_t b = a.begin_block; b < a.end_block; ++b)
-    bezier_block<L, M, N, Normals>(a, b, a.control_points, degree, glm::vec3(0.0f));
+    bezier_block<L, M, N, Normals>(a, b, a.control_points, degree, glm::vec3(0.0f), noise2);
 }
 
 // Uniform cubic B-spline segment → cubic Bézier: b0 = (p0 + 4p1 + p2)/6, b1 = (2p1 + p2)/3, b2 = (p1 + 2p2)/3,
@@ -353,11 +377,17 @@ inline void cell_to_bezier(const glm::vec3* points, glm::ivec3 counts, std::uint
 template <bool Normals>
 void bspline_blocks(const deform::detail::KernelArgs& a) {
   glm::vec3 bezier[64], base(0.0f);
+  // A cell's Bézier points are taken from one of its points (cell_to_bezier): within twice the lattice's extent
+  // from its first point, which bounds them for every cell at once.
+  const glm::ivec3 counts = a.binding->point_counts;
+  const float noise2 =
+      Normals ? 4.0f * noise_floor2(a.control_points, std::size_t(counts.x * counts.y * counts.z), a.control_points[0])
+              : 0.0f;
   std::uint32_t cell = deform::LatticeBinding::no_vertex;
   for (std::size_t b = a.begin_block; b < a.end_block; ++b) {
     const std::uint32_t first = a.binding->block_first_point[b];
     if (first != cell) cell_to_bezier(a.control_points, a.binding->point_counts, cell = first, bezier, base);
-    bezier_block<3, 3, 3, Normals>(a, b, bezier, glm::ivec3(3), base);
+    bezier_block<3, 3, 3, Normals>(a, b, bezier, glm::ivec3(3), base, noise2);
   }
 }
 

@@ -123,7 +123,7 @@ class DEFORM_GPU_API GpuBezierLattice {
  private:
   struct Uniforms {
     int first_vertex = -1, vertex_count = -1, normal_basis = -1, with_normals = -1, scatter = -1, additive = -1,
-        stride = -1, position_offset = -1, normal_offset = -1, to_bind = -1;
+        stride = -1, position_offset = -1, normal_offset = -1, to_bind = -1, noise_floor2 = -1;
   };
 
   Status upload(glm::ivec3 point_counts, const glm::mat3& normal_basis, std::span<const float> params,
