@@ -81,11 +81,8 @@ TEST_CASE("a collapsed lattice keeps the input normals on every kernel copy") {
     const deform::LatticeBinding binding = deform::bind_lattice(lattice, in);
     const glm::vec3 point = uniform3(rng, -2.0f, 2.0f), along = uniform3(rng, -1.0f, 1.0f);
     for (const bool onto_line : {false, true}) {
-      const std::span<glm::vec3> control = lattice.control_points();
-      for (std::size_t n = 0; n < control.size(); ++n)
-        control[n] = point + (onto_line ? float(n % 5) * along : glm::vec3(0.0f));
-      std::vector<glm::vec3> normals(in.size());
-      for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 1e-3f));
+      collapse(lattice.control_points(), point, along, onto_line);
+      std::vector<glm::vec3> normals = random_normals(rng, in.size());
       const std::vector<glm::vec3> normals_in = normals;
       const auto out = evaluate(binding, lattice.control_points(), in, &normals);
       bool kept = true, on_the_collapse = true;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,20 @@ inline deform::LatticeFrame random_frame(std::mt19937& rng) {
   f.v_axis = rot * glm::vec3(0.0f, uniform(rng, 0.5f, 3.0f), uniform(rng, -0.3f, 0.3f));
   f.w_axis = rot * glm::vec3(uniform(rng, -0.3f, 0.3f), 0.0f, uniform(rng, 0.5f, 3.0f));
   return f;
+}
+
+// `count` random unit normals.
+inline std::vector<glm::vec3> random_normals(std::mt19937& rng, std::size_t count) {
+  std::vector<glm::vec3> out(count);
+  for (glm::vec3& n : out) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 1e-3f));
+  return out;
+}
+
+// Every control point moved onto `point` or (onto_line) onto the line through it along `along`, point n at
+// (n mod 5) steps: a lattice whose Jacobian has rank 0 or 1 everywhere (to float rounding).
+inline void collapse(std::span<glm::vec3> control, glm::vec3 point, glm::vec3 along, bool onto_line) {
+  for (std::size_t n = 0; n < control.size(); ++n)
+    control[n] = point + (onto_line ? float(n % 5) * along : glm::vec3(0.0f));
 }
 
 // Random points of the box (parameters in [0, 1]³), in world space.
