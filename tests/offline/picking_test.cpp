@@ -67,6 +67,18 @@ Ray random_ray(std::mt19937& random) {
   return Ray{origin, (aim - origin) * (0.5f + unit(random) + 1.0f)};
 }
 
+// A seeded random_mesh, its BVH, and the generator for the rays that go with it.
+struct RandomScene {
+  std::mt19937 random;
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  TriangleBvh bvh;
+  RandomScene(unsigned seed, int n, int loose) : random(seed) {
+    random_mesh(random, n, loose, positions, indices);
+    bvh.build(positions, indices);
+  }
+};
+
 void check_same(const RayHit& bvh, const RayHit& reference, std::span<const glm::vec3> p,
                 std::span<const std::uint32_t> indices, const Ray& ray) {
   REQUIRE(bvh.hit == reference.hit);
@@ -113,12 +125,8 @@ TEST_CASE("a ray hits one hand-made triangle where the arithmetic says") {
 }
 
 TEST_CASE("the BVH agrees with brute force over thousands of random rays, before and after refit") {
-  std::mt19937 random(17);
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
-  random_mesh(random, 40, 300, positions, indices);  // 3,500 triangles
-  TriangleBvh bvh;
-  bvh.build(positions, indices);
+  RandomScene scene(17, 40, 300);  // 3,500 triangles
+  auto& [random, positions, indices, bvh] = scene;
   CHECK(bvh.triangle_count() == indices.size() / 3);
   int hits = 0;
   for (int r = 0; r < 5000; ++r) {
@@ -145,12 +153,8 @@ TEST_CASE("the BVH agrees with brute force over thousands of random rays, before
 }
 
 TEST_CASE("max_distance limits the BVH as it limits brute force") {
-  std::mt19937 random(23);
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
-  random_mesh(random, 20, 100, positions, indices);
-  TriangleBvh bvh;
-  bvh.build(positions, indices);
+  RandomScene scene(23, 20, 100);
+  auto& [random, positions, indices, bvh] = scene;
   for (int r = 0; r < 2000; ++r) {
     const Ray ray = random_ray(random);
     const float limit = 1.0f + 4.0f * float(r % 7) / 7.0f;
@@ -162,12 +166,8 @@ TEST_CASE("max_distance limits the BVH as it limits brute force") {
 }
 
 TEST_CASE("skip_point: the BVH passes the triangles around one point, as brute force over the others does") {
-  std::mt19937 random(29);
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
-  random_mesh(random, 20, 100, positions, indices);
-  TriangleBvh bvh;
-  bvh.build(positions, indices);
+  RandomScene scene(29, 20, 100);
+  auto& [random, positions, indices, bvh] = scene;
   int skipped = 0;
   for (int r = 0; r < 3000; ++r) {
     const Ray ray = random_ray(random);
