@@ -24,10 +24,9 @@ glm::quat unit(const glm::quat& q) noexcept {
   return glm::quat(q.w * inverse, q.x * inverse, q.y * inverse, q.z * inverse);
 }
 
-// The shortest rotation taking the direction of a to that of b; identity when either is zero. Opposite directions
-// turn half a turn about an axis perpendicular to a.
-glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
-  const float norms = std::sqrt(glm::dot(a, a) * glm::dot(b, b));
+// The shortest rotation taking the direction of a to that of b, given norms = |a| |b|; identity when either is zero.
+// Opposite directions turn half a turn about an axis perpendicular to a.
+glm::quat shortest_arc(glm::vec3 a, glm::vec3 b, float norms) noexcept {
   if (!(norms > 0.0f)) return glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
   const float w = norms + glm::dot(a, b);
   if (w <= 1e-6f * norms) {
@@ -36,6 +35,10 @@ glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
   }
   const glm::vec3 c = glm::cross(a, b);
   return unit(glm::quat(w, c.x, c.y, c.z));
+}
+
+glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
+  return shortest_arc(a, b, std::sqrt(glm::dot(a, a) * glm::dot(b, b)));
 }
 
 void require(bool ok, const std::string& element, const char* what) {
@@ -260,8 +263,11 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
   const float inverse_h = 1.0f / h;
   for (std::size_t i = 0; i < chain.count; ++i) {
     const std::size_t j = chain.first + i;
-    const glm::vec3 bone = bend * (sample_points_[point0 + i + 1] - sample_points_[point0 + i]);
-    const float length = glm::length(bone);
+    // The length from the animated bone before it is turned: the same to rounding, and off the chain's critical path
+    // (each link waits on the bend above it; the sub-step was bound by that chain of square roots and divisions).
+    const glm::vec3 animated = sample_points_[point0 + i + 1] - sample_points_[point0 + i];
+    const float length = glm::length(animated);
+    const glm::vec3 bone = bend * animated;
     const glm::vec3 rest = head + bone;
     const glm::vec3 rest_velocity = (rest - rests[j]) * inverse_h;
     const glm::vec3 y = positions[j] - rests[j];
@@ -305,7 +311,7 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
     positions[j] = p;
     velocities[j] = v;
     rests[j] = rest;
-    bend = shortest_arc(bone, p - head) * bend;
+    bend = shortest_arc(bone, p - head, length * length) * bend;  // keep_length left |p - head| = length
     head = p;
     head_velocity = v;
   }
