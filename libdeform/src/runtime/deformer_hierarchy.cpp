@@ -83,6 +83,13 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.bind_world = skeleton.bind_world()[std::size_t(lattice.spec.bone)];
     lattice.inverse_bind_world = skeleton.inverse_bind_world()[std::size_t(lattice.spec.bone)];
     lattice.field = lattice.rest;
+    for (int i = 0; i < lattice.rest.point_counts().x; ++i)
+      for (int k = 0; k < lattice.rest.point_counts().z; ++k)
+        for (int j = 0; j < lattice.rest.point_counts().y; ++j)
+          shared->slice_along[std::size_t(i)] +=
+              glm::dot(lattice.rest.control_points()[lattice.rest.index(i, j, k)], lattice.axis);
+    for (const glm::vec3& x : lattice.rest.control_points())
+      shared->radial.push_back(x - lattice.axis * glm::dot(x, lattice.axis));
 
     // The springs: the first face pinned, the last face read as one rigid translation.
     const glm::ivec3 counts = lattice.rest.point_counts();
@@ -200,14 +207,14 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
   const float per_slice = float(counts.y * counts.z);
   const std::span<const glm::vec3> rest = lattice.rest.control_points();
   const std::span<const glm::vec3> now = lattice.elastic.positions();
-  // Rest position and displacement along the bone, slice means; the far face's mean is its rigid translation's.
-  std::array<float, max_bezier_degree + 1> along{};
+  // Rest position (bind time) and displacement along the bone, slice sums; the far face's mean is its rigid
+  // translation's.
+  const std::array<float, max_bezier_degree + 1>& along = lattice.bound->slice_along;
   std::array<float, max_bezier_degree + 1> moved{};
   for (int k = 0; k < counts.z; ++k) {
     for (int j = 0; j < counts.y; ++j) {
       for (std::size_t i = 0; i <= last; ++i) {
         const std::size_t n = lattice.rest.index(int(i), j, k);
-        along[i] += glm::dot(rest[n], lattice.axis);
         moved[i] += glm::dot(now[n] - rest[n], lattice.axis);
       }
     }
@@ -395,21 +402,22 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
     lattice.linear = linear;
     const float still = 1e-7f * lattice.length;
     const std::span<glm::vec3> displacements = lattice.field.control_points();
+    const std::vector<glm::vec3>& radial = lattice.bound->radial;
+    std::array<glm::vec3, max_bezier_degree + 1> along;  // per slice: its shift along the bone
+    for (std::size_t i = 0; i <= last; ++i) along[i] = lattice.axis * slices.shift[i];
     for (int k = 0; k < counts.z; ++k) {
       for (int j = 0; j < counts.y; ++j) {
         for (std::size_t i = 0; i <= last; ++i) {
           const std::size_t n = lattice.rest.index(int(i), j, k);
-          const glm::vec3 radial = rest[n] - lattice.axis * glm::dot(rest[n], lattice.axis);
-          const glm::vec3 local = (i == last ? far : now[n] - rest[n]) + lattice.axis * slices.shift[i] +
-                                  radial * (slices.scale[i] - 1.0f);
+          const glm::vec3 local = (i == last ? far : now[n] - rest[n]) + along[i] + radial[n] * (slices.scale[i] - 1.0f);
           displacements[n] = linear * local;
         }
       }
     }
-    lattice.far_displacement = linear * (far + lattice.axis * slices.shift[last]);
+    lattice.far_displacement = linear * (far + along[last]);
     const float still2 = still * still;
     bool active = glm::dot(lattice.far_displacement, lattice.far_displacement) > still2;
-    for (const glm::vec3& d : displacements) active = active || glm::dot(d, d) > still2;
+    for (const glm::vec3& d : displacements) active = active || glm::dot(d, d) > still2;  // most stop at once
     lattice.active = active;
     lattice.bone_world = world[std::size_t(lattice.spec.bone)];
   }

@@ -262,6 +262,10 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<float> lane_weights;            // BoundLattice's
     std::vector<std::uint32_t> carried_points;  // BoundLattice's
     std::vector<float> carried_weights;         // BoundLattice's
+    // The rest lattice's terms of the stretch shape (update, shape_slices): per control point its part across the
+    // bone, rest - axis (rest · axis); per slice along U the sum of its control points' rest · axis.
+    std::vector<glm::vec3> radial;
+    std::array<float, max_bezier_degree + 1> slice_along{};
   };
   struct Lattice {
     LatticeSpec spec;  // per copy: its settings may change (set_shape, set_elastic, set_motion)
