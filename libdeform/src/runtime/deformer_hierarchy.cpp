@@ -446,10 +446,13 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
   if (positions.size() != point_count_) return Status::failure("positions do not have one entry per point");
   for (const Lattice& lattice : lattices_) {
     if (!lattice.active) continue;
-    const Binding& bound = *lattice.bound;
-    for (std::size_t n = 0; n < bound.carried_points.size(); ++n) {
-      positions[bound.carried_points[n]] += bound.carried_weights[n] * lattice.far_displacement;
-    }
+    // Locals, not members: a store to `positions` could alias them, and reloading them after every store made
+    // this loop wait on each one (three times slower).
+    const glm::vec3 far = lattice.far_displacement;
+    const std::uint32_t* points = lattice.bound->carried_points.data();
+    const float* weights = lattice.bound->carried_weights.data();
+    const std::size_t count = lattice.bound->carried_points.size();
+    for (std::size_t n = 0; n < count; ++n) positions[points[n]] += weights[n] * far;
   }
   return {};
 }
