@@ -1,11 +1,11 @@
 // crowd/builtin_1000/threads:N — one frame of a crowd: 1,000 instances of the built-in character (Character::instance,
 // sharing the bind data), each walking at its own clip time and with its own springs (the left arm's three lattices
 // stretched by a different amount per instance and let go and stretched again at different frames), each updated
-// as frame/builtin_whole is: walk sampled, set_pose, update, normals() (transported), with Character::prefetch()
-// called on the next instance before each update (its small arrays on their way while this one computes: -4% at 2
-// threads, docs/performance.md). The instances are split into
-// N contiguous ranges, one per thread, as an engine's job system would (here a ThreadPool; the library runs no
-// threads of its own). Counters: bytes_first — heap bytes held by the first character (make_builtin_character);
+// as frame/builtin_whole is: walk sampled, set_pose, update, normals() (transported). Before each update the loop
+// asks for the next instances' state (Character::prefetch on the next, prefetch_record on the one after), as an
+// engine's crowd loop would (docs/performance.md has the effect). The instances are split into N contiguous ranges,
+// one per thread, as an engine's job system would (here a ThreadPool; the library runs no threads of its own).
+// Counters: bytes_first — heap bytes held by the first character (make_builtin_character);
 // bytes_per_instance — held by each further instance (glibc's mallinfo2, live bytes after construction).
 #include <benchmark/benchmark.h>
 
@@ -77,7 +77,9 @@ struct Crowd {
       sampling.rotations = poses[i].rotations;
       sampling.translations = poses[i].translations;
       sampling.run();
-      if (i + 1 < end) characters[i + 1].prefetch();  // the next one's state on its way during this one's frame
+      // The next characters' state on its way while this one computes: the record two ahead, the arrays one ahead.
+      if (i + 2 < end) characters[i + 2].prefetch_record();
+      if (i + 1 < end) characters[i + 1].prefetch();
       c.set_pose(poses[i]);
       c.update(dt);
       benchmark::DoNotOptimize(c.normals().data());

@@ -459,6 +459,8 @@ void Character::release() {
   reaching_ = false;
 }
 
+void Character::prefetch_record() const noexcept { prefetch_bytes(this, sizeof(*this)); }
+
 void Character::prefetch() const noexcept {
   prefetch_span(pose_.rotations);
   prefetch_span(pose_.translations);

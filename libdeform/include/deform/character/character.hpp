@@ -206,6 +206,10 @@ class DEFORM_CHARACTER_API Character {
   // effect on any result. update() issues them itself as it starts; a crowd's loop may call it on the next
   // character while this one updates, so that its state is on its way before its update() starts. No allocation.
   void prefetch() const noexcept;
+  // A cache hint for the character's own record (the object, whose members prefetch() reads to find its arrays), with
+  // no load: a crowd loop calls it two characters ahead of the one it updates and prefetch() one ahead, so that
+  // neither waits on memory (crowd/builtin_1000 in bench/crowd_bench.cpp). No effect on any result.
+  void prefetch_record() const noexcept;
 
   // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
   std::span<const glm::vec3> positions() const noexcept { return positions_; }
