@@ -409,7 +409,8 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
       for (int j = 0; j < counts.y; ++j) {
         for (std::size_t i = 0; i <= last; ++i) {
           const std::size_t n = lattice.rest.index(int(i), j, k);
-          const glm::vec3 local = (i == last ? far : now[n] - rest[n]) + along[i] + radial[n] * (slices.scale[i] - 1.0f);
+          const glm::vec3 local =
+              (i == last ? far : now[n] - rest[n]) + along[i] + radial[n] * (slices.scale[i] - 1.0f);
           displacements[n] = linear * local;
         }
       }

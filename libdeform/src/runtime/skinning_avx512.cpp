@@ -116,6 +116,7 @@ struct Avx512 {
       for (std::size_t b = bones; b < columns; ++b) table[c][b] = 0.0f;
   }
 
+  // Out of line: run once per call, it stays out of the function that holds the block loop.
   [[gnu::noinline]] void fill_affine_table(std::span<const glm::mat4> matrices, std::size_t columns) {
     for (std::size_t first = 0; first < columns; first += 16) {
       __m512 m[16], a[12];
