@@ -15,6 +15,7 @@
 
 using namespace lattice_test;
 using deform::BezierLattice;
+using deform::BsplineLattice;
 using deform::LatticeFrame;
 
 TEST_CASE("degree 1: moving one corner is trilinear interpolation (hand-computed)") {
@@ -201,6 +202,92 @@ TEST_CASE("the Jacobian agrees with finite differences, and so do the deformed n
   }
 }
 
+TEST_CASE("weights: the field added by each point's weight and the normals blended alike, = reference, every copy") {
+  // The displacement form DeformerHierarchy::apply uses: position += w·Q(uvw), normal = normalize(n + w·(n' − n))
+  // with n' the deformed normal of n carried into the binding's space by normals_in_to_binding; Bézier and B-spline,
+  // every kernel copy, against the double references; a collapsed field keeps the normals. Points outside the box are
+  // not touched.
+  std::mt19937 rng(24);
+  std::size_t compared = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const bool bspline = trial % 3 == 2;
+    const LatticeFrame frame = random_frame(rng);
+    const glm::ivec3 counts = bspline ? glm::ivec3(4 + int(rng() % 4), 4 + int(rng() % 4), 4 + int(rng() % 4))
+                                      : glm::ivec3(2 + int(rng() % 5), 2 + int(rng() % 5), 2 + int(rng() % 5));
+    BezierLattice bezier(frame, counts - 1);
+    deform::BsplineLattice bspline_lattice(frame, bspline ? counts : glm::ivec3(4));
+    const std::span<glm::vec3> control = bspline ? bspline_lattice.control_points() : bezier.control_points();
+    for (glm::vec3& p : control) p = uniform3(rng, -0.3f, 0.3f);  // a displacement field: small vectors
+    // Some fields collapsed to a point or a line: no normal to give, each point keeps its own.
+    const bool collapsed = trial % 20 == 7;
+    if (collapsed) collapse(control, uniform3(rng, -1.0f, 1.0f), uniform3(rng, -0.1f, 0.1f), trial % 40 == 7);
+    std::vector<glm::vec3> in = points_inside(frame, rng, 1 + rng() % 40);
+    in.push_back(frame.to_world(glm::vec3(1.5f, 0.5f, 0.5f)));  // outside: not bound
+    const deform::LatticeBinding binding = bspline ? deform::bind_lattice(BsplineLattice(frame, counts), in)
+                                                   : deform::bind_lattice(BezierLattice(frame, counts - 1), in);
+    std::vector<float> point_weight(in.size());
+    for (float& w : point_weight) w = rng() % 5 == 0 ? float(rng() % 2) : uniform(rng, 0.0f, 1.0f);
+    std::vector<float> lane_weight(binding.vertices.size(), 0.0f);
+    for (std::size_t lane = 0; lane < binding.vertices.size(); ++lane)
+      if (binding.vertices[lane] != deform::LatticeBinding::no_vertex) lane_weight[lane] = point_weight[binding.vertices[lane]];
+    // Half the trials carry the normals by a rotation and a scale first, as a skinned bone's would be.
+    const glm::mat3 to_binding =
+        trial % 2 ? glm::mat3(glm::rotate(glm::mat4(1.0f), uniform(rng, -3.0f, 3.0f), glm::normalize(uniform3(rng, 0.1f, 1.0f)))) *
+                        uniform(rng, 0.5f, 2.0f)
+                  : glm::mat3(1.0f);
+    const std::vector<glm::vec3> normals_in = random_normals(rng, in.size());
+
+    const glm::dmat3 axes(glm::dvec3(frame.u_axis), glm::dvec3(frame.v_axis), glm::dvec3(frame.w_axis));
+    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512}) {
+      if (!deform::isa_available(isa)) continue;
+      std::vector<glm::vec3> positions = in, normals = normals_in, normals_only = normals_in;
+      deform::LatticeEvaluateJob job;
+      job.binding = &binding;
+      job.control_points = control;
+      job.positions = positions;
+      job.normals_in = normals;  // in place, as the hierarchy runs it
+      job.normals_out = normals;
+      job.weights = lane_weight;
+      job.normals_in_to_binding = to_binding;
+      job.isa = isa;
+      REQUIRE(job.validate());
+      REQUIRE(job.run());
+      job.positions = {};  // normals only: the same normals
+      job.normals_in = normals_only;
+      job.normals_out = normals_only;
+      REQUIRE(job.run());
+      for (std::size_t i = 0; i < in.size(); ++i) {
+        INFO("trial " << trial << " isa " << std::string(deform::isa_name(isa)) << " point " << i);
+        CHECK(normals_only[i] == normals[i]);
+        const glm::vec3 uvw = frame.to_lattice(in[i]);
+        if (glm::any(glm::lessThan(uvw, glm::vec3(0.0f))) || glm::any(glm::greaterThan(uvw, glm::vec3(1.0f)))) {
+          CHECK(positions[i] == in[i]);
+          CHECK(normals[i] == normals_in[i]);
+          continue;
+        }
+        const double w = point_weight[i];
+        const glm::dvec3 q = bspline ? lattice_reference::bspline(control, counts, glm::dvec3(uvw))
+                                     : lattice_reference::bezier(control, counts - 1, glm::dvec3(uvw));
+        CHECK(dist(positions[i], glm::dvec3(in[i]) + w * q) < 1e-5 * (1.0 + glm::length(glm::dvec3(in[i]))));
+        if (collapsed) {
+          CHECK(glm::length(normals[i] - normals_in[i]) < 1e-6f);
+          continue;
+        }
+        const glm::dmat3 jac = (bspline ? lattice_reference::bspline_jacobian(control, counts, glm::dvec3(uvw))
+                                        : lattice_reference::bezier_jacobian(control, counts - 1, glm::dvec3(uvw))) *
+                               glm::inverse(axes);
+        const glm::dvec3 n(normals_in[i]);
+        const glm::dvec3 deformed = lattice_reference::transform_normal(jac, glm::dmat3(to_binding) * n);
+        const glm::dvec3 blended = n + w * (deformed - n);
+        if (glm::length(blended) < 0.1) continue;  // nearly opposite normals half blended: no direction to compare
+        CHECK(dist(normals[i], glm::normalize(blended)) < 1e-4 / glm::length(blended));
+        ++compared;
+      }
+    }
+  }
+  CHECK(compared > 10000);
+}
+
 TEST_CASE("invalid Bézier lattices are errors with context") {
   const LatticeFrame unit = LatticeFrame::axis_aligned({0, 0, 0}, {1, 1, 1});
   CHECK_THROWS_AS(BezierLattice(LatticeFrame::axis_aligned({0, 0, 0}, {1, 0, 1})), deform::Error);
@@ -258,8 +345,21 @@ TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run, says why, an
   CHECK(job.validate());
   job.normals_out = small;
   CHECK(reason(job.validate()) == "normals too short");
+  job.positions = {};  // positions may be left out when normals are asked for
+  job.normals_out = normals;
+  CHECK(job.validate());
+  job.positions = out;
+  const std::vector<float> weights(16, 1.0f), short_weights(15, 1.0f);
+  job.weights = short_weights;
+  CHECK(reason(job.validate()) == "weights: one per binding lane");
+  job.weights = weights;
+  CHECK(job.validate());
+  job.weights = {};
   job.normals_in = {};
   job.normals_out = {};
+  job.positions = {};
+  CHECK(reason(job.validate()) == "positions too short");
+  job.positions = out;
   for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
     if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused, never run
       job.isa = isa;

@@ -142,7 +142,7 @@ void main() {
     contract(true, true, unused, qu, qv, qw);
     vec3 n0 = vec3(result[base + normal_offset], result[base + normal_offset + 1u], result[base + normal_offset + 2u]);
     vec3 n_bind = to_bind * n0;
-    vec3 blended = n0 + we * (jacobian_normal(n_bind, qu, qv, qw, n_bind) - n0);
+    vec3 blended = n0 + we * (jacobian_normal(n_bind, qu, qv, qw, n0) - n0);  // degenerate: n0 kept, as on the CPU
     float length2 = dot(blended, blended);
     if (length2 > 1.0e-12) {
       blended = blended / sqrt(length2);

@@ -117,18 +117,6 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     lattice.rest_velocity.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_start.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_end.assign(lattice.rest.point_count(), glm::vec3(0.0f));
-    // The same binding writing lane n's result to entry n: the frame's scratch arrays are then a few hundred
-    // entries, written in order, instead of a mesh-sized array written at scattered points (per character
-    // instance, 70 KB less memory and a fraction of the cache lines a crowd's frame touches).
-    shared->lane_binding = shared->binding;
-    std::vector<std::uint32_t>& lane_of = shared->lane_binding.vertices;
-    for (std::size_t n = 0; n < lane_of.size(); ++n)
-      if (lane_of[n] != LatticeBinding::no_vertex) lane_of[n] = std::uint32_t(n);
-    shared->lane_binding.max_vertex = lane_of.empty() ? 0 : std::uint32_t(lane_of.size() - 1);
-    if (scratch_.size() < lane_of.size()) {
-      scratch_.assign(lane_of.size(), glm::vec3(0.0f));
-      normal_scratch_.assign(lane_of.size(), glm::vec3(0.0f));
-    }
     lattice.bound = std::move(shared);
     lattices_.push_back(std::move(lattice));
   }
@@ -382,8 +370,6 @@ void DeformerHierarchy::prefetch() const noexcept {
       prefetch_span(lattice.accel_end);
     }
   }
-  prefetch_span(scratch_);
-  prefetch_span(normal_scratch_);
 }
 
 Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
@@ -458,11 +444,12 @@ Status DeformerHierarchy::apply_carried(std::span<glm::vec3> positions) {
   return {};
 }
 
-LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice) {
+LatticeEvaluateJob DeformerHierarchy::field_job(const Lattice& lattice, std::span<glm::vec3> positions) {
   LatticeEvaluateJob job;
-  job.binding = &lattice.bound->lane_binding;
+  job.binding = &lattice.bound->binding;
   job.control_points = lattice.field.control_points();
-  job.positions = scratch_;
+  job.positions = positions;
+  job.weights = lattice.bound->lane_weights;
   return job;
 }
 
@@ -471,75 +458,42 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
   // The constructor checked every binding against its lattice and the points, so no field is refused; checked all
   // the same before anything is written.
   for (const Lattice& lattice : lattices_)
-    if (lattice.active && !field_job(lattice).validate()) return Status::failure("a lattice field does not fit");
+    if (lattice.active && !field_job(lattice, positions).validate()) return Status::failure("a lattice field does not fit");
   apply_carried(positions);
-  for (const Lattice& lattice : lattices_) {
-    if (!lattice.active) continue;
-    field_job(lattice).run();
-    const std::vector<std::uint32_t>& lanes = lattice.bound->binding.vertices;
-    const std::vector<float>& weights = lattice.bound->lane_weights;
-    for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
-    }
-  }
+  for (const Lattice& lattice : lattices_)
+    if (lattice.active) field_job(lattice, positions).run();
   return {};
 }
 
 Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::vec3> normals) {
   if (positions.size() != point_count_ || normals.size() != point_count_)
     return Status::failure("positions and normals do not have one entry per point");
-  const auto mapped_job = [this](Lattice& lattice) {
-    LatticeEvaluateJob job;
-    job.binding = &lattice.bound->lane_binding;
-    job.control_points = lattice.mapped_points;
-    job.positions = scratch_;
-    job.normals_in = normal_scratch_;
-    job.normals_out = normal_scratch_;
-    return job;
-  };
   // The constructor checked every binding against its lattice and the points, and the control point arrays are
-  // sized with the lattice, so neither job can refuse: their O(bound points) validate() stays out of the frame.
-  // Only the points' count is the caller's, checked above.
+  // sized with the lattice, so no job can refuse: their O(bound points) validate() stays out of the frame. Only the
+  // points' count is the caller's, checked above.
   apply_carried(positions);
   for (std::size_t l = 0; l < lattices_.size(); ++l) {
     Lattice& lattice = lattices_[l];
     if (!lattice.active) continue;
+    LatticeEvaluateJob job = field_job(lattice, positions);
+    job.normals_in = normals;
+    job.normals_out = normals;
     // The binding takes normals in the bind pose's model space (normals_to_bind).
-    const glm::mat3 to_bind = normals_to_bind(l);
-    const std::vector<std::uint32_t>& lanes = lattice.bound->binding.vertices;
-    const std::vector<float>& weights = lattice.bound->lane_weights;
-    for (std::size_t n = 0; n < lanes.size(); ++n) {
-      if (lanes[n] != LatticeBinding::no_vertex) normal_scratch_[n] = to_bind * normals[lanes[n]];
-    }
+    job.normals_in_to_binding = normals_to_bind(l);
     if (lattice.regular_rest) {
-      // One evaluation: the field's positions (the same bits as apply()'s: the kernel's sums do not depend on the
-      // normals) and the normals of linear · X + D, the Jacobian of linear · X added as an offset.
+      // One evaluation: the field's displacements (the same bits as apply()'s: the kernel's sums do not depend on
+      // the normals) and the normals of linear · X + D, the Jacobian of linear · X added as an offset.
       const LatticeFrame& frame = lattice.rest.frame();
-      LatticeEvaluateJob job = field_job(lattice);
-      job.normals_in = normal_scratch_;
-      job.normals_out = normal_scratch_;
       job.normals_jacobian_offset = lattice.linear * glm::mat3(frame.u_axis, frame.v_axis, frame.w_axis);
       job.run();
-      for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
-      }
     } else {
+      // The displacements exactly as apply() adds them; then the normals of the map linear · X + D, evaluated from
+      // its own control points (its positions are not wanted).
+      field_job(lattice, positions).run();
       mapped_points(l, lattice.mapped_points);
-      // The positions exactly as apply() moves them; then the normals (the mapped job's positions, overwriting the
-      // consumed displacements, are not used).
-      field_job(lattice).run();
-      for (std::size_t n = 0; n < lanes.size(); ++n) {
-        if (lanes[n] != LatticeBinding::no_vertex) positions[lanes[n]] += weights[n] * scratch_[n];
-      }
-      mapped_job(lattice).run();
-    }
-    for (std::size_t n = 0; n < lanes.size(); ++n) {
-      const std::uint32_t p = lanes[n];
-      if (p == LatticeBinding::no_vertex) continue;
-      const float weight = weights[n];
-      const glm::vec3 blended = normals[p] + weight * (normal_scratch_[n] - normals[p]);
-      const float length2 = glm::dot(blended, blended);
-      if (length2 > 1e-12f) normals[p] = blended * (1.0f / std::sqrt(length2));  // one division, not three
+      job.control_points = lattice.mapped_points;
+      job.positions = {};
+      job.run();
     }
   }
   return {};

@@ -41,11 +41,13 @@ Status layout_ok(const LatticeEvaluateJob& job) noexcept {
   if (job.control_points.size() != binding->control_point_count())
     return Status::failure("control point count differs from the binding");
   const std::size_t needed = binding->vertex_count == 0 ? 0 : std::size_t{binding->max_vertex} + 1;
-  if (job.positions.size() < needed) return Status::failure("positions too short");
   if (job.normals_in.empty() != job.normals_out.empty())
     return Status::failure("normals_in and normals_out: both or neither");
+  const bool normals_only = job.positions.empty() && !job.normals_out.empty();
+  if (job.positions.size() < needed && !normals_only) return Status::failure("positions too short");
   if (!job.normals_out.empty() && (job.normals_in.size() < needed || job.normals_out.size() < needed))
     return Status::failure("normals too short");
+  if (!job.weights.empty() && job.weights.size() != lanes) return Status::failure("weights: one per binding lane");
   if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   return {};
 }
@@ -82,12 +84,14 @@ Status LatticeEvaluateJob::run(std::size_t begin, std::size_t end) const noexcep
   const bool normals = !normals_out.empty();
   const detail::KernelArgs args{binding,
                                 control_points.data(),
-                                positions.data(),
+                                positions.empty() ? nullptr : positions.data(),
                                 normals ? normals_in.data() : nullptr,
                                 normals ? normals_out.data() : nullptr,
+                                weights.empty() ? nullptr : weights.data(),
                                 begin,
                                 end,
-                                normals_jacobian_offset};
+                                normals_jacobian_offset,
+                                binding->normal_basis * normals_in_to_binding};
   if (begin < end) kernel_for(isa)(args);
   return {};
 }

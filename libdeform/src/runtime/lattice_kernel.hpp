@@ -13,12 +13,14 @@ namespace deform::detail {
 struct KernelArgs {
   const LatticeBinding* binding;
   const glm::vec3* control_points;
-  glm::vec3* positions;
+  glm::vec3* positions;  // null: normals only
   const glm::vec3* normals_in;
   glm::vec3* normals_out;
+  const float* weights;  // null: positions and normals written, not blended
   std::size_t begin_block;
   std::size_t end_block;
   glm::mat3 jacobian_offset;  // LatticeEvaluateJob::normals_jacobian_offset
+  glm::mat3 normal_basis;     // the binding's normal_basis · LatticeEvaluateJob::normals_in_to_binding
 };
 
 // One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,

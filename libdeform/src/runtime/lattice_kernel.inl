@@ -291,8 +291,9 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
   for (int k = 0; k <= n; ++k) add_slice<L, M, Normals>(points + (l + 1) * (m + 1) * k, l, m, k, b, sums);
 
   const std::uint32_t* vertex = bind.vertices.data() + first;
+  const float* weight = a.weights ? a.weights + first : nullptr;
   if constexpr (Normals) {
-    // m = G·n (G = binding.normal_basis), then n' = m.x (Qv × Qw) + m.y (Qw × Qu) + m.z (Qu × Qv): cofactor(J)·m,
+    // m = G·n (G = binding.normal_basis · normals_in_to_binding), then n' = m.x (Qv × Qw) + m.y (Qw × Qu) + m.z (Qu × Qv): cofactor(J)·m,
     // the inverse transpose up to the positive factor det(J); normalised. Padding lanes read a harmless (0, 0, 1).
     alignas(64) float in[3][lanes], out[3][lanes];
     for (int lane = 0; lane < lanes; ++lane) {
@@ -300,7 +301,7 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
                                                                              : glm::vec3(0.0f, 0.0f, 1.0f);
       in[0][lane] = nrm.x, in[1][lane] = nrm.y, in[2][lane] = nrm.z;
     }
-    const glm::mat3& g = bind.normal_basis;
+    const glm::mat3& g = a.normal_basis;
     const glm::mat3& o = a.jacobian_offset;  // added to (Qu, Qv, Qw)
     const Lane16 *qu = sums.du, *qv = sums.dv, *qw = sums.dw;
     for (int lane = 0; lane < lanes; ++lane) {
@@ -327,9 +328,31 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
                           std::abs(rz) <= largest;
       out[0][lane] = usable ? rx : ix, out[1][lane] = usable ? ry : iy, out[2][lane] = usable ? rz : iz;
     }
+    if (weight) {
+      // A displacement field's normals: the input moved toward the deformed normal by the lane's weight.
+      for (int lane = 0; lane < lanes; ++lane) {
+        const float w = weight[lane], ix = in[0][lane], iy = in[1][lane], iz = in[2][lane];
+        const float bx = ix + w * (out[0][lane] - ix), by = iy + w * (out[1][lane] - iy),
+                    bz = iz + w * (out[2][lane] - iz);
+        const float length2 = bx * bx + by * by + bz * bz;
+        const bool keep = !(length2 > 1e-12f);
+        const float inverse_length = 1.0f / std::sqrt(keep ? 1.0f : length2);  // one division, not three
+        out[0][lane] = keep ? ix : bx * inverse_length;
+        out[1][lane] = keep ? iy : by * inverse_length;
+        out[2][lane] = keep ? iz : bz * inverse_length;
+      }
+    }
     for (int lane = 0; lane < lanes; ++lane)
       if (vertex[lane] != deform::LatticeBinding::no_vertex)
         a.normals_out[vertex[lane]] = glm::vec3(out[0][lane], out[1][lane], out[2][lane]);
+  }
+  if (!a.positions) return;
+  if (weight) {
+    for (int lane = 0; lane < lanes; ++lane)
+      if (vertex[lane] != deform::LatticeBinding::no_vertex)
+        a.positions[vertex[lane]] +=
+            weight[lane] * glm::vec3(sums.q[0][lane] + base.x, sums.q[1][lane] + base.y, sums.q[2][lane] + base.z);
+    return;
   }
   for (int lane = 0; lane < lanes; ++lane)
     if (vertex[lane] != deform::LatticeBinding::no_vertex)

@@ -205,8 +205,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // matrix). Exact for a point of selection weight 1 skinned rigidly to the lattice's bone (the FFD map of its
   // skinned neighbourhood); where weights blend it leaves out the gradient of the weight and blends directions.
   // The positions are apply()'s, bit for bit. Refuses, changing nothing, a size mismatch. No allocation; per bound
-  // point apply()'s evaluation and one with normals (control points: the bone-rotated rest plus the displacements),
-  // about three times apply()'s field cost.
+  // point one evaluation with normals (about twice apply()'s field cost) for a rest lattice on its frame's grid, as
+  // bind_hierarchy fits them; for a sculpted rest lattice, apply()'s evaluation and one of the map below.
   Status apply(std::span<glm::vec3> positions, std::span<glm::vec3> normals);
 
   // What evaluating a lattice's field takes, for callers of apply_carried():
@@ -237,8 +237,10 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // the matrix that takes a skinned normal back into the bind pose the binding's normal_basis expects. A bound
   // point's normal n becomes normalise(n + w · (n_l − n)) (kept when that is shorter than 1e-6), w its bound weight
   // and n_l the LatticeEvaluateJob normal of binding(l) with those control points for the input normal
-  // normals_to_bind(l) · n (apply() itself, for a rest lattice on its frame's regular grid, gets the same Jacobian to
-  // rounding in one evaluation of the displacements, the frame's edges mapped by the bone as an offset). No allocation.
+  // normals_to_bind(l) · n: a LatticeEvaluateJob with those control points, normals_in_to_binding = normals_to_bind(l)
+  // and weights = bound_weights(l) does both (apply() itself, for a rest lattice on its frame's regular grid, gets
+  // the same Jacobian to rounding in one evaluation of the displacements, the frame's edges mapped by the bone as an
+  // offset). No allocation.
   void mapped_points(std::size_t lattice, std::span<glm::vec3> out) const;
   glm::mat3 normals_to_bind(std::size_t lattice) const;
   // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
@@ -258,7 +260,6 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // character's instances), so a crowd keeps one copy in memory and in the caches.
   struct Binding {
     LatticeBinding binding;                     // BoundLattice::binding, by mesh point
-    LatticeBinding lane_binding;                // the same writing lane n to scratch entry n (apply's evaluations)
     std::vector<float> lane_weights;            // BoundLattice's
     std::vector<std::uint32_t> carried_points;  // BoundLattice's
     std::vector<float> carried_weights;         // BoundLattice's
@@ -310,16 +311,14 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::array<float, max_bezier_degree + 1> scale{};
   };
   static void shape_slices(const Lattice& lattice, SliceShape& slices) noexcept;
-  // The evaluation of a lattice's displacement field into scratch_.
-  LatticeEvaluateJob field_job(const Lattice& lattice);
+  // The evaluation of a lattice's displacement field, added to `positions` by the points' weights.
+  static LatticeEvaluateJob field_job(const Lattice& lattice, std::span<glm::vec3> positions);
   bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;
 
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
   std::vector<Lattice> lattices_;
   mutable bool drawing_current_ = false;  // world_points as of the last update()
   std::size_t point_count_ = 0;            // the mesh's points, which apply() takes
-  std::vector<glm::vec3> scratch_;         // per binding lane: displacements of the lattice being applied
-  std::vector<glm::vec3> normal_scratch_;  // per binding lane: its normals (apply with normals)
 };
 
 }  // namespace deform

@@ -168,11 +168,23 @@ class DEFORM_RUNTIME_API BsplineLattice {
 struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   const LatticeBinding* binding = nullptr;
   std::span<const glm::vec3> control_points;  // binding->control_point_count() points, i-fastest
-  std::span<glm::vec3> positions;             // out: indexed by point; size > binding->max_vertex
+  // Out: indexed by point; size > binding->max_vertex. May be empty when normals are asked for: then only the
+  // normals are written.
+  std::span<glm::vec3> positions;
   // Optional (both or neither): per-point normals in, deformed unit normals out (n' ∝ cofactor(J)·n, the inverse
   // transpose of the map's Jacobian up to a positive scale). May alias. Size > binding->max_vertex.
   std::span<const glm::vec3> normals_in;
   std::span<glm::vec3> normals_out;
+  // Optional: one weight per binding lane (binding->vertices.size(); padding lanes' are not read). With weights the
+  // map is a displacement field added to the points, each by its lane's weight: position += w·Q, and the normal
+  // moved toward the deformed one by the same weight, normals_out = normalize(n + w·(n' − n)) with n the point's
+  // normals_in (kept when that sum is below 1e-6 long). Each point at most once in the binding (bind_lattice binds
+  // it so). DeformerHierarchy::apply sums its lattices' fields this way, without a per-lattice scratch array.
+  std::span<const float> weights;
+  // Takes normals_in into the space the binding was made in before the Jacobian sees them (identity by default):
+  // for normals that have moved since, the inverse transpose of that motion up to a positive scale, such as the
+  // transposed 3×3 of a skinned bone's world · inverse bind. The blend above and the outputs stay in normals_in's space.
+  glm::mat3 normals_in_to_binding{1.0f};
   // Added to the map's Jacobian ∂Q/∂(u, v, w) (as columns) before the normals are made; the positions do not see it.
   // Zero by default. With the Jacobian of an affine map x ↦ A·X(u, v, w), it gives the normals of A·X + Q from the
   // evaluation of Q alone: a displacement field over a skinned limb gives the limb's displacements and its deformed
@@ -190,7 +202,8 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   // point at most max_vertex or no_vertex ("binding vertex out of range"), every B-spline block's cell inside the
   // lattice ("binding cell out of range"), finite parameters ("binding parameter is not finite"); the control point
   // count of the binding ("control point count differs from the binding"); positions and normals spans covering
-  // max_vertex ("positions too short", "normals too short"; "normals_in and normals_out: both or neither"); the
+  // max_vertex ("positions too short": empty is accepted with normals, "normals too short"; "normals_in and
+  // normals_out: both or neither"); weights, if any, one per lane ("weights: one per binding lane"); the
   // ISA available. Cost: O(bound points); the binding is read-only after bind, so once per binding and job layout.
   Status validate() const noexcept;
 
