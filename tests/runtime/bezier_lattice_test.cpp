@@ -229,11 +229,12 @@ TEST_CASE("weights: the field added by each point's weight and the normals blend
     for (float& w : point_weight) w = rng() % 5 == 0 ? float(rng() % 2) : uniform(rng, 0.0f, 1.0f);
     std::vector<float> lane_weight(binding.vertices.size(), 0.0f);
     for (std::size_t lane = 0; lane < binding.vertices.size(); ++lane)
-      if (binding.vertices[lane] != deform::LatticeBinding::no_vertex) lane_weight[lane] = point_weight[binding.vertices[lane]];
+      if (binding.vertices[lane] != deform::LatticeBinding::no_vertex)
+        lane_weight[lane] = point_weight[binding.vertices[lane]];
     // Half the trials carry the normals by a rotation and a scale first, as a skinned bone's would be.
+    const glm::vec3 axis = glm::normalize(uniform3(rng, 0.1f, 1.0f));
     const glm::mat3 to_binding =
-        trial % 2 ? glm::mat3(glm::rotate(glm::mat4(1.0f), uniform(rng, -3.0f, 3.0f), glm::normalize(uniform3(rng, 0.1f, 1.0f)))) *
-                        uniform(rng, 0.5f, 2.0f)
+        trial % 2 ? glm::mat3(glm::rotate(glm::mat4(1.0f), uniform(rng, -3.0f, 3.0f), axis)) * uniform(rng, 0.5f, 2.0f)
                   : glm::mat3(1.0f);
     const std::vector<glm::vec3> normals_in = random_normals(rng, in.size());
 

@@ -458,7 +458,8 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions) {
   // The constructor checked every binding against its lattice and the points, so no field is refused; checked all
   // the same before anything is written.
   for (const Lattice& lattice : lattices_)
-    if (lattice.active && !field_job(lattice, positions).validate()) return Status::failure("a lattice field does not fit");
+    if (lattice.active && !field_job(lattice, positions).validate())
+      return Status::failure("a lattice field does not fit");
   apply_carried(positions);
   for (const Lattice& lattice : lattices_)
     if (lattice.active) field_job(lattice, positions).run();

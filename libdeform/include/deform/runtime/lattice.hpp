@@ -183,7 +183,8 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
   std::span<const float> weights;
   // Takes normals_in into the space the binding was made in before the Jacobian sees them (identity by default):
   // for normals that have moved since, the inverse transpose of that motion up to a positive scale, such as the
-  // transposed 3×3 of a skinned bone's world · inverse bind. The blend above and the outputs stay in normals_in's space.
+  // transposed 3×3 of a skinned bone's world · inverse bind. The blend above and the outputs stay in normals_in's
+  // space.
   glm::mat3 normals_in_to_binding{1.0f};
   // Added to the map's Jacobian ∂Q/∂(u, v, w) (as columns) before the normals are made; the positions do not see it.
   // Zero by default. With the Jacobian of an affine map x ↦ A·X(u, v, w), it gives the normals of A·X + Q from the
