@@ -93,6 +93,15 @@ file(SHA256 "${WORK}/sharp.skw" sharp)
 if(sharp STREQUAL heat)
   fail("--heat 4 changed nothing")
 endif()
+weights(--builtin --oblique-penalty 0 --out "${WORK}/plain.skw")
+expect_equal("exit status, --oblique-penalty 0" "${rc}" 0)
+file(SHA256 "${WORK}/plain.skw" plain)
+if(plain STREQUAL heat)
+  fail("--oblique-penalty 0 changed nothing")
+endif()
+weights(--builtin --oblique-penalty 0.3 --out "${WORK}/default.skw")
+file(SHA256 "${WORK}/default.skw" default)
+expect_equal("--oblique-penalty 0.3 is the default" "${default}" "${heat}")
 
 # --- geodesic voxel weights: their own, and --resolution acts ---
 weights(--builtin --method voxel --resolution 48 --out "${WORK}/voxel.skw")
@@ -171,6 +180,9 @@ expect_invalid("--smoothing does not apply to --method heat" --builtin --smoothi
 expect_invalid("--heat does not apply to --method distance" --builtin --method distance --heat 2
                --out "${WORK}/keep.skw")
 expect_invalid("--heat" --builtin --heat 0 --out "${WORK}/keep.skw")
+expect_invalid("--oblique-penalty" --builtin --oblique-penalty -1 --out "${WORK}/keep.skw")
+expect_invalid("--oblique-penalty does not apply to --method voxel" --builtin --method voxel --oblique-penalty 1
+               --out "${WORK}/keep.skw")
 expect_invalid("--builtin takes no MESH" --builtin "${SAMPLES}/builtin.obj" --out "${WORK}/keep.skw")
 expect_invalid("--skeleton is required" "${SAMPLES}/builtin.obj" --out "${WORK}/keep.skw")
 expect_invalid("missing.obj" "${WORK}/missing.obj" --skeleton "${SAMPLES}/builtin.sk" --out "${WORK}/keep.skw")

@@ -246,6 +246,36 @@ TEST_CASE("heat weights: a bone beside the surface does not heat it, whichever w
   }
 }
 
+TEST_CASE("heat weights: a bone straight behind the surface counts as nearer than one seen obliquely") {
+  // A body (cylinder of radius 0.2 along +Y) with a bone on its axis and a second bone inside it, off the axis: from
+  // the points on the +X side the second is 6% nearer but 58° off their inward normal (as a chest's points see a
+  // leg's top bone beside the spine). With the paper's plain distance (oblique_penalty 0) the side bone heats them
+  // and takes 0.7 of their weight; with the default penalty the axis heats them, and the side bone's weight there is
+  // only what diffuses from its own side of the body.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = make_skeleton({bone(-1, {0, 0.2f, 0}, "axis"), bone(0, {0, 1.6f, 0}, "axis_end"),
+                                           bone(0, {0.1f, 0.0f, 0.16f}, "side"), bone(2, {0, 1.6f, 0}, "side_end")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {1, 0, 1, 0};
+  CHECK(o.oblique_penalty == 0.3f);
+  const deform::WeightsResult with = deform::compute_heat_weights(mesh, skeleton, o);
+  o.oblique_penalty = 0.0f;
+  const deform::WeightsResult without = deform::compute_heat_weights(mesh, skeleton, o);
+  check_contract(with.weights, mesh.point_count(), 4);
+  check_contract(without.weights, mesh.point_count(), 4);
+  std::size_t facing_x = 0;
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
+    const glm::vec3 p = mesh.positions[i];
+    if (p.x < 0.19f || p.y < 0.6f || p.y > 1.4f) continue;
+    ++facing_x;
+    CAPTURE(i);
+    CHECK(weight_of(without.weights, i, 2) > 0.65f);
+    CHECK(weight_of(with.weights, i, 0) > weight_of(without.weights, i, 0) + 0.15f);
+  }
+  CHECK(facing_x >= 8);
+}
+
 TEST_CASE("heat weights: a bone's segment toward a child placed outside the body stops where it leaves the body") {
   // A body (lower -> upper) and an arm (upper -> arm -> hand) along +X at height 1.5, and an IK goal parented to
   // the root and placed at the hand, as rigs do (mrfixit.iqm's HandGoal under Spine1). The root's segment toward
@@ -401,6 +431,11 @@ TEST_CASE("heat weights: points welded across a seam, the deforming mask, max_in
     CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
     o = {};
     o.heat = 0.0f;
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    o = {};
+    o.oblique_penalty = -0.1f;
+    CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
+    o.oblique_penalty = NAN;
     CHECK_THROWS_AS(deform::compute_heat_weights(mesh, skeleton, o), deform::Error);
     o = {};
     o.deforming = {0, 0};

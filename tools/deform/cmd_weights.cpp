@@ -37,6 +37,8 @@ constexpr const char* usage =
     "  --leaf-length L      a leaf bone's length as a multiple of its distance to its parent, >= 0 (default 1)\n"
     "heat only:\n"
     "  --heat C             heat constant of H = C / d^2, > 0 (default 1; higher = sharper joints)\n"
+    "  --oblique-penalty K  how much farther a bone seen obliquely counts when the nearest is chosen, >= 0\n"
+    "                       (default 0.3; 0 = plain distance)\n"
     "voxel only:\n"
     "  --resolution N       voxels along the longest side of the mesh's box, 8 to 1024 (default 128)\n"
     "distance and voxel:\n"
@@ -57,8 +59,8 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--resolution", "--falloff", "--max-influences",
-                         "--smoothing", "--behind-penalty", "--leaf-length"},
+  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--oblique-penalty", "--resolution", "--falloff",
+                         "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length"},
                   {"--builtin"});
   const std::string out = args.required("--out");
   const std::string method = args.value("--method").value_or("heat");
@@ -66,8 +68,8 @@ int run(const std::vector<std::string>& argv) {
     throw UsageError("--method: '" + method + "' is not heat, voxel or distance");
   const std::vector<const char*> not_for =
       method == "heat"    ? std::vector<const char*>{"--resolution", "--falloff", "--smoothing", "--behind-penalty"}
-      : method == "voxel" ? std::vector<const char*>{"--heat", "--behind-penalty"}
-                          : std::vector<const char*>{"--heat", "--resolution"};
+      : method == "voxel" ? std::vector<const char*>{"--heat", "--oblique-penalty", "--behind-penalty"}
+                          : std::vector<const char*>{"--heat", "--oblique-penalty", "--resolution"};
   for (const char* flag : not_for)
     if (args.value(flag)) throw UsageError(std::string(flag) + " does not apply to --method " + method);
   deform::AutoWeightsOptions options;
@@ -84,6 +86,7 @@ int run(const std::vector<std::string>& argv) {
     options.smoothing_iterations = static_cast<int>(parse_integer(*n, "--smoothing", 0, 100));
   deform::HeatWeightsOptions heat_options;
   heat_options.heat = number_option(args, "--heat", heat_options.heat, 0.0f, true);
+  heat_options.oblique_penalty = number_option(args, "--oblique-penalty", heat_options.oblique_penalty, 0.0f);
   heat_options.leaf_length = options.leaf_length;
   heat_options.max_influences = influences;
   deform::VoxelWeightsOptions voxel_options;

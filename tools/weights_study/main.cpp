@@ -2,10 +2,11 @@
 // it, drop its weights, compute automatic ones by each method, play every clip and compare the skinned points.
 // Prints a Markdown table.
 //
-//   weights_study [--samples N] [--all-bones] MODEL...
+//   weights_study [--samples N] [--all-bones] [--detail] [HEAT OPTIONS] [--resolution N] MODEL...
 //
 // --all-bones lets every bone of the imported skeleton take weight; by default only the bones the artist weighted
-// deform (the rig's deform bones, as a rigger flags them), for both methods.
+// deform (the rig's deform bones, as a rigger flags them), for both methods. Heat options (HeatWeightsOptions):
+// --heat C, --oblique K (oblique_penalty), --no-visibility, --max-influences N; --resolution: the voxel grid.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -82,13 +83,15 @@ int main(int argc, char** argv) {
     else if (a == "--all-bones") all_bones = true;
     else if (a == "--heat" && i + 1 < argc) heat_options.heat = std::strtof(argv[++i], nullptr);
     else if (a == "--no-visibility") heat_options.visibility = false;
+    else if (a == "--oblique" && i + 1 < argc) heat_options.oblique_penalty = std::strtof(argv[++i], nullptr);
     else if (a == "--max-influences" && i + 1 < argc) heat_options.max_influences = std::atoi(argv[++i]);
     else if (a == "--detail") detail = true;
     else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
     else paths.push_back(a);
   }
   if (paths.empty() || samples < 1) {
-    std::fprintf(stderr, "usage: weights_study [--samples N] [--all-bones] MODEL...\n");
+    std::fprintf(stderr, "usage: weights_study [--samples N] [--all-bones] [--detail] [--heat C] [--oblique K] "
+                         "[--no-visibility] [--max-influences N] [--resolution N] MODEL...\n");
     return 2;
   }
   std::printf("| model | points | bones (deforming) | clips (poses) | method | mean | p99 | max | strongest bone differs "

@@ -37,6 +37,8 @@ void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
     fail("max_influences", "must be 1 to " + std::to_string(max_requested_influences));
   if (!std::isfinite(o.heat) || o.heat <= 0.0f) fail("heat", "must be finite and > 0");
   if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
+  if (!std::isfinite(o.oblique_penalty) || o.oblique_penalty < 0.0f)
+    fail("oblique_penalty", "must be finite and >= 0");
   if (!o.deforming.empty()) {
     if (o.deforming.size() != bone_count) fail("deforming", "must be empty or hold one entry per bone");
     if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
@@ -265,12 +267,21 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
       by_distance[c] = {glm::length(q - p), candidates[c]};
     }
     const std::size_t tries = std::min(by_distance.size(), max_visibility_tries);
-    std::partial_sort(by_distance.begin(), by_distance.begin() + static_cast<std::ptrdiff_t>(tries),
-                      by_distance.end());
+    const auto tried_end = by_distance.begin() + static_cast<std::ptrdiff_t>(tries);
+    std::partial_sort(by_distance.begin(), tried_end, by_distance.end());
     nearest_any[v] = by_distance.front().second;
     facing = facing && normal[v] != glm::vec3(0.0f);
+    if (facing && options.oblique_penalty > 0.0f) {
+      // The nearest tried bones reordered by their oblique distance (a bone in front counts as beside).
+      for (auto it = by_distance.begin(); it != tried_end; ++it) {
+        const float outward = it->first > 0.0f ? glm::dot(nearest_point[it->second] - p, normal[v]) / it->first : 0.0f;
+        it->first *= 1.0f + options.oblique_penalty * (1.0f + std::min(outward, 0.0f));
+      }
+      std::sort(by_distance.begin(), tried_end);
+    }
     for (std::size_t k = 0; k < tries; ++k) {
-      const auto [distance, bone] = by_distance[k];
+      const std::uint32_t bone = by_distance[k].second;
+      const float distance = glm::length(nearest_point[bone] - p);
       bool visible = true;
       if (bvh != nullptr && bvh->triangle_count() > 0 && distance > 2.0f * offset) {
         const glm::vec3 direction = (nearest_point[bone] - p) / distance;

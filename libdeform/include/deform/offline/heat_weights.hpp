@@ -12,7 +12,9 @@
 //     each segment of a bone that forks, ends where it leaves the mesh (an IK goal parented to the spine and placed
 //     at the hand must not make the spine reach along the arm).
 //  2. Heat: among the bones, nearest first, the first one *visible* from the point heats it: p_j = that bone,
-//     H_jj = heat / d². Visible: the bone lies behind the surface (the direction to its nearest point within 78° of
+//     H_jj = heat / d². Nearest counts a bone seen obliquely as farther: at angle θ from the inward normal, its
+//     distance times 1 + oblique_penalty · (1 − cos θ) (the bone straight behind a point is the one it lies on;
+//     one beside it, a neighbouring part's). Visible: the bone lies behind the surface (the direction to its nearest point within 78° of
 //     the inward normal; normals are turned per island so that most points have their nearest bone behind them)
 //     and the straight segment from the point to it crosses no triangle of the mesh but the point's own. A point
 //     that sees no bone gets no heat (H_jj = 0) and takes its weights from its neighbours; an island where no point
@@ -42,6 +44,9 @@ struct HeatWeightsOptions {
   int max_influences = 4;     // 1 .. deform::max_requested_influences (16); past 4 in SkinWeights' extras
   float heat = 1.0f;          // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
   float leaf_length = 1.0f;   // >= 0: a leaf bone's length as a multiple of its distance to its parent
+  // >= 0: how much farther a bone seen obliquely counts when the nearest is chosen (step 2 above; 0 = the plain
+  // distance, the paper's rule). docs/weights.md has the measurements behind 0.3.
+  float oblique_penalty = 0.3f;
   bool visibility = true;     // false: the nearest bone heats each point whether it sees it or not
   // An island (a connected piece of the surface) none of whose points sees a bone past the rest of the mesh (a
   // garment around a limb, a plate on a tail) looks again past its own triangles only; false: it is bound rigidly.
