@@ -1,8 +1,9 @@
 // Checks deform::GpuBezierLattice (deform/gpu/lattice.hpp) against the CPU kernel (LatticeEvaluateJob):
 // seeded random frames and control point displacements for several degrees, a few thousand random points inside and
 // outside the box, positions and Jacobian normals through both outputs (read back, and written into an interleaved
-// vertex buffer); and lattices collapsed to a point or onto a line, where both keep every input normal. Prints the largest differences; exits 1 when one exceeds 1e-4 (positions relative to the lattice's
-// size) or anything outside the bound vertices changed, 0 with "skipped" when the context lacks OpenGL 4.3.
+// vertex buffer); and lattices collapsed to a point or onto a line, where both keep every input normal. Prints the
+// largest differences; exits 1 when one exceeds 1e-4 (positions relative to the lattice's size) or anything outside
+// the bound vertices changed, 0 with "skipped" when the context lacks OpenGL 4.3.
 //
 // gpu_lattice_check --bench prints indicative per-frame times of both paths instead (not a test: docs/gpu.md).
 #include "hidden_context.hpp"  // epoxy first

@@ -294,7 +294,8 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
   const float* weight = a.weights ? a.weights + first : nullptr;
   if constexpr (Normals) {
     // m = G·n (G = binding.normal_basis · normals_in_to_binding), then n' = m.x (Qv × Qw) + m.y (Qw × Qu) +
-    // m.z (Qu × Qv): cofactor(J)·m, the inverse transpose up to the positive factor det(J); normalised. Padding lanes read a harmless (0, 0, 1).
+    // m.z (Qu × Qv): cofactor(J)·m, the inverse transpose up to the positive factor det(J); normalised. Padding
+    // lanes read a harmless (0, 0, 1).
     alignas(64) float in[3][lanes], out[3][lanes];
     for (int lane = 0; lane < lanes; ++lane) {
       const glm::vec3 nrm = vertex[lane] != deform::LatticeBinding::no_vertex ? a.normals_in[vertex[lane]]
