@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 
 #include <GLFW/glfw3.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -323,13 +324,20 @@ void MeshRenderer::create(const deform::Mesh& mesh) {
 
   textures_.assign(mesh.materials.size(), 0);
   for (std::size_t m = 0; m < mesh.materials.size(); ++m) {
-    const std::string& path = mesh.materials[m].diffuse_map;
-    if (path.empty() || !std::ifstream(path)) continue;
+    const deform::Material& material = mesh.materials[m];
+    const std::string& path = material.diffuse_map;
+    const std::vector<std::uint8_t>* embedded = material.diffuse_image.get();  // an image inside the model file
+    if (embedded == nullptr && (path.empty() || !std::ifstream(path))) continue;
+    if (embedded != nullptr && embedded->size() > std::size_t(std::numeric_limits<int>::max())) continue;
     int w = 0, h = 0, channels = 0;
     stbi_set_flip_vertically_on_load(1);
-    unsigned char* pixels = stbi_load(path.c_str(), &w, &h, &channels, 4);
+    unsigned char* pixels = embedded != nullptr
+                                ? stbi_load_from_memory(embedded->data(), int(embedded->size()), &w, &h, &channels, 4)
+                                : stbi_load(path.c_str(), &w, &h, &channels, 4);
     if (!pixels) {
-      std::fprintf(stderr, "warning: cannot load texture %s: %s\n", path.c_str(), stbi_failure_reason());
+      std::fprintf(stderr, "warning: cannot load texture %s: %s\n",
+                   embedded != nullptr ? ("of material " + material.name).c_str() : path.c_str(),
+                   stbi_failure_reason());
       continue;
     }
     glGenTextures(1, &textures_[m]);

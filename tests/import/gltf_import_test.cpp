@@ -3,15 +3,18 @@
 // malformed files as errors naming the file and the JSON path or accessor.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
 #include "deform/import/import.hpp"
+#include "deform/io/gltf_export.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/skeleton.hpp"
@@ -309,4 +312,110 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
   glb += std::string(20, ' ');
   const std::string path = write("chunk.glb", glb);
   CHECK(import_error(path).find("GLB header") != std::string::npos);
+}
+
+TEST_CASE("embedded PNG and JPEG textures are kept as their bytes: imported, exported natively and as glTF") {
+  // A 1×1 PNG and the first bytes of a JPEG: the importer keeps images without decoding them.
+  const std::vector<std::uint8_t> png = {
+      0x89, 0x50, 0x4E, 0x47, 0x0D, 0x0A, 0x1A, 0x0A, 0x00, 0x00, 0x00, 0x0D, 0x49, 0x48, 0x44, 0x52, 0x00, 0x00,
+      0x00, 0x01, 0x00, 0x00, 0x00, 0x01, 0x08, 0x02, 0x00, 0x00, 0x00, 0x90, 0x77, 0x53, 0xDE, 0x00, 0x00, 0x00,
+      0x0C, 0x49, 0x44, 0x41, 0x54, 0x08, 0xD7, 0x63, 0xF8, 0xCF, 0xC0, 0x00, 0x00, 0x03, 0x01, 0x01, 0x00, 0x18,
+      0xDD, 0x8D, 0xB0, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4E, 0x44, 0xAE, 0x42, 0x60, 0x82};
+  const std::vector<std::uint8_t> jpeg = {0xFF, 0xD8, 0xFF, 0xE0, 0x00, 0x10, 'J', 'F', 'I', 'F', 0x00};
+  const std::vector<std::uint8_t> gif = {'G', 'I', 'F', '8', '9', 'a', 0x01, 0x00, 0x01, 0x00};
+  Doc doc;
+  const Strip s = strip(doc, 0.0f);
+  std::vector<float> uv;
+  for (int r = 0; r < 3; ++r) uv.insert(uv.end(), {0.0f, 0.25f * float(r), 1.0f, 0.25f * float(r)});
+  const int uvs = doc.accessor(uv, "VEC2", 5126);
+  doc.accessor(png, "SCALAR", 5121);  // its buffer view holds the PNG (the accessor itself is unused)
+  const std::size_t png_view = doc.views.size() - 1;
+  doc.accessor(gif, "SCALAR", 5121);
+  const std::size_t gif_view = doc.views.size() - 1;
+  std::vector<float> ibm = translation_ibm(0, 0), ibm1 = translation_ibm(0, 1);
+  ibm.insert(ibm.end(), ibm1.begin(), ibm1.end());
+  const int ibms = doc.accessor(ibm, "MAT4", 5126);
+  std::string with_uvs = primitive(s);
+  with_uvs.insert(with_uvs.find('{', 1) + 1, R"("TEXCOORD_0": )" + std::to_string(uvs) + ", ");
+  // Four primitives over the same strip, one per material: buffer-view PNG (twice: one image, shared), data-URI
+  // JPEG, and a GIF, which glTF 2.0 does not allow.
+  std::string primitives;
+  for (int m = 0; m < 4; ++m) {
+    std::string p = with_uvs;
+    p.insert(p.size() - 1, R"(, "material": )" + std::to_string(m));
+    primitives += (m ? ", " : "") + p;
+  }
+  const std::string body =
+      R"("scene": 0, "scenes": [{"nodes": [0, 2]}], "nodes": [)"
+      R"({"name": "Hips", "children": [1]}, {"name": "Spine", "translation": [0, 1, 0]},)"
+      R"({"name": "skin", "mesh": 0, "skin": 0}], "meshes": [{"primitives": [)" + primitives + R"(]}],)"
+      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" + std::to_string(ibms) + R"(}],)"
+      R"("materials": [{"name": "a", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
+      R"({"name": "b", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
+      R"({"name": "c", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},)"
+      R"({"name": "d", "pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}}],)"
+      R"("textures": [{"source": 0}, {"source": 1}, {"source": 2}],)"
+      R"("images": [{"bufferView": )" + std::to_string(png_view) + R"(, "mimeType": "image/png"},)"
+      R"({"uri": "data:image/jpeg;base64,)" + gltf_doc::base64(jpeg) + R"("},)"
+      R"({"bufferView": )" + std::to_string(gif_view) + R"(, "mimeType": "image/png"}])";
+  const std::string path = write("embedded_textures.gltf", doc.json(body));
+  for (const bool isolated : {false, true}) {
+    CAPTURE(isolated);
+    const deform::ImportedModel imported = isolated ? deform::import_model_isolated(path) : deform::import_model(path);
+    const std::vector<deform::Material>& materials = imported.model.mesh.materials;
+    REQUIRE(materials.size() == 4);
+    REQUIRE(materials[0].diffuse_image);
+    REQUIRE(materials[1].diffuse_image);
+    REQUIRE(materials[2].diffuse_image);
+    CHECK(*materials[0].diffuse_image == png);
+    CHECK(*materials[1].diffuse_image == png);
+    if (!isolated) CHECK(materials[0].diffuse_image == materials[1].diffuse_image);  // one copy, shared
+    CHECK(*materials[2].diffuse_image == jpeg);
+    CHECK(!materials[3].diffuse_image);
+    CHECK(materials[0].diffuse_map.empty());
+    bool gif_warned = false;
+    for (const std::string& w : imported.warnings) gif_warned |= w.find("'d'") != std::string::npos;
+    CHECK(gif_warned);
+    // UVs in OBJ's convention: glTF's v = 0.5 (running down) is 0.5, 0.25 is 0.75.
+    REQUIRE(imported.model.mesh.vertex_uvs.size() >= 6);
+    CHECK(imported.model.mesh.vertex_uvs[2].y == doctest::Approx(0.75f));
+  }
+
+  // Native export: each image becomes one file beside the OBJ, named by map_Kd, with the same bytes.
+  const deform::ImportedModel imported = deform::import_model(path);
+  const fs::path folder = fs::temp_directory_path() / "deform_gltf_test_embedded_export";
+  fs::remove_all(folder);
+  const deform::ExportedFiles files = deform::export_native(imported.model, folder.string());
+  REQUIRE(files.textures.size() == 2);
+  const auto bytes_of = [](const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+  };
+  CHECK(bytes_of(files.textures[0]) == png);
+  CHECK(fs::path(files.textures[0]).extension() == ".png");
+  CHECK(bytes_of(files.textures[1]) == jpeg);
+  CHECK(fs::path(files.textures[1]).extension() == ".jpg");
+  std::ifstream mtl(files.mtl);
+  const std::string mtl_text((std::istreambuf_iterator<char>(mtl)), {});
+  CHECK(mtl_text.find("map_Kd " + fs::path(files.textures[0]).filename().string()) != std::string::npos);
+  fs::remove_all(folder);
+
+  // glTF export keeps them as they are: written, read back, the same bytes on the same materials.
+  const std::string glb = (fs::temp_directory_path() / "deform_gltf_test_embedded_back.glb").string();
+  const deform::GltfWritten written = deform::write_gltf(glb, imported.model);
+  CHECK(written.textures == 2);
+  const deform::ImportedModel back = deform::import_model(glb);
+  REQUIRE(back.model.mesh.materials.size() == 4);
+  REQUIRE(back.model.mesh.materials[0].diffuse_image);
+  CHECK(*back.model.mesh.materials[0].diffuse_image == png);
+  REQUIRE(back.model.mesh.materials[2].diffuse_image);
+  CHECK(*back.model.mesh.materials[2].diffuse_image == jpeg);
+  const auto sorted_v = [](const std::vector<glm::vec2>& uvs) {  // v flipped on the way out and back in
+    std::vector<float> v;
+    for (const glm::vec2& uv : uvs) v.push_back(uv.y);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  CHECK(sorted_v(back.model.mesh.vertex_uvs) == sorted_v(imported.model.mesh.vertex_uvs));
+  fs::remove(glb);
 }

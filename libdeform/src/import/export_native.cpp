@@ -90,7 +90,26 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   // Textures: one copy per distinct source; a name already taken by another source gets an index prefix.
   std::vector<Material> materials = model.mesh.materials;
   std::map<std::string, std::string> copy_of;  // source -> file name in `folder`
+  std::map<const std::vector<std::uint8_t>*, std::string> file_of_image;  // embedded image -> file name in `folder`
   for (Material& material : materials) {
+    if (material.diffuse_image) {  // an embedded image becomes a file of its own, named after its first material
+      const std::vector<std::uint8_t>& bytes = *material.diffuse_image;
+      auto found = file_of_image.find(&bytes);
+      if (found == file_of_image.end()) {
+        std::string name = stem + "_" + material.name;
+        for (char& c : name)
+          if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
+        name += bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8 ? ".jpg" : ".png";
+        while (std::find(names.begin(), names.end(), name) != names.end())
+          name = std::to_string(file_of_image.size()) + "_" + name;
+        write_file_atomic((staging.path / name).string(), bytes);
+        names.push_back(name);
+        found = file_of_image.emplace(&bytes, name).first;
+      }
+      material.diffuse_map = found->second;
+      material.diffuse_image.reset();
+      continue;
+    }
     if (material.diffuse_map.empty()) continue;
     auto found = copy_of.find(material.diffuse_map);
     if (found == copy_of.end()) {

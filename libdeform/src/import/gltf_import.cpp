@@ -39,6 +39,7 @@ namespace tinygltf = deform_gltf_import::tinygltf;
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <unordered_map>
 
@@ -56,9 +57,23 @@ namespace fs = std::filesystem;
 constexpr std::size_t max_bufferless_elements = std::size_t{1} << 26;
 constexpr int max_node_depth = 10000;
 
-// Images are not decoded (textures are referenced by path, never read): this loader accepts every image untouched.
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+// Images are not decoded here: a file's image is referenced by its path, and an embedded one (a data: URI or a
+// buffer view) is kept as its encoded bytes in `user` (an EmbeddedImages), for Material::diffuse_image.
+using EmbeddedImages = std::map<int, std::vector<std::uint8_t>>;
+bool keep_image(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
+                const unsigned char* bytes, int size, void* user) {
+  if (image != nullptr && user != nullptr && bytes != nullptr && size > 0 &&
+      (image->uri.empty() || image->uri.rfind("data:", 0) == 0))
+    (*static_cast<EmbeddedImages*>(user))[index].assign(bytes, bytes + size);
   return true;
+}
+
+// The image formats an embedded texture may have: glTF's core allows PNG and JPEG (others come by extensions).
+bool is_png_or_jpeg(const std::vector<std::uint8_t>& bytes) {
+  static constexpr std::uint8_t png[] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  static constexpr std::uint8_t jpeg[] = {0xFF, 0xD8, 0xFF};
+  return (bytes.size() >= sizeof png && std::equal(std::begin(png), std::end(png), bytes.begin())) ||
+         (bytes.size() >= sizeof jpeg && std::equal(std::begin(jpeg), std::end(jpeg), bytes.begin()));
 }
 
 // tinygltf reads the files a .gltf names (buffers, images) through these: regular files only (not /dev/zero or a
@@ -296,7 +311,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   // --- parse ---
   const std::vector<std::uint8_t> bytes = read_file_bytes(path);
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
+  EmbeddedImages embedded_images;
+  loader.SetImageLoader(keep_image, &embedded_images);
   loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, nullptr});
   tinygltf::Model gltf;
   std::string error, warning;
@@ -602,6 +618,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   Mesh& mesh = result.model.mesh;
   {
     std::vector<std::string> used;
+    std::map<int, std::shared_ptr<const std::vector<std::uint8_t>>> embedded_shared;  // image -> its bytes
     for (std::size_t m = 0; m < gltf.materials.size(); ++m) {
       const tinygltf::Material& source = gltf.materials[m];
       Material material;
@@ -623,7 +640,17 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         if (image >= 0 && static_cast<std::size_t>(image) < gltf.images.size()) {
           const tinygltf::Image& img = gltf.images[static_cast<std::size_t>(image)];
           if (img.uri.empty() || img.uri.rfind("data:", 0) == 0) {
-            warnings.push_back("material '" + name + "': embedded texture is not extracted");
+            auto found = embedded_images.find(image);
+            if (found != embedded_images.end() && is_png_or_jpeg(found->second)) {  // moved out after first use
+              embedded_shared[image] = std::make_shared<const std::vector<std::uint8_t>>(std::move(found->second));
+              embedded_images.erase(found);
+            }
+            if (embedded_shared.count(image) != 0) {  // one copy per image, however many materials use it
+              material.diffuse_image = embedded_shared[image];
+            } else {
+              warnings.push_back("material '" + name + "': embedded texture (image " + std::to_string(image) +
+                                 ") is not a PNG or JPEG image, left out");
+            }
           } else {
             std::string uri = img.uri;
             std::string decoded;  // URIs escape spaces and other bytes as %XX
@@ -855,8 +882,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         normal = std::isfinite(length) && length > 0.0 ? normal / length : glm::dvec3(0.0, 0.0, 1.0);
         mesh.vertex_normals.emplace_back(normal);
         if (any_uvs)
-          mesh.vertex_uvs.emplace_back(uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v]),
-                                       uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v + 1]));
+          mesh.vertex_uvs.emplace_back(uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v]),  // glTF's v runs down,
+                                       uvs.empty() ? 0.0f : 1.0f - static_cast<float>(uvs[2 * v + 1]));  // OBJ's up
       }
 
       // Triangles (strips and fans unrolled; degenerate ones kept as the file has them).

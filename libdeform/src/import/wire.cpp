@@ -12,7 +12,7 @@ namespace deform::wire {
 namespace {
 
 constexpr char magic[8] = {'D', 'F', 'I', 'M', 'P', 'O', 'R', 'T'};
-constexpr std::uint32_t version = 3;  // 2: extra influences, morph targets and channels; 3: skins
+constexpr std::uint32_t version = 4;  // 2: extra influences, morph targets and channels; 3: skins; 4: embedded images
 
 class Writer {
  public:
@@ -128,6 +128,7 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
     w.text(m.name);
     w.raw(m.ambient), w.raw(m.diffuse), w.raw(m.specular), w.raw(m.opacity), w.raw(m.shininess), w.raw(m.illum);
     w.text(m.diffuse_map);
+    w.array(m.diffuse_image ? *m.diffuse_image : std::vector<std::uint8_t>{});
   }
   w.count(mesh.material_libraries.size());
   for (const std::string& library : mesh.material_libraries) w.text(library);
@@ -211,6 +212,8 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     m.ambient = r.raw<glm::vec3>(), m.diffuse = r.raw<glm::vec3>(), m.specular = r.raw<glm::vec3>();
     m.opacity = r.raw<float>(), m.shininess = r.raw<float>(), m.illum = r.raw<int>();
     m.diffuse_map = r.text();
+    std::vector<std::uint8_t> image = r.array<std::uint8_t>();
+    if (!image.empty()) m.diffuse_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(image));
   }
   mesh.material_libraries.resize(r.count(8));
   for (std::string& library : mesh.material_libraries) library = r.text();

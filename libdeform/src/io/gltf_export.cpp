@@ -323,9 +323,23 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   Json images = Json::array(), textures = Json::array();
   {
     std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
+    std::vector<std::pair<const std::vector<std::uint8_t>*, int>> kept;  // embedded image -> texture index
     for (const Material& m : mesh.materials) {
       int texture = -1;
-      if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
+      if (m.diffuse_image && mesh.vertex_uvs.size() == vertices) {  // the model's own embedded image: kept as is
+        for (const auto& [image, index] : kept)
+          if (image == m.diffuse_image.get()) texture = index;
+        const std::vector<std::uint8_t>& bytes = *m.diffuse_image;
+        const std::string mime = image_type(bytes);
+        if (texture < 0 && mime.empty()) {
+          written.warnings.push_back("material '" + m.name + "': embedded texture not kept (not a PNG or JPEG image)");
+        } else if (texture < 0) {
+          images.push_back({{"bufferView", b.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
+          textures.push_back({{"source", images.size() - 1}});
+          texture = static_cast<int>(textures.size() - 1);
+          kept.emplace_back(m.diffuse_image.get(), texture);
+        }
+      } else if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
         for (const auto& [file, index] : embedded)
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {

@@ -9,6 +9,7 @@
 //    `vertex_point[r]` maps render vertex r back to its point, so per-point results reach the GPU by a gather and
 //    every deformation can be reported per original vertex.
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -29,6 +30,10 @@ struct Material {
   float shininess = 0.0f;     // Ns
   int illum = 2;              // illum
   std::string diffuse_map;    // map_Kd, resolved relative to the MTL file's folder; empty if none
+  // An embedded texture's encoded image (PNG or JPEG bytes, as a glTF/GLB file holds it), when the texture lives
+  // inside the model file rather than beside it; diffuse_map is then empty. Shared, so that copies of a Model (one
+  // per Character instance) do not copy the image. Null if none.
+  std::shared_ptr<const std::vector<std::uint8_t>> diffuse_image;
 };
 
 // A run of triangles drawn with one material.
