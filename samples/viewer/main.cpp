@@ -786,14 +786,25 @@ class Viewer {
     return box;
   }
 
-  // The camera that frames what plays (framed_bounds, where the character node puts it) from a little above and to
-  // the side of its broad side, across the box's longer horizontal axis: the front of a standing figure (its
-  // shoulders are broader than it is deep, whether it faces +Z as glTF's do or +X as IQM's do), the flank of a
-  // four-legged one or of a bind pose lying down. Every corner of the box within `fill` of the view's height and
-  // width, the box centred on the screen (right of the panel). Corners nearer the eye look bigger, so the distance is
-  // the largest any corner needs (|offset across the view| / (tan(fov/2) · fill) in front of it) and the centre is
-  // found in a few passes. `C` comes back here; choosing another clip in the panel refits while the camera has not
-  // been moved.
+  // The side the fitted camera looks from (its yaw): across the character's broad side, a little to its right. A
+  // box longer than tall (a four-legged character, a bind pose lying down) is seen across its length. A standing
+  // figure is seen across its bind pose's broader horizontal axis, its shoulders (or arms) broader than it is deep
+  // whether it faces +Z as glTF's do or +X as IQM's do; the clip's box would mislead here, as a walk's stride is
+  // deeper than its shoulders are broad. A bind pose lying down (CesiumMan's) that its clip stands up lies along the
+  // axis that stands up: across the other one.
+  float fitted_yaw(const deform::Bounds& framed) const {
+    const glm::vec3 f = framed.max - framed.min, b = rest_bounds_.max - rest_bounds_.min;
+    const float across_x = 0.35f, across_z = glm::half_pi<float>() - 0.35f;  // from +Z (a little +X), from +X
+    if (f.y < std::max(f.x, f.z)) return f.x >= f.z ? across_x : across_z;
+    if (b.y >= 0.5f * std::max(b.x, b.z)) return b.x >= b.z ? across_x : across_z;
+    return b.x >= b.z ? across_z : across_x;
+  }
+
+  // The camera that frames what plays (framed_bounds, where the character node puts it) from a little above, on the
+  // side fitted_yaw chooses: every corner of the box within `fill` of the view's height and width, the box centred
+  // on the screen (right of the panel). Corners nearer the eye look bigger, so the distance is the largest any corner
+  // needs (|offset across the view| / (tan(fov/2) · fill) in front of it) and the centre is found in a few passes.
+  // `C` comes back here; choosing another clip in the panel refits while the camera has not been moved.
   void fit_camera() {
     const deform::Bounds local = framed_bounds();
     const glm::mat4 to_world = scene_.node(character_node_).world;
@@ -804,8 +815,7 @@ class Viewer {
       corners[i] = transform_point(to_world, c);
     }
     sample::OrbitCamera camera = camera_;  // its field of view and floor
-    const glm::vec3 extent = local.max - local.min;
-    camera.yaw = extent.x >= extent.z ? 0.35f : glm::half_pi<float>() - 0.35f;
+    camera.yaw = fitted_yaw(local);
     camera.pitch = 0.12f;
     const glm::vec3 back(std::cos(camera.pitch) * std::sin(camera.yaw), std::sin(camera.pitch),
                          std::cos(camera.pitch) * std::cos(camera.yaw));  // target to eye
