@@ -4,7 +4,7 @@
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
 //                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
-//                 [--up y|z]
+//                 [--up y|z] [--lattices none|active|all]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
