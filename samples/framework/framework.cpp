@@ -189,7 +189,8 @@ glm::vec3 OrbitCamera::eye() const {
 glm::mat4 OrbitCamera::view() const { return glm::lookAt(eye(), target, glm::vec3(0, 1, 0)); }
 
 glm::mat4 OrbitCamera::projection(float aspect) const {
-  return glm::perspective(fov_y, aspect, 0.01f * distance, 100.0f * distance);
+  const glm::mat4 shift = glm::translate(glm::mat4(1.0f), glm::vec3(shift_x, 0.0f, 0.0f));  // x += shift_x · w
+  return shift * glm::perspective(fov_y, aspect, 0.01f * distance, 100.0f * distance);
 }
 
 // ---------------------------------------------------------------------------------------------------------------

@@ -82,6 +82,9 @@ struct OrbitCamera {
   float yaw = 0.5f;     // radians about +Y
   float pitch = 0.15f;  // radians above the horizon
   float fov_y = 0.8f;   // radians
+  // Lens shift: the view's centre drawn this far right of the window's, in half window widths (NDC), so that a
+  // panel over the left of the window leaves the target in the middle of what remains. 0: centred.
+  float shift_x = 0.0f;
   // The height (world y) the eye and target stay above: handle() lowers the pitch no further than keeps the eye
   // there (a scene with a floor is never seen from under it) and pans the target no lower. -inf: no floor.
   float floor = -std::numeric_limits<float>::infinity();

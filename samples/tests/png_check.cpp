@@ -4,11 +4,20 @@
 //     implausible (outside 1%..70%), or the frame after the reach equals the frame before it (viewer smoke test).
 //   png_check --same-picture A.png B.png: exits 1 when more than 0.1% of the pixels differ by more than 24 (sum over
 //     RGB) or A is blank (the CPU and GPU lattice screenshots of the viewer and the ffd_lattice sample).
+//   png_check --bbox IMAGE [--height MIN,MAX] [--width MIN,MAX] [--floor-row ROW]: the silhouette's box (the pixels
+//     that differ from the top-left corner's colour, the background of a bare frame): prints its rows and columns and
+//     the share of the image's height and width it spans; exits 1 when the image is blank, the silhouette touches the
+//     top or bottom border (cut off), its height is outside [MIN, MAX] of the image's (default 0.35, 0.95), its width
+//     outside --width's (default: not checked; a figure lying down fills the width, not the height), or, with ROW (the
+//     viewer's "floor_row": the floor's row under the character's lowest point), its lowest row is more than 3% of
+//     the image's height away from it (the character floats above the floor or sinks into it).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include <stb/stb_image.h>
 
@@ -57,12 +66,57 @@ int same_picture(const char* path_a, const char* path_b) {
   return ok ? 0 : 1;
 }
 
+const char* usage =
+    "usage: png_check BEFORE.png AFTER.png | png_check --same-picture A.png B.png\n"
+    "       png_check --bbox IMAGE.png [--height MIN,MAX] [--width MIN,MAX] [--floor-row ROW]\n";
+
+int bbox(const std::vector<std::string>& args) {
+  double min_height = 0.35, max_height = 0.95, min_width = 0.0, max_width = 1.0, floor_row = -1.0;
+  for (std::size_t i = 1; i < args.size(); i += 2) {
+    char tail = 0;
+    const char* value = i + 1 < args.size() ? args[i + 1].c_str() : "";
+    if (args[i] == "--height" && std::sscanf(value, "%lf,%lf%c", &min_height, &max_height, &tail) == 2) continue;
+    if (args[i] == "--width" && std::sscanf(value, "%lf,%lf%c", &min_width, &max_width, &tail) == 2) continue;
+    if (args[i] == "--floor-row" && std::sscanf(value, "%lf%c", &floor_row, &tail) == 1) continue;
+    std::fprintf(stderr, "png_check: --bbox: bad option '%s %s'\n%s", args[i].c_str(), value, usage);
+    return 2;
+  }
+  const Image im = load(args[0].c_str());
+  int top = im.h, bottom = -1, left = im.w, right = -1;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x)
+      if (differs(im.rgb + 3 * (long(y) * im.w + x), im.rgb)) {
+        top = std::min(top, y), bottom = std::max(bottom, y);
+        left = std::min(left, x), right = std::max(right, x);
+      }
+  if (bottom < 0) {
+    std::printf("FAIL %s: blank\n", args[0].c_str());
+    return 1;
+  }
+  const double height = double(bottom - top + 1) / im.h, width = double(right - left + 1) / im.w;
+  std::printf("%s: rows %d..%d (%.1f%% of the height), columns %d..%d (%.1f%% of the width)", args[0].c_str(), top,
+              bottom, 100.0 * height, left, right, 100.0 * width);
+  if (floor_row >= 0.0) std::printf(", floor at row %.1f", floor_row);
+  std::printf("\n");
+  bool ok = true;
+  if (top == 0 || bottom == im.h - 1) ok = false, std::printf("FAIL: cut off at the %s\n", top == 0 ? "top" : "bottom");
+  if (height < min_height || height > max_height)
+    ok = false, std::printf("FAIL: the height is outside %.0f%%..%.0f%%\n", 100.0 * min_height, 100.0 * max_height);
+  if (width < min_width || width > max_width)
+    ok = false, std::printf("FAIL: the width is outside %.0f%%..%.0f%%\n", 100.0 * min_width, 100.0 * max_width);
+  if (floor_row >= 0.0 && std::abs(bottom - floor_row) > 0.03 * im.h)
+    ok = false, std::printf("FAIL: the lowest row is %.1f rows %s the floor's\n", std::abs(bottom - floor_row),
+                            bottom < floor_row ? "above" : "below");
+  return ok ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc == 4 && std::string(argv[1]) == "--same-picture") return same_picture(argv[2], argv[3]);
+  if (argc >= 3 && std::string(argv[1]) == "--bbox") return bbox(std::vector<std::string>(argv + 2, argv + argc));
   if (argc != 3) {
-    std::fprintf(stderr, "usage: png_check BEFORE.png AFTER.png | png_check --same-picture A.png B.png\n");
+    std::fprintf(stderr, "%s", usage);
     return 2;
   }
   const Image before = load(argv[1]), after = load(argv[2]);

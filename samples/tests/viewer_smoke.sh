@@ -5,7 +5,9 @@
 # with the run (--blend run); one with a bone's weight map; a reach with a pole and one with swing-twist limits; the
 # frame after the reach again with the deformation on the GPU (--gpu), LBS and DQS, which must be the same pictures
 # (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
-# (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held.
+# (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held; the
+# lattice overlay drawing the reaching limb's lattices only, unless all are asked for; imported characters framed by
+# the camera and standing on the floor, with and without their clip.
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -14,8 +16,17 @@ run() { xvfb-run -a -s "-screen 0 640x480x24" "$viewer" --width 640 --height 480
 run --bare --screenshot "$work/before.png" --frames 20
 run --bare --screenshot "$work/after.png" --frames 40 --reach 1.3,1.6,0.4 --at 2
 "$check" "$work/before.png" "$work/after.png"
-run --screenshot "$work/full.png" --frames 30 --reach 1.3,1.6,0.4 --at 2 --release-at 20 >/dev/null
+full=$(run --screenshot "$work/full.png" --frames 30 --reach 1.3,1.6,0.4 --at 2 --release-at 20)
 test -s "$work/full.png"
+# Of the built-in character's 12 lattices the overlay draws the limb's that reached (upper arm, forearm, hand), not a
+# cage over the whole body; all 12 on request (--lattices all, the panel's "all lattices", the L key).
+all=$(run --screenshot "$work/all_lattices.png" --frames 1 --lattices all)
+python3 - "$full" "$all" <<'PY'
+import json, sys
+full, every = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+assert full["lattices_shown"] == 3, full
+assert every["lattices_shown"] == 12, every
+PY
 # A pole in front of the body lifts the elbow of a reach within the arm's length: another picture than without it;
 # the same with swing-twist limits, their cones drawn.
 run --bare --screenshot "$work/near.png" --frames 40 --reach 0.3,1.15,0.3 --at 2
@@ -105,5 +116,40 @@ PY
     set -- $pair
     if cmp -s "$work/$1" "$work/$2"; then echo "morph targets: $1 and $2 are the same picture"; exit 1; fi
   done
+fi
+# Imported characters framed and on the floor: the camera fits the bind pose's box, or with a clip the box of the
+# clip's sampled poses (a character whose clip stands it elsewhere than its bind pose stays in frame). In a bare
+# 320x240 frame the silhouette spans 35-95% of the height, is cut at neither the top nor the bottom, and its lowest
+# pixels are at the floor's row under them (the viewer's "floor_row"). mrfixit is Z-up, the others Y-up; each without
+# and with its first clip (rigid, --inertia 0), at a moment a foot is down (the floor is the lowest the clip reaches).
+small() { xvfb-run -a -s "-screen 0 320x240x24" "$viewer" --width 320 --height 240 --bare "$@"; }
+models=/usr/share/assimp/models
+if ! grep -q "no importer" <<<"${declared:-}"; then
+  for entry in IQM/mrfixit.iqm:30 X/BCN_Epileptic.X:15 X/Testwuson.X:10 glTF2/simple_skin/simple_skin.gltf:30; do
+    file=$models/${entry%:*} frames=${entry##*:}
+    if [ ! -f "$file" ]; then echo "framing: $file missing, skipped"; continue; fi
+    name=$(basename "${file%.*}")
+    for clip in "" "#0"; do
+      shot=$work/framed_$name${clip:+_clip}.png
+      summary=$(small "$file" --frames "$frames" ${clip:+--clip "$clip" --inertia 0} --screenshot "$shot" 2>/dev/null)
+      row=$(python3 -c 'import json, sys; print(json.loads(sys.argv[1])["floor_row"])' "$summary")
+      "$check" --bbox "$shot" --floor-row "$row"
+    done
+  done
+fi
+# A figure whose bind pose lies on its back and whose clip stands it up, as the Khronos CesiumMan does (generated:
+# lying_figure.py): lying, it fills the width; standing in its clip, the camera fitted to the bind pose would cut
+# its top off, the one fitted to the clip frames it whole, on the floor.
+python3 "$(dirname "$0")/lying_figure.py" "$work/lying_figure.gltf"
+lying=$(small "$work/lying_figure.gltf" --frames 2 --screenshot "$work/framed_lying.png" 2>&1 || true)
+if grep -q "no importer" <<<"$lying"; then
+  echo "lying figure skipped: no importer in this build"
+else
+  row=$(python3 -c 'import json, sys; print(json.loads(sys.argv[1].splitlines()[-1])["floor_row"])' "$lying")
+  "$check" --bbox "$work/framed_lying.png" --height 0.1,0.95 --width 0.35,0.95 --floor-row "$row"
+  summary=$(small "$work/lying_figure.gltf" --frames 30 --clip stand --inertia 0 \
+            --screenshot "$work/framed_standing.png")
+  row=$(python3 -c 'import json, sys; print(json.loads(sys.argv[1])["floor_row"])' "$summary")
+  "$check" --bbox "$work/framed_standing.png" --floor-row "$row"
 fi
 echo "viewer smoke test passed"

@@ -4,7 +4,7 @@
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
 //                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
-//                 [--up y|z]
+//                 [--up y|z] [--lattices none|active|all]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
@@ -21,6 +21,10 @@
 // (Character::deform_on_cpu = false); deform::GpuSkinning skins it into the vertex buffer from the palette and
 // deform::GpuLatticeFields::apply_into adds the lattices' carried points and fields there. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
+//
+// Framing: the camera fits the box of what plays (the bind pose, or the poses of the playing clip sampled when the
+// model loads), so a clip that stands a character elsewhere than its bind pose keeps it in frame; C fits it again.
+// The lattice overlay draws the active limb's lattices (reaching, or under the mouse), all of them on request (L).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -71,7 +75,7 @@ const char* usage =
     "                     [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,NAME:W...]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
-    "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z]\n"
+    "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
@@ -86,10 +90,17 @@ const char* usage =
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
     "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
     "skinning. --up z: the model's up axis is +Z (default: +Y, or what an imported file's metadata says).\n"
+    "--lattices: draw no lattice, the active limb's (default: the one reaching, else the one a click would move),\n"
+    "or all of them (L cycles the three).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
     "elbow's hint); right drag orbits; middle drag or\n"
     "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
-    "L the lattices, G the GPU deformation, R resets, C resets the camera, Esc quits.\n";
+    "L cycles the lattices shown (active limb, all, none), G the GPU deformation, R resets, C frames the\n"
+    "character again (the camera fitted to the playing clip), Esc quits.\n";
+
+// Which lattices the overlay draws: none, the active limb's (the one reaching, else the one a click at the mouse
+// would move, else the one that reached last), or all (with a dozen lattices they cage the whole body).
+enum class LatticeDisplay { none, active, all };
 
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
@@ -103,6 +114,7 @@ struct Options {
   bool dqs = false;   // start with dual quaternion skinning
   bool swing_twist = false;  // reach with swing-twist joint limits
   char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
+  char lattices = 'a';  // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
   std::optional<glm::vec3> reach, pole;
 };
 
@@ -189,6 +201,12 @@ Options parse_options(int argc, char** argv) {
       if (up != "y" && up != "z") fail("--up: '" + up + "' is not y or z");
       o.up = up[0];
     }
+    else if (a == "--lattices") {
+      const std::string shown = next();
+      if (shown != "none" && shown != "active" && shown != "all")
+        fail("--lattices: '" + shown + "' is not none, active or all");
+      o.lattices = shown == "none" ? 'n' : shown == "all" ? 'e' : 'a';
+    }
     else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
     else if (a == "--height") o.height = std::max(64, parse_int(next(), "--height"));
     else if (a.rfind("--", 0) == 0) fail("unknown option " + a + "\n" + usage);
@@ -260,6 +278,8 @@ class Viewer {
            : loaded.builtin     ? deform::builtin_full_rig(loaded.model)
                                 : model_loading::starting_rig(loaded);
     if (options.pole) pole_ = *options.pole, use_pole_ = true;
+    lattice_display_ = options.lattices == 'n' ? LatticeDisplay::none
+                       : options.lattices == 'e' ? LatticeDisplay::all : LatticeDisplay::active;
     if (options.swing_twist) reach_limits_ = deform::Character::JointLimits::swing_twist;
     rebuild_character();
     if (!options.weight_map.empty()) {
@@ -301,26 +321,26 @@ class Viewer {
     const float height = std::max(1e-3f, b.max.y - b.min.y);
     const float extent = std::max({b.max.x - b.min.x, height, b.max.z - b.min.z});
     scene_.node(floor_node_).translation = glm::vec3(0.5f * (b.min.x + b.max.x), b.min.y, 0.5f * (b.min.z + b.max.z));
-    // The floor under each clip is the lowest any point reaches while it plays (sampled once here), not the bind
-    // pose's lowest point: an imported file's bind pose can stand elsewhere than its animated stance (mrfixit.iqm's
-    // idle crouches below its bind pose's feet), and the character must stand on the floor, never sink into it.
-    rest_floor_ = b.min.y;
+    // What each clip shows, sampled once here: the box around its skinned poses (upright), which the camera frames,
+    // and the lowest any point reaches, where the floor goes, not the bind pose's lowest point: an imported file's
+    // bind pose can stand elsewhere than its animated stance (mrfixit.iqm's idle crouches below its bind pose's
+    // feet; a glTF character can lie on its back until its clip stands it up), and the character must stand on the
+    // floor, never sink into it, and stay in frame.
+    rest_bounds_ = b;
     floor_height_ = 0.01f * height;
-    for (const deform::Animation& clip : clips_)
-      clip_floors_.push_back(model_loading::lowest_height(base_model_, clip, up_));
+    for (const deform::Animation& clip : clips_) {
+      clip_bounds_.push_back(model_loading::posed_bounds(base_model_, clip, scene_.node(model_node_).rotation));
+      clip_floors_.push_back(clip_bounds_.back().min.y);
+    }
     floor_mesh_ = sample::make_floor(extent * 4.0f, 16);
     ball_mesh_ = sample::make_sphere(extent * 0.025f, 12, 24, glm::vec3(1.0f, 0.55f, 0.1f));
     for (const std::string& path : options.props) {
       props_.push_back(std::make_unique<deform::Mesh>(deform::read_obj(path)));
       prop_nodes_.push_back(scene_.add(path, world_node_, glm::vec3(extent * 0.6f * float(props_.size()), b.min.y, 0.0f)));
     }
-    camera_.target = 0.5f * (b.min + b.max);
-    camera_.distance = extent * 1.6f;
-    camera_.yaw = 0.35f;
-    camera_.pitch = 0.12f;
-    camera_.floor = b.min.y + 0.01f * height;  // the eye stays just above the floor
     place_floor();  // --clip and --blend chose clips before the floor existed
-    start_camera_ = camera_;
+    scene_.update();
+    fit_camera();
     pick_radius_ = extent;
 
     floor_renderer_.create(floor_mesh_);
@@ -350,6 +370,28 @@ class Viewer {
     return lowest;
   }
   glm::vec3 up() const { return up_; }
+  // The lattices drawn in the last frame (the overlay; 0 with --bare).
+  int lattices_shown() const {
+    return options_.bare || lattice_display_ == LatticeDisplay::none
+               ? 0 : int(std::count(lattice_shown_.begin(), lattice_shown_.end(), char(1)));
+  }
+  // The image row (from the top) of the floor under the point drawn lowest on the screen, through the camera: the
+  // row of the silhouette's lowest pixels when the character stands on the floor, below it when the character
+  // floats, above it when it sinks (headless pixel tests). Projects every point: for the headless summary only.
+  float floor_row() const {
+    const glm::ivec2 size = window_.framebuffer_size();
+    const glm::mat4 view = camera_.view(), projection = camera_.projection(window_.aspect());
+    const glm::vec4 viewport(0.0f, 0.0f, float(size.x), float(size.y));
+    glm::vec3 lowest(0.0f);
+    float lowest_window_y = std::numeric_limits<float>::infinity();
+    for (const glm::vec3& p : character_->positions()) {
+      const glm::vec3 world = transform_point(character_world(), p);
+      const float window_y = glm::project(world, view, projection, viewport).y;
+      if (window_y < lowest_window_y) lowest_window_y = window_y, lowest = world;
+    }
+    lowest.y = floor_y();
+    return float(size.y) - glm::project(lowest, view, projection, viewport).y;
+  }
   // The morph weights as applied now, comma-separated (the headless summary).
   std::string morph_weights_text() const {
     std::string text;
@@ -409,11 +451,19 @@ class Viewer {
     return effector_ >= 0 ? transform_point(character_world(), character_->bone_position(effector_)) : glm::vec3(0.0f);
   }
 
+  // The panel: a few lines of status, then collapsible sections, the most used open (display, clip, elastic
+  // lattices). It sizes itself to what is open, never taller than the window (then it scrolls), so that it fits an
+  // 800-pixel-high window with its default sections open.
   void panel(float frame_ms) {
     if (options_.bare) return;
+    const glm::ivec2 size = window_.framebuffer_size();
     ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(330, 0), ImGuiCond_FirstUseEver);
-    ImGui::Begin("libdeform");
+    ImGui::SetNextWindowSizeConstraints(ImVec2(330, 0), ImVec2(330, std::max(100.0f, float(size.y) - 20.0f)));
+    ImGui::Begin("libdeform", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    // What the panel hides on the left, for the next fit of the camera (none when collapsed or moved elsewhere).
+    const ImVec2 panel_at = ImGui::GetWindowPos(), panel_size = ImGui::GetWindowSize();
+    panel_right_ = !ImGui::IsWindowCollapsed() && panel_at.x < 0.3f * float(size.x) ? panel_at.x + panel_size.x + 10.0f
+                                                                                     : 0.0f;
     ImGui::Text("%s: %zu points, %zu bones", base_model_.name.c_str(), base_model_.mesh.point_count(),
                 base_model_.skeleton.bone_count());
     ImGui::Text("frame %.2f ms, deformation %.3f ms", frame_ms, deform_ms_);
@@ -421,76 +471,25 @@ class Viewer {
     if (Clock::now() - long_frame_at_ < std::chrono::seconds(2))
       ImGui::TextColored(ImVec4(1.0f, 0.6f, 0.2f, 1.0f), "frame took %.0f ms: simulated %.0f ms", long_frame_ms_,
                          long_frame_simulated_ms_);
-    ImGui::TextWrapped("Left click/drag: reach. Right drag: orbit. Wheel: zoom.");
-    ImGui::Separator();
-    int method = character_->skinning == deform::SkinningMethod::dqs;
-    ImGui::Text("Skinning");
-    ImGui::SameLine();
-    ImGui::RadioButton("LBS", &method, 0);
-    ImGui::SameLine();
-    ImGui::RadioButton("DQS", &method, 1);
-    character_->skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
-    ImGui::Checkbox("escape IK stalls", &character_->ik.escape_stalls);
-    ImGui::SliderInt("IK iterations", &character_->ik.max_iterations, 1, 256);
-
-    ImGui::Separator();
-    ImGui::Text("Elastic lattices (%zu)", character_->deformers().lattice_count());
-    bool changed = ImGui::SliderFloat("stiffness k", &elastic_.oscillator.stiffness, 5.0f, 1000.0f, "%.0f",
-                                      ImGuiSliderFlags_Logarithmic);
-    changed |= ImGui::SliderFloat("damping ratio", &elastic_.oscillator.damping_ratio, 0.0f, 2.0f);
-    int integrator = elastic_.integrator == deform::Integrator::verlet;
-    changed |= ImGui::RadioButton("exact (frame-rate independent)", &integrator, 0);
-    changed |= ImGui::RadioButton("Verlet, constant Kd (the seed's)", &integrator, 1);
-    elastic_.integrator = integrator ? deform::Integrator::verlet : deform::Integrator::exact;
-    if (changed) apply_elastic();
-    if (ImGui::SliderInt("lattice degree", &degree_, 1, 6)) rebuild_character();
-    bool gpu = gpu_;
-    ImGui::BeginDisabled(!gpu_available_);
-    if (ImGui::Checkbox("GPU deformation", &gpu)) set_gpu(gpu);
-    ImGui::EndDisabled();
-    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
-      ImGui::SetTooltip("%s", gpu_available_ ? "skinning and Bezier fields in compute shaders, into the vertex "
-                                               "buffer; the CPU only poses (deformation time: the CPU's part)"
-                                             : gpu_missing().c_str());
-    }
+    ImGui::TextDisabled("click: reach, right drag: orbit, C: camera");
     if (reaching_ || character_->stretch() != 0.0f)
       ImGui::Text("stretch %.3f, residual %.3f", character_->stretch(), last_reach_.residual);
-    // The rubber's shape: a limb never shorter than `min length` of its rest, its cross-section thinning as it
-    // stretches (volume 1: the volume kept) and bulging as it shortens.
-    bool shaped = ImGui::SliderFloat("volume", &shape_.volume, 0.0f, 1.0f);
-    shaped |= ImGui::SliderFloat("min length", &shape_.min_length_fraction, 0.0f, 1.0f);
-    if (shaped) apply_shape();
-    if (ImGui::SliderFloat("max stretch", &max_stretch_, 0.0f, 10.0f)) apply_reach_settings();
 
-    ImGui::Separator();
-    ImGui::Text("Reach");
-    int solver = reach_solver_ == deform::Character::ReachSolver::two_bone;
-    bool reach_changed = ImGui::RadioButton("CCD chain", &solver, 0);
-    ImGui::SameLine();
-    reach_changed |= ImGui::RadioButton("two-bone limb", &solver, 1);
-    reach_solver_ = solver ? deform::Character::ReachSolver::two_bone : deform::Character::ReachSolver::ccd;
-    ImGui::BeginDisabled(!solver);
-    reach_changed |= ImGui::SliderFloat("soften", &soften_, 0.0f, 1.0f);
-    ImGui::EndDisabled();
-    reach_changed |= ImGui::Checkbox("pole", &use_pole_);
-    ImGui::SameLine();
-    ImGui::TextDisabled("(shift+click places it)");
-    reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
-    bool swing_twist = character_->reach_limits == deform::Character::JointLimits::swing_twist;
-    if (ImGui::Checkbox("swing-twist limits", &swing_twist)) {
-      reach_limits_ = swing_twist ? deform::Character::JointLimits::swing_twist : deform::Character::JointLimits::euler;
-      reach_changed = true;
-    }
-    if (ImGui::IsItemHovered())
-      ImGui::SetTooltip("each joint of the reach chain limited by a twist range and a swing cone (drawn in cyan)\n"
-                        "made from its Euler limits, instead of the Euler box");
-    if (reach_changed) apply_reach_settings();
-
-    ImGui::Separator();
-    ImGui::Checkbox("skeleton", &show_skeleton_);
-    ImGui::SameLine();
-    ImGui::Checkbox("lattices", &show_lattices_);
-    {  // the weight map: one bone's skin weight at every point, blue (low) to red (1); points without it undrawn
+    if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+      ImGui::Checkbox("skeleton", &show_skeleton_);
+      ImGui::SameLine();
+      // The lattices of the limb in use only (reaching, else under the mouse), or every one (L cycles the three).
+      bool shown = lattice_display_ != LatticeDisplay::none, all = lattice_display_ == LatticeDisplay::all;
+      bool display_changed = ImGui::Checkbox("lattices", &shown);
+      ImGui::SameLine();
+      ImGui::BeginDisabled(!shown);
+      display_changed |= ImGui::Checkbox("all lattices", &all);
+      ImGui::EndDisabled();
+      if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+        ImGui::SetTooltip("every lattice; else only the limb that reaches, or would reach from under the mouse (L)");
+      if (display_changed)
+        lattice_display_ = !shown ? LatticeDisplay::none : all ? LatticeDisplay::all : LatticeDisplay::active;
+      // The weight map: one bone's skin weight at every point, blue (low) to red (1); points without it undrawn.
       const deform::Skeleton& sk = character_->skeleton();
       std::vector<std::string> keys{"(none)"};
       for (std::size_t b = 0; b < sk.bone_count(); ++b) keys.push_back(sk.key(std::int32_t(b)));
@@ -499,8 +498,8 @@ class Viewer {
       int selected = weight_bone_ + 1;
       if (ImGui::Combo("weights of", &selected, names.data(), int(names.size()))) weight_bone_ = selected - 1;
     }
-    if (!clips_.empty()) {
-      ImGui::Separator();
+
+    if (!clips_.empty() && ImGui::CollapsingHeader("Clip", ImGuiTreeNodeFlags_DefaultOpen)) {
       int selected = clip_ + 1;
       if (ImGui::Combo("clip", &selected, clip_names_.data(), int(clip_names_.size()))) select_clip(selected - 1);
       ImGui::BeginDisabled(clip_ < 0);
@@ -524,34 +523,103 @@ class Viewer {
       if (motion) apply_motion();
       ImGui::EndDisabled();
     }
-    if (character_->morph_target_count() > 0) {  // the morph targets' weights: the clip's, unless held here
-      ImGui::Separator();
-      ImGui::Text("Morph targets (%zu)", character_->morph_target_count());
+
+    char title[64];
+    std::snprintf(title, sizeof title, "Elastic lattices (%zu)###lattices", character_->deformers().lattice_count());
+    if (ImGui::CollapsingHeader(title, ImGuiTreeNodeFlags_DefaultOpen)) {
+      bool changed = ImGui::SliderFloat("stiffness k", &elastic_.oscillator.stiffness, 5.0f, 1000.0f, "%.0f",
+                                        ImGuiSliderFlags_Logarithmic);
+      changed |= ImGui::SliderFloat("damping ratio", &elastic_.oscillator.damping_ratio, 0.0f, 2.0f);
+      int integrator = elastic_.integrator == deform::Integrator::verlet;
+      changed |= ImGui::RadioButton("exact", &integrator, 0);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("frame-rate independent");
       ImGui::SameLine();
-      if (ImGui::SmallButton("follow the clip")) std::fill(morph_held_.begin(), morph_held_.end(), char(0));
-      if (ImGui::IsItemHovered()) ImGui::SetTooltip("every weight from the playing clip again (else its default)");
-      const std::vector<deform::MorphTarget>& targets = character_->model().morph_targets;
-      for (std::size_t k = 0; k < targets.size(); ++k) {
-        ImGui::PushID(int(k));
-        bool held = morph_held_[k] != 0;
-        float weight = character_->morph_weights()[k];
-        if (ImGui::Checkbox("##held", &held)) morph_held_[k] = held, morph_hold_[k] = weight;
-        if (ImGui::IsItemHovered()) ImGui::SetTooltip("held: the slider's weight; else the clip's (or the default)");
-        ImGui::SameLine();
-        const std::string label = targets[k].name.empty() ? "target " + std::to_string(k) : targets[k].name;
-        if (ImGui::SliderFloat(label.c_str(), &weight, 0.0f, 1.0f, "%.2f")) {
-          morph_held_[k] = 1;
-          morph_hold_[k] = weight;
-          apply_morph_weights();
-        }
-        if (ImGui::IsItemHovered() && !targets[k].mesh.empty()) ImGui::SetTooltip("mesh %s", targets[k].mesh.c_str());
-        ImGui::PopID();
+      changed |= ImGui::RadioButton("Verlet, constant Kd", &integrator, 1);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("the seed's integrator");
+      elastic_.integrator = integrator ? deform::Integrator::verlet : deform::Integrator::exact;
+      if (changed) apply_elastic();
+      if (ImGui::SliderInt("lattice degree", &degree_, 1, 6)) rebuild_character();
+      // The rubber's shape: a limb never shorter than `min length` of its rest, its cross-section thinning as it
+      // stretches (volume 1: the volume kept) and bulging as it shortens.
+      bool shaped = ImGui::SliderFloat("volume", &shape_.volume, 0.0f, 1.0f);
+      shaped |= ImGui::SliderFloat("min length", &shape_.min_length_fraction, 0.0f, 1.0f);
+      if (shaped) apply_shape();
+      if (ImGui::SliderFloat("max stretch", &max_stretch_, 0.0f, 10.0f)) apply_reach_settings();
+    }
+
+    if (ImGui::CollapsingHeader("Skinning and GPU")) {
+      int method = character_->skinning == deform::SkinningMethod::dqs;
+      ImGui::RadioButton("LBS", &method, 0);
+      ImGui::SameLine();
+      ImGui::RadioButton("DQS", &method, 1);
+      character_->skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+      bool gpu = gpu_;
+      ImGui::BeginDisabled(!gpu_available_);
+      if (ImGui::Checkbox("GPU deformation", &gpu)) set_gpu(gpu);
+      ImGui::EndDisabled();
+      if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
+        ImGui::SetTooltip("%s", gpu_available_ ? "skinning and Bezier fields in compute shaders, into the vertex "
+                                                 "buffer; the CPU only poses (deformation time: the CPU's part)"
+                                               : gpu_missing().c_str());
       }
     }
+
+    if (ImGui::CollapsingHeader("Reach")) {
+      ImGui::Checkbox("escape IK stalls", &character_->ik.escape_stalls);
+      ImGui::SliderInt("IK iterations", &character_->ik.max_iterations, 1, 256);
+      int solver = reach_solver_ == deform::Character::ReachSolver::two_bone;
+      bool reach_changed = ImGui::RadioButton("CCD chain", &solver, 0);
+      ImGui::SameLine();
+      reach_changed |= ImGui::RadioButton("two-bone limb", &solver, 1);
+      reach_solver_ = solver ? deform::Character::ReachSolver::two_bone : deform::Character::ReachSolver::ccd;
+      ImGui::BeginDisabled(!solver);
+      reach_changed |= ImGui::SliderFloat("soften", &soften_, 0.0f, 1.0f);
+      ImGui::EndDisabled();
+      reach_changed |= ImGui::Checkbox("pole", &use_pole_);
+      ImGui::SameLine();
+      ImGui::TextDisabled("(shift+click places it)");
+      reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
+      bool swing_twist = character_->reach_limits == deform::Character::JointLimits::swing_twist;
+      if (ImGui::Checkbox("swing-twist limits", &swing_twist)) {
+        reach_limits_ = swing_twist ? deform::Character::JointLimits::swing_twist
+                                    : deform::Character::JointLimits::euler;
+        reach_changed = true;
+      }
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("each joint of the reach chain limited by a twist range and a swing cone (drawn in cyan)\n"
+                          "made from its Euler limits, instead of the Euler box");
+      if (reach_changed) apply_reach_settings();
+    }
+
+    if (character_->morph_target_count() > 0) {  // the morph targets' weights: the clip's, unless held here
+      // Open by default for a handful of targets (they are then what the model is about); a long list starts closed.
+      std::snprintf(title, sizeof title, "Morph targets (%zu)###morphs", character_->morph_target_count());
+      if (ImGui::CollapsingHeader(title, character_->morph_target_count() <= 8 ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+        if (ImGui::SmallButton("follow the clip")) std::fill(morph_held_.begin(), morph_held_.end(), char(0));
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("every weight from the playing clip again (else its default)");
+        const std::vector<deform::MorphTarget>& targets = character_->model().morph_targets;
+        for (std::size_t k = 0; k < targets.size(); ++k) {
+          ImGui::PushID(int(k));
+          bool held = morph_held_[k] != 0;
+          float weight = character_->morph_weights()[k];
+          if (ImGui::Checkbox("##held", &held)) morph_held_[k] = held, morph_hold_[k] = weight;
+          if (ImGui::IsItemHovered()) ImGui::SetTooltip("held: the slider's weight; else the clip's (or the default)");
+          ImGui::SameLine();
+          const std::string label = targets[k].name.empty() ? "target " + std::to_string(k) : targets[k].name;
+          if (ImGui::SliderFloat(label.c_str(), &weight, 0.0f, 1.0f, "%.2f")) {
+            morph_held_[k] = 1;
+            morph_hold_[k] = weight;
+            apply_morph_weights();
+          }
+          if (ImGui::IsItemHovered() && !targets[k].mesh.empty()) ImGui::SetTooltip("mesh %s", targets[k].mesh.c_str());
+          ImGui::PopID();
+        }
+      }
+    }
+
     deform::SpringChains& springs = character_->springs();
-    if (springs.chain_count() > 0) {  // the rig's spring chains, drawn in green with the skeleton
-      ImGui::Separator();
-      ImGui::Text("Spring chains (%zu)", springs.chain_count());
+    std::snprintf(title, sizeof title, "Spring chains (%zu)###springs", springs.chain_count());
+    if (springs.chain_count() > 0 && ImGui::CollapsingHeader(title)) {  // drawn in green with the skeleton
       for (std::size_t c = 0; c < springs.chain_count(); ++c) {
         // Tuned in the viewer's copy of the rig, so a rebuilt character keeps the settings; clamped, since
         // set_settings throws on a value out of range (a ctrl+click can type one).
@@ -560,7 +628,7 @@ class Viewer {
         ImGui::PushID(int(c));
         ImGui::TextDisabled("%s", spec.name.c_str());
         bool tuned = ImGui::SliderFloat("frequency", &spec.frequency, 0.1f, 10.0f, "%.2f Hz",
-                                          ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);
+                                        ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);
         tuned |= ImGui::SliderFloat("damping", &spec.damping_ratio, 0.0f, 2.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
         if (ImGui::SliderFloat("gravity", &gravity, 0.0f, 20.0f, "%.2f m/s2", ImGuiSliderFlags_AlwaysClamp)) {
           spec.gravity = -gravity * up_;  // pulls toward the model's down
@@ -570,9 +638,8 @@ class Viewer {
         ImGui::PopID();
       }
     }
-    ImGui::Separator();
-    ImGui::Text("Scene");
-    SceneEdit("character", character_node_);
+
+    if (ImGui::CollapsingHeader("Scene")) SceneEdit("character", character_node_);
     ImGui::End();
   }
 
@@ -679,7 +746,8 @@ class Viewer {
       renderer_->set_texture_rgb(0, size, size, pixels.data());
     }
     reaching_ = false;
-    effector_ = -1;
+    effector_ = hovered_effector_ = -1;
+    lattice_shown_.assign(character_->deformers().lattice_count(), 0);
     morph_held_.resize(character_->morph_target_count(), 0);  // kept over rebuilds: the panel's holds stay
     morph_hold_.resize(character_->morph_target_count(), 0.0f);
     morph_second_.resize(character_->morph_target_count(), 0.0f);
@@ -699,18 +767,113 @@ class Viewer {
   // called on every frame, as the panel can change the clips at any time. Before the scene exists it does nothing.
   void place_floor() {
     if (floor_node_ < 0) return;
-    float floor = clip_ < 0 ? rest_floor_ : clip_floors_[std::size_t(clip_)];
+    float floor = clip_ < 0 ? rest_bounds_.min.y : clip_floors_[std::size_t(clip_)];
     if (clip_ >= 0 && blend_clip_ >= 0 && blend_weight_ > 0.0f)
       floor = std::min(floor, clip_floors_[std::size_t(blend_clip_)]);
     scene_.node(floor_node_).translation.y = floor;
     camera_.floor = floor + floor_height_;
   }
 
+  // The box the camera frames (upright model space): the playing clip's sampled poses (with a second clip blended
+  // in, both clips'), else the bind pose.
+  deform::Bounds framed_bounds() const {
+    if (clip_ < 0) return rest_bounds_;
+    deform::Bounds box = clip_bounds_[std::size_t(clip_)];
+    if (blend_clip_ >= 0 && blend_weight_ > 0.0f) {
+      box.min = glm::min(box.min, clip_bounds_[std::size_t(blend_clip_)].min);
+      box.max = glm::max(box.max, clip_bounds_[std::size_t(blend_clip_)].max);
+    }
+    return box;
+  }
+
+  // The side the fitted camera looks from (its yaw): across the character's broad side, a little to its right. A
+  // box longer than tall (a four-legged character, a bind pose lying down) is seen across its length. A standing
+  // figure is seen across its bind pose's broader horizontal axis, its shoulders (or arms) broader than it is deep
+  // whether it faces +Z as glTF's do or +X as IQM's do; the clip's box would mislead here, as a walk's stride is
+  // deeper than its shoulders are broad. A bind pose lying down (CesiumMan's) that its clip stands up lies along the
+  // axis that stands up: across the other one.
+  float fitted_yaw(const deform::Bounds& framed) const {
+    const glm::vec3 f = framed.max - framed.min, b = rest_bounds_.max - rest_bounds_.min;
+    const float across_x = 0.35f, across_z = glm::half_pi<float>() - 0.35f;  // from +Z (a little +X), from +X
+    if (f.y < std::max(f.x, f.z)) return f.x >= f.z ? across_x : across_z;
+    if (b.y >= 0.5f * std::max(b.x, b.z)) return b.x >= b.z ? across_x : across_z;
+    return b.x >= b.z ? across_z : across_x;
+  }
+
+  // The camera that frames what plays (framed_bounds, where the character node puts it) from a little above, on the
+  // side fitted_yaw chooses: every corner of the box within `fill` of the view's height and width, the box centred
+  // on the screen (right of the panel). Corners nearer the eye look bigger, so the distance is the largest any corner
+  // needs (|offset across the view| / (tan(fov/2) · fill) in front of it) and the centre is found in a few passes.
+  // `C` comes back here; choosing another clip in the panel refits while the camera has not been moved.
+  void fit_camera() {
+    const deform::Bounds local = framed_bounds();
+    const glm::mat4 to_world = scene_.node(character_node_).world;
+    glm::vec3 corners[8];
+    for (int i = 0; i < 8; ++i) {
+      const glm::vec3 c((i & 1 ? local.max : local.min).x, (i & 2 ? local.max : local.min).y,
+                        (i & 4 ? local.max : local.min).z);
+      corners[i] = transform_point(to_world, c);
+    }
+    sample::OrbitCamera camera = camera_;  // its field of view and floor
+    camera.yaw = fitted_yaw(local);
+    camera.pitch = 0.12f;
+    const glm::vec3 back(std::cos(camera.pitch) * std::sin(camera.yaw), std::sin(camera.pitch),
+                         std::cos(camera.pitch) * std::cos(camera.yaw));  // target to eye
+    const glm::vec3 right = glm::normalize(glm::cross(-back, glm::vec3(0.0f, 1.0f, 0.0f)));
+    const glm::vec3 up = glm::cross(right, -back);
+    constexpr float fill = 0.8f;
+    // The panel over the left of the window (`hidden`, a share of its width): the box is made to fit the rest and
+    // is drawn right of the panel (a lens shift), centred in the window when it is clear of the panel there.
+    const float width = float(std::max(1, window_.framebuffer_size().x));
+    const float hidden = options_.bare ? 0.0f : std::min(panel_right_, 0.5f * width) / width;
+    const float tan_y = std::tan(0.5f * camera.fov_y), tan_x = tan_y * window_.aspect() * (1.0f - hidden);
+    glm::vec3 centre = 0.5f * (corners[0] + corners[7]);
+    float distance = 1e-3f;
+    for (int pass = 0; pass < 4; ++pass) {
+      distance = 1e-3f;
+      for (const glm::vec3& c : corners) {
+        const glm::vec3 o = c - centre;
+        const float toward = glm::dot(o, back);
+        distance = std::max({distance, toward + std::abs(glm::dot(o, up)) / (tan_y * fill),
+                             toward + std::abs(glm::dot(o, right)) / (tan_x * fill)});
+      }
+      // The corners' extent on the screen (tangents from the eye), and the centre moved to its middle.
+      glm::vec2 low(std::numeric_limits<float>::infinity()), high(-std::numeric_limits<float>::infinity());
+      for (const glm::vec3& c : corners) {
+        const glm::vec3 o = c - centre;
+        const glm::vec2 seen = glm::vec2(glm::dot(o, right), glm::dot(o, up)) / (distance - glm::dot(o, back));
+        low = glm::min(low, seen), high = glm::max(high, seen);
+      }
+      centre += (0.5f * (low.x + high.x) * right + 0.5f * (low.y + high.y) * up) * distance;
+    }
+    // The box's half width on the screen (NDC), then the shift that puts its left side a little right of the panel's
+    // edge (NDC -1 + 2 · hidden), when centred it would be under the panel. It still ends within the window's right
+    // edge: the box is at most `fill` of the free width.
+    float half_width = 0.0f;
+    for (const glm::vec3& c : corners) {
+      const glm::vec3 o = c - centre;
+      half_width = std::max(half_width, std::abs(glm::dot(o, right)) / (distance - glm::dot(o, back)));
+    }
+    half_width /= tan_y * window_.aspect();
+    camera.shift_x = hidden > 0.0f ? std::max(0.0f, -1.0f + 2.0f * hidden + 0.1f * (1.0f - hidden) + half_width) : 0.0f;
+    camera.target = centre;
+    camera.distance = distance;
+    camera_ = fitted_camera_ = camera;
+  }
+
+  bool camera_fitted() const {
+    return camera_.target == fitted_camera_.target && camera_.distance == fitted_camera_.distance &&
+           camera_.shift_x == fitted_camera_.shift_x &&
+           camera_.yaw == fitted_camera_.yaw && camera_.pitch == fitted_camera_.pitch;
+  }
+
   // Plays clip `clip` (-1: none, the bind pose) from its start.
   void select_clip(int clip) {
+    const bool refit = floor_node_ >= 0 && camera_fitted();  // before the scene exists, the constructor fits
     clip_ = clip;
     clip_time_ = 0.0f;
     place_floor();
+    if (refit) fit_camera();
     if (clip_ < 0) character_->set_pose(bind_pose_);
     cut_ = true;
     apply_motion();
@@ -832,10 +995,13 @@ class Viewer {
       character_->skinning = character_->skinning == deform::SkinningMethod::lbs ? deform::SkinningMethod::dqs
                                                                                   : deform::SkinningMethod::lbs;
     if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
-    if (key == GLFW_KEY_L) show_lattices_ = !show_lattices_;
+    if (key == GLFW_KEY_L)  // active limb, all, none, active again
+      lattice_display_ = lattice_display_ == LatticeDisplay::active ? LatticeDisplay::all
+                         : lattice_display_ == LatticeDisplay::all  ? LatticeDisplay::none
+                                                                    : LatticeDisplay::active;
     if (key == GLFW_KEY_R) rebuild_character();
     if (key == GLFW_KEY_G) set_gpu(!gpu_);
-    if (key == GLFW_KEY_C) camera_ = start_camera_;
+    if (key == GLFW_KEY_C) fit_camera();
   }
 
   // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
@@ -891,6 +1057,15 @@ class Viewer {
   }
 
   void handle_mouse(const sample::Input& in) {
+    // The limb a click would move, under a mouse that moves freely over the scene: its lattices are the active ones.
+    // Not in headless runs, whose pictures must not depend on where the display's cursor happens to be.
+    if (options_.screenshot.empty() && lattice_display_ == LatticeDisplay::active &&
+        in.mouse_delta != glm::vec2(0.0f) && !in.left_down &&
+        !in.right_down && !in.middle_down) {
+      const auto p = pick(in.mouse);
+      hovered_effector_ =
+          p ? deform::nearest_reach_effector(*character_, transform_point(glm::inverse(character_world()), *p)) : -1;
+    }
     if (in.left_pressed && in.shift) {  // the pole: the point clicked, in the model's space
       if (const auto p = pick(in.mouse)) {
         pole_ = transform_point(glm::inverse(character_world()), *p);
@@ -916,6 +1091,26 @@ class Viewer {
       }
     } else if (in.left_released) {
       release();
+    }
+  }
+
+  // The lattices to draw this frame (lattice_shown_): all, none, or the active limb's: the lattices on the effector
+  // and on the bones above it up to the first bone without one (hand, forearm and upper arm, not the spine's). The
+  // active limb is the one reaching, else the one a click at the mouse would move, else the one that reached last.
+  // No allocation.
+  void mark_shown_lattices() {
+    const deform::DeformerHierarchy& deformers = character_->deformers();
+    const bool all = lattice_display_ == LatticeDisplay::all;
+    std::fill(lattice_shown_.begin(), lattice_shown_.end(), char(all));
+    if (lattice_display_ != LatticeDisplay::active) return;
+    const std::int32_t limb = reaching_ ? effector_ : hovered_effector_ >= 0 ? hovered_effector_ : effector_;
+    bool found = false;
+    for (std::int32_t b = limb; b >= 0; b = character_->skeleton().bone(b).parent) {
+      bool here = false;
+      for (std::size_t l = 0; l < deformers.lattice_count(); ++l)
+        if (deformers.spec(l).bone == b) lattice_shown_[l] = 1, here = true;
+      if (found && !here) break;
+      found |= here;
     }
   }
 
@@ -952,8 +1147,10 @@ class Viewer {
     if (reaching_) ball_renderer_.draw(scene_.node(ball_node_).world, view, projection, eye);
 
     const glm::mat4 to_world = character_world();
-    if (show_lattices_) {
+    mark_shown_lattices();
+    if (lattice_display_ != LatticeDisplay::none) {
       for (std::size_t l = 0; l < character_->deformers().lattice_count(); ++l) {
+        if (!lattice_shown_[l]) continue;
         const auto cps = character_->control_points(l);
         const glm::ivec3 n = character_->deformers().spec(l).degree + 1;
         const float stretch = character_->deformers().stretch(l) / std::max(1e-6f, character_->deformers().length(l));
@@ -1081,10 +1278,14 @@ class Viewer {
   std::vector<std::unique_ptr<sample::MeshRenderer>> prop_renderers_;
   sample::OverlayRenderer overlay_;
   sample::OrbitCamera camera_;
-  sample::OrbitCamera start_camera_;  // C returns here
+  sample::OrbitCamera fitted_camera_;  // the camera fit_camera() chose last (C fits again)
+  float panel_right_ = 350.0f;          // pixels: the right edge of the panel over the window's left (0: none)
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
-  bool reaching_ = false, show_skeleton_ = true, show_lattices_ = true;
+  bool reaching_ = false, show_skeleton_ = true;
+  LatticeDisplay lattice_display_ = LatticeDisplay::active;
+  std::vector<char> lattice_shown_;     // per lattice: drawn this frame (lattice_display_; sized by rebuild)
+  std::int32_t hovered_effector_ = -1;  // the limb a click at the mouse would move (-1: none)
   int weight_bone_ = -1;  // the bone whose weights the weight map shows; -1: none
   bool playing_ = true;
   deform::StretchShape shape_;           // the panel's rubber shape, for every lattice
@@ -1107,7 +1308,9 @@ class Viewer {
   bool jiggle_ = true;                   // lattices with inertia while a clip plays
   float inertia_ = 1.0f;
   bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
-  float rest_floor_ = 0.0f, floor_height_ = 0.0f;  // the floor under the bind pose; the eye's height above a floor
+  deform::Bounds rest_bounds_;                     // the bind pose, upright: its floor, its framing
+  std::vector<deform::Bounds> clip_bounds_;        // each clip's sampled poses, upright (posed_bounds)
+  float floor_height_ = 0.0f;                      // the eye's height above a floor
   std::vector<char> morph_held_;     // per morph target: the panel (or --morph) holds its weight
   std::vector<float> morph_hold_;    // ... at this weight
   std::vector<float> morph_second_;  // the blended second clip's morph weights (sized once)
@@ -1151,10 +1354,11 @@ int main(int argc, char** argv) {
       const glm::vec3 up = viewer.up();
       std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
                   "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
-                  "\"morph_weights\": [%s]}\n",
+                  "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f}\n",
                   options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
                   viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z,
-                  double(viewer.floor_y()), double(viewer.lowest_y()), viewer.morph_weights_text().c_str());
+                  double(viewer.floor_y()), double(viewer.lowest_y()), viewer.morph_weights_text().c_str(),
+                  viewer.lattices_shown(), double(viewer.floor_row()));
       return 0;
     }
     // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one

@@ -100,16 +100,20 @@ deform::Rig starting_rig(const LoadedModel& loaded) {
   return loaded.builtin ? deform::builtin_rig(loaded.model) : deform::default_rig(loaded.model);
 }
 
-float lowest_height(const deform::Model& model, const deform::Animation& clip, glm::vec3 up, int samples) {
+namespace {
+
+// Calls visit(points) with the model's skinned points (LBS) at `samples` (at least 2) evenly spaced times of `clip`,
+// both ends included, the clip sampled over the bind pose. The last sample is the clip's end, not its start again.
+template <class Visit>
+void for_each_sampled_pose(const deform::Model& model, const deform::Animation& clip, int samples, Visit&& visit) {
   const std::size_t bones = model.skeleton.bone_count();
   std::vector<glm::mat4> world(bones), palette(bones);
   std::vector<glm::vec3> points(model.mesh.point_count());
-  float lowest = std::numeric_limits<float>::infinity();
+  deform::Animation once = clip;
+  once.loop = false;
   samples = std::max(samples, 2);
   for (int s = 0; s < samples; ++s) {
     deform::Pose pose = model.skeleton.bind_pose();
-    deform::Animation once = clip;
-    once.loop = false;  // the last sample is the clip's end, not its start again
     deform::SamplingJob sampling;
     sampling.animation = &once;
     sampling.time = clip.duration * static_cast<float>(s) / static_cast<float>(samples - 1);
@@ -131,9 +135,31 @@ float lowest_height(const deform::Model& model, const deform::Animation& clip, g
     if (status) status = fk.run();
     if (status) status = skin.run();
     if (!status) throw deform::Error::in_file(model.name, "clip '" + clip.name + "'", status.reason());
-    for (const glm::vec3& p : points) lowest = std::min(lowest, glm::dot(p, up));
+    visit(std::span<const glm::vec3>(points));
   }
+}
+
+}  // namespace
+
+float lowest_height(const deform::Model& model, const deform::Animation& clip, glm::vec3 up, int samples) {
+  float lowest = std::numeric_limits<float>::infinity();
+  for_each_sampled_pose(model, clip, samples, [&](std::span<const glm::vec3> points) {
+    for (const glm::vec3& p : points) lowest = std::min(lowest, glm::dot(p, up));
+  });
   return lowest;
+}
+
+deform::Bounds posed_bounds(const deform::Model& model, const deform::Animation& clip, glm::quat frame, int samples) {
+  glm::vec3 low(std::numeric_limits<float>::infinity()), high(-std::numeric_limits<float>::infinity());
+  for_each_sampled_pose(model, clip, samples, [&](std::span<const glm::vec3> points) {
+    for (const glm::vec3& p : points) {
+      const glm::vec3 q = frame * p;
+      low = glm::min(low, q);
+      high = glm::max(high, q);
+    }
+  });
+  if (model.mesh.positions.empty()) return {};
+  return {low, high};
 }
 
 }  // namespace model_loading

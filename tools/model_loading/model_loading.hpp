@@ -11,9 +11,11 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
+#include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
 
 namespace model_loading {
@@ -60,5 +62,12 @@ deform::Rig starting_rig(const LoadedModel& loaded);
 // the bind pose would not (a clip that crouches, or a file whose bind pose is not its animated stance). Allocates;
 // for load time. Throws what the jobs report for a clip that does not fit the model (validated clips always do).
 float lowest_height(const deform::Model& model, const deform::Animation& clip, glm::vec3 up, int samples = 48);
+
+// The box around the model's skinned points over the same samples of `clip` as lowest_height, each point turned by
+// `frame` first (a viewer's upright turn, after which +Y is up): what a camera must see to keep the character in frame
+// through the whole clip. An empty mesh gives a zero box at the origin. Allocates; for load time; throws as
+// lowest_height does.
+deform::Bounds posed_bounds(const deform::Model& model, const deform::Animation& clip, glm::quat frame,
+                            int samples = 48);
 
 }  // namespace model_loading
