@@ -71,7 +71,8 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
             if (i < 0 || j < 0 || k < 0 || i >= c.x || j >= c.y || k >= c.z)
               throw py::index_error("control point (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
                                     std::to_string(k) + ") is outside the lattice's point counts (" +
-                                    std::to_string(c.x) + ", " + std::to_string(c.y) + ", " + std::to_string(c.z) + ")");
+                                    std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
+                                    std::to_string(c.z) + ")");
             return l.index(i, j, k);
           },
           py::arg("i"), py::arg("j"), py::arg("k"),

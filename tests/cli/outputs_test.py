@@ -80,7 +80,8 @@ if len(obj) == 1:
     after = {n: read(os.path.join("native", n)) for n in before}
     check(after == before, "export native: a failed export changed files of the previous set")
     check(strays(path("native")) == [] and strays() == [], "export native: temporary files left")
-    check(sorted(os.listdir(path("native"))) == names, f"export native: the folder now holds {os.listdir(path('native'))}")
+    check(sorted(os.listdir(path("native"))) == names,
+          f"export native: the folder now holds {os.listdir(path('native'))}")
 
 # --- exit codes: 1 for the environment, 2 for usage and input ---
 if os.path.exists("/dev/full"):

@@ -191,8 +191,9 @@ void fail_at_every_step(std::size_t count) {
     }
     ++failures;
     CHECK(snapshot(dir) == before);
+    const fs::perms private_mode = fs::perms::owner_read | fs::perms::owner_write;
     for (std::size_t i = 0; i < count; i += 2)
-      CHECK(fs::status(dir / ("f" + std::to_string(i))).permissions() == (fs::perms::owner_read | fs::perms::owner_write));
+      CHECK(fs::status(dir / ("f" + std::to_string(i))).permissions() == private_mode);
     CHECK(entries(elsewhere) == 0);  // files staged from elsewhere are consumed, never left behind
     REQUIRE(step < 100);
   }

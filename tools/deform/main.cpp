@@ -18,7 +18,8 @@ const cli::Command* const commands[] = {&cli::info_command, &cli::skin_command, 
 void print_usage(std::ostream& out) {
   out << "usage: deform [--help] [--version] COMMAND [ARGS...]\n\n"
          "libdeform " DEFORM_VERSION_STRING " command-line tool. Results are JSON on stdout; messages on stderr.\n"
-         "Exit status: 0 success, 2 bad usage or invalid input, 1 any other failure (a full disk, permissions).\n\ncommands:\n";
+         "Exit status: 0 success, 2 bad usage or invalid input, 1 any other failure (a full disk, permissions).\n"
+         "\ncommands:\n";
   for (const cli::Command* c : commands) {
     std::string name = c->name;
     name.resize(10, ' ');

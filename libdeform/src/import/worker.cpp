@@ -60,7 +60,8 @@ void tie_to_parent(long long parent, unsigned long long cpu_seconds) {
   if (cpu_seconds > 0) {
     rlimit value{static_cast<rlim_t>(cpu_seconds), static_cast<rlim_t>(cpu_seconds + 1)};
     rlimit current{};
-    if (::getrlimit(RLIMIT_CPU, &current) == 0 && current.rlim_max != RLIM_INFINITY && value.rlim_max > current.rlim_max)
+    if (::getrlimit(RLIMIT_CPU, &current) == 0 && current.rlim_max != RLIM_INFINITY &&
+        value.rlim_max > current.rlim_max)
       value.rlim_max = value.rlim_cur = current.rlim_max;
     ::setrlimit(RLIMIT_CPU, &value);
   }
@@ -115,9 +116,10 @@ int main(int argc, char** argv) {
   tie_to_parent(parent, cpu_seconds);
   if (memory > 0 && !sanitized) limit(RLIMIT_AS, memory);
   if (stack > 0) limit(RLIMIT_STACK, stack);
-  // Testing only (tests/cli/worker_kill_test.py): spin on the CPU, as Assimp looping on a hostile file does, until a
+  // Testing only (tests/cli/outputs_test.py): spin on the CPU, as Assimp looping on a hostile file does, until a
   // limit or the parent's death ends the process.
-  if (const char* spin = std::getenv("DEFORM_IMPORT_WORKER_TEST_SPIN"); spin != nullptr && std::string_view(spin) == "1")
+  const char* spin = std::getenv("DEFORM_IMPORT_WORKER_TEST_SPIN");
+  if (spin != nullptr && std::string_view(spin) == "1")
     for (volatile unsigned long long sink = 0;;) sink = 1;  // a volatile store: a loop the compiler keeps
   try {
     const std::vector<std::uint8_t> bytes = deform::wire::encode(deform::import_model(path, options));

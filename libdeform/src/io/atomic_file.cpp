@@ -258,7 +258,8 @@ void FileTransaction::commit() {
         const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
         if (injected_failure()) throw system_error(entry.named, "cannot keep a backup of it", errno);
         for (int attempt = 0; attempt < 16 && entry.backup.empty(); ++attempt) {
-          std::string backup = (folder / ("." + target.filename().string() + ".deform-bak-" + random_suffix())).string();
+          std::string backup =
+              (folder / ("." + target.filename().string() + ".deform-bak-" + random_suffix())).string();
           // A hard link leaves the target in place; a file system without them gets a rename (the target is then
           // missing until the staged file lands, never changed).
           if (::link(entry.target.c_str(), backup.c_str()) == 0 ||

@@ -123,7 +123,8 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
         append_statement(out, "g", submesh.group);
       if (!options.mtllib.empty() && (current ? submesh.material != current->material : submesh.material >= 0)) {
         const bool named = submesh.material >= 0 && std::size_t(submesh.material) < mesh.materials.size();
-        append_statement(out, "usemtl", named ? std::string_view(material_names[std::size_t(submesh.material)]) : "default");
+        append_statement(out, "usemtl",
+                         named ? std::string_view(material_names[std::size_t(submesh.material)]) : "default");
       }
       current = &submesh;
     }
