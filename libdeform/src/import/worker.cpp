@@ -71,6 +71,8 @@ void tie_to_parent(long long parent, unsigned long long cpu_seconds) {
 #endif
 }
 
+volatile unsigned long long test_spins = 0;  // DEFORM_IMPORT_WORKER_TEST_SPIN's counter
+
 bool write_all(const std::vector<std::uint8_t>& bytes) {
   std::size_t done = 0;
   while (done < bytes.size()) {
@@ -120,7 +122,7 @@ int main(int argc, char** argv) {
   // limit or the parent's death ends the process.
   const char* spin = std::getenv("DEFORM_IMPORT_WORKER_TEST_SPIN");
   if (spin != nullptr && std::string_view(spin) == "1")
-    for (volatile unsigned long long sink = 0;;) sink = 1;  // a volatile store: a loop the compiler keeps
+    for (;;) test_spins = test_spins + 1;  // volatile stores: a loop the compiler keeps
   try {
     const std::vector<std::uint8_t> bytes = deform::wire::encode(deform::import_model(path, options));
     return write_all(bytes) ? 0 : 1;
