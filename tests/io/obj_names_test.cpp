@@ -45,7 +45,7 @@ TEST_CASE("any byte string as an object, group or material name reads back to th
   const deform::Mesh base = six_submeshes();
   REQUIRE(base.submeshes.size() == 6);
   int renamed = 0;
-  for (std::uint32_t seed = 0; seed < 3000; ++seed) {
+  for (std::uint32_t seed = 0; seed < 2000; ++seed) {
     CAPTURE(seed);
     std::mt19937 random(seed);
     deform::Mesh mesh = base;
@@ -92,7 +92,7 @@ TEST_CASE("any byte string as an object, group or material name reads back to th
       CHECK(back.group == deform::obj_safe_name(written.group));
     }
   }
-  CHECK(renamed > 1000);  // the names were hostile enough to need it
+  CHECK(renamed > 700);  // the names were hostile enough to need it
   // A name the reader can read is written unchanged, and the safe names are what the reader reads.
   CHECK(deform::obj_safe_name("Body mesh.001 (ß)") == "Body mesh.001 (ß)");
   CHECK(deform::obj_safe_name("a\\ ") == "a\\_");
