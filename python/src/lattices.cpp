@@ -62,8 +62,21 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
                              })
       .def_property_readonly("origin",
                              [](const Lattice& l) { return py::make_tuple(l.frame().origin.x, l.frame().origin.y, l.frame().origin.z); })
-      .def("index", &Lattice::index, py::arg("i"), py::arg("j"), py::arg("k"),
-           "Row of control point (i, j, k) in control_points (i fastest).")
+      .def(
+          "index",
+          [](const Lattice& l, int i, int j, int k) {
+            // The C++ index() does no range check: here an index outside the lattice raises instead of wrapping
+            // round to a huge row (index(-1, 0, 0) would be 2**64 - 1).
+            const glm::ivec3 c = l.point_counts();
+            if (i < 0 || j < 0 || k < 0 || i >= c.x || j >= c.y || k >= c.z)
+              throw py::index_error("control point (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
+                                    std::to_string(k) + ") is outside the lattice's point counts (" +
+                                    std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
+                                    std::to_string(c.z) + ")");
+            return l.index(i, j, k);
+          },
+          py::arg("i"), py::arg("j"), py::arg("k"),
+          "Row of control point (i, j, k) in control_points (i fastest). IndexError outside the point counts.")
       .def_property_readonly(
           "control_points",
           [](py::object self) {

@@ -44,9 +44,11 @@ void translate(std::exception_ptr pointer) {
   try {
     if (pointer) std::rethrow_exception(pointer);
   } catch (const deform::Error& e) {
-    const bool input = e.kind() == deform::Error::Kind::input;
+    const char* kind = e.kind() == deform::Error::Kind::input      ? "input"
+                       : e.kind() == deform::Error::Kind::argument ? "argument"
+                                                                   : "environment";
     const py::object position = py::int_(e.position());
-    raise(e.what(), py::str(input ? "input" : "argument"), py::str(e.message()), or_none(e.file()),
+    raise(e.what(), py::str(kind), py::str(e.message()), or_none(e.file()),
           e.where() == deform::Error::Where::line ? position : py::none(),
           e.where() == deform::Error::Where::byte ? position : py::none(), or_none(e.element()));
   } catch (const StatusFailure& failure) {

@@ -21,6 +21,14 @@ def test_a_lattice_at_rest_is_the_identity(kind, cloud):
     np.testing.assert_allclose(lattice.control_points, lattice.rest_points)
 
 
+def test_index_outside_the_lattice_raises(cloud):
+    lattice = deform.BezierLattice.around(cloud, degree=(2, 3, 2))
+    assert lattice.index(2, 3, 2) == len(lattice.control_points) - 1
+    for bad in ((-1, 0, 0), (0, -1, 0), (0, 0, -1), (3, 0, 0), (0, 4, 0), (0, 0, 3)):
+        with pytest.raises(IndexError, match="outside the lattice"):
+            lattice.index(*bad)
+
+
 def bernstein(n, i, t):
     return comb(n, i) * t**i * (1 - t) ** (n - i)
 

@@ -79,6 +79,10 @@ static void character_reaches_stretches_and_springs_back(void) {
   const float nowhere[3] = {NAN, 0.0f, 0.0f};
   CHECK(deform_character_reach(hero, hand, nowhere, NULL) == DEFORM_ERROR_REFUSED);
   CHECK(deform_character_reach(hero, 0, target, NULL) == DEFORM_ERROR_REFUSED);
+  /* A finite target so far away that distances to it overflow: refused, never an infinite distance with DEFORM_OK. */
+  const float far_away[3] = {3e38f, 3e38f, 3e38f};
+  CHECK(deform_character_reach(hero, hand, far_away, NULL) == DEFORM_ERROR_REFUSED);
+  CHECK(strstr(deform_last_error(), "too far") != NULL);
   CHECK(deform_character_bone_position(hero, -1, hand_at) == DEFORM_ERROR_ARGUMENT);
 
   /* A pose: the bind pose given back as quaternions and translations of the right count. */

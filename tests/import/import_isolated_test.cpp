@@ -155,7 +155,8 @@ TEST_CASE("an importer that crashes, hangs, floods or answers garbage is stopped
   limits.max_output_bytes = 4ull << 30;
   limits.worker = fake_worker("garbage", "echo 'not a model'");
   CHECK(failure(path, limits).find("malformed") != std::string::npos);
-  limits.worker = fake_worker("refuse", "echo \"${10}: line 3: bad thing\" >&2; exit 2");
+  // The path is the worker's last argument.
+  limits.worker = fake_worker("refuse", "for last; do :; done; echo \"$last: line 3: bad thing\" >&2; exit 2");
   CHECK(failure(path, limits) == path + ": line 3: bad thing");
   limits.worker = "/nonexistent/worker";
   CHECK_THROWS_AS(deform::import_model_isolated(path, {}, limits), deform::Error);

@@ -346,6 +346,29 @@ TEST_CASE("voxel weights: a piece no bone reaches through the volume is bound ri
   CHECK_THROWS_AS(deform::compute_voxel_weights(mesh, skeleton, o), deform::Error);
 }
 
+TEST_CASE("voxel weights refuse a box they cannot divide: no size, or so large that distances overflow") {
+  const auto message = [](const Mesh& mesh) {
+    try {
+      (void)deform::compute_voxel_weights(mesh, two_bones());
+    } catch (const deform::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  Mesh point;  // every point at one place: a box of no size (it was a grid of 1e-32 cells, a bone 2^31 steps long)
+  add_box(point, {0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f});
+  CHECK(message(point).find("no size") != std::string::npos);
+  Mesh huge;  // ±3e38: the box's size is infinite (it escaped as std::length_error)
+  add_box(huge, {-3e38f, -3e38f, -3e38f}, {3e38f, 3e38f, 3e38f});
+  CHECK(message(huge).find("too large") != std::string::npos);
+  Mesh far;  // finite, but squared distances overflow
+  add_box(far, {1e20f, 0.0f, 0.0f}, {2e20f, 1.0f, 1.0f});
+  CHECK(message(far).find("too large") != std::string::npos);
+  Mesh small_far_away;  // a millimetre box a kilometre out is still voxelised
+  add_box(small_far_away, {1000.0f, 0.0f, 0.0f}, {1000.001f, 0.001f, 0.001f});
+  CHECK(message(small_far_away) == "no error");
+}
+
 TEST_CASE("heat weights: islands the body hides from every bone are named, and weighted past their own surface") {
   Mesh mesh;
   add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);

@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <iostream>
+#include <stdexcept>
+#include <string>
 
 namespace cli {
 
@@ -87,7 +89,10 @@ glm::vec3 parse_vec3(const std::string& text, std::string_view what) {
       throw UsageError(std::string(what) + ": '" + text + "' is not X,Y,Z");
     const std::string part = text.substr(start, last ? std::string::npos : comma - start);
     const double d = parse_number(part, what);
-    if (std::abs(d) > 3.0e38) throw UsageError(std::string(what) + ": '" + part + "' is out of range");
+    // A point in space (a target, a pole): beyond 1e18 the squared distances to it overflow a float, and a result
+    // computed from it would not be finite.
+    if (std::abs(d) > 1.0e18)
+      throw UsageError(std::string(what) + ": '" + part + "' is out of range (beyond 1e18, distances to it overflow)");
     v[axis] = static_cast<float>(d);
     start = comma + 1;
   }
@@ -96,10 +101,28 @@ glm::vec3 parse_vec3(const std::string& text, std::string_view what) {
 
 // Invalid UTF-8 (a non-UTF-8 output path, a name from a file) is printed as U+FFFD instead of failing the dump after
 // the outputs were written.
+// nlohmann writes a NaN or an infinity as null, which a reader takes for "no value": a result that is not finite is a
+// defect to report (exit 1), never printed. Checked before anything is written to stdout.
+template <class Json>
+void require_finite(const Json& value, const std::string& where) {
+  if (value.is_number_float() && !std::isfinite(value.template get<double>()))
+    throw std::logic_error("internal error: the result " + (where.empty() ? std::string("value") : where) +
+                           " is not finite (not printed)");
+  if (value.is_object())
+    for (auto item = value.begin(); item != value.end(); ++item) require_finite(item.value(), where + "/" + item.key());
+  if (value.is_array())
+    for (std::size_t i = 0; i < value.size(); ++i) require_finite(value[i], where + "/" + std::to_string(i));
+}
+
+void require_finite_json(const nlohmann::json& document) { require_finite(document, ""); }
+void require_finite_json(const nlohmann::ordered_json& document) { require_finite(document, ""); }
+
 void print_json(const nlohmann::json& document) {
+  require_finite(document, "");
   std::cout << document.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
 }
 void print_json_in_order(const nlohmann::ordered_json& document) {
+  require_finite(document, "");
   std::cout << document.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
 }
 

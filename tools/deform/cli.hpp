@@ -41,15 +41,20 @@ class Args {
   bool help_ = false;
 };
 
-// "1.5,-2,3" -> vec3; UsageError naming `what` on anything else (wrong count, non-finite, junk).
+// "1.5,-2,3" -> vec3, a point in space; UsageError naming `what` on anything else (wrong count, non-finite, junk, a
+// coordinate beyond 1e18, where distances overflow).
 glm::vec3 parse_vec3(const std::string& text, std::string_view what);
 double parse_number(const std::string& text, std::string_view what);
 long long parse_integer(const std::string& text, std::string_view what, long long min, long long max);
 
 // Prints one JSON document on stdout (the command's machine-readable result).
-// One JSON document on stdout: keys sorted (print_json) or in the order built (print_json_in_order).
+// One JSON document on stdout: keys sorted (print_json) or in the order built (print_json_in_order). A number that is
+// not finite (nlohmann would print null) throws std::logic_error instead, before anything is printed.
 void print_json(const nlohmann::json& document);
 void print_json_in_order(const nlohmann::ordered_json& document);
+// The same check for a document printed by other means.
+void require_finite_json(const nlohmann::json& document);
+void require_finite_json(const nlohmann::ordered_json& document);
 // Prints a warning or note on stderr.
 void note(const std::string& message);
 

@@ -216,6 +216,7 @@ int run(const std::vector<std::string>& argv) {
     sample(t);
   }
   // One sample per line: a long curve stays readable and greppable.
+  require_finite_json(samples);
   std::cout << "{\n  \"dt\": " << Json(shortest(dt)).dump() << ",\n  \"samples\": [";
   for (std::size_t n = 0; n < samples.size(); ++n) std::cout << (n ? ",\n    " : "\n    ") << samples[n].dump();
   std::cout << "\n  ]\n}\n";

@@ -18,7 +18,8 @@ const cli::Command* const commands[] = {&cli::info_command, &cli::skin_command, 
 void print_usage(std::ostream& out) {
   out << "usage: deform [--help] [--version] COMMAND [ARGS...]\n\n"
          "libdeform " DEFORM_VERSION_STRING " command-line tool. Results are JSON on stdout; messages on stderr.\n"
-         "Exit status: 0 success, 2 bad usage or invalid input, 1 any other failure.\n\ncommands:\n";
+         "Exit status: 0 success, 2 bad usage or invalid input, 1 any other failure (a full disk, permissions).\n"
+         "\ncommands:\n";
   for (const cli::Command* c : commands) {
     std::string name = c->name;
     name.resize(10, ' ');
@@ -65,7 +66,8 @@ int main(int argc, char** argv) {
     return cli::exit_invalid;
   } catch (const deform::Error& e) {
     std::cerr << "deform " << command->name << ": " << e.what() << '\n';
-    return cli::exit_invalid;
+    // What the system refused (a full disk, permissions) is not the user's input: 1, as any other failure.
+    return e.kind() == deform::Error::Kind::environment ? cli::exit_failure : cli::exit_invalid;
   } catch (const std::bad_alloc&) {
     std::cerr << "deform " << command->name << ": out of memory\n";
     return cli::exit_failure;

@@ -53,7 +53,11 @@ deform_status guarded(Body&& body) noexcept {
   try {
     return body();
   } catch (const deform::Error& e) {
-    return fail(e.kind() == deform::Error::Kind::input ? DEFORM_ERROR_INPUT : DEFORM_ERROR_ARGUMENT, e.what());
+    // The environment (a full disk, permissions) is neither the input nor the call: "anything else".
+    return fail(e.kind() == deform::Error::Kind::input      ? DEFORM_ERROR_INPUT
+                : e.kind() == deform::Error::Kind::argument ? DEFORM_ERROR_ARGUMENT
+                                                            : DEFORM_ERROR_INTERNAL,
+                e.what());
   } catch (const std::bad_alloc&) {
     return fail(DEFORM_ERROR_INTERNAL, "out of memory");
   } catch (const std::exception& e) {

@@ -13,6 +13,9 @@ namespace {
 
 bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// The largest target coordinate reach() takes: beyond, |target - effector|^2 overflows a float (about 3.4e38).
+constexpr float max_reach_coordinate = 1e18f;
+
 // Bones on the longest parent path, the root counted: 1 for a lone root.
 std::size_t skeleton_depth(const Skeleton& skeleton) {
   std::vector<std::size_t> depth(skeleton.bone_count(), 1);
@@ -269,6 +272,10 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   }
   if (!finite(target)) {
     result.status = Status::failure("target is not finite");
+    return result;
+  }
+  if (glm::any(glm::greaterThan(glm::abs(target), glm::vec3(max_reach_coordinate)))) {
+    result.status = Status::failure("target is too far: beyond 1e18, distances to it overflow");
     return result;
   }
 

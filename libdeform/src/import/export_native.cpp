@@ -7,6 +7,7 @@
 #include <map>
 #include <random>
 #include <string_view>
+#include <system_error>
 
 #include "deform/import/import.hpp"
 #include "deform/io/atomic_file.hpp"
@@ -82,7 +83,12 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
         (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".deform-tmp-" + std::to_string(entropy()));
     if (fs::create_directories(candidate, error)) staging.path = candidate;
   }
-  if (staging.path.empty()) throw Error::in_file(folder, "", "cannot create a folder beside it: " + error.message());
+  if (staging.path.empty()) {  // a missing parent folder is the user's; permissions or a full disk the system's
+    const std::string why = "cannot create a folder beside it: " + error.message();
+    if (error == std::errc::no_such_file_or_directory || error == std::errc::not_a_directory)
+      throw Error::in_file(folder, "", why);
+    throw Error::environment(folder, why);
+  }
 
   ExportedFiles files;
   std::vector<std::string> names = {stem + ".obj", stem + ".mtl", stem + ".sk", stem + ".skw"};
@@ -156,17 +162,18 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   mesh_with_copies.materials = std::move(materials);
   write_obj((staging.path / names[0]).string(), mesh_with_copies, model.mesh.positions, {}, obj_options);
 
-  // Every file is written: move the set into place (a new folder in one rename, else file by file, the OBJ last).
+  // Every file is written: move the set into place, a new folder in one rename, else as one FileTransaction (every
+  // previous file of the set kept until all the new ones are in, and put back if any step fails).
   if (!fs::exists(target, error)) {
     fs::rename(staging.path, target, error);
-    if (error) throw Error::in_file(folder, "", "cannot move the exported files into place: " + error.message());
+    if (error) throw Error::environment(folder, "cannot move the exported files into place: " + error.message());
     staging.path.clear();
   } else {
     if (!fs::is_directory(target, error)) throw Error::in_file(folder, "", "exists and is not a folder");
-    for (std::size_t i = names.size(); i-- > 0;) {  // textures, .skw, .sk, .mtl, then the OBJ
-      fs::rename(staging.path / names[i], base / names[i], error);
-      if (error) throw Error::in_file((base / names[i]).string(), "", "cannot move into place: " + error.message());
-    }
+    FileTransaction landing;
+    for (std::size_t i = names.size(); i-- > 0;)  // textures, .skw, .sk, .mtl, then the OBJ
+      landing.stage_written((base / names[i]).string(), (staging.path / names[i]).string());
+    landing.commit();
   }
   files.obj = (base / names[0]).string();
   files.mtl = (base / names[1]).string();

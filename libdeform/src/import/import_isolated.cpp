@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -94,6 +95,13 @@ std::string signal_name(int signal) {
   return std::to_string(signal) + (name != nullptr ? std::string(", ") + name : std::string());
 }
 
+// The worker's own CPU limit: the wall-clock limit in whole seconds, rounded up (0, no limit, for none or a limit too
+// large to matter). A worker uses at most one CPU, so it reaches this no sooner than the parent's deadline.
+std::string cpu_seconds(double max_seconds) {
+  if (!(max_seconds > 0.0) || max_seconds > 1e9) return "0";
+  return std::to_string(static_cast<unsigned long long>(std::ceil(max_seconds)));
+}
+
 }  // namespace
 
 ImportedModel import_model_isolated(const std::string& path, const ImportOptions& options,
@@ -102,6 +110,8 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   std::vector<std::string> args = {worker,
                                    "--max-memory", std::to_string(limits.max_memory_bytes),
                                    "--max-stack", std::to_string(limits.max_stack_bytes),
+                                   "--max-cpu-seconds", cpu_seconds(limits.max_seconds),
+                                   "--parent", std::to_string(::getpid()),
                                    "--ticks-per-second", std::to_string(options.default_ticks_per_second),
                                    "--loop", options.loop_clips ? "1" : "0",
                                    "--", path};

@@ -554,8 +554,12 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     buffer["uri"] = bin_name;
     doc["buffers"] = Json::array({std::move(buffer)});
     const std::string json = dump(doc);
-    write_file_atomic(written.bin, b.bin);
-    write_file_atomic(path, json);
+    // Both files or neither: a .gltf that cannot be written (a folder by that name, a full disk) leaves the previous
+    // .bin as it was.
+    FileTransaction files;
+    files.stage(written.bin, b.bin);
+    files.stage(path, json);
+    files.commit();
     written.bytes = b.bin.size() + json.size();
   }
   return written;

@@ -37,14 +37,14 @@ class LineReader {
     line_ = next_line_;
     std::string_view raw = take_line();
     if (ends_with_backslash(raw)) {
-      joined_.assign(raw.substr(0, raw.size() - 1)).push_back(' ');
+      joined_.assign(before_backslash(raw)).push_back(' ');
       while (position_ < text_.size()) {
         raw = take_line();
         if (!ends_with_backslash(raw)) {
           joined_.append(raw);
           break;
         }
-        joined_.append(raw.substr(0, raw.size() - 1)).push_back(' ');
+        joined_.append(before_backslash(raw)).push_back(' ');
       }
       raw = joined_;
     }
@@ -65,9 +65,16 @@ class LineReader {
     if (length > 0 && begin[length - 1] == '\r') --length;
     return {begin, length};
   }
+  // A line continues when its last non-blank byte is '\\' (blanks after it are tolerated); the writer never ends a
+  // name so (obj_safe_name).
   static bool ends_with_backslash(std::string_view raw) {
     raw = trim(raw);
     return !raw.empty() && raw.back() == '\\';
+  }
+  // The line without its final backslash and the blanks after it.
+  static std::string_view before_backslash(std::string_view raw) {
+    while (!raw.empty() && is_blank(raw.back())) raw.remove_suffix(1);
+    return raw.substr(0, raw.size() - 1);
   }
 
   std::string_view text_;

@@ -2,6 +2,9 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <unordered_set>
+#include <vector>
 
 #include "deform/io/atomic_file.hpp"
 #include "deform/runtime/error.hpp"
@@ -31,22 +34,51 @@ void append_line(std::string& out, const char* keyword, const glm::vec<N, float>
   out.push_back('\n');
 }
 
-// A name or path as the rest of an OBJ/MTL line: a line break would end the statement and start another (an imported
-// node named "x\nv 1 2 3" injects a vertex), '#' would start a comment and a trailing backslash would swallow the
-// next line, so control characters, '#' and a final backslash become '_'. A name read from an OBJ never holds them,
-// so OBJ in, OBJ out is unchanged.
 void append_statement(std::string& out, std::string_view keyword, std::string_view name) {
   out.append(keyword).push_back(' ');
-  const std::size_t start = out.size();
-  for (const char c : name) {
-    const auto byte = static_cast<unsigned char>(c);
-    out.push_back(byte < 0x20 || byte == 0x7f || c == '#' ? '_' : c);
-  }
-  if (out.size() > start && out.back() == '\\') out.back() = '_';
+  out.append(obj_safe_name(name));
   out.push_back('\n');
 }
 
 }  // namespace
+
+std::string obj_safe_name(std::string_view name) {
+  // The reader takes a name as the rest of its line with blanks trimmed, after cutting at '#' and joining a line whose
+  // last non-blank byte is '\\' to the next. So every byte that would end the line or start a comment (control
+  // characters, DEL, '#'), every blank at either end (only ' ' is left: the other blanks are control characters) and
+  // a final backslash become '_'; the rest, including invalid UTF-8, is kept. A name the reader can read is unchanged.
+  std::string safe(name);
+  for (char& c : safe) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f || c == '#') c = '_';
+  }
+  for (std::size_t i = 0; i < safe.size() && safe[i] == ' '; ++i) safe[i] = '_';
+  for (std::size_t i = safe.size(); i > 0 && safe[i - 1] == ' '; --i) safe[i - 1] = '_';
+  if (!safe.empty() && safe.back() == '\\') safe.back() = '_';
+  return safe;
+}
+
+std::vector<std::string> obj_material_names(std::span<const Material> materials) {
+  // Each name made safe, an empty one "_" (`usemtl` and `newmtl` need a name); a name taken by an earlier material
+  // gets "_2", "_3", ... (never a name another material has), so that every `usemtl` finds its own `newmtl`.
+  std::vector<std::string> base(materials.size());
+  std::unordered_set<std::string> natural;
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    base[m] = obj_safe_name(materials[m].name);
+    if (base[m].empty()) base[m] = "_";
+    natural.insert(base[m]);
+  }
+  std::unordered_set<std::string> taken;
+  std::vector<std::string> names(materials.size());
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    std::string name = base[m];
+    std::size_t n = 1;
+    while (taken.contains(name) || (n > 1 && natural.contains(name))) name = base[m] + "_" + std::to_string(++n);
+    taken.insert(name);
+    names[m] = std::move(name);
+  }
+  return names;
+}
 
 std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                        const ObjWriteOptions& options) {
@@ -72,6 +104,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
 
   std::string out;
   if (!options.mtllib.empty()) append_statement(out, "mtllib", options.mtllib);
+  const std::vector<std::string> material_names = obj_material_names(mesh.materials);
   for (const glm::vec3& p : positions) append_line(out, "v", p);
   if (write_uvs)
     for (const glm::vec2& uv : mesh.vertex_uvs) append_line(out, "vt", uv);
@@ -91,7 +124,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
       if (!options.mtllib.empty() && (current ? submesh.material != current->material : submesh.material >= 0)) {
         const bool named = submesh.material >= 0 && std::size_t(submesh.material) < mesh.materials.size();
         append_statement(out, "usemtl",
-                         named ? std::string_view(mesh.materials[std::size_t(submesh.material)].name) : "default");
+                         named ? std::string_view(material_names[std::size_t(submesh.material)]) : "default");
       }
       current = &submesh;
     }
@@ -140,8 +173,10 @@ std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path
 
 std::string format_mtl(std::span<const Material> materials) {
   std::string out;
-  for (const Material& material : materials) {
-    append_statement(out, "newmtl", material.name);
+  const std::vector<std::string> names = obj_material_names(materials);
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    const Material& material = materials[m];
+    append_statement(out, "newmtl", names[m]);
     append_line(out, "Ka", material.ambient);
     append_line(out, "Kd", material.diffuse);
     append_line(out, "Ks", material.specular);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <queue>
@@ -71,14 +72,26 @@ struct Grid {
   float size = 1.0f;
   glm::ivec3 dims{0};
   std::size_t count() const { return std::size_t(dims.x) * std::size_t(dims.y) * std::size_t(dims.z); }
+  // The cell holding p, clamped to the grid. Clamped as floats: a point far outside the grid (a bone's end) or not
+  // finite never converts an out-of-range float to int.
   glm::ivec3 cell(glm::vec3 p) const {
-    const glm::ivec3 c(glm::floor((p - origin) / size));
-    return glm::clamp(c, glm::ivec3(0), dims - 1);
+    const glm::vec3 f = glm::floor((p - origin) / size);
+    glm::ivec3 c(0);
+    for (int a = 0; a < 3; ++a)
+      c[a] = f[a] >= 0.0f ? (f[a] < static_cast<float>(dims[a] - 1) ? static_cast<int>(f[a]) : dims[a] - 1) : 0;
+    return c;
   }
   std::size_t index(glm::ivec3 c) const {
     return std::size_t(c.x) + std::size_t(dims.x) * (std::size_t(c.y) + std::size_t(dims.y) * std::size_t(c.z));
   }
 };
+
+// Samples along a length at under half a voxel apart, at least 1 and at most 2^22 (a bone thousands of times longer
+// than the mesh is sampled more sparsely away from it, never with an overflowing count).
+int sample_steps(float length, float voxel) {
+  const float steps = std::ceil(2.0f * length / voxel);
+  return steps >= 1.0f ? (steps < 4194304.0f ? static_cast<int>(steps) : 4194304) : 1;
+}
 
 }  // namespace
 
@@ -99,7 +112,21 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
   // --- the grid: the points' box, two voxels of margin all round ---
   const Bounds bounds = compute_bounds(mesh.positions);
   const glm::vec3 extent = bounds.max - bounds.min;
-  const float longest = std::max({extent.x, extent.y, extent.z, 1e-30f});
+  const float longest = std::max({extent.x, extent.y, extent.z});
+  // A box the grid cannot divide is refused rather than voxelised: coordinates so large that the box's size or a
+  // squared distance overflows (±3e38), or points that all coincide (a box of no size, cells of no size: a bone would
+  // take 2^31 steps), or nearly so (a box within the coordinates' float resolution, or cells below float's range).
+  const float largest = std::max({glm::abs(bounds.min.x), glm::abs(bounds.min.y), glm::abs(bounds.min.z),
+                                  glm::abs(bounds.max.x), glm::abs(bounds.max.y), glm::abs(bounds.max.z)});
+  if (!std::isfinite(longest) || !(largest <= 1e18f)) {  // beyond, squared distances overflow a float
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", double(largest));
+    throw Error::invalid_argument("mesh", std::string("the points' bounding box is too large to voxelise: coordinates "
+                                                      "up to ") + text + ", more than 1e18");
+  }
+  if (!(longest > 1e-7f * largest) || !(longest > 1e-30f))
+    throw Error::invalid_argument("mesh", "the points' bounding box has no size (all " + std::to_string(point_count) +
+                                              " points at one place): nothing to voxelise");
   Grid grid;
   grid.size = longest / static_cast<float>(options.resolution);
   grid.origin = bounds.min - 2.0f * grid.size;
@@ -114,7 +141,7 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
     const glm::vec3 a = mesh.positions[corners[t]], b = mesh.positions[corners[t + 1]],
                     c = mesh.positions[corners[t + 2]];
     const float edge = std::max({glm::length(b - a), glm::length(c - a), glm::length(c - b)});
-    const int steps = std::max(1, static_cast<int>(std::ceil(2.0f * edge / grid.size)));
+    const int steps = sample_steps(edge, grid.size);
     for (int i = 0; i <= steps; ++i)
       for (int j = 0; i + j <= steps; ++j) {
         const float u = static_cast<float>(i) / static_cast<float>(steps);
@@ -174,7 +201,7 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
     std::vector<std::int32_t> seeds, near;
     bool within_grid = false;
     for (const auto& [a, b] : shape.segments) {
-      const int steps = std::max(1, static_cast<int>(std::ceil(2.0f * glm::length(b - a) / grid.size)));
+      const int steps = sample_steps(glm::length(b - a), grid.size);
       for (int k = 0; k <= steps; ++k) {
         const glm::vec3 p = a + (b - a) * (static_cast<float>(k) / static_cast<float>(steps));
         const glm::ivec3 c = grid.cell(p);

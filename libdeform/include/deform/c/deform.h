@@ -29,7 +29,7 @@ typedef enum deform_status {
   DEFORM_ERROR_INPUT = 1,    /* a file or data that is malformed (the message names it) */
   DEFORM_ERROR_ARGUMENT = 2, /* a call that is not well formed: a NULL handle, a size that does not match, ... */
   DEFORM_ERROR_REFUSED = 3,  /* a per-frame call that refused its inputs (a non-finite target, a bad dt) */
-  DEFORM_ERROR_INTERNAL = 4  /* anything else (out of memory) */
+  DEFORM_ERROR_INTERNAL = 4  /* anything else (out of memory, the system refusing a file) */
 } deform_status;
 
 /* Why the last call on this thread failed: a NUL-terminated UTF-8 message, valid until the next failing call on this
@@ -96,7 +96,8 @@ typedef struct deform_reach_result {
 } deform_reach_result;
 
 /* Reaches for `target` (model space) with bone `effector`: IK, then elastic stretch for what remains. `result` may be
- * NULL. DEFORM_ERROR_REFUSED for an effector out of range or the root, or a non-finite target. */
+ * NULL. DEFORM_ERROR_REFUSED for an effector out of range or the root, or a target not finite or beyond 1e18 on an
+ * axis (distances to it would overflow: no result is ever infinite with DEFORM_OK). */
 DEFORM_C_API deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
                                                   deform_reach_result* result);
 /* Lets go: the stretch springs back, a damped oscillation. */

@@ -185,8 +185,9 @@ class DEFORM_CHARACTER_API Character {
   Status set_max_stretch(float max_stretch) noexcept;
 
   // Reaches for `target` (model space) with `effector`'s head: IK on the held pose, then the stretch target of the
-  // chain's lattices. Refuses (result.status), changing nothing, an effector out of range or the root, a non-finite
-  // target, a chain longer than max_chain_bones. No allocation: the chain is rebuilt in storage reserved at
+  // chain's lattices. Refuses (result.status), changing nothing, an effector out of range or the root, a target not
+  // finite or beyond ±1e18 on an axis (squared distances to it would overflow: the result would not be finite), a
+  // chain longer than max_chain_bones. No allocation: the chain is rebuilt in storage reserved at
   // construction when the effector changes. Cost: up to 17 CCD solves of the chain (microseconds), no full FK.
   // Called again each frame while the body moves (after each set_pose), it re-solves on the new pose: a reach held so
   // (the same effector, not released, a target within a tenth of the chain's length of the last) is solved without

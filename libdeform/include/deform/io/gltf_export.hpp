@@ -4,8 +4,8 @@
 //  - PATH ending in .glb (any case): one binary glTF file. PATH ending in .gltf: PATH plus STEM.bin beside it (STEM:
 //    PATH's file name without .gltf, characters outside [A-Za-z0-9._-] replaced by '_'), which PATH names by a
 //    relative URI. Nothing else is written.
-//  - every file is written atomically (io/atomic_file.hpp); for .gltf the .bin is written first, so a PATH that exists
-//    always names a complete buffer.
+//  - every file is written atomically (io/atomic_file.hpp); a .gltf and its .bin land together as one FileTransaction:
+//    a failure at any step leaves both previous files as they were.
 #include <cstdint>
 #include <span>
 #include <string>

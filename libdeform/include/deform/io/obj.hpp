@@ -40,9 +40,10 @@ struct ObjWriteOptions {
 // Formats the mesh as OBJ text: one `v` per point (in order, from `positions`, which must have point_count()
 // entries), then `vt`/`vn` per render vertex (normals from `normals` if not empty, else mesh.vertex_normals), then
 // the faces as the file had them, with `o`/`g`/`usemtl` where the submesh changes. Vertex i in means vertex i out;
-// numbers are written in the shortest form that reads back to the same float; names and paths with line breaks, '#'
-// or a final backslash written with '_' there, so that no name can inject a statement. Throws deform::Error (kind
-// argument) when a span has the wrong size or a position or normal is not finite: nothing non-finite is written.
+// numbers are written in the shortest form that reads back to the same float; names and paths as obj_safe_name and
+// obj_material_names give them, so that no name can inject a statement and every name reads back as written.
+// Throws deform::Error (kind argument) when a span has the wrong size or a position or normal is not finite: nothing
+// non-finite is written.
 DEFORM_IO_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions,
                                   std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
 // Writes format_obj() to `path` atomically. Throws deform::Error on failure.
@@ -52,7 +53,17 @@ DEFORM_IO_API void write_obj(const std::string& path, const Mesh& mesh, std::spa
 // each of mesh.material_libraries relative to obj_path's folder (absolute when no relative path exists), joined by
 // spaces. Empty when the mesh has none (a mesh built in code, or an OBJ without `mtllib`).
 DEFORM_IO_API std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path);
-// Formats the mesh's materials as MTL text (map_Kd written as given).
+// Formats the mesh's materials as MTL text (map_Kd written as given), each `newmtl` named by obj_material_names.
 DEFORM_IO_API std::string format_mtl(std::span<const Material> materials);
+
+// A name (`o`, `g`) or path (`mtllib`, `map_Kd`) as the OBJ and MTL writers write it, so that the readers read back
+// exactly this string: control characters, DEL and '#' become '_', and so do blanks at either end and a final
+// backslash (the reader trims blanks, and a line ending in '\\' continues on the next one). A name the readers can
+// read (any name from an OBJ) is unchanged.
+DEFORM_IO_API std::string obj_safe_name(std::string_view name);
+// The names `usemtl` and `newmtl` give `materials`: obj_safe_name of each, "_" for an empty one, and a name an earlier
+// material took suffixed "_2", "_3"... (never another material's name), so that the names read back are distinct and
+// every face keeps its material.
+DEFORM_IO_API std::vector<std::string> obj_material_names(std::span<const Material> materials);
 
 }  // namespace deform

@@ -7,6 +7,9 @@
 //      "arm.sk: byte 412: bone 3: child count 9999 overruns the file"
 //  - Invalid arguments to a bind-time call (a constructor, a binding, a solver set-up): deform::Error of kind
 //    `argument`, naming the element and what is wrong, with no file:  "invalid argument: bone 7: effector out of range"
+//  - The environment refused (a full disk, permissions, a read-only file system, a FIFO without a reader): kind
+//    `environment`, naming the file and the system's reason: "out/o.gltf: write failed: No space left on device".
+//    The CLI exits 1 for it, 2 for input and argument errors.
 //  - Per-frame calls (every job's run(), the stateful steps, Character::update) never throw and never allocate: they
 //    return a Status, ok or a static reason, and change nothing when it is not ok. Each job's validate() returns the
 //    same Status at bind time, saying why a call would be refused.
@@ -21,7 +24,7 @@ namespace deform {
 
 class DEFORM_RUNTIME_API Error : public std::runtime_error {
  public:
-  enum class Kind { input, argument };
+  enum class Kind { input, argument, environment };
   enum class Where { none, line, byte };
 
   // `message` says what is wrong; the other fields say where. Use the factories below.
@@ -39,6 +42,11 @@ class DEFORM_RUNTIME_API Error : public std::runtime_error {
   // An argument of an API call is invalid (no file involved).
   static Error invalid_argument(std::string element, std::string message) {
     return Error(Kind::argument, std::string(), Where::none, 0, std::move(element), std::move(message));
+  }
+
+  // The system refused an operation on `file` (not the file's content): see the contract above.
+  static Error environment(std::string file, std::string message) {
+    return Error(Kind::environment, std::move(file), Where::none, 0, std::string(), std::move(message));
   }
 
   Kind kind() const noexcept { return kind_; }
