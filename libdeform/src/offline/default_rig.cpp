@@ -361,10 +361,17 @@ RigSurvey survey_rig(const Model& model) {
   // A pair whose branch runs through a helper's name (mrfixit's ArmIK.L and HandGoal.L, which carry the hand's skin
   // but hang from the spine) is an IK set-up, not a limb.
   std::erase_if(pairs, [&](const Pair& p) {
-    for (const Branch* branch : {&p.a, &p.b})
-      for (const std::int32_t b : branch->path)
-        if (body.hints[std::size_t(b)].role == Role::helper) return true;
-    return false;
+    const auto helper = [&](const Branch& branch) {
+      for (const std::int32_t b : branch.path)
+        if (body.hints[std::size_t(b)].role == Role::helper) return b;
+      return std::int32_t(-1);
+    };
+    if (helper(p.a) < 0 && helper(p.b) < 0) return false;
+    for (const Branch* side : {&p.a, &p.b})
+      if (const std::int32_t b = helper(*side); b >= 0)
+        survey.skipped.emplace_back(side->path.front(), "not a limb: an IK set-up (its branch runs through '" +
+                                                            sk.bone(b).name + "', a helper's name)");
+    return true;
   });
   // Limbs are the large pairs, not inside another pair (fingers, toes) and at least half the largest one's extent.
   float largest = 0.0f;
