@@ -121,7 +121,7 @@ const char* naming_name(Naming naming) {
   switch (naming) {
     case Naming::generic: return "generic";
     case Naming::mixamo: return "Mixamo";
-    case Naming::rigify: return "Blender rigify/metarig";
+    case Naming::rigify: return "Blender";  // .L/.R suffixes: rigify (DEF-), the metarig, hand-made rigs
     case Naming::unreal: return "Unreal mannequin";
     case Naming::vrm: return "VRM";
     case Naming::none: break;

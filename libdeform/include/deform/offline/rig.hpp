@@ -68,7 +68,7 @@ struct RigSurvey {
   std::int32_t chest = -1;   // the bone the arms (front legs) branch from
   glm::vec3 up{0.0f, 1.0f, 0.0f};  // model-space up, against the legs' direction in the bind pose
   bool four_legged = false;
-  std::string naming;  // the name map that matched ("Mixamo", "Blender rigify/metarig", "Unreal mannequin", "VRM",
+  std::string naming;  // the name map that matched ("Mixamo", "Blender" (rigify, metarig), "Unreal mannequin", "VRM",
                        // "generic"), or "none": found from the structure alone
 };
 // Finds the limbs of a rigged model from its skeleton's structure and skin weights, names as hints that win when
