@@ -393,3 +393,35 @@ TEST_CASE("rigged models that are no characters keep a one-limb rig that binds a
   }
 }
 #endif
+
+TEST_CASE("survey_rig on hostile skeletons: a chain of 20,000 bones and a root with 20,000 children, quickly") {
+  for (const bool chain : {true, false}) {
+    CAPTURE(chain);
+    std::vector<Spec> s = {{"b0", "", {0, 0, 0}}};
+    for (int i = 1; i < 20000; ++i)
+      s.push_back({"b" + std::to_string(i), chain ? "b" + std::to_string(i - 1) : "b0",
+                   chain ? glm::vec3(0, 0.001f * float(i), 0) : glm::vec3(std::cos(float(i)), 1, std::sin(float(i)))});
+    // make_model looks parents up by name: quadratic, so the skeleton is built here directly.
+    std::vector<deform::Bone> bones(s.size());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      bones[i].name = s[i].name;
+      if (i == 0) continue;
+      bones[i].parent = chain ? std::int32_t(i - 1) : 0;
+      bones[std::size_t(bones[i].parent)].children.push_back(std::int32_t(i));
+      bones[i].bind_translation = s[i].head - s[std::size_t(bones[i].parent)].head;
+    }
+    deform::Model model;
+    model.name = "hostile";
+    model.skeleton = deform::Skeleton(bones);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      model.mesh.positions.push_back(s[i].head);
+      model.weights.bones.push_back(glm::u16vec4(std::uint16_t(i), 0, 0, 0));
+      model.weights.weights.push_back(glm::vec4(1, 0, 0, 0));
+    }
+    const deform::RigSurvey survey = deform::survey_rig(model);
+    CHECK(survey.limbs.empty());
+    const deform::Rig rig = deform::default_rig(model);
+    CHECK(rig.reach_effector > 0);
+    CHECK(rig.lattices.size() <= 3);
+  }
+}

@@ -139,19 +139,14 @@ struct Body {
   std::vector<bool> relevant;  // carries skin weight itself or below, and is no helper
   std::vector<std::vector<std::int32_t>> children;  // relevant children only
   std::vector<glm::vec3> head;
+  std::vector<float> reach;         // how far b's relevant bones (b included) reach from b's parent's head
+  std::vector<std::size_t> counts;  // relevant bones in b's subtree, b included
+  bool surveyed = true;             // false: too deep to survey (far beyond any character)
 
   glm::vec3 at(std::int32_t b) const { return head[std::size_t(b)]; }
-  // The farthest relevant bone head below `b` (b's own head when it has none), and its distance from `from`.
-  float extent(std::int32_t b, glm::vec3 from) const {
-    float far = glm::length(at(b) - from);
-    for (const std::int32_t c : children[std::size_t(b)]) far = std::max(far, extent(c, from));
-    return far;
-  }
-  std::size_t count(std::int32_t b) const {
-    std::size_t n = 1;
-    for (const std::int32_t c : children[std::size_t(b)]) n += count(c);
-    return n;
-  }
+  // How far the relevant bones from b down reach from b's parent's head (every use measures from there).
+  float extent(std::int32_t b) const { return reach[std::size_t(b)]; }
+  std::size_t count(std::int32_t b) const { return counts[std::size_t(b)]; }
   // From b down the child that reaches farthest: a limb's bones, with its hand's middle finger or its toes.
   std::vector<std::int32_t> main_path(std::int32_t b) const {
     std::vector<std::int32_t> path{b};
@@ -159,7 +154,7 @@ struct Body {
       std::int32_t best = -1;
       float far = -1.0f;
       for (const std::int32_t c : children[std::size_t(b)])
-        if (const float e = extent(c, at(b)); e > far) far = e, best = c;
+        if (const float e = extent(c); e > far) far = e, best = c;
       path.push_back(b = best);
     }
     return path;
@@ -215,6 +210,24 @@ Body make_body(const Model& model, RigSurvey& survey) {
       std::erase_if(survey.skipped, [&](const auto& entry) { return entry.first == b; });
     }
     if (parent >= 0 && body.relevant[std::size_t(b)]) body.children[std::size_t(parent)].push_back(b);
+  }
+  // Subtree counts, children before parents; the reach of each bone's subtree from its parent, every relevant bone
+  // walking up its ancestors: the pairs of ancestor and descendant, a few thousand on a character. A skeleton with
+  // more than 2^24 of them (a chain of thousands of bones) is not surveyed.
+  body.counts.assign(n, 1);
+  for (auto it = order.rbegin(); it != order.rend(); ++it)
+    if (const std::int32_t parent = skeleton.bone(*it).parent; parent >= 0 && body.relevant[std::size_t(*it)])
+      body.counts[std::size_t(parent)] += body.counts[std::size_t(*it)];
+  body.reach.assign(n, 0.0f);
+  std::size_t steps = 0;
+  for (std::size_t d = 0; d < n && body.surveyed; ++d) {
+    if (!body.relevant[d]) continue;
+    for (std::int32_t a = std::int32_t(d); skeleton.bone(a).parent >= 0; a = skeleton.bone(a).parent) {
+      const std::int32_t parent = skeleton.bone(a).parent;
+      float& far = body.reach[std::size_t(a)];
+      far = std::max(far, glm::length(body.head[d] - body.head[std::size_t(parent)]));
+      if (++steps > (std::size_t(1) << 24)) body.surveyed = false;
+    }
   }
   return body;
 }
@@ -308,6 +321,7 @@ RigSurvey survey_rig(const Model& model) {
   RigSurvey survey;
   const Body body = make_body(model, survey);
   const Skeleton& sk = model.skeleton;
+  if (!body.surveyed) return survey;
   const auto depth = [&](std::int32_t b) {
     int d = 0;
     while ((b = sk.bone(b).parent) >= 0) ++d;
@@ -323,6 +337,7 @@ RigSurvey survey_rig(const Model& model) {
   std::vector<Pair> pairs;
   for (std::int32_t bone = 0; bone < body.bones; ++bone) {
     const auto& kids = body.children[std::size_t(bone)];
+    if (kids.size() > 32) continue;  // a body branches into a few limbs, a hand into a few fingers
     std::vector<bool> used(kids.size(), false);
     struct Candidate {
       float mismatch;
@@ -331,7 +346,7 @@ RigSurvey survey_rig(const Model& model) {
     std::vector<Candidate> candidates;
     for (std::size_t i = 0; i < kids.size(); ++i)
       for (std::size_t j = i + 1; j < kids.size(); ++j) {
-        const float ei = body.extent(kids[i], body.at(bone)), ej = body.extent(kids[j], body.at(bone));
+        const float ei = body.extent(kids[i]), ej = body.extent(kids[j]);
         const std::size_t ci = body.count(kids[i]), cj = body.count(kids[j]);
         if (!(std::min(ei, ej) > 0.8f * std::max(ei, ej)) || 4 * std::min(ci, cj) < 3 * std::max(ci, cj)) continue;
         const auto pi = body.main_path(kids[i]), pj = body.main_path(kids[j]);
@@ -352,8 +367,8 @@ RigSurvey survey_rig(const Model& model) {
       if (used[c.i] || used[c.j]) continue;
       used[c.i] = used[c.j] = true;
       Pair pair;
-      pair.a = {bone, body.main_path(kids[c.i]), 0, body.extent(kids[c.i], body.at(bone))};
-      pair.b = {bone, body.main_path(kids[c.j]), 0, body.extent(kids[c.j], body.at(bone))};
+      pair.a = {bone, body.main_path(kids[c.i]), 0, body.extent(kids[c.i])};
+      pair.b = {bone, body.main_path(kids[c.j]), 0, body.extent(kids[c.j])};
       pair.extent = std::max(pair.a.extent, pair.b.extent);
       pairs.push_back(std::move(pair));
     }
@@ -378,12 +393,18 @@ RigSurvey survey_rig(const Model& model) {
   for (const Pair& p : pairs) largest = std::max(largest, p.extent);
   std::vector<Pair> limbs;
   for (const Pair& p : pairs) {
+    if (p.extent < 0.5f * largest) continue;
     bool inside = false;
     for (const Pair& q : pairs)
-      if (&q != &p && (sk.is_ancestor(q.a.path.front(), p.a.from) || sk.is_ancestor(q.b.path.front(), p.a.from)))
+      if (&q != &p && (sk.is_ancestor(q.a.path.front(), p.a.from) || sk.is_ancestor(q.b.path.front(), p.a.from))) {
         inside = true;
-    if (!inside && p.extent >= 0.5f * largest) limbs.push_back(p);
+        break;
+      }
+    if (!inside) limbs.push_back(p);
   }
+  // At most eight pairs, the largest (a spider's legs fit; more is no body).
+  std::stable_sort(limbs.begin(), limbs.end(), [](const Pair& x, const Pair& y) { return x.extent > y.extent; });
+  if (limbs.size() > 8) limbs.resize(8);
   // Sides: names, else +X is the character's left.
   for (Pair& p : limbs) {
     p.a.side = side_of(body, p.a.path);
@@ -473,8 +494,8 @@ RigSurvey survey_rig(const Model& model) {
       for (const Branch* b : {&p.a, &p.b})
         survey.limbs.push_back(make_limb(body, *b, LimbKind::leg, why_pair(p, "legs")));
 
-  // A named hand or foot no pair holds (an asymmetric rig): its limb runs up to the nearest branch.
-  for (std::int32_t bone = 0; bone < body.bones; ++bone) {
+  // A named hand or foot no pair holds (an asymmetric rig): its limb runs up to the nearest branch (four at most).
+  for (std::int32_t bone = 0, added = 0; bone < body.bones && added < 4; ++bone) {
     const NameHint& hint = body.hints[std::size_t(bone)];
     if (!body.relevant[std::size_t(bone)] || (hint.role != Role::hand && hint.role != Role::foot)) continue;
     bool held = false;
@@ -493,6 +514,7 @@ RigSurvey survey_rig(const Model& model) {
     branch.side = hint.side;
     if (branch.from < 0 || branch.path.size() < 2) continue;
     const bool arm = hint.role == Role::hand;
+    ++added;
     survey.limbs.push_back(make_limb(body, branch, arm ? LimbKind::arm : LimbKind::leg,
                                      std::string(arm ? "an arm" : "a leg") + " ending at a bone named '" +
                                          sk.bone(bone).name + "'"));
@@ -511,7 +533,7 @@ RigSurvey survey_rig(const Model& model) {
           continue;
         bool names = false;
         for (const std::int32_t b : body.main_path(c)) names = names || body.hints[std::size_t(b)].role == role;
-        const float e = body.extent(c, body.at(from));
+        const float e = body.extent(c);
         if (e >= legs->a.extent / 6.0f && ((names && !named) || (names == named && e > far)))
           far = e, best = c, named = names;
       }
@@ -553,6 +575,11 @@ Rig default_rig(const Model& model, std::int32_t effector) {
   const auto bones = static_cast<std::int32_t>(skeleton.bone_count());
   if (effector >= bones) throw Error::in_file(model.name, "bone " + std::to_string(effector), "no such bone");
   const RigSurvey survey = survey_rig(model);
+  std::vector<bool> weighted(std::size_t(bones), false);  // skin weight of its own
+  for (std::size_t p = 0; p < model.weights.size(); ++p)
+    for (int i = 0; i < max_influences; ++i)
+      if (model.weights.bones[p][i] < std::uint32_t(bones) && model.weights.weights[p][i] > 0.0f)
+        weighted[model.weights.bones[p][i]] = true;
 
   Rig rig;
   const auto add_lattice = [&](std::int32_t bone) {
@@ -593,11 +620,7 @@ Rig default_rig(const Model& model, std::int32_t effector) {
       std::vector<std::int32_t> own;
       std::int32_t top = -1;
       for (std::int32_t b = effector; b >= 0 && own.size() < 3; b = skeleton.bone(b).parent) {
-        bool weighted = false;
-        for (std::size_t p = 0; p < model.weights.size() && !weighted; ++p)
-          for (int i = 0; i < max_influences; ++i)
-            weighted = weighted || (model.weights.bones[p][i] == b && model.weights.weights[p][i] > 0.0f);
-        if (!weighted) continue;
+        if (!weighted[std::size_t(b)]) continue;
         own.insert(own.begin(), b);
         top = b;
       }
@@ -618,19 +641,14 @@ Rig default_rig(const Model& model, std::int32_t effector) {
   if (rig.reach_effector >= 0) return rig;
 
   // No limb: the deepest bone with skin weight of its own and up to two weighted ancestors, as for a chosen one.
-  std::int32_t deepest = -1, deepest_depth = -1;
-  const std::vector<bool> weighted = [&] {
-    std::vector<bool> w(std::size_t(bones), false);
-    for (std::size_t p = 0; p < model.weights.size(); ++p)
-      for (int i = 0; i < max_influences; ++i)
-        if (model.weights.bones[p][i] < std::uint32_t(bones) && model.weights.weights[p][i] > 0.0f)
-          w[model.weights.bones[p][i]] = true;
-    return w;
-  }();
-  for (std::int32_t b = 0; b < bones; ++b) {
-    int d = 0;
-    for (std::int32_t a = b; (a = skeleton.bone(a).parent) >= 0;) ++d;
-    if (weighted[std::size_t(b)] && d > deepest_depth) deepest = b, deepest_depth = d;
+  std::int32_t deepest = -1;
+  std::vector<int> depth(std::size_t(bones), 0);
+  for (const std::int32_t b : skeleton.order()) {  // parents first
+    if (const std::int32_t parent = skeleton.bone(b).parent; parent >= 0)
+      depth[std::size_t(b)] = depth[std::size_t(parent)] + 1;
+    if (weighted[std::size_t(b)] && (deepest < 0 || depth[std::size_t(b)] > depth[std::size_t(deepest)] ||
+                                     (depth[std::size_t(b)] == depth[std::size_t(deepest)] && b < deepest)))
+      deepest = b;
   }
   if (deepest < 0) throw Error::in_file(model.name, "", "no bone carries skin weight, so no lattice can be bound");
   Rig fallback = default_rig(model, deepest);
