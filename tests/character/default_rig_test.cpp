@@ -251,6 +251,11 @@ void check_reach_moves_only_the_limb(deform::Model model, const deform::Rig& rig
   deform::Character character(std::move(model), rig);
   const deform::Skeleton& sk = character.skeleton();
   const auto bones = std::int32_t(sk.bone_count());
+  // Every limb's end is one the viewer's click may reach with (reach_effectors), a hand without a lattice included.
+  const std::vector<std::int32_t> effectors = deform::reach_effectors(character);
+  for (const deform::Limb& limb : survey.limbs)
+    if (limb.kind != LimbKind::tail)
+      CHECK(std::count(effectors.begin(), effectors.end(), limb.chain.back()) == 1);
   character.update(1.0f / 60.0f);
   std::vector<glm::vec3> before(static_cast<std::size_t>(bones));
   for (std::int32_t b = 0; b < bones; ++b) before[std::size_t(b)] = character.bone_position(b);

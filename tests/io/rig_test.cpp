@@ -284,6 +284,11 @@ TEST_CASE("default_rig puts lattices on every limb, or on the chosen effector's,
                                  "lattices": []})", renamed.skeleton, renamed.mesh.point_count(), "bad.json"),
       doctest::Contains("reach.chains[0].root"), deform::Error);
 
+  // A reach chain whose root is not above its effector does not bind.
+  deform::Rig crossed = by_name;
+  crossed.reach_chains.push_back({renamed.skeleton.find("foot_l"), renamed.skeleton.find("hand_l")});
+  CHECK_THROWS_WITH_AS(deform::Character(renamed, crossed), doctest::Contains("reach chain"), deform::Error);
+
   // The rig binds, and a far target stretches the limb.
   deform::Character character(renamed, by_depth);
   const glm::vec3 tip = character.bone_position(by_depth.reach_effector);
