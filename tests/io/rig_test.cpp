@@ -11,6 +11,7 @@
 #include "deform/runtime/skeleton.hpp"
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -252,40 +253,41 @@ TEST_CASE("bad rig files: the error names the file and the key") {
   CHECK_THROWS_AS(deform::read_rig_json("/nonexistent/rig.json", model().skeleton, 10), deform::Error);
 }
 
-// default_rig: any model gets lattices on the limb its names or its depth point to, and binds.
-TEST_CASE("default_rig finds a limb by name, then by depth, and binds") {
+// default_rig: any model gets lattices on its limbs (tests/character/default_rig_test.cpp tests how they are found),
+// and on the limb of a chosen effector; the rig binds.
+TEST_CASE("default_rig puts lattices on every limb, or on the chosen effector's, and binds") {
   deform::Model renamed = model();
   renamed.name = "imported";
   const deform::Rig by_name = deform::default_rig(renamed);
-  const deform::Rig builtin = deform::builtin_rig(model());
-  REQUIRE(by_name.lattices.size() == 3);
-  for (std::size_t i = 0; i < 3; ++i) CHECK(by_name.lattices[i].bone == builtin.lattices[i].bone);
-  CHECK(by_name.reach_effector == builtin.reach_effector);
-  CHECK(by_name.reach_root == builtin.reach_root);
+  const deform::Rig full = deform::builtin_full_rig(model());
+  REQUIRE(by_name.lattices.size() == full.lattices.size());
+  for (std::size_t i = 0; i < full.lattices.size(); ++i) CHECK(by_name.lattices[i].bone == full.lattices[i].bone);
+  CHECK(by_name.reach_effector == full.reach_effector);
+  CHECK(by_name.reach_root == full.reach_root);
+  REQUIRE(by_name.reach_chains.size() == 3);  // right hand, and the feet from their hip joints
+  CHECK(by_name.reach_chains[1].root == renamed.skeleton.find("thigh_l"));
 
-  // Without telling names the deepest weighted bone is the effector and its weighted ancestors carry the lattices.
-  std::vector<deform::Bone> bones(renamed.skeleton.bones().begin(), renamed.skeleton.bones().end());
-  for (std::size_t b = 0; b < bones.size(); ++b) bones[b].name = "b" + std::to_string(b);
-  renamed.skeleton = deform::Skeleton(bones);
-  const deform::Rig by_depth = deform::default_rig(renamed);
-  const auto depth = [&](std::int32_t b) {
-    int d = 0;
-    while ((b = renamed.skeleton.bone(b).parent) >= 0) ++d;
-    return d;
-  };
-  REQUIRE(by_depth.reach_effector >= 0);
-  std::vector<bool> weighted(bones.size(), false);
-  for (std::size_t p = 0; p < renamed.weights.size(); ++p)
-    for (int i = 0; i < deform::max_influences; ++i)
-      if (renamed.weights.weights[p][i] > 0.0f) weighted[renamed.weights.bones[p][i]] = true;
-  for (std::size_t b = 0; b < bones.size(); ++b)
-    if (weighted[b]) CHECK(depth(std::int32_t(b)) <= depth(by_depth.reach_effector));
-  REQUIRE(!by_depth.lattices.empty());
-  for (const deform::LatticeSpec& spec : by_depth.lattices) {
-    CHECK(weighted[std::size_t(spec.bone)]);
-    CHECK(renamed.skeleton.is_ancestor(spec.bone, by_depth.reach_effector));
-  }
-  CHECK(renamed.skeleton.is_ancestor(by_depth.reach_root, by_depth.lattices.front().bone));
+  // A chosen effector that ends no limb: it and its weighted ancestors get lattices, reaching from the bone above.
+  const std::int32_t chosen = renamed.skeleton.find("ponytail4");
+  REQUIRE(chosen > 0);
+  const deform::Rig by_depth = deform::default_rig(renamed, chosen);
+  CHECK(by_depth.reach_effector == chosen);
+  CHECK(by_depth.reach_root != chosen);
+  CHECK(renamed.skeleton.is_ancestor(by_depth.reach_root, chosen));
+  CHECK(std::any_of(by_depth.lattices.begin(), by_depth.lattices.end(),
+                    [&](const deform::LatticeSpec& spec) { return spec.bone == chosen; }));
+  // The chains survive a rig file.
+  const std::string text = deform::format_rig_json(by_name, renamed.skeleton);
+  CHECK(deform::parse_rig_json(text, renamed.skeleton, renamed.mesh.point_count(), "chains.json") == by_name);
+  CHECK_THROWS_WITH_AS(
+      deform::parse_rig_json(R"({"rig": 1, "reach": {"chains": [{"effector": "foot_l", "root": "hand_l"}]},
+                                 "lattices": []})", renamed.skeleton, renamed.mesh.point_count(), "bad.json"),
+      doctest::Contains("reach.chains[0].root"), deform::Error);
+
+  // A reach chain whose root is not above its effector does not bind.
+  deform::Rig crossed = by_name;
+  crossed.reach_chains.push_back({renamed.skeleton.find("foot_l"), renamed.skeleton.find("hand_l")});
+  CHECK_THROWS_WITH_AS(deform::Character(renamed, crossed), doctest::Contains("reach chain"), deform::Error);
 
   // The rig binds, and a far target stretches the limb.
   deform::Character character(renamed, by_depth);

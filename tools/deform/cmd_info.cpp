@@ -10,6 +10,7 @@
 #include "deform/io/pose_json.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/io/text.hpp"
+#include "deform/offline/rig.hpp"
 #include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
@@ -76,12 +77,58 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+// --rig: the default rig default_rig() makes for a rigged model, and why (rig.hpp's survey_rig; docs/ik.md).
+[[maybe_unused]] Json rig_info(const deform::Model& model) {
+  const deform::Skeleton& skeleton = model.skeleton;
+  const deform::RigSurvey survey = deform::survey_rig(model);
+  const deform::Rig rig = deform::default_rig(model);
+  const auto name = [&](std::int32_t bone) { return bone < 0 ? Json(nullptr) : Json(skeleton.key(bone)); };
+  const auto names = [&](const std::vector<std::int32_t>& bones) {
+    Json list = Json::array();
+    for (const std::int32_t b : bones) list.push_back(skeleton.key(b));
+    return list;
+  };
+  Json limbs = Json::array();
+  for (const deform::Limb& limb : survey.limbs)
+    limbs.push_back({{"kind", deform::limb_kind_name(limb.kind)},
+                     {"side", limb.side > 0 ? "left" : limb.side < 0 ? "right" : "middle"},
+                     {"root", name(limb.chain.front())},
+                     {"effector", name(limb.chain.back())},
+                     {"chain", names(limb.chain)},
+                     {"lattices", names(limb.lattices)},
+                     {"why", limb.why}});
+  Json reach = Json::array();
+  if (rig.reach_effector >= 0)
+    reach.push_back({{"effector", name(rig.reach_effector)}, {"root", name(rig.reach_root)}});
+  for (const deform::Rig::ReachChain& chain : rig.reach_chains)
+    reach.push_back({{"effector", name(chain.effector)}, {"root", name(chain.root)}});
+  Json lattices = Json::array();
+  for (const deform::LatticeSpec& spec : rig.lattices) lattices.push_back(skeleton.key(spec.bone));
+  Json springs = Json::array();
+  for (const deform::SpringChainSpec& chain : rig.spring_chains)
+    springs.push_back({{"name", chain.name}, {"bones", names(chain.bones)}});
+  Json skipped = Json::array();
+  for (const auto& [bone, why] : survey.skipped) skipped.push_back({{"bone", skeleton.key(bone)}, {"why", why}});
+  return {{"naming", survey.naming},
+          {"four_legged", survey.four_legged},
+          {"up", vec3(survey.up)},
+          {"pelvis", name(survey.pelvis)},
+          {"chest", name(survey.chest)},
+          {"limbs", std::move(limbs)},
+          {"reach", std::move(reach)},
+          {"lattices", std::move(lattices)},
+          {"spring_chains", std::move(springs)},
+          {"skipped", std::move(skipped)}};
+}
+
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {}, {});
+  const Args args(argv, {}, {"--rig"});
   if (args.positionals().size() != 1) throw UsageError("expected exactly one file (a .sk skeleton or an .obj mesh)");
   const std::string& path = args.positionals()[0];
   const std::string ext = lower_extension(path);
   Json info;
+  if (args.has("--rig") && (ext == ".sk" || ext == ".obj"))
+    throw UsageError("--rig needs a rigged model the importer reads (glTF, FBX, .x, IQM, ...), not a " + ext + " file");
   if (ext == ".sk") {
     info = skeleton_info(deform::read_sk(path));
   } else if (ext == ".obj") {
@@ -138,6 +185,10 @@ int run(const std::vector<std::string>& argv) {
       // addresses; "bones" above stays the count the contract fixes).
       info["skeleton"] = bone_list(imported.model.skeleton);
     }
+    if (args.has("--rig")) {
+      if (!imported.rigged) throw deform::Error::in_file(path, "", "--rig needs a rigged model: this one has no skin");
+      info["rig"] = rig_info(imported.model);  // new key, last
+    }
 #endif
   } else {
     throw deform::Error::in_file(path, "", "unsupported file type '" + ext + "' (info reads .sk and .obj)");
@@ -150,7 +201,7 @@ int run(const std::vector<std::string>& argv) {
 
 const Command info_command = {
     "info", "inspect a .sk skeleton, an .obj mesh or an importable model",
-    "usage: deform info PATH\n"
+    "usage: deform info PATH [--rig]\n"
     "\n"
     "Prints what PATH holds as one JSON document on stdout.\n"
     "  S.sk      {\"kind\": \"skeleton\", \"bones\": [{\"id\", \"name\", \"parent\", \"head\": [x, y, z],\n"
@@ -167,6 +218,11 @@ const Command info_command = {
     "            most bones one point is skinned by), and when rigged \"skins\": [{\"name\", \"joints\", \"meshes\": the\n"
     "            names of the meshes it deforms}] (glTF: every skin of the file; other formats: one). Importer\n"
     "            warnings go to stderr.\n"
+    "  --rig     (a rigged MODEL) adds \"rig\": the default rig's choices and why: \"naming\" (the name map\n"
+    "            that matched, or none), \"four_legged\", \"up\", \"pelvis\", \"chest\", \"limbs\": [{\"kind\" (arm,\n"
+    "            leg, front_leg, hind_leg, neck, tail), \"side\", \"root\", \"effector\", \"chain\", \"lattices\",\n"
+    "            \"why\"}], \"reach\": [{\"effector\", \"root\"}] (the rig's chains, its default first),\n"
+    "            \"lattices\", \"spring_chains\" and \"skipped\": [{\"bone\", \"why\"}] (helper bones left out).\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a malformed file (the message names the file, the byte offset or\n"
     "line, and the bone or element); 1 any other failure.\n",

@@ -92,6 +92,12 @@ Character::Character(Model model, const Rig& rig)
   if (rig_.reach_effector >= bones || rig_.reach_root >= bones) {
     throw Error::in_file(bound.name, "rig", "reach bone out of range");
   }
+  for (const Rig::ReachChain& chain : rig_.reach_chains) {
+    if (chain.effector <= 0 || chain.effector >= bones || chain.root < 0 || chain.root >= bones ||
+        chain.root == chain.effector || !bound.skeleton.is_ancestor(chain.root, chain.effector)) {
+      throw Error::in_file(bound.name, "rig", "a reach chain's root must be a proper ancestor of its effector");
+    }
+  }
   if (!(rig_.max_stretch >= 0.0f) || !std::isfinite(rig_.max_stretch)) {
     throw Error::in_file(bound.name, "rig", "max_stretch must be finite and >= 0");
   }
@@ -280,12 +286,15 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   }
 
   // The chain, rebuilt only for another effector or setting (its root depends on the effector alone): two bones up
-  // for the two-bone solver; else the rig's root, else the parent of the topmost lattice bone above the effector —
+  // for the two-bone solver; else the rig's root (reach_root, or the effector's entry in reach_chains), else the
+  // parent of the topmost lattice bone above the effector —
   // that bone itself when its parent is the skeleton's root, which places the whole body (a leg's chain starts at the
   // thigh, not the hips: turning the hips would spin the character to point the leg) — else two bones up.
   const bool two_bone = reach_solver == ReachSolver::two_bone;
   if (effector != chain_effector_ || reach_limits != chain_limits_ || reach_solver != chain_solver_) {
     std::int32_t root = effector == rig_.reach_effector && !two_bone ? rig_.reach_root : -1;
+    for (const Rig::ReachChain& chain : rig_.reach_chains)  // (a few entries: a rig's limbs)
+      if (chain.effector == effector && effector != rig_.reach_effector && !two_bone) root = chain.root;
     if (two_bone) {
       root = skel.bone(effector).parent >= 0 ? skel.bone(skel.bone(effector).parent).parent : -1;
       if (root < 0) {

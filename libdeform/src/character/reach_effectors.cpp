@@ -26,6 +26,8 @@ void for_each_reach_effector(const Character& character, Visit&& visit) {
   }
   const std::int32_t effector = character.rig().reach_effector;
   if (effector > 0 && std::size_t(effector) < skeleton.bone_count()) visit(effector);
+  for (const Rig::ReachChain& chain : character.rig().reach_chains)
+    if (chain.effector > 0 && std::size_t(chain.effector) < skeleton.bone_count()) visit(chain.effector);
 }
 
 }  // namespace

@@ -177,7 +177,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
   rig.model = read_model(root);
   if (root.has("reach")) {
     const JsonReader reach = root.at("reach");
-    reach.expect_object({"effector", "root", "max_stretch"});
+    reach.expect_object({"effector", "root", "max_stretch", "chains"});
     if (reach.has("effector") && !reach.at("effector").is_null())
       rig.reach_effector = read_bone(reach.at("effector"), skeleton);
     if (reach.has("root") && !reach.at("root").is_null()) rig.reach_root = read_bone(reach.at("root"), skeleton);
@@ -185,6 +185,21 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
     if (rig.reach_root >= 0 && (rig.reach_effector < 0 || rig.reach_root == rig.reach_effector ||
                                 !skeleton.is_ancestor(rig.reach_root, rig.reach_effector))) {
       reach.at("root").fail("must be a proper ancestor of the effector");
+    }
+    if (reach.has("chains")) {
+      const JsonReader chains = reach.at("chains");
+      for (std::size_t i = 0; i < chains.array_size(); ++i) {
+        const JsonReader c = chains.at(i);
+        c.expect_object({"effector", "root"});
+        Rig::ReachChain chain{read_bone(c.at("effector"), skeleton), read_bone(c.at("root"), skeleton)};
+        if (chain.root == chain.effector || !skeleton.is_ancestor(chain.root, chain.effector))
+          c.at("root").fail("must be a proper ancestor of the effector");
+        for (const Rig::ReachChain& other : rig.reach_chains)
+          if (other.effector == chain.effector) c.at("effector").fail("has a chain already");
+        if (chain.effector == rig.reach_effector)
+          c.at("effector").fail("is the reach effector: its root is reach.root");
+        rig.reach_chains.push_back(chain);
+      }
     }
   }
   const JsonReader lattices = root.at("lattices");
@@ -272,6 +287,12 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
   document["reach"] = {{"effector", rig.reach_effector < 0 ? ojson(nullptr) : ojson(skeleton.key(rig.reach_effector))},
                        {"root", rig.reach_root < 0 ? ojson(nullptr) : ojson(skeleton.key(rig.reach_root))},
                        {"max_stretch", shortest_double(rig.max_stretch)}};
+  if (!rig.reach_chains.empty()) {  // written only when there are some: rigs without keep their old text
+    ojson chains = ojson::array();
+    for (const Rig::ReachChain& c : rig.reach_chains)
+      chains.push_back({{"effector", skeleton.key(c.effector)}, {"root", skeleton.key(c.root)}});
+    document["reach"]["chains"] = std::move(chains);
+  }
   ojson lattices = ojson::array();
   for (std::size_t i = 0; i < rig.lattices.size(); ++i) {
     const LatticeSpec& spec = rig.lattices[i];

@@ -6,8 +6,10 @@
 //   every frame: hero.update(dt); draw hero.positions(), hero.normals(), hero.control_points(i)
 //   hero.release();                                         // the stretch springs back, a damped oscillation
 //
-// reach(effector, target): the chain (rig reach root, or the parent of the topmost lattice above the effector — that
-// lattice's bone itself when its parent is the skeleton's root, so a leg reaches from the hip joint) turns toward the target by CCD within the DOF limits; what distance remains is covered by stretching the chain's
+// reach(effector, target): the chain (rig reach root, or the effector's Rig::reach_chains root, or the parent of the
+// topmost lattice above the effector — that lattice's bone itself when its parent is the skeleton's root, so a leg
+// reaches from the hip joint) turns toward the target by CCD within the DOF limits; what distance remains is covered
+// by stretching the chain's
 // lattices along their bones (shares in proportion to their lengths; IK and stretch are solved together, so a bent
 // chain that straightens as it grows is accounted for). The stretch is a spring target: update() lets the lattices
 // spring toward it, so the effector arrives — within 1% of that remaining distance once settled — with the
@@ -319,7 +321,8 @@ class DEFORM_CHARACTER_API Character {
 // The limbs reach() stretches, for a caller that reaches with "the nearest limb" (a click beside the character):
 // every lattice's bone that has no lattice on a bone below it and a lattice on a bone above it (the end of a chain of
 // lattices, which reach() stretches the lattices above: hand_l, hand_r, foot_l and foot_r with builtin_full_rig; the
-// lattice on the effector itself does not stretch), plus the rig's reach effector; ascending ids. Allocates the result.
+// lattice on the effector itself does not stretch), plus the rig's reach effector and its reach_chains' effectors;
+// ascending ids. Allocates the result.
 DEFORM_CHARACTER_API std::vector<std::int32_t> reach_effectors(const Character& character);
 // Of reach_effectors(), the one whose head (bone_position: as deformed now) is nearest `target`; ties go to the lower
 // id. -1 when there is none or the target is not finite. No allocation; O(lattices² · depth + depth).

@@ -5,7 +5,10 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include <glm/glm.hpp>
 
 #include "deform/offline/export.hpp"
 #include "deform/runtime/hierarchy.hpp"
@@ -30,6 +33,14 @@ struct Rig {
   // The chain reach() uses by default: effector bone and chain root (-1: none / chosen from the lattices).
   std::int32_t reach_effector = -1;
   std::int32_t reach_root = -1;
+  // The chains reach() uses for other effectors (each root a proper ancestor of its effector; one entry per effector,
+  // none the reach_effector): a foot reaches from its hip joint, not from the hips, so the body stays where it stands.
+  struct ReachChain {
+    std::int32_t effector = -1;
+    std::int32_t root = -1;
+    bool operator==(const ReachChain&) const = default;
+  };
+  std::vector<ReachChain> reach_chains;
   // Largest stretch reach() asks of a lattice, as a multiple of its length (>= 0).
   float max_stretch = 3.0f;
   // Spring chains (tails, hair, ears: runtime/spring_chain.hpp), the colliders they share, and their sub-step.
@@ -38,10 +49,46 @@ struct Rig {
   float spring_substep = SpringChains::default_substep;
   bool operator==(const Rig&) const = default;
 };
-// A rig for any rigged model, so an imported character stretches too: up to three lattices on the limb that ends at
-// `effector` (the effector's bone and its two nearest ancestors that carry skin weight: hand, forearm, upper arm on a
-// humanoid), springs as in builtin_rig(), reach chain from the bone above them. With `effector` = -1 it is chosen:
-// the first bone whose name contains "hand" (a left one first), else "wrist", else the deepest bone with skin weight.
-// (The built-in character has a rig of its own: builtin_rig() in extras.) Throws deform::Error when no bone carries skin weight.
+// What default_rig() finds in a skeleton, and why (`deform info MODEL --rig` prints it; docs/ik.md, "Default rigs").
+enum class LimbKind : std::uint8_t { arm, leg, front_leg, hind_leg, neck, tail, limb };
+DEFORM_OFFLINE_API const char* limb_kind_name(LimbKind kind) noexcept;
+struct Limb {
+  LimbKind kind = LimbKind::limb;
+  int side = 0;                      // +1 the character's left, -1 its right, 0 the middle
+  std::vector<std::int32_t> chain;   // the reach chain, root first (clavicle or shoulder, hip joint), effector last
+  std::vector<std::int32_t> lattices;  // the bones that get an elastic lattice (upper, lower, hand or foot)
+  std::string why;                   // how it was found, in words
+};
+struct RigSurvey {
+  std::vector<Limb> limbs;  // arms (left, right), legs (left, right), then a quadruped's neck; a tail last
+  // Bones left out of every limb, each with the reason: no vertex is skinned to it or below it (IK goals, poles,
+  // helper roots), a helper's name (twist, IK, pole, target, control) with no skinned bone below it.
+  std::vector<std::pair<std::int32_t, std::string>> skipped;
+  std::int32_t pelvis = -1;  // the bone the legs (hind legs) branch from, -1 when none was found
+  std::int32_t chest = -1;   // the bone the arms (front legs) branch from
+  glm::vec3 up{0.0f, 1.0f, 0.0f};  // model-space up, against the legs' direction in the bind pose
+  bool four_legged = false;
+  std::string naming;  // the name map that matched ("Mixamo", "Blender" (rigify, metarig), "Unreal mannequin", "VRM",
+                       // "generic"), or "none": found from the structure alone
+};
+// Finds the limbs of a rigged model from its skeleton's structure and skin weights, names as hints that win when
+// present. Structure: helpers (bones no vertex is skinned to, directly or below them, and twist/IK/pole bones by
+// name) are set aside; limbs are mirrored pairs of branches (the same bone count and extent, tips apart) of at least
+// half the largest pair's extent; the pair nearer the skeleton's root is the legs; along each limb the two longest
+// consecutive bones are the upper and lower limb, the next the hand or foot; a bone before an arm's upper arm is its
+// clavicle. A creature whose front limbs end near the floor (within 30% of the pelvis' height) is four-legged and
+// gets a neck (from the chest's remaining branch) and a tail (from the pelvis' remaining branch). Sides: names, else
+// +X is the character's left. Names (Mixamo `mixamorig:LeftHand`, rigify `DEF-hand.L`, Unreal `hand_l`, VRM
+// `leftHand` or `J_Bip_L_Hand`, and generic hand/wrist/foot/ankle words) choose the hand or foot on a limb and find
+// limbs the structure missed. Allocates; O(bones² + points).
+DEFORM_OFFLINE_API RigSurvey survey_rig(const Model& model);
+
+// A rig for any rigged model, so an imported character stretches and reaches: survey_rig()'s limbs each get elastic
+// lattices on their upper, lower and end bone (those carrying skin weight), reach chains from the clavicle or
+// shoulder and from the hip joint (Rig::reach_chains), the reach effector the left hand (else the first limb's end);
+// a tail a spring chain. With `effector` >= 0 that bone is the reach effector: when it ends no limb, its limb is the
+// bone and its two nearest ancestors that carry skin weight, reaching from the bone above them. When no limb is found
+// the deepest bone with skin weight is the effector. (The built-in character has a rig of its own: builtin_rig() in
+// extras.) Throws deform::Error when no bone carries skin weight or `effector` is out of range.
 DEFORM_OFFLINE_API Rig default_rig(const Model& model, std::int32_t effector = -1);
 }  // namespace deform
