@@ -82,6 +82,29 @@ TEST_CASE("rig JSON round trip: text, file, every field") {
   std::filesystem::remove(path);
 }
 
+TEST_CASE("a rig names an imported model by its file") {
+  deform::Rig rig = deform::builtin_rig(model());
+  rig.model = {};
+  rig.model.file = "models/CesiumMan.glb";
+  const std::string text = deform::format_rig_json(rig, model().skeleton);
+  CHECK(nlohmann::json::parse(text)["model"] == nlohmann::json{{"file", "models/CesiumMan.glb"}});
+  CHECK(parse(text) == rig);
+  CHECK(deform::parse_rig_model(text).file == "models/CesiumMan.glb");
+  CHECK_FALSE(deform::parse_rig_model(text).builtin);
+  // One model or the other, and a name.
+  const auto refused = [](const std::string& model_json) {
+    try {
+      (void)deform::parse_rig_model(R"({"rig": 1, "model": )" + model_json + R"(, "lattices": []})", "r.json");
+    } catch (const deform::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(refused(R"({"file": "a.glb", "obj": "a.obj"})").find("key 'model'") != std::string::npos);
+  CHECK(refused(R"({"file": ""})").find("key 'model.file'") != std::string::npos);
+  CHECK(refused(R"({"file": 3})").find("key 'model.file'") != std::string::npos);
+}
+
 TEST_CASE("the written form: hierarchy, names, model") {
   const nlohmann::json doc =
       nlohmann::json::parse(deform::format_rig_json(deform::builtin_rig(model()), model().skeleton));
