@@ -205,6 +205,24 @@ TEST_CASE("write_gltf: the built-in character's texture is embedded only from in
   CHECK(outside.warnings.size() == 1);
 }
 
+TEST_CASE("write_gltf: a texture given in memory is embedded under the name its material gives") {
+  const Folder folder("deform_gltf_image_test");
+  const deform::Model model = deform::builtin_character();  // "builtin.png", no folder: no file to read
+  const std::vector<deform::GltfExportOptions::Image> images = {
+      {"builtin.png", deform::read_file_bytes(DEFORM_SOURCE_DIR "/samples/data/builtin.png")}};
+  deform::GltfExportOptions options;
+  options.images = images;  // no texture_root: the bytes are the caller's
+  const deform::GltfWritten embedded = deform::write_gltf((folder.path / "a.glb").string(), model, options);
+  CHECK(embedded.textures == 1);
+  CHECK(embedded.warnings.empty());
+  const std::vector<deform::GltfExportOptions::Image> not_an_image = {{"builtin.png", {'G', 'I', 'F', '8'}}};
+  options.images = not_an_image;
+  const deform::GltfWritten refused = deform::write_gltf((folder.path / "b.glb").string(), model, options);
+  CHECK(refused.textures == 0);
+  REQUIRE(refused.warnings.size() == 1);
+  CHECK(refused.warnings[0].find("not a PNG or JPEG") != std::string::npos);
+}
+
 TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; model morph targets are warned") {
   const Folder folder("deform_gltf_extra_test");
   deform::Model model = quad();

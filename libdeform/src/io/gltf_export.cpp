@@ -325,12 +325,22 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
     for (const Material& m : mesh.materials) {
       int texture = -1;
-      if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
+      const auto given = std::find_if(options.images.begin(), options.images.end(),
+                                      [&](const GltfExportOptions::Image& image) { return image.name == m.diffuse_map; });
+      const bool in_memory = !m.diffuse_map.empty() && given != options.images.end();
+      if (!m.diffuse_map.empty() && (in_memory || !options.texture_root.empty()) && mesh.vertex_uvs.size() == vertices) {
         for (const auto& [file, index] : embedded)
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {
           std::string why, mime;
-          const std::vector<std::uint8_t> bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          std::vector<std::uint8_t> bytes;
+          if (in_memory) {
+            mime = image_type(given->bytes);
+            if (mime.empty()) why = "the image given for it is not a PNG or JPEG";
+            else bytes = given->bytes;
+          } else {
+            bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          }
           if (bytes.empty()) {
             written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
                                        why + ")");

@@ -51,6 +51,14 @@ struct GltfExportOptions {
   // image formats glTF 2.0 defines, by their first bytes). Any other is left out with a warning naming it, so a model
   // naming /etc/passwd as its texture leaks nothing. Empty: no texture is embedded.
   std::string texture_root;
+  // Textures the caller holds in memory, by the name a material gives as its diffuse_map: such a material's texture is
+  // these bytes (PNG or JPEG by their first bytes, else left out with a warning), whatever `texture_root` says. For a
+  // model whose texture is no file, e.g. the built-in character's "builtin.png" (deform::builtin_texture, encoded).
+  struct Image {
+    std::string name;
+    std::vector<std::uint8_t> bytes;
+  };
+  std::span<const Image> images;
 };
 
 struct GltfWritten {
