@@ -115,6 +115,11 @@ rejected("hero.glb: expected a rig JSON file (--rig), got a glTF binary",
          "simulate", "--builtin", "--rig", "hero.glb", "--target", "1,1,1")
 rejected("hero.glb: expected a rig JSON file (--rig), got a glTF binary",
          "bake", "--rig", "hero.glb", "--target", "1,1,1", "--out", "x.glb")
+rejected("rigs: expected a rig JSON file (--rig), got a folder", "simulate", "--builtin", "--rig", "rigs",
+         "--target", "1,1,1")
+with open(os.path.join(work, "list.json"), "w") as f:
+    f.write("[1, 2]")
+rejected("list.json: must be an object", "simulate", "list.json", "--target", "1,1,1")
 shutil.copy(os.path.join(work, "hero.glb"), os.path.join(work, "hero.sk"))
 rejected("hero.sk: expected a skeleton (.sk), got a glTF binary",
          "ik", "hero.sk", "--effector", "a", "--target", "0,0,0")

@@ -50,6 +50,8 @@ model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const s
 }
 
 std::string describe_file(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) return "a folder";
   std::ifstream in(path, std::ios::binary);
   if (!in) return "a file that cannot be read";
   std::string head(64 * 1024, '\0');
@@ -74,6 +76,7 @@ std::string describe_file(const std::string& path) {
     if (head.find("\"bones\"") != std::string::npos) return "a pose JSON file";
     return "a JSON file";
   }
+  if (first != std::string::npos && head[first] == '[') return "a JSON file";  // not a rig: the parser says why
   if (head.find("<COLLADA") != std::string::npos) return "a Collada model";
   const std::string extension = lower_extension(path);
   if (extension == ".obj") return "an OBJ mesh";

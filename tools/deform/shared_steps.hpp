@@ -20,7 +20,7 @@ namespace cli {
 model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path);
 
 // What a file holds, by its first bytes, in words for an error ("a glTF binary", "a skeleton (.sk)", "a rig JSON
-// file", ...; "an empty file", "a file that cannot be read"): so that a file given in the wrong place is named for
+// file", ...; "a folder", "an empty file", "a file that cannot be read"): so that a file given in the wrong place is named for
 // what it is. Reads at most the first 64 KiB.
 std::string describe_file(const std::string& path);
 
