@@ -20,8 +20,8 @@ namespace cli {
 model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path);
 
 // What a file holds, by its first bytes, in words for an error ("a glTF binary", "a skeleton (.sk)", "a rig JSON
-// file", ...; "a folder", "an empty file", "a file that cannot be read"): so that a file given in the wrong place is named for
-// what it is. Reads at most the first 64 KiB.
+// file", ...; "a folder", "an empty file", "a file that cannot be read"): so that a file given in the wrong place is
+// named for what it is. Reads at most the first 64 KiB.
 std::string describe_file(const std::string& path);
 
 // The text of a rig file (`--rig FILE`, or a RIG.json positional). Throws deform::Error naming the file when it cannot

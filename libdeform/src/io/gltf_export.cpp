@@ -326,9 +326,10 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     for (const Material& m : mesh.materials) {
       int texture = -1;
       const auto given = std::find_if(options.images.begin(), options.images.end(),
-                                      [&](const GltfExportOptions::Image& image) { return image.name == m.diffuse_map; });
+                                      [&](const GltfExportOptions::Image& i) { return i.name == m.diffuse_map; });
       const bool in_memory = !m.diffuse_map.empty() && given != options.images.end();
-      if (!m.diffuse_map.empty() && (in_memory || !options.texture_root.empty()) && mesh.vertex_uvs.size() == vertices) {
+      const bool wanted = !m.diffuse_map.empty() && (in_memory || !options.texture_root.empty());
+      if (wanted && mesh.vertex_uvs.size() == vertices) {
         for (const auto& [file, index] : embedded)
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {
