@@ -86,6 +86,10 @@ for name, path in candidates:
     from_rig = deform("ik", f"rigs/{name}.rig.json", "--target", "0,0,0")
     if from_rig:
         check(from_rig["bones"] == default["bones"], f"{name}: ik on the rig file differs from the default chain")
+    shutil.copy(os.path.join(work, "rigs", f"{name}.rig.json"), os.path.join(work, "rigs", f"{name}.rig"))
+    from_rig = deform("ik", f"rigs/{name}.rig", "--target", "0,0,0")  # a rig by its content, not its name
+    if from_rig:
+        check(from_rig["bones"] == default["bones"], f"{name}: ik on {name}.rig differs from the default chain")
     saved = f"rigs/{name}.rig.json"
     for args in ([saved], ["--rig", saved], [path, "--rig", saved]):
         sim = deform("simulate", *args, "--target", target, "--seconds", "0.1", "--dt", "0.05")

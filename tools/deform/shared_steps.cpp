@@ -94,7 +94,9 @@ std::string read_rig_text(const std::string& path) {
 RiggedModel load_rigged_model(const Args& args, bool need_rig) {
   const std::vector<std::string>& files = args.positionals();
   std::optional<std::string> rig_path = args.value("--rig");
-  const bool rig_positional = files.size() == 1 && !args.has("--builtin") && lower_extension(files[0]) == ".json";
+  // A rig positional: RIG.json, or a rig file by its content whatever its name (arm.rig).
+  const bool rig_positional = files.size() == 1 && !args.has("--builtin") &&
+                              (lower_extension(files[0]) == ".json" || describe_file(files[0]) == "a rig JSON file");
   if (rig_positional && rig_path)
     throw UsageError("'" + files[0] + "' is a rig and --rig names another: give MODEL --rig FILE, or the rig alone");
   if (rig_positional) rig_path = files[0];
