@@ -95,6 +95,17 @@ for name, path in candidates:
         sim = deform("simulate", *args, "--target", target, "--seconds", "0.1", "--dt", "0.05")
         if sim:
             check(len(sim["samples"]) == 3, f"{name}: simulate {' '.join(args)}: {len(sim['samples'])} samples")
+    # `simulate --save-rig` writes the rig as run, naming its model: the file alone runs the same simulation.
+    first = deform("simulate", path, "--target", target, "--inertia", "0.5", "--seconds", "0.2", "--dt", "0.05",
+                   "--save-rig", f"rigs/{name}-saved.rig.json")
+    again = deform("simulate", f"rigs/{name}-saved.rig.json", "--target", target, "--seconds", "0.2", "--dt", "0.05")
+    check(first is not None and first == again, f"{name}: simulate of the saved rig differs from the run that saved it")
+    with open(os.path.join(work, "rigs", f"{name}-saved.rig.json")) as f:
+        saved = json.load(f)
+    check(os.path.realpath(os.path.join(work, "rigs", saved["model"]["file"])) == os.path.realpath(path),
+          f"{name}: the saved rig names {saved['model']} for {path}")
+    check(all(l.get("motion", {}).get("inertia") == 0.5 for l in saved["lattices"]),
+          f"{name}: the saved rig lost --inertia 0.5")
     # Without a "model" the rig needs the model on the command line.
     del rig["model"]
     with open(os.path.join(work, "rigs", f"{name}-bare.rig.json"), "w") as f:

@@ -26,7 +26,7 @@ using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as docu
 constexpr const char* usage =
     "usage: deform simulate (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
     "                       [--release-at T] [--seconds S] [--dt DT] [--effector BONE] [--integrator exact|verlet]\n"
-    "                       [--min-length F] [--volume F] [--inertia F]\n"
+    "                       [--min-length F] [--volume F] [--inertia F] [--save-rig FILE]\n"
     "\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
     "stretch to cover what remains), holds, releases at T and lets the stretch spring back; with --clip, plays the\n"
@@ -56,14 +56,17 @@ constexpr const char* usage =
     "                       s^(-F/2) (default: the rig's, 1 unless it says: keeps its volume; 0: the plain\n"
     "                       stretch)\n"
     "  --inertia F          how much every lattice lags behind its bone's motion, in [0, 1] (default: the rig's,\n"
-    "                       0 unless it says: the lattices move only when stretched)\n";
+    "                       0 unless it says: the lattices move only when stretched)\n"
+    "  --save-rig FILE      also write the rig as run (these options applied) to FILE, its \"model\" naming the\n"
+    "                       model relative to FILE's folder, so that `deform simulate FILE` runs it again\n";
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = {"--target",     "--clip",       "--release-at", "--seconds", "--dt",
-                                          "--effector",   "--integrator", "--min-length", "--volume",  "--inertia"};
+                                          "--effector",   "--integrator", "--min-length", "--volume",  "--inertia",
+                                          "--save-rig"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {
@@ -114,6 +117,8 @@ int run(const std::vector<std::string>& argv) {
     if (effector < 0) throw UsageError("--effector: no bone named '" + *name + "'");
   }
   if (effector <= 0) throw UsageError("the rig has no reach effector: give --effector BONE");
+  // The rig as run, the options above applied, naming its model: `deform simulate FILE` runs it again.
+  if (const auto path = args.value("--save-rig")) save_rig(*path, rig, rigged.named, model.skeleton);
 
   deform::Character character(std::move(model), rig);
   // The pose at time t: the clip's (and, a millisecond later, where it is heading), then the reach on top.

@@ -109,9 +109,21 @@ RiggedModel load_rigged_model(const Args& args, bool need_rig) {
   if (rig_path && (rig_positional || (files.empty() && !args.has("--builtin")))) {
     for (const char* flag : {"--skeleton", "--weights", "--max-influences"})
       if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a model given on the command line");
-    out.loaded = load_rig_model(deform::parse_rig_model(text, *rig_path), *rig_path);
+    out.named = deform::parse_rig_model(text, *rig_path);
+    out.loaded = load_rig_model(out.named, *rig_path);
+    const std::filesystem::path folder = std::filesystem::path(*rig_path).parent_path();
+    for (std::string* file : {&out.named.obj, &out.named.skeleton, &out.named.weights, &out.named.file})
+      if (!file->empty()) *file = (folder / *file).string();
   } else {
     out.loaded = load_model(args);  // --builtin, MODEL or the native triple; the rig's "model", if any, is not used
+    out.named.builtin = out.loaded.builtin;
+    if (out.loaded.imported) {
+      out.named.file = out.loaded.source;
+    } else if (!out.loaded.builtin) {
+      out.named.obj = out.loaded.source;
+      out.named.skeleton = args.value("--skeleton").value_or("");
+      out.named.weights = args.value("--weights").value_or("");
+    }
   }
   deform::Model& model = out.loaded.model;
   if (rig_path) out.rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), *rig_path);
@@ -121,6 +133,18 @@ RiggedModel load_rigged_model(const Args& args, bool need_rig) {
       out.loaded.builtin ? "" : std::filesystem::path(out.loaded.source).parent_path().lexically_normal().string();
   out.texture_root = folder.empty() ? "." : folder;
   return out;
+}
+
+void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named, const deform::Skeleton& skeleton) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::absolute(path).parent_path();
+  rig.model = named;
+  for (std::string* file : {&rig.model.obj, &rig.model.skeleton, &rig.model.weights, &rig.model.file}) {
+    if (file->empty()) continue;
+    const fs::path relative = fs::absolute(*file).lexically_normal().lexically_relative(folder);
+    if (!relative.empty()) *file = relative.generic_string();
+  }
+  deform::write_rig_json(path, rig, skeleton);
 }
 
 const deform::Animation& find_clip_or_fail(const std::vector<deform::Animation>& clips, const std::string& name) {

@@ -37,11 +37,16 @@ inline const std::vector<std::string> rig_value_flags = {"--skeleton", "--weight
 struct RiggedModel {
   model_loading::LoadedModel loaded;     // its clips: the file's for an import, builtin_clips for the built-in one
   deform::Rig rig;
+  deform::RigModel named;                // the model's files as read (paths from the current folder), for save_rig
   std::string texture_root;              // the model's folder ("." for the built-in character)
 };
 // With `need_rig` false and no rig file, `rig` is left empty instead (a command that names its bones itself need not
 // fail where the default rig would).
 RiggedModel load_rigged_model(const Args& args, bool need_rig = true);
+
+// Writes `rig` as a rig file at `path` (atomically) whose "model" names `named`'s files relative to `path`'s folder,
+// so that the file alone brings its model back (`deform simulate RIG.json`).
+void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named, const deform::Skeleton& skeleton);
 
 // The clip named `name` among `clips`; UsageError listing the clips there are when none has that name.
 const deform::Animation& find_clip_or_fail(const std::vector<deform::Animation>& clips, const std::string& name);
