@@ -135,7 +135,8 @@ RiggedModel load_rigged_model(const Args& args, bool need_rig) {
   return out;
 }
 
-void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named, const deform::Skeleton& skeleton) {
+void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named,
+              const deform::Skeleton& skeleton) {
   namespace fs = std::filesystem;
   const fs::path folder = fs::absolute(path).parent_path();
   rig.model = named;

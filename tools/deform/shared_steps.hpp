@@ -46,7 +46,8 @@ RiggedModel load_rigged_model(const Args& args, bool need_rig = true);
 
 // Writes `rig` as a rig file at `path` (atomically) whose "model" names `named`'s files relative to `path`'s folder,
 // so that the file alone brings its model back (`deform simulate RIG.json`).
-void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named, const deform::Skeleton& skeleton);
+void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named,
+              const deform::Skeleton& skeleton);
 
 // The clip named `name` among `clips`; UsageError listing the clips there are when none has that name.
 const deform::Animation& find_clip_or_fail(const std::vector<deform::Animation>& clips, const std::string& name);
