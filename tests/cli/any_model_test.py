@@ -138,6 +138,7 @@ rejected("list.json: must be an object", "simulate", "list.json", "--target", "1
 shutil.copy(os.path.join(work, "hero.glb"), os.path.join(work, "hero.sk"))
 rejected("hero.sk: expected a skeleton (.sk), got a glTF binary",
          "ik", "hero.sk", "--effector", "a", "--target", "0,0,0")
+rejected("--builtin takes no skeleton file", "ik", "--builtin", "hero.sk", "--effector", "a", "--target", "0,0,0")
 rejected("'rigs/x.rig.json' is a rig and --rig names another", "ik", "rigs/x.rig.json", "--rig", "rigs/y.rig.json",
          "--target", "0,0,0")
 check(not os.path.exists(os.path.join(work, "x.glb")), "a refused bake wrote its output")

@@ -29,7 +29,7 @@ deform::Rig parse(const std::string& text) {
 // A rig using every field away from its default.
 deform::Rig everything() {
   deform::Rig rig = deform::builtin_rig(model());
-  rig.model = {false, "arm.obj", "arm.sk", "arm.skw"};
+  rig.model = {false, "arm.obj", "arm.sk", "arm.skw", ""};
   rig.max_stretch = 1.25f;
   deform::LatticeSpec& upper = rig.lattices[0];
   upper.degree = glm::ivec3(2, 4, 1);

@@ -35,6 +35,7 @@ int run(const std::vector<std::string>& argv) {
   deform::Rig rig;
   if (skeleton_only) {
     const std::string& path = args.positionals()[0];
+    if (args.has("--builtin")) throw UsageError("--builtin takes no skeleton file (got '" + path + "')");
     const std::string kind = describe_file(path);
     if (kind != "a skeleton (.sk)" && kind != "a file that cannot be read")
       throw deform::Error::in_file(path, "", "expected a skeleton (.sk), got " + kind);
