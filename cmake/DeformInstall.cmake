@@ -19,6 +19,27 @@ install(TARGETS deform_runtime deform_offline deform_io deform_character deform_
 install(EXPORT libdeformTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
   PATTERN "import" EXCLUDE PATTERN "gpu" EXCLUDE)
+# deform-c.pc: the C API for a build without CMake: cc app.c $(pkg-config --cflags --libs deform-c). Relocatable
+# (paths from the .pc file's own folder), so an install with --prefix anywhere works. A static build lists every
+# layer's archive, in link order, and the C++ runtime; a shared one, libdeform_c alone.
+set(deform_pc_libs "-ldeform_c")
+set(deform_pc_private "-ldeform_extras -ldeform_character -ldeform_io -ldeform_offline -ldeform_runtime -pthread")
+if(NOT BUILD_SHARED_LIBS)
+  get_property(deform_cxx_runtime GLOBAL PROPERTY DEFORM_CXX_RUNTIME)
+  list(TRANSFORM deform_cxx_runtime PREPEND "-l")
+  list(JOIN deform_cxx_runtime " " deform_cxx_runtime)
+  string(APPEND deform_pc_libs " ${deform_pc_private} ${deform_cxx_runtime}")
+  set(deform_pc_private "")
+endif()
+if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}")
+  set(deform_pc_prefix "${CMAKE_INSTALL_PREFIX}")
+else()
+  file(RELATIVE_PATH deform_pc_up "/root/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/root")
+  set(deform_pc_prefix "\${pcfiledir}/${deform_pc_up}")
+endif()
+configure_file(${PROJECT_SOURCE_DIR}/cmake/deform-c.pc.in ${PROJECT_BINARY_DIR}/deform-c.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/deform-c.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+
 set(DEFORM_HAVE_IMPORT_COMPONENT 0)
 if(TARGET deform_import)
   set(DEFORM_HAVE_IMPORT_COMPONENT 1)

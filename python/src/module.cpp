@@ -1,6 +1,7 @@
 // The `deform` Python module: errors, models (loading, weights, export), skeletons and poses.
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <optional>
 #include <memory>
 #include <string>
@@ -323,10 +324,23 @@ PYBIND11_MODULE(deform, m) {
           "next): frequency in Hz, damping ratio, gravity in m/s² (model space; default none). A Character built "
           "with the rig checks the bones and raises deform.Error for a chain it cannot bind.")
       .def(
-          "save", [](const deform::Rig& r, const std::string& path, const deform::Model& md) {
-            deform::write_rig_json(path, r, md.skeleton);
+          "save",
+          [](const deform::Rig& r, const std::string& path, const deform::Model& md,
+             const std::optional<std::string>& model_file) {
+            deform::Rig saved = r;
+            if (model_file) {  // the file names its model relative to its own folder, as the CLI reads it
+              const std::filesystem::path folder = std::filesystem::absolute(path).parent_path();
+              std::filesystem::path relative = std::filesystem::absolute(*model_file).lexically_relative(folder);
+              if (relative.empty()) relative = std::filesystem::absolute(*model_file);
+              saved.model = {};
+              saved.model.file = relative.generic_string();
+            }
+            deform::write_rig_json(path, saved, md.skeleton);
           },
-          py::arg("path"), py::arg("model"), "Writes the rig as JSON.");
+          py::arg("path"), py::arg("model"), py::arg("model_file") = py::none(),
+          "Writes the rig as JSON. Its \"model\" key names the model the CLI loads with it (`deform simulate RIG`): "
+          "`model_file` (the file import_model read, written relative to the rig's folder), or else what the rig "
+          "says (\"builtin\" for builtin_rig()); without either the CLI needs the model on its command line.");
 
   m.def(
       "compute_automatic_weights",

@@ -87,3 +87,19 @@ def test_import_error_names_the_file(tmp_path):
     with pytest.raises(deform.Error) as info:
         deform.import_model(str(bad))
     assert str(bad) in str(info.value)
+
+
+@pytest.mark.skipif(not deform.has_import or not WUSON.exists(), reason="needs deform::import and assimp-testmodels")
+def test_a_saved_rig_names_its_imported_model(tmp_path):
+    import json
+    model = deform.import_model(str(WUSON))["model"]
+    rig = deform.default_rig(model)
+    path = tmp_path / "rigs" / "wuson.rig.json"
+    path.parent.mkdir()
+    rig.save(str(path), model, model_file=str(WUSON))
+    written = json.loads(path.read_text())
+    # Relative to the rig's folder, which is how `deform simulate RIG` finds it.
+    assert (path.parent / written["model"]["file"]).resolve() == WUSON.resolve()
+    assert deform.read_rig(str(path), model).lattice_names == rig.lattice_names
+    rig.save(str(path), model)  # no model_file: the rig says what it knows, here nothing
+    assert "model" not in json.loads(path.read_text())

@@ -168,10 +168,20 @@ def expect_only(folder, names):
 os.makedirs(os.path.join(work, "gltf"))
 out = run("export", "--builtin", "--format", "gltf", "--out", "gltf/builtin.gltf")
 if out:
-    check(out["bin"] == "gltf/builtin.bin" and out["bones"] == 33 and out["clips"] == [], f"export builtin: {out}")
+    # Its clips and its texture (painted by code: no file to find, no warning) come with it.
+    check(out["bin"] == "gltf/builtin.bin" and out["bones"] == 33 and
+          out["clips"] == ["idle", "walk", "run", "wave"] and out["textures"] == 1, f"export builtin: {out}")
 expect_only(os.path.join(work, "gltf"), ["builtin.gltf", "builtin.bin"])
-run("export", "--builtin", "--format", "gltf", "--out", "builtin.glb")
+p = subprocess.run([deform, "export", "--builtin", "--format", "gltf", "--out", "builtin.glb"], capture_output=True,
+                   text=True, timeout=300, cwd=work)
+check(p.returncode == 0 and "builtin.png" not in p.stderr, f"export --builtin .glb: {p.returncode} {p.stderr}")
 written += ["gltf/builtin.gltf", "builtin.glb"]
+with open(os.path.join(work, "gltf", "builtin.gltf")) as f:
+    builtin_doc = json.load(f)
+check([a["name"] for a in builtin_doc.get("animations", [])] == ["idle", "walk", "run", "wave"],
+      f"builtin.gltf animations: {[a.get('name') for a in builtin_doc.get('animations', [])]}")
+check(len(builtin_doc.get("images", [])) == 1 and builtin_doc["images"][0].get("mimeType") == "image/png",
+      f"builtin.gltf images: {builtin_doc.get('images')}")
 # The native triple of samples/data, whose material has a PNG texture in the model's folder: it is embedded.
 out = run("export", os.path.join(samples, "builtin.obj"), "--skeleton", os.path.join(samples, "builtin.sk"),
           "--weights", os.path.join(samples, "builtin.skw"), "--format", "gltf", "--out", "textured.glb")
@@ -267,12 +277,43 @@ if out:
         first = max(math.dist(a, b) for a, b in zip(frames[1], frames[0]))
         check(last < first or first == 0, f"reach.glb: the motion does not settle ({first:g} -> {last:g})")
 
+# --- bake --clip: the built-in walk with its jiggle (every lattice of the rig given inertia), and an import's clip ---
+rig = {"rig": 1, "model": "builtin", "reach": {"effector": "hand_l", "root": "clavicle_l"},
+       "lattices": [{"name": n, "bone": n, "motion": {"inertia": 1}} for n in ("upperarm_l", "forearm_l", "hand_l")]}
+with open(os.path.join(work, "jiggle.rig.json"), "w") as f:
+    json.dump(rig, f)
+walks = {}
+for name, args in (("walk.glb", ["--builtin"]), ("walk-jiggle.glb", ["--builtin", "--rig", "jiggle.rig.json"])):
+    out = run("bake", *args, "--clip", "walk", "--fps", "10", "--out", name)
+    written.append(name)
+    if out:
+        check(out["frames"] == 11, f"bake {name}: {out['frames']} frames, not 11 (the walk's 1 s at 10 fps)")
+        doc, rest, frames = baked_frames(os.path.join(work, name))
+        check(doc["animations"][0]["name"] == "walk", f"bake {name}: animation {doc['animations'][0]['name']}")
+        check(len(doc.get("images", [])) == 1, f"bake {name}: the texture is not embedded")
+        walks[name] = frames
+if len(walks) == 2:
+    # The walk moves the body; the jiggle moves the left arm's points away from the rigid walk's.
+    a, b = walks["walk.glb"], walks["walk-jiggle.glb"]
+    check(max(math.dist(p, q) for p, q in zip(a[5], a[0])) > 0.05, "bake --clip walk: the body does not move")
+    jiggle = max(math.dist(p, q) for k in range(len(a)) for p, q in zip(a[k], b[k]))
+    check(jiggle > 1e-3, f"bake --clip walk --rig jiggle: the lattices' inertia moves no point ({jiggle:g})")
+if os.path.exists(wuson):
+    out = run("bake", wuson, "--clip", "Wuson_Walk", "--seconds", "0.5", "--fps", "8", "--out", "wuson-walk.glb")
+    written.append("wuson-walk.glb")
+    if out:
+        check(out["frames"] == 5, f"bake wuson --clip: {out['frames']} frames, not 5")
+        doc, rest, frames = baked_frames(os.path.join(work, "wuson-walk.glb"))
+        check(doc["animations"][0]["name"] == "Wuson_Walk", "bake wuson --clip: the animation is not the clip's")
+        check(max(math.dist(p, q) for p, q in zip(frames[2], frames[0])) > 0, "bake wuson --clip: nothing moves")
+    run("bake", wuson, "--clip", "Dance", "--out", "none.glb", expect=2)
+
 # --- bad usage writes nothing ---
 run("export", "--builtin", "--format", "gltf", "--out", "x.obj", expect=2)
 run("export", "--builtin", "--format", "fbx", "--out", "x.glb", expect=2)
 run("bake", "--builtin", "--target", "1.3,1.6,0.4", "--fps", "0", "--out", "bad.glb", expect=2)
 run("bake", mesh, "--lattice", "head.json", "--target", "1,1,1", "--out", "bad.glb", expect=2)
-for name in ("x.obj", "x.glb", "bad.glb"):
+for name in ("x.obj", "x.glb", "bad.glb", "none.glb"):
     check(not os.path.exists(os.path.join(work, name)), f"{name} was written by a failed command")
 
 validate([os.path.join(work, name) for name in written])

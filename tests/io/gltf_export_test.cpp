@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -203,6 +204,24 @@ TEST_CASE("write_gltf: the built-in character's texture is embedded only from in
   const deform::GltfWritten outside = deform::write_gltf((folder.path / "c.glb").string(), textured, options);
   CHECK(outside.textures == 0);
   CHECK(outside.warnings.size() == 1);
+}
+
+TEST_CASE("write_gltf: a texture the model holds in memory is embedded as it is, with no texture folder") {
+  const Folder folder("deform_gltf_image_test");
+  deform::Model model = deform::builtin_character();  // "builtin.png", no folder: no file to read
+  const auto png = std::make_shared<const std::vector<std::uint8_t>>(
+      deform::read_file_bytes(DEFORM_SOURCE_DIR "/samples/data/builtin.png"));
+  model.mesh.materials[0].diffuse_map.clear();
+  model.mesh.materials[0].diffuse_image = png;  // no texture_root: the bytes are the model's
+  const deform::GltfWritten embedded = deform::write_gltf((folder.path / "a.glb").string(), model);
+  CHECK(embedded.textures == 1);
+  CHECK(embedded.warnings.empty());
+  model.mesh.materials[0].diffuse_image =
+      std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{'G', 'I', 'F', '8'});
+  const deform::GltfWritten refused = deform::write_gltf((folder.path / "b.glb").string(), model);
+  CHECK(refused.textures == 0);
+  REQUIRE(refused.warnings.size() == 1);
+  CHECK(refused.warnings[0].find("not a PNG or JPEG") != std::string::npos);
 }
 
 TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; model morph targets are warned") {

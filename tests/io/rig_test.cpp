@@ -30,7 +30,7 @@ deform::Rig parse(const std::string& text) {
 // A rig using every field away from its default.
 deform::Rig everything() {
   deform::Rig rig = deform::builtin_rig(model());
-  rig.model = {false, "arm.obj", "arm.sk", "arm.skw"};
+  rig.model = {false, "arm.obj", "arm.sk", "arm.skw", ""};
   rig.max_stretch = 1.25f;
   deform::LatticeSpec& upper = rig.lattices[0];
   upper.degree = glm::ivec3(2, 4, 1);
@@ -81,6 +81,29 @@ TEST_CASE("rig JSON round trip: text, file, every field") {
   CHECK(deform::read_rig_json(path.string(), model().skeleton, model().mesh.point_count()) == everything());
   CHECK(deform::parse_rig_model(deform::read_file_text(path.string())) == everything().model);
   std::filesystem::remove(path);
+}
+
+TEST_CASE("a rig names an imported model by its file") {
+  deform::Rig rig = deform::builtin_rig(model());
+  rig.model = {};
+  rig.model.file = "models/CesiumMan.glb";
+  const std::string text = deform::format_rig_json(rig, model().skeleton);
+  CHECK(nlohmann::json::parse(text)["model"] == nlohmann::json{{"file", "models/CesiumMan.glb"}});
+  CHECK(parse(text) == rig);
+  CHECK(deform::parse_rig_model(text).file == "models/CesiumMan.glb");
+  CHECK_FALSE(deform::parse_rig_model(text).builtin);
+  // One model or the other, and a name.
+  const auto refused = [](const std::string& model_json) {
+    try {
+      (void)deform::parse_rig_model(R"({"rig": 1, "model": )" + model_json + R"(, "lattices": []})", "r.json");
+    } catch (const deform::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(refused(R"({"file": "a.glb", "obj": "a.obj"})").find("key 'model'") != std::string::npos);
+  CHECK(refused(R"({"file": ""})").find("key 'model.file'") != std::string::npos);
+  CHECK(refused(R"({"file": 3})").find("key 'model.file'") != std::string::npos);
 }
 
 TEST_CASE("the written form: hierarchy, names, model") {

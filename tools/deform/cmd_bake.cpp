@@ -20,6 +20,7 @@
 #include "deform/io/text.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/model.hpp"
@@ -31,23 +32,29 @@ namespace {
 using Json = nlohmann::json;
 
 constexpr const char* usage =
-    "usage: deform bake (--builtin | RIG) --target X,Y,Z [--release-at T] [--seconds S] [--fps F] [--dt DT]\n"
-    "                   --out FILE.(gltf|glb)\n"
+    "usage: deform bake (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
+    "                   [--release-at T] [--seconds S] [--fps F] [--dt DT] --out FILE.(gltf|glb)\n"
     "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
     "\n"
     "Writes a deformation over time as glTF 2.0 that any glTF viewer plays: the mesh at its bind pose plus one morph\n"
     "target per frame (sparse: only the vertices that move), and one animation whose weights show frame k at k/F\n"
     "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md).\n"
     "\n"
-    "  --builtin | RIG      the reach-stretch-release of `deform simulate` (same rig, target and release): frame 0 is\n"
-    "                       just after the reach, the mesh's bind pose is the glTF's rest shape\n"
+    "  --builtin | MODEL | RIG   what `deform simulate` runs, with the same rig, target, clip and release: the\n"
+    "                       built-in character, any model (an import, or MESH.obj --skeleton S.sk --weights W.skw)\n"
+    "                       with its default rig or --rig FILE, or a rig file naming its model; frame 0 is t = 0,\n"
+    "                       the mesh's bind pose is the glTF's rest shape\n"
+    "  --target X,Y,Z       world-space target of the rig's reach effector\n"
+    "  --clip NAME          play this clip of the model (the built-in character's idle, walk, run, wave; an\n"
+    "                       import's own), the rig's lattices and spring chains jiggling with it; the animation\n"
+    "                       is named after the clip\n"
     "  MESH.obj --lattice L.json   the FFD of `deform ffd`, its displacements scaled from 0 (frame 0) to 1 (the\n"
     "                       last frame, which is `deform ffd`'s output)\n"
-    "  --seconds S          length (default 3 for a reach, 1 for an FFD); frames at 0, 1/F, ..., S\n"
+    "  --seconds S          length (default: the clip's duration for --clip alone, 3 for a reach, 1 for an FFD);\n"
+    "                       frames at 0, 1/F, ..., S\n"
     "  --fps F              frames per second, in (0, 240] (default 30); at most 1000 frames\n"
     "  --dt DT              largest simulation step, seconds (default 1/60); frames and the release split steps\n"
     "  --release-at T       seconds after the reach when the stretch is released (default 1.5)\n"
-    "  --target X,Y,Z       world-space target of the rig's reach effector\n"
     "\n"
     "Prints {\"gltf\": FILE, \"bin\": path or null, \"bytes\", \"frames\", \"fps\", \"render_vertices\",\n"
     "\"stored_displacements\": sparse values over all frames (positions and normals)}.\n";
@@ -86,7 +93,8 @@ std::string checked_out(const Args& args) {
   return out;
 }
 
-// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none.
+// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none. Textures the model holds
+// in memory (Material::diffuse_image) are embedded whatever it says.
 int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
           const std::string& texture_root) {
   deform::GltfExportOptions options;
@@ -105,32 +113,28 @@ int write(const std::string& out, const deform::Model& model, const deform::Bake
   return exit_ok;
 }
 
-int bake_reach(const Args& args) {
+int bake_animated(const Args& args) {
   const std::string out = checked_out(args);
-  const bool builtin = args.has("--builtin");
-  if (builtin == (args.positionals().size() == 1) || args.positionals().size() > 1)
-    throw UsageError("give either --builtin or one RIG file (or MESH.obj --lattice L.json)");
-  const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
-  const double release_at = args.value("--release-at") ? parse_number(*args.value("--release-at"), "--release-at") : 1.5;
+  const auto target_text = args.value("--target");
+  const auto clip_name = args.value("--clip");
+  if (!target_text && !clip_name) throw UsageError("give --target, --clip or both (or MESH.obj --lattice L.json)");
+  const glm::vec3 target = target_text ? parse_vec3(*target_text, "--target") : glm::vec3(0.0f);
+  const double release_at =
+      args.value("--release-at") ? parse_number(*args.value("--release-at"), "--release-at") : 1.5;
   const double dt = args.value("--dt") ? parse_number(*args.value("--dt"), "--dt") : 1.0 / 60.0;
   if (!(dt > 0.0) || dt > 10.0) throw UsageError("--dt must be in (0, 10] seconds");
-  const Timing timing = parse_timing(args, 3.0);
-  if (timing.seconds / dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
 
-  deform::Model model;
-  deform::Rig rig;
-  if (builtin) {
-    model_loading::LoadedModel loaded = model_loading::load_model({});
-    rig = model_loading::starting_rig(loaded);
-    model = std::move(loaded.model);
-  } else {
-    const std::string& path = args.positionals().front();
-    const std::string text = deform::read_file_text(path);
-    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
-    rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
-  }
+  RiggedModel rigged = load_rigged_model(args);
+  embed_builtin_texture(rigged.loaded);
+  deform::Model model = std::move(rigged.loaded.model);
+  const deform::Rig rig = std::move(rigged.rig);
+  const std::vector<deform::Animation> clips = std::move(rigged.loaded.clips);
+  const deform::Animation* clip = clip_name ? &find_clip_or_fail(clips, *clip_name) : nullptr;
+  // A clip alone lasts its own length (once round a loop); a reach, 3 s.
+  const Timing timing = parse_timing(args, clip != nullptr && !target_text ? double(clip->duration) : 3.0);
+  if (timing.seconds / dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
   const std::int32_t effector = rig.reach_effector;
-  if (effector <= 0) throw UsageError("the rig has no reach effector");
+  if (target_text && effector <= 0) throw UsageError("the rig has no reach effector");
 
   deform::Model rest = model;  // the glTF's rest shape: bind positions, the normals the character computes there
   deform::Character character(std::move(model), rig);
@@ -138,15 +142,38 @@ int bake_reach(const Args& args) {
   const std::span<const glm::vec3> bind_normals = character.normals();
   rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
 
-  const deform::ReachResult reach = character.reach(effector, target);
-  if (!reach.status)
-    throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
+  // The pose at time t, as `deform simulate` sets it: the clip's (and, a millisecond later, where it is heading, so
+  // the lattices and spring chains feel its motion), then the reach on top.
+  const deform::Pose bind = character.skeleton().bind_pose();
+  deform::Pose pose = bind, later = bind;
+  const auto sample_clip = [&](double t, deform::Pose& into) {
+    std::copy(bind.rotations.begin(), bind.rotations.end(), into.rotations.begin());
+    std::copy(bind.translations.begin(), bind.translations.end(), into.translations.begin());
+    deform::SamplingJob job;
+    job.animation = clip;
+    job.time = float(t);
+    job.rotations = into.rotations;
+    job.translations = into.translations;
+    if (!job.run()) throw UsageError("--clip: clip '" + clip->name + "' does not fit the skeleton");
+  };
+  bool reaching = target_text.has_value();
+  const auto pose_at = [&](double t) {
+    if (clip != nullptr) {
+      constexpr float lead = 1e-3f;
+      sample_clip(t, pose);
+      sample_clip(t + lead, later);
+      character.set_pose(pose, later, lead);
+    }
+    if (reaching && !character.reach(effector, target).status)
+      throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
+  };
 
   deform::BakedFrames baked;
-  baked.name = "reach";
+  baked.name = clip != nullptr ? clip->name : "reach";
   baked.position_tolerance = 1e-6f * diagonal(rest.mesh.positions);
   baked.normal_tolerance = 1e-5f;
-  const auto advance = [&](double step) {
+  const auto advance = [&](double step, double t) {
+    if (clip != nullptr) pose_at(t);
     if (const deform::Status status = character.update(float(step)); !status)
       throw UsageError(std::string("a simulation step was refused: ") + status.reason());
   };
@@ -158,10 +185,17 @@ int bake_reach(const Args& args) {
   };
   // As `deform simulate`: t = 0 is just after the reach; the release happens at T whatever the steps (a step that
   // crosses it is split there).
-  bool released = false;
+  bool released = !reaching;
+  const auto let_go = [&] {
+    character.release();
+    reaching = false;
+    released = true;
+  };
   const double snap = 1e-9 * dt;
-  if (release_at <= snap) character.release(), released = true;
-  advance(0.0);
+  pose_at(0.0);
+  if (!released && release_at <= snap) let_go();
+  if (const deform::Status status = character.update(0.0f); !status)
+    throw UsageError(std::string("the first pose was refused: ") + status.reason());
   keep(0);
   double now = 0.0;
   for (std::size_t k = 1; k < timing.frames; ++k) {
@@ -169,23 +203,20 @@ int bake_reach(const Args& args) {
     while (now < t - snap) {
       double next = std::min(t, now + dt);
       if (!released && release_at > now + snap && release_at < next - snap) next = release_at;
-      advance(next - now);
+      advance(next - now, next);
       now = next;
-      if (!released && release_at <= now + snap) character.release(), released = true;
+      if (!released && release_at <= now + snap) let_go();
     }
     now = t;
     keep(k);
   }
-  // The built-in character's texture is a file name with no folder: none is embedded for it.
-  std::string folder;
-  if (!builtin) folder = std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
-  return write(out, rest, baked, timing, builtin ? std::string() : folder.empty() ? std::string(".") : folder);
+  return write(out, rest, baked, timing, rigged.texture_root);
 }
 
 int bake_ffd(const Args& args) {
   const std::string out = checked_out(args);
   if (args.positionals().size() != 1) throw UsageError("an FFD bake takes exactly one MESH.obj");
-  for (const char* flag : {"--builtin", "--target", "--release-at", "--dt"})
+  for (const char* flag : {"--builtin", "--target", "--clip", "--release-at", "--dt", "--rig"})
     if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a reach bake, not an FFD (--lattice)");
   const Timing timing = parse_timing(args, 1.0);
   const std::string mesh_path = args.positionals()[0];
@@ -232,12 +263,15 @@ int bake_ffd(const Args& args) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out"}, {"--builtin"});
+  std::vector<std::string> value_flags = {"--target", "--clip", "--release-at", "--seconds", "--fps", "--dt",
+                                          "--lattice", "--out"};
+  value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
+  const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;
   }
-  return args.has("--lattice") ? bake_ffd(args) : bake_reach(args);
+  return args.has("--lattice") ? bake_ffd(args) : bake_animated(args);
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 
 #include "cli.hpp"
 #include "model_loader.hpp"
+#include "shared_steps.hpp"
+#include "deform/extras/builtin.hpp"
 #include "deform/io/gltf_export.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
@@ -26,8 +28,10 @@ std::string texture_root(const Args& args) {
 }
 
 int run_gltf(const Args& args, const std::string& out) {
-  const LoadedModel loaded = load_model(args);
+  LoadedModel loaded = load_model(args);
   const deform::Model& model = loaded.model;
+  if (loaded.builtin) loaded.clips = deform::builtin_clips(model);  // idle, walk, run, wave
+  embed_builtin_texture(loaded);
   deform::GltfExportOptions options;
   options.clips = loaded.clips;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
@@ -113,8 +117,9 @@ const Command export_command = {
     "--max-influences N (1 to 16, default 4): influences kept per point from W.skw.\n"
     "\n"
     "--format gltf: writes FILE as glTF 2.0 (docs/gltf-export.md): FILE.glb as one binary file, FILE.gltf plus\n"
-    "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation.\n"
-    "Diffuse textures (PNG, JPEG) from the model's folder are embedded. Prints {\"gltf\": FILE, \"bin\": path or\n"
+    "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation\n"
+    "(the built-in character's: idle, walk, run, wave). Diffuse textures (PNG, JPEG) from the model's folder are\n"
+    "embedded, and the built-in character's own. Prints {\"gltf\": FILE, \"bin\": path or\n"
     "null, \"bytes\", \"textures\": images embedded, \"vertices\", \"render_vertices\", \"triangles\", \"bones\",\n"
     "\"clips\": [names]}. Needs no importer for --builtin or native files.\n"
     "\n"

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "model_loading.hpp"
 #include "shared_steps.hpp"
 #include "deform/io/lattice_json.hpp"
 #include "deform/io/obj.hpp"
@@ -17,9 +18,10 @@ namespace cli {
 namespace {
 
 const char* const usage =
-    "usage: deform ffd MESH.obj --lattice L.json --out OUT.obj\n"
+    "usage: deform ffd (MESH.obj | MODEL) --lattice L.json --out OUT.obj\n"
     "\n"
-    "Deforms the mesh with an axis-aligned Bezier lattice. L.json:\n"
+    "Deforms the mesh (an OBJ, or the bind-pose mesh of a MODEL an importer reads: glTF, FBX, ...) with an\n"
+    "axis-aligned Bezier lattice. L.json:\n"
     "  {\"origin\": [x, y, z], \"size\": [sx, sy, sz], \"degree\": [l, m, n],\n"
     "   \"displacements\": [{\"index\": [i, j, k], \"offset\": [dx, dy, dz]}, ...], \"vertices\": [...]}\n"
     "Control point P_ijk rests at origin + (i/l*sx, j/m*sy, k/n*sz); degree defaults to [3, 3, 3]. A vertex is\n"
@@ -35,9 +37,18 @@ int run(const std::vector<std::string>& argv) {
   const std::string lattice_path = args.required("--lattice");
   const std::string out_path = args.required("--out");
 
-  deform::Warnings warnings;
-  const deform::Mesh mesh = deform::read_obj(mesh_path, &warnings);
-  for (const std::string& w : warnings.messages) note(w);
+  deform::Mesh mesh;
+  if (model_loading::importable(mesh_path)) {  // an import's mesh in its bind pose
+    model_loading::ModelRequest request;
+    request.path = mesh_path;
+    model_loading::LoadedModel loaded = model_loading::load_model(request);
+    for (const std::string& w : loaded.warnings) note(w);
+    mesh = std::move(loaded.model.mesh);
+  } else {
+    deform::Warnings warnings;
+    mesh = deform::read_obj(mesh_path, &warnings);
+    for (const std::string& w : warnings.messages) note(w);
+  }
   const deform::LatticeDocument doc = deform::read_lattice_json(lattice_path, mesh.point_count());
   const deform::BezierLattice& lattice = doc.lattice;
 

@@ -1,11 +1,13 @@
 // deform ik: solve a bone chain toward a target point (docs/cli.md, docs/cli.md).
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "cli.hpp"
+#include "shared_steps.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
@@ -22,18 +24,40 @@ std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  {"--effector", "--target", "--root", "--solver", "--max-iterations", "--tolerance", "--limits",
-                   "--pole", "--soften", "--stretch", "--swivel"},
-                  {"--builtin"});
-  const bool builtin = args.has("--builtin");
-  if (args.positionals().size() != (builtin ? 0u : 1u))
-    throw UsageError(builtin ? "--builtin takes no skeleton file" : "expected one skeleton file (S.sk) or --builtin");
-  const deform::Skeleton skeleton =
-      builtin ? deform::builtin_character().skeleton : deform::read_sk(args.positionals()[0]);
+  std::vector<std::string> value_flags = {"--effector", "--target", "--root", "--solver", "--max-iterations",
+                                          "--tolerance", "--limits", "--pole", "--soften", "--stretch", "--swivel"};
+  value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
+  const Args args(argv, value_flags, {"--builtin"});
+  // A skeleton alone (S.sk) names its bones; any model, or a rig, also brings a rig whose reach chain is the default.
+  const bool skeleton_only =
+      args.positionals().size() == 1 && std::filesystem::path(args.positionals()[0]).extension() == ".sk";
+  deform::Skeleton skeleton;
+  deform::Rig rig;
+  if (skeleton_only) {
+    const std::string& path = args.positionals()[0];
+    if (args.has("--builtin")) throw UsageError("--builtin takes no skeleton file (got '" + path + "')");
+    const std::string kind = describe_file(path);
+    if (kind != "a skeleton (.sk)" && kind != "a file that cannot be read")
+      throw deform::Error::in_file(path, "", "expected a skeleton (.sk), got " + kind);
+    if (args.has("--rig")) throw UsageError("--rig needs the model it rigs, not a skeleton alone");
+    if (!args.has("--effector")) throw UsageError("--effector is required with a skeleton alone (S.sk)");
+    skeleton = deform::read_sk(path);
+  } else {
+    RiggedModel rigged = load_rigged_model(args, !args.has("--effector"));
+    skeleton = std::move(rigged.loaded.model.skeleton);
+    rig = std::move(rigged.rig);
+  }
 
-  const std::int32_t effector = find_bone(skeleton, args.required("--effector"), "--effector");
-  const std::int32_t root = args.value("--root") ? find_bone(skeleton, *args.value("--root"), "--root") : 0;
+  // Without --effector: the rig's reach chain (effector, and root unless --root says).
+  std::int32_t effector = -1, root = 0;
+  if (const auto name = args.value("--effector")) {
+    effector = find_bone(skeleton, *name, "--effector");
+  } else {
+    effector = rig.reach_effector;
+    if (effector < 0) throw UsageError("the rig has no reach effector: give --effector NAME");
+    if (rig.reach_root >= 0) root = rig.reach_root;
+  }
+  if (const auto name = args.value("--root")) root = find_bone(skeleton, *name, "--root");
   const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
   const std::string solver = args.value("--solver").value_or("ccd");
   if (solver != "ccd" && solver != "fabrik" && solver != "two-bone")
@@ -155,11 +179,18 @@ int run(const std::vector<std::string>& argv) {
 
 const Command ik_command = {
     "ik", "solve inverse kinematics for a bone chain",
-    "usage: deform ik (S.sk | --builtin) --effector NAME --target X,Y,Z [--root NAME] [--solver ccd|fabrik|two-bone]\n"
-    "                 [--max-iterations N] [--tolerance T] [--limits euler|swing-twist] [--pole X,Y,Z]\n"
-    "                 [--soften F] [--stretch MAX] [--swivel DEGREES]\n\n"
-    "Moves the chain from --root (default: the skeleton root) to --effector, starting from the bind pose and within\n"
-    "the DOF limits, so that the effector's head reaches the target (world coordinates).\n"
+    "usage: deform ik (--builtin | MODEL | RIG | S.sk) [--rig FILE] --target X,Y,Z [--effector NAME] [--root NAME]\n"
+    "                 [--solver ccd|fabrik|two-bone] [--max-iterations N] [--tolerance T]\n"
+    "                 [--limits euler|swing-twist] [--pole X,Y,Z] [--soften F] [--stretch MAX] [--swivel DEGREES]\n\n"
+    "Moves the chain from --root to --effector, starting from the bind pose and within the DOF limits, so that the\n"
+    "effector's head reaches the target (world coordinates).\n"
+    "  --builtin | MODEL   the built-in character, any model `deform skin` takes (an import, or MESH.obj\n"
+    "                      --skeleton S.sk --weights W.skw), a rig file naming its model (RIG.json), or a skeleton\n"
+    "                      alone (S.sk, with --effector)\n"
+    "  --rig FILE          the model's rig (default: its default rig; the built-in character's: clavicle_l -> hand_l)\n"
+    "  --effector NAME     the chain's last bone (default: the rig's reach effector, with its root)\n"
+    "  --root NAME         the chain's first bone (default: the rig's reach root without --effector, else the\n"
+    "                      skeleton root)\n"
     "  --solver            ccd (default), fabrik, or two-bone (a chain of exactly two joints, closed form)\n"
     "  --max-iterations N  sweeps or passes, default 100\n"
     "  --tolerance T       reached when |effector - target| <= T, default 1e-4 x the chain length\n"

@@ -24,9 +24,9 @@ namespace {
 using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as documented
 
 constexpr const char* usage =
-    "usage: deform simulate (--builtin | RIG) (--target X,Y,Z | --clip NAME | both) [--release-at T] [--seconds S]\n"
-    "                       [--dt DT] [--effector BONE] [--integrator exact|verlet] [--min-length F] [--volume F]\n"
-    "                       [--inertia F]\n"
+    "usage: deform simulate (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
+    "                       [--release-at T] [--seconds S] [--dt DT] [--effector BONE] [--integrator exact|verlet]\n"
+    "                       [--min-length F] [--volume F] [--inertia F] [--save-rig FILE]\n"
     "\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
     "stretch to cover what remains), holds, releases at T and lets the stretch spring back; with --clip, plays the\n"
@@ -36,10 +36,13 @@ constexpr const char* usage =
     "t = 0.\n"
     "\n"
     "  --builtin            the built-in character with its default rig (three lattices on the left arm)\n"
-    "  RIG                  a rig file (docs/formats.md) whose \"model\" names the model\n"
+    "  MODEL                any model `deform skin` takes (an import, or MESH.obj --skeleton S.sk --weights W.skw),\n"
+    "                       with the default rig for it (deform::default_rig)\n"
+    "  RIG                  a rig file (RIG.json, docs/formats.md) whose \"model\" names the model\n"
+    "  --rig FILE           the rig for the model given (its \"model\" key is then not used), or alone: as RIG\n"
     "  --target X,Y,Z       world-space target of the effector (metres for the built-in character)\n"
     "  --clip NAME          play this clip of the model from t = 0, looping as the clip says: the built-in\n"
-    "                       character (--builtin, or a rig file on it) has \"idle\", \"walk\", \"run\" and \"wave\";\n"
+    "                       character (--builtin, or a rig on it) has \"idle\", \"walk\", \"run\" and \"wave\";\n"
     "                       an imported model, its file's clips\n"
     "  --release-at T       seconds after the reach when the stretch is released (default 1.5); a step that\n"
     "                       crosses T is split there\n"
@@ -53,21 +56,22 @@ constexpr const char* usage =
     "                       s^(-F/2) (default: the rig's, 1 unless it says: keeps its volume; 0: the plain\n"
     "                       stretch)\n"
     "  --inertia F          how much every lattice lags behind its bone's motion, in [0, 1] (default: the rig's,\n"
-    "                       0 unless it says: the lattices move only when stretched)\n";
+    "                       0 unless it says: the lattices move only when stretched)\n"
+    "  --save-rig FILE      also write the rig as run (these options applied) to FILE, its \"model\" naming the\n"
+    "                       model relative to FILE's folder, so that `deform simulate FILE` runs it again\n";
 
 // A value as the float it is reported as, in its shortest form; a non-finite one (a diverged simulation) as 0.
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--clip", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
-                         "--min-length", "--volume", "--inertia"}, {"--builtin"});
+  std::vector<std::string> value_flags = {"--target",     "--clip",       "--release-at", "--seconds", "--dt",
+                                          "--effector",   "--integrator", "--min-length", "--volume",  "--inertia",
+                                          "--save-rig"};
+  value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
+  const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;
-  }
-  const bool builtin = args.has("--builtin");
-  if (builtin == (args.positionals().size() == 1) || args.positionals().size() > 1) {
-    throw UsageError("give either --builtin or one RIG file");
   }
   const auto target_text = args.value("--target");
   const auto clip_name = args.value("--clip");
@@ -81,34 +85,11 @@ int run(const std::vector<std::string>& argv) {
   if (!(seconds >= 0.0)) throw UsageError("--seconds must be >= 0");
   if (seconds / dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
 
-  deform::Model model;
-  deform::Rig rig;
-  std::vector<deform::Animation> clips;
-  if (builtin) {
-    model_loading::LoadedModel loaded = model_loading::load_model({});
-    rig = model_loading::starting_rig(loaded);
-    model = std::move(loaded.model);
-    clips = deform::builtin_clips(model);
-  } else {
-    const std::string& path = args.positionals().front();
-    const std::string text = deform::read_file_text(path);
-    const deform::RigModel named = deform::parse_rig_model(text, path);
-    model_loading::LoadedModel loaded = load_rig_model(named, path);
-    model = std::move(loaded.model);
-    clips = named.builtin ? deform::builtin_clips(model) : std::move(loaded.clips);
-    rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
-  }
-  const deform::Animation* clip = nullptr;
-  if (clip_name) {
-    const std::int32_t found = deform::find_clip(clips, *clip_name);
-    if (found < 0) {
-      std::string names;
-      for (const deform::Animation& c : clips) names += (names.empty() ? "" : ", ") + ("'" + c.name + "'");
-      throw UsageError("--clip: no clip named '" + *clip_name + "' (the model has " +
-                       (names.empty() ? std::string("none") : names) + ")");
-    }
-    clip = &clips[std::size_t(found)];
-  }
+  RiggedModel rigged = load_rigged_model(args);
+  deform::Model model = std::move(rigged.loaded.model);
+  deform::Rig rig = std::move(rigged.rig);
+  const std::vector<deform::Animation> clips = std::move(rigged.loaded.clips);
+  const deform::Animation* clip = clip_name ? &find_clip_or_fail(clips, *clip_name) : nullptr;
   if (const auto name = args.value("--integrator")) {
     if (*name != "exact" && *name != "verlet") throw UsageError("--integrator must be exact or verlet");
     for (deform::LatticeSpec& spec : rig.lattices) {
@@ -136,6 +117,8 @@ int run(const std::vector<std::string>& argv) {
     if (effector < 0) throw UsageError("--effector: no bone named '" + *name + "'");
   }
   if (effector <= 0) throw UsageError("the rig has no reach effector: give --effector BONE");
+  // The rig as run, the options above applied, naming its model: `deform simulate FILE` runs it again.
+  if (const auto path = args.value("--save-rig")) save_rig(*path, rig, rigged.named, model.skeleton);
 
   deform::Character character(std::move(model), rig);
   // The pose at time t: the clip's (and, a millisecond later, where it is heading), then the reach on top.

@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "cli.hpp"
+#include "model_loading.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
@@ -17,10 +18,12 @@ namespace {
 
 constexpr const char* usage =
     "usage: deform weights MESH.obj --skeleton S.sk --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
+    "       deform weights MODEL [--skeleton S.sk] --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
     "       deform weights --builtin --out W.skw [--method heat|voxel|distance] [OPTIONS]\n"
     "\n"
     "Computes automatic skin weights for the mesh's points (one .skw line per OBJ `v`) from the skeleton's bind pose\n"
-    "(docs/weights.md). --builtin uses the built-in character's mesh and skeleton.\n"
+    "(docs/weights.md). --builtin uses the built-in character's mesh and skeleton; a MODEL an importer reads (glTF,\n"
+    "FBX, ...), its mesh and its own skeleton (or S.sk), its file's weights left aside.\n"
     "  heat (default)  bone heat diffusion over the surface (Baran & Popovic 2007): each point is heated by its\n"
     "                  nearest bone that it sees through no triangle, and the heat of each bone spreads over the\n"
     "                  surface; a hand resting against a thigh keeps its arm's weights.\n"
@@ -108,13 +111,25 @@ int run(const std::vector<std::string>& argv) {
     skeleton = std::move(model.skeleton);
     source = "builtin";
   } else {
-    if (args.positionals().size() != 1) throw UsageError("expected one MESH.obj (or --builtin)");
+    if (args.positionals().size() != 1) throw UsageError("expected one MESH.obj or MODEL (or --builtin)");
     source = args.positionals()[0];
-    const std::string sk = args.required("--skeleton");
-    deform::Warnings warnings;
-    mesh = deform::read_obj(source, &warnings);
-    for (const std::string& w : warnings.messages) note(w);
-    skeleton = deform::read_sk(sk);
+    if (model_loading::importable(source)) {  // an import's mesh and skeleton (its own weights are not used)
+      model_loading::ModelRequest request;
+      request.path = source;
+      model_loading::LoadedModel loaded = model_loading::load_model(request);
+      for (const std::string& w : loaded.warnings) note(w);
+      if (!loaded.rigged && !args.has("--skeleton"))
+        throw deform::Error::in_file(source, "", "the model has no skeleton: give --skeleton S.sk");
+      mesh = std::move(loaded.model.mesh);
+      skeleton =
+          args.has("--skeleton") ? deform::read_sk(args.required("--skeleton")) : std::move(loaded.model.skeleton);
+    } else {
+      const std::string sk = args.required("--skeleton");
+      deform::Warnings warnings;
+      mesh = deform::read_obj(source, &warnings);
+      for (const std::string& w : warnings.messages) note(w);
+      skeleton = deform::read_sk(sk);
+    }
   }
 
   deform::WeightsResult result;

@@ -3,6 +3,7 @@
 // headers (deform/runtime/..., deform/io/..., deform/offline/...) stay usable on their own; docs/architecture.md
 // says which target holds what.
 #include "deform/character/character.hpp"
+#include "deform/extras/builtin.hpp"  // make_builtin_character(), which character.hpp's quick start calls
 #include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/offline/rig.hpp"

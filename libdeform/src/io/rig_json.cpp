@@ -148,11 +148,18 @@ RigModel read_model(const JsonReader& root) {
   if (!root.has("model") || root.at("model").is_null()) return model;
   const JsonReader r = root.at("model");
   if (r.is_string()) {
-    if (r.text() != "builtin") r.fail("must be \"builtin\" or an object with obj, skeleton and weights");
+    if (r.text() != "builtin")
+      r.fail("must be \"builtin\", {\"file\": MODEL} or an object with obj, skeleton and weights");
     model.builtin = true;
     return model;
   }
-  r.expect_object({"obj", "skeleton", "weights"});
+  r.expect_object({"obj", "skeleton", "weights", "file"});
+  if (r.has("file")) {  // an imported model: nothing else with it
+    if (r.has("obj") || r.has("skeleton") || r.has("weights")) r.fail("has \"file\" and native files: give one");
+    model.file = r.at("file").text();
+    if (model.file.empty()) r.at("file").fail("must not be empty");
+    return model;
+  }
   model.obj = r.at("obj").text();
   model.skeleton = r.at("skeleton").text();
   model.weights = r.at("weights").text();
@@ -281,6 +288,8 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
   document["rig"] = rig_format_version;
   if (rig.model.builtin) {
     document["model"] = "builtin";
+  } else if (!rig.model.file.empty()) {
+    document["model"] = {{"file", rig.model.file}};
   } else if (!rig.model.obj.empty() || !rig.model.skeleton.empty() || !rig.model.weights.empty()) {
     document["model"] = {{"obj", rig.model.obj}, {"skeleton", rig.model.skeleton}, {"weights", rig.model.weights}};
   }

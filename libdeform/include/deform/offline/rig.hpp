@@ -17,13 +17,15 @@
 
 namespace deform {
 
-// The model a rig was made for (the file's optional "model" key): the built-in character, or the OBJ, .sk and .skw
-// paths as the file writes them (relative paths are relative to the rig file's folder). All empty: not named.
+// The model a rig was made for (the file's optional "model" key): the built-in character, the OBJ, .sk and .skw
+// paths, or one file an importer reads (glTF, FBX, ...), as the file writes them (relative paths are relative to the
+// rig file's folder). All empty: not named. At most one of builtin, obj (with skeleton and weights) and file is set.
 struct RigModel {
   bool builtin = false;
   std::string obj;
   std::string skeleton;
   std::string weights;
+  std::string file;  // an imported model (deform::import), e.g. "CesiumMan.glb"
   bool operator==(const RigModel&) const = default;
 };
 
