@@ -78,11 +78,10 @@ std::string resolve_referenced_file_in(const std::string& folder, const std::str
   if (!real.empty() && below(real, real_folder)) return real.string();
   for (const std::string& allowed : policy.allow_outside)
     if (!real.empty() && !allowed.empty() && below(real, canonical_or_empty(allowed))) return real.string();
-  // Nothing about the file itself is said (not whether it exists, nor its size): only what the model wrote.
-  std::string where = real_folder.empty() ? folder : real_folder.string();
+  // Nothing about the file itself is said (not whether it exists, nor its size): only what the model wrote. Kept
+  // short, as a message is cut at 200 bytes (error.hpp) and the name is what the reader needs.
   refuse(referrer, line, key,
-         "refused: names a file outside the model's folder '" + where +
-             "' (--allow-outside DIR allows a folder on purpose): '" + std::string(reference) + "'");
+         "refused, outside the model's folder (--allow-outside DIR allows one): '" + std::string(reference) + "'");
 }
 
 std::string resolve_referenced_file(const std::string& referrer, std::string_view reference, const std::string& key,
