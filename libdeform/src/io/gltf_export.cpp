@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <iterator>
 #include <utility>
 #include <limits>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 
 namespace deform {
@@ -194,6 +196,9 @@ std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::s
   const fs::path inside = real.lexically_relative(real_root);
   if (inside.empty() || *inside.begin() == "..")
     return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
+  // The signature from the first bytes alone: a large file that is not an image is never read whole.
+  const std::string format = image_format(real.string());
+  if (format != "png" && format != "jpeg") return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
   std::vector<std::uint8_t> bytes = read_file_bytes(real.string());
   mime = image_type(bytes);
   if (mime.empty()) return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
@@ -323,6 +328,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   Json images = Json::array(), textures = Json::array();
   {
     std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
+    std::map<std::string, std::string> refused;         // texture path -> why: each is checked, and read, once
     for (const Material& m : mesh.materials) {
       int texture = -1;
       if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
@@ -330,8 +336,13 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {
           std::string why, mime;
-          const std::vector<std::uint8_t> bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          std::vector<std::uint8_t> bytes;
+          if (const auto known = refused.find(m.diffuse_map); known != refused.end())
+            why = known->second;
+          else
+            bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
           if (bytes.empty()) {
+            refused.emplace(m.diffuse_map, why);
             written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
                                        why + ")");
           } else {
