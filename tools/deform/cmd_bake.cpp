@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "model_loading.hpp"
 #include "deform/character/character.hpp"
@@ -35,6 +36,8 @@ constexpr const char* usage =
     "                   --out FILE.(gltf|glb)\n"
     "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
     "\n"
+    "The files a RIG or MESH names are read only from its folder, or a folder --allow-outside DIR (repeatable)\n"
+    "names (docs/security.md).\n"
     "Writes a deformation over time as glTF 2.0 that any glTF viewer plays: the mesh at its bind pose plus one morph\n"
     "target per frame (sparse: only the vertices that move), and one animation whose weights show frame k at k/F\n"
     "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md).\n"
@@ -126,7 +129,7 @@ int bake_reach(const Args& args) {
   } else {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
-    model = load_rig_model(deform::parse_rig_model(text, path), path).model;
+    model = load_rig_model(deform::parse_rig_model(text, path), path, reference_policy(args)).model;
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);
   }
   const std::int32_t effector = rig.reach_effector;
@@ -193,7 +196,7 @@ int bake_ffd(const Args& args) {
 
   deform::Warnings warnings;
   deform::Model model;
-  model.mesh = deform::read_obj(mesh_path, &warnings);
+  model.mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args));
   for (const std::string& w : warnings.messages) note(w);
   model.name = std::filesystem::path(mesh_path).stem().string();
   const deform::Mesh& mesh = model.mesh;
@@ -232,7 +235,8 @@ int bake_ffd(const Args& args) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out"}, {"--builtin"});
+  const Args args(argv, {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out", "--allow-outside"},
+                  {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "deform/io/lattice_json.hpp"
 #include "deform/io/obj.hpp"
@@ -17,7 +18,7 @@ namespace cli {
 namespace {
 
 const char* const usage =
-    "usage: deform ffd MESH.obj --lattice L.json --out OUT.obj\n"
+    "usage: deform ffd MESH.obj --lattice L.json --out OUT.obj [--allow-outside DIR]...\n"
     "\n"
     "Deforms the mesh with an axis-aligned Bezier lattice. L.json:\n"
     "  {\"origin\": [x, y, z], \"size\": [sx, sy, sz], \"degree\": [l, m, n],\n"
@@ -29,14 +30,14 @@ const char* const usage =
     "Prints {\"vertices\": N, \"deformed\": K, \"lattice\": {...}, \"output\": OUT.obj}.\n";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--lattice", "--out"}, {});
+  const Args args(argv, {"--lattice", "--out", "--allow-outside"}, {});
   if (args.positionals().size() != 1) throw UsageError("expected exactly one MESH argument");
   const std::string mesh_path = args.positionals()[0];
   const std::string lattice_path = args.required("--lattice");
   const std::string out_path = args.required("--out");
 
   deform::Warnings warnings;
-  const deform::Mesh mesh = deform::read_obj(mesh_path, &warnings);
+  const deform::Mesh mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args));
   for (const std::string& w : warnings.messages) note(w);
   const deform::LatticeDocument doc = deform::read_lattice_json(lattice_path, mesh.point_count());
   const deform::BezierLattice& lattice = doc.lattice;

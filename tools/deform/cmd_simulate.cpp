@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "model_loading.hpp"
 #include "deform/character/character.hpp"
@@ -26,8 +27,9 @@ using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as docu
 constexpr const char* usage =
     "usage: deform simulate (--builtin | RIG) (--target X,Y,Z | --clip NAME | both) [--release-at T] [--seconds S]\n"
     "                       [--dt DT] [--effector BONE] [--integrator exact|verlet] [--min-length F] [--volume F]\n"
-    "                       [--inertia F]\n"
+    "                       [--inertia F] [--allow-outside DIR]...\n"
     "\n"
+    "The model a RIG names is read only from the rig's folder, or a folder --allow-outside names (docs/security.md).\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
     "stretch to cover what remains), holds, releases at T and lets the stretch spring back; with --clip, plays the\n"
     "clip meanwhile (the reach follows the moving body), the lattices with inertia and the rig's spring chains\n"
@@ -60,7 +62,7 @@ double shortest(double value) { return std::isfinite(value) ? deform::shortest_d
 
 int run(const std::vector<std::string>& argv) {
   const Args args(argv, {"--target", "--clip", "--release-at", "--seconds", "--dt", "--effector", "--integrator",
-                         "--min-length", "--volume", "--inertia"}, {"--builtin"});
+                         "--min-length", "--volume", "--inertia", "--allow-outside"}, {"--builtin"});
   if (args.help()) {
     std::cout << usage;
     return exit_ok;
@@ -93,7 +95,7 @@ int run(const std::vector<std::string>& argv) {
     const std::string& path = args.positionals().front();
     const std::string text = deform::read_file_text(path);
     const deform::RigModel named = deform::parse_rig_model(text, path);
-    model_loading::LoadedModel loaded = load_rig_model(named, path);
+    model_loading::LoadedModel loaded = load_rig_model(named, path, reference_policy(args));
     model = std::move(loaded.model);
     clips = named.builtin ? deform::builtin_clips(model) : std::move(loaded.clips);
     rig = deform::parse_rig_json(text, model.skeleton, model.mesh.point_count(), path);

@@ -4,13 +4,20 @@
 #include <filesystem>
 
 #include "cli.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 namespace cli {
 
-model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path,
+                                          const deform::ReferencePolicy& policy) {
   model_loading::ModelRequest request;
+  request.references = policy;
   if (!named.builtin) {
     if (named.obj.empty()) throw deform::Error::in_file(rig_path, "key 'model'", "the rig names no model");
+    // Each is confined before it is opened; the paths keep the rig's spelling (they name the files in messages).
+    deform::resolve_referenced_file(rig_path, named.obj, "key 'model.obj'", policy);
+    deform::resolve_referenced_file(rig_path, named.skeleton, "key 'model.skeleton'", policy);
+    deform::resolve_referenced_file(rig_path, named.weights, "key 'model.weights'", policy);
     const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
     request.path = (folder / named.obj).string();
     request.skeleton = (folder / named.skeleton).string();
