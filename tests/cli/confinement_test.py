@@ -179,6 +179,14 @@ for label, args in [("simulate", ["simulate", rig, "--target", "1,1,1", "--secon
                               "--out", os.path.join(outputs, "r.glb")])]:
     expect_refused(f"rig.json: {label}", args, rig)
 
+# A name inside the folder that does not exist stays a warning, printed on one line whatever bytes it holds.
+if importer:
+    model = write(os.path.join(models, "newline.gltf"), gltf_with_image("missing%0Adeform%3A%20forged.png"))
+    code, messages = run(["info", model])
+    check(code == 0, f"info newline.gltf: exit {code}: {messages[-300:]!r}")
+    check(b"\ndeform: forged" not in messages and b"\\x0a" in messages,
+          f"info newline.gltf: a name from the file broke the warning's line: {messages[-300:]!r}")
+
 # --allow-outside reads the same files on purpose: the checks above see a leak when there is one.
 allow = ["--allow-outside", secret_dir]
 if importer:
