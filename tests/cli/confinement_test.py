@@ -150,7 +150,8 @@ def model_commands(model, native):
     triple = ["--skeleton", sk, "--weights", skw] if native else []
     commands = [
         ("info", ["info", model]),
-        ("export --format gltf", ["export", model, *triple, "--format", "gltf", "--out", os.path.join(outputs, "o.gltf")]),
+        ("export --format gltf",
+         ["export", model, *triple, "--format", "gltf", "--out", os.path.join(outputs, "o.gltf")]),
         ("skin", ["skin", model, *triple, "--pose", pose, "--out", os.path.join(outputs, "s.obj")]),
     ]
     if importer:  # the native export needs the importer component, even for native files

@@ -235,7 +235,8 @@ int bake_ffd(const Args& args) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out", "--allow-outside"},
+  const Args args(argv,
+                  {"--target", "--release-at", "--seconds", "--fps", "--dt", "--lattice", "--out", "--allow-outside"},
                   {"--builtin"});
   if (args.help()) {
     std::cout << usage;

@@ -20,14 +20,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
-
 // Where a texture may be copied from: inside `root` or a folder `policy` allows once links are resolved
-// (lies_inside, the rule every reader applies), and an image by its first bytes alone (image_format: a 100 MB file that is not one is never read).
-// Empty = allowed. `real` receives the canonical path to copy.
+// (lies_inside, the rule every reader applies), and an image by its first bytes alone (image_format: a 100 MB file
+// that is not one is never read). Empty = allowed. `real` receives the canonical path to copy.
 std::string refusal(const std::string& texture, const std::string& root, const ReferencePolicy& policy,
                     std::string& real) {
   std::error_code error;
@@ -86,7 +81,10 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
       auto known = checked.find(material.diffuse_map);
       std::string real;
       if (known == checked.end())
-        known = checked.emplace(material.diffuse_map, refusal(material.diffuse_map, options.texture_root, options.references, real)).first;
+        known = checked
+                    .emplace(material.diffuse_map,
+                             refusal(material.diffuse_map, options.texture_root, options.references, real))
+                    .first;
       if (!known->second.empty()) {
         files.warnings.push_back(escape_control_characters("material '" + material.name + "': texture '" +
                                                            material.diffuse_map + "' not copied (" + known->second +
