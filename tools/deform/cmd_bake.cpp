@@ -91,10 +91,11 @@ std::string checked_out(const Args& args) {
 
 // `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none.
 int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
-          const std::string& texture_root) {
+          const std::string& texture_root, const deform::ReferencePolicy& references) {
   deform::GltfExportOptions options;
   options.baked = &baked;
   options.texture_root = texture_root;
+  options.references = references;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
@@ -182,7 +183,8 @@ int bake_reach(const Args& args) {
   // The built-in character's texture is a file name with no folder: none is embedded for it.
   std::string folder;
   if (!builtin) folder = std::filesystem::path(args.positionals().front()).parent_path().lexically_normal().string();
-  return write(out, rest, baked, timing, builtin ? std::string() : folder.empty() ? std::string(".") : folder);
+  return write(out, rest, baked, timing, builtin ? std::string() : folder.empty() ? std::string(".") : folder,
+               reference_policy(args));
 }
 
 int bake_ffd(const Args& args) {
@@ -231,7 +233,7 @@ int bake_ffd(const Args& args) {
     baked.normals.push_back(ffd_normals(mesh, current, deformed));
   }
   const std::string folder = std::filesystem::path(mesh_path).parent_path().lexically_normal().string();
-  return write(out, model, baked, timing, folder.empty() ? "." : folder);
+  return write(out, model, baked, timing, folder.empty() ? "." : folder, reference_policy(args));
 }
 
 int run(const std::vector<std::string>& argv) {

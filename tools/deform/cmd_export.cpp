@@ -32,6 +32,7 @@ int run_gltf(const Args& args, const std::string& out) {
   options.clips = loaded.clips;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   options.texture_root = texture_root(args);
+  options.references = reference_policy(args);
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
   Json clips = Json::array();

@@ -185,8 +185,8 @@ std::string image_type(const std::vector<std::uint8_t>& bytes) {
 
 // Reads a texture that may be embedded: inside `root` once links are resolved, PNG or JPEG. Empty result = refused,
 // `why` says why.
-std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root, std::string& why,
-                                        std::string& mime) {
+std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root,
+                                        const ReferencePolicy& policy, std::string& why, std::string& mime) {
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::path real = fs::canonical(texture, error);
@@ -194,7 +194,9 @@ std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::s
   const fs::path real_root = fs::canonical(root, error);
   if (error) return why = "the texture folder '" + root + "' does not exist", std::vector<std::uint8_t>{};
   const fs::path inside = real.lexically_relative(real_root);
-  if (inside.empty() || *inside.begin() == "..")
+  bool allowed = !inside.empty() && *inside.begin() != "..";
+  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(real.string(), other);
+  if (!allowed)
     return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
   // The signature from the first bytes alone: a large file that is not an image is never read whole.
   const std::string format = image_format(real.string());
@@ -340,7 +342,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
           if (const auto known = refused.find(m.diffuse_map); known != refused.end())
             why = known->second;
           else
-            bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+            bytes = texture_bytes(m.diffuse_map, options.texture_root, options.references, why, mime);
           if (bytes.empty()) {
             refused.emplace(m.diffuse_map, why);
             written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
