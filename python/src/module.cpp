@@ -244,12 +244,18 @@ PYBIND11_MODULE(deform, m) {
 
   m.def(
       "load_model",
-      [](const std::string& obj, const std::string& sk, const std::string& skw) {
+      [](const std::string& obj, const std::string& sk, const std::string& skw,
+         const std::vector<std::string>& allow_outside) {
         deform::Warnings warnings;
-        auto model = std::make_shared<deform::Model>(deform::load_model(obj, sk, skw, &warnings));
+        deform::ReferencePolicy policy;
+        policy.allow_outside = allow_outside;
+        auto model = std::make_shared<deform::Model>(
+            deform::load_model(obj, sk, skw, &warnings, deform::max_influences, policy));
         return model;
       },
-      py::arg("obj"), py::arg("sk"), py::arg("skw"), "Loads a native model: OBJ mesh, .sk skeleton, .skw weights.");
+      py::arg("obj"), py::arg("sk"), py::arg("skw"), py::arg("allow_outside") = std::vector<std::string>{},
+      "Loads a native model: OBJ mesh, .sk skeleton, .skw weights. The MTL files and textures the OBJ names are read "
+      "only inside its folder or a folder of `allow_outside` (docs/security.md); any other raises ValueError.");
   m.def(
       "save_obj",
       [](const std::string& path, const deform::Model& md, std::optional<FloatArray> positions) {
@@ -371,8 +377,10 @@ PYBIND11_MODULE(deform, m) {
   m.attr("has_import") = true;
   m.def(
       "import_model",
-      [](const std::string& path) {
-        deform::ImportedModel imported = deform::import_model_isolated(path);
+      [](const std::string& path, const std::vector<std::string>& allow_outside) {
+        deform::ImportOptions options;
+        options.references.allow_outside = allow_outside;
+        deform::ImportedModel imported = deform::import_model_isolated(path, options);
         py::dict out;
         out["model"] = std::make_shared<deform::Model>(std::move(imported.model));
         out["rigged"] = imported.rigged;
@@ -380,8 +388,9 @@ PYBIND11_MODULE(deform, m) {
         out["clips"] = std::move(imported.clips);
         return out;
       },
-      py::arg("path"),
+      py::arg("path"), py::arg("allow_outside") = std::vector<std::string>{},
       "Imports glTF/FBX/Collada/X/... through Assimp in a separate process (deform::import_model_isolated; the "
+      "files the model names are read only inside its folder or a folder of `allow_outside`, docs/security.md; the "
       "worker executable deform-import-worker is found through $DEFORM_IMPORT_WORKER, the build or the install). "
       "Returns a dict: model, rigged, warnings, clips (a list of Animation).");
   m.def(

@@ -103,3 +103,40 @@ def test_a_saved_rig_names_its_imported_model(tmp_path):
     assert deform.read_rig(str(path), model).lattice_names == rig.lattice_names
     rig.save(str(path), model)  # no model_file: the rig says what it knows, here nothing
     assert "model" not in json.loads(path.read_text())
+def _secret_and_obj(tmp_path):
+    """A secret beside the model's folder and an OBJ that names it as its MTL file."""
+    (tmp_path / "private").mkdir()
+    (tmp_path / "private" / "secret.mtl").write_text("SECRET-7e57\nnewmtl s\n")
+    (tmp_path / "m").mkdir()
+    obj = tmp_path / "m" / "body.obj"
+    obj.write_text("mtllib ../private/secret.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    return obj
+
+
+def test_files_outside_the_model_folder_are_refused(tmp_path, native_paths):
+    obj = _secret_and_obj(tmp_path)
+    with pytest.raises(deform.Error) as info:
+        deform.load_model(str(obj), native_paths[1], native_paths[2])
+    assert info.value.kind == "input" and "mtllib" in str(info.value) and "SECRET" not in str(info.value)
+    # Allowed on purpose, the OBJ is read; the built-in skeleton's weights then do not fit its 3 points.
+    with pytest.raises(deform.Error) as info:
+        deform.load_model(str(obj), native_paths[1], native_paths[2], allow_outside=[str(tmp_path / "private")])
+    assert "mtllib" not in str(info.value)
+
+
+@pytest.mark.skipif(not deform.has_import, reason="needs deform::import")
+def test_import_refuses_a_buffer_outside_the_model_folder(tmp_path):
+    (tmp_path / "private").mkdir()
+    (tmp_path / "private" / "secret.bin").write_bytes(b"SECRET-7e57" + bytes(25))
+    (tmp_path / "m").mkdir()
+    model = tmp_path / "m" / "x.gltf"
+    model.write_text('{"asset": {"version": "2.0"}, "buffers": [{"uri": "..%2fprivate/secret.bin", "byteLength": 36}],'
+                     ' "bufferViews": [{"buffer": 0, "byteLength": 36}], "accessors": [{"bufferView": 0,'
+                     ' "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 1]}],'
+                     ' "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "nodes": [{"mesh": 0}],'
+                     ' "scenes": [{"nodes": [0]}], "scene": 0}')
+    with pytest.raises(deform.Error) as info:
+        deform.import_model(str(model))
+    assert "buffers[0].uri" in str(info.value) and "36" not in str(info.value).replace(str(tmp_path), "")
+    imported = deform.import_model(str(model), allow_outside=[str(tmp_path / "private")])
+    assert imported["model"].point_count > 0

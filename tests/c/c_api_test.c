@@ -6,6 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "deform/c/deform.h"
 
 static int failures = 0;
@@ -151,6 +154,43 @@ static void loading_errors_name_the_file(void) {
   CHECK(deform_character_load(NULL, "a", "b", NULL, &nobody) == DEFORM_ERROR_ARGUMENT);
 }
 
+static void write_text(const char* path, const char* text) {
+  FILE* f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (f == NULL) return;
+  fputs(text, f);
+  fclose(f);
+}
+
+/* An OBJ naming an MTL file outside its folder is refused, unread, unless the caller allows that folder. */
+static void files_outside_the_model_folder_are_refused(void) {
+  char root[256], model[300], obj[320], secret[320];
+  snprintf(root, sizeof root, "/tmp/deform_c_confine_%ld", (long)getpid());
+  snprintf(model, sizeof model, "%s/model", root);
+  snprintf(obj, sizeof obj, "%s/body.obj", model);
+  snprintf(secret, sizeof secret, "%s/secret.mtl", root);
+  mkdir(root, 0700);
+  mkdir(model, 0700);
+  write_text(secret, "SECRET-c0ffee\nnewmtl s\n");
+  write_text(obj, "mtllib ../secret.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  deform_character* nobody = NULL;
+  CHECK(deform_character_load(obj, "/nonexistent/body.sk", "/nonexistent/body.skw", NULL, &nobody) ==
+        DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), "mtllib") != NULL);
+  CHECK(strstr(deform_last_error(), "SECRET") == NULL);
+  /* Allowed, the OBJ and its MTL file are read: the load goes on to the (missing) skeleton. */
+  const char* const allowed[] = {root};
+  CHECK(deform_character_load_allowing(obj, "/nonexistent/body.sk", "/nonexistent/body.skw", NULL, allowed, 1,
+                                       &nobody) == DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), "body.sk") != NULL);
+  CHECK(deform_character_load_allowing(obj, "a", "b", NULL, NULL, 1, &nobody) == DEFORM_ERROR_ARGUMENT);
+  CHECK(nobody == NULL);
+  remove(obj);
+  remove(secret);
+  rmdir(model);
+  rmdir(root);
+}
+
 /* Rigid transforms: a rotation about a random axis, a translation, column-major. */
 static void random_rigid(float* m) {
   double axis[3] = {uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
@@ -256,6 +296,7 @@ int main(void) {
   CHECK(strcmp(deform_last_error(), "") == 0);
   character_reaches_stretches_and_springs_back();
   loading_errors_name_the_file();
+  files_outside_the_model_folder_are_refused();
   skinning_matches_a_plain_reference();
   lattice_matches_trilinear_interpolation();
   if (failures) {

@@ -267,11 +267,17 @@ if importer:
     doc["meshes"][0]["primitives"][0]["material"] = 0
     doc["materials"] = [{"name": "m", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
     doc["textures"] = [{"source": 0}]
-    doc["images"] = [{"uri": "../secret/key.png"}, {"uri": "/etc/passwd"}]
+    doc["images"] = [{"uri": "missing.png"}]
     write("model/named.gltf", json.dumps(doc))
-    doc["images"] = [{"uri": "/etc/passwd"}]
-    write("model/passwd.gltf", json.dumps(doc))
-    for model in ("named", "passwd"):
+    # An image outside the model's folder is refused at import, unread (tests/cli/confinement_test.py tries every
+    # command and every kind of reference): nothing is exported.
+    for uri in ("../secret/key.png", "/etc/passwd"):
+        doc["images"] = [{"uri": uri}]
+        write("model/outside.gltf", json.dumps(doc))
+        r = run("export", "model/outside.gltf", "--out", "exported_outside")
+        expect(f"export with an image at {uri}", r, codes=(2,), names="outside.gltf")
+        check(not os.path.exists(path("exported_outside")), f"export with an image at {uri} wrote files")
+    for model in ("named",):
         r = run("export", f"model/{model}.gltf", "--out", f"exported_{model}")
         expect(f"export {model}", r, codes=(0,))
         copied = sorted(os.listdir(path(f"exported_{model}"))) if os.path.isdir(path(f"exported_{model}")) else []

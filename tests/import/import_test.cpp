@@ -18,9 +18,12 @@
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cmath>
+#include <chrono>
 #include <filesystem>
 #include <glm/gtc/quaternion.hpp>
 #include <utility>
+
+#include <unistd.h>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -499,6 +502,34 @@ TEST_CASE("export copies the model's own image textures, names the copies in the
   for (const fs::directory_entry& entry : fs::directory_iterator(folder))
     staging += entry.path().filename().string().find("deform-tmp") != std::string::npos;
   CHECK(staging == 0);
+  fs::remove_all(folder);
+}
+
+TEST_CASE("export checks a texture from its first bytes, once, however large it is and however often it is named") {
+  deform::ImportedModel imported = deform::import_model(test_model("X/BCN_Epileptic.X"));
+  const fs::path folder = fs::temp_directory_path() / ("deform_export_large_texture_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder / "source");
+  // A sparse file past the 1 GiB read limit that is not an image: reading it whole would fail the export, and 300
+  // materials reading it each would take minutes.
+  const fs::path large = folder / "source" / "large.png";
+  std::ofstream(large, std::ios::binary) << "not an image";
+  fs::resize_file(large, (std::uintmax_t{1} << 30) + 1);
+  REQUIRE(!imported.model.mesh.materials.empty());
+  imported.model.mesh.materials.resize(300, imported.model.mesh.materials[0]);
+  for (std::size_t m = 0; m < 300; ++m) {
+    imported.model.mesh.materials[m].name = "m" + std::to_string(m);
+    imported.model.mesh.materials[m].diffuse_map = large.string();
+  }
+  deform::ExportOptions options;
+  options.texture_root = (folder / "source").string();
+  const auto start = std::chrono::steady_clock::now();
+  const deform::ExportedFiles files = deform::export_native(imported.model, (folder / "out").string(), options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK(files.textures.empty());
+  REQUIRE(files.warnings.size() >= 300);
+  CHECK(files.warnings[0].find("not an image") != std::string::npos);
+  CHECK(seconds < 30.0);  // the export itself; 300 whole reads of a 1 GiB file could not fit
   fs::remove_all(folder);
 }
 

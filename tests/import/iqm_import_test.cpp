@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "deform/import/import.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
@@ -343,4 +345,25 @@ TEST_CASE("a looping IQM clip wraps from its last frame to its first; several ro
   CHECK(std::any_of(rooted.warnings.begin(), rooted.warnings.end(),
                     [](const std::string& w) { return w.find("another parent") != std::string::npos; }));
   fs::remove(two_roots);
+}
+
+TEST_CASE("an IQM material naming a texture outside the model's folder is refused unless that folder is allowed") {
+  std::vector<unsigned char> bytes = read_bytes(require_model());
+  const std::string body = "Body.jpg", outside = "../s.jpg";  // same length: every offset stays
+  const auto found = std::search(bytes.begin(), bytes.end(), body.begin(), body.end());
+  REQUIRE(found != bytes.end());
+  std::copy(outside.begin(), outside.end(), found);
+  const fs::path root = fs::temp_directory_path() / ("deform_iqm_confined_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "m");
+  const fs::path model = root / "m" / "fixit.iqm";
+  std::ofstream(model, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                               static_cast<std::streamsize>(bytes.size()));
+  CHECK_THROWS_WITH_AS(deform::import_model(model.string()), doctest::Contains(".material"), deform::Error);
+  deform::ImportOptions options;
+  options.references.allow_outside = {root.string()};
+  const deform::ImportedModel imported = deform::import_model(model.string(), options);
+  CHECK(imported.model.mesh.materials.size() == 2);
+  CHECK(imported.warnings.size() >= 1);  // both textures are missing: warnings, as before
+  fs::remove_all(root);
 }

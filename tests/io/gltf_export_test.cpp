@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -222,6 +223,36 @@ TEST_CASE("write_gltf: a texture the model holds in memory is embedded as it is,
   CHECK(refused.textures == 0);
   REQUIRE(refused.warnings.size() == 1);
   CHECK(refused.warnings[0].find("not a PNG or JPEG") != std::string::npos);
+}
+
+TEST_CASE("write_gltf: a texture is checked from its first bytes, once; allowed folders widen texture_root") {
+  const Folder folder("deform_gltf_texture_once_test");
+  deform::Model model = deform::builtin_character();
+  // A sparse file past the 1 GiB read limit that is not an image, named by 300 materials: reading it whole would
+  // fail the export (and 300 reads would take minutes).
+  fs::create_directories(folder.path / "source");
+  const fs::path large = folder.path / "source" / "large.png";
+  { std::ofstream(large, std::ios::binary) << "not an image"; }
+  fs::resize_file(large, (std::uintmax_t{1} << 30) + 1);
+  REQUIRE(!model.mesh.materials.empty());
+  model.mesh.materials.resize(300, model.mesh.materials[0]);
+  for (std::size_t m = 0; m < 300; ++m) {
+    model.mesh.materials[m].name = "m" + std::to_string(m);
+    model.mesh.materials[m].diffuse_map = large.string();
+  }
+  deform::GltfExportOptions options;
+  options.texture_root = (folder.path / "source").string();
+  const deform::GltfWritten written = deform::write_gltf((folder.path / "a.glb").string(), model, options);
+  CHECK(written.textures == 0);
+  REQUIRE(!written.warnings.empty());
+  CHECK(written.warnings[0].find("not a PNG or JPEG") != std::string::npos);
+  // The built-in PNG from a folder outside texture_root: embedded only where that folder is allowed.
+  deform::Model textured = deform::builtin_character();
+  for (deform::Material& m : textured.mesh.materials)
+    if (!m.diffuse_map.empty()) m.diffuse_map = DEFORM_SOURCE_DIR "/samples/data/" + m.diffuse_map;
+  CHECK(deform::write_gltf((folder.path / "b.glb").string(), textured, options).textures == 0);
+  options.references.allow_outside = {DEFORM_SOURCE_DIR "/samples/data"};
+  CHECK(deform::write_gltf((folder.path / "c.glb").string(), textured, options).textures == 1);
 }
 
 TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; model morph targets are warned") {

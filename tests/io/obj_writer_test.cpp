@@ -63,7 +63,10 @@ TEST_CASE("obj writer: round trip of the cube fixture with materials and an MTL"
   deform::write_file_atomic((folder / "out.mtl").string(), deform::format_mtl(cube.materials));
   deform::write_obj((folder / "out.obj").string(), cube, cube.positions, {}, {.mtllib = "out.mtl"});
   deform::Warnings warnings;
-  const Mesh back = deform::read_obj((folder / "out.obj").string(), &warnings);
+  // The MTL names the fixture's texture where it lies, outside the new folder: read because that folder is allowed.
+  deform::ReferencePolicy policy;
+  policy.allow_outside = {DEFORM_TEST_DATA "/mesh"};
+  const Mesh back = deform::read_obj((folder / "out.obj").string(), &warnings, policy);
   CHECK(warnings.messages.empty());
   check_same(cube, back);
   REQUIRE(back.materials.size() == cube.materials.size());
@@ -86,7 +89,8 @@ TEST_CASE("obj writer: an OBJ written elsewhere names the input's MTL files rela
   CHECK(std::filesystem::equivalent(cube.material_libraries[0], DEFORM_TEST_DATA "/mesh/cube.mtl"));
   CHECK(deform::parse_obj("v 0 0 0\n").material_libraries.empty());
 
-  // Next to the input, two folders below it, and in another tree: each reads back with the same materials.
+  // Next to the input, two folders below it, and in another tree: each reads back with the same materials (the
+  // other tree's OBJ names an MTL outside its own folder: read only where the caller allows that folder).
   const auto root = std::filesystem::temp_directory_path() / ("deform_mesh_mtllib_" + std::to_string(::getpid()));
   const auto data = root / "data", deep = root / "out" / "deeper";
   std::filesystem::create_directories(data);
@@ -102,7 +106,10 @@ TEST_CASE("obj writer: an OBJ written elsewhere names the input's MTL files rela
     deform::write_obj(out.string(), input, input.positions, {},
                       {.mtllib = deform::material_libraries_for(input, out.string())});
     deform::Warnings warnings;
-    const Mesh back = deform::read_obj(out.string(), &warnings);
+    if (out == deep / "o.obj") CHECK_THROWS_AS(deform::read_obj(out.string(), &warnings), deform::Error);
+    deform::ReferencePolicy policy;
+    policy.allow_outside = {data.string()};
+    const Mesh back = deform::read_obj(out.string(), &warnings, policy);
     CHECK(warnings.messages.empty());
     REQUIRE(back.materials.size() == cube.materials.size());
     for (std::size_t m = 0; m < cube.materials.size(); ++m) CHECK(back.materials[m].name == cube.materials[m].name);

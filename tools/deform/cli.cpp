@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "deform/runtime/error.hpp"
+
 namespace cli {
 
 Args::Args(std::vector<std::string> argv, std::vector<std::string> value_flags, std::vector<std::string> switch_flags) {
@@ -48,6 +50,13 @@ std::optional<std::string> Args::value(std::string_view flag) const {
   std::optional<std::string> found;
   for (const auto& [f, v] : values_)
     if (f == flag) found = v;
+  return found;
+}
+
+std::vector<std::string> Args::values(std::string_view flag) const {
+  std::vector<std::string> found;
+  for (const auto& [f, v] : values_)
+    if (f == flag) found.push_back(v);
   return found;
 }
 
@@ -126,7 +135,11 @@ void print_json_in_order(const nlohmann::ordered_json& document) {
   std::cout << document.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
 }
 
-void note(const std::string& message) { std::cerr << "deform: " << message << '\n'; }
+// Warnings quote names and paths from files: control characters are escaped (the readers do; this keeps any other
+// message to one line as well).
+void note(const std::string& message) {
+  std::cerr << "deform: " << deform::escape_control_characters(message) << '\n';
+}
 
 nlohmann::json to_json(glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 

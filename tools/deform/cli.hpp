@@ -31,6 +31,7 @@ class Args {
   const std::vector<std::string>& positionals() const { return positionals_; }
   bool has(std::string_view flag) const;                          // a switch, or a value flag that was given
   std::optional<std::string> value(std::string_view flag) const;  // last occurrence
+  std::vector<std::string> values(std::string_view flag) const;   // every occurrence, in order (a repeatable flag)
   std::string required(std::string_view flag) const;              // UsageError when missing
   bool help() const { return help_; }
 

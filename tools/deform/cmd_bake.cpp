@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "model_loading.hpp"
 #include "deform/character/character.hpp"
@@ -36,6 +37,8 @@ constexpr const char* usage =
     "                   [--release-at T] [--seconds S] [--fps F] [--dt DT] --out FILE.(gltf|glb)\n"
     "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
     "\n"
+    "The files a RIG or MESH names are read only from its folder, or a folder --allow-outside DIR (repeatable)\n"
+    "names (docs/security.md).\n"
     "Writes a deformation over time as glTF 2.0 that any glTF viewer plays: the mesh at its bind pose plus one morph\n"
     "target per frame (sparse: only the vertices that move), and one animation whose weights show frame k at k/F\n"
     "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md).\n"
@@ -96,10 +99,11 @@ std::string checked_out(const Args& args) {
 // `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none. Textures the model holds
 // in memory (Material::diffuse_image) are embedded whatever it says.
 int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
-          const std::string& texture_root) {
+          const std::string& texture_root, const deform::ReferencePolicy& references) {
   deform::GltfExportOptions options;
   options.baked = &baked;
   options.texture_root = texture_root;
+  options.references = references;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
@@ -210,7 +214,7 @@ int bake_animated(const Args& args) {
     now = t;
     keep(k);
   }
-  return write(out, rest, baked, timing, rigged.texture_root);
+  return write(out, rest, baked, timing, rigged.texture_root, reference_policy(args));
 }
 
 int bake_ffd(const Args& args) {
@@ -224,7 +228,7 @@ int bake_ffd(const Args& args) {
 
   deform::Warnings warnings;
   deform::Model model;
-  model.mesh = deform::read_obj(mesh_path, &warnings);
+  model.mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args));
   for (const std::string& w : warnings.messages) note(w);
   model.name = std::filesystem::path(mesh_path).stem().string();
   const deform::Mesh& mesh = model.mesh;
@@ -259,7 +263,7 @@ int bake_ffd(const Args& args) {
     baked.normals.push_back(ffd_normals(mesh, current, deformed));
   }
   const std::string folder = std::filesystem::path(mesh_path).parent_path().lexically_normal().string();
-  return write(out, model, baked, timing, folder.empty() ? "." : folder);
+  return write(out, model, baked, timing, folder.empty() ? "." : folder, reference_policy(args));
 }
 
 int run(const std::vector<std::string>& argv) {

@@ -36,6 +36,7 @@ int run_gltf(const Args& args, const std::string& out) {
   options.clips = loaded.clips;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   options.texture_root = texture_root(args);
+  options.references = reference_policy(args);
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
   Json clips = Json::array();
@@ -61,6 +62,7 @@ int run_native(const Args& args, const std::string& out) {
   // Textures are copied only from the model's own folder (deform::ExportOptions).
   deform::ExportOptions options;
   options.texture_root = texture_root(args);
+  options.references = reference_policy(args);
   const deform::ExportedFiles files = deform::export_native(model, out, options);
   for (const std::string& w : files.warnings) note(w);
   print_json(Json{{"obj", files.obj},
@@ -115,6 +117,8 @@ const Command export_command = {
     "Prints {\"obj\", \"mtl\", \"sk\", \"skw\": paths, \"textures\": [paths], \"vertices\", \"triangles\", \"bones\"\n"
     "(0 for a static model), \"clips\": [names]}. Importer warnings go to stderr.\n"
     "--max-influences N (1 to 16, default 4): influences kept per point from W.skw.\n"
+    "--allow-outside DIR (repeatable): files the model names (MTL, textures, buffers) may also come from DIR; by\n"
+    "default only its own folder is read, and a file named elsewhere is refused with exit 2 (docs/security.md).\n"
     "\n"
     "--format gltf: writes FILE as glTF 2.0 (docs/gltf-export.md): FILE.glb as one binary file, FILE.gltf plus\n"
     "NAME.bin beside it; the mesh with normals, the skeleton as nodes, the skin and every clip as an animation\n"

@@ -5,6 +5,7 @@
 
 #include "cli.hpp"
 #include "model_loading.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "deform/io/lattice_json.hpp"
 #include "deform/io/obj.hpp"
@@ -18,7 +19,7 @@ namespace cli {
 namespace {
 
 const char* const usage =
-    "usage: deform ffd (MESH.obj | MODEL) --lattice L.json --out OUT.obj\n"
+    "usage: deform ffd (MESH.obj | MODEL) --lattice L.json --out OUT.obj [--allow-outside DIR]...\n"
     "\n"
     "Deforms the mesh (an OBJ, or the bind-pose mesh of a MODEL an importer reads: glTF, FBX, ...) with an\n"
     "axis-aligned Bezier lattice. L.json:\n"
@@ -31,7 +32,7 @@ const char* const usage =
     "Prints {\"vertices\": N, \"deformed\": K, \"lattice\": {...}, \"output\": OUT.obj}.\n";
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--lattice", "--out"}, {});
+  const Args args(argv, {"--lattice", "--out", "--allow-outside"}, {});
   if (args.positionals().size() != 1) throw UsageError("expected exactly one MESH argument");
   const std::string mesh_path = args.positionals()[0];
   const std::string lattice_path = args.required("--lattice");
@@ -41,12 +42,13 @@ int run(const std::vector<std::string>& argv) {
   if (model_loading::importable(mesh_path)) {  // an import's mesh in its bind pose
     model_loading::ModelRequest request;
     request.path = mesh_path;
+    request.references = reference_policy(args);
     model_loading::LoadedModel loaded = model_loading::load_model(request);
     for (const std::string& w : loaded.warnings) note(w);
     mesh = std::move(loaded.model.mesh);
   } else {
     deform::Warnings warnings;
-    mesh = deform::read_obj(mesh_path, &warnings);
+    mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args));
     for (const std::string& w : warnings.messages) note(w);
   }
   const deform::LatticeDocument doc = deform::read_lattice_json(lattice_path, mesh.point_count());

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "deform/import/import.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/pose_json.hpp"
@@ -122,7 +123,8 @@ std::string lower_extension(const std::string& path) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {}, {"--rig"});
+  const Args args(argv, {"--allow-outside"}, {"--rig"});
+  const deform::ReferencePolicy policy = reference_policy(args);
   if (args.positionals().size() != 1) throw UsageError("expected exactly one file (a .sk skeleton or an .obj mesh)");
   const std::string& path = args.positionals()[0];
   const std::string ext = lower_extension(path);
@@ -133,11 +135,13 @@ int run(const std::vector<std::string>& argv) {
     info = skeleton_info(deform::read_sk(path));
   } else if (ext == ".obj") {
     deform::Warnings warnings;
-    info = mesh_info(deform::read_obj(path, &warnings));
+    info = mesh_info(deform::read_obj(path, &warnings, policy));
     for (const std::string& w : warnings.messages) note(w);
 #ifdef DEFORM_HAVE_IMPORT  // imported models: bones and clips
   } else if (deform::is_importable(path)) {
-    const deform::ImportedModel imported = deform::import_model_isolated(path);
+    deform::ImportOptions options;
+    options.references = policy;
+    const deform::ImportedModel imported = deform::import_model_isolated(path, options);
     for (const std::string& w : imported.warnings) note(path + ": " + w);
     info = mesh_info(imported.model.mesh);  // "vertices": the distinct points (docs/import.md)
     if (imported.rigged) {
@@ -201,8 +205,10 @@ int run(const std::vector<std::string>& argv) {
 
 const Command info_command = {
     "info", "inspect a .sk skeleton, an .obj mesh or an importable model",
-    "usage: deform info PATH [--rig]\n"
+    "usage: deform info PATH [--rig] [--allow-outside DIR]...\n"
     "\n"
+    "Files a model names (MTL, textures, buffers) are read only from its own folder, or from a folder given with\n"
+    "--allow-outside DIR (repeatable); any other is refused with exit 2 (docs/security.md).\n"
     "Prints what PATH holds as one JSON document on stdout.\n"
     "  S.sk      {\"kind\": \"skeleton\", \"bones\": [{\"id\", \"name\", \"parent\", \"head\": [x, y, z],\n"
     "             \"limits\": {\"min\": [x, y, z], \"max\": [x, y, z]}}, ...]}\n"

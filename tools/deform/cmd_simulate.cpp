@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli.hpp"
+#include "model_loader.hpp"
 #include "shared_steps.hpp"
 #include "model_loading.hpp"
 #include "deform/character/character.hpp"
@@ -26,8 +27,9 @@ using Json = nlohmann::ordered_json;  // keeps "t" first in each sample, as docu
 constexpr const char* usage =
     "usage: deform simulate (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
     "                       [--release-at T] [--seconds S] [--dt DT] [--effector BONE] [--integrator exact|verlet]\n"
-    "                       [--min-length F] [--volume F] [--inertia F] [--save-rig FILE]\n"
+    "                       [--min-length F] [--volume F] [--inertia F] [--save-rig FILE] [--allow-outside DIR]...\n"
     "\n"
+    "The model a RIG names is read only from the rig's folder, or a folder --allow-outside names (docs/security.md).\n"
     "Reaches for the target with the rig's reach chain (IK within the DOF limits, then the chain's elastic lattices\n"
     "stretch to cover what remains), holds, releases at T and lets the stretch spring back; with --clip, plays the\n"
     "clip meanwhile (the reach follows the moving body), the lattices with inertia and the rig's spring chains\n"

@@ -366,6 +366,8 @@ const Command skin_command = {
     "(`deform info` lists them).\n"
     "--max-influences N (1 to 16, default 4): influences kept per point from W.skw (`deform weights --max-influences\n"
     "N` writes up to 16).\n"
+    "--allow-outside DIR (repeatable): files the model names (MTL, textures, buffers) may also come from DIR; by\n"
+    "default only its own folder is read, and a file named elsewhere is refused with exit 2 (docs/security.md).\n"
     "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
     "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"

@@ -3,6 +3,7 @@
 
 #include "cli.hpp"
 #include "model_loading.hpp"
+#include "model_loader.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
@@ -24,6 +25,8 @@ constexpr const char* usage =
     "Computes automatic skin weights for the mesh's points (one .skw line per OBJ `v`) from the skeleton's bind pose\n"
     "(docs/weights.md). --builtin uses the built-in character's mesh and skeleton; a MODEL an importer reads (glTF,\n"
     "FBX, ...), its mesh and its own skeleton (or S.sk), its file's weights left aside.\n"
+    "--allow-outside DIR (repeatable): files the model names (MTL, textures, buffers) may also come from DIR; by\n"
+    "default only its own folder is read, and a file named elsewhere is refused with exit 2 (docs/security.md).\n"
     "  heat (default)  bone heat diffusion over the surface (Baran & Popovic 2007): each point is heated by its\n"
     "                  nearest bone that it sees through no triangle, and the heat of each bone spreads over the\n"
     "                  surface; a hand resting against a thigh keeps its arm's weights.\n"
@@ -63,7 +66,7 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 
 int run(const std::vector<std::string>& argv) {
   const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--oblique-penalty", "--resolution", "--falloff",
-                         "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length"},
+                         "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length", "--allow-outside"},
                   {"--builtin"});
   const std::string out = args.required("--out");
   const std::string method = args.value("--method").value_or("heat");
@@ -116,6 +119,7 @@ int run(const std::vector<std::string>& argv) {
     if (model_loading::importable(source)) {  // an import's mesh and skeleton (its own weights are not used)
       model_loading::ModelRequest request;
       request.path = source;
+      request.references = reference_policy(args);
       model_loading::LoadedModel loaded = model_loading::load_model(request);
       for (const std::string& w : loaded.warnings) note(w);
       if (!loaded.rigged && !args.has("--skeleton"))
@@ -126,7 +130,7 @@ int run(const std::vector<std::string>& argv) {
     } else {
       const std::string sk = args.required("--skeleton");
       deform::Warnings warnings;
-      mesh = deform::read_obj(source, &warnings);
+      mesh = deform::read_obj(source, &warnings, reference_policy(args));
       for (const std::string& w : warnings.messages) note(w);
       skeleton = deform::read_sk(sk);
     }

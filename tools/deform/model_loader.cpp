@@ -3,12 +3,21 @@
 
 namespace cli {
 
+deform::ReferencePolicy reference_policy(const Args& args) {
+  deform::ReferencePolicy policy;
+  policy.allow_outside = args.values("--allow-outside");
+  for (const std::string& folder : policy.allow_outside)
+    if (folder.empty()) throw UsageError("--allow-outside needs a folder");
+  return policy;
+}
+
 LoadedModel load_model(const Args& args) {
   const auto skeleton = args.value("--skeleton");
   const auto weights = args.value("--weights");
   const std::vector<std::string>& files = args.positionals();
 
   model_loading::ModelRequest request;
+  request.references = reference_policy(args);
   if (args.has("--builtin")) {
     if (!files.empty()) throw UsageError("--builtin takes no model file (got '" + files[0] + "')");
     if (skeleton || weights) throw UsageError("--builtin takes no --skeleton or --weights");

@@ -10,12 +10,18 @@
 
 #include "cli.hpp"
 #include "model_loading.hpp"
+#include "deform/io/referenced_file.hpp"
 namespace cli {
 
 using model_loading::LoadedModel;
 
-// Value flags a model-taking command must accept: --skeleton, --weights.  Switch: --builtin.
-inline const std::vector<std::string> model_value_flags = {"--skeleton", "--weights", "--max-influences"};
+// Value flags a model-taking command must accept: --skeleton, --weights, --allow-outside.  Switch: --builtin.
+inline const std::vector<std::string> model_value_flags = {"--skeleton", "--weights", "--max-influences",
+                                                           "--allow-outside"};
+
+// The folders --allow-outside DIR (repeatable) names: files a model names may be read there too
+// (deform::resolve_referenced_file, docs/security.md). UsageError for an empty DIR.
+deform::ReferencePolicy reference_policy(const Args& args);
 inline const std::vector<std::string> model_switch_flags = {"--builtin"};
 
 // Loads the model named by `args` (first positional, or --builtin) and prints its warnings (note()). Throws

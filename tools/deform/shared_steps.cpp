@@ -12,6 +12,7 @@
 #include "model_loader.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #ifdef DEFORM_HAVE_STB
 #include <stb_image_write.h>
@@ -27,12 +28,22 @@ std::string lower_extension(const std::string& path) {
 
 }  // namespace
 
-model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path) {
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path,
+                                          const deform::ReferencePolicy& policy) {
   model_loading::ModelRequest request;
+  request.references = policy;
   if (!named.builtin) {
     if (named.obj.empty() && named.file.empty())
       throw deform::Error::in_file(rig_path, "key 'model'",
                                    "the rig names no model: give the model too (MODEL --rig " + rig_path + ")");
+    // Each is confined before it is opened; the paths keep the rig's spelling (they name the files in messages).
+    if (!named.file.empty()) {
+      deform::resolve_referenced_file(rig_path, named.file, "key 'model.file'", policy);
+    } else {
+      deform::resolve_referenced_file(rig_path, named.obj, "key 'model.obj'", policy);
+      deform::resolve_referenced_file(rig_path, named.skeleton, "key 'model.skeleton'", policy);
+      deform::resolve_referenced_file(rig_path, named.weights, "key 'model.weights'", policy);
+    }
     const std::filesystem::path folder = std::filesystem::path(rig_path).parent_path();
     if (!named.file.empty()) {
       request.path = (folder / named.file).string();
@@ -111,7 +122,7 @@ RiggedModel load_rigged_model(const Args& args, bool need_rig) {
     for (const char* flag : {"--skeleton", "--weights", "--max-influences"})
       if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a model given on the command line");
     out.named = deform::parse_rig_model(text, *rig_path);
-    out.loaded = load_rig_model(out.named, *rig_path);
+    out.loaded = load_rig_model(out.named, *rig_path, reference_policy(args));
     const std::filesystem::path folder = std::filesystem::path(*rig_path).parent_path();
     for (std::string* file : {&out.named.obj, &out.named.skeleton, &out.named.weights, &out.named.file})
       if (!file->empty()) *file = (folder / *file).string();

@@ -17,7 +17,10 @@ namespace cli {
 
 // The model a rig file names (`simulate`, `bake`), its paths taken relative to the rig file's folder; the loader's
 // warnings go to stderr. Throws deform::Error naming the rig file when it names no model.
-model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path);
+// The model's files are confined to the rig file's folder and `policy`'s (resolve_referenced_file), as any file a
+// model names is.
+model_loading::LoadedModel load_rig_model(const deform::RigModel& named, const std::string& rig_path,
+                                          const deform::ReferencePolicy& policy = {});
 
 // What a file holds, by its first bytes, in words for an error ("a glTF binary", "a skeleton (.sk)", "a rig JSON
 // file", ...; "a folder", "an empty file", "a file that cannot be read"): so that a file given in the wrong place is
@@ -33,7 +36,8 @@ std::string read_rig_text(const std::string& path);
 //                                   the model's starting rig (model_loading::starting_rig);
 //   RIG.json, or --rig FILE alone   the rig and the model its "model" key names (relative to the rig's folder).
 // The command must accept rig_value_flags and model_switch_flags. Loader warnings go to stderr.
-inline const std::vector<std::string> rig_value_flags = {"--skeleton", "--weights", "--max-influences", "--rig"};
+inline const std::vector<std::string> rig_value_flags = {"--skeleton", "--weights", "--max-influences", "--rig",
+                                                         "--allow-outside"};
 struct RiggedModel {
   model_loading::LoadedModel loaded;     // its clips: the file's for an import, builtin_clips for the built-in one
   deform::Rig rig;

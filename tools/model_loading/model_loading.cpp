@@ -36,7 +36,8 @@ LoadedModel load_native(const ModelRequest& request) {
   loaded.source = request.path;
   if (!request.weights.empty()) {
     deform::Warnings warnings;
-    loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings, request.influences);
+    loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings, request.influences,
+                                      request.references);
     loaded.warnings = std::move(warnings.messages);
     return loaded;
   }
@@ -44,7 +45,7 @@ LoadedModel load_native(const ModelRequest& request) {
     throw deform::Error::invalid_argument(request.path, "the native files need weights (.skw)");
   deform::Warnings warnings;
   loaded.model.name = std::filesystem::path(request.path).stem().string();
-  loaded.model.mesh = deform::read_obj(request.path, &warnings);
+  loaded.model.mesh = deform::read_obj(request.path, &warnings, request.references);
   loaded.model.skeleton = deform::read_sk(request.skeleton);
   deform::WeightsResult automatic = deform::compute_heat_weights(loaded.model.mesh, loaded.model.skeleton);
   loaded.model.weights = std::move(automatic.weights);
@@ -75,7 +76,9 @@ LoadedModel load_model(const ModelRequest& request) {
   if (!request.skeleton.empty() || !request.weights.empty()) return load_native(request);
 #ifdef DEFORM_HAVE_IMPORT
   if (importable(request.path)) {
-    deform::ImportedModel imported = deform::import_model_isolated(request.path);
+    deform::ImportOptions options;
+    options.references = request.references;
+    deform::ImportedModel imported = deform::import_model_isolated(request.path, options);
     LoadedModel loaded;
     loaded.model = std::move(imported.model);
     loaded.source = request.path;

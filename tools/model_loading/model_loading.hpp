@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "deform/io/referenced_file.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -29,6 +30,8 @@ struct ModelRequest {
   // An OBJ with a skeleton but no weights gets compute_heat_weights() (default options, docs/weights.md; about a
   // second for 40k points), its warnings added to the loaded model's; false: such a request is an error.
   bool automatic_weights = false;
+  // Folders besides the model's own whose files it may name (MTL, textures, buffers): resolve_referenced_file.
+  deform::ReferencePolicy references;
 };
 
 struct LoadedModel {

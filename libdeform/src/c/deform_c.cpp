@@ -106,10 +106,22 @@ deform_status deform_character_create_builtin(deform_character** out) {
 
 deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
                                     const char* rig_path, deform_character** out) {
+  return deform_character_load_allowing(obj_path, sk_path, skw_path, rig_path, nullptr, 0, out);
+}
+
+deform_status deform_character_load_allowing(const char* obj_path, const char* sk_path, const char* skw_path,
+                                             const char* rig_path, const char* const* allow_outside,
+                                             size_t allow_count, deform_character** out) {
   if (out == nullptr || obj_path == nullptr || sk_path == nullptr || skw_path == nullptr)
     return fail_argument("deform_character_load: a path or out is NULL");
+  if (allow_count > 0 && allow_outside == nullptr)
+    return fail_argument("deform_character_load_allowing: allow_outside is NULL with a count above 0");
+  for (size_t i = 0; i < allow_count; ++i)
+    if (allow_outside[i] == nullptr) return fail_argument("deform_character_load_allowing: a folder is NULL");
   return guarded([&] {
-    deform::Model model = deform::load_model(obj_path, sk_path, skw_path);
+    deform::ReferencePolicy policy;
+    for (size_t i = 0; i < allow_count; ++i) policy.allow_outside.emplace_back(allow_outside[i]);
+    deform::Model model = deform::load_model(obj_path, sk_path, skw_path, nullptr, deform::max_influences, policy);
     if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);
     deform::Rig rig = deform::read_rig_json(rig_path, model.skeleton, model.mesh.point_count());
     return adopt(deform::Character(std::move(model), rig), out);

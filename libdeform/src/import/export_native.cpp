@@ -12,6 +12,7 @@
 #include "deform/import/import.hpp"
 #include "deform/io/atomic_file.hpp"
 #include "deform/io/obj.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/runtime/error.hpp"
 
@@ -20,39 +21,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
-}
-
-// True when the bytes start as an image file does (TGA has no signature: its extension decides).
-bool is_image(const std::vector<std::uint8_t>& bytes, const fs::path& path) {
-  const auto starts = [&](std::string_view magic, std::size_t at = 0) {
-    return bytes.size() >= at + magic.size() &&
-           std::equal(magic.begin(), magic.end(), bytes.begin() + static_cast<std::ptrdiff_t>(at),
-                      [](char m, std::uint8_t b) { return static_cast<std::uint8_t>(m) == b; });
-  };
-  static constexpr std::array<std::string_view, 11> signatures = {
-      "\x89PNG\r\n\x1a\n", "\xff\xd8\xff", "BM", "GIF87a", "GIF89a", "DDS ", "\xabKTX", "II*", "MM\0*",
-      "#?RADIANCE", "8BPS"};
-  for (std::string_view magic : signatures)
-    if (starts(magic)) return true;
-  if (starts("RIFF") && starts("WEBP", 8)) return true;
-  return lower(path.extension().string()) == ".tga" && bytes.size() >= 18;
-}
-
-// Where a texture may be copied from: inside `root` once links are resolved, and an image. Empty `why` = allowed.
-std::string refusal(const std::string& texture, const std::string& root, std::vector<std::uint8_t>& bytes) {
+// Where a texture may be copied from: inside `root` or a folder `policy` allows once links are resolved
+// (lies_inside, the rule every reader applies), and an image by its first bytes alone (image_format: a 100 MB file
+// that is not one is never read). Empty = allowed. `real` receives the canonical path to copy.
+std::string refusal(const std::string& texture, const std::string& root, const ReferencePolicy& policy,
+                    std::string& real) {
   std::error_code error;
   if (root.empty()) return "no texture folder was given";
-  const fs::path real = fs::canonical(texture, error);
-  if (error || !fs::is_regular_file(real, error)) return "not found";
-  const fs::path real_root = fs::canonical(root, error);
-  if (error) return "the texture folder '" + root + "' does not exist";
-  const fs::path inside = real.lexically_relative(real_root);
-  if (inside.empty() || *inside.begin() == "..") return "it lies outside the model's folder '" + root + "'";
-  bytes = read_file_bytes(real.string());
-  if (!is_image(bytes, real)) return "it is not an image file";
+  const fs::path canonical = fs::canonical(texture, error);
+  if (error || !fs::is_regular_file(canonical, error)) return "not found";
+  if (!fs::is_directory(root, error)) return "the texture folder '" + root + "' does not exist";
+  bool allowed = lies_inside(canonical.string(), root);
+  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(canonical.string(), other);
+  if (!allowed) return "it lies outside the model's folder '" + root + "'";
+  if (image_format(canonical.string()).empty()) return "it is not an image file";
+  real = canonical.string();
   return {};
 }
 
@@ -97,6 +80,7 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   std::vector<Material> materials = model.mesh.materials;
   std::map<std::string, std::string> copy_of;  // source -> file name in `folder`
   std::map<const std::vector<std::uint8_t>*, std::string> file_of_image;  // embedded image -> file name in `folder`
+  std::map<std::string, std::string> checked;  // source -> why refused ("" if not): each is checked once per export
   for (Material& material : materials) {
     if (material.diffuse_image) {  // an embedded image becomes a file of its own, named after its first material
       const std::vector<std::uint8_t>& bytes = *material.diffuse_image;
@@ -119,14 +103,21 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
     if (material.diffuse_map.empty()) continue;
     auto found = copy_of.find(material.diffuse_map);
     if (found == copy_of.end()) {
-      std::vector<std::uint8_t> bytes;
-      const std::string why = refusal(material.diffuse_map, options.texture_root, bytes);
-      if (!why.empty()) {
-        files.warnings.push_back("material '" + material.name + "': texture '" + material.diffuse_map +
-                                 "' not copied (" + why + "), map_Kd left out");
+      auto known = checked.find(material.diffuse_map);
+      std::string real;
+      if (known == checked.end())
+        known = checked
+                    .emplace(material.diffuse_map,
+                             refusal(material.diffuse_map, options.texture_root, options.references, real))
+                    .first;
+      if (!known->second.empty()) {
+        files.warnings.push_back(escape_control_characters("material '" + material.name + "': texture '" +
+                                                           material.diffuse_map + "' not copied (" + known->second +
+                                                           "), map_Kd left out"));
         material.diffuse_map.clear();
         continue;
       }
+      const std::vector<std::uint8_t> bytes = read_file_bytes(real);
       std::string name = fs::path(material.diffuse_map).filename().string();
       while (std::find(names.begin(), names.end(), name) != names.end())
         name = std::to_string(copy_of.size()) + "_" + name;

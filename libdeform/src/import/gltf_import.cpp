@@ -44,6 +44,7 @@ namespace tinygltf = deform_gltf_import::tinygltf;
 #include <unordered_map>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "import/import_common.hpp"
 #include "runtime/finite.hpp"
@@ -76,17 +77,31 @@ bool is_png_or_jpeg(const std::vector<std::uint8_t>& bytes) {
          (bytes.size() >= sizeof jpeg && std::equal(std::begin(jpeg), std::end(jpeg), bytes.begin()));
 }
 
-// tinygltf reads the files a .gltf names (buffers, images) through these: regular files only (not /dev/zero or a
-// FIFO), at most 1 GiB each; nothing is ever written.
-bool file_exists(const std::string& path, void*) {
+// tinygltf reads the files a .gltf names (buffers; images are never read, TINYGLTF_NO_EXTERNAL_IMAGE) through
+// these. Only the files approved beforehand are read: `approved` maps the path tinygltf asks for (its folder joined
+// with its decoding of the URI) to the canonical path resolve_referenced_file returned for that buffer. Anything
+// else, such as tinygltf's second try in the current folder, is refused unread. Regular files only (not /dev/zero or
+// a FIFO), at most 1 GiB each; nothing is ever written.
+struct ApprovedFiles {
+  std::map<std::string, std::string> approved;  // path tinygltf asks for -> canonical path to read
+};
+const std::string* approved_path(const std::string& path, void* user) {
+  const auto* files = static_cast<const ApprovedFiles*>(user);
+  if (files == nullptr) return nullptr;
+  const auto found = files->approved.find(path);
+  return found == files->approved.end() ? nullptr : &found->second;
+}
+bool file_exists(const std::string& path, void* user) {
+  const std::string* real = approved_path(path, user);
   std::error_code error;
-  return fs::is_regular_file(path, error);
+  return real != nullptr && fs::is_regular_file(*real, error);
 }
 std::string expand_path(const std::string& path, void*) { return path; }
-bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const std::string& path, void*) {
+bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const std::string& path, void* user) {
   try {
-    if (!file_exists(path, nullptr)) throw Error::in_file(path, "", "not a regular file");
-    const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+    const std::string* real = approved_path(path, user);
+    if (real == nullptr || !file_exists(path, user)) throw Error::in_file(path, "", "not a regular file");
+    const std::vector<std::uint8_t> bytes = read_file_bytes(*real);
     out->assign(bytes.begin(), bytes.end());
     return true;
   } catch (const std::exception& e) {
@@ -94,6 +109,28 @@ bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const 
     return false;
   }
 }
+
+// Confines every external buffer the file names before tinygltf reads any (resolve_referenced_file): a buffer
+// outside the model's folder and the policy's folders throws here, naming "buffers[i].uri", unread. `json` is the
+// glTF JSON (a .gltf file, or a .glb's JSON chunk); malformed JSON approves nothing and is left to tinygltf to
+// report. Images are confined after parsing, as tinygltf never reads them.
+ApprovedFiles approve_buffers(const std::string& path, const std::string& base, std::string_view json,
+                              const ReferencePolicy& policy) {
+  ApprovedFiles files;
+  const nlohmann::json document = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+  if (!document.is_object() || !document.contains("buffers") || !document["buffers"].is_array()) return files;
+  const nlohmann::json& buffers = document["buffers"];
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    if (!buffers[i].is_object() || !buffers[i].contains("uri") || !buffers[i]["uri"].is_string()) continue;
+    const std::string& uri = buffers[i]["uri"].get_ref<const std::string&>();
+    if (tinygltf::IsDataURI(uri)) continue;
+    const std::string real = resolve_referenced_file(path, uri, "buffers[" + std::to_string(i) + "].uri", policy,
+                                                     ReferenceSyntax::uri);
+    files.approved[tinygltf::JoinPath(base, tinygltf::dlib::urldecode(uri))] = real;
+  }
+  return files;
+}
+
 bool refuse_write(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
   if (error != nullptr) *error += "the importer writes no file";
   return false;
@@ -313,12 +350,16 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   tinygltf::TinyGLTF loader;
   EmbeddedImages embedded_images;
   loader.SetImageLoader(keep_image, &embedded_images);
-  loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, nullptr});
+  ApprovedFiles approved;
+  loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, &approved});
   tinygltf::Model gltf;
   std::string error, warning;
   const std::string base = fs::path(path).parent_path().string();
   bool loaded = false;
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  const auto text = [&](std::size_t from, std::size_t length) {
+    return std::string_view(reinterpret_cast<const char*>(bytes.data()) + from, length);
+  };
   if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error::in_file(path, "", "larger than 4 GiB");
   if (binary) {
     // The GLB header's lengths are checked here: tinygltf adds them in 32 bits.
@@ -332,9 +373,11 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     if (header[4] != 0x4E4F534Au || std::uint64_t{header[3]} + 20 > header[2])
       throw Error::in_file(path, "GLB header", "the first chunk is not JSON within the file (" +
                                                    std::to_string(header[3]) + " bytes claimed)");
+    approved = approve_buffers(path, base, text(20, header[3]), options.references);
     loaded = loader.LoadBinaryFromMemory(&gltf, &error, &warning, bytes.data(),
                                          static_cast<unsigned int>(bytes.size()), base);
   } else {
+    approved = approve_buffers(path, base, text(0, bytes.size()), options.references);
     loaded = loader.LoadASCIIFromString(&gltf, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
                                         static_cast<unsigned int>(bytes.size()), base);
   }
@@ -344,6 +387,15 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     throw Error::in_file(path, "", "not a valid glTF 2.0 file: " + (error.empty() ? std::string("unreadable") : error));
   }
   const Reader reader{gltf, path};
+
+  // Every image the file names, used or not, is confined as its buffers are (tinygltf read none of them).
+  std::vector<std::string> image_paths(gltf.images.size());
+  for (std::size_t i = 0; i < gltf.images.size(); ++i) {
+    const std::string& uri = gltf.images[i].uri;
+    if (uri.empty() || tinygltf::IsDataURI(uri)) continue;
+    image_paths[i] = resolve_referenced_file(path, uri, "images[" + std::to_string(i) + "].uri", options.references,
+                                             ReferenceSyntax::uri);
+  }
 
   ImportedModel result;
   std::vector<std::string>& warnings = result.warnings;
@@ -652,22 +704,12 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
                                  ") is not a PNG or JPEG image, left out");
             }
           } else {
-            std::string uri = img.uri;
-            std::string decoded;  // URIs escape spaces and other bytes as %XX
-            for (std::size_t i = 0; i < uri.size(); ++i) {
-              if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-                  std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-                decoded.push_back(static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
-                i += 2;
-              } else {
-                decoded.push_back(uri[i]);
-              }
-            }
-            fs::path resolved(decoded);
+            // The path as the file names it (kept for messages and copies); image_paths holds its canonical form.
+            fs::path resolved(decode_uri_reference(img.uri));
             if (resolved.is_relative()) resolved = fs::path(base) / resolved;
             material.diffuse_map = resolved.lexically_normal().string();
             std::error_code ignored;
-            if (!fs::is_regular_file(material.diffuse_map, ignored))
+            if (!fs::is_regular_file(image_paths[static_cast<std::size_t>(image)], ignored))
               warnings.push_back("material '" + name + "': texture '" + material.diffuse_map + "' not found");
           }
         }

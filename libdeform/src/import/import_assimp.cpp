@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
@@ -13,9 +14,11 @@
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
+#include <optional>
 #include <unordered_map>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
 #include "import/import_common.hpp"
@@ -25,6 +28,42 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace import_detail;
+
+// Every file Assimp opens while it reads a model (an .md5anim beside an .md5mesh, an MD3's skins, an Ogre
+// .material) is a file the model names: it is opened only inside the model's folder or a folder the policy allows
+// (resolve_referenced_file). A refusal cannot travel through Assimp as an exception: it is kept, the open fails, and
+// import_model throws it once ReadFile returns. Exists() answers false for a refused file, so whether a file outside
+// exists never shows.
+class ConfinedIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  ConfinedIOSystem(const std::string& model, const ReferencePolicy& policy) : model_(model), policy_(policy) {}
+
+  bool Exists(const char* file) const override { return allowed(file) && Assimp::DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (!allowed(file)) return nullptr;
+    return Assimp::DefaultIOSystem::Open(file, mode);
+  }
+  // The first refusal, if any.
+  const std::optional<Error>& refusal() const { return refusal_; }
+
+ private:
+  bool allowed(const char* file) const {
+    if (file == nullptr) return false;
+    std::error_code error;
+    const std::string absolute = fs::absolute(file, error).lexically_normal().string();  // Assimp joins the folder
+    if (error) return false;
+    try {
+      resolve_referenced_file(model_, absolute, "a file the importer opened", policy_);
+      return true;
+    } catch (const Error& e) {
+      if (!refusal_) refusal_ = e;
+      return false;
+    }
+  }
+  std::string model_;
+  const ReferencePolicy& policy_;
+  mutable std::optional<Error> refusal_;
+};
 
 glm::mat4 to_glm(const aiMatrix4x4& m) {
   // aiMatrix4x4 is row-major with column vectors (translation in a4, b4, c4); glm is column-major.
@@ -62,8 +101,9 @@ std::string material_name(const aiMaterial& material, std::size_t index, std::ve
   return name;
 }
 
-Material convert_material(const aiScene& scene, const aiMaterial& source, std::size_t index, const fs::path& folder,
-                          std::vector<std::string>& used, std::vector<std::string>& warnings) {
+Material convert_material(const aiScene& scene, const aiMaterial& source, std::size_t index, const std::string& file,
+                          const ReferencePolicy& policy, std::vector<std::string>& used,
+                          std::vector<std::string>& warnings) {
   Material m;
   m.name = material_name(source, index, used);
   aiColor3D c;
@@ -82,10 +122,13 @@ Material convert_material(const aiScene& scene, const aiMaterial& source, std::s
     } else {
       std::replace(path.begin(), path.end(), '\\', '/');
       fs::path resolved(path);
-      if (resolved.is_relative()) resolved = folder / resolved;
+      if (resolved.is_relative()) resolved = fs::path(file).parent_path() / resolved;
       m.diffuse_map = resolved.lexically_normal().string();
+      // Confined to the model's folder like every file a model names (resolve_referenced_file).
+      const std::string real = resolve_referenced_file(
+          file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy);
       std::error_code error;
-      if (!fs::is_regular_file(m.diffuse_map, error))
+      if (!fs::is_regular_file(real, error))
         warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not found");
     }
   }
@@ -123,7 +166,19 @@ bool is_importable(const std::string& path) {
   return importer.IsExtensionSupported(extension.c_str());
 }
 
+namespace {
+ImportedModel import_any(const std::string& path, const ImportOptions& options);
+}  // namespace
+
+// Warnings quote names and paths from the file: each is escaped as errors are (one printable line each).
 ImportedModel import_model(const std::string& path, const ImportOptions& options) {
+  ImportedModel result = import_any(path, options);
+  for (std::string& warning : result.warnings) warning = escape_control_characters(warning);
+  return result;
+}
+
+namespace {
+ImportedModel import_any(const std::string& path, const ImportOptions& options) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) throw Error::in_file(path, "", "no such file");
   const auto size = fs::file_size(path, error);
@@ -136,7 +191,10 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                          aiProcess_GenSmoothNormals | aiProcess_ValidateDataStructure;
+  auto* io = new ConfinedIOSystem(path, options.references);  // the importer owns it
+  importer.SetIOHandler(io);
   const aiScene* scene = importer.ReadFile(path, flags);
+  if (io->refusal()) throw Error(*io->refusal());
   if (scene == nullptr || scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
     const char* message = importer.GetErrorString();
     throw Error::in_file(
@@ -414,9 +472,9 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   // --- mesh, materials and weights ---
   Mesh& mesh = result.model.mesh;
   std::vector<std::string> used_names;
-  const fs::path folder = fs::path(path).parent_path();
   for (unsigned m = 0; m < scene->mNumMaterials; ++m)
-    mesh.materials.push_back(convert_material(*scene, *scene->mMaterials[m], m, folder, used_names, warnings));
+    mesh.materials.push_back(
+        convert_material(*scene, *scene->mMaterials[m], m, path, options.references, used_names, warnings));
   const bool any_uvs =
       std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.mesh->HasTextureCoords(0); });
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
@@ -658,5 +716,6 @@ ImportedModel import_model(const std::string& path, const ImportOptions& options
   }
   return result;
 }
+}  // namespace
 
 }  // namespace deform

@@ -115,6 +115,9 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
                                    "--ticks-per-second", std::to_string(options.default_ticks_per_second),
                                    "--loop", options.loop_clips ? "1" : "0",
                                    "--", path};
+  // The reference policy travels as one --allow-outside per folder, before "--" (the worker confines as we would).
+  for (const std::string& folder : options.references.allow_outside)
+    args.insert(args.end() - 2, {"--allow-outside", folder});
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);

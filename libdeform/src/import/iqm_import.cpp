@@ -19,6 +19,7 @@
 #include <span>
 #include <unordered_map>
 
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "import/import_common.hpp"
 #include "runtime/finite.hpp"
@@ -365,8 +366,10 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
         fs::path resolved(texture);
         if (resolved.is_relative()) resolved = folder / resolved;
         out.diffuse_map = resolved.lexically_normal().string();
+        // Confined to the model's folder like every file a model names (resolve_referenced_file).
+        const std::string real = resolve_referenced_file(path, texture, element + ".material", options.references);
         std::error_code error;
-        if (!fs::is_regular_file(out.diffuse_map, error))
+        if (!fs::is_regular_file(real, error))
           warnings.push_back("material '" + out.name + "': texture '" + out.diffuse_map + "' not found");
       }
       mesh.materials.push_back(std::move(out));

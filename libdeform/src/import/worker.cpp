@@ -1,7 +1,7 @@
 // deform-import-worker: the process import_model_isolated starts. Limits itself (memory, stack), imports one file with
 // Assimp (import_model) and writes the model to stdout in the private wire layout (wire.hpp).
 //   deform-import-worker --max-memory BYTES --max-stack BYTES --max-cpu-seconds S --parent PID --ticks-per-second T
-//                        --loop 0|1 -- PATH
+//                        --loop 0|1 [--allow-outside DIR]... -- PATH
 // Exit status: 0 with the model on stdout; 2 with deform::Error's message on stderr; 3 out of memory; 1 otherwise.
 // A crash or a hang is what the parent is there for; on Linux the worker also ends by itself when the parent dies
 // (PR_SET_PDEATHSIG, SIGKILL: a parent killed by kill -9 or the OOM killer leaves no importer running) and when it
@@ -106,6 +106,8 @@ int main(int argc, char** argv) {
       options.default_ticks_per_second = std::strtod(argv[++i], nullptr);
     } else if (i + 1 < argc && a == "--loop") {
       options.loop_clips = std::string_view(argv[++i]) == "1";
+    } else if (i + 1 < argc && a == "--allow-outside") {  // ImportOptions::references, one folder each
+      options.references.allow_outside.emplace_back(argv[++i]);
     } else {
       std::fprintf(stderr, "deform-import-worker: unexpected argument '%s' (it is started by libdeform)\n", argv[i]);
       return 1;

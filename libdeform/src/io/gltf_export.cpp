@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <iterator>
 #include <utility>
 #include <limits>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 
 namespace deform {
@@ -183,8 +185,8 @@ std::string image_type(const std::vector<std::uint8_t>& bytes) {
 
 // Reads a texture that may be embedded: inside `root` once links are resolved, PNG or JPEG. Empty result = refused,
 // `why` says why.
-std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root, std::string& why,
-                                        std::string& mime) {
+std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root,
+                                        const ReferencePolicy& policy, std::string& why, std::string& mime) {
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::path real = fs::canonical(texture, error);
@@ -192,8 +194,13 @@ std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::s
   const fs::path real_root = fs::canonical(root, error);
   if (error) return why = "the texture folder '" + root + "' does not exist", std::vector<std::uint8_t>{};
   const fs::path inside = real.lexically_relative(real_root);
-  if (inside.empty() || *inside.begin() == "..")
+  bool allowed = !inside.empty() && *inside.begin() != "..";
+  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(real.string(), other);
+  if (!allowed)
     return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
+  // The signature from the first bytes alone: a large file that is not an image is never read whole.
+  const std::string format = image_format(real.string());
+  if (format != "png" && format != "jpeg") return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
   std::vector<std::uint8_t> bytes = read_file_bytes(real.string());
   mime = image_type(bytes);
   if (mime.empty()) return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
@@ -324,6 +331,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   {
     std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
     std::vector<std::pair<const std::vector<std::uint8_t>*, int>> kept;  // embedded image -> texture index
+    std::map<std::string, std::string> refused;         // texture path -> why: each is checked, and read, once
     for (const Material& m : mesh.materials) {
       int texture = -1;
       if (m.diffuse_image && mesh.vertex_uvs.size() == vertices) {  // the model's own embedded image: kept as is
@@ -344,8 +352,13 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {
           std::string why, mime;
-          const std::vector<std::uint8_t> bytes = texture_bytes(m.diffuse_map, options.texture_root, why, mime);
+          std::vector<std::uint8_t> bytes;
+          if (const auto known = refused.find(m.diffuse_map); known != refused.end())
+            why = known->second;
+          else
+            bytes = texture_bytes(m.diffuse_map, options.texture_root, options.references, why, mime);
           if (bytes.empty()) {
+            refused.emplace(m.diffuse_map, why);
             written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
                                        why + ")");
           } else {

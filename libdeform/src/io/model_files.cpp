@@ -9,10 +9,10 @@
 namespace deform {
 
 Model load_model(const std::string& obj_path, const std::string& sk_path, const std::string& skw_path,
-                 Warnings* warnings, int influences) {
+                 Warnings* warnings, int influences, const ReferencePolicy& policy) {
   Model model;
   model.name = std::filesystem::path(obj_path).stem().string();
-  model.mesh = read_obj(obj_path, warnings);
+  model.mesh = read_obj(obj_path, warnings, policy);
   model.skeleton = read_sk(sk_path);
   // read_skw rejects a vertex count other than the mesh's and bone ids outside the skeleton, naming the line; the
   // checks below hold the Model invariant whatever the reader does.

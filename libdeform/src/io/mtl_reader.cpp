@@ -78,7 +78,13 @@ std::string_view parse_map_file(Tokens& tokens, const Place& place, std::string_
 }  // namespace
 
 std::vector<Material> parse_mtl(std::string_view text, const std::string& name, const std::string& base_folder,
-                                Warnings* warnings) {
+                                Warnings* warnings, const ReferencePolicy& policy) {
+  return obj_text::parse_mtl_confined(text, name, base_folder, base_folder, warnings, policy);
+}
+
+std::vector<Material> obj_text::parse_mtl_confined(std::string_view text, const std::string& name,
+                                                   const std::string& base_folder, const std::string& root,
+                                                   Warnings* warnings, const ReferencePolicy& policy) {
   std::vector<Material> materials;
   obj_text::LineReader lines(text);
   obj_text::SkippedStatements skipped;
@@ -133,8 +139,14 @@ std::vector<Material> parse_mtl(std::string_view text, const std::string& name, 
     } else {  // map_Kd
       const std::string_view file = parse_map_file(tokens, place, keyword);
       material.diffuse_map = obj_text::resolve_path(base_folder, file);
+      // Confined to the model's folder (a texture is read later, by a copy or a renderer): refused here, at once.
+      // (An MTL file in a subfolder of the model's: its names are made absolute, relative to the MTL's folder.)
+      const std::string named =
+          base_folder == root ? std::string(file) : std::filesystem::absolute(material.diffuse_map).string();
+      const std::string real =
+          resolve_referenced_file_in(root, name, named, "map_Kd", policy, ReferenceSyntax::path, place.line);
       std::error_code error;
-      if (!std::filesystem::is_regular_file(material.diffuse_map, error))
+      if (!std::filesystem::is_regular_file(real, error))
         obj_text::warn(warnings, name, place.line,
                        "texture " + obj_text::quoted(file) + " not found (looked for '" + material.diffuse_map + "')");
     }

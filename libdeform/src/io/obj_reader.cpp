@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "deform/io/atomic_file.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
@@ -43,8 +44,8 @@ struct SubmeshState {
 
 class ObjParser {
  public:
-  ObjParser(const std::string& name, const std::string& base_folder, Warnings* warnings)
-      : name_(name), base_folder_(base_folder), warnings_(warnings) {}
+  ObjParser(const std::string& name, const std::string& base_folder, Warnings* warnings, const ReferencePolicy& policy)
+      : name_(name), base_folder_(base_folder), warnings_(warnings), policy_(policy) {}
 
   Mesh parse(std::string_view text) {
     max_name_bytes_ = (std::size_t{64} << 20) + 4 * text.size();
@@ -208,12 +209,20 @@ class ObjParser {
     submesh_states_.push_back(state_);
   }
 
-  // `mtllib a.mtl b.mtl`; a single name with blanks is taken whole when such a file exists.
+  // `mtllib a.mtl b.mtl`; a single name with blanks is taken whole when such a file exists inside the model's folder
+  // (or an allowed one): whether a file outside exists changes nothing.
   void read_material_libraries(Tokens& tokens, const Place& place) {
     const std::string_view whole = tokens.rest();
     if (whole.empty()) place.fail("mtllib", "missing file name");
+    std::string whole_path;
+    try {
+      whole_path = resolve_referenced_file_in(base_folder_, name_, whole, "mtllib", policy_, ReferenceSyntax::path,
+                                              place.line);
+    } catch (const Error&) {
+      whole_path.clear();  // refused as a whole: each name is resolved (and refused) on its own below
+    }
     std::error_code error;
-    if (std::filesystem::is_regular_file(obj_text::resolve_path(base_folder_, whole), error)) {
+    if (!whole_path.empty() && std::filesystem::is_regular_file(whole_path, error)) {
       read_material_library(whole, place);
       return;
     }
@@ -221,21 +230,25 @@ class ObjParser {
     while (tokens.next(file)) read_material_library(file, place);
   }
 
+  // One MTL file, confined to the model's folder (resolve_referenced_file): a file outside is refused before it is
+  // opened, so nothing of it (not a line, not its size) reaches a message.
   void read_material_library(std::string_view file, const Place& place) {
+    const std::string real =
+        resolve_referenced_file_in(base_folder_, name_, file, "mtllib", policy_, ReferenceSyntax::path, place.line);
     const std::string path = obj_text::resolve_path(base_folder_, file);
     std::error_code error;
-    if (!std::filesystem::is_regular_file(path, error)) {
+    if (!std::filesystem::is_regular_file(real, error)) {
       obj_text::warn(warnings_, name_, place.line,
                      "MTL file " + obj_text::quoted(file) + " not found (looked for '" + path + "')");
       return;
     }
     // Each MTL file is read once, however often the OBJ names it (a hostile file names one 20,000 times).
-    if (std::find(mesh_.material_libraries.begin(), mesh_.material_libraries.end(), path) !=
-        mesh_.material_libraries.end())
-      return;
+    if (std::find(read_libraries_.begin(), read_libraries_.end(), real) != read_libraries_.end()) return;
+    read_libraries_.push_back(real);
     mesh_.material_libraries.push_back(path);
     const std::string folder = std::filesystem::path(path).parent_path().generic_string();
-    for (Material& material : parse_mtl(read_file_text(path), path, folder.empty() ? "." : folder, warnings_)) {
+    for (Material& material : obj_text::parse_mtl_confined(read_file_text(real), path, folder.empty() ? "." : folder,
+                                                           base_folder_, warnings_, policy_)) {
       if (material_index_.contains(material.name)) {
         obj_text::warn(warnings_, name_, place.line,
                        "material " + obj_text::quoted(material.name) + " defined again in '" + path +
@@ -283,6 +296,8 @@ class ObjParser {
   const std::string& name_;
   const std::string& base_folder_;
   Warnings* warnings_;
+  const ReferencePolicy& policy_;
+  std::vector<std::string> read_libraries_;  // canonical paths of the MTL files read
   Mesh mesh_;
 
   std::vector<glm::vec2> uvs_;      // the file's `vt`
@@ -314,14 +329,15 @@ class ObjParser {
 
 }  // namespace
 
-Mesh parse_obj(std::string_view text, const std::string& name, const std::string& base_folder, Warnings* warnings) {
-  return ObjParser(name, base_folder, warnings).parse(text);
+Mesh parse_obj(std::string_view text, const std::string& name, const std::string& base_folder, Warnings* warnings,
+               const ReferencePolicy& policy) {
+  return ObjParser(name, base_folder, warnings, policy).parse(text);
 }
 
-Mesh read_obj(const std::string& path, Warnings* warnings) {
+Mesh read_obj(const std::string& path, Warnings* warnings, const ReferencePolicy& policy) {
   const std::string text = read_file_text(path);
   const std::string folder = std::filesystem::path(path).parent_path().generic_string();
-  return parse_obj(text, path, folder.empty() ? "." : folder, warnings);
+  return parse_obj(text, path, folder.empty() ? "." : folder, warnings, policy);
 }
 
 }  // namespace deform

@@ -14,6 +14,7 @@
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/offline/topology.hpp"
 namespace deform::obj_text {
 
@@ -190,7 +191,8 @@ inline void warn(Warnings* warnings, const std::string& file, std::int64_t line,
   if (!warnings) return;
   std::string text = file.empty() ? std::string("<memory>") : file;
   if (line > 0) text.append(": line ").append(std::to_string(line));
-  warnings->messages.push_back(text.append(": ").append(message));
+  // Names and paths from the file are escaped as errors escape them: a warning stays one line.
+  warnings->messages.push_back(escape_control_characters(text.append(": ").append(message)));
 }
 
 // Statements a reader skips, reported once per keyword (first line and count) so a file of a million `l` lines
@@ -231,5 +233,11 @@ class SkippedStatements {
 
 // `name` relative to `folder` unless absolute, normalised, with '/' separators.
 std::string resolve_path(const std::string& folder, std::string_view name);
+
+// parse_mtl with its textures (`map_Kd`) resolved in `base_folder` and confined to `root`, the folder of the model
+// that named the MTL file, and the folders `policy` allows (resolve_referenced_file): a texture elsewhere is refused.
+std::vector<Material> parse_mtl_confined(std::string_view text, const std::string& name,
+                                         const std::string& base_folder, const std::string& root, Warnings* warnings,
+                                         const ReferencePolicy& policy);
 
 }  // namespace deform::obj_text

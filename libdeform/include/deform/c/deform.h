@@ -49,6 +49,14 @@ DEFORM_C_API deform_status deform_character_create_builtin(deform_character** ou
  * lattices, skinning and IK only). */
 DEFORM_C_API deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
                                                  const char* rig_path, deform_character** out);
+/* deform_character_load, with `allow_count` folders (`allow_outside`, NUL-terminated paths) from which the OBJ may
+ * also name its MTL files and textures. By default, and with deform_character_load, only the OBJ's own folder is
+ * read: a file named elsewhere fails the call with DEFORM_ERROR_INPUT, naming the OBJ and the key (docs/security.md).
+ * `allow_outside` may be NULL when `allow_count` is 0. */
+DEFORM_C_API deform_status deform_character_load_allowing(const char* obj_path, const char* sk_path,
+                                                          const char* skw_path, const char* rig_path,
+                                                          const char* const* allow_outside, size_t allow_count,
+                                                          deform_character** out);
 DEFORM_C_API void deform_character_destroy(deform_character* character);
 
 /* Mesh points (OBJ `v`) and bones. */

@@ -5,7 +5,8 @@
 // DirectX .x, B3D, SMD, MD5, ...) as a Model plus animation clips. docs/import.md explains every conversion (glTF's
 // and IQM's differences in their own sections); in short:
 //  - all meshes merge into one Mesh in the scene's world space (node transforms applied), one submesh per mesh
-//    instance, with its materials; texture paths are resolved relative to the model's folder.
+//    instance, with its materials; texture paths are resolved relative to the model's folder, and every file the
+//    model names (glTF buffers and images, textures) must lie inside that folder or one options.references allows.
 //  - a *point* (Mesh::positions, .skw line, OBJ `v`) is a unique (exact bind position, skin influences) pair: Assimp
 //    vertices that differ only by normal or UV share one point; each Assimp vertex is one render vertex.
 //  - bones are the nodes skinning needs (those named by the meshes' bones, the nodes of meshes with unweighted
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "deform/import/export.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
 namespace deform {
@@ -32,6 +34,10 @@ struct ImportOptions {
   double default_ticks_per_second = 25.0;
   // Whether imported clips loop (the formats do not say).
   bool loop_clips = true;
+  // Folders besides the model's own whose files it may name (buffers, images, textures): resolve_referenced_file.
+  // A file named outside both is refused (deform::Error naming the model and the key, e.g. "buffers[0].uri") before
+  // it is opened. Travels to the isolated worker.
+  ReferencePolicy references;
 };
 
 // A skin of the file, for listings (`deform info`): the merged Model has one skeleton and one set of weights.
@@ -105,7 +111,10 @@ struct ExportOptions {
   // resolved, it lies inside this folder and is an image file (PNG, JPEG, BMP, GIF, TGA, DDS, KTX, WebP, TIFF, HDR
   // or PSD, by its first bytes; TGA by its extension). Anything else is left out with a warning naming it, so a
   // model that names /etc/passwd or ../../secret as its texture leaks nothing. Empty: no texture is copied.
+  // Each distinct texture is checked once, from its first bytes, and read once when copied.
   std::string texture_root;
+  // Folders besides texture_root textures may be copied from, on purpose (ImportOptions::references).
+  ReferencePolicy references;
 };
 
 // Writes `model` into `folder` as STEM.obj + STEM.mtl + STEM.sk + STEM.skw, STEM = model.name with anything outside

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include "deform/io/export.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
 
@@ -49,8 +50,11 @@ struct GltfExportOptions {
   // The only folder textures are embedded from: a material's diffuse texture (Material::diffuse_map) is embedded in
   // the buffer when, with every symbolic link resolved, it lies inside this folder and is a PNG or JPEG file (the
   // image formats glTF 2.0 defines, by their first bytes). Any other is left out with a warning naming it, so a model
-  // naming /etc/passwd as its texture leaks nothing. Empty: no texture is embedded.
+  // naming /etc/passwd as its texture leaks nothing. Empty: no texture is embedded. Each distinct texture is checked
+  // once, from its first bytes, and read whole only to be embedded.
   std::string texture_root;
+  // Folders besides texture_root textures may be embedded from, on purpose (resolve_referenced_file's policy).
+  ReferencePolicy references;
 };
 
 struct GltfWritten {

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "deform/io/export.hpp"
+#include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 
@@ -20,15 +21,22 @@ namespace deform {
 // A malformed line or an out-of-range index throws deform::Error with the file and line; a missing MTL, an unknown
 // material, a missing texture or an unsupported statement (`l`, `p`, curves...) is a warning. Normals missing from
 // the file are computed as compute_vertex_normals does. Linear time and memory in the file size.
-DEFORM_IO_API Mesh read_obj(const std::string& path, Warnings* warnings = nullptr);
+// The MTL files (`mtllib`) and textures (`map_Kd`) named must lie inside the OBJ's folder, or a folder `policy`
+// allows (resolve_referenced_file): anything else throws deform::Error naming the file, line and key, before the
+// named file is opened. Each MTL file is read once.
+DEFORM_IO_API Mesh read_obj(const std::string& path, Warnings* warnings = nullptr, const ReferencePolicy& policy = {});
 
-// Parses OBJ text held in memory; `name` is used in messages, MTL files are resolved relative to `base_folder`.
+// Parses OBJ text held in memory; `name` is used in messages, MTL files are resolved relative to `base_folder` and
+// confined to it (and `policy`'s folders) as read_obj confines them to the OBJ's folder.
 DEFORM_IO_API Mesh parse_obj(std::string_view text, const std::string& name = "<memory>",
-                          const std::string& base_folder = ".", Warnings* warnings = nullptr);
+                          const std::string& base_folder = ".", Warnings* warnings = nullptr,
+                          const ReferencePolicy& policy = {});
 
-// Parses MTL text; `name` for messages, texture paths resolved relative to `base_folder`.
+// Parses MTL text; `name` for messages, texture paths resolved relative to `base_folder` and confined to it (and
+// `policy`'s folders): a `map_Kd` outside throws deform::Error.
 DEFORM_IO_API std::vector<Material> parse_mtl(std::string_view text, const std::string& name,
-                                           const std::string& base_folder, Warnings* warnings = nullptr);
+                                           const std::string& base_folder, Warnings* warnings = nullptr,
+                                           const ReferencePolicy& policy = {});
 
 // Options for write_obj.
 struct ObjWriteOptions {

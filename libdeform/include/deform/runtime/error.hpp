@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "deform/runtime/export.hpp"
@@ -85,6 +86,10 @@ class Status {
   constexpr explicit Status(const char* reason) noexcept : reason_(reason) {}
   const char* reason_ = nullptr;
 };
+
+// `text` with each control character (below 0x20, and 0x7f) written as \xNN, as Error's what() writes what it quotes:
+// a name or path taken from a file prints as one line whatever bytes it holds. Used for every warning a reader gives.
+DEFORM_RUNTIME_API std::string escape_control_characters(std::string_view text);
 
 // Non-fatal findings of a reader (a missing MTL or texture), one line each, with file and line.
 struct Warnings {

@@ -1,0 +1,177 @@
+// The confinement rule for files a model names (deform/io/referenced_file.hpp) and the readers that apply it.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+#include "deform/io/obj.hpp"
+#include "deform/io/referenced_file.hpp"
+#include "deform/runtime/error.hpp"
+
+namespace fs = std::filesystem;
+using deform::ReferencePolicy;
+using deform::ReferenceSyntax;
+using deform::resolve_referenced_file;
+
+namespace {
+
+// root/model/m.obj beside root/secret.txt (outside the model's folder) and root/model/inside.mtl.
+struct Tree {
+  fs::path root = fs::temp_directory_path() / ("deform_referenced_" + std::to_string(::getpid()));
+  fs::path model = root / "model";
+  std::string referrer = (model / "m.obj").string();
+  Tree() {
+    fs::remove_all(root);
+    fs::create_directories(model / "sub");
+    write(root / "secret.txt", "SECRET-5f3a\n");
+    write(model / "inside.mtl", "newmtl a\nKd 1 0 0\n");
+    write(model / "sub" / "tex.png", "\x89PNG\r\n\x1a\n0123456789");
+  }
+  ~Tree() {
+    std::error_code ignored;
+    fs::remove_all(root, ignored);
+  }
+  static void write(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+  std::string canonical(const fs::path& path) const { return fs::weakly_canonical(path).string(); }
+};
+
+// The refusal's message, which must name the referrer and key and nothing of the refused file.
+std::string refusal(const std::string& referrer, const std::string& reference, const std::string& key,
+                    const ReferencePolicy& policy = {}, ReferenceSyntax syntax = ReferenceSyntax::path) {
+  try {
+    resolve_referenced_file(referrer, reference, key, policy, syntax);
+  } catch (const deform::Error& e) {
+    CHECK(e.kind() == deform::Error::Kind::input);
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("referenced files: inside the model's folder they resolve to canonical paths") {
+  const Tree tree;
+  CHECK(resolve_referenced_file(tree.referrer, "inside.mtl", "mtllib") == tree.canonical(tree.model / "inside.mtl"));
+  CHECK(resolve_referenced_file(tree.referrer, "sub/../inside.mtl", "mtllib") ==
+        tree.canonical(tree.model / "inside.mtl"));
+  CHECK(resolve_referenced_file(tree.referrer, "sub%2ftex.png", "images[0].uri", {}, ReferenceSyntax::uri) ==
+        tree.canonical(tree.model / "sub" / "tex.png"));
+  // An absolute path inside the folder is inside.
+  CHECK(resolve_referenced_file(tree.referrer, (tree.model / "inside.mtl").string(), "mtllib") ==
+        tree.canonical(tree.model / "inside.mtl"));
+  // A name inside that does not exist is returned (the reader decides: warning or error), not refused.
+  CHECK(resolve_referenced_file(tree.referrer, "missing.mtl", "mtllib") == tree.canonical(tree.model / "missing.mtl"));
+}
+
+TEST_CASE("referenced files: '..', absolute paths and percent-encoding out of the folder are refused") {
+  const Tree tree;
+  for (const std::string& reference : {std::string("../secret.txt"), std::string("sub/../../secret.txt"),
+                                       (tree.root / "secret.txt").string(), std::string("/etc/passwd"),
+                                       std::string("../missing-outside.txt")}) {
+    CAPTURE(reference);
+    const std::string message = refusal(tree.referrer, reference, "mtllib");
+    CHECK(message.find(tree.referrer) != std::string::npos);
+    CHECK(message.find("mtllib") != std::string::npos);
+    CHECK(message.find("outside") != std::string::npos);
+    CHECK(message.find("SECRET") == std::string::npos);
+    CHECK(message.find(" 12 ") == std::string::npos);  // the secret's size is never given
+  }
+  // Percent-encoded dots and slashes are decoded before the test (glTF URIs), and only there.
+  CHECK(refusal(tree.referrer, "%2e%2e%2fsecret.txt", "buffers[0].uri", {}, ReferenceSyntax::uri)
+            .find("buffers[0].uri") != std::string::npos);
+  CHECK(refusal(tree.referrer, "..%2Fsecret.txt", "buffers[0].uri", {}, ReferenceSyntax::uri) != "");
+  CHECK(refusal(tree.referrer, "%2e%2e%2fsecret.txt", "mtllib") == "");  // a plain path: a file of that odd name
+  // Nothing at all, or a NUL byte (which the system would cut the name at), is refused.
+  CHECK(refusal(tree.referrer, "", "mtllib") != "");
+  CHECK(refusal(tree.referrer, "inside.mtl%00/../../secret.txt", "images[0].uri", {}, ReferenceSyntax::uri) != "");
+}
+
+TEST_CASE("referenced files: symbolic links are followed before the test") {
+  const Tree tree;
+  fs::create_symlink(tree.root / "secret.txt", tree.model / "link.txt");
+  fs::create_directory_symlink(tree.root, tree.model / "up");
+  CHECK(refusal(tree.referrer, "link.txt", "map_Kd").find("map_Kd") != std::string::npos);
+  CHECK(refusal(tree.referrer, "up/secret.txt", "map_Kd") != "");
+  // A model whose own folder is reached through a link: its files are inside the folder the link leads to.
+  fs::create_directory_symlink(tree.model, tree.root / "linked_model");
+  const std::string through_link = (tree.root / "linked_model" / "m.obj").string();
+  CHECK(resolve_referenced_file(through_link, "inside.mtl", "mtllib") == tree.canonical(tree.model / "inside.mtl"));
+  CHECK(refusal(through_link, "../secret.txt", "mtllib") != "");
+  // A link inside pointing to a file inside is fine.
+  fs::create_symlink(tree.model / "inside.mtl", tree.model / "alias.mtl");
+  CHECK(resolve_referenced_file(tree.referrer, "alias.mtl", "mtllib") == tree.canonical(tree.model / "inside.mtl"));
+}
+
+TEST_CASE("referenced files: allow_outside widens the rule on purpose, and only by the folders it names") {
+  const Tree tree;
+  ReferencePolicy policy;
+  policy.allow_outside = {tree.root.string()};
+  CHECK(resolve_referenced_file(tree.referrer, "../secret.txt", "mtllib", policy) ==
+        tree.canonical(tree.root / "secret.txt"));
+  policy.allow_outside = {(tree.root / "elsewhere").string()};
+  CHECK(refusal(tree.referrer, "../secret.txt", "mtllib", policy) != "");
+  CHECK(deform::lies_inside((tree.model / "inside.mtl").string(), tree.model.string()));
+  CHECK_FALSE(deform::lies_inside((tree.root / "secret.txt").string(), tree.model.string()));
+  CHECK_FALSE(deform::lies_inside(tree.model.string(), tree.model.string()));  // the folder itself is not inside it
+}
+
+TEST_CASE("referenced files: the OBJ reader confines mtllib and map_Kd, and never quotes a refused file") {
+  const Tree tree;
+  Tree::write(tree.root / "secret.mtl", "SECRET-line one\nnewmtl s\nmap_Kd x.png\n");
+  for (const std::string& mtllib : {std::string("../secret.mtl"), (tree.root / "secret.mtl").string()}) {
+    CAPTURE(mtllib);
+    Tree::write(tree.model / "m.obj", "mtllib " + mtllib + "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    deform::Warnings warnings;
+    try {
+      deform::read_obj(tree.referrer, &warnings);
+      FAIL("an MTL file outside the model's folder was read");
+    } catch (const deform::Error& e) {
+      const std::string message = e.what();
+      CHECK(message.find("line 1") != std::string::npos);
+      CHECK(message.find("mtllib") != std::string::npos);
+      CHECK(message.find("SECRET") == std::string::npos);
+    }
+    for (const std::string& w : warnings.messages) CHECK(w.find("SECRET") == std::string::npos);
+    // Allowed on purpose, it is read.
+    ReferencePolicy policy;
+    policy.allow_outside = {tree.root.string()};
+    CHECK(deform::read_obj(tree.referrer, &warnings, policy).materials.size() == 1);
+  }
+  // map_Kd in an MTL inside naming a file outside.
+  Tree::write(tree.model / "inside.mtl", "newmtl a\nmap_Kd ../secret.txt\n");
+  Tree::write(tree.model / "m.obj", "mtllib inside.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  CHECK_THROWS_WITH_AS(deform::read_obj(tree.referrer), doctest::Contains("map_Kd"), deform::Error);
+  // A texture inside that is missing stays a warning.
+  Tree::write(tree.model / "inside.mtl", "newmtl a\nmap_Kd missing.png\n");
+  deform::Warnings warnings;
+  CHECK(deform::read_obj(tree.referrer, &warnings).materials.size() == 1);
+  CHECK(warnings.messages.size() == 1);
+}
+
+TEST_CASE("referenced files: warnings print names from files on one line") {
+  const Tree tree;
+  Tree::write(tree.model / "m.obj", "mtllib a\x01" "b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  deform::Warnings warnings;
+  deform::read_obj(tree.referrer, &warnings);
+  REQUIRE(warnings.messages.size() == 1);
+  CHECK(warnings.messages[0].find('\x01') == std::string::npos);
+  CHECK(warnings.messages[0].find("\\x01") != std::string::npos);
+  CHECK(deform::escape_control_characters("a\nb\x7f") == "a\\x0ab\\x7f");
+}
+
+TEST_CASE("referenced files: image signatures are read from the first bytes") {
+  const Tree tree;
+  CHECK(deform::image_format((tree.model / "sub" / "tex.png").string()) == "png");
+  CHECK(deform::image_format((tree.root / "secret.txt").string()).empty());
+  CHECK(deform::image_format((tree.root / "absent.png").string()).empty());
+  CHECK(deform::image_format(tree.root.string()).empty());  // a folder
+  Tree::write(tree.model / "t.tga", std::string(18, '\0'));
+  CHECK(deform::image_format((tree.model / "t.tga").string()) == "tga");
+  Tree::write(tree.model / "mm.tif", std::string("MM\0*", 4) + "rest");
+  CHECK(deform::image_format((tree.model / "mm.tif").string()) == "tiff");
+  Tree::write(tree.model / "mx.bin", "MMXX not a tiff");
+  CHECK(deform::image_format((tree.model / "mx.bin").string()).empty());
+}
