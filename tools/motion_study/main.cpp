@@ -70,7 +70,8 @@ int flesh(const char* csv) {
   }
   std::ofstream out(csv);
   out << "t";
-  for (const std::string& limb : run_tuned.limbs) out << "," << limb << "_rigid," << limb << "_tuned," << limb << "_untamed";
+  for (const std::string& limb : run_tuned.limbs)
+    out << "," << limb << "_rigid," << limb << "_tuned," << limb << "_untamed";
   out << "\n";
   for (std::size_t k = 0; k < run_tuned.times.size(); ++k) {
     out << run_tuned.times[k];

@@ -442,7 +442,8 @@ inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& cli
     if (n == 0 || n % per != 0) continue;
     m.times.push_back(t);
     const auto skin = jiggly.positions(), still = rigid.positions();
-    for (std::size_t p = 0; p < skin.size(); ++p) m.jiggle = std::max(m.jiggle, double(glm::length(skin[p] - still[p])));
+    for (std::size_t p = 0; p < skin.size(); ++p)
+      m.jiggle = std::max(m.jiggle, double(glm::length(skin[p] - still[p])));
     for (std::size_t l = 0; l < limbs.size(); ++l) {
       const double length = glm::length(skin[limbs[l].a] - skin[limbs[l].b]);
       const double reference = glm::length(still[limbs[l].a] - still[limbs[l].b]);
