@@ -14,10 +14,14 @@
 
 namespace {
 
-// The built-in rig with inertia on the arm's lattices and a spring chain on the right hand's fingers.
+// The built-in rig with inertia on the arm's lattices (the hand carried by their far faces' motion) and a spring
+// chain on the right hand's fingers.
 deform::Rig jiggling_rig(const deform::Model& model) {
   deform::Rig rig = deform::builtin_rig(model);
-  for (deform::LatticeSpec& lattice : rig.lattices) lattice.motion.inertia = 1.0f;
+  for (deform::LatticeSpec& lattice : rig.lattices) {
+    lattice.motion.inertia = 1.0f;
+    lattice.motion.far_share = 1.0f;  // the hand lags with the forearm's far face
+  }
   deform::SpringChainSpec fingers;
   fingers.name = "fingers_r";
   fingers.bones = {model.skeleton.find("fingers1_r"), model.skeleton.find("fingers2_r")};
@@ -194,4 +198,47 @@ TEST_CASE("the built-in ponytail swings behind the walking head, stays out of th
   CHECK(sag < 0.08f);  // 6.1 cm at the tip: g/ω² ≈ 3.3 cm per tail, along the chain
   CHECK(late < 1e-3f);
   CHECK(tips.back().y < tips.front().y);
+}
+
+TEST_CASE("flesh: the tuned jiggle keeps every limb's length within 2% and every lattice's volume within 3%") {
+  // Every limb's lattice with its part's default_lattice_motion, on the built-in walk and run, against the same clip
+  // with no inertia (tools/motion_study --flesh-csv draws it; docs/elasticity.md, "Measured").
+  const deform::Rig tuned = motion_study::tuned_full_rig();
+  for (const char* clip : {"walk", "run"}) {
+    const motion_study::FleshMeasure m = motion_study::measure_flesh(tuned, clip, 60.0, 2.0);
+    INFO(clip << ": limb " << m.limb_percent << "% (" << m.worst_limb << "), volume " << m.volume_percent << "% ("
+              << m.worst_lattice << "), jiggle " << m.jiggle << " m");
+    CHECK(m.limb_percent < 2.0);
+    CHECK(m.volume_percent < 3.0);
+    CHECK(m.jiggle > 0.01);  // centimetres: still visible
+  }
+  // The viewer's inertia 1 on every lattice, with the parts' bounds and far face shares: the walk's limbs still keep
+  // their length (before the bound and the split, the stepping leg grew by about 8% of the body's height).
+  deform::Rig heavy = tuned;
+  for (deform::LatticeSpec& lattice : heavy.lattices) lattice.motion.inertia = 1.0f;
+  const motion_study::FleshMeasure walk = motion_study::measure_flesh(heavy, "walk", 60.0, 2.0);
+  INFO("walk at inertia 1: limb " << walk.limb_percent << "% (" << walk.worst_limb << ")");
+  CHECK(walk.limb_percent < 2.0);
+  CHECK(walk.volume_percent < 3.0);
+}
+
+TEST_CASE("the whole character at any frame rate: every point and the ponytail within 0.5% of 240 Hz") {
+  // Every limb's lattice (tuned, and at inertia 1) and the ponytail, on the run, posed with a millisecond lead,
+  // compared every 1/3 s. The ponytail's first head took its velocity from the lead's rate, off by half the lead
+  // times the acceleration: sub-steps inside 30, 60 and 144 Hz frames and those on 240 Hz frames parted by 0.6-1%.
+  const deform::Rig rig = motion_study::tuned_full_rig();
+  for (const float inertia : {-1.0f, 1.0f}) {
+    const motion_study::CharacterPaths reference = motion_study::play_character(rig, "run", 240.0, 2.0, 3.0, inertia);
+    const double all = motion_study::amplitude_of(reference.surface);
+    const double tail = motion_study::amplitude_of(reference.ponytail);
+    for (const double hz : {30.0, 60.0, 144.0}) {
+      const motion_study::CharacterPaths run = motion_study::play_character(rig, "run", hz, 2.0, 3.0, inertia);
+      const double points = 100.0 * motion_study::largest_difference(run.surface, reference.surface) / all;
+      const double ponytail = 100.0 * motion_study::largest_difference(run.ponytail, reference.ponytail) / tail;
+      INFO("inertia " << (inertia < 0.0f ? "tuned" : "1") << ", " << hz << " Hz: points " << points << "%, ponytail "
+                      << ponytail << "%");
+      CHECK(points < 0.5);
+      CHECK(ponytail < 0.2);
+    }
+  }
 }

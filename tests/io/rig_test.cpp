@@ -46,7 +46,7 @@ deform::Rig everything() {
   fore.vertices = {3, 17, 400, 2000};
   fore.elastic.springs = {true, false, true, 12.5f, 0.1f, 1.0f / 480.0f};
   fore.shape.min_length_fraction = 0.0f;  // no floor; volume stays default
-  upper.motion = {0.75f, glm::vec3(0.0f, -9.81f, 0.0f), 100.0f};
+  upper.motion = {0.75f, glm::vec3(0.0f, -9.81f, 0.0f), 100.0f, 0.05f, 0.25f};
   const deform::Skeleton& skeleton = model().skeleton;
   rig.colliders = {{skeleton.find("chest"), glm::vec3(0.0f, 0.1f, 0.0f), glm::vec3(0.0f, 0.3f, 0.0f), 0.12f},
                    {skeleton.find("thigh_r"), glm::vec3(0.0f), glm::vec3(0.0f), 0.08f}};
@@ -121,13 +121,15 @@ TEST_CASE("the written form: hierarchy, names, model") {
   CHECK(doc["lattices"][1]["elastic"]["stiffness"] == 150.0);
   CHECK(doc["lattices"][1]["elastic"]["damping_ratio"] == 0.2);  // shortest form of 0.2f, not 0.20000000298...
   CHECK(doc["lattices"][1]["select"]["by"] == "weight");
-  // Default stretch shapes and motion are not written, nor an empty springs block, so files from before the keys
-  // existed round-trip byte for byte.
+  // Default stretch shapes are not written, nor an empty springs block, so files from before the keys existed
+  // round-trip byte for byte. The built-in rig's motion is its parts' bound and far face share (no inertia).
   for (const auto& lattice : doc["lattices"]) {
     CHECK_FALSE(lattice.contains("min_length_fraction"));
     CHECK_FALSE(lattice.contains("volume"));
-    CHECK_FALSE(lattice.contains("motion"));
   }
+  CHECK(doc["lattices"][0]["motion"]["inertia"] == 0.0);
+  CHECK(doc["lattices"][0]["motion"]["far_share"] == 0.0);  // the upper arm's elbow stays where the bone puts it
+  CHECK_FALSE(doc["lattices"][2].contains("motion"));       // the hand's is the default: it carries nothing
   // The built-in rig's ponytail chain and its colliders are written; a rig without chains has no springs block.
   REQUIRE(doc.contains("springs"));
   deform::Rig no_springs = deform::builtin_rig(model());
@@ -161,7 +163,14 @@ TEST_CASE("secondary motion: lattice motion and spring chains are written and re
   const nlohmann::json doc = nlohmann::json::parse(deform::format_rig_json(everything(), model().skeleton));
   CHECK(doc["lattices"][0]["motion"]["inertia"] == 0.75);
   CHECK(doc["lattices"][0]["motion"]["units_per_metre"] == 100.0);
-  CHECK_FALSE(doc["lattices"][1].contains("motion"));
+  CHECK(doc["lattices"][0]["motion"]["along_bound"] == 0.05);
+  CHECK(doc["lattices"][0]["motion"]["far_share"] == 0.25);
+  // Absent, the bound and the far face's share take their defaults.
+  const deform::Rig partial = parse(R"({"rig": 1, "lattices": [{"name": "a", "bone": "forearm_l",
+      "motion": {"inertia": 0.5}}]})");
+  CHECK(partial.lattices[0].motion.along_bound == deform::LatticeMotion{}.along_bound);
+  CHECK(partial.lattices[0].motion.far_share == deform::LatticeMotion{}.far_share);
+  CHECK(doc["lattices"][1]["motion"]["along_bound"] == doctest::Approx(0.02));
   CHECK(doc["springs"]["chains"][0]["bones"] == nlohmann::json::array({"fingers1_r", "fingers2_r"}));
   CHECK(doc["springs"]["colliders"][0]["bone"] == "chest");
   const deform::Rig rig = parse(R"({"rig": 1, "lattices": [], "springs": {"colliders": [{"bone": "head",
@@ -253,6 +262,10 @@ TEST_CASE("bad rig files: the error names the file and the key") {
        "key 'lattices[0].motion.gravity'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"units_per_metre": 0}}]})",
        "key 'lattices[0].motion.units_per_metre'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"along_bound": -0.1}}]})",
+       "key 'lattices[0].motion.along_bound'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"far_share": 1.5}}]})",
+       "key 'lattices[0].motion.far_share'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": []}]}})",
        "key 'springs.chains[0].bones'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck", "chest"]}]}})",

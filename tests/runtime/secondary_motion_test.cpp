@@ -253,12 +253,16 @@ TEST_CASE("inertial lattice: against a double-precision reference of the forced 
     const glm::dvec3 acceleration = (r(t + e) - 2.0 * r(t) + r(t - e)) / (e * e);
     return -(glm::inverse(glm::dmat3(motion.at(t))) * acceleration)[axis];
   };
+  // Along the bone (U) the offset is shown through the bound b·tanh(z / b) (LatticeMotion::along_bound).
+  const glm::dvec3 u = glm::normalize(glm::dvec3(probe.rest_lattice(0).frame().u_axis));
+  const double bound = double(lattice_motion.along_bound) * double(probe.length(0));
   std::vector<glm::dvec3> reference;
   for (int c = 1; c <= 30; ++c) {
     glm::dvec3 y;
     for (int axis = 0; axis < 3; ++axis)
       y[axis] = rk4_oscillator(9.0, 0.2, {}, c / 15.0, [&](double t) { return forcing(t, axis); }, 4000 * c).y;
-    reference.push_back(y);
+    const double along = glm::dot(y, u);
+    reference.push_back(y + u * (bound * std::tanh(along / bound) - along));
   }
   double largest = 0.0;
   for (const glm::dvec3& y : reference) largest = std::max(largest, glm::length(y));
@@ -349,6 +353,47 @@ TEST_CASE("inertial lattice: a constant acceleration settles at the offset -λ·
   CHECK(d.z == doctest::Approx(-981.0 / (omega * omega)).epsilon(1e-3));
 }
 
+TEST_CASE("inertial lattice: the motion moves whole slices across the bone and along it within along_bound") {
+  // The swing about Z flings the far points outward along the bone (centrifugal) and sideways: without the split the
+  // lattice would stretch and its slices fan out.
+  const MovingLimb limb = moving_limb();
+  const Motion motion;
+  for (const float bound : {0.02f, 1.0f}) {
+    deform::LatticeMotion lattice_motion;
+    lattice_motion.inertia = 1.0f;
+    lattice_motion.along_bound = bound;
+    deform::DeformerHierarchy h = inertial_hierarchy(limb, lattice_motion, 9.0, 0.2);
+    const deform::BezierLattice& rest = h.rest_lattice(0);
+    const glm::vec3 u = glm::normalize(rest.frame().u_axis);
+    float along = 0.0f, across = 0.0f, within_slice = 0.0f;
+    const std::vector<double> times = frame_times(60, 2.0, false);
+    REQUIRE(h.step(0.0f, bone_matrices(motion.at(0.0)), bone_matrices(motion.rate(0.0))));
+    for (std::size_t n = 1; n < times.size(); ++n) {
+      const std::vector<glm::mat4> world = bone_matrices(motion.at(times[n]));
+      REQUIRE(h.step(float(times[n] - times[n - 1]), world, bone_matrices(motion.rate(times[n]))));
+      REQUIRE(h.update(world));
+      const glm::mat3 back = glm::inverse(glm::mat3(world[1]));
+      for (int i = 0; i < rest.point_counts().x; ++i) {
+        const glm::vec3 first = back * h.displacements(0)[rest.index(i, 0, 0)];
+        along = std::max(along, std::abs(glm::dot(first, u)));
+        across = std::max(across, glm::length(first - u * glm::dot(first, u)));
+        for (int k = 0; k < rest.point_counts().z; ++k)
+          for (int j = 0; j < rest.point_counts().y; ++j)
+            within_slice = std::max(within_slice, glm::length(back * h.displacements(0)[rest.index(i, j, k)] - first));
+      }
+    }
+    INFO("bound " << bound << ": along " << along << ", across " << across << ", within a slice " << within_slice);
+    CHECK(within_slice < 1e-5f * h.length(0));  // each slice translates: a shear, no swelling
+    CHECK(across > 0.05f * h.length(0));        // the jiggle across the bone is free
+    if (bound < 1.0f) {
+      CHECK(along <= bound * h.length(0) * (1.0f + 1e-5f));  // tanh saturates at the bound, to rounding
+      CHECK(along > 0.5f * bound * h.length(0));  // ... and along it, up to the bound
+    } else {
+      CHECK(along > 0.05f * h.length(0));  // unbounded, the swing would stretch the limb by more than 5%
+    }
+  }
+}
+
 TEST_CASE("set_motion and bind-time checks refuse bad values naming the field") {
   const MovingLimb limb = moving_limb();
   deform::DeformerHierarchy h = inertial_hierarchy(limb, {}, 9.0, 0.2);
@@ -358,6 +403,12 @@ TEST_CASE("set_motion and bind-time checks refuse bad values naming the field") 
   bad = {};
   bad.units_per_metre = 0.0f;
   CHECK_THROWS_WITH_AS(h.set_motion(0, bad), doctest::Contains("units_per_metre"), deform::Error);
+  bad = {};
+  bad.along_bound = -0.1f;
+  CHECK_THROWS_WITH_AS(h.set_motion(0, bad), doctest::Contains("along_bound"), deform::Error);
+  bad = {};
+  bad.far_share = NAN;
+  CHECK_THROWS_WITH_AS(h.set_motion(0, bad), doctest::Contains("far_share"), deform::Error);
   bad = {};
   bad.gravity.y = NAN;
   CHECK_THROWS_WITH_AS(inertial_hierarchy(limb, bad, 9.0, 0.2), doctest::Contains("gravity"), deform::Error);

@@ -1,10 +1,12 @@
 #!/usr/bin/env python3
-"""The figure of docs/elasticity.md, "Measured": a whipped six-link chain's tip height over time at 15 Hz and at
-240 Hz, libdeform's spring chain beside a naive per-frame spring (VRM's update) with the same parameters at 60 Hz.
+"""The figures of docs/elasticity.md, "Measured": a whipped six-link chain's tip height over time at 15 Hz and at
+240 Hz, libdeform's spring chain beside a naive per-frame spring (VRM's update) with the same parameters at 60 Hz;
+and the built-in run's limbs' lengths with the tuned jiggle and an untamed one, against the rigid run.
 
-    python3 tools/motion_study/plot.py MOTION_STUDY_BINARY [--out FILE]   (default: docs/images/secondary-motion.png)
+    python3 tools/motion_study/plot.py MOTION_STUDY_BINARY [--out FILE] [--flesh-out FILE]
+      (defaults: docs/images/secondary-motion.png, docs/images/jiggle-flesh.png)
 
-Runs the study binary (built as build/tools/motion_study) for its CSV, then draws it with matplotlib.
+Runs the study binary (built as build/tools/motion_study) for its CSVs, then draws them with matplotlib.
 """
 import argparse
 import csv
@@ -18,11 +20,42 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+def draw_flesh(binary, out):
+    """The run's legs and arms: length change against the rigid run (%), tuned jiggle and untamed."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = pathlib.Path(folder) / "flesh.csv"
+        subprocess.run([binary, "--flesh-csv", str(path)], check=True, stdout=subprocess.DEVNULL)
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    t = [float(r["t"]) for r in rows]
+    limbs = ("leg_r", "arm_l")
+    figure, axes = plt.subplots(1, len(limbs), figsize=(10, 3.6), sharey=True)
+    for ax, limb in zip(axes, limbs):
+        def change(kind):
+            return [100.0 * (float(r[limb + "_" + kind]) / float(r[limb + "_rigid"]) - 1.0) for r in rows]
+        ax.axhspan(-2.0, 2.0, color="#2ca02c", alpha=0.12, label="within 2%")
+        ax.plot(t, change("untamed"), color="#d62728", linestyle="--",
+                label="inertia 1, far faces free, no bound")
+        ax.plot(t, change("tuned"), color="#1f77b4", label="tuned (default_lattice_motion)")
+        ax.set_title({"leg_r": "right leg, hip to ankle", "arm_l": "left arm, shoulder to wrist"}[limb])
+        ax.set_xlabel("time (s)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("length change vs the rigid run (%)")
+    axes[0].legend(loc="upper left", fontsize=8)
+    figure.suptitle("The built-in run: limbs keep their length, the flesh between the joints jiggles", fontsize=11)
+    figure.tight_layout()
+    pathlib.Path(out).parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(out, dpi=110)
+    print(out)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("binary")
     parser.add_argument("--out", default="docs/images/secondary-motion.png")
+    parser.add_argument("--flesh-out", default="docs/images/jiggle-flesh.png")
     args = parser.parse_args()
+    draw_flesh(args.binary, args.flesh_out)
     with tempfile.TemporaryDirectory() as folder:
         path = pathlib.Path(folder) / "whip.csv"
         subprocess.run([args.binary, "--csv", str(path)], check=True, stdout=subprocess.DEVNULL)

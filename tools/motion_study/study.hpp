@@ -232,6 +232,7 @@ inline Path walk_hand(Method method, const std::vector<double>& times, double sc
   deform::Rig rig = deform::builtin_rig(scaled.model);
   for (deform::LatticeSpec& lattice : rig.lattices) {
     lattice.motion.inertia = 1.0f;
+    lattice.motion.far_share = 1.0f;  // the hand lags with the forearm's far face
     if (method == Method::naive) {
       lattice.elastic.integrator = deform::Integrator::verlet;
       lattice.elastic.verlet_kd = float(deform::verlet_kd(lattice.elastic.oscillator, 1.0 / 60.0));
@@ -263,6 +264,207 @@ inline Path walk_hand(Method method, const std::vector<double>& times, double sc
     if (n > 0 && at_checkpoint(times[n])) out.push_back(character.bone_position(hand));
   }
   return out;
+}
+
+// --- the whole character: the built-in character with every limb's lattice (builtin_full_rig) and the ponytail ----
+
+// What a whole-character run records at every checkpoint of `checkpoint_hz` (k / checkpoint_hz s): every point of
+// the deformed surface and the ponytail's spring points.
+struct CharacterPaths {
+  std::vector<Path> surface;   // per checkpoint, every mesh point
+  std::vector<Path> ponytail;  // per checkpoint, the chain's points (first head, then the tails)
+};
+
+// The built-in full rig with every lattice's tuned motion (default_lattice_motion of its part, inertia included).
+inline deform::Rig tuned_full_rig() {
+  deform::Rig rig = deform::builtin_full_rig(deform::builtin_character());
+  for (deform::LatticeSpec& lattice : rig.lattices)
+    lattice.motion = deform::default_lattice_motion(deform::builtin_body_part(lattice.name));
+  return rig;
+}
+
+// Plays the built-in clip `clip` on the built-in character with `rig` (its lattices' motion as the rig has it, or
+// every lattice's inertia set to `inertia` when it is >= 0), stepped at `hz` for `seconds`, posed with the pose
+// `lead` seconds later; records at every 1 / checkpoint_hz s.
+inline CharacterPaths play_character(const deform::Rig& rig, const std::string& clip, double hz, double seconds,
+                                     double checkpoint_hz = 3.0, float inertia = -1.0f, float lead = 1e-3f) {
+  deform::Model model = deform::builtin_character();
+  deform::Animation animation;
+  for (deform::Animation& a : deform::builtin_clips(model))
+    if (a.name == clip) animation = std::move(a);
+  deform::Rig tuned = rig;
+  if (inertia >= 0.0f)
+    for (deform::LatticeSpec& lattice : tuned.lattices) lattice.motion.inertia = inertia;
+  deform::Character character(std::move(model), tuned);
+  const deform::Pose bind = character.skeleton().bind_pose();
+  deform::Pose pose = bind, later = bind;
+  const auto sample = [&](double t, deform::Pose& into) {
+    into = bind;
+    deform::SamplingJob job;
+    job.animation = &animation;
+    job.time = float(t);
+    job.rotations = into.rotations;
+    job.translations = into.translations;
+    job.run();
+  };
+  CharacterPaths out;
+  const auto steps = std::size_t(std::llround(seconds * hz));
+  const auto per = std::size_t(std::llround(hz / checkpoint_hz));
+  for (std::size_t n = 0; n <= steps; ++n) {
+    const double t = double(n) / hz;
+    sample(t, pose);
+    if (lead > 0.0f) {
+      sample(t + double(lead), later);
+      character.set_pose(pose, later, lead);
+    } else {
+      character.set_pose(pose);
+    }
+    character.update(n == 0 ? 0.0f : float(1.0 / hz));
+    if (n == 0 || n % per != 0) continue;
+    out.surface.emplace_back(character.positions().begin(), character.positions().end());
+    if (character.springs().chain_count() > 0) {
+      const auto points = character.springs().points(0);
+      out.ponytail.emplace_back(points.begin(), points.end());
+    }
+  }
+  return out;
+}
+
+// The largest distance of any point at any checkpoint from `reference`'s, as a percentage of `amplitude`.
+inline double largest_difference(const std::vector<Path>& run, const std::vector<Path>& reference) {
+  double largest = 0.0;
+  for (std::size_t k = 0; k < std::min(run.size(), reference.size()); ++k)
+    for (std::size_t p = 0; p < std::min(run[k].size(), reference[k].size()); ++p)
+      largest = std::max(largest, double(glm::length(run[k][p] - reference[k][p])));
+  return largest;
+}
+
+// The jiggle's amplitude: the largest range of any point along any axis over the checkpoints.
+inline double amplitude_of(const std::vector<Path>& run) {
+  double largest = 0.0;
+  if (run.empty()) return 0.0;
+  for (std::size_t p = 0; p < run.front().size(); ++p)
+    for (int axis = 0; axis < 3; ++axis) {
+      double lo = 1e300, hi = -1e300;
+      for (const Path& at : run) lo = std::min(lo, double(at[p][axis])), hi = std::max(hi, double(at[p][axis]));
+      largest = std::max(largest, hi - lo);
+    }
+  return largest;
+}
+
+// --- flesh, not a longer limb: the jiggle's shape against the rigid walk -------------------------------------------
+
+// How the jiggle of `rig`'s lattices (their motion as the rig has it) deforms the built-in character over a clip,
+// against the same clip with every lattice's inertia 0 (the rigid walk), every 1/30 s:
+struct FleshMeasure {
+  double limb_percent = 0.0;     // the largest change of a limb's length (shoulder to wrist, hip to ankle, between
+                                 // the skin points nearest those joints in the bind pose), % of the rigid one's
+  double volume_percent = 0.0;   // the largest change of a lattice's volume (its control grid's cells), %
+  double jiggle = 0.0;           // the largest distance of a skin point from the rigid walk's, model units
+  std::string worst_limb, worst_lattice;
+  std::vector<double> times;                       // the samples' times
+  std::vector<std::string> limbs;                  // arm_l, leg_l, arm_r, leg_r
+  std::vector<std::vector<double>> limb_length;    // per limb, its length at every sample
+  std::vector<std::vector<double>> rigid_length;   // the same in the rigid walk
+};
+
+// The signed volume of a lattice's control grid (i-fastest, `counts` points per axis): its cells, six tetrahedra each.
+inline double grid_volume(std::span<const glm::vec3> p, glm::ivec3 counts) {
+  const auto at = [&](int i, int j, int k) { return glm::dvec3(p[std::size_t(i + counts.x * (j + counts.y * k))]); };
+  double volume = 0.0;
+  const auto tet = [](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, glm::dvec3 d) {
+    return glm::dot(b - a, glm::cross(c - a, d - a)) / 6.0;
+  };
+  for (int k = 0; k + 1 < counts.z; ++k)
+    for (int j = 0; j + 1 < counts.y; ++j)
+      for (int i = 0; i + 1 < counts.x; ++i) {
+        const glm::dvec3 c000 = at(i, j, k), c100 = at(i + 1, j, k), c010 = at(i, j + 1, k),
+                         c110 = at(i + 1, j + 1, k), c001 = at(i, j, k + 1), c101 = at(i + 1, j, k + 1),
+                         c011 = at(i, j + 1, k + 1), c111 = at(i + 1, j + 1, k + 1);
+        // The cube's six tetrahedra around its diagonal c000-c111.
+        volume += tet(c000, c100, c110, c111) + tet(c000, c110, c010, c111) + tet(c000, c010, c011, c111) +
+                  tet(c000, c011, c001, c111) + tet(c000, c001, c101, c111) + tet(c000, c101, c100, c111);
+      }
+  return volume;
+}
+
+inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& clip, double hz, double seconds) {
+  deform::Model model = deform::builtin_character();
+  deform::Animation animation;
+  for (deform::Animation& a : deform::builtin_clips(model))
+    if (a.name == clip) animation = std::move(a);
+  deform::Rig rigid_rig = rig;
+  for (deform::LatticeSpec& lattice : rigid_rig.lattices) lattice.motion = {};
+  deform::Character jiggly(model, rig), rigid(model, rigid_rig);
+  const deform::Skeleton& skeleton = jiggly.skeleton();
+  // The limbs: the skin points nearest their end joints in the bind pose.
+  const auto nearest = [&](const char* bone) {
+    const glm::vec3 joint(skeleton.bind_world()[std::size_t(skeleton.find(bone))][3]);
+    std::size_t best = 0;
+    for (std::size_t p = 0; p < model.mesh.positions.size(); ++p)
+      if (glm::length(model.mesh.positions[p] - joint) < glm::length(model.mesh.positions[best] - joint)) best = p;
+    return best;
+  };
+  struct Limb {
+    std::string name;
+    std::size_t a, b;
+  };
+  std::vector<Limb> limbs;
+  for (const char* side : {"_l", "_r"}) {
+    limbs.push_back({std::string("arm") + side, nearest((std::string("upperarm") + side).c_str()),
+                     nearest((std::string("hand") + side).c_str())});
+    limbs.push_back({std::string("leg") + side, nearest((std::string("thigh") + side).c_str()),
+                     nearest((std::string("foot") + side).c_str())});
+  }
+  const deform::Pose bind = skeleton.bind_pose();
+  deform::Pose pose = bind, later = bind;
+  const auto sample = [&](double t, deform::Pose& into) {
+    into = bind;
+    deform::SamplingJob job;
+    job.animation = &animation;
+    job.time = float(t);
+    job.rotations = into.rotations;
+    job.translations = into.translations;
+    job.run();
+  };
+  FleshMeasure m;
+  std::vector<std::vector<double>> lengths(limbs.size()), rigid_lengths(limbs.size());
+  const auto steps = std::size_t(std::llround(seconds * hz));
+  const auto per = std::max<std::size_t>(1, std::size_t(std::llround(hz / 30.0)));
+  for (std::size_t n = 0; n <= steps; ++n) {
+    const double t = double(n) / hz;
+    sample(t, pose);
+    sample(t + 1e-3, later);
+    for (deform::Character* c : {&jiggly, &rigid}) {
+      c->set_pose(pose, later, 1e-3f);
+      c->update(n == 0 ? 0.0f : float(1.0 / hz));
+    }
+    if (n == 0 || n % per != 0) continue;
+    m.times.push_back(t);
+    const auto skin = jiggly.positions(), still = rigid.positions();
+    for (std::size_t p = 0; p < skin.size(); ++p)
+      m.jiggle = std::max(m.jiggle, double(glm::length(skin[p] - still[p])));
+    for (std::size_t l = 0; l < limbs.size(); ++l) {
+      const double length = glm::length(skin[limbs[l].a] - skin[limbs[l].b]);
+      const double reference = glm::length(still[limbs[l].a] - still[limbs[l].b]);
+      lengths[l].push_back(length);
+      rigid_lengths[l].push_back(reference);
+      const double percent = 100.0 * std::abs(length / reference - 1.0);
+      if (percent > m.limb_percent) m.limb_percent = percent, m.worst_limb = limbs[l].name;
+    }
+    const deform::DeformerHierarchy& lattices = jiggly.deformers();
+    for (std::size_t l = 0; l < lattices.lattice_count(); ++l) {
+      const glm::ivec3 counts = lattices.rest_lattice(l).point_counts();
+      const double volume = grid_volume(lattices.control_points(l), counts);
+      const double reference = grid_volume(rigid.deformers().control_points(l), counts);
+      const double percent = 100.0 * std::abs(volume / reference - 1.0);
+      if (percent > m.volume_percent) m.volume_percent = percent, m.worst_lattice = lattices.spec(l).name;
+    }
+  }
+  for (const Limb& limb : limbs) m.limbs.push_back(limb.name);
+  m.limb_length = std::move(lengths);
+  m.rigid_length = std::move(rigid_lengths);
+  return m;
 }
 
 // One row of the study: a motion measured over 15, 30, 60, 144 and 240 Hz and a jittered frame time (about 60 Hz),

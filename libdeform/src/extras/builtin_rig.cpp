@@ -1,11 +1,21 @@
 // The rig of the built-in character: the thesis' scene, three elastic lattices on one arm; and the same on every limb.
 #include <initializer_list>
+#include <string_view>
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/extras/builtin.hpp"
 namespace deform {
+
+BodyPart builtin_body_part(std::string_view bone) noexcept {
+  if (bone.starts_with("upperarm") || bone.starts_with("thigh")) return BodyPart::upper_limb;
+  if (bone.starts_with("forearm") || bone.starts_with("shin")) return BodyPart::lower_limb;
+  if (bone.starts_with("hand")) return BodyPart::hand;
+  if (bone.starts_with("foot")) return BodyPart::foot;
+  return BodyPart::torso;
+}
+
 namespace {
 
 // A rig with a lattice on each named bone, builtin_rig()'s springs, reach chain clavicle_l → hand_l.
@@ -25,6 +35,10 @@ Rig rig_on(const Model& model, std::initializer_list<const char*> bones) {
     spec.bone = bone(name);
     // Rubber: about 2 Hz, visibly under-damped (a few decaying swings, settled within about 1.6 s).
     spec.elastic.oscillator = {150.0f, 0.2f, 1.0f};
+    // Flesh when it moves (set the inertia to feel it: 0 by default, the thesis' rubber arm): the part's bound and
+    // far face share (default_lattice_motion), at no inertia.
+    spec.motion = default_lattice_motion(builtin_body_part(name));
+    spec.motion.inertia = 0.0f;
     rig.lattices.push_back(std::move(spec));
   }
   rig.reach_effector = bone("hand_l");

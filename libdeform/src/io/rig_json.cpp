@@ -79,8 +79,10 @@ glm::vec3 read_gravity(const JsonReader& r) {
 LatticeMotion read_motion(const JsonReader& r) {
   // The ranges validate_motion enforces (runtime/hierarchy.hpp).
   LatticeMotion motion;
-  r.expect_object({"inertia", "gravity", "units_per_metre"});
+  r.expect_object({"inertia", "gravity", "units_per_metre", "along_bound", "far_share"});
   if (r.has("inertia")) motion.inertia = r.at("inertia").number(0.0f, 1.0f);
+  if (r.has("along_bound")) motion.along_bound = r.at("along_bound").number(0.0f, 1.0f);
+  if (r.has("far_share")) motion.far_share = r.at("far_share").number(0.0f, 1.0f);
   if (r.has("gravity")) motion.gravity = read_gravity(r.at("gravity"));
   if (r.has("units_per_metre")) motion.units_per_metre = r.at("units_per_metre").number(0.0f, 1e6f, true);
   return motion;
@@ -339,7 +341,9 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
     if (spec.motion != LatticeMotion{}) {  // likewise
       written["motion"] = {{"inertia", shortest_double(spec.motion.inertia)},
                            {"gravity", vec3_json(spec.motion.gravity)},
-                           {"units_per_metre", shortest_double(spec.motion.units_per_metre)}};
+                           {"units_per_metre", shortest_double(spec.motion.units_per_metre)},
+                           {"along_bound", shortest_double(spec.motion.along_bound)},
+                           {"far_share", shortest_double(spec.motion.far_share)}};
     }
     written["elastic"] = elastic;
   }

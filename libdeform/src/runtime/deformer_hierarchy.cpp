@@ -16,6 +16,24 @@ glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m 
 // The smallest length ratio volume compensation reads (a floorless lattice squashed past zero stays finite).
 constexpr float min_volume_ratio = 0.01f;
 
+// Splits a per-control-point vector field (forcing or impulse, bone frame, i-fastest over `counts`) per slice along
+// U: every point gets its slice's mean across the bone `axis`, and `along` the slice's mean along it. A slice of
+// points that share one forcing moves as a whole: across the bone a shear, no swelling. The last slice's (the far
+// face's) is scaled by `far_weight`.
+void split_slices(std::span<glm::vec3> field, glm::ivec3 counts, glm::vec3 axis, float far_weight,
+                  std::array<float, max_bezier_degree + 1>& along) noexcept {
+  std::array<glm::vec3, max_bezier_degree + 1> mean{};
+  const auto slices = std::size_t(counts.x);
+  for (std::size_t n = 0; n < field.size(); ++n) mean[n % slices] += field[n];
+  const float per_slice = 1.0f / float(counts.y * counts.z);
+  for (std::size_t i = 0; i < slices; ++i) {
+    mean[i] *= i + 1 == slices ? per_slice * far_weight : per_slice;
+    along[i] = glm::dot(mean[i], axis);
+    mean[i] -= axis * along[i];
+  }
+  for (std::size_t n = 0; n < field.size(); ++n) field[n] = mean[n % slices];
+}
+
 }  // namespace
 
 float soft_length_floor(float ratio, float min_fraction) noexcept {
@@ -41,6 +59,25 @@ void validate_motion(const LatticeMotion& motion) {
     throw Error::invalid_argument("<lattice motion>", "motion gravity must be finite and at most 1e6 m/s²");
   if (!(motion.units_per_metre > 0.0f && motion.units_per_metre <= 1e6f))
     throw Error::invalid_argument("<lattice motion>", "motion units_per_metre must be in (0, 1e6]");
+  if (!(motion.along_bound >= 0.0f && motion.along_bound <= 1.0f))
+    throw Error::invalid_argument("<lattice motion>", "motion along_bound must be in [0, 1]");
+  if (!(motion.far_share >= 0.0f && motion.far_share <= 1.0f))
+    throw Error::invalid_argument("<lattice motion>", "motion far_share must be in [0, 1]");
+}
+
+LatticeMotion default_lattice_motion(BodyPart part) noexcept {
+  // {inertia, gravity, units_per_metre, along_bound, far_share}: measured on the built-in walk and run by
+  // tests/character/secondary_motion_test.cpp ("flesh: ...") and tools/motion_study --flesh-csv.
+  switch (part) {
+    case BodyPart::upper_limb: return {0.3f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
+    case BodyPart::lower_limb: return {0.3f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
+    case BodyPart::hand: return {0.2f, glm::vec3(0.0f), 1.0f, 0.02f, 1.0f};
+    case BodyPart::foot: return {0.1f, glm::vec3(0.0f), 1.0f, 0.01f, 0.0f};
+    case BodyPart::torso: return {0.4f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
+    case BodyPart::head: return {0.1f, glm::vec3(0.0f), 1.0f, 0.01f, 0.0f};
+    case BodyPart::appendage: return {0.8f, glm::vec3(0.0f), 1.0f, 0.05f, 1.0f};
+  }
+  return {};
 }
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
@@ -181,7 +218,38 @@ float DeformerHierarchy::stretch(std::size_t index) const {
   }
   SliceShape slices;
   shape_slices(lattice, slices);
-  return sum / float(lattice.far_face.size()) + slices.shift[std::size_t(lattice.rest.point_counts().x - 1)];
+  std::array<float, max_bezier_degree + 1> along;
+  along_shown(lattice, along);
+  const auto last = std::size_t(lattice.rest.point_counts().x - 1);
+  return sum / float(lattice.far_face.size()) + along[last] + slices.shift[last];
+}
+
+void DeformerHierarchy::along_shown(const Lattice& lattice, std::array<float, max_bezier_degree + 1>& shown) noexcept {
+  // b·tanh(z / b): the oscillator's offset for small z, never beyond b (b = 0 shows nothing).
+  const float bound = lattice.spec.motion.along_bound * lattice.length;
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    const float z = lattice.along_offset[i];
+    shown[i] = bound > 0.0f && z != 0.0f ? bound * std::tanh(z / bound) : 0.0f;
+  }
+}
+
+void DeformerHierarchy::step_along(Lattice& lattice, float dt, const std::array<float, max_bezier_degree + 1>& start,
+                                   const std::array<float, max_bezier_degree + 1>& end) noexcept {
+  if (!(dt > 0.0f)) return;
+  if (double(dt) != lattice.along_dt) {  // a fixed frame rate computes the maps once
+    lattice.along_step = oscillator_step(lattice.spec.elastic.oscillator, dt);
+    lattice.along_forced = forced_step(lattice.spec.elastic.oscillator, dt);
+    lattice.along_dt = dt;
+  }
+  const OscillatorStep& m = lattice.along_step;
+  const ForcedStep& f = lattice.along_forced;
+  for (std::size_t i = 1; i < std::size_t(lattice.rest.point_counts().x); ++i) {
+    const double z = lattice.along_offset[i], u = lattice.along_velocity[i];
+    lattice.along_offset[i] = float(m.position_from_offset * z + m.position_from_velocity * u +
+                                    f.position_from_start * start[i] + f.position_from_end * end[i]);
+    lattice.along_velocity[i] = float(m.velocity_from_offset * z + m.velocity_from_velocity * u +
+                                      f.velocity_from_start * start[i] + f.velocity_from_end * end[i]);
+  }
 }
 
 void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices) noexcept {
@@ -199,6 +267,8 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
   // translation's.
   const std::array<float, max_bezier_degree + 1>& along = lattice.bound->slice_along;
   std::array<float, max_bezier_degree + 1> moved{};
+  along_shown(lattice, moved);  // what the motion shows along the bone, per point of the slice
+  for (std::size_t i = 0; i <= last; ++i) moved[i] *= per_slice;
   for (int k = 0; k < counts.z; ++k) {
     for (int j = 0; j < counts.y; ++j) {
       for (std::size_t i = 0; i <= last; ++i) {
@@ -237,6 +307,7 @@ void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& se
   Lattice& lattice = lattices_.at(index);
   lattice.elastic.set_settings(settings);
   lattice.spec.elastic = settings;
+  lattice.along_dt = -1.0;
 }
 
 Status DeformerHierarchy::step(float dt) {
@@ -263,7 +334,13 @@ Status DeformerHierarchy::step(float dt, std::span<const glm::mat4> world, std::
 Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::mat4* world, const glm::mat4* rate) {
   // With dt checked, a lattice's step cannot refuse: its target and acceleration arrays were sized with it.
   const LatticeMotion& motion = lattice.spec.motion;
-  if (!motion.active()) return lattice.elastic.step(dt, lattice.target_points);
+  if (!motion.active()) {
+    // Motion switched off (set_motion) lets the along oscillators settle as the springs do.
+    if (std::any_of(lattice.along_offset.begin(), lattice.along_offset.end(), [](float z) { return z != 0.0f; }) ||
+        std::any_of(lattice.along_velocity.begin(), lattice.along_velocity.end(), [](float u) { return u != 0.0f; }))
+      step_along(lattice, dt, {}, {});
+    return lattice.elastic.step(dt, lattice.target_points);
+  }
   // Everything in the bone's frame: the rest's world acceleration taken back by the bone's inverse 3×3, gravity by
   // the same and rescaled by the bone's scale (so a scaled character moves the same way, scaled).
   const glm::mat4 now = world != nullptr ? *world : lattice.motion_known ? lattice.motion_world : lattice.bind_world;
@@ -282,8 +359,12 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     const float det = glm::determinant(glm::mat3(m));
     return std::isfinite(det) && std::abs(det) > 1e-30f;
   };
+  std::array<float, max_bezier_degree + 1> along_start{}, along_end{};
+  const glm::ivec3 counts = lattice.rest.point_counts();
+  const float far_weight = lattice.bound->carried_points.empty() ? 1.0f : motion.far_share;
   if (!invertible(before) || !invertible(now) || (rate != nullptr && !finite(*rate))) {
     lattice.motion_known = false;
+    step_along(lattice, dt, along_start, along_end);
     return lattice.elastic.step(dt, lattice.target_points);
   }
   const glm::mat3 inverse_before = glm::inverse(glm::mat3(before));
@@ -321,7 +402,9 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
         lattice.accel_start[i] = -inertia * (inverse_before * change);
         lattice.rest_velocity[i] = velocity;
       }
+      split_slices(lattice.accel_start, counts, lattice.axis, far_weight, along_start);
       lattice.elastic.add_velocity(lattice.accel_start);
+      for (std::size_t i = 1; i < std::size_t(counts.x); ++i) lattice.along_velocity[i] += along_start[i];
     }
     std::fill(lattice.accel_start.begin(), lattice.accel_start.end(), gravity_before);
     std::fill(lattice.accel_end.begin(), lattice.accel_end.end(), gravity_now);
@@ -337,6 +420,9 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     if (rate != nullptr) lattice.motion_rate = *rate;
     lattice.rest_velocity_known = false;
   }
+  split_slices(lattice.accel_start, counts, lattice.axis, far_weight, along_start);
+  split_slices(lattice.accel_end, counts, lattice.axis, far_weight, along_end);
+  step_along(lattice, dt, along_start, along_end);
   return lattice.elastic.step(dt, lattice.target_points, lattice.accel_start, lattice.accel_end);
 }
 
@@ -351,6 +437,8 @@ void DeformerHierarchy::reset() {
     lattice.target = 0.0f;
     stretch_points(lattice);
     lattice.elastic.reset(lattice.rest.control_points());
+    lattice.along_offset.fill(0.0f);
+    lattice.along_velocity.fill(0.0f);
     lattice.motion_known = false;
     lattice.rate_known = false;
   }
@@ -384,13 +472,15 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
     for (std::uint32_t n : lattice.far_face) far += now[n] - rest[n];
     far /= float(lattice.far_face.size());
     shape_slices(lattice, slices);
+    std::array<float, max_bezier_degree + 1> motion_along;
+    along_shown(lattice, motion_along);
     const glm::mat3 linear(world[std::size_t(lattice.spec.bone)]);
     lattice.linear = linear;
     const float still = 1e-7f * lattice.length;
     const std::span<glm::vec3> displacements = lattice.field.control_points();
     const std::vector<glm::vec3>& radial = lattice.bound->radial;
     std::array<glm::vec3, max_bezier_degree + 1> along;  // per slice: its shift along the bone
-    for (std::size_t i = 0; i <= last; ++i) along[i] = lattice.axis * slices.shift[i];
+    for (std::size_t i = 0; i <= last; ++i) along[i] = lattice.axis * (slices.shift[i] + motion_along[i]);
     for (int k = 0; k < counts.z; ++k) {
       for (int j = 0; j < counts.y; ++j) {
         for (std::size_t i = 0; i <= last; ++i) {

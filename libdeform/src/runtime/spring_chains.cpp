@@ -170,12 +170,13 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
     point_local_.push_back(collider.end);
   }
   const std::size_t points = point_bone_.size();
-  for (auto* v : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_,
-                  &sample_velocities_, &drawn_})
+  for (auto* v : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_, &drawn_})
     v->assign(points, glm::vec3(0.0f));
   for (auto* v : {&positions_, &velocities_, &rests_, &report_positions_, &report_velocities_, &report_rests_})
     v->assign(joints, glm::vec3(0.0f));
   corrections_.assign(joints, glm::mat4(1.0f));
+  heads_.assign(chains_.size(), glm::vec3(0.0f));
+  report_heads_ = heads_;
   collider_start_radius_.assign(colliders_.size(), 0.0f);
   collider_end_radius_ = collider_start_radius_;
   sample_colliders_.assign(colliders_.size(), Placed{});
@@ -223,6 +224,7 @@ void SpringChains::place_at_rest(Chain& chain) noexcept {
     positions_[chain.first + i] = rests_[chain.first + i] = end_points_[point0 + i + 1];
     velocities_[chain.first + i] = end_velocities_[point0 + i + 1];
   }
+  heads_[std::size_t(&chain - chains_.data())] = end_points_[point0];
   chain.restart = false;
 }
 
@@ -231,11 +233,9 @@ void SpringChains::sample_points(double tau, double dt) {
   const double s = dt > 0.0 ? std::clamp(tau / dt, 0.0, 1.0) : 1.0;
   const auto s2 = float(s * s), s3 = float(s * s * s), sf = float(s), h = float(dt);
   const float h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + sf, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
-  const float d00 = h > 0 ? (6 * s2 - 6 * sf) / h : 0, d10 = 3 * s2 - 4 * sf + 1, d11 = 3 * s2 - 2 * sf;
   for (std::size_t k = 0; k < sample_points_.size(); ++k) {
     const glm::vec3 p0 = start_points_[k], v0 = start_velocities_[k], p1 = end_points_[k], v1 = end_velocities_[k];
     sample_points_[k] = h00 * p0 + (h10 * h) * v0 + h01 * p1 + (h11 * h) * v1;
-    sample_velocities_[k] = d00 * (p0 - p1) + d10 * v0 + d11 * v1;
   }
 }
 
@@ -250,13 +250,19 @@ void SpringChains::sample_colliders(float blend) {
 }
 
 void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions,
-                           glm::vec3* velocities, glm::vec3* rests) const noexcept {
+                           glm::vec3* velocities, glm::vec3* rests, glm::vec3* heads) const noexcept {
   // Root to tip: each tail's rest is its head (the parent's simulated tail) plus its animated bone vector turned by
   // the rotation the chain above has been bent by; the rest moves linearly over the sub-step, which the oscillator
   // step follows exactly; then the colliders and the bone's length.
-  const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
+  const std::size_t index = std::size_t(&chain - chains_.data());
+  const std::size_t point0 = chain.first + index;
   glm::vec3 head = sample_points_[point0];
-  glm::vec3 head_velocity = sample_velocities_[point0];
+  // The first head's velocity over the sub-step, as the rests' (linear over it): from its positions only, which a
+  // frame's cubic gives to O(h⁴). The cubic's own derivative carries the caller's rate, whose error (a forward
+  // difference over a lead of a millisecond is off by half the lead times the acceleration) differs between a
+  // frame's ends and its inside: sub-steps inside frames and sub-steps on frames would part by it.
+  glm::vec3 head_velocity = (head - heads[index]) * (1.0f / h);
+  heads[index] = head;
   glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
   const glm::vec3 gravity = chain.spec.gravity * (chain.spec.units_per_metre * chain.scale);
   const float radius = chain.spec.radius * chain.scale;
@@ -330,7 +336,7 @@ void SpringChains::advance(double dt) {
     sample_colliders(dt > 0.0 ? float(std::clamp(kept / dt, 0.0, 1.0)) : 1.0f);
     for (const Chain& chain : chains_) {
       substep(chain, length == h ? chain.fixed : oscillator(chain, length), float(length), positions_.data(),
-              velocities_.data(), rests_.data());
+              velocities_.data(), rests_.data(), heads_.data());
     }
   };
   if (available > max_substepped) {
@@ -344,12 +350,13 @@ void SpringChains::advance(double dt) {
   report_positions_ = positions_;
   report_velocities_ = velocities_;
   report_rests_ = rests_;
+  report_heads_ = heads_;
   if (owed_ > 1e-12) {
     sample_points(dt, dt);
     sample_colliders(1.0f);
     for (const Chain& chain : chains_) {
       substep(chain, oscillator(chain, owed_), float(owed_), report_positions_.data(), report_velocities_.data(),
-              report_rests_.data());
+              report_rests_.data(), report_heads_.data());
     }
   }
 }
@@ -448,8 +455,8 @@ void SpringChains::prefetch() const noexcept {
   prefetch_span(governed_);
   prefetch_span(inverse_bind_);
   for (const auto* points : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_,
-                             &sample_velocities_, &positions_, &velocities_, &rests_, &report_positions_,
-                             &report_velocities_, &report_rests_, &drawn_})
+                             &positions_, &velocities_, &rests_, &report_positions_, &report_velocities_,
+                             &report_rests_, &heads_, &drawn_})
     prefetch_span(*points);
   prefetch_span(collider_start_radius_);
   prefetch_span(collider_end_radius_);

@@ -8,6 +8,7 @@
 // pushes). The root (hips) has its local +Y pointing forward (+Z), so that both the spine and the legs hang off it
 // with bind rotations of ±90° rather than 180° and every joint's DOF range is a plain [min, max] around its bind angle.
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "deform/character/character.hpp"
@@ -43,6 +44,9 @@ DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
 // hand_l, hand_r, foot_l or foot_r stretches that limb's two upper lattices (nearest_reach_effector picks the limb
 // for a target); a foot's chain starts at the hips, the root. Throws deform::Error when `model` lacks those bones.
 DEFORM_EXTRAS_API Rig builtin_full_rig(const Model& model);
+// What each lattice bone of the built-in character is, for default_lattice_motion: upper arms and thighs
+// upper_limb, forearms and shins lower_limb, hands hand, feet foot, any other bone torso.
+DEFORM_EXTRAS_API BodyPart builtin_body_part(std::string_view bone) noexcept;
 // A walk for the built-in character (builtin_character()): "walk", 1 s, looping, cubic-spline keys every 1/16 s
 // (tangents from the swing itself: smooth through the keys) on the spine, neck, arms and legs (within their limits)
 // and a bob of the hips; for SamplingJob, the benchmarks of a whole

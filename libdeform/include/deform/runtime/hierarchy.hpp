@@ -76,16 +76,49 @@ DEFORM_RUNTIME_API void validate_shape(const StretchShape& shape);
 // Coriolis and centrifugal terms, second order in it, are left out). Gravity pulls every control point (a belly
 // sags, then bounces). Both are measured in the bone's own frame, so a character scaled by any factor moves the same
 // way, scaled.
+// What the motion moves is flesh on a bone of a fixed length: the forcing (inertia and gravity) is taken per slice of
+// control points across the bone (the points with one index i along U; an affine forcing's slice mean is its value at
+// the slice's centre), and
+//  - across the bone it moves each slice as a whole: the lattice shears and bends, it does not swell (a translation
+//    of slices keeps the volume exactly);
+//  - along the bone it drives one more oscillator per slice (the lattice's springs), whose offset z is shown as
+//    b·tanh(z / b), b = along_bound · length(): a slice moves along the bone by less than b, so the limb keeps its
+//    length within along_bound (the StretchShape's volume compensation then keeps its volume);
+//  - a lattice that carries points beyond its far face (the joint and the limb below) moves that face by far_share
+//    of its motion: at 0 the joint stays where the bone puts it and only the flesh between the joints jiggles, so a
+//    limb keeps its length from joint to joint; at 1 the limb below lags with the far face. A lattice that carries
+//    nothing (a hand, a foot, a tail's tip) moves its far face fully.
+// Both parts are linear in the forcing and stepped exactly; the bound is a memoryless function of the state, so the
+// motion is as frame-rate independent as the springs (docs/elasticity.md).
 struct LatticeMotion {
   float inertia = 0.0f;          // λ in [0, 1]: 0 the bone carries the points rigidly, 1 they are free masses
   glm::vec3 gravity{0.0f};       // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model; at most 1e6 long
   float units_per_metre = 1.0f;  // model units in a metre (100 for a model in centimetres), in (0, 1e6]
+  float along_bound = 0.02f;     // in [0, 1]: the most a slice moves along the bone, as a fraction of the length
+  float far_share = 1.0f;        // in [0, 1]: how much of the motion a far face that carries points takes
   bool active() const noexcept { return inertia != 0.0f || gravity != glm::vec3(0.0f); }
   bool operator==(const LatticeMotion&) const = default;
 };
 
 // Throws deform::Error ("<lattice motion>", naming the field) when a field is not finite or out of its range.
 DEFORM_RUNTIME_API void validate_motion(const LatticeMotion& motion);
+
+// What a lattice's bone is, for the default secondary motion of a rig (default_lattice_motion).
+enum class BodyPart : std::uint8_t {
+  upper_limb,  // upper arm, thigh: the flesh between two joints
+  lower_limb,  // forearm, shin
+  hand,        // a limb's end that carries nothing below it
+  foot,
+  torso,       // spine, chest, belly, hips
+  head,        // head, neck
+  appendage,   // tail, ears, hair, a ponytail as lattices: free to swing
+};
+
+// The tuned secondary motion of a lattice on such a part (inertia, along_bound, far_share; no gravity): flesh that
+// wobbles between joints that stay put, hands that lag a little, feet that stay planted, appendages that swing —
+// on the built-in walk and run each limb keeps its length within 2% and each lattice its volume within 3%
+// (docs/elasticity.md, "Measured"). The built-in rigs use it; so can a rig built for any model.
+DEFORM_RUNTIME_API LatticeMotion default_lattice_motion(BodyPart part) noexcept;
 
 // The set-up of one lattice (what a rig file stores, docs/formats.md).
 struct LatticeSpec {
@@ -298,6 +331,13 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::vector<glm::vec3> rest_velocity;
     std::vector<glm::vec3> accel_start;
     std::vector<glm::vec3> accel_end;
+    // The motion along the bone (LatticeMotion): per slice the oscillator's offset and velocity, model units along
+    // U, before the bound; its exact step for the last dt.
+    std::array<float, max_bezier_degree + 1> along_offset{};
+    std::array<float, max_bezier_degree + 1> along_velocity{};
+    OscillatorStep along_step;
+    ForcedStep along_forced;
+    double along_dt = -1.0;
     std::vector<glm::vec3> mapped_points;  // apply(positions, normals): linear · rest + world displacement
     bool regular_rest = false;             // rest control points on the frame's grid (one evaluation for normals)
     bool active = false;
@@ -311,6 +351,12 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     std::array<float, max_bezier_degree + 1> scale{};
   };
   static void shape_slices(const Lattice& lattice, SliceShape& slices) noexcept;
+  // Per slice: what the motion shows along the bone (LatticeMotion::along_bound), model units along U.
+  static void along_shown(const Lattice& lattice, std::array<float, max_bezier_degree + 1>& shown) noexcept;
+  // Steps every slice's along oscillator by dt under an along forcing linear over the step, per slice (slice 0,
+  // pinned, stays at rest).
+  static void step_along(Lattice& lattice, float dt, const std::array<float, max_bezier_degree + 1>& start,
+                         const std::array<float, max_bezier_degree + 1>& end) noexcept;
   // The evaluation of a lattice's displacement field, added to `positions` by the points' weights.
   static LatticeEvaluateJob field_job(const Lattice& lattice, std::span<glm::vec3> positions);
   bool is_ancestor(std::int32_t ancestor, std::int32_t bone) const noexcept;

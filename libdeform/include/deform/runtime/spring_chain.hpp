@@ -146,7 +146,7 @@ class DEFORM_RUNTIME_API SpringChains {
   void sample_points(double tau, double dt);
   void sample_colliders(float blend);
   void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
-               glm::vec3* rests) const noexcept;
+               glm::vec3* rests, glm::vec3* heads) const noexcept;
   void advance(double dt);
   void place_at_rest(Chain& chain) noexcept;  // the chain's tails on end_points_, moving with them
 
@@ -160,7 +160,7 @@ class DEFORM_RUNTIME_API SpringChains {
   std::vector<glm::mat4> inverse_bind_;      // per bone
   // Animated points at the last run (start of this step) and now, with velocities; the sample at a sub-step.
   std::vector<glm::vec3> start_points_, start_velocities_, end_points_, end_velocities_;
-  std::vector<glm::vec3> sample_points_, sample_velocities_;
+  std::vector<glm::vec3> sample_points_;
   std::size_t collider_points_ = 0;  // the first collider end among the points
   // Colliders' radii in world space at the start and end of the step; colliders at a sub-step.
   std::vector<float> collider_start_radius_, collider_end_radius_;
@@ -168,6 +168,8 @@ class DEFORM_RUNTIME_API SpringChains {
   // Per joint: the kept state (positions, velocities, rest at the last sub-step), the reported one, corrections.
   std::vector<glm::vec3> positions_, velocities_, rests_;
   std::vector<glm::vec3> report_positions_, report_velocities_, report_rests_;
+  // Per chain: its animated first head at the kept state's last sub-step, and in the reported state.
+  std::vector<glm::vec3> heads_, report_heads_;
   std::vector<glm::vec3> drawn_;  // per point: the reported chain (first head, tails)
   std::vector<glm::mat4> corrections_;
   double owed_ = 0.0;
