@@ -16,22 +16,34 @@ glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m 
 // The smallest length ratio volume compensation reads (a floorless lattice squashed past zero stays finite).
 constexpr float min_volume_ratio = 0.01f;
 
-// Splits a per-control-point vector field (forcing or impulse, bone frame, i-fastest over `counts`) per slice along
-// U: every point gets its slice's mean across the bone `axis`, and `along` the slice's mean along it. A slice of
-// points that share one forcing moves as a whole: across the bone a shear, no swelling. The last slice's (the far
-// face's) is scaled by `far_weight`.
-void split_slices(std::span<glm::vec3> field, glm::ivec3 counts, glm::vec3 axis, float far_weight,
-                  std::array<float, max_bezier_degree + 1>& along) noexcept {
-  std::array<glm::vec3, max_bezier_degree + 1> mean{};
+// Per slice along U (the control points with one index i; i-fastest over `counts`): its points' mean, e.g. the centre
+// of the rest, where an affine forcing's value is its slice mean. No division per point (a slice is every counts.x-th
+// point from i).
+using Slices = std::array<glm::vec3, max_bezier_degree + 1>;
+void slice_means(std::span<const glm::vec3> points, glm::ivec3 counts, Slices& means) noexcept {
   const auto slices = std::size_t(counts.x);
-  for (std::size_t n = 0; n < field.size(); ++n) mean[n % slices] += field[n];
+  for (std::size_t i = 0; i < slices; ++i) means[i] = glm::vec3(0.0f);
+  for (std::size_t n = 0; n < points.size(); n += slices)
+    for (std::size_t i = 0; i < slices; ++i) means[i] += points[n + i];
   const float per_slice = 1.0f / float(counts.y * counts.z);
+  for (std::size_t i = 0; i < slices; ++i) means[i] *= per_slice;
+}
+
+// Splits each slice's forcing (or impulse) `f` into its part across the bone `axis`, kept in `f`, and along it,
+// written to `along`; the last slice's (the far face's) both scaled by `far_weight`.
+void split_slices(Slices& f, std::size_t slices, glm::vec3 axis, float far_weight,
+                  std::array<float, max_bezier_degree + 1>& along) noexcept {
+  f[slices - 1] *= far_weight;
   for (std::size_t i = 0; i < slices; ++i) {
-    mean[i] *= i + 1 == slices ? per_slice * far_weight : per_slice;
-    along[i] = glm::dot(mean[i], axis);
-    mean[i] -= axis * along[i];
+    along[i] = glm::dot(f[i], axis);
+    f[i] -= axis * along[i];
   }
-  for (std::size_t n = 0; n < field.size(); ++n) field[n] = mean[n % slices];
+}
+
+// Every point gets its slice's value.
+void fill_slices(std::span<glm::vec3> points, std::size_t slices, const Slices& values) noexcept {
+  for (std::size_t n = 0; n < points.size(); n += slices)
+    for (std::size_t i = 0; i < slices; ++i) points[n + i] = values[i];
 }
 
 }  // namespace
@@ -374,7 +386,11 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
   const glm::vec3 gravity_before = inverse_before * (gravity * scale(before));
   const glm::vec3 gravity_now = inverse_now * (gravity * scale(now));
   const float inertia = motion.inertia;
-  const std::size_t n = lattice.target_points.size();
+  const auto slices = std::size_t(counts.x);
+  // The forcing is affine in the point and taken per slice (LatticeMotion): its value at each slice's centre.
+  Slices centre, force_at_start, force_at_end;
+  slice_means(lattice.target_points, counts, centre);
+  for (std::size_t i = 0; i < slices; ++i) force_at_start[i] = gravity_before, force_at_end[i] = gravity_now;
   if (dt > 0.0f && rate != nullptr && inertia > 0.0f) {
     // The rest moves along the cubic through its positions and velocities at the two ends: its acceleration is linear
     // over the step, which the exact integrator follows exactly. The cubic's end accelerations are linear in the
@@ -386,28 +402,27 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     const glm::mat4 end = (2.0f * rate_before + 4.0f * *rate) * (1.0f / h) - chord;
     const glm::mat4 force_start = glm::mat4(-inertia * inverse_before) * start;  // rows 0-2 used, bottom row 0
     const glm::mat4 force_end = glm::mat4(-inertia * inverse_now) * end;
-    for (std::size_t i = 0; i < n; ++i) {
-      const glm::vec4 x(lattice.target_points[i], 1.0f);
-      lattice.accel_start[i] = gravity_before + glm::vec3(force_start * x);
-      lattice.accel_end[i] = gravity_now + glm::vec3(force_end * x);
+    for (std::size_t i = 0; i < slices; ++i) {
+      const glm::vec4 x(centre[i], 1.0f);
+      force_at_start[i] += glm::vec3(force_start * x);
+      force_at_end[i] += glm::vec3(force_end * x);
     }
-  } else {
+  } else if (dt > 0.0f && inertia > 0.0f) {
     // The rest moves linearly within the step: its velocity changes at the step's start, an impulse of minus λ times
-    // that change on the points' velocities (in the bone's frame).
-    if (dt > 0.0f && inertia > 0.0f) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const glm::vec4 x(lattice.target_points[i], 1.0f);
-        const glm::vec3 velocity = glm::vec3(now * x - before * x) / dt;
-        const glm::vec3 change = lattice.rest_velocity_known ? velocity - lattice.rest_velocity[i] : glm::vec3(0.0f);
-        lattice.accel_start[i] = -inertia * (inverse_before * change);
-        lattice.rest_velocity[i] = velocity;
-      }
-      split_slices(lattice.accel_start, counts, lattice.axis, far_weight, along_start);
-      lattice.elastic.add_velocity(lattice.accel_start);
-      for (std::size_t i = 1; i < std::size_t(counts.x); ++i) lattice.along_velocity[i] += along_start[i];
+    // that change on the points' velocities (in the bone's frame); per slice, as the forcing.
+    Slices impulse;
+    std::array<float, max_bezier_degree + 1> along_impulse{};
+    for (std::size_t i = 0; i < slices; ++i) {
+      const glm::vec4 x(centre[i], 1.0f);
+      const glm::vec3 velocity = glm::vec3(now * x - before * x) / dt;
+      const glm::vec3 change = lattice.rest_velocity_known ? velocity - lattice.rest_velocity[i] : glm::vec3(0.0f);
+      impulse[i] = -inertia * (inverse_before * change);
+      lattice.rest_velocity[i] = velocity;
     }
-    std::fill(lattice.accel_start.begin(), lattice.accel_start.end(), gravity_before);
-    std::fill(lattice.accel_end.begin(), lattice.accel_end.end(), gravity_now);
+    split_slices(impulse, slices, lattice.axis, far_weight, along_impulse);
+    fill_slices(lattice.accel_start, slices, impulse);
+    lattice.elastic.add_velocity(lattice.accel_start);
+    for (std::size_t i = 1; i < slices; ++i) lattice.along_velocity[i] += along_impulse[i];
   }
   if (dt > 0.0f) {
     lattice.motion_world = now;
@@ -420,8 +435,10 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
     if (rate != nullptr) lattice.motion_rate = *rate;
     lattice.rest_velocity_known = false;
   }
-  split_slices(lattice.accel_start, counts, lattice.axis, far_weight, along_start);
-  split_slices(lattice.accel_end, counts, lattice.axis, far_weight, along_end);
+  split_slices(force_at_start, slices, lattice.axis, far_weight, along_start);
+  split_slices(force_at_end, slices, lattice.axis, far_weight, along_end);
+  fill_slices(lattice.accel_start, slices, force_at_start);
+  fill_slices(lattice.accel_end, slices, force_at_end);
   step_along(lattice, dt, along_start, along_end);
   return lattice.elastic.step(dt, lattice.target_points, lattice.accel_start, lattice.accel_end);
 }

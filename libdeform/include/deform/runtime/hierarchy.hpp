@@ -321,8 +321,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     mutable std::vector<glm::vec3> world_points;  // for drawing, computed by control_points()
     glm::mat4 bone_world{1.0f};            // the bone's world matrix as of update()
     glm::mat3 linear{1.0f};                // the bone's world 3×3 (rotation, with any scale)
-    // Secondary motion (step with world): the bone's matrix and rate at the last step, each control point's world
-    // rest velocity over the last step (linear motion), and this step's accelerations in the bone's frame.
+    // Secondary motion (step with world): the bone's matrix and rate at the last step, each slice centre's world
+    // rest velocity over the last step (linear motion; the first point_counts().x entries), and this step's
+    // accelerations in the bone's frame, per control point (its slice's).
     glm::mat4 motion_world{1.0f};
     glm::mat4 motion_rate{0.0f};
     bool motion_known = false;
