@@ -91,12 +91,19 @@ void bind_character(py::module_& m) {
           "set_lattice_motion",
           [](deform::Character& c, float inertia, const std::optional<FloatArray>& gravity, float units_per_metre,
              std::optional<std::size_t> lattice) {
-            deform::LatticeMotion motion{inertia, gravity ? to_vec3(*gravity, "gravity") : glm::vec3(0.0f), units_per_metre};
+            const glm::vec3 pull = gravity ? to_vec3(*gravity, "gravity") : glm::vec3(0.0f);
             const std::size_t count = c.deformers().lattice_count();
             if (lattice && *lattice >= count)
               throw deform::Error::invalid_argument("lattice " + std::to_string(*lattice), "lattice out of range");
+            // Inertia and gravity change; each lattice keeps its along-bone bound and far-face share.
+            const auto with = [&](deform::LatticeMotion motion) {
+              motion.inertia = inertia, motion.gravity = pull, motion.units_per_metre = units_per_metre;
+              return motion;
+            };
             for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
-              c.deformers().set_motion(l, motion);
+              deform::validate_motion(with(c.deformers().spec(l).motion));  // before any lattice changes
+            for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
+              c.deformers().set_motion(l, with(c.deformers().spec(l).motion));
           },
           py::arg("inertia"), py::arg("gravity") = py::none(), py::arg("units_per_metre") = 1.0f,
           py::arg("lattice") = py::none(),

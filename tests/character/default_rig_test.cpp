@@ -312,7 +312,13 @@ TEST_CASE("the built-in character, its names taken away, gets its every-limb rig
   for (const deform::Model* model : {&builtin, static_cast<const deform::Model*>(&renamed)}) {
     const deform::Rig rig = deform::default_rig(*model);
     REQUIRE(rig.lattices.size() == full.lattices.size());
-    for (std::size_t i = 0; i < full.lattices.size(); ++i) CHECK(rig.lattices[i].bone == full.lattices[i].bone);
+    for (std::size_t i = 0; i < full.lattices.size(); ++i) {
+      CHECK(rig.lattices[i].bone == full.lattices[i].bone);
+      // The part found from the structure moves as the named part does (default_lattice_motion), still at rest.
+      CHECK(rig.lattices[i].motion.along_bound == full.lattices[i].motion.along_bound);
+      CHECK(rig.lattices[i].motion.far_share == full.lattices[i].motion.far_share);
+      CHECK(rig.lattices[i].motion.inertia == 0.0f);
+    }
     CHECK(rig.reach_effector == full.reach_effector);
     CHECK(rig.reach_root == full.reach_root);
     const deform::RigSurvey survey = deform::survey_rig(*model);

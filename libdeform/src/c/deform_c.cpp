@@ -199,12 +199,18 @@ deform_status deform_character_set_lattice_motion(deform_character* character, s
   const bool all = lattice == DEFORM_ALL_LATTICES;
   if (!all && lattice >= lattices.lattice_count())
     return fail_argument("deform_character_set_lattice_motion: lattice out of range");
-  const deform::LatticeMotion motion{
-      inertia, gravity != nullptr ? glm::vec3(gravity[0], gravity[1], gravity[2]) : glm::vec3(0.0f), units_per_metre};
+  // Inertia and gravity change; each lattice keeps its own along-bone bound and far-face share (its part's tuning).
+  const auto with = [&](deform::LatticeMotion motion) {
+    motion.inertia = inertia;
+    motion.gravity = gravity != nullptr ? glm::vec3(gravity[0], gravity[1], gravity[2]) : glm::vec3(0.0f);
+    motion.units_per_metre = units_per_metre;
+    return motion;
+  };
   return guarded([&] {
-    deform::validate_motion(motion);  // before any lattice changes
     for (std::size_t l = all ? 0 : lattice; l < (all ? lattices.lattice_count() : lattice + 1); ++l)
-      lattices.set_motion(l, motion);
+      deform::validate_motion(with(lattices.spec(l).motion));  // before any lattice changes
+    for (std::size_t l = all ? 0 : lattice; l < (all ? lattices.lattice_count() : lattice + 1); ++l)
+      lattices.set_motion(l, with(lattices.spec(l).motion));
     return DEFORM_OK;
   });
 }

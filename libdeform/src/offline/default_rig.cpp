@@ -582,14 +582,24 @@ Rig default_rig(const Model& model, std::int32_t effector) {
         weighted[model.weights.bones[p][i]] = true;
 
   Rig rig;
-  const auto add_lattice = [&](std::int32_t bone) {
+  const auto add_lattice = [&](std::int32_t bone, BodyPart part) {
     for (const LatticeSpec& spec : rig.lattices)
       if (spec.bone == bone) return;
     LatticeSpec spec;
     spec.name = skeleton.key(bone);
     spec.bone = bone;
     spec.elastic.oscillator = {150.0f, 0.2f, 1.0f};  // the built-in rig's rubber: about 2 Hz, under-damped
+    // Flesh when it moves, as the built-in rigs: the part's bound and far-face share, at no inertia until asked.
+    spec.motion = default_lattice_motion(part);
+    spec.motion.inertia = 0.0f;
     rig.lattices.push_back(std::move(spec));
+  };
+  // A limb's lattice bones run upper, lower, end: the end is a hand or foot (a neck's, its head).
+  const auto part_of = [](const Limb& limb, std::size_t i) {
+    const bool end = limb.lattices[i] == limb.chain.back();
+    if (limb.kind == LimbKind::neck) return end ? BodyPart::head : BodyPart::torso;
+    if (end) return limb.kind == LimbKind::arm ? BodyPart::hand : BodyPart::foot;
+    return i + 2 == limb.lattices.size() ? BodyPart::lower_limb : BodyPart::upper_limb;
   };
   for (const Limb& limb : survey.limbs) {
     if (limb.kind == LimbKind::tail) {
@@ -601,7 +611,7 @@ Rig default_rig(const Model& model, std::int32_t effector) {
       rig.spring_chains.push_back(std::move(tail));
       continue;
     }
-    for (const std::int32_t bone : limb.lattices) add_lattice(bone);
+    for (std::size_t i = 0; i < limb.lattices.size(); ++i) add_lattice(limb.lattices[i], part_of(limb, i));
     const std::int32_t end = limb.chain.back(), root = limb.chain.front();
     if (rig.reach_effector < 0 && root != end) {
       rig.reach_effector = end;
@@ -624,7 +634,10 @@ Rig default_rig(const Model& model, std::int32_t effector) {
         own.insert(own.begin(), b);
         top = b;
       }
-      for (const std::int32_t b : own) add_lattice(b);
+      for (std::size_t i = 0; i < own.size(); ++i)  // upper, lower, then the chosen end (a hand, say)
+        add_lattice(own[i], i + 1 == own.size()   ? BodyPart::hand
+                            : i + 2 == own.size() ? BodyPart::lower_limb
+                                                  : BodyPart::upper_limb);
       const std::int32_t root = top >= 0 && skeleton.bone(top).parent >= 0 ? skeleton.bone(top).parent : top;
       if (rig.reach_effector >= 0 && rig.reach_effector != effector)
         rig.reach_chains.push_back({rig.reach_effector, rig.reach_root});
