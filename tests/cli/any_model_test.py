@@ -78,27 +78,31 @@ for name, path in candidates:
     if bake:
         check(bake["frames"] == 3, f"{name}: bake wrote {bake['frames']} frames, not 3")
     # --- a saved rig that names its model by file, relative to the rig's folder ---
+    # The model lies outside the rig's folder: read only where the run allows its folder (docs/security.md).
+    allow = ["--allow-outside", os.path.dirname(os.path.abspath(path))]
     os.makedirs(os.path.join(work, "rigs"), exist_ok=True)
     rig = {"rig": 1, "model": {"file": os.path.relpath(path, os.path.join(work, "rigs"))},
            "reach": {"effector": chain[-1], "root": chain[0]}, "lattices": []}
     with open(os.path.join(work, "rigs", f"{name}.rig.json"), "w") as f:
         json.dump(rig, f)
-    from_rig = deform("ik", f"rigs/{name}.rig.json", "--target", "0,0,0")
+    rejected("key 'model.file': refused, outside", "ik", f"rigs/{name}.rig.json", "--target", "0,0,0")
+    from_rig = deform("ik", f"rigs/{name}.rig.json", "--target", "0,0,0", *allow)
     if from_rig:
         check(from_rig["bones"] == default["bones"], f"{name}: ik on the rig file differs from the default chain")
     shutil.copy(os.path.join(work, "rigs", f"{name}.rig.json"), os.path.join(work, "rigs", f"{name}.rig"))
-    from_rig = deform("ik", f"rigs/{name}.rig", "--target", "0,0,0")  # a rig by its content, not its name
+    from_rig = deform("ik", f"rigs/{name}.rig", "--target", "0,0,0", *allow)  # a rig by its content, not its name
     if from_rig:
         check(from_rig["bones"] == default["bones"], f"{name}: ik on {name}.rig differs from the default chain")
     saved = f"rigs/{name}.rig.json"
     for args in ([saved], ["--rig", saved], [path, "--rig", saved]):
-        sim = deform("simulate", *args, "--target", target, "--seconds", "0.1", "--dt", "0.05")
+        sim = deform("simulate", *args, "--target", target, "--seconds", "0.1", "--dt", "0.05", *allow)
         if sim:
             check(len(sim["samples"]) == 3, f"{name}: simulate {' '.join(args)}: {len(sim['samples'])} samples")
     # `simulate --save-rig` writes the rig as run, naming its model: the file alone runs the same simulation.
     first = deform("simulate", path, "--target", target, "--inertia", "0.5", "--seconds", "0.2", "--dt", "0.05",
                    "--save-rig", f"rigs/{name}-saved.rig.json")
-    again = deform("simulate", f"rigs/{name}-saved.rig.json", "--target", target, "--seconds", "0.2", "--dt", "0.05")
+    again = deform("simulate", f"rigs/{name}-saved.rig.json", "--target", target, "--seconds", "0.2", "--dt", "0.05",
+                   *allow)
     check(first is not None and first == again, f"{name}: simulate of the saved rig differs from the run that saved it")
     with open(os.path.join(work, "rigs", f"{name}-saved.rig.json")) as f:
         saved = json.load(f)
