@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <limits>
 #include <memory>
 #include <type_traits>
@@ -266,7 +267,7 @@ TEST_CASE("release: the stretch springs back as a damped oscillation and settles
   REQUIRE(extremes.size() >= 4);
   const double zeta = 0.2;
   CHECK(-extremes[0] / result.stretch ==
-        doctest::Approx(std::exp(-zeta * M_PI / std::sqrt(1 - zeta * zeta))).epsilon(0.02));
+        doctest::Approx(std::exp(-zeta * std::numbers::pi / std::sqrt(1 - zeta * zeta))).epsilon(0.02));
   for (std::size_t n = 1; n < extremes.size(); ++n) {
     CHECK(extremes[n] * extremes[n - 1] < 0.0f);
     CHECK(std::abs(extremes[n]) < std::abs(extremes[n - 1]));

@@ -89,6 +89,7 @@ TEST_CASE("referenced files: '..', absolute paths and percent-encoding out of th
   CHECK(refusal(tree.referrer, "inside.mtl%00/../../secret.txt", "images[0].uri", {}, ReferenceSyntax::uri) != "");
 }
 
+#ifndef _WIN32  // symbolic links on Windows need a privilege the tests do not have (and mingw's library makes none)
 TEST_CASE("referenced files: symbolic links are followed before the test") {
   const Tree tree;
   fs::create_symlink(tree.root / "secret.txt", tree.model / "link.txt");
@@ -104,6 +105,7 @@ TEST_CASE("referenced files: symbolic links are followed before the test") {
   fs::create_symlink(tree.model / "inside.mtl", tree.model / "alias.mtl");
   CHECK(resolve_referenced_file(tree.referrer, "alias.mtl", "mtllib") == tree.canonical(tree.model / "inside.mtl"));
 }
+#endif
 
 TEST_CASE("referenced files: allow_outside widens the rule on purpose, and only by the folders it names") {
   const Tree tree;

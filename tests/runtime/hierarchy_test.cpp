@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <random>
 #include <cmath>
+#include <numbers>
 #include <glm/gtc/matrix_transform.hpp>
 #include <vector>
 
@@ -50,7 +51,7 @@ Limb make_limb() {
   for (int r = 0; r < rings; ++r) {
     const float y = 0.05f * float(r);
     for (int a = 0; a < ring_points; ++a) {
-      const float angle = 2.0f * float(M_PI) * float(a) / ring_points;
+      const float angle = 2.0f * float(std::numbers::pi) * float(a) / ring_points;
       limb.points.emplace_back(0.2f * std::cos(angle), y, 0.2f * std::sin(angle));
       const int below = std::clamp(int(std::floor(y)), 0, 3);
       float upper_weight = 0.0f;  // weight of bone below+1 near the joint above
@@ -534,7 +535,7 @@ Tube make_tube() {
   for (int r = 0; r < along; ++r) {
     const float y = 0.52f + 0.96f * float(r) / float(along - 1);
     for (int a = 0; a < around; ++a) {
-      const float angle = 2.0f * float(M_PI) * float(a) / around;
+      const float angle = 2.0f * float(std::numbers::pi) * float(a) / around;
       tube.points.emplace_back(0.2f * std::cos(angle), y, 0.2f * std::sin(angle));
     }
   }

@@ -6,6 +6,8 @@
 // A crash or a hang is what the parent is there for; on Linux the worker also ends by itself when the parent dies
 // (PR_SET_PDEATHSIG, SIGKILL: a parent killed by kill -9 or the OOM killer leaves no importer running) and when it
 // has used S seconds of CPU (RLIMIT_CPU: the parent's deadline, kept even by a worker the parent can no longer stop).
+// On Windows the parent's job object holds the memory and CPU limits and ends the worker with the parent
+// (import_isolated.cpp); the worker sets nothing itself.
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -13,12 +15,16 @@
 #include <string>
 #include <string_view>
 
-#include <csignal>
-
-#include <sys/resource.h>
-#include <unistd.h>
+#ifdef _WIN32
+#  include <fcntl.h>
+#  include <io.h>
+#else
+#  include <csignal>
+#  include <sys/resource.h>
+#  include <unistd.h>
+#endif
 #ifdef __linux__
-#include <sys/prctl.h>
+#  include <sys/prctl.h>
 #endif
 
 #include "deform/import/import.hpp"
@@ -39,6 +45,7 @@ constexpr bool sanitized = false;
 constexpr bool sanitized = false;
 #endif
 
+#ifndef _WIN32
 void limit(int resource, unsigned long long bytes) {
   rlimit value{static_cast<rlim_t>(bytes), static_cast<rlim_t>(bytes)};
   rlimit current{};
@@ -47,7 +54,7 @@ void limit(int resource, unsigned long long bytes) {
   ::setrlimit(resource, &value);
 }
 
-// Ties the worker's life to the parent's (Linux; the portability work brings Windows job objects). The parent-death
+// Ties the worker's life to the parent's (Linux; on Windows the parent's job object does). The parent-death
 // signal is checked against a race: a parent that died before prctl() took effect has already re-parented this
 // process, and getppid() no longer names it. The CPU limit is the wall-clock limit rounded up: SIGXCPU at it, SIGKILL a
 // second later if SIGXCPU is caught (Assimp does not catch it).
@@ -71,9 +78,16 @@ void tie_to_parent(long long parent, unsigned long long cpu_seconds) {
 #endif
 }
 
+#endif
+
 volatile unsigned long long test_spins = 0;  // DEFORM_IMPORT_WORKER_TEST_SPIN's counter
 
 bool write_all(const std::vector<std::uint8_t>& bytes) {
+#ifdef _WIN32
+  // Bytes as they are: no CR inserted before each LF.
+  if (_setmode(_fileno(stdout), _O_BINARY) == -1) return false;
+  return std::fwrite(bytes.data(), 1, bytes.size(), stdout) == bytes.size() && std::fflush(stdout) == 0;
+#else
   std::size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(STDOUT_FILENO, bytes.data() + done, bytes.size() - done);
@@ -81,6 +95,7 @@ bool write_all(const std::vector<std::uint8_t>& bytes) {
     done += static_cast<std::size_t>(n);
   }
   return true;
+#endif
 }
 
 }  // namespace
@@ -117,9 +132,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "deform-import-worker: no file\n");
     return 1;
   }
+#ifdef _WIN32
+  (void)stack;
+  (void)cpu_seconds;
+  (void)parent;
+  (void)sanitized;
+#else
   tie_to_parent(parent, cpu_seconds);
   if (memory > 0 && !sanitized) limit(RLIMIT_AS, memory);
   if (stack > 0) limit(RLIMIT_STACK, stack);
+#endif
   // Testing only (tests/cli/outputs_test.py): spin on the CPU, as Assimp looping on a hostile file does, until a
   // limit or the parent's death ends the process.
   const char* spin = std::getenv("DEFORM_IMPORT_WORKER_TEST_SPIN");

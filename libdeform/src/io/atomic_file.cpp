@@ -1,4 +1,4 @@
-// Bounded whole-file reads and atomic writes (POSIX).
+// Bounded whole-file reads and atomic writes: POSIX, and Windows through its own API (wide paths, MoveFileExW).
 #include "deform/io/atomic_file.hpp"
 
 #include <cerrno>
@@ -7,9 +7,19 @@
 #include <filesystem>
 #include <random>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#ifdef _WIN32
+#  ifndef NOMINMAX
+#    define NOMINMAX
+#  endif
+#  ifndef WIN32_LEAN_AND_MEAN
+#    define WIN32_LEAN_AND_MEAN
+#  endif
+#  include <windows.h>
+#else
+#  include <fcntl.h>
+#  include <sys/stat.h>
+#  include <unistd.h>
+#endif
 
 #include "deform/runtime/error.hpp"
 
@@ -17,6 +27,160 @@ namespace deform {
 namespace {
 
 namespace fs = std::filesystem;
+
+// A path from its UTF-8 bytes (every path in the API is UTF-8): on Windows the wide path the system calls take,
+// elsewhere the bytes unchanged.
+fs::path native_path(const std::string& path) { return fs::path(std::u8string(path.begin(), path.end())); }
+
+// A path back to UTF-8 bytes.
+std::string utf8(const fs::path& path) {
+  const std::u8string text = path.u8string();
+  return std::string(text.begin(), text.end());
+}
+
+// ---- The file-system primitives, one copy per system. Each returns false on failure with errno set to the reason
+// (on Windows the system's error translated, see errno_from_windows), so the steps above them are shared. ----
+
+enum class FileKind { missing, regular, directory, other };
+
+struct FileStatus {
+  FileKind kind = FileKind::missing;
+#ifndef _WIN32
+  struct stat info {};  // a regular file's mode and owner, kept by its replacement
+#endif
+};
+
+#ifdef _WIN32
+
+// The errno closest to a Windows error, for the messages and the input/environment split of system_error.
+int errno_from_windows(DWORD code) {
+  switch (code) {
+    case ERROR_FILE_NOT_FOUND:
+    case ERROR_PATH_NOT_FOUND:
+    case ERROR_INVALID_DRIVE:
+    case ERROR_BAD_NETPATH:
+    case ERROR_BAD_NET_NAME:
+    case ERROR_INVALID_NAME:
+      return ENOENT;
+    case ERROR_DIRECTORY:
+      return ENOTDIR;
+    case ERROR_FILENAME_EXCED_RANGE:
+      return ENAMETOOLONG;
+    case ERROR_CANT_RESOLVE_FILENAME:
+      return ELOOP;
+    case ERROR_FILE_EXISTS:
+    case ERROR_ALREADY_EXISTS:
+      return EEXIST;
+    case ERROR_ACCESS_DENIED:
+    case ERROR_SHARING_VIOLATION:
+    case ERROR_LOCK_VIOLATION:
+    case ERROR_WRITE_PROTECT:
+      return EACCES;
+    case ERROR_DISK_FULL:
+    case ERROR_HANDLE_DISK_FULL:
+      return ENOSPC;
+    case ERROR_NOT_SAME_DEVICE:
+      return EXDEV;
+    case ERROR_NOT_ENOUGH_MEMORY:
+    case ERROR_OUTOFMEMORY:
+      return ENOMEM;
+    case ERROR_NOT_SUPPORTED:
+    case ERROR_INVALID_FUNCTION:
+      return ENOSYS;
+    default:
+      return EIO;
+  }
+}
+
+bool failed_windows() {
+  errno = errno_from_windows(GetLastError());
+  return false;
+}
+
+// Closes a handle on every path out of a scope.
+struct Handle {
+  HANDLE h = INVALID_HANDLE_VALUE;
+  ~Handle() {
+    if (h != INVALID_HANDLE_VALUE) CloseHandle(h);
+  }
+};
+
+// FILE_SHARE_DELETE: a file this process reads can still be replaced by another's MoveFileExW.
+constexpr DWORD share_all = FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELETE;
+
+FileStatus file_status(const std::string& path) {
+  FileStatus status;
+  const DWORD attributes = GetFileAttributesW(native_path(path).c_str());
+  if (attributes == INVALID_FILE_ATTRIBUTES) return status;
+  if (attributes & FILE_ATTRIBUTE_DIRECTORY) {
+    status.kind = FileKind::directory;
+    return status;
+  }
+  // A name the console or a device answers to (NUL, CON) has attributes but is no disk file.
+  Handle file{CreateFileW(native_path(path).c_str(), 0, share_all, nullptr, OPEN_EXISTING, 0, nullptr)};
+  status.kind = file.h == INVALID_HANDLE_VALUE || GetFileType(file.h) == FILE_TYPE_DISK ? FileKind::regular
+                                                                                         : FileKind::other;
+  return status;
+}
+
+bool exists_no_follow(const std::string& path) {
+  return GetFileAttributesW(native_path(path).c_str()) != INVALID_FILE_ATTRIBUTES;
+}
+
+// Replaces `to` by `from` in one step; MOVEFILE_WRITE_THROUGH returns once the move is on the disk.
+bool rename_over(const std::string& from, const std::string& to) {
+  return MoveFileExW(native_path(from).c_str(), native_path(to).c_str(),
+                     MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH) != 0 ||
+         failed_windows();
+}
+
+// Moves `from` to `to`, which must not exist (a temporary or backup name; never replaces a file).
+bool rename_new(const std::string& from, const std::string& to) {
+  return MoveFileExW(native_path(from).c_str(), native_path(to).c_str(), MOVEFILE_WRITE_THROUGH) != 0 ||
+         failed_windows();
+}
+
+bool hard_link(const std::string& existing, const std::string& link) {
+  return CreateHardLinkW(native_path(link).c_str(), native_path(existing).c_str(), nullptr) != 0 || failed_windows();
+}
+
+bool remove_file(const std::string& path) { return DeleteFileW(native_path(path).c_str()) != 0 || failed_windows(); }
+
+// Windows files carry no POSIX mode or owner: a replacement gets the folder's inherited permissions, as any new file.
+bool keep_mode_and_owner(const std::string&, const FileStatus&) { return true; }
+
+// A new file opened for writing, created only if nothing has the name.
+struct NewFile {
+  Handle file;
+  bool create(const std::string& path) {
+    file.h = CreateFileW(native_path(path).c_str(), GENERIC_WRITE, 0, nullptr, CREATE_NEW, FILE_ATTRIBUTE_NORMAL,
+                         nullptr);
+    return file.h != INVALID_HANDLE_VALUE || failed_windows();
+  }
+  bool write(const std::uint8_t* data, std::size_t size) {
+    while (size > 0) {
+      const DWORD chunk = static_cast<DWORD>(std::min<std::size_t>(size, 1u << 30));
+      DWORD written = 0;
+      if (!WriteFile(file.h, data, chunk, &written, nullptr)) return failed_windows();
+      if (written == 0) {
+        errno = EIO;
+        return false;
+      }
+      data += written;
+      size -= written;
+    }
+    return true;
+  }
+  bool keep(const FileStatus&) { return true; }
+  bool sync() { return FlushFileBuffers(file.h) != 0 || failed_windows(); }
+  bool close() {
+    const HANDLE h = file.h;
+    file.h = INVALID_HANDLE_VALUE;
+    return CloseHandle(h) != 0 || failed_windows();
+  }
+};
+
+#else  // POSIX
 
 std::string errno_text() { return std::strerror(errno); }
 
@@ -38,6 +202,59 @@ bool write_all(int fd, const std::uint8_t* data, std::size_t size) {
   }
   return true;
 }
+
+FileStatus file_status(const std::string& path) {
+  FileStatus status;
+  if (::stat(path.c_str(), &status.info) != 0) return status;
+  status.kind = S_ISREG(status.info.st_mode)   ? FileKind::regular
+                : S_ISDIR(status.info.st_mode) ? FileKind::directory
+                                               : FileKind::other;
+  return status;
+}
+
+bool exists_no_follow(const std::string& path) {
+  struct stat info {};
+  return ::lstat(path.c_str(), &info) == 0;
+}
+
+bool rename_over(const std::string& from, const std::string& to) { return ::rename(from.c_str(), to.c_str()) == 0; }
+
+bool rename_new(const std::string& from, const std::string& to) { return ::rename(from.c_str(), to.c_str()) == 0; }
+
+bool hard_link(const std::string& existing, const std::string& link) {
+  return ::link(existing.c_str(), link.c_str()) == 0;
+}
+
+bool remove_file(const std::string& path) { return ::unlink(path.c_str()) == 0; }
+
+// Keeps the replaced file's permissions, and its owner where this process may set it (root, or the same owner).
+bool keep_mode_and_owner(const std::string& file, const FileStatus& existing) {
+  return ::chmod(file.c_str(), existing.info.st_mode & 07777) == 0 &&
+         (::chown(file.c_str(), existing.info.st_uid, existing.info.st_gid) == 0 || errno == EPERM);
+}
+
+// A new file opened for writing, created only if nothing has the name.
+struct NewFile {
+  Descriptor out;
+  bool create(const std::string& path) {
+    out.fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    return out.fd >= 0;
+  }
+  bool write(const std::uint8_t* data, std::size_t size) { return write_all(out.fd, data, size); }
+  // As keep_mode_and_owner, through the open descriptor.
+  bool keep(const FileStatus& existing) {
+    return ::fchmod(out.fd, existing.info.st_mode & 07777) == 0 &&
+           (::fchown(out.fd, existing.info.st_uid, existing.info.st_gid) == 0 || errno == EPERM);
+  }
+  bool sync() { return ::fsync(out.fd) == 0; }
+  bool close() {
+    const int fd = out.fd;
+    out.fd = -1;
+    return ::close(fd) == 0;
+  }
+};
+
+#endif
 
 // The failure injection of inject_file_failure_for_testing: the step numbered `steps_until_failure` fails.
 long steps_until_failure = -1;
@@ -65,6 +282,78 @@ Error system_error(const std::string& path, const std::string& what, int code) {
   return Error::environment(path, message);
 }
 
+#ifdef _WIN32
+
+// Writes a target that is no disk file (a device such as NUL or CON, a named pipe) in place.
+void write_direct(const std::string& target, const std::string& named, const std::vector<std::uint8_t>& data) {
+  NewFile out;
+  out.file.h = CreateFileW(native_path(target).c_str(), GENERIC_WRITE, share_all, nullptr, OPEN_EXISTING,
+                           FILE_ATTRIBUTE_NORMAL, nullptr);
+  if (out.file.h == INVALID_HANDLE_VALUE) {
+    failed_windows();
+    throw system_error(named, "cannot open for writing", errno);
+  }
+  if (!out.write(data.data(), data.size())) throw system_error(named, "write failed", errno);
+}
+
+// The file an output path names. Windows resolves symbolic links and junctions itself when a file is opened; a
+// rename replaces the name given (a link is replaced, not its target).
+std::string output_target(const std::string& path) { return path; }
+
+template <class Container>
+Container read_all(const std::string& path, std::uint64_t max_bytes) {
+  // FILE_FLAG_BACKUP_SEMANTICS opens a folder too, so that it is reported as one.
+  Handle file{CreateFileW(native_path(path).c_str(), GENERIC_READ, share_all, nullptr, OPEN_EXISTING,
+                          FILE_FLAG_BACKUP_SEMANTICS, nullptr)};
+  if (file.h == INVALID_HANDLE_VALUE) {
+    failed_windows();
+    throw system_error(path, "cannot open for reading", errno);
+  }
+  BY_HANDLE_FILE_INFORMATION info{};
+  if (GetFileType(file.h) == FILE_TYPE_DISK && GetFileInformationByHandle(file.h, &info) &&
+      (info.dwFileAttributes & FILE_ATTRIBUTE_DIRECTORY))
+    throw Error::in_file(path, "", "is a directory, not a file");
+  if (GetFileType(file.h) != FILE_TYPE_DISK)
+    throw Error::in_file(path, "", "is not a regular file (a device, pipe or console)");
+  LARGE_INTEGER bytes{};
+  if (!GetFileSizeEx(file.h, &bytes)) {
+    failed_windows();
+    throw Error::in_file(path, "", std::string("cannot read its attributes: ") + std::strerror(errno));
+  }
+  const auto size = static_cast<std::uint64_t>(bytes.QuadPart);
+  if (size > max_bytes)
+    throw Error::in_file(path, "", "file is " + std::to_string(size) + " bytes, more than the limit of " +
+                                       std::to_string(max_bytes));
+  Container data(static_cast<std::size_t>(size), {});
+  std::size_t done = 0;
+  while (done < data.size()) {  // a file that shrinks while read ends early; one that grows is read to `size`
+    const DWORD chunk = static_cast<DWORD>(std::min<std::size_t>(data.size() - done, 1u << 30));
+    DWORD got = 0;
+    if (!ReadFile(file.h, reinterpret_cast<char*>(data.data()) + done, chunk, &got, nullptr)) {
+      failed_windows();
+      throw Error::in_file(path, "", std::string("read failed: ") + std::strerror(errno));
+    }
+    if (got == 0) break;
+    done += got;
+  }
+  data.resize(done);
+  return data;
+}
+
+#else  // POSIX
+
+// Writes a device or FIFO in place.
+void write_direct(const std::string& target, const std::string& named, const std::vector<std::uint8_t>& data) {
+  // O_NONBLOCK: a FIFO without a reader is refused (ENXIO) instead of blocking this process for ever.
+  Descriptor out{::open(target.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK)};
+  if (out.fd < 0 && errno == ENXIO)
+    throw Error::environment(named, "is a FIFO that no process reads: nothing written");
+  if (out.fd < 0) throw system_error(named, "cannot open for writing", errno);
+  const int flags = ::fcntl(out.fd, F_GETFL);
+  if (flags < 0 || ::fcntl(out.fd, F_SETFL, flags & ~O_NONBLOCK) != 0)
+    throw system_error(named, "cannot open for writing", errno);
+  if (!write_all(out.fd, data.data(), data.size())) throw system_error(named, "write failed", errno);
+}
 // The file an output path names. An existing regular file: the path with every symbolic link resolved (its temporary
 // file goes beside the real file). Anything else that exists (a device, a FIFO, /dev/stdout's link to a pipe, a
 // folder): the path as given, opened through its links. Nothing there: symbolic links followed, dangling or not (a
@@ -116,6 +405,8 @@ Container read_all(const std::string& path, std::uint64_t max_bytes) {
   return data;
 }
 
+#endif
+
 }  // namespace
 
 std::vector<std::uint8_t> read_file_bytes(const std::string& path, std::uint64_t max_bytes) {
@@ -142,7 +433,7 @@ long file_steps_for_testing() { return steps_taken; }
 FileTransaction::~FileTransaction() {
   if (committed_) return;
   for (const Entry& entry : entries_)
-    if (!entry.temp.empty()) ::unlink(entry.temp.c_str());
+    if (!entry.temp.empty()) remove_file(entry.temp);
 }
 
 void FileTransaction::stage(const std::string& path, std::string_view text) {
@@ -152,7 +443,7 @@ void FileTransaction::stage(const std::string& path, std::string_view text) {
 void FileTransaction::stage_written(const std::string& path, const std::string& written) {
   struct Remove {
     const std::string& file;
-    ~Remove() { ::unlink(file.c_str()); }
+    ~Remove() { remove_file(file); }
   } consumed{written};
   const std::size_t before = entries_.size();
   stage(path, {}, &written);
@@ -172,10 +463,10 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
   for (const Entry& other : entries_)
     if (fs::absolute(other.target, ec).lexically_normal() == same)
       throw Error::in_file(path, "", "names the same file as " + other.named + ", another output of this run");
-  struct stat existing {};
-  entry.existed = ::stat(entry.target.c_str(), &existing) == 0;
-  if (entry.existed && S_ISDIR(existing.st_mode)) throw Error::in_file(path, "", "is a directory, not a file");
-  if (entry.existed && !S_ISREG(existing.st_mode)) {  // a device or FIFO: written directly by commit()
+  const FileStatus existing = file_status(entry.target);
+  entry.existed = existing.kind != FileKind::missing;
+  if (existing.kind == FileKind::directory) throw Error::in_file(path, "", "is a directory, not a file");
+  if (existing.kind == FileKind::other) {  // a device or FIFO: written directly by commit()
     entry.existed = false;
     entry.direct.assign(data.begin(), data.end());
     entries_.push_back(std::move(entry));
@@ -184,17 +475,16 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
 
   // A temporary file beside the target, named so that one left by a killed process is recognisable:
   // .NAME.deform-tmp-NUMBER (docs/reliability.md).
-  const fs::path target(entry.target);
+  const fs::path target = native_path(entry.target);
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  Descriptor out;
+  const std::string temp_prefix = "." + utf8(target.filename()) + ".deform-tmp-";
   if (injected_failure()) throw system_error(path, "cannot create a temporary file beside it", errno);
   if (written != nullptr) {  // already written: moved beside the target under a temporary name, or copied there
     bool moved = false;
     for (int attempt = 0; attempt < 16 && !moved; ++attempt) {
-      entry.temp = (folder / ("." + target.filename().string() + ".deform-tmp-" + random_suffix())).string();
-      struct stat taken {};
-      if (::lstat(entry.temp.c_str(), &taken) == 0) continue;
-      if (::rename(written->c_str(), entry.temp.c_str()) == 0) {
+      entry.temp = utf8(folder / native_path(temp_prefix + random_suffix()));
+      if (exists_no_follow(entry.temp)) continue;
+      if (rename_new(*written, entry.temp)) {
         moved = true;
       } else if (errno == EXDEV) {
         stage(path, read_file_bytes(*written), nullptr);
@@ -204,23 +494,22 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
       }
     }
     if (!moved) throw system_error(path, "cannot move the written file beside it", EEXIST);
-    if (entry.existed) {
-      if (::chmod(entry.temp.c_str(), existing.st_mode & 07777) != 0 ||
-          (::chown(entry.temp.c_str(), existing.st_uid, existing.st_gid) != 0 && errno != EPERM)) {
-        const int code = errno;
-        ::unlink(entry.temp.c_str());
-        throw system_error(path, "cannot keep the file's mode and owner", code);
-      }
+    if (entry.existed && !keep_mode_and_owner(entry.temp, existing)) {
+      const int code = errno;
+      remove_file(entry.temp);
+      throw system_error(path, "cannot keep the file's mode and owner", code);
     }
     entries_.push_back(std::move(entry));
     return;
   }
-  for (int attempt = 0; attempt < 16 && out.fd < 0; ++attempt) {
-    entry.temp = (folder / ("." + target.filename().string() + ".deform-tmp-" + random_suffix())).string();
-    out.fd = ::open(entry.temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (out.fd < 0 && errno != EEXIST) break;
+  NewFile out;
+  bool created = false;
+  for (int attempt = 0; attempt < 16 && !created; ++attempt) {
+    entry.temp = utf8(folder / native_path(temp_prefix + random_suffix()));
+    created = out.create(entry.temp);
+    if (!created && errno != EEXIST) break;
   }
-  if (out.fd < 0) throw system_error(path, "cannot create a temporary file beside it", errno);
+  if (!created) throw system_error(path, "cannot create a temporary file beside it", errno);
 
   std::string failure;
   int code = 0;
@@ -228,19 +517,13 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
     code = errno;
     failure = what;
   };
-  if (!write_all(out.fd, data.data(), data.size())) failed("write failed");
-  if (failure.empty() && entry.existed) {
-    // Keep the replaced file's permissions, and its owner where this process may set it (root, or the same owner).
-    if (::fchmod(out.fd, existing.st_mode & 07777) != 0) failed("cannot keep the file's mode");
-    if (failure.empty() && ::fchown(out.fd, existing.st_uid, existing.st_gid) != 0 && errno != EPERM)
-      failed("cannot keep the file's owner");
-  }
-  if (failure.empty() && ::fsync(out.fd) != 0) failed("fsync failed");
-  const int fd = out.fd;
-  out.fd = -1;
-  if (::close(fd) != 0 && failure.empty()) failed("close failed");
+  if (!out.write(data.data(), data.size())) failed("write failed");
+  // Keep the replaced file's permissions, and its owner where this process may set it (root, or the same owner).
+  if (failure.empty() && entry.existed && !out.keep(existing)) failed("cannot keep the file's mode and owner");
+  if (failure.empty() && !out.sync()) failed("fsync failed");
+  if (!out.close() && failure.empty()) failed("close failed");
   if (!failure.empty()) {
-    ::unlink(entry.temp.c_str());
+    remove_file(entry.temp);
     throw system_error(path, failure, code);
   }
   entries_.push_back(std::move(entry));
@@ -254,39 +537,29 @@ void FileTransaction::commit() {
     for (Entry& entry : entries_) {
       if (entry.temp.empty()) continue;
       if (entry.existed && !single) {
-        const fs::path target(entry.target);
+        const fs::path target = native_path(entry.target);
         const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
         if (injected_failure()) throw system_error(entry.named, "cannot keep a backup of it", errno);
         for (int attempt = 0; attempt < 16 && entry.backup.empty(); ++attempt) {
-          std::string backup =
-              (folder / ("." + target.filename().string() + ".deform-bak-" + random_suffix())).string();
+          std::string backup = utf8(folder / native_path("." + utf8(target.filename()) + ".deform-bak-" +
+                                                         random_suffix()));
           // A hard link leaves the target in place; a file system without them gets a rename (the target is then
           // missing until the staged file lands, never changed).
-          if (::link(entry.target.c_str(), backup.c_str()) == 0 ||
-              (errno != EEXIST && ::rename(entry.target.c_str(), backup.c_str()) == 0))
+          if (hard_link(entry.target, backup) || (errno != EEXIST && rename_new(entry.target, backup)))
             entry.backup = std::move(backup);
           else if (errno != EEXIST)
             throw system_error(entry.named, "cannot keep a backup of it", errno);
         }
         if (entry.backup.empty()) throw system_error(entry.named, "cannot keep a backup of it", EEXIST);
       }
-      if (injected_failure() || ::rename(entry.temp.c_str(), entry.target.c_str()) != 0)
+      if (injected_failure() || !rename_over(entry.temp, entry.target))
         throw system_error(entry.named, "cannot move into place", errno);
       entry.placed = true;
     }
     for (Entry& entry : entries_) {
       if (!entry.temp.empty()) continue;
       if (injected_failure()) throw system_error(entry.named, "write failed", errno);
-      // O_NONBLOCK: a FIFO without a reader is refused (ENXIO) instead of blocking this process for ever.
-      Descriptor out{::open(entry.target.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK)};
-      if (out.fd < 0 && errno == ENXIO)
-        throw Error::environment(entry.named, "is a FIFO that no process reads: nothing written");
-      if (out.fd < 0) throw system_error(entry.named, "cannot open for writing", errno);
-      const int flags = ::fcntl(out.fd, F_GETFL);
-      if (flags < 0 || ::fcntl(out.fd, F_SETFL, flags & ~O_NONBLOCK) != 0)
-        throw system_error(entry.named, "cannot open for writing", errno);
-      if (!write_all(out.fd, entry.direct.data(), entry.direct.size()))
-        throw system_error(entry.named, "write failed", errno);
+      write_direct(entry.target, entry.named, entry.direct);
     }
   } catch (...) {
     roll_back();
@@ -294,26 +567,25 @@ void FileTransaction::commit() {
   }
   committed_ = true;
   for (const Entry& entry : entries_)
-    if (!entry.backup.empty()) ::unlink(entry.backup.c_str());
+    if (!entry.backup.empty()) remove_file(entry.backup);
 }
 
 void FileTransaction::roll_back() noexcept {
   for (auto entry = entries_.rbegin(); entry != entries_.rend(); ++entry) {
     if (entry->placed) {
       if (!entry->backup.empty())
-        ::rename(entry->backup.c_str(), entry->target.c_str());
+        rename_over(entry->backup, entry->target);
       else if (!entry->existed)
-        ::unlink(entry->target.c_str());
+        remove_file(entry->target);
     } else {
       if (!entry->backup.empty()) {
         // Backed up but not replaced: a hard link is removed; a rename is undone.
-        struct stat target {};
-        if (::stat(entry->target.c_str(), &target) == 0)
-          ::unlink(entry->backup.c_str());
+        if (file_status(entry->target).kind != FileKind::missing)
+          remove_file(entry->backup);
         else
-          ::rename(entry->backup.c_str(), entry->target.c_str());
+          rename_new(entry->backup, entry->target);
       }
-      if (!entry->temp.empty()) ::unlink(entry->temp.c_str());
+      if (!entry->temp.empty()) remove_file(entry->temp);
     }
     entry->placed = false;
     entry->backup.clear();

@@ -6,9 +6,13 @@
 #include <cctype>
 #include <filesystem>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#ifdef _WIN32
+#  include <fstream>
+#else
+#  include <fcntl.h>
+#  include <sys/stat.h>
+#  include <unistd.h>
+#endif
 
 #include "deform/runtime/error.hpp"
 
@@ -96,11 +100,21 @@ bool lies_inside(const std::string& path, const std::string& folder) {
 }
 
 std::string image_format(const std::string& path) {
+  std::array<unsigned char, 32> head{};
+  std::size_t size = 0;
+#ifdef _WIN32
+  // Only a regular file is read (a device or pipe name is not); the path's bytes are UTF-8.
+  const fs::path file(std::u8string(path.begin(), path.end()));
+  std::error_code error;
+  if (!fs::is_regular_file(file, error)) return {};
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return {};
+  in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  size = static_cast<std::size_t>(in.gcount());
+#else
   // O_NONBLOCK: a FIFO named as a texture must not hang the check; only a regular file is read.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
   if (fd < 0) return {};
-  std::array<unsigned char, 32> head{};
-  std::size_t size = 0;
   struct stat info {};
   if (::fstat(fd, &info) == 0 && S_ISREG(info.st_mode)) {
     while (size < head.size()) {
@@ -110,6 +124,7 @@ std::string image_format(const std::string& path) {
     }
   }
   ::close(fd);
+#endif
   const auto starts = [&](std::string_view magic, std::size_t at = 0) {
     return size >= at + magic.size() &&
            std::equal(magic.begin(), magic.end(), head.begin() + static_cast<std::ptrdiff_t>(at),

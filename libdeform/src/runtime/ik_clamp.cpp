@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "deform/runtime/portable.hpp"
 #include "ik_chain.hpp"
 
 namespace deform {
@@ -122,7 +123,7 @@ inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
 // detail::limit_euler, inlined into the clamps below (its result then stays in registers instead of going through
 // memory to quaternion_of; the options are constants there).
 template <bool angles_needed, bool raw_directions>
-[[gnu::always_inline]] inline bool limit_euler_inline(const EulerLimits& limits, glm::quat rotation,
+DEFORM_ALWAYS_INLINE inline bool limit_euler_inline(const EulerLimits& limits, glm::quat rotation,
                                                       detail::EulerAngles& euler) noexcept {
   using detail::EulerAngles;
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);

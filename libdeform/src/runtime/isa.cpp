@@ -1,6 +1,8 @@
 // The one CPU-feature query of the runtime kernels (isa.hpp).
 #include "deform/runtime/isa.hpp"
 
+#include "deform/runtime/portable.hpp"
+
 namespace deform {
 namespace {
 
@@ -14,10 +16,10 @@ CpuFeatures read_cpu_features() noexcept {
 #if defined(DEFORM_X86_KERNELS)
   // libgcc fills the table __builtin_cpu_supports reads from a constructor of its own; initialising it here makes the
   // answer right even when the first query comes from another static initialiser.
-  __builtin_cpu_init();
-  features.avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  features.avx512 = features.avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                    __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+  DEFORM_X86_CPU_INIT();
+  features.avx2 = DEFORM_X86_CPU_SUPPORTS("avx2") && DEFORM_X86_CPU_SUPPORTS("fma");
+  features.avx512 = features.avx2 && DEFORM_X86_CPU_SUPPORTS("avx512f") && DEFORM_X86_CPU_SUPPORTS("avx512dq") &&
+                    DEFORM_X86_CPU_SUPPORTS("avx512vl") && DEFORM_X86_CPU_SUPPORTS("avx512bw");
 #endif
   return features;
 }

@@ -14,13 +14,9 @@
 // (inline, external) definition could be merged at link time with a copy that uses instructions the CPU lacks.
 #include <cmath>
 
-// Asks GCC and Clang to unroll the next loop completely (up to 16 iterations): for the fixed-length loops inside a loop
-// over the lanes, which the vectoriser only takes when nothing but straight-line code is left in it.
-#if defined(__GNUC__)
-#define DEFORM_UNROLL _Pragma("GCC unroll 16")
-#else
-#define DEFORM_UNROLL
-#endif
+// DEFORM_UNROLL (portable.hpp) before the fixed-length loops inside a loop over the lanes: the vectoriser only takes
+// such a loop when nothing but straight-line code is left in it.
+#include "deform/runtime/portable.hpp"
 
 namespace {
 

@@ -11,6 +11,7 @@
 // them (two 8×8 at once). Either way the antipodality test, the blend and the transform run on 16 lanes.
 #include <immintrin.h>
 
+#include "deform/runtime/portable.hpp"
 #include "skinning_kernels.hpp"
 
 namespace deform::detail {
@@ -117,7 +118,7 @@ struct Avx512 {
   }
 
   // Out of line: run once per call, it stays out of the function that holds the block loop.
-  [[gnu::noinline]] void fill_affine_table(std::span<const glm::mat4> matrices, std::size_t columns) {
+  DEFORM_NOINLINE void fill_affine_table(std::span<const glm::mat4> matrices, std::size_t columns) {
     for (std::size_t first = 0; first < columns; first += 16) {
       __m512 m[16], a[12];
       for (std::size_t l = 0; l < 16; ++l)
@@ -182,7 +183,7 @@ struct Avx512 {
   }
 
   // Forced inline: called once per block, where a call cost 25% of the in-cache kernel.
-  [[gnu::always_inline]] void blend_matrices(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
+  DEFORM_ALWAYS_INLINE void blend_matrices(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
     if (use_tables) {
       // A wide table's block whose sixteen vertices all have bones below 32 (bit 5 clear in all four 16-bit ids)
       // takes the narrow lookups: with bones ordered root first, most blocks of a 33- to 64-bone character do.

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "deform/runtime/portable.hpp"
 #include "skinning_kernels.hpp"
 
 namespace deform::detail {
@@ -46,7 +47,7 @@ void cross3(const V a[3], const V b[3], V out[3]) {
 // One block of Isa::width vertices from vertex i. Forced inline: as a call per block it lost ~5% (the loop's
 // constants reloaded every block).
 template <class Isa>
-[[gnu::always_inline]] inline void skin_lbs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
+DEFORM_ALWAYS_INLINE inline void skin_lbs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
                                                   bool stream) noexcept {
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
@@ -71,7 +72,7 @@ template <class Isa>
 }
 
 template <class Isa>
-[[gnu::always_inline]] inline void skin_dqs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
+DEFORM_ALWAYS_INLINE inline void skin_dqs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
                                                   bool stream) noexcept {
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
@@ -145,7 +146,7 @@ template <class Isa>
 
 // One block of either method.
 template <class Isa, SkinningMethod method>
-[[gnu::always_inline]] inline void skin_block(const SkinningJob& job, const Isa& isa, std::size_t i, bool stream) {
+DEFORM_ALWAYS_INLINE inline void skin_block(const SkinningJob& job, const Isa& isa, std::size_t i, bool stream) {
   if constexpr (method == SkinningMethod::lbs) {
     skin_lbs_block(job, isa, i, stream);
   } else {
@@ -213,10 +214,10 @@ constexpr std::size_t prefetch_distance = 128;
 // The lines of `bytes` bytes from base + offset, for reading or (`write`) for writing: PREFETCHW where the file is
 // compiled with -mprfchw, else an ordinary hint.
 template <std::size_t bytes, bool write = false>
-[[gnu::always_inline]] inline void prefetch_lines(const void* base, std::size_t offset) noexcept {
+DEFORM_ALWAYS_INLINE inline void prefetch_lines(const void* base, std::size_t offset) noexcept {
   const std::uintptr_t start = reinterpret_cast<std::uintptr_t>(base) + offset;
   for (std::size_t line = 0; line < bytes; line += 64)
-    __builtin_prefetch(reinterpret_cast<const char*>(start + line), write ? 1 : 0, 3);
+    DEFORM_PREFETCH(reinterpret_cast<const char*>(start + line), write ? 1 : 0);
 }
 
 // Branch-free: for a strided stream (a line per vertex) the first lines are asked for, for absent normals an
@@ -225,7 +226,7 @@ template <std::size_t bytes, bool write = false>
 // and read-for-ownership misses the hardware prefetchers left to the stores cost 3-5% of the crowd's frame (not
 // when streaming: those stores bypass the caches).
 template <std::size_t width, bool stream>
-[[gnu::always_inline]] inline void prefetch_inputs(const SkinningJob& job, std::size_t i) noexcept {
+DEFORM_ALWAYS_INLINE inline void prefetch_inputs(const SkinningJob& job, std::size_t i) noexcept {
   const std::size_t ahead = i + prefetch_distance;
   prefetch_lines<width * sizeof(glm::vec4)>(job.bone_weights.data(), ahead * sizeof(glm::vec4));
   prefetch_lines<width * sizeof(glm::u16vec4)>(job.bone_indices.data(), ahead * sizeof(glm::u16vec4));

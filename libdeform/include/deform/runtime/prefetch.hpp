@@ -7,21 +7,18 @@
 #include <span>
 #include <vector>
 
+#include "deform/runtime/portable.hpp"
+
 namespace deform {
 
 // Hints that [data, data + bytes) will be read or written soon: a prefetch for writing where the target has one
-// (PREFETCHW), else into every cache level. Nothing on compilers without __builtin_prefetch.
+// (PREFETCHW), else into every cache level; nothing where the compiler has no prefetch (portable.hpp).
 inline void prefetch_bytes(const void* data, std::size_t bytes) noexcept {
-#if defined(__GNUC__) || defined(__clang__)
   // Every 64-byte line of the range: one hint per 64 bytes from its start, and its last byte's line. (Addresses
   // stay pointers into the range: aligned through integer casts, GCC 12 compiled the hints to nothing.)
   const char* const p = static_cast<const char*>(data);
-  for (std::size_t offset = 0; offset < bytes; offset += 64) __builtin_prefetch(p + offset, 1, 3);
-  if (bytes > 0) __builtin_prefetch(p + bytes - 1, 1, 3);
-#else
-  (void)data;
-  (void)bytes;
-#endif
+  for (std::size_t offset = 0; offset < bytes; offset += 64) DEFORM_PREFETCH(p + offset, 1);
+  if (bytes > 0) DEFORM_PREFETCH(p + bytes - 1, 1);
 }
 
 template <class T>
