@@ -6,6 +6,7 @@ deform_packages=(
   libassimp-dev assimp-testmodels libeigen3-dev libtinygltf-dev
   libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pip python3-setuptools python3-wheel
+  g++-aarch64-linux-gnu qemu-user
 )
 
 deform_install_deps() {

@@ -13,7 +13,9 @@
 #include <stdexcept>
 #include <string>
 
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#endif
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deform/extras/builtin.hpp"
@@ -28,7 +30,9 @@
 namespace {
 
 using deform::Mesh;
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+#endif
 
 // A mesh whose render vertices are its points (no seams).
 Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> triangles) {
@@ -207,6 +211,7 @@ glm::vec3 warp(glm::vec3 p) {
 
 OmMesh to_openmesh(const Mesh& mesh) {
   OmMesh om;
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
   for (const glm::vec3& p : mesh.positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     const auto vh = [&](int k) { return OmMesh::VertexHandle(int(mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]])); };
@@ -216,6 +221,7 @@ OmMesh to_openmesh(const Mesh& mesh) {
 }
 
 }  // namespace
+#endif
 
 TEST_CASE("normals: hand-computed corner — 90 and 45 degree corners weigh 2 : 1") {
   // Corner O of a right angle in z = 0 (normal +z) and of a 45-degree triangle in x = 0 (normal +x).
@@ -413,6 +419,7 @@ TEST_CASE("normals: every kernel copy and the one-shot function agree to float r
 
 TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge circulators") {
   std::mt19937 random(5);
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
   const Mesh mesh = torus(24, 16, random);
   OmMesh om = to_openmesh(mesh);
   om.request_face_normals();
@@ -446,6 +453,7 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
 }
 
 TEST_CASE("normals: wrong sizes and out-of-range indices are refused with a reason (or throw when binding)") {
+#endif
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2});
   std::vector<glm::vec3> scratch(3), out(3), short_span(2);
   const auto reason = [](deform::Status status) { return std::string(status.reason()); };
@@ -580,6 +588,7 @@ TEST_CASE("bounds") {
 
 TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and closed meshes") {
   std::mt19937 random(21);
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
   for (int round = 0; round < 10; ++round) {
     const Mesh mesh = round % 2 ? torus(5 + int(random() % 6), 4 + int(random() % 6), random)
                                 : flat_grid(2 + int(random() % 7), 2 + int(random() % 7), random);
@@ -612,6 +621,7 @@ TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and clo
 }
 
 TEST_CASE("topology: non-manifold soups, isolated points and bad indices") {
+#endif
   // Three triangles on one edge (0, 1), a degenerate triangle, and an isolated point 5.
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {9, 9, 9}},
                               {0, 1, 2, 0, 1, 3, 1, 0, 4, 2, 2, 3});
