@@ -7,6 +7,7 @@ namespace {
 struct CpuFeatures {
   bool avx2 = false;
   bool avx512 = false;
+  bool neon = false;
 };
 
 CpuFeatures read_cpu_features() noexcept {
@@ -18,6 +19,9 @@ CpuFeatures read_cpu_features() noexcept {
   features.avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   features.avx512 = features.avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
                     __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+  features.neon = true;  // Advanced SIMD and FMA are part of the aarch64 base architecture: nothing to ask the CPU
 #endif
   return features;
 }
@@ -35,11 +39,13 @@ bool isa_available(Isa isa) noexcept {
     case Isa::portable: return true;
     case Isa::avx2: return cpu_features().avx2;
     case Isa::avx512: return cpu_features().avx512;
+    case Isa::neon: return cpu_features().neon;
   }
   return false;
 }
 
 Isa isa_best() noexcept {
+  if (cpu_features().neon) return Isa::neon;
   if (cpu_features().avx512) return Isa::avx512;
   if (cpu_features().avx2) return Isa::avx2;
   return Isa::portable;
@@ -51,6 +57,7 @@ const char* isa_name(Isa isa) noexcept {
     case Isa::portable: return "portable";
     case Isa::avx2: return "avx2";
     case Isa::avx512: return "avx512";
+    case Isa::neon: return "neon";
   }
   return "unknown";
 }
