@@ -2,7 +2,8 @@
 //   ffd/bezier333/VERTICES/THREADS/NORMALS   tricubic Bézier, THREADS 1 or 0 (= all), NORMALS 0 or 1
 //   ffd/bspline/VERTICES/THREADS/NORMALS     uniform cubic B-spline, 10×10×10 control points (7³ cells)
 //   ffd/bspline_random_order/...             the same with the vertices in random order (cache misses)
-//   ffd/bezier333_portable, ffd/bspline_portable, ffd/*_avx2   a kernel copy forced (isa.hpp), 100k, one thread
+//   ffd/bezier333_portable, ffd/bspline_portable, ffd/*_avx2, ffd/*_neon   a kernel copy forced (isa.hpp), 100k,
+//                                            one thread
 //   ffd/bezier_degree/DEGREE                 degree sweep (d, d, d), 100k vertices, one thread, positions only
 //   ffd/reference333/VERTICES                the equations as written (pow, binomials), one thread
 #include <benchmark/benchmark.h>
@@ -179,6 +180,8 @@ BENCHMARK_CAPTURE(bezier333, portable, Isa::portable)->Name("ffd/bezier333_porta
 BENCHMARK_CAPTURE(bspline, portable, Isa::portable)->Name("ffd/bspline_portable")->Apply(one_thread);
 BENCHMARK_CAPTURE(bezier333, avx2, Isa::avx2)->Name("ffd/bezier333_avx2")->Apply(one_thread);
 BENCHMARK_CAPTURE(bspline, avx2, Isa::avx2)->Name("ffd/bspline_avx2")->Apply(one_thread);
+BENCHMARK_CAPTURE(bezier333, neon, Isa::neon)->Name("ffd/bezier333_neon")->Apply(one_thread);
+BENCHMARK_CAPTURE(bspline, neon, Isa::neon)->Name("ffd/bspline_neon")->Apply(one_thread);
 BENCHMARK(bspline_random_order)->Name("ffd/bspline_random_order")->Args({1000000, 1, 0})->Args({1000000, 1, 1})
     ->ArgNames({"vertices", "threads", "normals"})->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(bezier_degree)->Name("ffd/bezier_degree")->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);

@@ -5,6 +5,7 @@
 //   normals/builtin_threads, normals/100k_threads    the same split over all threads (run_parallel)
 //   normals/builtin_portable, normals/100k_portable  the portable copy forced (what a CPU without AVX2 runs)
 //   normals/builtin_avx2, normals/100k_avx2          the AVX2 copy forced
+//   normals/builtin_neon, normals/100k_neon          the NEON copy forced (aarch64)
 //   normals/builtin_function, normals/100k_function  compute_vertex_normals, one triangle at a time
 //   normals/builtin_atan2                            the former code (std::atan2 per corner), for the speed-up
 //   normals/bind/builtin, normals/bind/100k          bind_vertex_normals (once per mesh)
@@ -148,6 +149,8 @@ BENCHMARK_CAPTURE(bound, 100k_portable, false, Isa::portable)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(bound, builtin_avx2, true, Isa::avx2)->Name("normals/builtin_avx2")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(bound, 100k_avx2, false, Isa::avx2)->Name("normals/100k_avx2")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, builtin_neon, true, Isa::neon)->Name("normals/builtin_neon")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(bound, 100k_neon, false, Isa::neon)->Name("normals/100k_neon")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, builtin, true)->Name("normals/builtin_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(function, 100k, false)->Name("normals/100k_function")->Unit(benchmark::kMicrosecond);
 BENCHMARK(atan2_former)->Name("normals/builtin_atan2")->Unit(benchmark::kMicrosecond);

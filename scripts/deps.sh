@@ -7,6 +7,7 @@ deform_packages=(
   libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pip python3-setuptools python3-wheel
   g++-mingw-w64-x86-64-posix wine wine64
+  g++-aarch64-linux-gnu qemu-user
 )
 
 deform_install_deps() {

@@ -13,7 +13,9 @@
 #include <stdexcept>
 #include <string>
 
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#endif
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deform/extras/builtin.hpp"
@@ -28,7 +30,9 @@
 namespace {
 
 using deform::Mesh;
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+#endif
 
 // A mesh whose render vertices are its points (no seams).
 Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> triangles) {
@@ -40,15 +44,16 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
 }
 
 // The ways to get normals: the one-shot function and VertexNormalsJob with each kernel copy this CPU runs.
-enum class Path { function, bound_portable, bound_avx2, bound_avx512 };
+enum class Path { function, bound_portable, bound_avx2, bound_avx512, bound_neon };
 deform::Isa isa_of(Path path) {
   return path == Path::bound_avx512 ? deform::Isa::avx512
          : path == Path::bound_avx2 ? deform::Isa::avx2
+         : path == Path::bound_neon ? deform::Isa::neon
                                     : deform::Isa::portable;
 }
 const std::vector<Path> all_paths = [] {
   std::vector<Path> paths;
-  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512})
+  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512, Path::bound_neon})
     if (path == Path::function || deform::isa_available(isa_of(path))) paths.push_back(path);
   return paths;
 }();
@@ -58,6 +63,7 @@ std::string path_name(Path path) {
     case Path::bound_portable: return "VertexNormalsJob portable";
     case Path::bound_avx2: return "VertexNormalsJob avx2";
     case Path::bound_avx512: return "VertexNormalsJob avx512";
+    case Path::bound_neon: return "VertexNormalsJob neon";
   }
   return "?";
 }
@@ -205,6 +211,7 @@ glm::vec3 warp(glm::vec3 p) {
   return {c * p.x + s * p.z + 0.3f * p.y * p.y, 0.9f * p.y, -s * p.x + c * p.z + 0.1f * std::sin(3.0f * p.x)};
 }
 
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 OmMesh to_openmesh(const Mesh& mesh) {
   OmMesh om;
   for (const glm::vec3& p : mesh.positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
@@ -214,6 +221,7 @@ OmMesh to_openmesh(const Mesh& mesh) {
   }
   return om;
 }
+#endif
 
 }  // namespace
 
@@ -411,6 +419,7 @@ TEST_CASE("normals: every kernel copy and the one-shot function agree to float r
   }
 }
 
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge circulators") {
   std::mt19937 random(5);
   const Mesh mesh = torus(24, 16, random);
@@ -444,6 +453,7 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
     }
   }
 }
+#endif
 
 TEST_CASE("normals: wrong sizes and out-of-range indices are refused with a reason (or throw when binding)") {
   const Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2});
@@ -480,7 +490,7 @@ TEST_CASE("normals: wrong sizes and out-of-range indices are refused with a reas
   CHECK(untouched == std::vector<glm::vec3>(2, glm::vec3(7.0f)));  // "writing nothing"
   CHECK(reason(job.run(2, 4)) == "range outside the job");
   CHECK(reason(job.run(2, 1)) == "range outside the job");
-  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512})
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon})
     if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused
       std::vector<glm::vec3> kept(3, glm::vec3(7.0f));
       bad_job = job, bad_job.normals = kept, bad_job.isa = isa;
@@ -578,6 +588,7 @@ TEST_CASE("bounds") {
   CHECK(empty.max == glm::vec3(0.0f));
 }
 
+#if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and closed meshes") {
   std::mt19937 random(21);
   for (int round = 0; round < 10; ++round) {
@@ -610,6 +621,7 @@ TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and clo
     if (round % 2) CHECK(topology.boundary_edge_count() == 0);  // closed torus: the UV seams are not boundaries
   }
 }
+#endif
 
 TEST_CASE("topology: non-manifold soups, isolated points and bad indices") {
   // Three triangles on one edge (0, 1), a degenerate triangle, and an isolated point 5.

@@ -75,7 +75,7 @@ void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3>
 
 std::vector<Isa> available_isas() {
   std::vector<Isa> isas;
-  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512})
+  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512, Isa::neon})
     if (isa_available(isa)) isas.push_back(isa);
   return isas;
 }
@@ -249,7 +249,10 @@ TEST_CASE("isa: the automatic path is the best available one; names; forced path
   CHECK(isa_available(Isa::portable));
   CHECK(isa_available(isa_best()));
   CHECK(isa_best() != Isa::automatic);
-  if (isa_available(Isa::avx512)) {
+  if (isa_available(Isa::neon)) {  // aarch64 builds: always, and never an x86 copy
+    CHECK(isa_best() == Isa::neon);
+    CHECK_FALSE(isa_available(Isa::avx2));
+  } else if (isa_available(Isa::avx512)) {
     CHECK(isa_best() == Isa::avx512);
     CHECK(isa_available(Isa::avx2));  // the AVX-512 copies use AVX2 and FMA too
   } else if (isa_available(Isa::avx2)) {
@@ -261,6 +264,7 @@ TEST_CASE("isa: the automatic path is the best available one; names; forced path
   CHECK(std::string(isa_name(Isa::portable)) == "portable");
   CHECK(std::string(isa_name(Isa::avx2)) == "avx2");
   CHECK(std::string(isa_name(Isa::avx512)) == "avx512");
+  CHECK(std::string(isa_name(Isa::neon)) == "neon");
   CHECK(std::string(isa_name(static_cast<Isa>(9))) == "unknown");
   CHECK_FALSE(isa_available(static_cast<Isa>(9)));
   MESSAGE("best kernel copy here: " << isa_name(isa_best()));
@@ -601,7 +605,7 @@ TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1
   job = good, job.matrices = huge;
   rejected(job, "palette has more than 65536 bones");
   // A forced path this CPU lacks is refused, never run.
-  for (Isa isa : {Isa::avx2, Isa::avx512})
+  for (Isa isa : {Isa::avx2, Isa::avx512, Isa::neon})
     if (!isa_available(isa)) {
       job = good, job.isa = isa;
       rejected(job, "instruction set not available");

@@ -9,6 +9,7 @@ namespace {
 struct CpuFeatures {
   bool avx2 = false;
   bool avx512 = false;
+  bool neon = false;
 };
 
 CpuFeatures read_cpu_features() noexcept {
@@ -20,6 +21,9 @@ CpuFeatures read_cpu_features() noexcept {
   features.avx2 = DEFORM_X86_CPU_SUPPORTS("avx2") && DEFORM_X86_CPU_SUPPORTS("fma");
   features.avx512 = features.avx2 && DEFORM_X86_CPU_SUPPORTS("avx512f") && DEFORM_X86_CPU_SUPPORTS("avx512dq") &&
                     DEFORM_X86_CPU_SUPPORTS("avx512vl") && DEFORM_X86_CPU_SUPPORTS("avx512bw");
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+  features.neon = true;  // Advanced SIMD and FMA are part of the aarch64 base architecture: nothing to ask the CPU
 #endif
   return features;
 }
@@ -37,11 +41,13 @@ bool isa_available(Isa isa) noexcept {
     case Isa::portable: return true;
     case Isa::avx2: return cpu_features().avx2;
     case Isa::avx512: return cpu_features().avx512;
+    case Isa::neon: return cpu_features().neon;
   }
   return false;
 }
 
 Isa isa_best() noexcept {
+  if (cpu_features().neon) return Isa::neon;
   if (cpu_features().avx512) return Isa::avx512;
   if (cpu_features().avx2) return Isa::avx2;
   return Isa::portable;
@@ -53,6 +59,7 @@ const char* isa_name(Isa isa) noexcept {
     case Isa::portable: return "portable";
     case Isa::avx2: return "avx2";
     case Isa::avx512: return "avx512";
+    case Isa::neon: return "neon";
   }
   return "unknown";
 }

@@ -23,9 +23,11 @@ namespace {
 // a·b + c, fused (one rounding) in the copies compiled for FMA hardware, else a multiply and an add. The kernel files
 // are compiled with -ffp-contract=off and fuse only where this is written: the compiler's own contraction depends on
 // the shape of the code around an expression, so that the same sum could round differently in two instantiations (a
-// lattice's positions with and without normals) or two loops of one copy.
+// lattice's positions with and without normals) or two loops of one copy. The portable copies define
+// DEFORM_LANES_UNFUSED and never fuse, although aarch64's baseline has FMA: fusing is what the NEON copy adds there,
+// as the AVX2 copy does on x86-64, and the portable copy rounds each product and sum alike on every CPU.
 inline float mul_add(float a, float b, float c) noexcept {
-#if defined(__FMA__) || defined(__ARM_FEATURE_FMA)
+#if (defined(__FMA__) || defined(__ARM_FEATURE_FMA)) && !defined(DEFORM_LANES_UNFUSED)
   return std::fma(a, b, c);
 #else
   return a * b + c;

@@ -17,6 +17,9 @@ Kernel kernel_for(Isa isa) noexcept {
   if (isa == Isa::avx512) return detail::evaluate_lattice_avx512;
   if (isa == Isa::avx2) return detail::evaluate_lattice_avx2;
 #endif
+#if defined(DEFORM_NEON_KERNELS)
+  if (isa == Isa::neon) return detail::evaluate_lattice_neon;
+#endif
   return detail::evaluate_lattice_portable;
 }
 

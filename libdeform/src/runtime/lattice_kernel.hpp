@@ -24,11 +24,15 @@ struct KernelArgs {
 };
 
 // One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,
-// lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags).
+// lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags),
+// lattice_evaluate_neon.cpp (aarch64 builds).
 void evaluate_lattice_portable(const KernelArgs& args);
 #if defined(DEFORM_X86_KERNELS)
 void evaluate_lattice_avx2(const KernelArgs& args);
 void evaluate_lattice_avx512(const KernelArgs& args);
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+void evaluate_lattice_neon(const KernelArgs& args);  // lattice_evaluate_neon.cpp (aarch64 builds)
 #endif
 
 }  // namespace deform::detail

@@ -1,6 +1,6 @@
 // Angle-weighted vertex normals (Thürmer & Wüthrich, "Computing vertex normals from polygonal facets", 1998) and
 // bounds: per-frame safe (no allocation, no exceptions) but for bind_vertex_normals. VertexNormalsJob runs the kernel
-// of mesh_normals_kernel.inl: the portable, AVX2 or AVX-512 copy, as its Isa says (isa.hpp).
+// of mesh_normals_kernel.inl: the portable, AVX2, AVX-512 or NEON copy, as its Isa says (isa.hpp).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,6 +23,9 @@ KernelEntry kernel_for(Isa isa) noexcept {
 #if defined(DEFORM_X86_KERNELS)
   if (isa == Isa::avx512) return detail::vertex_normals_avx512;
   if (isa == Isa::avx2) return detail::vertex_normals_avx2;
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+  if (isa == Isa::neon) return detail::vertex_normals_neon;
 #endif
   return detail::vertex_normals_portable;
 }

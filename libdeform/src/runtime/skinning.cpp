@@ -82,6 +82,9 @@ detail::SkinKernel select_kernel(const SkinningJob& job) noexcept {
   if (isa == Isa::avx512) return lbs ? detail::skin_lbs_avx512 : detail::skin_dqs_avx512;
   if (isa == Isa::avx2) return lbs ? detail::skin_lbs_avx2 : detail::skin_dqs_avx2;
 #endif
+#if defined(DEFORM_NEON_KERNELS)
+  if (isa == Isa::neon) return lbs ? detail::skin_lbs_neon : detail::skin_dqs_neon;
+#endif
   (void)isa;
   return lbs ? detail::skin_lbs_portable : detail::skin_dqs_portable;
 }

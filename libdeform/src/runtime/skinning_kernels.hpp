@@ -27,6 +27,10 @@ void skin_dqs_avx2(const SkinningJob& job, std::size_t begin, std::size_t end) n
 void skin_lbs_avx512(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 void skin_dqs_avx512(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 
+// 4 vertices per step (skinning_neon.cpp, aarch64 builds).
+void skin_lbs_neon(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+void skin_dqs_neon(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+
 // Byte-addressed stream access shared by the kernels.
 inline const float* stream_at(std::span<const float> s, std::size_t stride, std::size_t i) noexcept {
   return reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(s.data()) + i * stride);

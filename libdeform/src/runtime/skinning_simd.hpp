@@ -1,7 +1,8 @@
 #pragma once
 // Internal: the block loops of the SIMD skinning kernels, written once over an instruction-set traits class and
-// instantiated by skinning_avx2.cpp (8 lanes) and skinning_avx512.cpp (16 lanes). Everything here is in an anonymous
-// namespace on purpose: each including file compiles it with its own -m flags, so no symbol may be shared.
+// instantiated by skinning_avx2.cpp (8 lanes), skinning_avx512.cpp (16 lanes) and skinning_neon.cpp (4 lanes, aarch64).
+// Everything here is in an anonymous namespace on purpose: each including file compiles it with its own -m flags, so
+// no symbol may be shared.
 //
 // A traits class `Isa`, constructed once per kernel call from the job (it may precompute per-palette tables), provides:
 //   V, width                     the lane vector and its lane count
