@@ -1,5 +1,5 @@
-// The VertexNormalsJob kernel, included once per instruction set (mesh_normals_portable.cpp, _avx2.cpp and
-// _avx512.cpp, each compiled with its own flags). Everything here has internal linkage but the one entry point the
+// The VertexNormalsJob kernel, included once per instruction set (mesh_normals_portable.cpp, _avx2.cpp, _avx512.cpp
+// and, on aarch64, _neon.cpp, each compiled with its own flags). Everything here has internal linkage but the one entry point the
 // includer names with DEFORM_NORMALS_ENTRY, so the copies never meet at link time.
 //
 // A range of points [begin, end) (normals.hpp says why this shape): the triangles with a corner in it are computed 16
