@@ -1,6 +1,7 @@
-// The lattice evaluation kernel, included once per instruction set (lattice_evaluate_portable.cpp, _avx2.cpp and
-// _avx512.cpp, each compiled with its own flags). Everything here has internal linkage, so the copies never meet at
-// link time; the includer defines DEFORM_KERNEL_ENTRY, the name of its one exported entry point.
+// The lattice evaluation kernel, included once per instruction set (lattice_evaluate_portable.cpp, _avx2.cpp,
+// _avx512.cpp and, on aarch64, _neon.cpp, each compiled with its own flags). Everything here has internal linkage, so
+// the copies never meet at link time; the includer defines DEFORM_KERNEL_ENTRY, the name of its one exported entry
+// point.
 //
 // 16 vertices at once (one block of the binding), structure of arrays: loops over the 16 lanes around scalar code,
 // which the compiler vectorises (lanes.hpp; four xmm registers per lane vector for the portable copy on x86-64, two

@@ -1,6 +1,6 @@
-// The VertexNormalsJob kernel, included once per instruction set (mesh_normals_portable.cpp, _avx2.cpp and
-// _avx512.cpp, each compiled with its own flags). Everything here has internal linkage but the one entry point the
-// includer names with DEFORM_NORMALS_ENTRY, so the copies never meet at link time.
+// The VertexNormalsJob kernel, included once per instruction set (mesh_normals_portable.cpp, _avx2.cpp, _avx512.cpp
+// and, on aarch64, _neon.cpp, each compiled with its own flags). Everything here has internal linkage but the one
+// entry point the includer names with DEFORM_NORMALS_ENTRY, so the copies never meet at link time.
 //
 // A range of points [begin, end) (normals.hpp says why this shape): the triangles with a corner in it are computed 16
 // at a time in structure-of-arrays lanes, a loop over the lanes around scalar code that the compiler vectorises
