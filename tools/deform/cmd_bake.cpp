@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -146,28 +147,12 @@ int bake_animated(const Args& args) {
   const std::span<const glm::vec3> bind_normals = character.normals();
   rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
 
-  // The pose at time t, as `deform simulate` sets it: the clip's (and, a millisecond later, where it is heading, so
-  // the lattices and spring chains feel its motion), then the reach on top.
-  const deform::Pose bind = character.skeleton().bind_pose();
-  deform::Pose pose = bind, later = bind;
-  const auto sample_clip = [&](double t, deform::Pose& into) {
-    std::copy(bind.rotations.begin(), bind.rotations.end(), into.rotations.begin());
-    std::copy(bind.translations.begin(), bind.translations.end(), into.translations.begin());
-    deform::SamplingJob job;
-    job.animation = clip;
-    job.time = float(t);
-    job.rotations = into.rotations;
-    job.translations = into.translations;
-    if (!job.run()) throw UsageError("--clip: clip '" + clip->name + "' does not fit the skeleton");
-  };
+  // The pose at time t: the clip's, moving as it does (ClipPlayer), then the reach on top.
+  std::optional<ClipPlayer> player;
+  if (clip != nullptr) player.emplace(character, *clip);
   bool reaching = target_text.has_value();
   const auto pose_at = [&](double t) {
-    if (clip != nullptr) {
-      constexpr float lead = 1e-3f;
-      sample_clip(t, pose);
-      sample_clip(t + lead, later);
-      character.set_pose(pose, later, lead);
-    }
+    if (player) player->set(t);
     if (reaching && !character.reach(effector, target).status)
       throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
   };

@@ -171,6 +171,27 @@ const deform::Animation& find_clip_or_fail(const std::vector<deform::Animation>&
   return clips[std::size_t(found)];
 }
 
+ClipPlayer::ClipPlayer(deform::Character& character, const deform::Animation& clip)
+    : character_(character), clip_(clip), bind_(character.skeleton().bind_pose()), pose_(bind_), later_(bind_) {}
+
+void ClipPlayer::sample(double t, deform::Pose& into) const {
+  std::copy(bind_.rotations.begin(), bind_.rotations.end(), into.rotations.begin());
+  std::copy(bind_.translations.begin(), bind_.translations.end(), into.translations.begin());
+  deform::SamplingJob job;
+  job.animation = &clip_;
+  job.time = float(t);
+  job.rotations = into.rotations;
+  job.translations = into.translations;
+  if (!job.run()) throw UsageError("--clip: clip '" + clip_.name + "' does not fit the skeleton");
+}
+
+void ClipPlayer::set(double t) {
+  constexpr float lead = 1e-3f;  // docs/elasticity.md: a lead of 1 ms or less keeps every frame rate alike
+  sample(t, pose_);
+  sample(t + lead, later_);
+  character_.set_pose(pose_, later_, lead);
+}
+
 void embed_builtin_texture(model_loading::LoadedModel& loaded) {
   if (!loaded.builtin) return;
 #ifdef DEFORM_HAVE_STB

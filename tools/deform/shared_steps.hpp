@@ -7,6 +7,7 @@
 
 #include "cli.hpp"
 #include "model_loading.hpp"
+#include "deform/character/character.hpp"
 #include "deform/io/gltf_export.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/offline/rig.hpp"
@@ -55,6 +56,21 @@ void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& 
 
 // The clip named `name` among `clips`; UsageError listing the clips there are when none has that name.
 const deform::Animation& find_clip_or_fail(const std::vector<deform::Animation>& clips, const std::string& name);
+
+// Plays a clip on a character as `simulate` and `bake` do: set(t) poses it as the clip is at t seconds, moving as the
+// clip does there (the clip a millisecond later as set_pose's `later`, so that the lattices and spring chains feel
+// its motion). The poses are held here, so a call allocates nothing. UsageError for a clip that does not fit.
+class ClipPlayer {
+ public:
+  ClipPlayer(deform::Character& character, const deform::Animation& clip);
+  void set(double t);
+
+ private:
+  void sample(double t, deform::Pose& into) const;
+  deform::Character& character_;
+  const deform::Animation& clip_;
+  deform::Pose bind_, pose_, later_;
+};
 
 // Gives the built-in character's material its texture in memory (Material::diffuse_image), as the PNG
 // samples/data/builtin.png holds (deform::builtin_texture(512)), so that glTF export embeds it with no file to read;
