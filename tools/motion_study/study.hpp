@@ -275,6 +275,17 @@ struct CharacterPaths {
   std::vector<Path> ponytail;  // per checkpoint, the chain's points (first head, then the tails)
 };
 
+// `into` = `animation` at t seconds over `bind` (the clip's channels replace the bind's values).
+inline void sample_clip(const deform::Animation& animation, const deform::Pose& bind, double t, deform::Pose& into) {
+  into = bind;
+  deform::SamplingJob job;
+  job.animation = &animation;
+  job.time = float(t);
+  job.rotations = into.rotations;
+  job.translations = into.translations;
+  job.run();
+}
+
 // The built-in full rig with every lattice's tuned motion (default_lattice_motion of its part, inertia included).
 inline deform::Rig tuned_full_rig() {
   deform::Rig rig = deform::builtin_full_rig(deform::builtin_character());
@@ -298,15 +309,7 @@ inline CharacterPaths play_character(const deform::Rig& rig, const std::string& 
   deform::Character character(std::move(model), tuned);
   const deform::Pose bind = character.skeleton().bind_pose();
   deform::Pose pose = bind, later = bind;
-  const auto sample = [&](double t, deform::Pose& into) {
-    into = bind;
-    deform::SamplingJob job;
-    job.animation = &animation;
-    job.time = float(t);
-    job.rotations = into.rotations;
-    job.translations = into.translations;
-    job.run();
-  };
+  const auto sample = [&](double t, deform::Pose& into) { sample_clip(animation, bind, t, into); };
   CharacterPaths out;
   const auto steps = std::size_t(std::llround(seconds * hz));
   const auto per = std::size_t(std::llround(hz / checkpoint_hz));
@@ -418,15 +421,7 @@ inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& cli
   }
   const deform::Pose bind = skeleton.bind_pose();
   deform::Pose pose = bind, later = bind;
-  const auto sample = [&](double t, deform::Pose& into) {
-    into = bind;
-    deform::SamplingJob job;
-    job.animation = &animation;
-    job.time = float(t);
-    job.rotations = into.rotations;
-    job.translations = into.translations;
-    job.run();
-  };
+  const auto sample = [&](double t, deform::Pose& into) { sample_clip(animation, bind, t, into); };
   FleshMeasure m;
   std::vector<std::vector<double>> lengths(limbs.size()), rigid_lengths(limbs.size());
   const auto steps = std::size_t(std::llround(seconds * hz));
