@@ -7,11 +7,10 @@
 
 #include "deform/offline/hierarchy_binding.hpp"
 #include "deform/runtime/prefetch.hpp"
+#include "runtime/finite.hpp"
 
 namespace deform {
 namespace {
-
-bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // The largest target coordinate reach() takes: beyond, |target - effector|^2 overflows a float (about 3.4e38).
 constexpr float max_reach_coordinate = 1e18f;

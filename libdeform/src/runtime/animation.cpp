@@ -3,14 +3,9 @@
 #include <cmath>
 
 #include "deform/runtime/error.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
-
-bool finite(float v) { return std::isfinite(v); }
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool finite(glm::quat q) {
-  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
 
 template <class T>
 void validate_track(const Track<T>& track, const char* what, const std::string& source, const std::string& element) {

@@ -7,12 +7,9 @@
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/prefetch.hpp"
+#include "runtime/finite.hpp"
 namespace deform {
 namespace {
-
-bool finite(float x) noexcept { return std::isfinite(x); }
-
-bool finite(glm::vec3 p) noexcept { return finite(p.x) && finite(p.y) && finite(p.z); }
 
 void require(bool ok, const char* field, const char* what) {
   if (!ok) throw Error::invalid_argument(field, what);

@@ -8,6 +8,7 @@
 
 namespace deform {
 
+inline bool finite(float x) noexcept { return std::isfinite(x); }
 inline bool finite(glm::vec2 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y); }
 inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 inline bool finite(glm::vec4 v) noexcept {

@@ -9,16 +9,15 @@
 
 #include "deform/runtime/error.hpp"
 #include "ik_chain.hpp"
+#include "runtime/finite.hpp"
 
 namespace deform {
 
 namespace {
 
-bool finite(glm::quat q) noexcept {
-  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
+using deform::finite;  // the overloads below would hide it
 
-bool finite(const RigidTransform& t) noexcept { return finite(t.rotation) && detail::finite(t.translation); }
+bool finite(const RigidTransform& t) noexcept { return finite(t.rotation) && finite(t.translation); }
 
 // True when the spans hold every bone of the chain and its ancestors.
 bool spans_fit(const IkChain& chain, std::size_t rotations, std::size_t translations) noexcept {
@@ -39,7 +38,7 @@ Status check_chain_pose(const IkChain& chain, std::span<const glm::quat> rotatio
                         std::span<const glm::vec3> translations, float& length) noexcept {
   for (const std::int32_t id : chain.bones) {
     const auto b = static_cast<std::size_t>(id);
-    if (!finite(rotations[b]) || !detail::finite(translations[b])) return Status::failure("chain pose is not finite");
+    if (!finite(rotations[b]) || !finite(translations[b])) return Status::failure("chain pose is not finite");
   }
   length = segment_sum(chain, translations);
   if (!std::isfinite(length)) return Status::failure("chain length overflows");
@@ -165,9 +164,9 @@ Status check(const IkJob& job, float& length) noexcept {
   if (job.scratch.size() < job.scratch_size()) return Status::failure("scratch smaller than scratch_size()");
   if (reinterpret_cast<std::uintptr_t>(job.scratch.data()) % IkJob::scratch_alignment != 0)
     return Status::failure("scratch misaligned");
-  if (!detail::finite(job.target)) return Status::failure("target is not finite");
+  if (!finite(job.target)) return Status::failure("target is not finite");
   if (!finite(job.base)) return Status::failure("base is not finite");
-  if (job.use_pole && !detail::finite(job.pole)) return Status::failure("pole is not finite");
+  if (job.use_pole && !finite(job.pole)) return Status::failure("pole is not finite");
   if (!chain->swing_twist.empty() && chain->swing_twist.size() != chain->joint_count())
     return Status::failure("swing_twist has neither 0 nor one entry per joint");
   if (!(job.weight >= 0.0f && job.weight <= 1.0f)) return Status::failure("weight not within [0, 1]");

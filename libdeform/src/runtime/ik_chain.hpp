@@ -6,6 +6,7 @@
 #include <span>
 
 #include "deform/runtime/ik.hpp"
+#include "runtime/finite.hpp"
 namespace deform::detail {
 
 using Frame = RigidTransform;
@@ -50,8 +51,6 @@ IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::
                    std::uint32_t& random_state) noexcept;
 IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
                       const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
-
-inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // The small helpers below are defined here so that they inline into the solvers' per-solve code (a two-bone solve
 // is ~200 ns: a call each would show).

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "ik_chain.hpp"
+#include "runtime/finite.hpp"
 
 namespace deform {
 namespace {
@@ -12,10 +13,6 @@ namespace {
 constexpr float tiny = 1e-12f;
 // A bone shorter than this fraction of the limb counts as zero-length (validate refuses it).
 constexpr float zero_bone_fraction = 1e-6f;
-
-bool finite(glm::quat q) noexcept {
-  return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
 
 // Normalises `rotation` and clamps it into `limits` (clamp_rotation), the normalisation inline for a free joint.
 // True when the limits moved it.
@@ -207,9 +204,9 @@ Status explain(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   if (!(std::abs(job.swivel_degrees) <= 360.0f)) return Status::failure("swivel_degrees not within [-360, 360]");
   if (job.pole_kind != PoleKind::direction && job.pole_kind != PoleKind::point)
     return Status::failure("pole_kind is not direction or point");
-  if (!detail::finite(job.target)) return Status::failure("target is not finite");
-  if (!detail::finite(job.pole)) return Status::failure("pole is not finite");
-  if (!finite(job.base.rotation) || !detail::finite(job.base.translation)) return Status::failure("base is not finite");
+  if (!finite(job.target)) return Status::failure("target is not finite");
+  if (!finite(job.pole)) return Status::failure("pole is not finite");
+  if (!finite(job.base.rotation) || !finite(job.base.translation)) return Status::failure("base is not finite");
   // Each number times 0 is 0 when finite and NaN when not: one test for the 21 (no -ffinite-math-only here).
   float zero = 0.0f;
   for (const std::int32_t id : chain->bones) {

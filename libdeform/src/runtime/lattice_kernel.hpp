@@ -38,6 +38,7 @@ void evaluate_lattice_neon(const KernelArgs& args);  // lattice_evaluate_neon.cp
 }  // namespace deform::detail
 
 #include <vector>
+#include "runtime/finite.hpp"
 
 namespace deform::detail {
 
@@ -78,8 +79,5 @@ inline int cell_of(float x, int cells, float& t) noexcept {
 inline glm::mat3 cofactor(const glm::mat3& a) noexcept {
   return glm::mat3(glm::cross(a[1], a[2]), glm::cross(a[2], a[0]), glm::cross(a[0], a[1]));
 }
-
-// True when all three components are finite.
-inline bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace deform::detail

@@ -2,11 +2,11 @@
 #include "deform/runtime/morph.hpp"
 #include <algorithm>
 #include <cmath>
+#include "runtime/finite.hpp"
 
 namespace deform {
 namespace {
 
-bool finite(glm::vec3 v) noexcept { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Empty when the target is valid for `point_count` points, else what is wrong.
 const char* target_problem(const MorphTarget& t, std::size_t point_count) noexcept {
