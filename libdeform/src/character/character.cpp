@@ -573,7 +573,7 @@ Status Character::update(float dt) {
   }
   normals_current_ = false;
   transported_current_ = false;
-  if (!job.run()) return Status::failure("skinning refused");
+  if (const Status status = job.run(); !status) return status;
   if (const Status status = hierarchy_.update(world_); !status) return status;
   if (!lattice_fields) {
     // The carried points only translate: their normals stay as skinned.
