@@ -153,6 +153,8 @@ static void character_reaches_stretches_and_springs_back(void) {
   CHECK(deform_character_set_lattice_motion(hero, 99, 0.5f, NULL, 1.0f) == DEFORM_ERROR_ARGUMENT);
   CHECK(deform_character_set_lattice_motion(hero, 0, 2.0f, NULL, 1.0f) == DEFORM_ERROR_ARGUMENT);
   CHECK(strstr(deform_last_error(), "inertia") != NULL);
+  CHECK(deform_character_set_lattice_motion(hero, DEFORM_ALL_LATTICES, 1.5f, NULL, 1.0f) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "inertia scale") != NULL);
   CHECK(deform_character_bind_pose(hero, rotations, translations, bones - 1) == DEFORM_ERROR_ARGUMENT);
   free(later_rotations);
   free(later_translations);
