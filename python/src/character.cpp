@@ -95,9 +95,11 @@ void bind_character(py::module_& m) {
             const std::size_t count = c.deformers().lattice_count();
             if (lattice && *lattice >= count)
               throw deform::Error::invalid_argument("lattice " + std::to_string(*lattice), "lattice out of range");
-            // Inertia and gravity change; each lattice keeps its along-bone bound and far-face share.
+            // Inertia and gravity change; each lattice keeps its along-bone bound and far-face share. For every
+            // lattice the inertia scales each one's tuned inertia, its part's (scaled_inertia); for one, it is its.
             const auto with = [&](deform::LatticeMotion motion) {
-              motion.inertia = inertia, motion.gravity = pull, motion.units_per_metre = units_per_metre;
+              motion.inertia = lattice ? inertia : deform::scaled_inertia(motion.part, inertia);
+              motion.gravity = pull, motion.units_per_metre = units_per_metre;
               return motion;
             };
             for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
@@ -108,7 +110,9 @@ void bind_character(py::module_& m) {
           py::arg("inertia"), py::arg("gravity") = py::none(), py::arg("units_per_metre") = 1.0f,
           py::arg("lattice") = py::none(),
           "Secondary motion of one lattice (or every one, lattice=None): inertia in [0, 1] (how much its control "
-          "points lag behind their bone's motion), gravity in m/s² (model space; default none).")
+          "points lag behind their bone's motion), gravity in m/s² (model space; default none). For every lattice "
+          "inertia is a scale of each one's tuned inertia, its body part's: 1 the tuned jiggle (limbs keep their "
+          "length), 0 none; a lattice with no part takes it as its inertia. For one lattice it is its inertia.")
       .def_property_readonly("spring_chain_count", [](const deform::Character& c) { return c.springs().chain_count(); })
       .def(
           "spring_points",

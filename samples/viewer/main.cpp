@@ -80,7 +80,8 @@ const char* usage =
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
     "its files in samples/data), an imported file's own. --inertia F: how much the lattices lag behind the\n"
-    "playing clip, [0, 1] (default 1; the panel's \"jiggle\").\n"
+    "playing clip, [0, 1], a scale of each lattice's tuned inertia (its body part's): 1 the tuned jiggle\n"
+    "(default), 0 none (the panel's \"jiggle\").\n"
     "--blend NAME|#N: blend a second clip with the --clip one, in step with its phase; --blend-weight W: the second\n"
     "clip's weight, [0, 1] (default 0.5; the first has 1 - W; the panel's \"blend with\" and \"blend\").\n"
     "--morph NAME:W: hold morph target NAME (every target of that name) at weight W over what the clip animates\n"
@@ -107,7 +108,7 @@ struct Options {
   std::vector<std::string> props;
   std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
-  float inertia = 1.0f;  // the lattices' inertia while a clip plays
+  float inertia = 1.0f;  // while a clip plays, the scale of each lattice's tuned inertia (scaled_inertia)
   float blend_weight = 0.5f;  // the second clip's weight
   bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;   // start with the deformation (skinning and lattices) on the GPU
@@ -513,7 +514,8 @@ class Viewer {
       ImGui::BeginDisabled(blend_clip_ < 0);
       ImGui::SliderFloat("blend", &blend_weight_, 0.0f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
       ImGui::EndDisabled();
-      // The jiggle: the lattices lag behind their bones while the clip plays (LatticeMotion::inertia).
+      // The jiggle: the lattices lag behind their bones while the clip plays, each part's tuned inertia times the
+      // slider (DeformerHierarchy::set_inertia_scale): at 1 the tuned jiggle, limbs keeping their length.
       bool motion = ImGui::Checkbox("jiggle", &jiggle_);
       ImGui::SameLine();
       ImGui::BeginDisabled(!jiggle_);
@@ -940,16 +942,9 @@ class Viewer {
     (void)sampling.run();  // cannot fail: the clips were validated against this skeleton when loaded
   }
 
-  // The lattices' inertia: the panel's while a clip is chosen and jiggle is on, else none, so a reach on a still
-  // body is the plain rubber arm. The rig's gravity on the lattices is kept.
-  void apply_motion() {
-    const float inertia = clip_ >= 0 && jiggle_ ? inertia_ : 0.0f;
-    for (std::size_t l = 0; l < character_->deformers().lattice_count(); ++l) {
-      deform::LatticeMotion motion = character_->deformers().spec(l).motion;
-      motion.inertia = inertia;
-      character_->deformers().set_motion(l, motion);
-    }
-  }
+  // The lattices' inertia: the panel's scale of each part's tuned inertia while a clip is chosen and jiggle is on,
+  // else none, so a reach on a still body is the plain rubber arm. The rig's gravity on the lattices is kept.
+  void apply_motion() { character_->deformers().set_inertia_scale(clip_ >= 0 && jiggle_ ? inertia_ : 0.0f); }
 
   // The panel's shape for every lattice (DeformerHierarchy::set_shape).
   void apply_shape() {
@@ -1306,7 +1301,7 @@ class Viewer {
   float blend_weight_ = 0.5f;              // its weight; clip_ has 1 - blend_weight_
   float speed_ = 1.0f;                   // playback rate
   bool jiggle_ = true;                   // lattices with inertia while a clip plays
-  float inertia_ = 1.0f;
+  float inertia_ = 1.0f;                 // the scale of each lattice's tuned inertia
   bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
   deform::Bounds rest_bounds_;                     // the bind pose, upright: its floor, its framing
   std::vector<deform::Bounds> clip_bounds_;        // each clip's sampled poses, upright (posed_bounds)

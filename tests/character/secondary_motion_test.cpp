@@ -11,6 +11,11 @@
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
 #include "study.hpp"  // tools/motion_study
+#ifdef DEFORM_HAVE_IMPORT
+#include <filesystem>
+
+#include "deform/import/import.hpp"
+#endif
 
 namespace {
 
@@ -220,6 +225,69 @@ TEST_CASE("flesh: the tuned jiggle keeps every limb's length within 2% and every
   INFO("walk at inertia 1: limb " << walk.limb_percent << "% (" << walk.worst_limb << ")");
   CHECK(walk.limb_percent < 2.0);
   CHECK(walk.volume_percent < 3.0);
+}
+
+TEST_CASE("flesh at the viewer's inertia 1: a scale of each part's tuned inertia, the run's limbs within 2%") {
+  // The viewer's slider and `deform simulate --inertia` scale each lattice's tuned inertia (set_inertia_scale): at 1
+  // the rig as shipped (parts, no inertia) moves exactly as the tuned rig; at inertia 1 on every lattice, as the
+  // slider set it before, the run's left arm changed length by 6.2%.
+  const deform::Rig shipped = deform::builtin_full_rig(deform::builtin_character());
+  for (const deform::LatticeSpec& lattice : shipped.lattices) CHECK(lattice.motion.inertia == 0.0f);
+  const motion_study::FleshMeasure slider = motion_study::measure_flesh(shipped, "run", 60.0, 2.0, 1.0f);
+  const motion_study::FleshMeasure tuned =
+      motion_study::measure_flesh(motion_study::tuned_full_rig(), "run", 60.0, 2.0);
+  INFO("run at the slider's 1: limb " << slider.limb_percent << "% (" << slider.worst_limb << "), volume "
+                                      << slider.volume_percent << "%, jiggle " << slider.jiggle << " m");
+  CHECK(slider.limb_length == tuned.limb_length);
+  CHECK(slider.jiggle == tuned.jiggle);
+  CHECK(slider.limbs.size() == 4);
+  CHECK(slider.limb_percent < 2.0);
+  CHECK(slider.volume_percent < 3.0);
+  CHECK(slider.jiggle > 0.01);
+  // Half the slider: half of each part's inertia, still jiggling, less.
+  const motion_study::FleshMeasure half = motion_study::measure_flesh(shipped, "run", 60.0, 2.0, 0.5f);
+  CHECK(half.jiggle > 0.005);
+  CHECK(half.jiggle < slider.jiggle);
+  CHECK(half.limb_percent < 2.0);
+}
+
+TEST_CASE("flesh on imported characters: default_rig at the tuned inertia keeps limbs within 2%, volumes within 3%") {
+#ifdef DEFORM_HAVE_IMPORT
+  // Debian's assimp-testmodels on their own clips with the viewer's defaults (docs/elasticity.md, "Measured").
+  for (const motion_study::ImportedClip& c : motion_study::imported_clips()) {
+    if (!std::filesystem::exists(c.file)) {
+      MESSAGE("skipped: " << c.file << " is not installed (assimp-testmodels)");
+      continue;
+    }
+    const std::string file = c.file, clip_name = c.clip;
+    CAPTURE(file);
+    CAPTURE(clip_name);
+    const deform::ImportedModel imported = deform::import_model(c.file);
+    const deform::Rig rig = deform::default_rig(imported.model);
+    // Every lattice of the default rig knows its part (an arm whose hand has no lattice still has an upper arm).
+    for (const deform::LatticeSpec& lattice : rig.lattices) {
+      CAPTURE(lattice.name);
+      CHECK(lattice.motion.part != deform::BodyPart::unspecified);
+      if (lattice.name.starts_with("UpperArm") || lattice.name.starts_with("Thigh"))
+        CHECK(lattice.motion.part == deform::BodyPart::upper_limb);
+      if (lattice.name.starts_with("LowerArm") || lattice.name.starts_with("Shin"))
+        CHECK(lattice.motion.part == deform::BodyPart::lower_limb);
+    }
+    const auto clip = std::find_if(imported.clips.begin(), imported.clips.end(),
+                                   [&](const deform::Animation& a) { return a.name == clip_name; });
+    REQUIRE(clip != imported.clips.end());
+    const motion_study::FleshMeasure m = motion_study::measure_flesh(
+        imported.model, *clip, rig, 60.0, motion_study::measured_seconds(*clip), 1.0f);
+    INFO("limb " << m.limb_percent << "% (" << m.worst_limb << "), volume " << m.volume_percent << "% ("
+                 << m.worst_lattice << "), jiggle " << m.jiggle_percent() << "% of the height");
+    CHECK(m.limbs.size() == 4);  // two arms and two legs, or four legs
+    CHECK(m.limb_percent < 2.0);
+    CHECK(m.volume_percent < 3.0);
+    CHECK(m.jiggle_percent() > 0.02);  // still visible: the rigid clip's skin is not what shows
+  }
+#else
+  MESSAGE("skipped: built without deform::import");
+#endif
 }
 
 TEST_CASE("the whole character at any frame rate: every point and the ponytail within 0.5% of 240 Hz") {

@@ -108,8 +108,15 @@ for name, path in candidates:
         saved = json.load(f)
     check(os.path.realpath(os.path.join(work, "rigs", saved["model"]["file"])) == os.path.realpath(path),
           f"{name}: the saved rig names {saved['model']} for {path}")
-    check(all(l.get("motion", {}).get("inertia") == 0.5 for l in saved["lattices"]),
-          f"{name}: the saved rig lost --inertia 0.5")
+    # --inertia scales each lattice's tuned inertia, its part's (docs/elasticity.md, "Tuned per part"), which the
+    # default rig stores with every lattice.
+    tuned = {"upper_limb": 0.3, "lower_limb": 0.3, "hand": 0.2, "foot": 0.1, "torso": 0.4, "head": 0.1,
+             "appendage": 0.8}
+    check(all(l.get("motion", {}).get("part") in tuned for l in saved["lattices"]),
+          f"{name}: a lattice of the default rig has no part: {[l.get('motion') for l in saved['lattices']]}")
+    check(all(abs(l["motion"]["inertia"] - 0.5 * tuned[l["motion"]["part"]]) < 1e-6 for l in saved["lattices"]
+              if l.get("motion", {}).get("part") in tuned),
+          f"{name}: the saved rig lost --inertia 0.5, half of each part's tuned inertia")
     # Without a "model" the rig needs the model on the command line.
     del rig["model"]
     with open(os.path.join(work, "rigs", f"{name}-bare.rig.json"), "w") as f:

@@ -168,6 +168,35 @@ expect_equal("exit status of a clip and a target" "${rc}" 0)
 expect_between(1.14 1.26 samples 28 effector 0)
 expect_between(1.54 1.66 samples 28 effector 1)
 
+# --inertia is a scale of each lattice's tuned inertia, its part's: --inertia 1 is the rig with every lattice at its
+# part's default_lattice_motion inertia (upper arm and forearm 0.3, hand 0.2: docs/elasticity.md), spelled out here
+# in the rig the built-in character runs with, the same run to the last digit; and the saved rig says so.
+deform(simulate --builtin --clip run --seconds 1 --dt 0.05 --save-rig "${WORK}/builtin.rig.json")
+file(READ "${WORK}/builtin.rig.json" rig)
+foreach(i 0 1 2)
+  string(JSON part GET "${rig}" lattices ${i} motion part)
+  if(part STREQUAL "hand")
+    string(JSON rig SET "${rig}" lattices ${i} motion inertia 0.2)
+  else()
+    string(JSON rig SET "${rig}" lattices ${i} motion inertia 0.3)
+  endif()
+  list(APPEND parts "${part}")
+endforeach()
+expect_equal("the built-in rig's parts" "${parts}" "upper_limb;lower_limb;hand")
+file(WRITE "${WORK}/tuned.rig.json" "${rig}")
+deform(simulate "${WORK}/tuned.rig.json" --clip run --seconds 1 --dt 0.05)
+expect_equal("exit status of the tuned rig" "${rc}" 0)
+set(tuned "${out}")
+deform(simulate --builtin --clip run --inertia 1 --seconds 1 --dt 0.05 --save-rig "${WORK}/scaled.rig.json")
+if(NOT out STREQUAL tuned)
+  fail("--inertia 1 is not the rig with each part's tuned inertia")
+endif()
+file(READ "${WORK}/scaled.rig.json" out)
+expect_between(0.1999999 0.2000001 lattices 2 motion inertia)  # the hand's
+deform(simulate --builtin --clip run --inertia 0.5 --seconds 1 --dt 0.05 --save-rig "${WORK}/scaled.rig.json")
+file(READ "${WORK}/scaled.rig.json" out)
+expect_between(0.1499999 0.1500001 lattices 0 motion inertia)  # the upper arm's: half its 0.3
+
 # Every built-in clip plays; the effector (the left hand) moves with it.
 foreach(name idle run wave)
   deform(simulate --builtin --clip ${name} --inertia 0.5 --seconds 1 --dt 0.1)

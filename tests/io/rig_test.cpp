@@ -129,7 +129,11 @@ TEST_CASE("the written form: hierarchy, names, model") {
   }
   CHECK(doc["lattices"][0]["motion"]["inertia"] == 0.0);
   CHECK(doc["lattices"][0]["motion"]["far_share"] == 0.0);  // the upper arm's elbow stays where the bone puts it
-  CHECK_FALSE(doc["lattices"][2].contains("motion"));       // the hand's is the default: it carries nothing
+  // Each lattice's part, whose tuned inertia --inertia and the viewer's slider scale; the hand's bound and share are
+  // the defaults, its part is not.
+  CHECK(doc["lattices"][0]["motion"]["part"] == "upper_limb");
+  CHECK(doc["lattices"][1]["motion"]["part"] == "lower_limb");
+  CHECK(doc["lattices"][2]["motion"]["part"] == "hand");
   // The built-in rig's ponytail chain and its colliders are written; a rig without chains has no springs block.
   REQUIRE(doc.contains("springs"));
   deform::Rig no_springs = deform::builtin_rig(model());
@@ -171,6 +175,22 @@ TEST_CASE("secondary motion: lattice motion and spring chains are written and re
   CHECK(partial.lattices[0].motion.along_bound == deform::LatticeMotion{}.along_bound);
   CHECK(partial.lattices[0].motion.far_share == deform::LatticeMotion{}.far_share);
   CHECK(doc["lattices"][1]["motion"]["along_bound"] == doctest::Approx(0.02));
+  // The part: absent (a file from before parts) it is unspecified and is not written back; given, it is kept.
+  CHECK(partial.lattices[0].motion.part == deform::BodyPart::unspecified);
+  CHECK_FALSE(nlohmann::json::parse(deform::format_rig_json(partial, model().skeleton))["lattices"][0]["motion"]
+                  .contains("part"));
+  using deform::BodyPart;
+  for (const BodyPart part : {BodyPart::upper_limb, BodyPart::lower_limb, BodyPart::hand, BodyPart::foot,
+                              BodyPart::torso, BodyPart::head, BodyPart::appendage}) {
+    deform::Rig with_part = partial;
+    with_part.lattices[0].motion.part = part;
+    const std::string text = deform::format_rig_json(with_part, model().skeleton);
+    CHECK(nlohmann::json::parse(text)["lattices"][0]["motion"]["part"] == std::string(deform::body_part_name(part)));
+    CHECK(parse(text).lattices[0].motion == with_part.lattices[0].motion);
+  }
+  CHECK(parse(R"({"rig": 1, "lattices": [{"name": "a", "bone": "forearm_l", "motion": {"part": "foot"}}]})")
+            .lattices[0]
+            .motion.part == deform::BodyPart::foot);
   CHECK(doc["springs"]["chains"][0]["bones"] == nlohmann::json::array({"fingers1_r", "fingers2_r"}));
   CHECK(doc["springs"]["colliders"][0]["bone"] == "chest");
   const deform::Rig rig = parse(R"({"rig": 1, "lattices": [], "springs": {"colliders": [{"bone": "head",
@@ -266,6 +286,13 @@ TEST_CASE("bad rig files: the error names the file and the key") {
        "key 'lattices[0].motion.along_bound'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"far_share": 1.5}}]})",
        "key 'lattices[0].motion.far_share'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": "elbow"}}]})",
+       "key 'lattices[0].motion.part': must be \"upper_limb\""},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": ""}}]})", "key 'lattices[0].motion.part'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": 3}}]})", "key 'lattices[0].motion.part'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": null}}]})", "key 'lattices[0].motion.part'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": "Hand"}}]})",
+       "key 'lattices[0].motion.part'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": []}]}})",
        "key 'springs.chains[0].bones'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck", "chest"]}]}})",

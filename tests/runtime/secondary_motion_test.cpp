@@ -416,6 +416,54 @@ TEST_CASE("set_motion and bind-time checks refuse bad values naming the field") 
   CHECK_FALSE(h.step(0.1f, std::vector<glm::mat4>(3), std::vector<glm::mat4>(1)));
 }
 
+TEST_CASE("the inertia knob scales each part's tuned inertia: 1 the tuned motion, 0 rigid, no part the knob itself") {
+  using deform::BodyPart;
+  for (const BodyPart part : {BodyPart::upper_limb, BodyPart::lower_limb, BodyPart::hand, BodyPart::foot,
+                              BodyPart::torso, BodyPart::head, BodyPart::appendage}) {
+    CAPTURE(deform::body_part_name(part));
+    const deform::LatticeMotion tuned = deform::default_lattice_motion(part);
+    CHECK(tuned.part == part);
+    CHECK(tuned.inertia > 0.0f);
+    CHECK(tuned.inertia < 1.0f);  // every known part is tamer than a free mass
+    CHECK(deform::scaled_inertia(part, 1.0f) == tuned.inertia);
+    CHECK(deform::scaled_inertia(part, 0.5f) == 0.5f * tuned.inertia);
+    CHECK(deform::scaled_inertia(part, 0.0f) == 0.0f);
+    CHECK(deform::body_part_named(deform::body_part_name(part)) == part);
+  }
+  // A lattice with no part (set up by hand, or from a rig file older than parts): the knob is its inertia.
+  CHECK(deform::scaled_inertia(BodyPart::unspecified, 0.7f) == 0.7f);
+  deform::LatticeMotion unspecified;
+  unspecified.inertia = 1.0f;
+  CHECK(deform::default_lattice_motion(BodyPart::unspecified) == unspecified);
+  CHECK(deform::body_part_named("unspecified") == BodyPart::unspecified);
+  CHECK_FALSE(deform::body_part_named("elbow"));
+  CHECK_FALSE(deform::body_part_named(""));
+  for (const float bad : {-0.1f, 1.5f, NAN})
+    CHECK_THROWS_WITH_AS(deform::scaled_inertia(BodyPart::hand, bad), doctest::Contains("scale"), deform::Error);
+  const auto stray = static_cast<BodyPart>(200);
+  CHECK(deform::body_part_name(stray).empty());
+  CHECK_THROWS_WITH_AS(deform::scaled_inertia(stray, 1.0f), doctest::Contains("part"), deform::Error);
+  deform::LatticeMotion bad;
+  bad.part = stray;
+  CHECK_THROWS_WITH_AS(deform::validate_motion(bad), doctest::Contains("part"), deform::Error);
+
+  // A hierarchy: every lattice at the scale of its part's tuned inertia, the rest of its motion kept.
+  const MovingLimb limb = moving_limb();
+  deform::LatticeMotion rigid = deform::default_lattice_motion(BodyPart::upper_limb);
+  rigid.inertia = 0.0f;
+  rigid.gravity = glm::vec3(0.0f, -1.0f, 0.0f);
+  deform::DeformerHierarchy h = inertial_hierarchy(limb, rigid, 9.0, 0.2);
+  h.set_inertia_scale(1.0f);
+  deform::LatticeMotion expected = rigid;
+  expected.inertia = 0.3f;
+  CHECK(h.spec(0).motion == expected);
+  h.set_inertia_scale(0.5f);
+  expected.inertia = 0.15f;
+  CHECK(h.spec(0).motion == expected);
+  CHECK_THROWS_WITH_AS(h.set_inertia_scale(2.0f), doctest::Contains("scale"), deform::Error);
+  CHECK(h.spec(0).motion == expected);  // unchanged
+}
+
 // --- spring chains ------------------------------------------------------------------------------------------------
 
 namespace {

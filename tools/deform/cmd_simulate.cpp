@@ -58,8 +58,11 @@ constexpr const char* usage =
     "  --volume F           volume compensation in [0, 1]: a lattice stretched by s scales across its bone by\n"
     "                       s^(-F/2) (default: the rig's, 1 unless it says: keeps its volume; 0: the plain\n"
     "                       stretch)\n"
-    "  --inertia F          how much every lattice lags behind its bone's motion, in [0, 1] (default: the rig's,\n"
-    "                       0 unless it says: the lattices move only when stretched)\n"
+    "  --inertia F          how much the lattices lag behind their bones' motion, in [0, 1]: a scale of each\n"
+    "                       lattice's tuned inertia, its part's (\"motion.part\" in the rig: an upper arm 0.3,\n"
+    "                       a hand 0.2, a foot 0.1, ...), so 1 is the tuned jiggle and 0 none; a lattice with\n"
+    "                       no part takes F itself (default: the rig's inertia, 0 unless it says: the lattices\n"
+    "                       move only when stretched)\n"
     "  --save-rig FILE      also write the rig as run (these options applied) to FILE, its \"model\" naming the\n"
     "                       model relative to FILE's folder, so that `deform simulate FILE` runs it again\n";
 
@@ -112,7 +115,9 @@ int run(const std::vector<std::string>& argv) {
   if (const auto text = args.value("--inertia")) {
     const double inertia = parse_number(*text, "--inertia");
     if (!(inertia >= 0.0 && inertia <= 1.0)) throw UsageError("--inertia must be in [0, 1]");
-    for (deform::LatticeSpec& spec : rig.lattices) spec.motion.inertia = float(inertia);
+    // A scale, so that each part keeps its tuned character: limbs keep their length at any value (docs/cli.md).
+    for (deform::LatticeSpec& spec : rig.lattices)
+      spec.motion.inertia = deform::scaled_inertia(spec.motion.part, float(inertia));
   }
   std::int32_t effector = rig.reach_effector;
   if (const auto name = args.value("--effector")) {

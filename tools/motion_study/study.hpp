@@ -8,6 +8,7 @@
 #include <random>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -357,18 +358,21 @@ inline double amplitude_of(const std::vector<Path>& run) {
 
 // --- flesh, not a longer limb: the jiggle's shape against the rigid walk -------------------------------------------
 
-// How the jiggle of `rig`'s lattices (their motion as the rig has it) deforms the built-in character over a clip,
-// against the same clip with every lattice's inertia 0 (the rigid walk), every 1/30 s:
+// How the jiggle of `rig`'s lattices (their motion as the rig has it) deforms a character over a clip, against the
+// same clip with every lattice's inertia 0 (the rigid clip), every 1/30 s:
 struct FleshMeasure {
-  double limb_percent = 0.0;     // the largest change of a limb's length (shoulder to wrist, hip to ankle, between
-                                 // the skin points nearest those joints in the bind pose), % of the rigid one's
+  double limb_percent = 0.0;     // the largest change of a limb's length (from its upper limb's joint to its hand's
+                                 // or foot's, between the skin points nearest those joints in the bind pose), % of
+                                 // the rigid one's
   double volume_percent = 0.0;   // the largest change of a lattice's volume (its control grid's cells), %
-  double jiggle = 0.0;           // the largest distance of a skin point from the rigid walk's, model units
+  double jiggle = 0.0;           // the largest distance of a skin point from the rigid clip's, model units
+  double height = 0.0;           // the bind pose's extent along its tallest axis, model units (jiggle's yardstick)
   std::string worst_limb, worst_lattice;
   std::vector<double> times;                       // the samples' times
-  std::vector<std::string> limbs;                  // arm_l, leg_l, arm_r, leg_r
+  std::vector<std::string> limbs;                  // "upper-end" bone keys: upperarm_l-hand_l, thigh_r-foot_r, ...
   std::vector<std::vector<double>> limb_length;    // per limb, its length at every sample
-  std::vector<std::vector<double>> rigid_length;   // the same in the rigid walk
+  std::vector<std::vector<double>> rigid_length;   // the same in the rigid clip
+  double jiggle_percent() const { return height > 0.0 ? 100.0 * jiggle / height : 0.0; }
 };
 
 // The signed volume of a lattice's control grid (i-fastest, `counts` points per axis): its cells, six tetrahedra each.
@@ -391,18 +395,43 @@ inline double grid_volume(std::span<const glm::vec3> p, glm::ivec3 counts) {
   return volume;
 }
 
-inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& clip, double hz, double seconds) {
-  deform::Model model = deform::builtin_character();
-  deform::Animation animation;
-  for (deform::Animation& a : deform::builtin_clips(model))
-    if (a.name == clip) animation = std::move(a);
+// The limbs of a rig, from its lattices' parts: each hand or foot lattice's bone, and each reach effector, with the
+// nearest bone above it that has an upper limb lattice (its shoulder's or hip's joint), as (upper, end) bone pairs.
+inline std::vector<std::pair<std::int32_t, std::int32_t>> rig_limbs(const deform::Rig& rig,
+                                                                    const deform::Skeleton& skeleton) {
+  std::vector<std::int32_t> ends;
+  for (const deform::LatticeSpec& end : rig.lattices)
+    if (end.motion.part == deform::BodyPart::hand || end.motion.part == deform::BodyPart::foot)
+      ends.push_back(end.bone);
+  if (rig.reach_effector >= 0) ends.push_back(rig.reach_effector);
+  for (const deform::Rig::ReachChain& chain : rig.reach_chains) ends.push_back(chain.effector);
+  std::vector<std::pair<std::int32_t, std::int32_t>> limbs;
+  for (const std::int32_t end : ends) {
+    for (std::int32_t b = skeleton.bone(end).parent; b >= 0; b = skeleton.bone(b).parent) {
+      const auto upper = std::find_if(rig.lattices.begin(), rig.lattices.end(), [&](const deform::LatticeSpec& l) {
+        return l.bone == b && l.motion.part == deform::BodyPart::upper_limb;
+      });
+      if (upper == rig.lattices.end()) continue;
+      if (std::find(limbs.begin(), limbs.end(), std::pair(b, end)) == limbs.end()) limbs.emplace_back(b, end);
+      break;
+    }
+  }
+  return limbs;
+}
+
+// The flesh measures of `rig` on `model` playing `animation` at `hz` for `seconds`; with `inertia_scale` >= 0 the
+// jiggling character's lattices take that scale of their parts' tuned inertia first (set_inertia_scale, as the
+// viewer's slider and `deform simulate --inertia` do).
+inline FleshMeasure measure_flesh(const deform::Model& model, const deform::Animation& animation,
+                                  const deform::Rig& rig, double hz, double seconds, float inertia_scale = -1.0f) {
   deform::Rig rigid_rig = rig;
   for (deform::LatticeSpec& lattice : rigid_rig.lattices) lattice.motion = {};
   deform::Character jiggly(model, rig), rigid(model, rigid_rig);
+  if (inertia_scale >= 0.0f) jiggly.deformers().set_inertia_scale(inertia_scale);
   const deform::Skeleton& skeleton = jiggly.skeleton();
   // The limbs: the skin points nearest their end joints in the bind pose.
-  const auto nearest = [&](const char* bone) {
-    const glm::vec3 joint(skeleton.bind_world()[std::size_t(skeleton.find(bone))][3]);
+  const auto nearest = [&](std::int32_t bone) {
+    const glm::vec3 joint(skeleton.bind_world()[std::size_t(bone)][3]);
     std::size_t best = 0;
     for (std::size_t p = 0; p < model.mesh.positions.size(); ++p)
       if (glm::length(model.mesh.positions[p] - joint) < glm::length(model.mesh.positions[best] - joint)) best = p;
@@ -413,16 +442,15 @@ inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& cli
     std::size_t a, b;
   };
   std::vector<Limb> limbs;
-  for (const char* side : {"_l", "_r"}) {
-    limbs.push_back({std::string("arm") + side, nearest((std::string("upperarm") + side).c_str()),
-                     nearest((std::string("hand") + side).c_str())});
-    limbs.push_back({std::string("leg") + side, nearest((std::string("thigh") + side).c_str()),
-                     nearest((std::string("foot") + side).c_str())});
-  }
+  for (const auto& [upper, end] : rig_limbs(rig, skeleton))
+    limbs.push_back({skeleton.key(upper) + "-" + skeleton.key(end), nearest(upper), nearest(end)});
+  FleshMeasure m;
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (const glm::vec3& p : model.mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  m.height = model.mesh.positions.empty() ? 0.0 : double(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
   const deform::Pose bind = skeleton.bind_pose();
   deform::Pose pose = bind, later = bind;
   const auto sample = [&](double t, deform::Pose& into) { sample_clip(animation, bind, t, into); };
-  FleshMeasure m;
   std::vector<std::vector<double>> lengths(limbs.size()), rigid_lengths(limbs.size());
   const auto steps = std::size_t(std::llround(seconds * hz));
   const auto per = std::max<std::size_t>(1, std::size_t(std::llround(hz / 30.0)));
@@ -460,6 +488,32 @@ inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& cli
   m.limb_length = std::move(lengths);
   m.rigid_length = std::move(rigid_lengths);
   return m;
+}
+
+// The imported clips the flesh is measured on (Debian's assimp-testmodels, with default_rig): the tool's table in
+// docs/elasticity.md and the test that holds them to 2% and 3%.
+struct ImportedClip {
+  const char* file;
+  const char* clip;
+};
+// How long a clip is measured: 2 s as the built-in clips, looping; a clip that does not loop, at most its length.
+inline double measured_seconds(const deform::Animation& clip) {
+  return clip.loop ? 2.0 : std::min(2.0, double(clip.duration));
+}
+inline std::vector<ImportedClip> imported_clips() {
+  return {{"/usr/share/assimp/models/IQM/mrfixit.iqm", "idle"},
+          {"/usr/share/assimp/models/X/Testwuson.X", "Wuson_Walk"},
+          {"/usr/share/assimp/models/X/Testwuson.X", "Wuson_Run"}};
+}
+
+// The same on the built-in character and its clip `clip` ("walk", "run", ...).
+inline FleshMeasure measure_flesh(const deform::Rig& rig, const std::string& clip, double hz, double seconds,
+                                  float inertia_scale = -1.0f) {
+  const deform::Model model = deform::builtin_character();
+  deform::Animation animation;
+  for (deform::Animation& a : deform::builtin_clips(model))
+    if (a.name == clip) animation = std::move(a);
+  return measure_flesh(model, animation, rig, hz, seconds, inertia_scale);
 }
 
 // One row of the study: a motion measured over 15, 30, 60, 144 and 240 Hz and a jittered frame time (about 60 Hz),

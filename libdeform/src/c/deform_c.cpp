@@ -200,8 +200,10 @@ deform_status deform_character_set_lattice_motion(deform_character* character, s
   if (!all && lattice >= lattices.lattice_count())
     return fail_argument("deform_character_set_lattice_motion: lattice out of range");
   // Inertia and gravity change; each lattice keeps its own along-bone bound and far-face share (its part's tuning).
+  // For every lattice `inertia` scales each one's tuned inertia, its part's (scaled_inertia: 1 the tuned jiggle);
+  // for one lattice it is that lattice's inertia.
   const auto with = [&](deform::LatticeMotion motion) {
-    motion.inertia = inertia;
+    motion.inertia = all ? deform::scaled_inertia(motion.part, inertia) : inertia;
     motion.gravity = gravity != nullptr ? glm::vec3(gravity[0], gravity[1], gravity[2]) : glm::vec3(0.0f);
     motion.units_per_metre = units_per_metre;
     return motion;

@@ -1,6 +1,7 @@
 // Rig files (JSON): read, validate with context, write. Format: docs/formats.md, "Rig files".
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -79,7 +80,15 @@ glm::vec3 read_gravity(const JsonReader& r) {
 LatticeMotion read_motion(const JsonReader& r) {
   // The ranges validate_motion enforces (runtime/hierarchy.hpp).
   LatticeMotion motion;
-  r.expect_object({"inertia", "gravity", "units_per_metre", "along_bound", "far_share"});
+  r.expect_object({"inertia", "gravity", "units_per_metre", "along_bound", "far_share", "part"});
+  if (r.has("part")) {  // absent in files from before parts: unspecified, LatticeMotion's default
+    const JsonReader part = r.at("part");
+    const std::optional<BodyPart> named = body_part_named(part.text());
+    if (!named)
+      part.fail("must be \"upper_limb\", \"lower_limb\", \"hand\", \"foot\", \"torso\", \"head\", \"appendage\" or "
+                "\"unspecified\"");
+    motion.part = *named;
+  }
   if (r.has("inertia")) motion.inertia = r.at("inertia").number(0.0f, 1.0f);
   if (r.has("along_bound")) motion.along_bound = r.at("along_bound").number(0.0f, 1.0f);
   if (r.has("far_share")) motion.far_share = r.at("far_share").number(0.0f, 1.0f);
@@ -344,6 +353,8 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
                            {"units_per_metre", shortest_double(spec.motion.units_per_metre)},
                            {"along_bound", shortest_double(spec.motion.along_bound)},
                            {"far_share", shortest_double(spec.motion.far_share)}};
+      if (spec.motion.part != BodyPart::unspecified)  // files from before parts are written back as they were
+        written["motion"]["part"] = std::string(body_part_name(spec.motion.part));
     }
     written["elastic"] = elastic;
   }

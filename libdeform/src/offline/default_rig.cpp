@@ -594,12 +594,15 @@ Rig default_rig(const Model& model, std::int32_t effector) {
     spec.motion.inertia = 0.0f;
     rig.lattices.push_back(std::move(spec));
   };
-  // A limb's lattice bones run upper, lower, end: the end is a hand or foot (a neck's, its head).
+  // A limb's chain runs (clavicle,) upper, lower, end: the end is a hand or foot (a neck's, its head). The part is
+  // the bone's place in the chain, not in the lattices: an arm whose hand has no lattice of its own (mrfixit's)
+  // still has an upper arm and a forearm (rig files store the part: LatticeMotion::part).
   const auto part_of = [](const Limb& limb, std::size_t i) {
     const bool end = limb.lattices[i] == limb.chain.back();
     if (limb.kind == LimbKind::neck) return end ? BodyPart::head : BodyPart::torso;
     if (end) return limb.kind == LimbKind::arm ? BodyPart::hand : BodyPart::foot;
-    return i + 2 == limb.lattices.size() ? BodyPart::lower_limb : BodyPart::upper_limb;
+    const auto at = std::find(limb.chain.begin(), limb.chain.end(), limb.lattices[i]);
+    return at != limb.chain.end() && at + 2 == limb.chain.end() ? BodyPart::lower_limb : BodyPart::upper_limb;
   };
   for (const Limb& limb : survey.limbs) {
     if (limb.kind == LimbKind::tail) {

@@ -1,7 +1,9 @@
 // Elastic lattices bound to bones, and the hierarchy that makes a stretched lattice carry what lies below it.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
@@ -75,21 +77,63 @@ void validate_motion(const LatticeMotion& motion) {
     throw Error::invalid_argument("<lattice motion>", "motion along_bound must be in [0, 1]");
   if (!(motion.far_share >= 0.0f && motion.far_share <= 1.0f))
     throw Error::invalid_argument("<lattice motion>", "motion far_share must be in [0, 1]");
+  if (body_part_name(motion.part).empty())
+    throw Error::invalid_argument("<lattice motion>", "motion part is not a BodyPart");
 }
 
 LatticeMotion default_lattice_motion(BodyPart part) noexcept {
-  // {inertia, gravity, units_per_metre, along_bound, far_share}: measured on the built-in walk and run by
-  // tests/character/secondary_motion_test.cpp ("flesh: ...") and tools/motion_study --flesh-csv.
+  // {inertia, gravity, units_per_metre, along_bound, far_share, part}: measured on the built-in walk and run by
+  // tests/character/secondary_motion_test.cpp ("flesh: ...") and tools/motion_study --flesh-csv, and on imported
+  // clips with default_rig (the same file, "flesh on imported characters").
+  const glm::vec3 none(0.0f);
   switch (part) {
-    case BodyPart::upper_limb: return {0.3f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
-    case BodyPart::lower_limb: return {0.3f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
-    case BodyPart::hand: return {0.2f, glm::vec3(0.0f), 1.0f, 0.02f, 1.0f};
-    case BodyPart::foot: return {0.1f, glm::vec3(0.0f), 1.0f, 0.01f, 0.0f};
-    case BodyPart::torso: return {0.4f, glm::vec3(0.0f), 1.0f, 0.02f, 0.0f};
-    case BodyPart::head: return {0.1f, glm::vec3(0.0f), 1.0f, 0.01f, 0.0f};
-    case BodyPart::appendage: return {0.8f, glm::vec3(0.0f), 1.0f, 0.05f, 1.0f};
+    case BodyPart::upper_limb: return {0.3f, none, 1.0f, 0.02f, 0.0f, part};
+    case BodyPart::lower_limb: return {0.3f, none, 1.0f, 0.02f, 0.0f, part};
+    case BodyPart::hand: return {0.2f, none, 1.0f, 0.02f, 1.0f, part};
+    case BodyPart::foot: return {0.1f, none, 1.0f, 0.01f, 0.0f, part};
+    case BodyPart::torso: return {0.4f, none, 1.0f, 0.02f, 0.0f, part};
+    case BodyPart::head: return {0.1f, none, 1.0f, 0.01f, 0.0f, part};
+    case BodyPart::appendage: return {0.8f, none, 1.0f, 0.05f, 1.0f, part};
+    case BodyPart::unspecified: break;
   }
+  // What a lattice with no part had before parts existed: the defaults, the knob (scaled_inertia) its inertia.
+  LatticeMotion motion;
+  motion.inertia = 1.0f;
+  return motion;
+}
+
+float scaled_inertia(BodyPart part, float scale) {
+  if (!(scale >= 0.0f && scale <= 1.0f))
+    throw Error::invalid_argument("<lattice motion>", "inertia scale must be in [0, 1]");
+  if (body_part_name(part).empty())
+    throw Error::invalid_argument("<lattice motion>", "motion part is not a BodyPart");
+  return scale * default_lattice_motion(part).inertia;  // a tuned inertia is in [0, 1]: so is the product
+}
+
+namespace {
+constexpr std::array<std::pair<BodyPart, std::string_view>, 8> body_part_names{{
+    {BodyPart::upper_limb, "upper_limb"},
+    {BodyPart::lower_limb, "lower_limb"},
+    {BodyPart::hand, "hand"},
+    {BodyPart::foot, "foot"},
+    {BodyPart::torso, "torso"},
+    {BodyPart::head, "head"},
+    {BodyPart::appendage, "appendage"},
+    {BodyPart::unspecified, "unspecified"},
+}};
+}  // namespace
+
+std::string_view body_part_name(BodyPart part) noexcept {
+  for (const auto& [p, name] : body_part_names)
+    if (p == part) return name;
   return {};
+}
+
+std::optional<BodyPart> body_part_named(std::string_view name) noexcept {
+  if (name.empty()) return std::nullopt;
+  for (const auto& [p, n] : body_part_names)
+    if (n == name) return p;
+  return std::nullopt;
 }
 
 DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices,
@@ -447,6 +491,11 @@ void DeformerHierarchy::set_motion(std::size_t index, const LatticeMotion& motio
   Lattice& lattice = lattices_.at(index);
   validate_motion(motion);
   lattice.spec.motion = motion;
+}
+
+void DeformerHierarchy::set_inertia_scale(float scale) {
+  for (Lattice& lattice : lattices_) (void)scaled_inertia(lattice.spec.motion.part, scale);  // before any changes
+  for (Lattice& lattice : lattices_) lattice.spec.motion.inertia = scaled_inertia(lattice.spec.motion.part, scale);
 }
 
 void DeformerHierarchy::reset() {

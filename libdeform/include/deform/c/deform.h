@@ -89,9 +89,12 @@ DEFORM_C_API size_t deform_character_lattice_count(const deform_character* chara
 DEFORM_C_API size_t deform_character_spring_chain_count(const deform_character* character);
 /* Secondary motion of lattice `lattice`, or of every lattice when `lattice` is DEFORM_ALL_LATTICES: `inertia` in
  * [0, 1] (how much its control points lag behind their bone's motion), `gravity` in m/s² in model space (3 floats;
- * NULL: none), `units_per_metre` > 0 (model units in a metre). Each lattice keeps its rig's along-bone bound and
- * far-face share (docs/elasticity.md). DEFORM_ERROR_ARGUMENT for a value out of its range or a lattice out of range,
- * changing nothing. */
+ * NULL: none), `units_per_metre` > 0 (model units in a metre). For one lattice `inertia` is its inertia; with
+ * DEFORM_ALL_LATTICES it is a scale of each lattice's tuned inertia, its body part's (the rig's "motion.part";
+ * deform::scaled_inertia): 1 gives every part its tuned jiggle, in which limbs keep their length, 0 none; a lattice
+ * with no part takes `inertia` itself. Each lattice keeps its rig's along-bone bound and far-face share
+ * (docs/elasticity.md). DEFORM_ERROR_ARGUMENT for a value out of its range or a lattice out of range, changing
+ * nothing. */
 #define DEFORM_ALL_LATTICES ((size_t)-1)
 DEFORM_C_API deform_status deform_character_set_lattice_motion(deform_character* character, size_t lattice,
                                                                float inertia, const float gravity[3],

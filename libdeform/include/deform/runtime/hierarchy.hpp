@@ -23,6 +23,7 @@
 #include <glm/glm.hpp>
 #include <span>
 #include <string>
+#include <optional>
 #include <string_view>
 #include <memory>
 #include <vector>
@@ -68,6 +69,18 @@ DEFORM_RUNTIME_API float soft_length_floor(float ratio, float min_fraction) noex
 // Throws deform::Error ("<stretch shape>", naming the field) when a field is not finite or out of its range.
 DEFORM_RUNTIME_API void validate_shape(const StretchShape& shape);
 
+// What a lattice's bone is, for the default secondary motion of a rig (default_lattice_motion).
+enum class BodyPart : std::uint8_t {
+  upper_limb,   // upper arm, thigh: the flesh between two joints
+  lower_limb,   // forearm, shin
+  hand,         // a limb's end that carries nothing below it
+  foot,
+  torso,        // spine, chest, belly, hips
+  head,         // head, neck
+  appendage,    // tail, ears, hair, a ponytail as lattices: free to swing
+  unspecified,  // not said (set up by hand, a rig file from before parts): LatticeMotion's defaults at inertia 1
+};
+
 // How a lattice's control points follow their bone's motion: secondary motion (docs/elasticity.md, "Secondary
 // motion"). With both at 0 (the default, as in the thesis) the springs live in the bone's frame and only a stretch
 // excites them. With inertia λ > 0 every control point also feels λ times minus its rest's acceleration in the world:
@@ -96,6 +109,7 @@ struct LatticeMotion {
   float units_per_metre = 1.0f;  // model units in a metre (100 for a model in centimetres), in (0, 1e6]
   float along_bound = 0.02f;     // in [0, 1]: the most a slice moves along the bone, as a fraction of the length
   float far_share = 1.0f;        // in [0, 1]: how much of the motion a far face that carries points takes
+  BodyPart part = BodyPart::unspecified;  // what the bone is: whose tuned inertia scaled_inertia scales
   bool active() const noexcept { return inertia != 0.0f || gravity != glm::vec3(0.0f); }
   bool operator==(const LatticeMotion&) const = default;
 };
@@ -103,22 +117,25 @@ struct LatticeMotion {
 // Throws deform::Error ("<lattice motion>", naming the field) when a field is not finite or out of its range.
 DEFORM_RUNTIME_API void validate_motion(const LatticeMotion& motion);
 
-// What a lattice's bone is, for the default secondary motion of a rig (default_lattice_motion).
-enum class BodyPart : std::uint8_t {
-  upper_limb,  // upper arm, thigh: the flesh between two joints
-  lower_limb,  // forearm, shin
-  hand,        // a limb's end that carries nothing below it
-  foot,
-  torso,       // spine, chest, belly, hips
-  head,        // head, neck
-  appendage,   // tail, ears, hair, a ponytail as lattices: free to swing
-};
-
-// The tuned secondary motion of a lattice on such a part (inertia, along_bound, far_share; no gravity): flesh that
-// wobbles between joints that stay put, hands that lag a little, feet that stay planted, appendages that swing —
-// on the built-in walk and run each limb keeps its length within 2% and each lattice its volume within 3%
-// (docs/elasticity.md, "Measured"). The built-in rigs use it; so can a rig built for any model.
+// The tuned secondary motion of a lattice on such a part (inertia, along_bound, far_share, the part; no gravity):
+// flesh that wobbles between joints that stay put, hands that lag a little, feet that stay planted, appendages that
+// swing — on the built-in walk and run, and on an imported clip with default_rig, each limb keeps its length within
+// 2% and each lattice its volume within 3% (docs/elasticity.md, "Measured"). The built-in rigs and default_rig use
+// it. An unspecified part gets LatticeMotion's defaults at inertia 1 (a free mass, bounded along the bone).
 DEFORM_RUNTIME_API LatticeMotion default_lattice_motion(BodyPart part) noexcept;
+
+// The tuned inertia of a lattice on `part` (default_lattice_motion(part).inertia) times `scale`: the one knob the
+// viewer's slider, `deform simulate --inertia` and the C and Python global setters turn. 1 gives every part its
+// tuned inertia, 0 a rigid body, between them every part in proportion, so each keeps its character (a limb's
+// flesh wobbling less than a belly). An unspecified part's tuned inertia is 1, so for such a lattice the scale is its
+// inertia, as the knob set it before lattices had parts. Throws deform::Error ("<lattice motion>") when `scale` is
+// not in [0, 1].
+DEFORM_RUNTIME_API float scaled_inertia(BodyPart part, float scale);
+
+// A part's name as rig files write it ("upper_limb", ..., "appendage", "unspecified"), and the part of a name
+// (std::nullopt for none).
+DEFORM_RUNTIME_API std::string_view body_part_name(BodyPart part) noexcept;
+DEFORM_RUNTIME_API std::optional<BodyPart> body_part_named(std::string_view name) noexcept;
 
 // The set-up of one lattice (what a rig file stores, docs/formats.md).
 struct LatticeSpec {
@@ -190,6 +207,9 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid (validate_motion)
   // or the index is out of range.
   void set_motion(std::size_t lattice, const LatticeMotion& motion);
+  // Every lattice's inertia at `scale` of its part's tuned inertia (scaled_inertia), the rest of its motion and its
+  // state kept: 1 the tuned jiggle, 0 none. Throws deform::Error, changing nothing, when `scale` is not in [0, 1].
+  void set_inertia_scale(float scale);
   // The lattice's next step takes its bone's motion as it is then, with no jolt, as the first step does: for a bone
   // that jumped (a reach that snapped the limb). Throws std::out_of_range for a bad index.
   void restart_motion(std::size_t lattice) { lattices_.at(lattice).motion_known = false; }
