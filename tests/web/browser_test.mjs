@@ -77,7 +77,7 @@ async function reachFar(page, bounds) {
   await page.mouse.move(bounds.x + wrist[0], bounds.y + wrist[1]);
   await page.mouse.down();
   await frames(page, 2);
-  await page.mouse.move(bounds.x + 0.9 * bounds.width, bounds.y + 0.6 * bounds.height, { steps: 12 });
+  await page.mouse.move(bounds.x + 0.87 * bounds.width, bounds.y + 0.62 * bounds.height, { steps: 12 });
   await frames(page, 10, 1500);
 }
 
