@@ -57,7 +57,7 @@ class WebViewer {
         clips_(deform::builtin_clips(model_)) {
     rebuild_character();
     const deform::Mesh& mesh = model_.mesh;
-    renderer_.create(character_->model().mesh);
+    renderer_.create(model_.mesh);  // the viewer's own copy: it outlives every character rebuild_character() makes
     constexpr int texture_size = 512;
     const std::vector<std::uint8_t> pixels = deform::builtin_texture(texture_size);
     renderer_.set_texture_rgb(0, texture_size, texture_size, pixels.data());
@@ -126,6 +126,7 @@ class WebViewer {
 
   // The panel's controls (index.html); an unknown name or a value out of range changes nothing.
   void set(std::string_view name, float v) {
+    if (!std::isfinite(v)) return;
     if (name == "clip") select_clip(int(v) >= -1 && int(v) < int(clips_.size()) ? int(v) : -1);
     else if (name == "playing") playing_ = v != 0.0f;
     else if (name == "speed") speed_ = std::clamp(v, 0.0f, 2.0f);

@@ -173,6 +173,11 @@ try {
   const walking = await state(full);
   check(walking.clip === 'walk' && walking.clip_time !== t0,
         `walk: the panel's clip plays (${t0} s, then ${walking.clip_time} s)`);
+  // The panel's reset makes a new character: the page goes on drawing it.
+  await full.click('#reset');
+  await frames(full, 5);
+  const reset = await silhouette(full, await full.locator('#canvas').screenshot());
+  check(reset.count > 0.05 * reset.width * reset.height, 'reset: the page draws the new character');
   await full.close();
   check(consoleErrors.length === 0,
         `no error in the page's console${consoleErrors.length ? ': ' + consoleErrors.join('; ') : ''}`);
