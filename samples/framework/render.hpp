@@ -17,7 +17,8 @@
 
 namespace sample {
 
-// Mouse and keyboard state of the current frame, already filtered for ImGui (clicks on the panel are not the scene's).
+// Mouse and keyboard state of the current frame, the scene's only: the native window leaves out what ImGui's panel
+// takes; in the browser the panel is HTML beside the canvas.
 struct Input {
   glm::vec2 mouse{0.0f};         // pixels, origin top-left
   glm::vec2 mouse_delta{0.0f};
@@ -54,6 +55,7 @@ class MeshRenderer {
  public:
   ~MeshRenderer();
   // `mesh` must outlive the renderer. Textures (map_Kd) are loaded with stb_image; a missing one falls back to Kd.
+  // In the browser (no files) none is loaded: set_texture_rgb gives one from memory.
   void create(const deform::Mesh& mesh);
   // Replaces a material's texture with RGB pixels held in memory (row 0 = top), e.g. deform::builtin_texture().
   void set_texture_rgb(std::size_t material, int width, int height, const std::uint8_t* pixels);
