@@ -8,6 +8,7 @@ deform_packages=(
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pip python3-setuptools python3-wheel
   g++-mingw-w64-x86-64-posix wine wine64
   g++-aarch64-linux-gnu qemu-user
+  emscripten chromium
 )
 
 deform_install_deps() {

@@ -1,18 +1,12 @@
 #pragma once
-// The thin framework every libdeform sample shares: a GLFW window with an OpenGL 3.3 core context (4.3 when the
-// driver offers it, for compute shaders), Dear ImGui, an orbit camera, a renderer for a deforming mesh streamed as one
-// interleaved buffer (position, normal, UV), line/point overlays, and offscreen PNG screenshots for headless runs.
-// All OpenGL of the project lives here and in deform::gpu (libdeform/src/gpu), which the GPU paths use.
-#include <cstdint>
-#include <limits>
-#include <span>
+// The thin framework every native libdeform sample shares: a GLFW window with an OpenGL 3.3 core context (4.3 when the
+// driver offers it, for compute shaders), Dear ImGui and offscreen PNG screenshots for headless runs, over the drawing
+// of render.hpp (camera, mesh and overlay renderers), which the browser viewer (samples/web) shares too.
+// All OpenGL of the project lives here, in render.cpp and in deform::gpu (libdeform/src/gpu), which the GPU paths use.
 #include <string>
-#include <vector>
 
-#include <epoxy/gl.h>
-#include <glm/glm.hpp>
+#include "render.hpp"  // epoxy before any other GL header
 
-#include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
@@ -25,17 +19,6 @@ struct WindowOptions {
   int width = 1280;
   int height = 800;
   bool hidden = false;  // headless runs: an invisible window, rendering into an offscreen framebuffer
-};
-
-// Mouse and keyboard state of the current frame, already filtered for ImGui (clicks on the panel are not the scene's).
-struct Input {
-  glm::vec2 mouse{0.0f};         // pixels, origin top-left
-  glm::vec2 mouse_delta{0.0f};
-  float scroll = 0.0f;
-  bool left_down = false, left_pressed = false, left_released = false;
-  bool right_down = false, middle_down = false;
-  bool shift = false;
-  int key_pressed = 0;           // last GLFW key pressed this frame (0 if none)
 };
 
 class Window {
@@ -74,67 +57,5 @@ class Window {
   static void on_scroll(GLFWwindow*, double, double);
   static void on_key(GLFWwindow*, int, int, int, int);
 };
-
-// Orbit camera: right drag orbits, middle drag (or shift + right) pans, wheel zooms.
-struct OrbitCamera {
-  glm::vec3 target{0.0f, 1.0f, 0.0f};
-  float distance = 3.5f;
-  float yaw = 0.5f;     // radians about +Y
-  float pitch = 0.15f;  // radians above the horizon
-  float fov_y = 0.8f;   // radians
-  // Lens shift: the view's centre drawn this far right of the window's, in half window widths (NDC), so that a
-  // panel over the left of the window leaves the target in the middle of what remains. 0: centred.
-  float shift_x = 0.0f;
-  // The height (world y) the eye and target stay above: handle() lowers the pitch no further than keeps the eye
-  // there (a scene with a floor is never seen from under it) and pans the target no lower. -inf: no floor.
-  float floor = -std::numeric_limits<float>::infinity();
-
-  void handle(const Input& input, glm::ivec2 viewport);
-  glm::vec3 eye() const;
-  glm::mat4 view() const;
-  glm::mat4 projection(float aspect) const;
-};
-
-// Draws a Mesh whose points move every frame. Topology, UVs and materials are uploaded once; each frame upload()
-// streams positions and normals into the one interleaved buffer (T2F_N3F_V3F in spirit, §9.4.2 of the thesis).
-class MeshRenderer {
- public:
-  ~MeshRenderer();
-  // `mesh` must outlive the renderer. Textures (map_Kd) are loaded with stb_image; a missing one falls back to Kd.
-  void create(const deform::Mesh& mesh);
-  // Replaces a material's texture with RGB pixels held in memory (row 0 = top), e.g. deform::builtin_texture().
-  void set_texture_rgb(std::size_t material, int width, int height, const std::uint8_t* pixels);
-  // Per render vertex positions and normals (size = mesh.vertex_count()).
-  void upload(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals);
-  void draw(const glm::mat4& model, const glm::mat4& view, const glm::mat4& projection, glm::vec3 eye,
-            glm::vec3 tint = glm::vec3(1.0f)) const;
-  // Binds the interleaved VBO as a shader storage buffer (GPU paths write positions/normals into it directly).
-  GLuint vertex_buffer() const { return vbo_; }
-  static constexpr int floats_per_vertex = 8;  // u v, nx ny nz, x y z
-
- private:
-  const deform::Mesh* mesh_ = nullptr;
-  GLuint vao_ = 0, vbo_ = 0, ibo_ = 0, program_ = 0;
-  std::vector<GLuint> textures_;  // per material (0 = none)
-  std::vector<float> interleaved_;
-};
-
-// Coloured lines and points in world space, rebuilt every frame (skeleton, lattices, targets, the floor grid).
-class OverlayRenderer {
- public:
-  ~OverlayRenderer();
-  void create();
-  void line(glm::vec3 a, glm::vec3 b, glm::vec3 colour);
-  void point(glm::vec3 p, glm::vec3 colour, float size = 8.0f);
-  // Draws and clears what was added; `on_top` ignores depth (skeleton and handles show through the skin).
-  void flush(const glm::mat4& view_projection, bool on_top);
-
- private:
-  GLuint vao_ = 0, vbo_ = 0, program_ = 0;
-  std::vector<float> lines_, points_;
-};
-
-// Compiles and links a program from sources; aborts with the GL log on failure (samples only).
-GLuint build_program(const char* vertex_source, const char* fragment_source);
 
 }  // namespace sample

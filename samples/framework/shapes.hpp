@@ -2,9 +2,7 @@
 // Procedural props for the viewer's scene (a floor, a target ball) as deform::Mesh values, so they draw through the
 // same MeshRenderer as the character.
 #include "deform/runtime/mesh.hpp"
-#include "deform/runtime/normals.hpp"
-#include "deform/io/obj.hpp"
-#include "deform/offline/topology.hpp"
+
 namespace sample {
 
 // A square in the XZ plane at y = 0, `size` wide, `cells` checker cells per side (two materials alternate).

@@ -30,6 +30,7 @@ import sys
 NOT_RUN = {
     "./scripts/test": "it is the suite that runs this test",
     "./scripts/demo": "the viewer under Xvfb is the viewer_smoke_xvfb test, the CLI half the commands below",
+    "./scripts/web": "it serves until stopped; scripts/test builds the page and opens it in headless Chromium",
     "./scripts/fuzz": "the suite runs every fuzzer for a fixed number of inputs (the fuzz_* tests)",
     "cmake ": "the build itself: scripts/test builds, consumer_links_installed_library installs and links",
     "cc ": "a C program built against the installed package: consumer_links_installed_library builds it so",
