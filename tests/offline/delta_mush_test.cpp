@@ -482,3 +482,80 @@ TEST_CASE("Delta Mush at a bent elbow: the volume it keeps against LBS, measured
                                    << "% of the body's volume on average, Delta Mush " << 100.0 * mush_loss / trials / rest
                                    << "%");
 }
+
+TEST_CASE("Character: Delta Mush after the lattices, off by default, no allocation per frame") {
+  deform::Character off = deform::make_builtin_character();
+  deform::Character on = deform::make_builtin_character();
+  CHECK(off.delta_mush() == nullptr);
+  const float size = diagonal(off.model().mesh.positions);
+  // At the bind pose the mush gives the rest back.
+  on.set_delta_mush({12, 0.5f, {}});
+  REQUIRE(on.delta_mush() != nullptr);
+  REQUIRE(on.update(0.0f));
+  CHECK(max_distance(on.positions(), on.model().mesh.positions) <= 1e-6 * size);
+  // Set, then cleared: the same bits as never set.
+  deform::Character cleared = deform::make_builtin_character();
+  cleared.set_delta_mush({});
+  cleared.clear_delta_mush();
+  CHECK(cleared.delta_mush() == nullptr);
+  CHECK_THROWS_AS(cleared.set_delta_mush({-3, 0.5f, {}}), deform::Error);
+  CHECK(cleared.delta_mush() == nullptr);
+
+  // A bent arm reaching far (the lattices stretched), two frames: the mushed character equals DeltaMushJob run by
+  // hand on the unmushed one's points, to the bit; the cleared one equals the one never mushed.
+  const deform::Skeleton& sk = off.skeleton();
+  deform::Pose pose = sk.bind_pose();
+  sk.set_euler(pose, sk.find("forearm_l"), {110.0f, 0.0f, 0.0f});
+  const glm::vec3 target(1.4f, 1.6f, 0.4f);
+  for (deform::Character* c : {&off, &on, &cleared}) {
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->reach(sk.find("hand_l"), target).status);
+    for (int frame = 0; frame < 2; ++frame) REQUIRE(c->update(1.0f / 60.0f));
+  }
+  CHECK(off.stretch() > 0.05f);
+  CHECK(std::memcmp(cleared.positions().data(), off.positions().data(), off.positions().size_bytes()) == 0);
+  const std::vector<glm::vec3> by_hand = mush(*on.delta_mush(), off.positions());
+  CHECK(std::memcmp(on.positions().data(), by_hand.data(), by_hand.size() * sizeof(glm::vec3)) == 0);
+  CHECK(max_distance(on.positions(), off.positions()) > 1e-3 * size);  // it did smooth
+
+  // normals(): recomputed from the mushed points.
+  const std::span<const glm::vec3> normals = on.normals();
+  const deform::VertexNormalsBinding nb = deform::bind_vertex_normals(on.model().mesh);
+  std::vector<glm::vec4> normals_scratch(nb.scratch_size());
+  std::vector<glm::vec3> expected(on.model().mesh.vertex_count());
+  deform::VertexNormalsJob nj;
+  nj.binding = &nb;
+  nj.positions = on.positions();
+  nj.normals = expected;
+  nj.scratch = normals_scratch;
+  REQUIRE(nj.run());
+  CHECK(std::memcmp(normals.data(), expected.data(), expected.size() * sizeof(glm::vec3)) == 0);
+
+  // An instance shares the binding and gives what a character of its own with the same settings gives.
+  deform::Character copy = on.instance();
+  CHECK(copy.delta_mush() == on.delta_mush());
+  deform::Character own = deform::make_builtin_character();
+  own.set_delta_mush({12, 0.5f, {}});
+  for (deform::Character* c : {&copy, &own}) {
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->update(0.0f));
+  }
+  CHECK(std::memcmp(copy.positions().data(), own.positions().data(), own.positions().size_bytes()) == 0);
+
+  // 200 frames of a clip with the mush on: no allocation.
+  const std::vector<deform::Animation> clips = deform::builtin_clips(on.model());
+  deform::Pose sampled = sk.bind_pose();
+  const long before = allocations.load();
+  for (int frame = 0; frame < 200; ++frame) {
+    deform::SamplingJob sampling;
+    sampling.animation = &clips[1];
+    sampling.time = float(frame) / 60.0f;
+    sampling.rotations = sampled.rotations;
+    sampling.translations = sampled.translations;
+    REQUIRE(sampling.run());
+    REQUIRE(on.set_pose(sampled));
+    REQUIRE(on.update(1.0f / 60.0f));
+    (void)on.normals();
+  }
+  CHECK(allocations.load() == before);
+}
