@@ -5,10 +5,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "deform/runtime/parallel.hpp"
 #include "deform/runtime/portable.hpp"
 #include "runtime/finite.hpp"
+
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#elif defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
 
 namespace deform {
 namespace {
@@ -22,9 +29,10 @@ Status shape_ok(const DeltaMushJob& job) noexcept {
   if (b->iterations > max_delta_mush_iterations) return Status::failure("iterations out of range");
   if (!(b->step > 0.0f && b->step <= 1.0f)) return Status::failure("step is not within (0, 1]");
   if (b->ring_offsets.size() != n + 1 || b->smoothing.size() != n || b->fan_offsets.size() != n + 1 ||
-      b->tangent_neighbour.size() != n || b->pinned.size() != n)
+      b->tangent_neighbour.size() != n || b->pinned.size() != n || b->padded_offsets.size() != n + 1)
     return Status::failure("binding is malformed: per-point arrays differ in size");
-  if (b->ring_offsets.back() != b->rings.size() || b->fan_offsets.back() * std::size_t{2} != b->fans.size())
+  if (b->ring_offsets.back() != b->rings.size() || b->fan_offsets.back() * std::size_t{2} != b->fans.size() ||
+      b->padded_offsets.back() * std::size_t{4} != b->padded_rings.size())
     return Status::failure("binding is malformed: offsets do not end at their arrays' sizes");
   if (job.in_positions.size() != n || job.out_positions.size() != n)
     return Status::failure("positions are not one per point");
@@ -34,22 +42,75 @@ Status shape_ok(const DeltaMushJob& job) noexcept {
 
 glm::vec3 xyz(const glm::vec4& p) noexcept { return glm::vec3(p); }
 
-// One smoothing step over points [begin, end): out[i] = keep · in[i] + pull · Σ in[ring]. The sum runs over four
-// components so that a packed source (vec4) becomes one vector add per neighbour.
-template <class Point>
-void smooth(const DeltaMushBinding& b, const Point* in, glm::vec4* out, std::size_t begin, std::size_t end) noexcept {
+// One smoothing step over points [begin, end): out[i] = keep · in[i] + pull · Σ in[ring]. The padded source (vec4)
+// sums all four components, which GCC and Clang turn into one vector add per neighbour (the w of the scratch is 0).
+void smooth(const DeltaMushBinding& b, const glm::vec3* in, glm::vec4* out, std::size_t begin,
+            std::size_t end) noexcept {
   const std::uint32_t* offsets = b.ring_offsets.data();
   const std::uint32_t* rings = b.rings.data();
   const glm::vec2* smoothing = b.smoothing.data();
   for (std::size_t i = begin; i < end; ++i) {
-    float sum[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    for (std::uint32_t r = offsets[i]; r < offsets[i + 1]; ++r) {
-      const Point& p = in[rings[r]];
-      for (int c = 0; c < Point::length(); ++c) sum[c] += p[c];
+    float x = 0.0f, y = 0.0f, z = 0.0f;
+    for (std::uint32_t r = offsets[i], last = offsets[i + 1]; r < last; ++r) {
+      const glm::vec3 p = in[rings[r]];
+      x += p.x, y += p.y, z += p.z;
     }
     const glm::vec2 k = smoothing[i];
-    const Point& x = in[i];
-    out[i] = glm::vec4(k.x * x[0] + k.y * sum[0], k.x * x[1] + k.y * sum[1], k.x * x[2] + k.y * sum[2], 0.0f);
+    const glm::vec3 p = in[i];
+    out[i] = glm::vec4(k.x * p.x + k.y * x, k.x * p.y + k.y * y, k.x * p.z + k.y * z, 0.0f);
+  }
+}
+// Four floats added lane by lane: SSE2 (every x86-64) or NEON (every aarch64), else scalar — the same IEEE sums in
+// the same order on every path, so every path gives the same bits (GCC does not vectorise the scalar form itself).
+#if defined(__SSE2__) || defined(_M_X64)
+struct Four {
+  __m128 v;
+  static Four zero() noexcept { return {_mm_setzero_ps()}; }
+  static Four load(const float* p) noexcept { return {_mm_loadu_ps(p)}; }
+  void add(Four o) noexcept { v = _mm_add_ps(v, o.v); }
+  void store(float* p) const noexcept { _mm_storeu_ps(p, v); }
+};
+#elif defined(__ARM_NEON)
+struct Four {
+  float32x4_t v;
+  static Four zero() noexcept { return {vdupq_n_f32(0.0f)}; }
+  static Four load(const float* p) noexcept { return {vld1q_f32(p)}; }
+  void add(Four o) noexcept { v = vaddq_f32(v, o.v); }
+  void store(float* p) const noexcept { vst1q_f32(p, v); }
+};
+#else
+struct Four {
+  float v[4];
+  static Four zero() noexcept { return {{0.0f, 0.0f, 0.0f, 0.0f}}; }
+  static Four load(const float* p) noexcept { return {{p[0], p[1], p[2], p[3]}}; }
+  void add(Four o) noexcept {
+    for (int c = 0; c < 4; ++c) v[c] += o.v[c];
+  }
+  void store(float* p) const noexcept {
+    for (int c = 0; c < 4; ++c) p[c] = v[c];
+  }
+};
+#endif
+
+// The passes after the first: the padded rings, four neighbours at a time (the pads read the zero after `in`), summed
+// in the same order as the first pass's loop, so that the result is the same bits.
+void smooth(const DeltaMushBinding& b, const glm::vec4* in, glm::vec4* out, std::size_t begin,
+            std::size_t end) noexcept {
+  const std::uint32_t* offsets = b.padded_offsets.data();
+  const std::uint32_t* rings = b.padded_rings.data();
+  const glm::vec2* smoothing = b.smoothing.data();
+  for (std::size_t i = begin; i < end; ++i) {
+    Four sum = Four::zero();
+    for (std::uint32_t g = offsets[i], last = offsets[i + 1]; g < last; ++g) {
+      const std::uint32_t* group = rings + 4 * std::size_t(g);
+      DEFORM_UNROLL
+      for (int r = 0; r < 4; ++r) sum.add(Four::load(&in[group[r]].x));
+    }
+    float total[4];
+    sum.store(total);
+    const glm::vec2 k = smoothing[i];
+    const glm::vec4 p = in[i];
+    out[i] = glm::vec4(k.x * p.x + k.y * total[0], k.x * p.y + k.y * total[1], k.x * p.z + k.y * total[2], 0.0f);
   }
 }
 
@@ -67,12 +128,12 @@ DEFORM_ALWAYS_INLINE inline bool frame_of(const DeltaMushBinding& b, const glm::
     n += glm::cross(xyz(s[fans[2 * f]]) - c, xyz(s[fans[2 * f + 1]]) - c);
   const glm::vec3 e = xyz(s[t]) - c;
   const float ee = glm::dot(e, e), nn = glm::dot(n, n);
-  if (!(nn > 1e-12f * ee * ee) || !std::isfinite(nn)) return false;
-  normal = n / std::sqrt(nn);
+  if (!(nn > 1e-12f * ee * ee && nn <= std::numeric_limits<float>::max())) return false;
+  normal = n * (1.0f / std::sqrt(nn));
   const glm::vec3 in_plane = e - normal * glm::dot(normal, e);
   const float tt = glm::dot(in_plane, in_plane);
   if (!(tt > 1e-12f * ee)) return false;
-  tangent = in_plane / std::sqrt(tt);
+  tangent = in_plane * (1.0f / std::sqrt(tt));
   bitangent = glm::cross(normal, tangent);
   return true;
 }
@@ -98,7 +159,7 @@ void finish(const DeltaMushBinding& b, const glm::vec4* s, const glm::vec3* in, 
 
 // Scratch halves: pass p writes buffer p % 2 and reads buffer (p - 1) % 2.
 glm::vec4* buffer(const DeltaMushJob& job, std::size_t which) noexcept {
-  return job.scratch.data() + which * job.binding->point_count();
+  return job.scratch.data() + which * (job.binding->point_count() + 1);
 }
 
 }  // namespace
@@ -118,6 +179,10 @@ Status DeltaMushJob::validate() const noexcept {
     return Status::failure("binding is malformed: offsets do not ascend from 0");
   for (const std::uint32_t p : b.rings)
     if (p >= n) return Status::failure("binding is malformed: ring point out of range");
+  if (b.padded_offsets[0] != 0 || !std::is_sorted(b.padded_offsets.begin(), b.padded_offsets.end()))
+    return Status::failure("binding is malformed: offsets do not ascend from 0");
+  for (const std::uint32_t p : b.padded_rings)
+    if (p > n) return Status::failure("binding is malformed: ring point out of range");
   for (const std::uint32_t p : b.fans)
     if (p >= n) return Status::failure("binding is malformed: fan point out of range");
   for (const std::uint32_t p : b.tangent_neighbour)
@@ -143,6 +208,11 @@ Status DeltaMushJob::run_pass(std::size_t pass, std::size_t begin, std::size_t e
   }
   if (pass == 0) {
     smooth(b, in_positions.data(), buffer(*this, 0), begin, end);
+    // The zeros the padded rings read, after each buffer: written by the range that ends the pass.
+    if (end == count()) {
+      buffer(*this, 0)[count()] = glm::vec4(0.0f);
+      if (k > 1) buffer(*this, 1)[count()] = glm::vec4(0.0f);
+    }
   } else if (pass < k) {
     smooth(b, static_cast<const glm::vec4*>(buffer(*this, (pass - 1) % 2)), buffer(*this, pass % 2), begin, end);
   } else {
