@@ -50,7 +50,8 @@ std::vector<std::vector<glm::vec3>> frames(const deform::Mesh& m) {
   std::vector<std::vector<glm::vec3>> out(16);
   for (int f = 0; f < 16; ++f) {
     const float bend = 0.05f * float(f);
-    for (const glm::vec3& p : m.positions) out[std::size_t(f)].emplace_back(p.x + bend * p.y * p.y, p.y, p.z + bend * p.x * p.y);
+    for (const glm::vec3& p : m.positions)
+      out[std::size_t(f)].emplace_back(p.x + bend * p.y * p.y, p.y, p.z + bend * p.x * p.y);
   }
   return out;
 }

@@ -319,7 +319,8 @@ static void delta_mush_smooths_a_bent_elbow(void) {
   CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, NULL, 0) == DEFORM_OK);
   CHECK(deform_character_update(mushed, 0.0f) == DEFORM_OK);
   double worst = 0.0;
-  for (size_t p = 0; p < points; ++p) worst = fmax(worst, distance3(deform_character_positions(mushed) + 3 * p, rest + 3 * p));
+  for (size_t p = 0; p < points; ++p)
+    worst = fmax(worst, distance3(deform_character_positions(mushed) + 3 * p, rest + 3 * p));
   CHECK(worst < 1e-5);  /* the rest pose back (the character is about 2 units tall) */
   /* The left elbow bent 100 degrees about x. */
   CHECK(deform_character_bind_pose(plain, rotations, translations, bones) == DEFORM_OK);
@@ -338,7 +339,8 @@ static void delta_mush_smooths_a_bent_elbow(void) {
     CHECK(deform_character_update(mushed, 0.0f) == DEFORM_OK);
     moved = 0.0;
     for (size_t p = 0; p < points; ++p)
-      moved = fmax(moved, distance3(deform_character_positions(mushed) + 3 * p, deform_character_positions(plain) + 3 * p));
+      moved = fmax(moved,
+                   distance3(deform_character_positions(mushed) + 3 * p, deform_character_positions(plain) + 3 * p));
     if (pass == 0) CHECK(moved > 1e-3);  /* smoothed */
     else CHECK(moved == 0.0);            /* a mask of zeros: every point as skinned */
     if (pass == 0) CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, zeros, points) == DEFORM_OK);

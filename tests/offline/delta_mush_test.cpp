@@ -479,8 +479,8 @@ TEST_CASE("Delta Mush at a bent elbow: the volume it keeps against LBS, measured
     mush_loss += mushy;
   }
   MESSAGE("elbow 30-150 degrees, " << trials << " poses: LBS loses " << 100.0 * lbs_loss / trials / rest
-                                   << "% of the body's volume on average, Delta Mush " << 100.0 * mush_loss / trials / rest
-                                   << "%");
+                                   << "% of the body's volume on average, Delta Mush "
+                                   << 100.0 * mush_loss / trials / rest << "%");
 }
 
 TEST_CASE("Character: Delta Mush after the lattices, off by default, no allocation per frame") {

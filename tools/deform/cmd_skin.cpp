@@ -230,8 +230,8 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, co
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(),
-                     {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph", "--mush", "--mush-step"});
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph",
+                                         "--mush", "--mush-step"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);

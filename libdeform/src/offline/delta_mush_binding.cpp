@@ -110,7 +110,8 @@ DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& sett
   job.out_positions = unused;
   job.scratch = scratch;
   for (std::size_t pass = 0; pass + 1 < job.passes(); ++pass)
-    if (const Status status = job.run_pass(pass, 0, n); !status) throw Error::invalid_argument(element, status.reason());
+    if (const Status status = job.run_pass(pass, 0, n); !status)
+      throw Error::invalid_argument(element, status.reason());
   const std::span<const glm::vec4> s = job.smoothed();
 
   for (std::uint32_t i = 0; i < n; ++i) {

@@ -240,7 +240,8 @@ Status DeltaMushJob::run(ThreadPool& pool, std::size_t min_chunk) const noexcept
     const Split* context = &split;  // one pointer: the std::function stores it without allocating
     pool.parallel_for(units, min_units, [context](std::size_t begin, std::size_t end) {
       const std::size_t n = context->job->count();
-      (void)context->job->run_pass(context->pass, std::min(begin * split_multiple, n), std::min(end * split_multiple, n));
+      (void)context->job->run_pass(context->pass, std::min(begin * split_multiple, n),
+                                   std::min(end * split_multiple, n));
     });
   }
   return {};
@@ -253,12 +254,12 @@ std::span<const glm::vec4> DeltaMushJob::smoothed() const noexcept {
 
 bool delta_mush_frame(const DeltaMushBinding& binding, std::span<const glm::vec4> smoothed, std::uint32_t point,
                       glm::mat3& frame) noexcept {
-  if (point >= binding.point_count() || smoothed.size() != binding.point_count() ||
-      binding.tangent_neighbour.size() != binding.point_count() || binding.fan_offsets.size() != binding.point_count() + 1)
+  const std::size_t n = binding.point_count();
+  if (point >= n || smoothed.size() != n || binding.tangent_neighbour.size() != n || binding.fan_offsets.size() != n + 1)
     return false;
-  glm::vec3 t, b, n;
-  if (!frame_of(binding, smoothed.data(), point, t, b, n)) return false;
-  frame = glm::mat3(t, b, n);
+  glm::vec3 tangent, bitangent, normal;
+  if (!frame_of(binding, smoothed.data(), point, tangent, bitangent, normal)) return false;
+  frame = glm::mat3(tangent, bitangent, normal);
   return true;
 }
 

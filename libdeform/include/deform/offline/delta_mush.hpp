@@ -28,10 +28,10 @@ struct DeltaMushSettings {
 // to a dot — a lone triangle, a box, an eye — or a neighbourhood flattened to a line) is pinned: it keeps its input
 // position, as under mask 0, so that the input's rounding (a skinned rest pose is within about 1e-7 of the model size
 // of the rest) never turns into a visible move. The rest deltas are computed from the smoothed rest points exactly as
-// DeltaMushJob computes them (the job's own passes), so that the rest pose comes back to within float rounding. Throws deform::Error (kind argument, element "delta mush") for iterations
-// out of range ("iterations must be within [0, 10000]"), a step not within (0, 1], a mask not one per point or a mask
-// weight not within [0, 1] (naming the point), rest points that are not finite (naming the point), and what
-// build_point_topology throws. O(iterations · (points + edges) + triangles · log triangles); allocates the binding.
+// DeltaMushJob computes them (the job's own passes), so that the rest pose comes back to within float rounding.
+// Throws deform::Error (kind argument, element "delta mush") for iterations out of range ("iterations must be within
+// [0, 10000]"), a step not within (0, 1], a mask not one per point or a mask weight not within [0, 1] (naming the
+// point), rest points that are not finite (naming the point), and what build_point_topology throws. O(iterations · (points + edges) + triangles · log triangles); allocates the binding.
 DEFORM_OFFLINE_API DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& settings = {});
 
 }  // namespace deform
