@@ -168,6 +168,27 @@ void bind_character(py::module_& m) {
           })
       .def_readwrite("lattice_fields", &deform::Character::lattice_fields)
       .def(
+          "set_delta_mush",
+          [](deform::Character& c, int iterations, float step, std::optional<FloatArray> mask) {
+            deform::DeltaMushSettings settings;
+            settings.iterations = iterations;
+            settings.step = step;
+            if (mask) {
+              if (mask->ndim() != 1) throw deform::Error::invalid_argument("mask", "expected one weight per point");
+              settings.mask = std::span<const float>(mask->data(), static_cast<std::size_t>(mask->size()));
+            }
+            c.set_delta_mush(settings);
+          },
+          py::arg("iterations") = 10, py::arg("step") = 0.5f, py::arg("mask") = py::none(),
+          "Delta Mush after the lattices (docs/skinning.md): `iterations` in [0, 10000] (0: off), `step` in (0, 1], "
+          "`mask` None or one weight per point in [0, 1] (0 keeps a point as skinned). Binds at once (call it at "
+          "set-up); raises deform.Error for a value out of range.")
+      .def("clear_delta_mush", &deform::Character::clear_delta_mush, "Turns Delta Mush off (the default).")
+      .def_property_readonly(
+          "delta_mush_iterations",
+          [](const deform::Character& c) { return c.delta_mush() ? c.delta_mush()->iterations : 0u; },
+          "The Delta Mush stage's iterations, 0 when it is off.")
+      .def(
           "set_max_stretch", [](deform::Character& c, float s) { check(c.set_max_stretch(s)); }, py::arg("max_stretch"),
           "The largest stretch reach() asks of a lattice, in multiples of its length, [0, 1000].")
       .def(

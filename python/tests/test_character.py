@@ -87,3 +87,27 @@ def test_a_character_from_loaded_files(native_paths):
     assert np.linalg.norm(np.array(hero.bone_position("hand_l")) - TARGET) < 0.02
     plain = deform.Character(model)
     assert plain.lattice_count == 0
+
+
+def test_delta_mush_smooths_a_bent_elbow_and_gives_the_rest_back():
+    plain, mushed = deform.Character.builtin(), deform.Character.builtin()
+    assert mushed.delta_mush_iterations == 0
+    mushed.set_delta_mush(iterations=10, step=0.5)
+    assert mushed.delta_mush_iterations == 10
+    plain.update(0.0)
+    mushed.update(0.0)
+    np.testing.assert_allclose(mushed.positions, plain.positions, atol=2e-6)  # the rest pose back
+    for c in (plain, mushed):
+        pose = c.pose
+        c.skeleton.set_euler(pose, "forearm_l", [110, 0, 0])
+        c.pose = pose
+        c.update(0.0)
+    assert np.abs(mushed.positions - plain.positions).max() > 1e-3
+    mushed.set_delta_mush(10, 0.5, np.zeros(mushed.point_count, np.float32))  # every point kept as skinned
+    mushed.update(0.0)
+    np.testing.assert_array_equal(mushed.positions, plain.positions)
+    for bad in ({"iterations": -1}, {"step": float("nan")}, {"mask": np.ones(3, np.float32)}):
+        with pytest.raises(deform.Error):
+            mushed.set_delta_mush(**bad)
+    mushed.clear_delta_mush()
+    assert mushed.delta_mush_iterations == 0

@@ -311,6 +311,64 @@ static void lattice_matches_trilinear_interpolation(void) {
   CHECK(deform_lattice_create(origin, flat, 1, 1, 1, &box) == DEFORM_ERROR_ARGUMENT);
 }
 
+/* Delta Mush through the C API: at the bind pose the rest comes back; a bent elbow is smoothed; a mask of zeros keeps
+ * the skinned points; bad values are refused, changing nothing. */
+static void delta_mush_smooths_a_bent_elbow(void) {
+  deform_character* plain = NULL;
+  deform_character* mushed = NULL;
+  CHECK(deform_character_create_builtin(&plain) == DEFORM_OK);
+  CHECK(deform_character_create_builtin(&mushed) == DEFORM_OK);
+  if (plain == NULL || mushed == NULL) return;
+  const size_t points = deform_character_point_count(plain), bones = deform_character_bone_count(plain);
+  float* rest = malloc(points * 3 * sizeof(float));
+  float* zeros = calloc(points, sizeof(float));
+  float* rotations = malloc(bones * 4 * sizeof(float));
+  float* translations = malloc(bones * 3 * sizeof(float));
+  CHECK(deform_character_copy_positions(plain, rest, points * 3) == DEFORM_OK);
+  CHECK(deform_character_set_delta_mush(mushed, -1, 0.5f, NULL, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "iterations") != NULL);
+  CHECK(deform_character_set_delta_mush(mushed, 10, NAN, NULL, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "step") != NULL);
+  CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, zeros, points - 1) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, NULL, 3) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, NULL, 0) == DEFORM_OK);
+  CHECK(deform_character_update(mushed, 0.0f) == DEFORM_OK);
+  double worst = 0.0;
+  for (size_t p = 0; p < points; ++p)
+    worst = fmax(worst, distance3(deform_character_positions(mushed) + 3 * p, rest + 3 * p));
+  CHECK(worst < 1e-5);  /* the rest pose back (the character is about 2 units tall) */
+  /* The left elbow bent 100 degrees about x. */
+  CHECK(deform_character_bind_pose(plain, rotations, translations, bones) == DEFORM_OK);
+  const int32_t forearm = deform_character_find_bone(plain, "forearm_l");
+  CHECK(forearm >= 0);
+  if (forearm >= 0) {
+    const float half = 0.5f * 100.0f * 3.14159265f / 180.0f;
+    float* q = rotations + 4 * forearm;
+    q[0] = sinf(half), q[1] = 0.0f, q[2] = 0.0f, q[3] = cosf(half);
+  }
+  double moved = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    CHECK(deform_character_set_pose(plain, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_set_pose(mushed, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_update(plain, 0.0f) == DEFORM_OK);
+    CHECK(deform_character_update(mushed, 0.0f) == DEFORM_OK);
+    moved = 0.0;
+    for (size_t p = 0; p < points; ++p)
+      moved = fmax(moved,
+                   distance3(deform_character_positions(mushed) + 3 * p, deform_character_positions(plain) + 3 * p));
+    if (pass == 0) CHECK(moved > 1e-3);  /* smoothed */
+    else CHECK(moved == 0.0);            /* a mask of zeros: every point as skinned */
+    if (pass == 0) CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, zeros, points) == DEFORM_OK);
+  }
+  CHECK(deform_character_set_delta_mush(mushed, 0, 0.5f, NULL, 0) == DEFORM_OK);  /* off */
+  free(rest);
+  free(zeros);
+  free(rotations);
+  free(translations);
+  deform_character_destroy(plain);
+  deform_character_destroy(mushed);
+}
+
 int main(void) {
   CHECK(strlen(deform_version()) >= 5);
   CHECK(strcmp(deform_last_error(), "") == 0);
@@ -319,6 +377,7 @@ int main(void) {
   files_outside_the_model_folder_are_refused();
   skinning_matches_a_plain_reference();
   lattice_matches_trilinear_interpolation();
+  delta_mush_smooths_a_bent_elbow();
   if (failures) {
     fprintf(stderr, "%d checks failed\n", failures);
     return 1;

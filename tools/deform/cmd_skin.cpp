@@ -9,12 +9,14 @@
 #include "deform/io/obj.hpp"
 #include "deform/io/pose_json.hpp"
 #include "deform/io/text.hpp"
+#include "deform/offline/delta_mush.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/blending.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/morph.hpp"
+#include "deform/runtime/normals.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "model_loader.hpp"
@@ -228,7 +230,8 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, co
 
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph"});
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph",
+                                         "--mush", "--mush-step"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);
@@ -243,6 +246,12 @@ int run(const std::vector<std::string>& argv) {
   if (!animated && args.has("--time")) throw UsageError("--time needs --clip or --blend");
   const std::string out_path = args.required("--out");
   const bool limits = !args.has("--no-limits");
+  // Delta Mush after skinning: iterations and step, checked before the model loads.
+  const auto mush_iterations = static_cast<int>(
+      args.has("--mush") ? parse_integer(*args.value("--mush"), "--mush", 0, deform::max_delta_mush_iterations) : 0);
+  const double mush_step = args.has("--mush-step") ? parse_number(*args.value("--mush-step"), "--mush-step") : 0.5;
+  if (!(mush_step > 0.0 && mush_step <= 1.0)) throw UsageError("--mush-step: must be within (0, 1]");
+  if (args.has("--mush-step") && !args.has("--mush")) throw UsageError("--mush-step needs --mush");
 
   const LoadedModel loaded = load_model(args);
   const deform::Model& model = loaded.model;
@@ -312,6 +321,31 @@ int run(const std::vector<std::string>& argv) {
   }
   if (render_vertices > 0)
     skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
+  if (mush_iterations > 0) {
+    // Delta Mush of the skinned points, bound on the rest points; the normals then come from the mushed surface.
+    const deform::DeltaMushBinding binding =
+        deform::bind_delta_mush(mesh, {mush_iterations, static_cast<float>(mush_step), {}});
+    std::vector<glm::vec4> mush_scratch(deform::DeltaMushJob::scratch_size(binding));
+    deform::DeltaMushJob mush;
+    mush.binding = &binding;
+    mush.in_positions = positions;
+    mush.out_positions = positions;
+    mush.scratch = mush_scratch;
+    if (const deform::Status status = mush.validate(); !status)
+      throw deform::Error::in_file(loaded.source, "--mush", status.reason());
+    mush.run();
+    if (render_vertices > 0) {
+      const deform::VertexNormalsBinding normals_binding = deform::bind_vertex_normals(mesh);
+      std::vector<glm::vec4> normals_scratch(normals_binding.scratch_size());
+      deform::VertexNormalsJob recompute;
+      recompute.binding = &normals_binding;
+      recompute.positions = positions;
+      recompute.normals = normals;
+      recompute.scratch = normals_scratch;
+      if (const deform::Status status = recompute.run(); !status)
+        throw deform::Error::in_file(loaded.source, "--mush", status.reason());
+    }
+  }
 
   // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
   deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
@@ -338,6 +372,8 @@ int run(const std::vector<std::string>& argv) {
   out["max_displacement"] = max_displacement;
   out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
   out["kernel"] = deform::isa_name(deform::isa_best());
+  if (mush_iterations > 0)
+    out["mush"] = {{"iterations", mush_iterations}, {"step", deform::shortest_double(static_cast<float>(mush_step))}};
   out["out"] = out_path;
   if (!blend.empty()) {
     nlohmann::ordered_json items = nlohmann::ordered_json::array();
@@ -354,7 +390,7 @@ int run(const std::vector<std::string>& argv) {
 const Command skin_command = {
     "skin", "deform a mesh by a pose (LBS or DQS)",
     "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
-    "                   [--no-limits] --out OUT.obj\n"
+    "                   [--mush N [--mush-step S]] [--no-limits] --out OUT.obj\n"
     "       deform skin MODEL (--pose P.json | --clip NAME --time T) [--morph NAME:W[,NAME:W...]] ...\n"
     "                   (MODEL: an import: glTF, FBX, .x, ...)\n"
     "       deform skin (--builtin | MODEL) --blend CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
@@ -373,7 +409,10 @@ const Command skin_command = {
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"
     "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", \"bones_posed\", \"limits\",\n"
     "\"max_displacement\", \"bounds\": {\"min\", \"max\"}, \"kernel\", \"out\"}; with --blend also\n"
-    "\"blend\": [{\"clip\", \"weight\"}].\n",
+    "\"blend\": [{\"clip\", \"weight\"}].\n"
+    "--mush N (0 to 10000) smooths the skinned points by Delta Mush with N iterations (--mush-step S, (0, 1],\n"
+    "default 0.5): bent joints smooth, detail kept; the normals are then recomputed from the mushed points and the\n"
+    "summary gains \"mush\": {\"iterations\", \"step\"}.\n",
     run};
 
 }  // namespace cli

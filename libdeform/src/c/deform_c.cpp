@@ -217,6 +217,21 @@ deform_status deform_character_set_lattice_motion(deform_character* character, s
   });
 }
 
+deform_status deform_character_set_delta_mush(deform_character* character, int iterations, float step,
+                                              const float* mask, size_t mask_count) {
+  if (character == nullptr) return fail_argument("deform_character_set_delta_mush: the handle is NULL");
+  if (mask == nullptr && mask_count != 0)
+    return fail_argument("deform_character_set_delta_mush: mask is NULL with a nonzero count");
+  return guarded([&] {
+    deform::DeltaMushSettings settings;
+    settings.iterations = iterations;
+    settings.step = step;
+    if (mask != nullptr) settings.mask = std::span<const float>(mask, mask_count);
+    character->character.set_delta_mush(settings);  // throws deform::Error (argument), changing nothing
+    return DEFORM_OK;
+  });
+}
+
 deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
                                      deform_reach_result* result) {
   if (character == nullptr || target == nullptr) return fail_argument("deform_character_reach: a handle or target is NULL");

@@ -183,6 +183,11 @@ Character Character::instance() const {
   copy.reach_soften = reach_soften;
   copy.reach_limits = reach_limits;
   copy.set_normals_mode(normals_mode_);
+  copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
+  if (mush_) {
+    copy.mush_scratch_.resize(mush_scratch_.size());
+    if (copy.normals_scratch_.empty()) copy.normals_scratch_.resize(bind_->vertex_normals.scratch_size());
+  }
   for (std::size_t c = 0; c < springs_.chain_count(); ++c) copy.springs_.set_settings(c, springs_.spec(c));
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
@@ -583,8 +588,32 @@ Status Character::update(float dt) {
              !status) {
     return status;
   }
+  if (mush_ && lattice_fields) {
+    // Delta Mush after the lattices, in place; the normals are then recomputed from the mushed points.
+    DeltaMushJob mush;
+    mush.binding = mush_.get();
+    mush.in_positions = positions_;
+    mush.out_positions = positions_;
+    mush.scratch = mush_scratch_;
+    if (const Status status = mush.run(); !status) return status;
+    return {};
+  }
   transported_current_ = transport;
   return {};
+}
+
+void Character::set_delta_mush(const DeltaMushSettings& settings) {
+  auto binding = std::make_shared<const DeltaMushBinding>(bind_delta_mush(bind_->model.mesh, settings));
+  if (binding->iterations == 0) return clear_delta_mush();
+  std::vector<glm::vec4> scratch(DeltaMushJob::scratch_size(*binding));
+  if (normals_scratch_.empty()) normals_scratch_.resize(bind_->vertex_normals.scratch_size());
+  mush_ = std::move(binding);
+  mush_scratch_ = std::move(scratch);
+}
+
+void Character::clear_delta_mush() noexcept {
+  mush_.reset();
+  mush_scratch_.clear();
 }
 
 std::span<const glm::vec3> Character::normals() {

@@ -100,6 +100,14 @@ DEFORM_C_API deform_status deform_character_set_lattice_motion(deform_character*
                                                                float inertia, const float gravity[3],
                                                                float units_per_metre);
 
+/* Delta Mush after the lattices (Character::set_delta_mush, docs/skinning.md "Delta Mush"): `iterations` smoothing
+ * steps in [0, 10000] (0: off, the default), `step` in (0, 1], `mask` NULL (every point fully mushed) or `mask_count`
+ * = point_count weights in [0, 1] (0 keeps a point as skinned). Binds at once (allocates: call it at set-up); from the
+ * next update() the positions are mushed. DEFORM_ERROR_ARGUMENT naming the value for one out of range, changing
+ * nothing. */
+DEFORM_C_API deform_status deform_character_set_delta_mush(deform_character* character, int iterations, float step,
+                                                           const float* mask, size_t mask_count);
+
 typedef struct deform_reach_result {
   float residual; /* |target - effector| after IK alone (model units) */
   float stretch;  /* stretch asked of the chain's lattices (model units) */

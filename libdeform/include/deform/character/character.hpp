@@ -50,6 +50,7 @@
 
 #include "deform/character/export.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/offline/delta_mush.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
@@ -138,6 +139,19 @@ class DEFORM_CHARACTER_API Character {
   std::span<const glm::vec3> morphed_bind_positions() const noexcept {
     return morphed_ ? std::span<const glm::vec3>(morphed_positions_) : std::span<const glm::vec3>(model().mesh.positions);
   }
+
+  // Delta Mush (runtime/delta_mush.hpp), an optional smoothing stage after the lattices, off by default: update()
+  // then mushes the skinned, stretched points in place, so that a bent joint and the stretched rubber stay smooth
+  // while the surface keeps its detail. set_delta_mush binds it for this model (bind_delta_mush: allocates and throws
+  // as it does, so call it at set-up; iterations 0 turns the stage off, as clear_delta_mush does) and takes effect at
+  // the next update(). While it is on, normals() recomputes the normals from the mushed points (VertexNormalsJob),
+  // whatever normals_mode() says. It runs only when update() deforms completely (deform_on_cpu and lattice_fields
+  // true; else the caller, who finishes the deformation, mushes after it: DeltaMushJob with delta_mush()). Instances
+  // share the binding. Off, the frame is what it was without the stage, to the bit.
+  void set_delta_mush(const DeltaMushSettings& settings);
+  void clear_delta_mush() noexcept;
+  // The binding in use, or null when the stage is off.
+  const DeltaMushBinding* delta_mush() const noexcept { return mush_.get(); }
 
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
@@ -316,6 +330,9 @@ class DEFORM_CHARACTER_API Character {
   std::vector<std::byte> ik_scratch_;
   std::vector<glm::mat4> chain_world_;
   std::vector<Stretched> chain_lattices_;
+  // Delta Mush: the binding (shared by instances; null when off) and the job's scratch.
+  std::shared_ptr<const DeltaMushBinding> mush_;
+  std::vector<glm::vec4> mush_scratch_;
 };
 
 // The limbs reach() stretches, for a caller that reaches with "the nearest limb" (a click beside the character):
