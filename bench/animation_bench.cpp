@@ -46,7 +46,7 @@ deform::Animation make_clip(unsigned seed, deform::Interpolation interpolation) 
     }
     clip.channels.push_back(std::move(c));
   }
-  clip.validate(bones);
+  clip.require_valid(bones);
   return clip;
 }
 

@@ -103,7 +103,7 @@ void bind_character(py::module_& m) {
               return motion;
             };
             for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
-              deform::validate_motion(with(c.deformers().spec(l).motion));  // before any lattice changes
+              deform::require_valid_motion(with(c.deformers().spec(l).motion));  // before any lattice changes
             for (std::size_t l = lattice ? *lattice : 0; l < (lattice ? *lattice + 1 : count); ++l)
               c.deformers().set_motion(l, with(c.deformers().spec(l).motion));
           },

@@ -211,7 +211,7 @@ void bind_jobs(py::module_& m) {
              settings.oscillator.stiffness = stiffness;
              settings.oscillator.damping_ratio = damping_ratio;
              settings.oscillator.mass = mass;
-             deform::validate_settings(settings);
+             deform::require_valid_settings(settings);
              return deform::ElasticLattice(as_vec3(rest, "rest"), settings);
            }),
            py::arg("rest"), py::arg("stiffness") = 150.0f, py::arg("damping_ratio") = 0.2f, py::arg("mass") = 1.0f,

@@ -34,7 +34,7 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
       .def(py::init([](const FloatArray& origin, const FloatArray& size, const py::object& counts) {
              const deform::LatticeFrame frame =
                  deform::LatticeFrame::axis_aligned(to_vec3(origin, "origin"), to_vec3(size, "size"));
-             frame.validate();
+             frame.require_valid();
              return Lattice(frame, to_ivec3(counts, "degree or point_counts"));
            }),
            py::arg("origin"), py::arg("size"), py::arg(counts_name) = 3 + std::is_same_v<Lattice, deform::BsplineLattice>,
@@ -49,7 +49,7 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
             const glm::vec3 extent = glm::max(b.max - b.min, glm::vec3(1e-6f));
             const glm::vec3 pad = extent * margin + glm::vec3(1e-6f);
             const deform::LatticeFrame frame = deform::LatticeFrame::axis_aligned(b.min - pad, extent + 2.0f * pad);
-            frame.validate();
+            frame.require_valid();
             return Lattice(frame, to_ivec3(counts, "degree or point_counts"));
           },
           py::arg("points"), py::arg(counts_name) = 3 + std::is_same_v<Lattice, deform::BsplineLattice>,

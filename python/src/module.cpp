@@ -320,7 +320,7 @@ PYBIND11_MODULE(deform, m) {
             chain.gravity = gravity ? to_vec3(*gravity, "gravity") : glm::vec3(0.0f);
             chain.units_per_metre = units_per_metre;
             chain.radius = radius;
-            deform::validate_chain_settings(chain);
+            deform::require_valid_chain_settings(chain);
             r.spring_chains.push_back(std::move(chain));
           },
           py::arg("model"), py::arg("name"), py::arg("bones"), py::arg("frequency") = 2.0f,

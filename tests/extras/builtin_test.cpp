@@ -428,7 +428,7 @@ TEST_CASE("clips: idle, walk, run and wave, smooth loops within the limits") {
     INFO(clip.name);
     CHECK(clip.loop);
     CHECK(clip.duration > 0.0f);
-    CHECK_NOTHROW(clip.validate(s.bone_count(), m.name));
+    CHECK_NOTHROW(clip.require_valid(s.bone_count(), m.name));
     CHECK(clip.channels.size() >= 7);
     for (const deform::Channel& channel : clip.channels) {
       INFO(s.bone(channel.bone).name);

@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (imported.model.weights.size() != mesh.point_count()) fuzz::broken("one weight entry per point");
     for (const glm::vec4& w : imported.model.weights.weights)
       if (!(std::abs(w.x + w.y + w.z + w.w - 1.0f) < 1e-3f)) fuzz::broken("imported weights are normalised");
-    for (const deform::Animation& clip : imported.clips) clip.validate(imported.model.skeleton.bone_count(), path);
+    for (const deform::Animation& clip : imported.clips) clip.require_valid(imported.model.skeleton.bone_count(), path);
   } catch (const deform::Error& error) {
     if (std::string_view(error.what()).substr(0, path.size()) != path) {
       std::fprintf(stderr, "error without the file: %s\n", error.what());

@@ -226,7 +226,7 @@ TEST_CASE("hostile IQM files: truncated, corrupted or lying headers give a model
     try {
       const deform::ImportedModel imported = deform::import_model(copy.string());
       REQUIRE(imported.model.weights.size() == imported.model.mesh.point_count());
-      for (const deform::Animation& clip : imported.clips) clip.validate(imported.model.skeleton.bone_count());
+      for (const deform::Animation& clip : imported.clips) clip.require_valid(imported.model.skeleton.bone_count());
       return {};
     } catch (const deform::Error& e) {
       REQUIRE(e.file() == copy.string());

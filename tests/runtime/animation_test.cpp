@@ -222,7 +222,7 @@ TEST_CASE("SamplingJob: ranges of channels give the whole run") {
   clip.channels.push_back(other);
   other.bone = 0;
   clip.channels.push_back(other);
-  REQUIRE_NOTHROW(clip.validate(4));
+  REQUIRE_NOTHROW(clip.require_valid(4));
   deform::Pose whole = identity_pose(4), split = identity_pose(4);
   deform::SamplingJob job;
   job.animation = &clip;
@@ -245,12 +245,12 @@ TEST_CASE("SamplingJob: ranges of channels give the whole run") {
 
 TEST_CASE("validate rejects malformed clips with the clip and the bone named") {
   const Animation good = two_key_clip(Interpolation::linear);
-  CHECK_NOTHROW(good.validate(2));
-  CHECK_THROWS_AS(good.validate(1), deform::Error);  // bone 1 out of range
+  CHECK_NOTHROW(good.require_valid(2));
+  CHECK_THROWS_AS(good.require_valid(1), deform::Error);  // bone 1 out of range
 
   auto expect = [](const Animation& clip, const char* words) {
     try {
-      clip.validate(4, "clip.test");
+      clip.require_valid(4, "clip.test");
       FAIL("no error for: " << words);
     } catch (const deform::Error& e) {
       CHECK(std::string(e.what()).find(words) != std::string::npos);
@@ -274,7 +274,7 @@ TEST_CASE("validate rejects malformed clips with the clip and the bone named") {
   expect(clip, "two channels");
   clip = good;
   clip.duration = -1.0f;
-  CHECK_THROWS_AS(clip.validate(4), deform::Error);
+  CHECK_THROWS_AS(clip.require_valid(4), deform::Error);
 }
 
 TEST_CASE("find_clip looks clips up by name") {

@@ -165,7 +165,7 @@ Animation random_clip(Random& r, std::size_t bones, float duration) {
     }
     clip.channels.push_back(c);
   }
-  clip.validate(bones);
+  clip.require_valid(bones);
   return clip;
 }
 
@@ -380,7 +380,7 @@ TEST_CASE("an additive clip samples to the delta of the clip from its first fram
     }
     const Animation additive =
         first_frame ? deform::make_additive_clip(clip) : deform::make_additive_clip(clip, reference);
-    additive.validate(bones);
+    additive.require_valid(bones);
     const float t = r.uniform(0.0f, clip.duration);
     Pose sampled = identity_pose(bones), delta = identity_pose(bones), expected = identity_pose(bones);
     sample(clip, t, sampled);
@@ -508,7 +508,7 @@ Animation root_clip(Random& r, float duration, bool turning, Interpolation inter
                        glm::normalize(glm::vec3(r.uniform(-1, 1), 0.0f, r.uniform(-1, 1)) + glm::vec3(1e-3f, 0, 0))));
   }
   clip.channels.push_back(c);
-  clip.validate(1);
+  clip.require_valid(1);
   return clip;
 }
 

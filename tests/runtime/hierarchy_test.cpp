@@ -506,11 +506,11 @@ TEST_CASE("soft_length_floor: identity above the knee, smooth, increasing, never
     CHECK(shown <= std::max(r, 0.8f) + 1e-6f);
     previous = shown;
   }
-  CHECK_THROWS_AS(deform::validate_shape({1.0f, 1.0f}), deform::Error);
-  CHECK_THROWS_AS(deform::validate_shape({0.7f, 1.5f}), deform::Error);
-  CHECK_THROWS_AS(deform::validate_shape({0.7f, -0.1f}), deform::Error);
-  CHECK_THROWS_AS(deform::validate_shape({NAN, 1.0f}), deform::Error);
-  CHECK_NOTHROW(deform::validate_shape({0.0f, 0.0f}));
+  CHECK_THROWS_AS(deform::require_valid_shape({1.0f, 1.0f}), deform::Error);
+  CHECK_THROWS_AS(deform::require_valid_shape({0.7f, 1.5f}), deform::Error);
+  CHECK_THROWS_AS(deform::require_valid_shape({0.7f, -0.1f}), deform::Error);
+  CHECK_THROWS_AS(deform::require_valid_shape({NAN, 1.0f}), deform::Error);
+  CHECK_NOTHROW(deform::require_valid_shape({0.0f, 0.0f}));
 }
 
 namespace {

@@ -96,10 +96,10 @@ TEST_CASE("MorphJob::validate and run say what is wrong and write nothing") {
   weights[0] = 1.0f;
   targets[0].points = {2, 0};
   CHECK(std::string(job.validate().reason()) == "target is malformed");
-  CHECK_THROWS_WITH_AS(validate_morph_targets(targets, 3, "m.gltf"), doctest::Contains("not strictly ascending"),
+  CHECK_THROWS_WITH_AS(require_valid_morph_targets(targets, 3, "m.gltf"), doctest::Contains("not strictly ascending"),
                        Error);
   targets[0].points = {0, 3};
-  CHECK_THROWS_WITH_AS(validate_morph_targets(targets, 3, "m.gltf"), doctest::Contains("point out of range"), Error);
+  CHECK_THROWS_WITH_AS(require_valid_morph_targets(targets, 3, "m.gltf"), doctest::Contains("point out of range"), Error);
   std::vector<float> two = {1.0f, 2.0f};
   job.weights = two;
   CHECK(std::string(job.validate().reason()) == "weights and targets differ in count");
@@ -115,7 +115,7 @@ TEST_CASE("morph channels: step, linear and cubic spline weights; sample_morph_w
   MorphChannel linear{0, {Interpolation::linear, {0.0f, 2.0f}, {0.0f, 1.0f}, {}, {}}};
   MorphChannel cubic{3, {Interpolation::cubic_spline, {0.0f, 1.0f}, {0.0f, 1.0f}, {0.0f, 0.5f}, {2.0f, 0.0f}}};
   clip.morph_channels = {step, linear, cubic};
-  clip.validate(0, "clip.gltf");
+  clip.require_valid(0, "clip.gltf");
   std::vector<float> weights = {9.0f, 9.0f, 9.0f, 9.0f};
   REQUIRE(sample_morph_weights(clip, 0.5f, weights));
   CHECK(weights[0] == doctest::Approx(0.25f));
@@ -129,5 +129,5 @@ TEST_CASE("morph channels: step, linear and cubic spline weights; sample_morph_w
   CHECK(std::string(sample_morph_weights(clip, 0.5f, short_weights).reason()) == "morph channel target out of range");
   CHECK(short_weights == std::vector<float>(2, 0.0f));
   clip.morph_channels.push_back(step);
-  CHECK_THROWS_WITH_AS(clip.validate(0, "clip.gltf"), doctest::Contains("two morph channels for one target"), Error);
+  CHECK_THROWS_WITH_AS(clip.require_valid(0, "clip.gltf"), doctest::Contains("two morph channels for one target"), Error);
 }

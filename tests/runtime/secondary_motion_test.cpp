@@ -445,7 +445,7 @@ TEST_CASE("the inertia knob scales each part's tuned inertia: 1 the tuned motion
   CHECK_THROWS_WITH_AS(deform::scaled_inertia(stray, 1.0f), doctest::Contains("part"), deform::Error);
   deform::LatticeMotion bad;
   bad.part = stray;
-  CHECK_THROWS_WITH_AS(deform::validate_motion(bad), doctest::Contains("part"), deform::Error);
+  CHECK_THROWS_WITH_AS(deform::require_valid_motion(bad), doctest::Contains("part"), deform::Error);
 
   // A hierarchy: every lattice at the scale of its part's tuned inertia, the rest of its motion kept.
   const MovingLimb limb = moving_limb();

@@ -210,7 +210,7 @@ deform_status deform_character_set_lattice_motion(deform_character* character, s
   };
   return guarded([&] {
     for (std::size_t l = all ? 0 : lattice; l < (all ? lattices.lattice_count() : lattice + 1); ++l)
-      deform::validate_motion(with(lattices.spec(l).motion));  // before any lattice changes
+      deform::require_valid_motion(with(lattices.spec(l).motion));  // before any lattice changes
     for (std::size_t l = all ? 0 : lattice; l < (all ? lattices.lattice_count() : lattice + 1); ++l)
       lattices.set_motion(l, with(lattices.spec(l).motion));
     return DEFORM_OK;

@@ -100,7 +100,7 @@ Character::Character(Model model, const Rig& rig)
   if (!(rig_.max_stretch >= 0.0f) || !std::isfinite(rig_.max_stretch)) {
     throw Error::in_file(bound.name, "rig", "max_stretch must be finite and >= 0");
   }
-  validate_morph_targets(bound.morph_targets, bound.mesh.point_count(), bound.name);
+  require_valid_morph_targets(bound.morph_targets, bound.mesh.point_count(), bound.name);
   for (const MorphTarget& target : bound.morph_targets) {
     if (!std::isfinite(target.default_weight)) {
       throw Error::in_file(bound.name, "morph target '" + target.name + "'", "default weight is not finite");

@@ -88,7 +88,7 @@ Animation make_cycle(const Model& model, const Cycle& cycle) {
     }
     clip.channels.push_back(std::move(hips));
   }
-  clip.validate(skeleton.bone_count(), model.name);
+  clip.require_valid(skeleton.bone_count(), model.name);
   return clip;
 }
 

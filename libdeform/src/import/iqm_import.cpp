@@ -648,7 +648,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
     if (scaled_bones > 0)
       warnings.push_back("clip '" + clip.name + "': " + std::to_string(scaled_bones) +
                          " bones animate scale, which a Pose cannot hold (ignored)");
-    clip.validate(bones.size(), path);
+    clip.require_valid(bones.size(), path);
     result.clips.push_back(std::move(clip));
   }
   return result;

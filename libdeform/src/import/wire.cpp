@@ -261,7 +261,7 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
       if (m.target < 0 || static_cast<std::size_t>(m.target) >= model.morph_targets.size())
         r.fail("a morph channel names a target out of range");
     }
-    clip.validate(model.skeleton.bone_count(), source);
+    clip.require_valid(model.skeleton.bone_count(), source);
   }
   imported.warnings.resize(r.count(8));
   for (std::string& warning : imported.warnings) warning = r.text();
@@ -312,7 +312,7 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     if (sw.extra_bones[e] >= model.skeleton.bone_count() || !(sw.extra_weights[e] >= 0.0f) ||
         !std::isfinite(sw.extra_weights[e]))
       r.fail("an extra influence is out of range");
-  validate_morph_targets(model.morph_targets, points, source);
+  require_valid_morph_targets(model.morph_targets, points, source);
   return imported;
 }
 

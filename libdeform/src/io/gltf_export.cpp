@@ -488,7 +488,7 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     doc["scenes"] = Json::array({{{"nodes", {0, static_cast<int>(skeleton.bone_count())}}}});
 
     for (const Animation& clip : options.clips) {
-      clip.validate(skeleton.bone_count(), "clip '" + clip.name + "'");
+      clip.require_valid(skeleton.bone_count(), "clip '" + clip.name + "'");
       Json samplers = Json::array(), channels = Json::array();
       const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components, const char* type) {
         if (track.empty()) return;

@@ -70,7 +70,7 @@ ElasticSettings read_elastic(const JsonReader& r) {
   return e;
 }
 
-// A gravity vector, m/s², at most 1e6 long (validate_motion, validate_chain_settings).
+// A gravity vector, m/s², at most 1e6 long (require_valid_motion, require_valid_chain_settings).
 glm::vec3 read_gravity(const JsonReader& r) {
   const glm::vec3 g = r.vec3();
   if (!(glm::length(g) <= 1e6f)) r.fail("must be at most 1e6 m/s² long");
@@ -78,7 +78,7 @@ glm::vec3 read_gravity(const JsonReader& r) {
 }
 
 LatticeMotion read_motion(const JsonReader& r) {
-  // The ranges validate_motion enforces (runtime/hierarchy.hpp).
+  // The ranges require_valid_motion enforces (runtime/hierarchy.hpp).
   LatticeMotion motion;
   r.expect_object({"inertia", "gravity", "units_per_metre", "along_bound", "far_share", "part"});
   if (r.has("part")) {  // absent in files from before parts: unspecified, LatticeMotion's default
@@ -99,7 +99,7 @@ LatticeMotion read_motion(const JsonReader& r) {
 
 // The "springs" block: colliders first, since chains name them by index.
 void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
-  constexpr float big = 1e6f;  // the runtime's bound on lengths and units (validate_chain_settings)
+  constexpr float big = 1e6f;  // the runtime's bound on lengths and units (require_valid_chain_settings)
   r.expect_object({"substep", "colliders", "chains"});
   if (r.has("substep")) rig.spring_substep = r.at("substep").number(0.0f, 1.0f, true);
   if (r.has("colliders")) {
@@ -266,7 +266,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
     }
     if (r.has("margin")) spec.margin = r.at("margin").number(0.0f, 1.0f);
     if (r.has("carry")) spec.carry_descendants = r.at("carry").boolean();
-    // The ranges validate_shape enforces (runtime/hierarchy.hpp); the floor must stay below the full length.
+    // The ranges require_valid_shape enforces (runtime/hierarchy.hpp); the floor must stay below the full length.
     if (r.has("min_length_fraction")) {
       const JsonReader floor = r.at("min_length_fraction");
       spec.shape.min_length_fraction = floor.number(0.0f, 1.0f);

@@ -67,12 +67,12 @@ DeformerHierarchy bind_hierarchy(const Skeleton& skeleton, std::span<const glm::
     }
     if (!(spec.margin >= 0.0f && spec.margin <= 1.0f)) throw spec_error(source, spec, "margin must be in [0, 1]");
     try {
-      validate_settings(spec.elastic);
+      require_valid_settings(spec.elastic);
     } catch (const Error& e) {
       throw spec_error(source, spec, "elastic " + e.element() + " " + e.message());
     }
     try {
-      validate_shape(spec.shape);
+      require_valid_shape(spec.shape);
     } catch (const Error& e) {
       throw spec_error(source, spec, e.message());
     }

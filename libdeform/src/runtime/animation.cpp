@@ -8,7 +8,7 @@ namespace deform {
 namespace {
 
 template <class T>
-void validate_track(const Track<T>& track, const char* what, const std::string& source, const std::string& element) {
+void require_valid_track(const Track<T>& track, const char* what, const std::string& source, const std::string& element) {
   auto fail = [&](const std::string& message) {
     throw Error::in_file(source, element, std::string(what) + " track: " + message);
   };
@@ -152,7 +152,7 @@ Status SamplingJob::run(std::size_t begin, std::size_t end) const noexcept {
   return {};
 }
 
-void Animation::validate(std::size_t bone_count, const std::string& source) const {
+void Animation::require_valid(std::size_t bone_count, const std::string& source) const {
   const std::string clip = "clip '" + name + "'";
   if (!std::isfinite(duration) || duration < 0.0f)
     throw Error::in_file(source, clip, "duration is not finite and >= 0");
@@ -164,16 +164,16 @@ void Animation::validate(std::size_t bone_count, const std::string& source) cons
     if (seen[static_cast<std::size_t>(channel.bone)])
       throw Error::in_file(source, element, "two channels for one bone");
     seen[static_cast<std::size_t>(channel.bone)] = true;
-    validate_track(channel.translation, "translation", source, element);
-    validate_track(channel.rotation, "rotation", source, element);
-    validate_track(channel.scale, "scale", source, element);
+    require_valid_track(channel.translation, "translation", source, element);
+    require_valid_track(channel.rotation, "rotation", source, element);
+    require_valid_track(channel.scale, "scale", source, element);
   }
   std::vector<std::int32_t> targets;
   for (const MorphChannel& channel : morph_channels) {
     const std::string element = clip + ": morph target " + std::to_string(channel.target);
     if (channel.target < 0) throw Error::in_file(source, element, "morph target out of range");
     targets.push_back(channel.target);
-    validate_track(channel.weight, "weight", source, element);
+    require_valid_track(channel.weight, "weight", source, element);
   }
   std::sort(targets.begin(), targets.end());
   if (std::adjacent_find(targets.begin(), targets.end()) != targets.end())

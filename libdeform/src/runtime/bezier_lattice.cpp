@@ -42,7 +42,7 @@ constexpr int max_n = max_bezier_degree + 1;
 
 BezierLattice::BezierLattice(const LatticeFrame& frame, glm::ivec3 degree, const std::string& source)
     : frame_(frame), point_counts_(degree + 1) {
-  frame.validate(source, "frame");
+  frame.require_valid(source, "frame");
   const char* axis = "lmn";
   for (int a = 0; a < 3; ++a)
     if (degree[a] < 1 || degree[a] > max_bezier_degree)

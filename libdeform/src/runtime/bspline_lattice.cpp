@@ -33,7 +33,7 @@ using detail::cell_of;
 
 BsplineLattice::BsplineLattice(const LatticeFrame& frame, glm::ivec3 point_counts, const std::string& source)
     : frame_(frame), point_counts_(point_counts) {
-  frame.validate(source, "frame");
+  frame.require_valid(source, "frame");
   const char* axis = "uvw";
   for (int a = 0; a < 3; ++a)
     if (point_counts[a] < 4 || point_counts[a] > max_bspline_points)

@@ -58,14 +58,14 @@ float soft_length_floor(float ratio, float min_fraction) noexcept {
   return min_fraction + knee * std::exp((ratio - bend) / knee);
 }
 
-void validate_shape(const StretchShape& shape) {
+void require_valid_shape(const StretchShape& shape) {
   if (!(shape.min_length_fraction >= 0.0f && shape.min_length_fraction < 1.0f))
     throw Error::invalid_argument("<stretch shape>", "shape min_length_fraction must be in [0, 1)");
   if (!(shape.volume >= 0.0f && shape.volume <= 1.0f))
     throw Error::invalid_argument("<stretch shape>", "shape volume must be in [0, 1]");
 }
 
-void validate_motion(const LatticeMotion& motion) {
+void require_valid_motion(const LatticeMotion& motion) {
   if (!(motion.inertia >= 0.0f && motion.inertia <= 1.0f))
     throw Error::invalid_argument("<lattice motion>", "motion inertia must be in [0, 1]");
   // Bounds far beyond any character, so that their product cannot overflow a float.
@@ -148,8 +148,8 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
       throw Error::invalid_argument(element, "bone is out of range");
     }
     try {
-      validate_shape(bound.spec.shape);
-      validate_motion(bound.spec.motion);
+      require_valid_shape(bound.spec.shape);
+      require_valid_motion(bound.spec.motion);
     } catch (const Error& error) {
       throw Error::invalid_argument(element, error.message());
     }
@@ -355,7 +355,7 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
 
 void DeformerHierarchy::set_shape(std::size_t index, const StretchShape& shape) {
   Lattice& lattice = lattices_.at(index);
-  validate_shape(shape);
+  require_valid_shape(shape);
   lattice.spec.shape = shape;
 }
 
@@ -489,7 +489,7 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
 
 void DeformerHierarchy::set_motion(std::size_t index, const LatticeMotion& motion) {
   Lattice& lattice = lattices_.at(index);
-  validate_motion(motion);
+  require_valid_motion(motion);
   lattice.spec.motion = motion;
 }
 

@@ -149,7 +149,7 @@ double settling_time(const ElasticParams& params, double tolerance) noexcept {
   return 0.5 * (lo + hi);
 }
 
-void validate_settings(const ElasticSettings& settings) {
+void require_valid_settings(const ElasticSettings& settings) {
   const ElasticParams& p = settings.oscillator;
   require(finite(p.stiffness) && p.stiffness > 0.0f, "stiffness", "must be finite and > 0");
   require(finite(p.mass) && p.mass > 0.0f, "mass", "must be finite and > 0");
@@ -164,7 +164,7 @@ void validate_settings(const ElasticSettings& settings) {
 
 ElasticLattice::ElasticLattice(std::span<const glm::vec3> rest, const ElasticSettings& settings, glm::ivec3 grid)
     : grid_(grid) {
-  validate_settings(settings);
+  require_valid_settings(settings);
   for (std::size_t i = 0; i < rest.size(); ++i) {
     if (!finite(rest[i])) throw Error::invalid_argument("point " + std::to_string(i), "rest position is not finite");
   }
@@ -185,7 +185,7 @@ ElasticLattice::ElasticLattice(std::span<const glm::vec3> rest, const ElasticSet
 }
 
 void ElasticLattice::set_settings(const ElasticSettings& settings) {
-  validate_settings(settings);
+  require_valid_settings(settings);
   if (settings.integrator != settings_.integrator) previous_ = positions_;  // Verlet restarts from rest velocity
   settings_ = settings;
   springs_ = grid_ == glm::ivec3(0) ? std::vector<Spring>{} : grid_springs(grid_, settings.springs);

@@ -26,7 +26,7 @@ glm::vec3 LatticeFrame::to_world(glm::vec3 uvw) const noexcept {
   return origin + uvw.x * u_axis + uvw.y * v_axis + uvw.z * w_axis;
 }
 
-void LatticeFrame::validate(const std::string& source, const std::string& element) const {
+void LatticeFrame::require_valid(const std::string& source, const std::string& element) const {
   if (!finite(origin) || !finite(u_axis) || !finite(v_axis) || !finite(w_axis))
     throw Error::in_file(source, element, "origin or axes are not finite");
   const double lu = glm::length(glm::dvec3(u_axis)), lv = glm::length(glm::dvec3(v_axis)),

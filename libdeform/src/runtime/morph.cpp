@@ -35,7 +35,7 @@ Status sizes_ok(const MorphJob& job) noexcept {
 
 }  // namespace
 
-void validate_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count, const std::string& source) {
+void require_valid_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count, const std::string& source) {
   for (std::size_t k = 0; k < targets.size(); ++k)
     if (const char* problem = target_problem(targets[k], point_count))
       throw Error::in_file(source, "morph target " + std::to_string(k) + " '" + targets[k].name + "'", problem);

@@ -47,7 +47,7 @@ void require(bool ok, const std::string& element, const char* what) {
 
 }  // namespace
 
-void validate_chain_settings(const SpringChainSpec& chain) {
+void require_valid_chain_settings(const SpringChainSpec& chain) {
   const std::string element = chain.name.empty() ? std::string("<spring chain>") : "spring chain '" + chain.name + "'";
   // Bounds far beyond any character, so that no product of them overflows a float.
   require(chain.frequency > 0.0f && chain.frequency <= 1000.0f, element, "frequency must be in (0, 1000] Hz");
@@ -101,7 +101,7 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
   std::size_t joints = 0;
   for (std::size_t c = 0; c < chains.size(); ++c) {
     SpringChainSpec& spec = chains[c];
-    validate_chain_settings(spec);
+    require_valid_chain_settings(spec);
     const std::string element = "spring chain '" + spec.name + "'";
     for (std::size_t other = 0; other < c; ++other)
       require(chains[other].name != spec.name, element, "name is used by another chain");
@@ -187,7 +187,7 @@ void SpringChains::set_settings(std::size_t chain, const SpringChainSpec& settin
   SpringChainSpec checked = settings;
   checked.name = target.spec.name;
   checked.tip = target.spec.tip;
-  validate_chain_settings(checked);
+  require_valid_chain_settings(checked);
   target.spec.frequency = settings.frequency;
   target.spec.damping_ratio = settings.damping_ratio;
   target.spec.gravity = settings.gravity;

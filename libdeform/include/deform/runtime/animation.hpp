@@ -66,7 +66,7 @@ struct DEFORM_RUNTIME_API Animation {
   // Checks the clip against a skeleton with `bone_count` bones: duration finite and >= 0, bones in range and at most
   // one channel per bone, every track with times finite and strictly increasing, values (and tangents, sized as
   // above) finite. Throws deform::Error naming `source`, the clip and the bone.
-  void validate(std::size_t bone_count, const std::string& source = "<memory>") const;
+  void require_valid(std::size_t bone_count, const std::string& source = "<memory>") const;
 
   // The clip-local time `seconds` maps to: wrapped into [0, duration) when looping (negative times too), clamped
   // into [0, duration] otherwise; 0 for a zero-length clip.

@@ -138,7 +138,7 @@ class DEFORM_RUNTIME_API ElasticLattice {
   ElasticLattice() = default;
   // Points start at `rest` with zero velocity. `grid` (points per axis, product = rest.size()) places them for the
   // neighbour springs; {0,0,0} means no grid (springs then ignored). Throws deform::Error when the settings are not
-  // valid (see validate_settings), a rest position is not finite, or `grid` does not match rest.size().
+  // valid (see require_valid_settings), a rest position is not finite, or `grid` does not match rest.size().
   explicit ElasticLattice(std::span<const glm::vec3> rest, const ElasticSettings& settings = {},
                           glm::ivec3 grid = glm::ivec3(0));
 
@@ -211,6 +211,6 @@ class DEFORM_RUNTIME_API ElasticLattice {
 };
 
 // Throws deform::Error ("<settings>", naming the field) when a parameter is not finite or out of its range.
-DEFORM_RUNTIME_API void validate_settings(const ElasticSettings& settings);
+DEFORM_RUNTIME_API void require_valid_settings(const ElasticSettings& settings);
 
 }  // namespace deform

@@ -13,6 +13,8 @@
 //  - Per-frame calls (every job's run(), the stateful steps, Character::update) never throw and never allocate: they
 //    return a Status, ok or a static reason, and change nothing when it is not ok. Each job's validate() returns the
 //    same Status at bind time, saying why a call would be refused.
+//  - Names say which of the two a check is: `validate()` returns a Status (a job's checks); `require_valid...()`
+//    throws deform::Error (the bind-time checks of clips, lattice frames and settings).
 #include <cstdint>
 #include <stdexcept>
 #include <string>

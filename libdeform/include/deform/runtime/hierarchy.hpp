@@ -67,7 +67,7 @@ struct StretchShape {
 DEFORM_RUNTIME_API float soft_length_floor(float ratio, float min_fraction) noexcept;
 
 // Throws deform::Error ("<stretch shape>", naming the field) when a field is not finite or out of its range.
-DEFORM_RUNTIME_API void validate_shape(const StretchShape& shape);
+DEFORM_RUNTIME_API void require_valid_shape(const StretchShape& shape);
 
 // What a lattice's bone is, for the default secondary motion of a rig (default_lattice_motion).
 enum class BodyPart : std::uint8_t {
@@ -115,7 +115,7 @@ struct LatticeMotion {
 };
 
 // Throws deform::Error ("<lattice motion>", naming the field) when a field is not finite or out of its range.
-DEFORM_RUNTIME_API void validate_motion(const LatticeMotion& motion);
+DEFORM_RUNTIME_API void require_valid_motion(const LatticeMotion& motion);
 
 // The tuned secondary motion of a lattice on such a part (inertia, along_bound, far_share, the part; no gravity):
 // flesh that wobbles between joints that stay put, hands that lag a little, feet that stay planted, appendages that
@@ -201,10 +201,10 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid.
   void set_elastic(std::size_t lattice, const ElasticSettings& settings);
   // Changes a lattice's length floor and volume compensation; shown from the next update(). Throws deform::Error
-  // when invalid (validate_shape) or the index is out of range.
+  // when invalid (require_valid_shape) or the index is out of range.
   void set_shape(std::size_t lattice, const StretchShape& shape);
 
-  // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid (validate_motion)
+  // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid (require_valid_motion)
   // or the index is out of range.
   void set_motion(std::size_t lattice, const LatticeMotion& motion);
   // Every lattice's inertia at `scale` of its part's tuned inertia (scaled_inertia), the rest of its motion and its

@@ -51,7 +51,7 @@ struct DEFORM_RUNTIME_API LatticeFrame {
   // X0 + u·U + v·V + w·W.
   glm::vec3 to_world(glm::vec3 uvw) const noexcept;
   // Throws deform::Error naming `source` and `element` when the frame is not finite or not of positive volume.
-  void validate(const std::string& source = "<memory>", const std::string& element = "frame") const;
+  void require_valid(const std::string& source = "<memory>", const std::string& element = "frame") const;
 };
 
 // Which lattice a binding was made for; evaluation needs the same kind and point counts.

@@ -34,7 +34,7 @@ struct MorphTarget {
 
 // Checks targets against a mesh of `point_count` points: points strictly ascending and in range, deltas sized as
 // above and finite. Throws deform::Error naming `source` and the target.
-DEFORM_RUNTIME_API void validate_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count,
+DEFORM_RUNTIME_API void require_valid_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count,
                                                const std::string& source = "<memory>");
 
 // The morph job: out[i] = rest[i] + Σₖ weights[k] · Δₖ[i] over the targets that move point i, for positions and,
@@ -52,7 +52,7 @@ struct DEFORM_RUNTIME_API MorphJob {
 
   // Ok when well formed, else why not: weights as many as targets ("weights and targets differ in count") and
   // finite ("weight is not finite"), outputs as long as the rest positions, normals both or neither and sized alike,
-  // every target valid for the point count (as validate_morph_targets: "target is malformed"). Cost: O(points +
+  // every target valid for the point count (as require_valid_morph_targets: "target is malformed"). Cost: O(points +
   // deltas) — call it when binding, not every frame.
   Status validate() const noexcept;
   // The O(1) checks (sizes, range: "range outside the job") and the weights' finiteness (O(targets)); on failure

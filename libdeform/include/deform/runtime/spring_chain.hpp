@@ -56,7 +56,7 @@ struct SpringChainSpec {
 
 // Throws deform::Error ("<spring chain>" or the chain's name, naming the field) when a setting is not finite or out
 // of its range. The bones and colliders are checked against a skeleton by SpringChains' constructor.
-DEFORM_RUNTIME_API void validate_chain_settings(const SpringChainSpec& chain);
+DEFORM_RUNTIME_API void require_valid_chain_settings(const SpringChainSpec& chain);
 
 // A joint's parameters in VRMC_springBone (VRM 1.0), as a .vrm file gives them. VRM moves a tail every frame by
 //   next = tail + (tail - previous)·(1 - dragForce) + restDirection·stiffness·Δt + gravityDir·gravityPower·Δt,
@@ -87,7 +87,7 @@ class DEFORM_RUNTIME_API SpringChains {
   SpringChains() = default;
   // Throws deform::Error naming the chain or collider for a bone out of range, a chain whose bones are not a parent
   // path, a bone in two chains, a chain below another chain's bone (chains do not nest), a leaf root with no tip to
-  // guess, a collider index out of range, a setting out of range (validate_chain_settings) or a substep outside
+  // guess, a collider index out of range, a setting out of range (require_valid_chain_settings) or a substep outside
   // (0, 1] s.
   SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec> chains, std::vector<SpringCollider> colliders,
                float substep = default_substep);
