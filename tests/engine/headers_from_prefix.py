@@ -92,6 +92,7 @@ def main():
     args = parser.parse_args()
     objects = {}
     if args.ninja:
+        # Ninja runs every compiler in the build folder: relative paths start there.
         out = subprocess.run([args.ninja, "-C", args.build, "-t", "deps"], capture_output=True, text=True,
                              check=True).stdout
         current = None
@@ -100,11 +101,15 @@ def main():
                 current = line.split(":")[0]
                 objects[current] = []
             elif line.strip() and current:
-                objects[current].append(line.strip())
+                objects[current].append(os.path.normpath(os.path.join(args.build, line.strip())))
     else:
         for depfile in pathlib.Path(args.build).rglob("*.d"):
-            if depfile.suffixes[-2:-1] in ([".o"], [".obj"]):
-                objects[str(depfile)] = depfile_inputs(depfile.read_text(errors="replace"))
+            if depfile.suffixes[-2:-1] in ([".o"], [".obj"]) and "CMakeFiles" in depfile.parts:
+                # The compiler ran in the target's folder, the one holding CMakeFiles/: relative paths start there.
+                parts = depfile.parts
+                cwd = pathlib.Path(*parts[:len(parts) - parts[::-1].index("CMakeFiles") - 1])
+                objects[str(depfile)] = [os.path.normpath(os.path.join(cwd, header))
+                                         for header in depfile_inputs(depfile.read_text(errors="replace"))]
     required = [r for r in args.require.split(",") if r]
     problems, seen = check(objects, args.prefix, required)
     for problem in problems:

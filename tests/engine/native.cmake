@@ -20,7 +20,8 @@ function(run what)
   set(run_output "${out}" PARENT_SCOPE)
 endfunction()
 
-run("installing libdeform" ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${WORK_DIR}/libdeform --config ${BUILD_TYPE})
+run("installing libdeform"
+    ${CMAKE_COMMAND} --install ${BINARY_DIR} --prefix ${WORK_DIR}/libdeform --config ${BUILD_TYPE})
 run("making the engine's prefix" ${CMAKE_COMMAND} -DPREFIX=${WORK_DIR}/prefix -DCOPY=ON
     -P ${SOURCE_DIR}/cmake/toolchains/header_prefix.cmake)
 

@@ -11,9 +11,14 @@
 // arm must be stretched while reaching, back to its length once released and settled, and every value finite.
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <exception>
+#include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <glm/glm.hpp>
 
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
@@ -84,9 +89,9 @@ std::string run() {
   if (!(reach.stretch > 0.1f)) throw SceneError("the far point asks for no stretch: it is not far");
   check(hero.update(0.0f), "the first frame");
 
-  std::string out = "# libdeform engine scene: the built-in character reaching for (1.6, 1.5, 0.3), released at frame " +
-                    std::to_string(release_frame) + ", walking from frame " + std::to_string(walk_frame) + ", " +
-                    std::to_string(rate) + " frames per second\n";
+  std::string out = "# libdeform engine scene: the built-in character reaching for (1.6, 1.5, 0.3), released at "
+                    "frame " + std::to_string(release_frame) + ", walking from frame " + std::to_string(walk_frame) +
+                    ", " + std::to_string(rate) + " frames per second\n";
   // How far the hand is from the point: held (the stretch covers what IK left), and settled after the release
   // (back to what IK alone reached: reach.residual).
   float held_gap = 0.0f, settled_gap = 0.0f;
