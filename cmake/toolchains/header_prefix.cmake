@@ -6,6 +6,9 @@
 # library headers would shadow the target's), and PREFIX/lib/cmake/<package> a config file making the target the
 # project finds (glm::glm, nlohmann_json::nlohmann_json,
 # Eigen3::Eigen, doctest::doctest). An engine's own prefix replaces it.
+# With -DCOPY=ON the header folders are copied instead of linked (about 14 MB): a prefix of its own, as an engine's is,
+# so that a check of which headers a build read (tests/engine) can tell it from the host's /usr/include. GCC names
+# headers found through a link by their resolved path in its dependency files.
 cmake_minimum_required(VERSION 3.25)
 if(NOT PREFIX)
   message(FATAL_ERROR "usage: cmake -DPREFIX=<folder> -P header_prefix.cmake")
@@ -29,8 +32,12 @@ foreach(entry IN LISTS packages)
   if(NOT IS_DIRECTORY "${HOST_INCLUDE}/${folder}")
     message(FATAL_ERROR "${HOST_INCLUDE}/${folder} is missing: install the Debian package of ${package}")
   endif()
-  file(REMOVE "${prefix}/include/${folder}")
-  file(CREATE_LINK "${HOST_INCLUDE}/${folder}" "${prefix}/include/${folder}" SYMBOLIC)
+  file(REMOVE_RECURSE "${prefix}/include/${folder}")
+  if(COPY)
+    file(COPY "${HOST_INCLUDE}/${folder}" DESTINATION "${prefix}/include" FOLLOW_SYMLINK_CHAIN)
+  else()
+    file(CREATE_LINK "${HOST_INCLUDE}/${folder}" "${prefix}/include/${folder}" SYMBOLIC)
+  endif()
   string(REPLACE "::" ";" names "${target}")
   file(WRITE "${prefix}/lib/cmake/${package}/${package}Config.cmake"
 "# Made by header_prefix.cmake: the header-only ${package} from ${HOST_INCLUDE}/${folder}.
