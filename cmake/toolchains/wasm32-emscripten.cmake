@@ -28,3 +28,7 @@ set(CMAKE_CROSSCOMPILING_EMULATOR ${DEFORM_NODE};--no-experimental-fetch CACHE S
 
 # Packages from the sysroot and from the prefixes in CMAKE_PREFIX_PATH (each a root of its own), never the host's.
 list(APPEND CMAKE_FIND_ROOT_PATH ${CMAKE_PREFIX_PATH})
+# pkg-config too: only the sysroot's .pc files (the host's stb.pc, found by tests/CMakeLists.txt, would put -lstb,
+# an x86-64 library, on a test's link line).
+set(ENV{PKG_CONFIG_LIBDIR} "${EMSCRIPTEN_SYSROOT}/local/lib/pkgconfig:${EMSCRIPTEN_SYSROOT}/lib/pkgconfig")
+set(ENV{PKG_CONFIG_PATH} "")
