@@ -1,7 +1,6 @@
 // .sk files: byte layout, byte-exact round trips, and every malformed case of the spec with its offset and bone.
 #include <doctest/doctest.h>
 
-#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -16,6 +15,15 @@
 #include "runtime/skeleton_test_util.hpp"
 
 namespace {
+
+// std::bit_cast for 32-bit values, through memcpy: emscripten 3.1.6's libc++ has no std::bit_cast.
+template <typename To, typename From>
+To bits_as(From from) {
+  static_assert(sizeof(To) == sizeof(From));
+  To to;
+  std::memcpy(&to, &from, sizeof to);
+  return to;
+}
 
 // A bone record written field by field, so that tests can build files the Skeleton class would never produce.
 struct RawBone {
@@ -36,7 +44,7 @@ std::vector<std::uint8_t> raw_sk(const std::vector<RawBone>& bones, std::int64_t
     std::uint8_t name[80] = {};
     std::memcpy(name, b.name.data(), std::min<std::size_t>(b.name.size(), 80));
     out.insert(out.end(), name, name + 80);
-    for (float f : b.numbers) put32(out, std::bit_cast<std::uint32_t>(f));
+    for (float f : b.numbers) put32(out, bits_as<std::uint32_t>(f));
     put32(out, static_cast<std::uint32_t>(b.parent));
     put32(out, static_cast<std::uint32_t>(b.children.size()));
     for (std::int32_t c : b.children) put32(out, static_cast<std::uint32_t>(c));
@@ -96,7 +104,7 @@ TEST_CASE("format_sk writes the spec's layout") {
   CHECK(std::memcmp(bytes.data(), "SKEL\x05\0\0\0", 8) == 0);
   CHECK(std::memcmp(bytes.data() + 8, "root\0\0", 6) == 0);
   auto f32 = [&](std::size_t at) {
-    return std::bit_cast<float>(bytes[at] | bytes[at + 1] << 8 | bytes[at + 2] << 16 | bytes[at + 3] << 24);
+    return bits_as<float>(bytes[at] | bytes[at + 1] << 8 | bytes[at + 2] << 16 | bytes[at + 3] << 24);
   };
   auto i32 = [&](std::size_t at) {
     return static_cast<std::int32_t>(bytes[at] | bytes[at + 1] << 8 | bytes[at + 2] << 16 | bytes[at + 3] << 24);

@@ -226,7 +226,7 @@ TEST_CASE("run_parallel and any split into block ranges give the single-threaded
     CHECK(parallel_positions == serial);
     CHECK(parallel_normals == normals);
     // Random block ranges, every block once, on every kernel copy: each gives that copy's run() bits.
-    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon}) {
+    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
       if (!deform::isa_available(isa)) continue;
       CAPTURE(std::string(deform::isa_name(isa)));
       job.isa = isa;

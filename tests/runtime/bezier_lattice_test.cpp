@@ -239,7 +239,7 @@ TEST_CASE("weights: the field added by each point's weight and the normals blend
     const std::vector<glm::vec3> normals_in = random_normals(rng, in.size());
 
     const glm::dmat3 axes(glm::dvec3(frame.u_axis), glm::dvec3(frame.v_axis), glm::dvec3(frame.w_axis));
-    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon}) {
+    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
       if (!deform::isa_available(isa)) continue;
       std::vector<glm::vec3> positions = in, normals = normals_in, normals_only = normals_in;
       deform::LatticeEvaluateJob job;
@@ -361,7 +361,7 @@ TEST_CASE("LatticeEvaluateJob::validate rejects what it cannot run, says why, an
   job.positions = {};
   CHECK(reason(job.validate()) == "positions too short");
   job.positions = out;
-  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon})
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128})
     if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused, never run
       job.isa = isa;
       CHECK(reason(job.validate()) == "instruction set not available");

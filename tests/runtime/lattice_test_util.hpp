@@ -78,7 +78,7 @@ inline std::vector<glm::vec3> evaluate(const deform::LatticeBinding& binding, st
   std::vector<glm::vec3> portable_positions, portable_normals;
   run(deform::Isa::portable, portable_positions, portable_normals);
   std::vector<glm::vec3> best_positions = portable_positions, best_normals = portable_normals;
-  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon}) {
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
     if (!deform::isa_available(isa)) continue;
     std::vector<glm::vec3> p, n;
     run(isa, p, n);

@@ -44,16 +44,18 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
 }
 
 // The ways to get normals: the one-shot function and VertexNormalsJob with each kernel copy this CPU runs.
-enum class Path { function, bound_portable, bound_avx2, bound_avx512, bound_neon };
+enum class Path { function, bound_portable, bound_avx2, bound_avx512, bound_neon, bound_simd128 };
 deform::Isa isa_of(Path path) {
   return path == Path::bound_avx512 ? deform::Isa::avx512
          : path == Path::bound_avx2 ? deform::Isa::avx2
          : path == Path::bound_neon ? deform::Isa::neon
+         : path == Path::bound_simd128 ? deform::Isa::simd128
                                     : deform::Isa::portable;
 }
 const std::vector<Path> all_paths = [] {
   std::vector<Path> paths;
-  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512, Path::bound_neon})
+  for (const Path path : {Path::function, Path::bound_portable, Path::bound_avx2, Path::bound_avx512, Path::bound_neon,
+                          Path::bound_simd128})
     if (path == Path::function || deform::isa_available(isa_of(path))) paths.push_back(path);
   return paths;
 }();
@@ -64,6 +66,7 @@ std::string path_name(Path path) {
     case Path::bound_avx2: return "VertexNormalsJob avx2";
     case Path::bound_avx512: return "VertexNormalsJob avx512";
     case Path::bound_neon: return "VertexNormalsJob neon";
+    case Path::bound_simd128: return "VertexNormalsJob simd128";
   }
   return "?";
 }
@@ -490,7 +493,7 @@ TEST_CASE("normals: wrong sizes and out-of-range indices are refused with a reas
   CHECK(untouched == std::vector<glm::vec3>(2, glm::vec3(7.0f)));  // "writing nothing"
   CHECK(reason(job.run(2, 4)) == "range outside the job");
   CHECK(reason(job.run(2, 1)) == "range outside the job");
-  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon})
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128})
     if (!deform::isa_available(isa)) {  // a forced copy this CPU lacks is refused
       std::vector<glm::vec3> kept(3, glm::vec3(7.0f));
       bad_job = job, bad_job.normals = kept, bad_job.isa = isa;

@@ -123,7 +123,7 @@ Case random_case(std::mt19937& rng, std::size_t count, int bones, int max_influe
 
 std::vector<Isa> available_isas() {
   std::vector<Isa> isas;
-  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512, Isa::neon})
+  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512, Isa::neon, Isa::simd128})
     if (isa_available(isa)) isas.push_back(isa);
   return isas;
 }

@@ -75,7 +75,7 @@ void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3>
 
 std::vector<Isa> available_isas() {
   std::vector<Isa> isas;
-  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512, Isa::neon})
+  for (Isa isa : {Isa::portable, Isa::avx2, Isa::avx512, Isa::neon, Isa::simd128})
     if (isa_available(isa)) isas.push_back(isa);
   return isas;
 }
@@ -252,6 +252,10 @@ TEST_CASE("isa: the automatic path is the best available one; names; forced path
   if (isa_available(Isa::neon)) {  // aarch64 builds: always, and never an x86 copy
     CHECK(isa_best() == Isa::neon);
     CHECK_FALSE(isa_available(Isa::avx2));
+  } else if (isa_available(Isa::simd128)) {  // WebAssembly builds with DEFORM_WASM_SIMD128: chosen by the build
+    CHECK(isa_best() == Isa::simd128);
+    CHECK_FALSE(isa_available(Isa::avx2));
+    CHECK_FALSE(isa_available(Isa::neon));
   } else if (isa_available(Isa::avx512)) {
     CHECK(isa_best() == Isa::avx512);
     CHECK(isa_available(Isa::avx2));  // the AVX-512 copies use AVX2 and FMA too
@@ -265,6 +269,7 @@ TEST_CASE("isa: the automatic path is the best available one; names; forced path
   CHECK(std::string(isa_name(Isa::avx2)) == "avx2");
   CHECK(std::string(isa_name(Isa::avx512)) == "avx512");
   CHECK(std::string(isa_name(Isa::neon)) == "neon");
+  CHECK(std::string(isa_name(Isa::simd128)) == "simd128");
   CHECK(std::string(isa_name(static_cast<Isa>(9))) == "unknown");
   CHECK_FALSE(isa_available(static_cast<Isa>(9)));
   MESSAGE("best kernel copy here: " << isa_name(isa_best()));
@@ -605,7 +610,7 @@ TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1
   job = good, job.matrices = huge;
   rejected(job, "palette has more than 65536 bones");
   // A forced path this CPU lacks is refused, never run.
-  for (Isa isa : {Isa::avx2, Isa::avx512, Isa::neon})
+  for (Isa isa : {Isa::avx2, Isa::avx512, Isa::neon, Isa::simd128})
     if (!isa_available(isa)) {
       job = good, job.isa = isa;
       rejected(job, "instruction set not available");

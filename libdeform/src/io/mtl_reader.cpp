@@ -65,7 +65,7 @@ std::string_view parse_map_file(Tokens& tokens, const Place& place, std::string_
       look_ahead = tokens;
       if (!look_ahead.next(token)) break;
       float unused = 0.0f;
-      const auto [stop, error] = std::from_chars(token.data(), token.data() + token.size(), unused);
+      const auto [stop, error] = detail::read_decimal(token.data(), token.data() + token.size(), unused);
       if (error != std::errc() || stop != token.data() + token.size()) {
         if (i == 0) place.fail(element, "texture option is missing its numbers");
         break;

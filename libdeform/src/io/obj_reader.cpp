@@ -1,4 +1,5 @@
-// Wavefront OBJ reader: one pass over the text, std::from_chars for numbers, every index checked where it is read.
+// Wavefront OBJ reader: one pass over the text, std::from_chars and read_decimal for numbers, every index checked
+// where it is read.
 // Memory grows only with what the file holds (nothing is reserved from counts the file claims).
 #include <algorithm>
 #include <filesystem>

@@ -1,6 +1,7 @@
 #pragma once
 // Private: the line and token scanning shared by the OBJ and MTL readers. Allocation-free except for joining
-// `\`-continued lines; numbers through std::from_chars (locale-independent, no exceptions).
+// `\`-continued lines; integers through std::from_chars, floats through read_decimal (float_text.hpp), both
+// locale-independent and without exceptions.
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -16,6 +17,8 @@
 #include "deform/io/obj.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/offline/topology.hpp"
+#include "float_text.hpp"
+
 namespace deform::obj_text {
 
 inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
@@ -143,10 +146,10 @@ inline float parse_float(std::string_view token, const Place& place, std::string
   const char* begin = digits.data();
   const char* end = begin + digits.size();
   float value = 0.0f;
-  auto [stop, error] = std::from_chars(begin, end, value);
+  auto [stop, error] = detail::read_decimal(begin, end, value);
   if (error == std::errc::result_out_of_range) {
     double wide = 0.0;
-    const auto result = std::from_chars(begin, end, wide);
+    const auto result = detail::read_decimal(begin, end, wide);
     stop = result.ptr;
     error = result.ec;
     if (error == std::errc() && std::fabs(wide) <= double(std::numeric_limits<float>::max()))

@@ -3,7 +3,6 @@
 // Every length is checked against the bytes left before anything is allocated from it, so the reader's memory is
 // bounded by the file size; every malformed case names the file, the byte offset of the offending field and the bone.
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -16,6 +15,15 @@
 
 namespace deform {
 namespace {
+
+// std::bit_cast for 32-bit values, through memcpy: emscripten 3.1.6's libc++ has no std::bit_cast.
+template <typename To, typename From>
+To bits_as(From from) {
+  static_assert(sizeof(To) == sizeof(From));
+  To to;
+  std::memcpy(&to, &from, sizeof to);
+  return to;
+}
 
 constexpr std::array<std::uint8_t, 4> magic = {'S', 'K', 'E', 'L'};
 constexpr std::size_t name_bytes = 80;
@@ -75,10 +83,10 @@ class Reader {
     offset_ += 4;
     return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24;
   }
-  std::int32_t i32() { return std::bit_cast<std::int32_t>(u32()); }
+  std::int32_t i32() { return bits_as<std::int32_t>(u32()); }
   float f32(std::int64_t bone) {
     const std::size_t at = offset_;
-    const float value = std::bit_cast<float>(u32());
+    const float value = bits_as<float>(u32());
     if (!std::isfinite(value)) fail(at, bone, "number is not finite");
     return value;
   }
@@ -116,8 +124,8 @@ class Writer {
                                static_cast<std::uint8_t>(v >> 16), static_cast<std::uint8_t>(v >> 24)};
     bytes(b, 4);
   }
-  void i32(std::int32_t v) { u32(std::bit_cast<std::uint32_t>(v)); }
-  void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
+  void i32(std::int32_t v) { u32(bits_as<std::uint32_t>(v)); }
+  void f32(float v) { u32(bits_as<std::uint32_t>(v)); }
 
   std::vector<std::uint8_t> out;
 };

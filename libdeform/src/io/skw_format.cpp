@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <type_traits>
 
 #include "deform/io/atomic_file.hpp"
 #include "deform/runtime/error.hpp"
@@ -31,8 +32,13 @@ void split(std::string_view line, std::vector<std::string_view>& tokens) {
 template <typename T>
 bool parse_number(std::string_view token, T& value) {
   const char* end = token.data() + token.size();
-  const auto [ptr, ec] = std::from_chars(token.data(), end, value);
-  return ec == std::errc() && ptr == end;
+  if constexpr (std::is_floating_point_v<T>) {
+    const auto [ptr, ec] = detail::read_decimal(token.data(), end, value);
+    return ec == std::errc() && ptr == end;
+  } else {
+    const auto [ptr, ec] = std::from_chars(token.data(), end, value);
+    return ec == std::errc() && ptr == end;
+  }
 }
 
 struct Influence {

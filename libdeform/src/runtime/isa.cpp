@@ -10,6 +10,7 @@ struct CpuFeatures {
   bool avx2 = false;
   bool avx512 = false;
   bool neon = false;
+  bool simd128 = false;
 };
 
 CpuFeatures read_cpu_features() noexcept {
@@ -24,6 +25,10 @@ CpuFeatures read_cpu_features() noexcept {
 #endif
 #if defined(DEFORM_NEON_KERNELS)
   features.neon = true;  // Advanced SIMD and FMA are part of the aarch64 base architecture: nothing to ask the CPU
+#endif
+#if defined(DEFORM_SIMD128_KERNELS)
+  // WebAssembly cannot ask: an engine without SIMD128 refuses the whole module, so the build decides.
+  features.simd128 = true;
 #endif
   return features;
 }
@@ -42,12 +47,14 @@ bool isa_available(Isa isa) noexcept {
     case Isa::avx2: return cpu_features().avx2;
     case Isa::avx512: return cpu_features().avx512;
     case Isa::neon: return cpu_features().neon;
+    case Isa::simd128: return cpu_features().simd128;
   }
   return false;
 }
 
 Isa isa_best() noexcept {
   if (cpu_features().neon) return Isa::neon;
+  if (cpu_features().simd128) return Isa::simd128;
   if (cpu_features().avx512) return Isa::avx512;
   if (cpu_features().avx2) return Isa::avx2;
   return Isa::portable;
@@ -60,6 +67,7 @@ const char* isa_name(Isa isa) noexcept {
     case Isa::avx2: return "avx2";
     case Isa::avx512: return "avx512";
     case Isa::neon: return "neon";
+    case Isa::simd128: return "simd128";
   }
   return "unknown";
 }

@@ -20,6 +20,9 @@ Kernel kernel_for(Isa isa) noexcept {
 #if defined(DEFORM_NEON_KERNELS)
   if (isa == Isa::neon) return detail::evaluate_lattice_neon;
 #endif
+#if defined(DEFORM_SIMD128_KERNELS)
+  if (isa == Isa::simd128) return detail::evaluate_lattice_simd128;
+#endif
   return detail::evaluate_lattice_portable;
 }
 

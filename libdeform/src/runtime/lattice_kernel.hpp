@@ -25,7 +25,7 @@ struct KernelArgs {
 
 // One copy of lattice_kernel.inl per instruction set (isa.hpp): lattice_evaluate_portable.cpp,
 // lattice_evaluate_avx2.cpp and lattice_evaluate_avx512.cpp (x86-64 builds, each compiled with its own flags),
-// lattice_evaluate_neon.cpp (aarch64 builds).
+// lattice_evaluate_neon.cpp (aarch64 builds), lattice_evaluate_simd128.cpp (WebAssembly builds with SIMD128).
 void evaluate_lattice_portable(const KernelArgs& args);
 #if defined(DEFORM_X86_KERNELS)
 void evaluate_lattice_avx2(const KernelArgs& args);
@@ -33,6 +33,9 @@ void evaluate_lattice_avx512(const KernelArgs& args);
 #endif
 #if defined(DEFORM_NEON_KERNELS)
 void evaluate_lattice_neon(const KernelArgs& args);  // lattice_evaluate_neon.cpp (aarch64 builds)
+#endif
+#if defined(DEFORM_SIMD128_KERNELS)
+void evaluate_lattice_simd128(const KernelArgs& args);  // lattice_evaluate_simd128.cpp (WebAssembly builds)
 #endif
 
 }  // namespace deform::detail

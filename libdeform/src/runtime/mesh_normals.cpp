@@ -27,6 +27,9 @@ KernelEntry kernel_for(Isa isa) noexcept {
 #if defined(DEFORM_NEON_KERNELS)
   if (isa == Isa::neon) return detail::vertex_normals_neon;
 #endif
+#if defined(DEFORM_SIMD128_KERNELS)
+  if (isa == Isa::simd128) return detail::vertex_normals_simd128;
+#endif
   return detail::vertex_normals_portable;
 }
 

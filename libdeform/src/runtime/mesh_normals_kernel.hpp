@@ -58,6 +58,9 @@ void vertex_normals_avx512(const NormalsKernelArgs& args) noexcept;
 #if defined(DEFORM_NEON_KERNELS)
 void vertex_normals_neon(const NormalsKernelArgs& args) noexcept;  // mesh_normals_neon.cpp (aarch64 builds)
 #endif
+#if defined(DEFORM_SIMD128_KERNELS)
+void vertex_normals_simd128(const NormalsKernelArgs& args) noexcept;  // mesh_normals_simd128.cpp (WebAssembly)
+#endif
 
 // Below this length a point's sum of contributions (radians times unit normals) has cancelled: a point between
 // opposite faces, whose direction would be rounding noise.

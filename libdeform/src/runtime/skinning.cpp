@@ -85,6 +85,9 @@ detail::SkinKernel select_kernel(const SkinningJob& job) noexcept {
 #if defined(DEFORM_NEON_KERNELS)
   if (isa == Isa::neon) return lbs ? detail::skin_lbs_neon : detail::skin_dqs_neon;
 #endif
+#if defined(DEFORM_SIMD128_KERNELS)
+  if (isa == Isa::simd128) return lbs ? detail::skin_lbs_simd128 : detail::skin_dqs_simd128;
+#endif
   (void)isa;
   return lbs ? detail::skin_lbs_portable : detail::skin_dqs_portable;
 }

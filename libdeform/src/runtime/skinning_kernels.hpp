@@ -31,6 +31,10 @@ void skin_dqs_avx512(const SkinningJob& job, std::size_t begin, std::size_t end)
 void skin_lbs_neon(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 void skin_dqs_neon(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
 
+// 4 vertices per step (skinning_simd128.cpp, WebAssembly builds with DEFORM_WASM_SIMD128).
+void skin_lbs_simd128(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+void skin_dqs_simd128(const SkinningJob& job, std::size_t begin, std::size_t end) noexcept;
+
 // Byte-addressed stream access shared by the kernels.
 inline const float* stream_at(std::span<const float> s, std::size_t stride, std::size_t i) noexcept {
   return reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(s.data()) + i * stride);

@@ -1,6 +1,7 @@
 #pragma once
 // Internal: the block loops of the SIMD skinning kernels, written once over an instruction-set traits class and
-// instantiated by skinning_avx2.cpp (8 lanes), skinning_avx512.cpp (16 lanes) and skinning_neon.cpp (4 lanes, aarch64).
+// instantiated by skinning_avx2.cpp (8 lanes), skinning_avx512.cpp (16 lanes), skinning_neon.cpp (4 lanes, aarch64)
+// and skinning_simd128.cpp (4 lanes, WebAssembly).
 // Everything here is in an anonymous namespace on purpose: each including file compiles it with its own -m flags, so
 // no symbol may be shared.
 //
