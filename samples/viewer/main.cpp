@@ -231,7 +231,8 @@ model_loading::LoadedModel load(const Options& o) {
   const bool is_obj = o.model.size() > 4 && (o.model.substr(o.model.size() - 4) == ".obj" ||
                                              o.model.substr(o.model.size() - 4) == ".OBJ");
   if (is_obj && o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
-  model_loading::LoadedModel loaded = model_loading::load_model({o.model, o.skeleton, o.weights, true});
+  model_loading::LoadedModel loaded = model_loading::load_model(
+      {.path = o.model, .skeleton = o.skeleton, .weights = o.weights, .automatic_weights = true});
   for (const std::string& w : loaded.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (o.up == 'y') loaded.up = glm::vec3(0.0f, 1.0f, 0.0f);
   if (o.up == 'z') loaded.up = glm::vec3(0.0f, 0.0f, 1.0f);
