@@ -232,7 +232,7 @@ model_loading::LoadedModel load(const Options& o) {
                                              o.model.substr(o.model.size() - 4) == ".OBJ");
   if (is_obj && o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
   model_loading::LoadedModel loaded = model_loading::load_model(
-      {.path = o.model, .skeleton = o.skeleton, .weights = o.weights, .automatic_weights = true});
+      {.path = o.model, .skeleton = o.skeleton, .weights = o.weights, .automatic_weights = true, .references = {}});
   for (const std::string& w : loaded.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (o.up == 'y') loaded.up = glm::vec3(0.0f, 1.0f, 0.0f);
   if (o.up == 'z') loaded.up = glm::vec3(0.0f, 0.0f, 1.0f);
