@@ -12,47 +12,19 @@
 #include <numbers>
 #include <vector>
 
-#include "deform/extras/builtin.hpp"
 #include "deform/offline/delta_mush.hpp"
 #include "deform/runtime/delta_mush.hpp"
 #include "deform/runtime/parallel.hpp"
+#include "fixtures.hpp"
 
 namespace {
 
-// A closed torus of n x m points.
-deform::Mesh torus(int n, int m) {
-  deform::Mesh mesh;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const float u = 2 * std::numbers::pi_v<float> * float(i) / float(n);
-      const float v = 2 * std::numbers::pi_v<float> * float(j) / float(m);
-      mesh.positions.emplace_back((1 + 0.4f * std::cos(v)) * std::cos(u), (1 + 0.4f * std::cos(v)) * std::sin(u),
-                                  0.4f * std::sin(v));
-      mesh.vertex_point.push_back(std::uint32_t(i * m + j));
-    }
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const auto a = std::uint32_t(i * m + j), b = std::uint32_t((i + 1) % n * m + j),
-                 c = std::uint32_t((i + 1) % n * m + (j + 1) % m), d = std::uint32_t(i * m + (j + 1) % m);
-      mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
-    }
-  return mesh;
-}
-
-const deform::Mesh& mesh(bool builtin) {
-  static const deform::Mesh character = deform::builtin_character().mesh;
-  static const deform::Mesh big = torus(400, 250);
-  return builtin ? character : big;
-}
+using bench_fixtures::mesh;
 
 // 16 frames of the points bent a little differently.
 std::vector<std::vector<glm::vec3>> frames(const deform::Mesh& m) {
-  std::vector<std::vector<glm::vec3>> out(16);
-  for (int f = 0; f < 16; ++f) {
-    const float bend = 0.05f * float(f);
-    for (const glm::vec3& p : m.positions)
-      out[std::size_t(f)].emplace_back(p.x + bend * p.y * p.y, p.y, p.z + bend * p.x * p.y);
-  }
+  std::vector<std::vector<glm::vec3>> out;
+  for (int f = 0; f < 16; ++f) out.push_back(bench_fixtures::bent_points(m, f));
   return out;
 }
 

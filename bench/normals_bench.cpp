@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "../tests/runtime/normals_reference.hpp"
-#include "deform/extras/builtin.hpp"
+#include "fixtures.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/runtime/parallel.hpp"
@@ -25,39 +25,7 @@
 #include "deform/offline/topology.hpp"
 namespace {
 
-// A closed torus of n x m points, its render vertices split along the u = 0 and v = 0 seams ((n + 1) x (m + 1)).
-deform::Mesh torus(int n, int m) {
-  deform::Mesh mesh;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const float u = 2 * std::numbers::pi_v<float> * float(i) / float(n);
-      const float v = 2 * std::numbers::pi_v<float> * float(j) / float(m);
-      mesh.positions.emplace_back((1 + 0.4f * std::cos(v)) * std::cos(u), (1 + 0.4f * std::cos(v)) * std::sin(u),
-                                  0.4f * std::sin(v));
-    }
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= m; ++j) mesh.vertex_point.push_back(std::uint32_t((i % n) * m + j % m));
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const auto a = std::uint32_t(i * (m + 1) + j), b = a + std::uint32_t(m + 1), c = b + 1, d = a + 1;
-      mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
-    }
-  return mesh;
-}
-
-const deform::Mesh& mesh(bool builtin) {
-  static const deform::Mesh character = deform::builtin_character().mesh;
-  static const deform::Mesh big = torus(400, 250);
-  return builtin ? character : big;
-}
-
-// The points bent a little differently each frame.
-std::vector<glm::vec3> pose(const deform::Mesh& m, int frame) {
-  std::vector<glm::vec3> points;
-  const float bend = 0.05f * float(frame % 16);
-  for (const glm::vec3& p : m.positions) points.emplace_back(p.x + bend * p.y * p.y, p.y, p.z + bend * p.x * p.y);
-  return points;
-}
+using bench_fixtures::mesh;
 
 void set_counters(benchmark::State& state, const deform::Mesh& m) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(m.vertex_count()));
@@ -77,7 +45,7 @@ void bound(benchmark::State& state, bool builtin, deform::Isa isa, bool threads 
   }
   const deform::Mesh& m = mesh(builtin);
   const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(m);
-  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  const std::vector<glm::vec3> poses[2] = {bench_fixtures::bent_points(m, 3), bench_fixtures::bent_points(m, 9)};
   std::vector<glm::vec3> out(m.vertex_count());
   std::vector<glm::vec4> scratch(binding.scratch_size());
   deform::VertexNormalsJob job;
@@ -98,7 +66,7 @@ void bound(benchmark::State& state, bool builtin, deform::Isa isa, bool threads 
 
 void function(benchmark::State& state, bool builtin) {
   const deform::Mesh& m = mesh(builtin);
-  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  const std::vector<glm::vec3> poses[2] = {bench_fixtures::bent_points(m, 3), bench_fixtures::bent_points(m, 9)};
   std::vector<glm::vec3> scratch(m.point_count()), out(m.vertex_count());
   int frame = 0;
   for (auto _ : state) {
@@ -111,7 +79,7 @@ void function(benchmark::State& state, bool builtin) {
 // The library's code before VertexNormals: std::atan2 for two corners of every triangle.
 void atan2_former(benchmark::State& state) {
   const deform::Mesh& m = mesh(true);
-  const std::vector<glm::vec3> poses[2] = {pose(m, 3), pose(m, 9)};
+  const std::vector<glm::vec3> poses[2] = {bench_fixtures::bent_points(m, 3), bench_fixtures::bent_points(m, 9)};
   std::vector<glm::vec3> scratch(m.point_count()), out(m.vertex_count());
   int frame = 0;
   for (auto _ : state) {
