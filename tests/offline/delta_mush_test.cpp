@@ -196,7 +196,9 @@ TEST_CASE("Delta Mush: the job agrees with the double-precision reference, and a
         worst = std::max(worst, glm::length(glm::dvec3(out[i]) - expected[i]));
     }
     MESSAGE("iterations " << settings.iterations << ": job vs reference, at most " << worst / size << " of the size");
-    CHECK(worst <= 2e-6 * size);
+    // Float against double: the job rounds each pass, and a frame built from a one-pass smoothing turns the rounding
+    // up (2.1e-6 of the size with Clang's code, 1.5e-6 with GCC's); a wrong sum or frame is off by 1e-3 and more.
+    CHECK(worst <= 1e-5 * size);
 
     // A rigid motion of the whole rest mesh: the mush is the moved rest (the deltas turn with their frames).
     const glm::dquat q = glm::normalize(glm::dquat(0.8, 0.3, -0.4, 0.2));
