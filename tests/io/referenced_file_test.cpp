@@ -262,3 +262,30 @@ TEST_CASE("referenced files: UTF-8 names outside ASCII, read, confined, named an
   CHECK(document["buffers"][0]["byteLength"] == deform::read_file_bytes(written.bin).size());
   CHECK(document["images"].size() == 1);
 }
+
+// A name that is not UTF-8 names no file on Windows (no wide name corresponds to it): a reader refuses it naming the
+// file, line and statement, and the checks that answer yes or no answer no. On POSIX the bytes are the name.
+TEST_CASE("referenced files: names that are not UTF-8") {
+  const Tree tree;
+  const std::string invalid = "\xff\xfe.png";
+  Tree::write(tree.model / "bad.mtl", "newmtl a\nmap_Kd " + invalid + "\n");
+  Tree::write(tree.model / "m.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  Tree::write(tree.model / "n.obj", "mtllib \xff.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string texture = utf8(tree.model) + "/" + invalid;
+  deform::Warnings warnings;
+#ifdef _WIN32
+  CHECK_THROWS_WITH_AS(deform::read_obj(tree.referrer, &warnings), doctest::Contains("map_Kd"), deform::Error);
+  CHECK_THROWS_WITH_AS(deform::read_obj(utf8(tree.model / "n.obj"), &warnings), doctest::Contains("not UTF-8"),
+                       deform::Error);
+  CHECK(refusal(tree.referrer, invalid, "map_Kd").find("not UTF-8") != std::string::npos);
+  CHECK_THROWS_WITH_AS(deform::write_file_atomic(texture, std::string_view("x")), doctest::Contains("not UTF-8"),
+                       deform::Error);
+  CHECK_FALSE(deform::lies_inside(texture, utf8(tree.model)));
+#else
+  CHECK(deform::read_obj(tree.referrer, &warnings).materials.size() == 1);
+  CHECK(deform::read_obj(utf8(tree.model / "n.obj"), &warnings).materials.empty());
+  CHECK(resolve_referenced_file(tree.referrer, invalid, "map_Kd") == utf8(tree.model) + "/" + invalid);
+  CHECK(deform::lies_inside(texture, utf8(tree.model)));
+#endif
+  CHECK(deform::image_format(texture).empty());
+}
