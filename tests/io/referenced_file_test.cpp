@@ -4,9 +4,14 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <string_view>
 
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include "deform/io/atomic_file.hpp"
+#include "deform/io/gltf_export.hpp"
+#include "deform/io/model_files.hpp"
 #include "deform/io/obj.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
@@ -176,4 +181,128 @@ TEST_CASE("referenced files: image signatures are read from the first bytes") {
   CHECK(deform::image_format((tree.model / "mm.tif").string()) == "tiff");
   Tree::write(tree.model / "mx.bin", "MMXX not a tiff");
   CHECK(deform::image_format((tree.model / "mx.bin").string()).empty());
+}
+
+namespace {
+
+// A path's or a literal's UTF-8 bytes as the API takes them.
+std::string utf8(const fs::path& path) {
+  const std::u8string text = path.u8string();
+  return std::string(text.begin(), text.end());
+}
+std::string str(std::u8string_view text) { return std::string(text.begin(), text.end()); }
+
+}  // namespace
+
+// Every path in the API is UTF-8. On Windows a name outside ASCII must reach the system as the wide name it spells,
+// not as bytes in the ANSI code page: this holds the readers, the confinement, the model's name and the writers to
+// that (it runs under wine in the Windows pass; on POSIX the bytes are the name).
+TEST_CASE("referenced files: UTF-8 names outside ASCII, read, confined, named and written") {
+  const Tree tree;
+  const fs::path folder = tree.root / u8"Ωmega ünïcode 日本";
+  fs::create_directories(folder);
+  const std::string png("\x89PNG\r\n\x1a\n0123456789", 18);
+  Tree::write(folder / u8"tëxture_日本.png", png);
+  Tree::write(tree.root / u8"dehors_Ω.png", png);
+  Tree::write(folder / u8"mätériaux_Ω.mtl", str(u8"newmtl peau\nKd 1 0 0\nmap_Kd tëxture_日本.png\n"));
+  const std::string triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl peau\nf 1/1 2/2 3/3\n";
+  Tree::write(folder / u8"mödel_日本.obj", str(u8"mtllib mätériaux_Ω.mtl\n") + triangle);
+  fs::copy_file(DEFORM_TEST_DATA "/skeleton/arm.sk", folder / u8"ßkeleton.sk");
+  Tree::write(folder / u8"pöids.skw", "skw 1\nvertices 3\n0 0 1\n1 1 1\n2 1 1\n");
+  const std::string obj = utf8(folder / u8"mödel_日本.obj");
+  const std::string texture = str((folder / u8"tëxture_日本.png").lexically_normal().generic_u8string());
+
+  // Read: the OBJ, its MTL and the texture it names, found inside the folder (no "not found" warning).
+  deform::Warnings warnings;
+  const deform::Model model =
+      deform::load_model(obj, utf8(folder / u8"ßkeleton.sk"), utf8(folder / u8"pöids.skw"), &warnings);
+  for (const std::string& w : warnings.messages) FAIL_CHECK(w);
+  CHECK(model.name == str(u8"mödel_日本"));
+  REQUIRE(model.mesh.materials.size() == 1);
+  CHECK(model.mesh.materials[0].diffuse_map == texture);
+  REQUIRE(model.mesh.material_libraries.size() == 1);
+  CHECK(model.mesh.material_libraries[0] == str((folder / u8"mätériaux_Ω.mtl").lexically_normal().generic_u8string()));
+
+  // Confined: the texture inside resolves to its canonical UTF-8 path; one outside is refused, or allowed on purpose.
+  CHECK(resolve_referenced_file(obj, str(u8"tëxture_日本.png"), "map_Kd") ==
+        utf8(fs::weakly_canonical(folder / u8"tëxture_日本.png")));
+  CHECK(refusal(obj, str(u8"../dehors_Ω.png"), "map_Kd").find("outside") != std::string::npos);
+  CHECK(deform::lies_inside(texture, utf8(folder)));
+  CHECK(deform::image_format(texture) == "png");
+  Tree::write(folder / u8"ailleurs_Ω.mtl", str(u8"newmtl b\nmap_Kd ../dehors_Ω.png\n"));
+  Tree::write(folder / u8"fuite_日本.obj", str(u8"mtllib ailleurs_Ω.mtl\n") + triangle);
+  CHECK_THROWS_WITH_AS(deform::read_obj(utf8(folder / u8"fuite_日本.obj")), doctest::Contains("map_Kd"),
+                       deform::Error);
+  ReferencePolicy policy;
+  policy.allow_outside = {utf8(tree.root)};
+  CHECK(deform::read_obj(utf8(folder / u8"fuite_日本.obj"), nullptr, policy).materials[0].diffuse_map ==
+        str((tree.root / u8"dehors_Ω.png").lexically_normal().generic_u8string()));
+
+  // Written: an OBJ naming the MTL relative to it, read back with its texture.
+  const std::string obj_out = utf8(folder / u8"sortie_Ω.obj");
+  deform::ObjWriteOptions obj_options;
+  obj_options.mtllib = deform::material_libraries_for(model.mesh, obj_out);
+  CHECK(obj_options.mtllib == str(u8"mätériaux_Ω.mtl"));
+  deform::write_obj(obj_out, model.mesh, model.mesh.positions, {}, obj_options);
+  const deform::Mesh back = deform::read_obj(obj_out);
+  CHECK(back.point_count() == 3);
+  REQUIRE(back.materials.size() == 1);
+  CHECK(back.materials[0].diffuse_map == texture);
+
+  // Written: a .gltf beside its .bin (the .bin's name made ASCII, a '_' a byte), the texture embedded from the folder.
+  deform::GltfExportOptions gltf_options;
+  gltf_options.texture_root = utf8(folder);
+  const std::string gltf_out = utf8(folder / u8"exporté_日本.gltf");
+  const deform::GltfWritten written = deform::write_gltf(gltf_out, model, gltf_options);
+  CHECK(written.warnings.empty());
+  CHECK(written.textures == 1);
+  CHECK(written.bin == utf8(folder / "export_________.bin"));
+  const nlohmann::json document = nlohmann::json::parse(deform::read_file_text(gltf_out));
+  CHECK(document["buffers"][0]["uri"] == "export_________.bin");
+  CHECK(document["buffers"][0]["byteLength"] == deform::read_file_bytes(written.bin).size());
+  CHECK(document["images"].size() == 1);
+}
+
+// A name that is not UTF-8 names no file on Windows (no wide name corresponds to it): a reader refuses it naming the
+// file, line and statement, and the checks that answer yes or no answer no. On POSIX the bytes are the name.
+TEST_CASE("referenced files: names that are not UTF-8") {
+  const Tree tree;
+  const std::string invalid = "\xff\xfe.png";
+  Tree::write(tree.model / "bad.mtl", "newmtl a\nmap_Kd " + invalid + "\n");
+  Tree::write(tree.model / "m.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  Tree::write(tree.model / "n.obj", "mtllib \xff.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string texture = utf8(tree.model) + "/" + invalid;
+  deform::Warnings warnings;
+#ifdef _WIN32
+  CHECK_THROWS_WITH_AS(deform::read_obj(tree.referrer, &warnings), doctest::Contains("map_Kd"), deform::Error);
+  CHECK_THROWS_WITH_AS(deform::read_obj(utf8(tree.model / "n.obj"), &warnings), doctest::Contains("not UTF-8"),
+                       deform::Error);
+  CHECK(refusal(tree.referrer, invalid, "map_Kd").find("not UTF-8") != std::string::npos);
+  CHECK_THROWS_WITH_AS(deform::write_file_atomic(texture, std::string_view("x")), doctest::Contains("not UTF-8"),
+                       deform::Error);
+  CHECK_FALSE(deform::lies_inside(texture, utf8(tree.model)));
+#else
+  CHECK(deform::read_obj(tree.referrer, &warnings).materials.size() == 1);
+  CHECK(deform::read_obj(utf8(tree.model / "n.obj"), &warnings).materials.empty());
+  CHECK(resolve_referenced_file(tree.referrer, invalid, "map_Kd") == utf8(tree.model) + "/" + invalid);
+  CHECK(deform::lies_inside(texture, utf8(tree.model)));
+#endif
+  CHECK(deform::image_format(texture).empty());
+  // glTF export leaves such a texture out with a warning naming why (on POSIX: a file that does not exist).
+  Tree::write(tree.model / "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+  fs::copy_file(DEFORM_TEST_DATA "/skeleton/arm.sk", tree.model / "t.sk");
+  Tree::write(tree.model / "t.skw", "skw 1\nvertices 3\n0 0 1\n1 1 1\n2 1 1\n");
+  deform::Model model = deform::load_model(utf8(tree.model / "t.obj"), utf8(tree.model / "t.sk"),
+                                           utf8(tree.model / "t.skw"));
+  model.mesh.materials.assign(1, deform::Material{});
+  model.mesh.materials[0].diffuse_map = texture;
+  deform::GltfExportOptions options;
+  options.texture_root = utf8(tree.model);
+  const deform::GltfWritten written = deform::write_gltf(utf8(tree.model / "t.glb"), model, options);
+  REQUIRE(written.warnings.size() == 1);
+#ifdef _WIN32
+  CHECK(written.warnings[0].find("not UTF-8") != std::string::npos);
+#else
+  CHECK(written.warnings[0].find("not found") != std::string::npos);
+#endif
 }

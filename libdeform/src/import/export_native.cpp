@@ -15,11 +15,17 @@
 #include "deform/io/referenced_file.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/runtime/error.hpp"
+#include "io/utf8_path.hpp"
 
 namespace deform {
 namespace {
 
 namespace fs = std::filesystem;
+using utf8_path::from_utf8;
+using utf8_path::to_utf8;
+
+// The UTF-8 path of `name` (UTF-8) in `folder`.
+std::string path_in(const fs::path& folder, const std::string& name) { return to_utf8(folder / from_utf8(name)); }
 
 // Where a texture may be copied from: inside `root` or a folder `policy` allows once links are resolved
 // (lies_inside, the rule every reader applies), and an image by its first bytes alone (image_format: a 100 MB file
@@ -28,14 +34,21 @@ std::string refusal(const std::string& texture, const std::string& root, const R
                     std::string& real) {
   std::error_code error;
   if (root.empty()) return "no texture folder was given";
-  const fs::path canonical = fs::canonical(texture, error);
+  fs::path named;
+  try {
+    named = from_utf8(texture);
+  } catch (const Error&) {  // only on Windows, where a path is the wide name its UTF-8 spells
+    return "its name is not UTF-8";
+  }
+  const fs::path canonical = fs::canonical(named, error);
   if (error || !fs::is_regular_file(canonical, error)) return "not found";
-  if (!fs::is_directory(root, error)) return "the texture folder '" + root + "' does not exist";
-  bool allowed = lies_inside(canonical.string(), root);
-  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(canonical.string(), other);
+  if (!fs::is_directory(from_utf8(root), error)) return "the texture folder '" + root + "' does not exist";
+  const std::string canonical_utf8 = to_utf8(canonical);
+  bool allowed = lies_inside(canonical_utf8, root);
+  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(canonical_utf8, other);
   if (!allowed) return "it lies outside the model's folder '" + root + "'";
-  if (image_format(canonical.string()).empty()) return "it is not an image file";
-  real = canonical.string();
+  if (image_format(canonical_utf8).empty()) return "it is not an image file";
+  real = canonical_utf8;
   return {};
 }
 
@@ -55,15 +68,15 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
   std::error_code error;
-  const fs::path base = fs::path(folder).lexically_normal();
+  const fs::path base = from_utf8(folder).lexically_normal();
   const fs::path target = base.filename().empty() ? base.parent_path() : base;  // without a trailing separator
-  const std::string leaf = target.filename().string();
+  const std::string leaf = to_utf8(target.filename());
   const fs::path parent = target.parent_path();
   Staging staging;
   std::random_device entropy;
   for (int attempt = 0; attempt < 16 && staging.path.empty(); ++attempt) {
     const fs::path candidate =
-        (parent.empty() ? fs::path(".") : parent) / ("." + leaf + ".deform-tmp-" + std::to_string(entropy()));
+        (parent.empty() ? fs::path(".") : parent) / from_utf8("." + leaf + ".deform-tmp-" + std::to_string(entropy()));
     if (fs::create_directories(candidate, error)) staging.path = candidate;
   }
   if (staging.path.empty()) {  // a missing parent folder is the user's; permissions or a full disk the system's
@@ -92,7 +105,7 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
         name += bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8 ? ".jpg" : ".png";
         while (std::find(names.begin(), names.end(), name) != names.end())
           name = std::to_string(file_of_image.size()) + "_" + name;
-        write_file_atomic((staging.path / name).string(), bytes);
+        write_file_atomic(path_in(staging.path, name), bytes);
         names.push_back(name);
         found = file_of_image.emplace(&bytes, name).first;
       }
@@ -118,17 +131,17 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
         continue;
       }
       const std::vector<std::uint8_t> bytes = read_file_bytes(real);
-      std::string name = fs::path(material.diffuse_map).filename().string();
+      std::string name = to_utf8(from_utf8(material.diffuse_map).filename());
       while (std::find(names.begin(), names.end(), name) != names.end())
         name = std::to_string(copy_of.size()) + "_" + name;
-      write_file_atomic((staging.path / name).string(), bytes);
+      write_file_atomic(path_in(staging.path, name), bytes);
       names.push_back(name);
       found = copy_of.emplace(material.diffuse_map, name).first;
     }
     material.diffuse_map = found->second;
   }
 
-  write_file_atomic((staging.path / names[1]).string(), format_mtl(materials));
+  write_file_atomic(path_in(staging.path, names[1]), format_mtl(materials));
   SkinWeights folded;  // .skw readers keep four influences by default: the file holds what reloads
   if (model.weights.has_extra()) {
     folded = model.weights;
@@ -145,13 +158,13 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
     files.warnings.push_back(names[0] + ": " + std::to_string(model.morph_targets.size()) +
                              " morph targets are not written (OBJ, .sk and .skw have no blend shapes); the mesh is "
                              "the base shape");
-  write_skw((staging.path / names[3]).string(), model.weights.has_extra() ? folded : model.weights);
-  write_sk((staging.path / names[2]).string(), model.skeleton);
+  write_skw(path_in(staging.path, names[3]), model.weights.has_extra() ? folded : model.weights);
+  write_sk(path_in(staging.path, names[2]), model.skeleton);
   ObjWriteOptions obj_options;
   obj_options.mtllib = names[1];
   Mesh mesh_with_copies = model.mesh;
   mesh_with_copies.materials = std::move(materials);
-  write_obj((staging.path / names[0]).string(), mesh_with_copies, model.mesh.positions, {}, obj_options);
+  write_obj(path_in(staging.path, names[0]), mesh_with_copies, model.mesh.positions, {}, obj_options);
 
   // Every file is written: move the set into place, a new folder in one rename, else as one FileTransaction (every
   // previous file of the set kept until all the new ones are in, and put back if any step fails).
@@ -163,14 +176,14 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
     if (!fs::is_directory(target, error)) throw Error::in_file(folder, "", "exists and is not a folder");
     FileTransaction landing;
     for (std::size_t i = names.size(); i-- > 0;)  // textures, .skw, .sk, .mtl, then the OBJ
-      landing.stage_written((base / names[i]).string(), (staging.path / names[i]).string());
+      landing.stage_written(path_in(base, names[i]), path_in(staging.path, names[i]));
     landing.commit();
   }
-  files.obj = (base / names[0]).string();
-  files.mtl = (base / names[1]).string();
-  files.sk = (base / names[2]).string();
-  files.skw = (base / names[3]).string();
-  for (std::size_t i = 4; i < names.size(); ++i) files.textures.push_back((base / names[i]).string());
+  files.obj = path_in(base, names[0]);
+  files.mtl = path_in(base, names[1]);
+  files.sk = path_in(base, names[2]);
+  files.skw = path_in(base, names[3]);
+  for (std::size_t i = 4; i < names.size(); ++i) files.textures.push_back(path_in(base, names[i]));
   return files;
 }
 

@@ -47,6 +47,7 @@ namespace tinygltf = deform_gltf_import::tinygltf;
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "import/import_common.hpp"
+#include "io/utf8_path.hpp"
 #include "runtime/finite.hpp"
 namespace deform::import_detail {
 namespace {
@@ -94,7 +95,7 @@ const std::string* approved_path(const std::string& path, void* user) {
 bool file_exists(const std::string& path, void* user) {
   const std::string* real = approved_path(path, user);
   std::error_code error;
-  return real != nullptr && fs::is_regular_file(*real, error);
+  return real != nullptr && fs::is_regular_file(utf8_path::from_utf8(*real), error);
 }
 std::string expand_path(const std::string& path, void*) { return path; }
 bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const std::string& path, void* user) {
@@ -339,7 +340,7 @@ glm::dmat4 trs(glm::dvec3 t, glm::dquat r, glm::dvec3 s) {
 }  // namespace
 
 bool is_gltf_path(const std::string& path) {
-  std::string extension = fs::path(path).extension().string();
+  std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return extension == ".gltf" || extension == ".glb";
 }
@@ -354,7 +355,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, &approved});
   tinygltf::Model gltf;
   std::string error, warning;
-  const std::string base = fs::path(path).parent_path().string();
+  const std::string base = utf8_path::to_utf8(utf8_path::from_utf8(path).parent_path());
   bool loaded = false;
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
   const auto text = [&](std::size_t from, std::size_t length) {
@@ -399,7 +400,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
 
   ImportedModel result;
   std::vector<std::string>& warnings = result.warnings;
-  result.model.name = fs::path(path).stem().string();
+  result.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path).stem());
   for (const std::string& required : gltf.extensionsRequired) {
     const bool harmless = required == "KHR_mesh_quantization" || required == "KHR_texture_transform" ||
                           required.rfind("KHR_materials_", 0) == 0 || required == "KHR_texture_basisu" ||
@@ -705,11 +706,11 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
             }
           } else {
             // The path as the file names it (kept for messages and copies); image_paths holds its canonical form.
-            fs::path resolved(decode_uri_reference(img.uri));
-            if (resolved.is_relative()) resolved = fs::path(base) / resolved;
-            material.diffuse_map = resolved.lexically_normal().string();
+            fs::path resolved = utf8_path::from_utf8(decode_uri_reference(img.uri));
+            if (resolved.is_relative()) resolved = utf8_path::from_utf8(base) / resolved;
+            material.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
             std::error_code ignored;
-            if (!fs::is_regular_file(image_paths[static_cast<std::size_t>(image)], ignored))
+            if (!fs::is_regular_file(utf8_path::from_utf8(image_paths[static_cast<std::size_t>(image)]), ignored))
               warnings.push_back("material '" + name + "': texture '" + material.diffuse_map + "' not found");
           }
         }

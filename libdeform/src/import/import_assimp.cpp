@@ -22,6 +22,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
 #include "import/import_common.hpp"
+#include "io/utf8_path.hpp"
 #include "runtime/finite.hpp"
 namespace deform {
 namespace {
@@ -49,10 +50,12 @@ class ConfinedIOSystem : public Assimp::DefaultIOSystem {
  private:
   bool allowed(const char* file) const {
     if (file == nullptr) return false;
-    std::error_code error;
-    const std::string absolute = fs::absolute(file, error).lexically_normal().string();  // Assimp joins the folder
-    if (error) return false;
     try {
+      std::error_code error;
+      // Assimp joins the folder; its names are UTF-8 (its Windows IO system opens them as wide names).
+      const std::string absolute =
+          utf8_path::to_utf8(fs::absolute(utf8_path::from_utf8(file), error).lexically_normal());
+      if (error) return false;
       resolve_referenced_file(model_, absolute, "a file the importer opened", policy_);
       return true;
     } catch (const Error& e) {
@@ -121,14 +124,15 @@ Material convert_material(const aiScene& scene, const aiMaterial& source, std::s
       warnings.push_back("material '" + m.name + "': embedded texture '" + path + "' is not extracted");
     } else {
       std::replace(path.begin(), path.end(), '\\', '/');
-      fs::path resolved(path);
-      if (resolved.is_relative()) resolved = fs::path(file).parent_path() / resolved;
-      m.diffuse_map = resolved.lexically_normal().string();
-      // Confined to the model's folder like every file a model names (resolve_referenced_file).
+      // Confined to the model's folder like every file a model names (resolve_referenced_file); first, as it
+      // refuses a name that is no path (not UTF-8, on Windows).
       const std::string real = resolve_referenced_file(
           file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy);
+      fs::path resolved = utf8_path::from_utf8(path);
+      if (resolved.is_relative()) resolved = utf8_path::from_utf8(file).parent_path() / resolved;
+      m.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
       std::error_code error;
-      if (!fs::is_regular_file(real, error))
+      if (!fs::is_regular_file(utf8_path::from_utf8(real), error))
         warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not found");
     }
   }
@@ -160,7 +164,7 @@ Track<T> convert_track(const Key* keys, unsigned count, double ticks_per_second,
 }  // namespace
 
 bool is_importable(const std::string& path) {
-  const std::string extension = fs::path(path).extension().string();
+  const std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
   if (extension.size() < 2) return false;
   Assimp::Importer importer;
   return importer.IsExtensionSupported(extension.c_str());
@@ -203,7 +207,7 @@ ImportedModel import_any(const std::string& path, const ImportOptions& options) 
 
   ImportedModel result;
   std::vector<std::string>& warnings = result.warnings;
-  result.model.name = fs::path(path).stem().string();
+  result.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path).stem());
   // The up axis the file declares, where Assimp reads one (its FBX reader; glTF is +Y by definition).
   int up_axis = 1, up_sign = 1;
   if (scene->mMetaData != nullptr && scene->mMetaData->Get("UpAxis", up_axis) && up_axis >= 0 && up_axis <= 2) {

@@ -31,6 +31,7 @@
 
 #include "deform/import/import.hpp"
 #include "deform/runtime/error.hpp"
+#include "io/utf8_path.hpp"
 #include "wire.hpp"
 
 #ifndef _WIN32
@@ -55,7 +56,7 @@ std::string find_worker(const std::string& given) {
   for (const std::string& candidate : candidates) {
     std::error_code error;
 #ifdef _WIN32
-    if (fs::is_regular_file(fs::path(std::u8string(candidate.begin(), candidate.end())), error)) return candidate;
+    if (fs::is_regular_file(utf8_path::from_utf8(candidate), error)) return candidate;
 #else
     if (fs::is_regular_file(candidate, error) && ::access(candidate.c_str(), X_OK) == 0) return candidate;
 #endif
@@ -157,7 +158,7 @@ Error worker_failed(const std::string& path, int code, std::string messages) {
 
 #ifdef _WIN32
 
-std::wstring wide(const std::string& utf8) { return fs::path(std::u8string(utf8.begin(), utf8.end())).wstring(); }
+std::wstring wide(const std::string& utf8) { return utf8_path::from_utf8(utf8).wstring(); }
 
 // Appends one argument as the C runtime's parser of the command line reads it back: quoted when it holds a space, tab
 // or quote; backslashes doubled before a quote and before the closing quote.

@@ -22,6 +22,7 @@
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "import/import_common.hpp"
+#include "io/utf8_path.hpp"
 #include "runtime/finite.hpp"
 namespace deform::import_detail {
 namespace {
@@ -175,7 +176,7 @@ struct VertexArray {
 }  // namespace
 
 bool is_iqm_path(const std::string& path) {
-  std::string extension = fs::path(path).extension().string();
+  std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return extension == ".iqm";
@@ -184,7 +185,7 @@ bool is_iqm_path(const std::string& path) {
 ImportedModel import_iqm(const std::string& path, const ImportOptions& options) {
   std::vector<unsigned char> bytes;
   {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(utf8_path::from_utf8(path), std::ios::binary);
     if (!in) throw Error::in_file(path, "", "cannot be opened");
     bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     if (in.bad()) throw Error::in_file(path, "", "cannot be read");
@@ -227,7 +228,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
 
   ImportedModel result;
   std::vector<std::string>& warnings = result.warnings;
-  result.model.name = fs::path(path).stem().string();
+  result.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path).stem());
   result.up = glm::vec3(0.0f, 0.0f, 1.0f);  // Quake's convention, which IQM files follow: +Z up
 
   // --- vertex arrays ---
@@ -327,7 +328,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
 
   // --- materials: one per distinct material string (IQM names a texture there), resolved beside the file ---
   Mesh& mesh = result.model.mesh;
-  const fs::path folder = fs::path(path).parent_path();
+  const fs::path folder = utf8_path::from_utf8(path).parent_path();
   std::map<std::string, std::int32_t> material_of;
   struct Part {
     std::string name;
@@ -363,13 +364,14 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
       if (!material.empty()) {
         std::string texture = material;
         std::replace(texture.begin(), texture.end(), '\\', '/');
-        fs::path resolved(texture);
-        if (resolved.is_relative()) resolved = folder / resolved;
-        out.diffuse_map = resolved.lexically_normal().string();
-        // Confined to the model's folder like every file a model names (resolve_referenced_file).
+        // Confined to the model's folder like every file a model names (resolve_referenced_file); first, as it
+        // refuses a name that is no path (not UTF-8, on Windows).
         const std::string real = resolve_referenced_file(path, texture, element + ".material", options.references);
+        fs::path resolved = utf8_path::from_utf8(texture);
+        if (resolved.is_relative()) resolved = folder / resolved;
+        out.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
         std::error_code error;
-        if (!fs::is_regular_file(real, error))
+        if (!fs::is_regular_file(utf8_path::from_utf8(real), error))
           warnings.push_back("material '" + out.name + "': texture '" + out.diffuse_map + "' not found");
       }
       mesh.materials.push_back(std::move(out));

@@ -22,21 +22,16 @@
 #endif
 
 #include "deform/runtime/error.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 namespace {
 
 namespace fs = std::filesystem;
 
-// A path from its UTF-8 bytes (every path in the API is UTF-8): on Windows the wide path the system calls take,
-// elsewhere the bytes unchanged.
-fs::path native_path(const std::string& path) { return fs::path(std::u8string(path.begin(), path.end())); }
-
-// A path back to UTF-8 bytes.
-std::string utf8(const fs::path& path) {
-  const std::u8string text = path.u8string();
-  return std::string(text.begin(), text.end());
-}
+// Every path in the API is UTF-8: on Windows the wide path the system calls take, elsewhere the bytes unchanged.
+using utf8_path::from_utf8;
+using utf8_path::to_utf8;
 
 // ---- The file-system primitives, one copy per system. Each returns false on failure with errno set to the reason
 // (on Windows the system's error translated, see errno_from_windows), so the steps above them are shared. ----
@@ -110,41 +105,41 @@ constexpr DWORD share_all = FILE_SHARE_READ | FILE_SHARE_WRITE | FILE_SHARE_DELE
 
 FileStatus file_status(const std::string& path) {
   FileStatus status;
-  const DWORD attributes = GetFileAttributesW(native_path(path).c_str());
+  const DWORD attributes = GetFileAttributesW(from_utf8(path).c_str());
   if (attributes == INVALID_FILE_ATTRIBUTES) return status;
   if (attributes & FILE_ATTRIBUTE_DIRECTORY) {
     status.kind = FileKind::directory;
     return status;
   }
   // A name the console or a device answers to (NUL, CON) has attributes but is no disk file.
-  Handle file{CreateFileW(native_path(path).c_str(), 0, share_all, nullptr, OPEN_EXISTING, 0, nullptr)};
+  Handle file{CreateFileW(from_utf8(path).c_str(), 0, share_all, nullptr, OPEN_EXISTING, 0, nullptr)};
   status.kind = file.h == INVALID_HANDLE_VALUE || GetFileType(file.h) == FILE_TYPE_DISK ? FileKind::regular
                                                                                          : FileKind::other;
   return status;
 }
 
 bool exists_no_follow(const std::string& path) {
-  return GetFileAttributesW(native_path(path).c_str()) != INVALID_FILE_ATTRIBUTES;
+  return GetFileAttributesW(from_utf8(path).c_str()) != INVALID_FILE_ATTRIBUTES;
 }
 
 // Replaces `to` by `from` in one step; MOVEFILE_WRITE_THROUGH returns once the move is on the disk.
 bool rename_over(const std::string& from, const std::string& to) {
-  return MoveFileExW(native_path(from).c_str(), native_path(to).c_str(),
+  return MoveFileExW(from_utf8(from).c_str(), from_utf8(to).c_str(),
                      MOVEFILE_REPLACE_EXISTING | MOVEFILE_WRITE_THROUGH) != 0 ||
          failed_windows();
 }
 
 // Moves `from` to `to`, which must not exist (a temporary or backup name; never replaces a file).
 bool rename_new(const std::string& from, const std::string& to) {
-  return MoveFileExW(native_path(from).c_str(), native_path(to).c_str(), MOVEFILE_WRITE_THROUGH) != 0 ||
+  return MoveFileExW(from_utf8(from).c_str(), from_utf8(to).c_str(), MOVEFILE_WRITE_THROUGH) != 0 ||
          failed_windows();
 }
 
 bool hard_link(const std::string& existing, const std::string& link) {
-  return CreateHardLinkW(native_path(link).c_str(), native_path(existing).c_str(), nullptr) != 0 || failed_windows();
+  return CreateHardLinkW(from_utf8(link).c_str(), from_utf8(existing).c_str(), nullptr) != 0 || failed_windows();
 }
 
-bool remove_file(const std::string& path) { return DeleteFileW(native_path(path).c_str()) != 0 || failed_windows(); }
+bool remove_file(const std::string& path) { return DeleteFileW(from_utf8(path).c_str()) != 0 || failed_windows(); }
 
 // Windows files carry no POSIX mode or owner: a replacement gets the folder's inherited permissions, as any new file.
 bool keep_mode_and_owner(const std::string&, const FileStatus&) { return true; }
@@ -153,7 +148,7 @@ bool keep_mode_and_owner(const std::string&, const FileStatus&) { return true; }
 struct NewFile {
   Handle file;
   bool create(const std::string& path) {
-    file.h = CreateFileW(native_path(path).c_str(), GENERIC_WRITE, 0, nullptr, CREATE_NEW, FILE_ATTRIBUTE_NORMAL,
+    file.h = CreateFileW(from_utf8(path).c_str(), GENERIC_WRITE, 0, nullptr, CREATE_NEW, FILE_ATTRIBUTE_NORMAL,
                          nullptr);
     return file.h != INVALID_HANDLE_VALUE || failed_windows();
   }
@@ -287,7 +282,7 @@ Error system_error(const std::string& path, const std::string& what, int code) {
 // Writes a target that is no disk file (a device such as NUL or CON, a named pipe) in place.
 void write_direct(const std::string& target, const std::string& named, const std::vector<std::uint8_t>& data) {
   NewFile out;
-  out.file.h = CreateFileW(native_path(target).c_str(), GENERIC_WRITE, share_all, nullptr, OPEN_EXISTING,
+  out.file.h = CreateFileW(from_utf8(target).c_str(), GENERIC_WRITE, share_all, nullptr, OPEN_EXISTING,
                            FILE_ATTRIBUTE_NORMAL, nullptr);
   if (out.file.h == INVALID_HANDLE_VALUE) {
     failed_windows();
@@ -303,7 +298,7 @@ std::string output_target(const std::string& path) { return path; }
 template <class Container>
 Container read_all(const std::string& path, std::uint64_t max_bytes) {
   // FILE_FLAG_BACKUP_SEMANTICS opens a folder too, so that it is reported as one.
-  Handle file{CreateFileW(native_path(path).c_str(), GENERIC_READ, share_all, nullptr, OPEN_EXISTING,
+  Handle file{CreateFileW(from_utf8(path).c_str(), GENERIC_READ, share_all, nullptr, OPEN_EXISTING,
                           FILE_FLAG_BACKUP_SEMANTICS, nullptr)};
   if (file.h == INVALID_HANDLE_VALUE) {
     failed_windows();
@@ -459,9 +454,9 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
   entry.named = path;
   entry.target = output_target(path);
   std::error_code ec;
-  const fs::path same = fs::absolute(entry.target, ec).lexically_normal();
+  const fs::path same = fs::absolute(from_utf8(entry.target), ec).lexically_normal();
   for (const Entry& other : entries_)
-    if (fs::absolute(other.target, ec).lexically_normal() == same)
+    if (fs::absolute(from_utf8(other.target), ec).lexically_normal() == same)
       throw Error::in_file(path, "", "names the same file as " + other.named + ", another output of this run");
   const FileStatus existing = file_status(entry.target);
   entry.existed = existing.kind != FileKind::missing;
@@ -475,14 +470,14 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
 
   // A temporary file beside the target, named so that one left by a killed process is recognisable:
   // .NAME.deform-tmp-NUMBER (docs/reliability.md).
-  const fs::path target = native_path(entry.target);
+  const fs::path target = from_utf8(entry.target);
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string temp_prefix = "." + utf8(target.filename()) + ".deform-tmp-";
+  const std::string temp_prefix = "." + to_utf8(target.filename()) + ".deform-tmp-";
   if (injected_failure()) throw system_error(path, "cannot create a temporary file beside it", errno);
   if (written != nullptr) {  // already written: moved beside the target under a temporary name, or copied there
     bool moved = false;
     for (int attempt = 0; attempt < 16 && !moved; ++attempt) {
-      entry.temp = utf8(folder / native_path(temp_prefix + random_suffix()));
+      entry.temp = to_utf8(folder / from_utf8(temp_prefix + random_suffix()));
       if (exists_no_follow(entry.temp)) continue;
       if (rename_new(*written, entry.temp)) {
         moved = true;
@@ -505,7 +500,7 @@ void FileTransaction::stage(const std::string& path, std::span<const std::uint8_
   NewFile out;
   bool created = false;
   for (int attempt = 0; attempt < 16 && !created; ++attempt) {
-    entry.temp = utf8(folder / native_path(temp_prefix + random_suffix()));
+    entry.temp = to_utf8(folder / from_utf8(temp_prefix + random_suffix()));
     created = out.create(entry.temp);
     if (!created && errno != EEXIST) break;
   }
@@ -537,11 +532,11 @@ void FileTransaction::commit() {
     for (Entry& entry : entries_) {
       if (entry.temp.empty()) continue;
       if (entry.existed && !single) {
-        const fs::path target = native_path(entry.target);
+        const fs::path target = from_utf8(entry.target);
         const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
         if (injected_failure()) throw system_error(entry.named, "cannot keep a backup of it", errno);
         for (int attempt = 0; attempt < 16 && entry.backup.empty(); ++attempt) {
-          std::string backup = utf8(folder / native_path("." + utf8(target.filename()) + ".deform-bak-" +
+          std::string backup = to_utf8(folder / from_utf8("." + to_utf8(target.filename()) + ".deform-bak-" +
                                                          random_suffix()));
           // A hard link leaves the target in place; a file system without them gets a rename (the target is then
           // missing until the staged file lands, never changed).

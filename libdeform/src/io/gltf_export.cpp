@@ -16,6 +16,7 @@
 #include "deform/io/atomic_file.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 namespace {
@@ -30,7 +31,7 @@ constexpr int array_buffer = 34962;
 constexpr int element_array_buffer = 34963;
 
 std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
+  std::string ext = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
@@ -188,20 +189,27 @@ std::string image_type(const std::vector<std::uint8_t>& bytes) {
 std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::string& root,
                                         const ReferencePolicy& policy, std::string& why, std::string& mime) {
   namespace fs = std::filesystem;
+  fs::path named;
+  try {
+    named = utf8_path::from_utf8(texture);
+  } catch (const Error&) {  // only on Windows, where a path is the wide name its UTF-8 spells
+    return why = "its name is not UTF-8", std::vector<std::uint8_t>{};
+  }
   std::error_code error;
-  const fs::path real = fs::canonical(texture, error);
+  const fs::path real = fs::canonical(named, error);
   if (error || !fs::is_regular_file(real, error)) return why = "not found", std::vector<std::uint8_t>{};
-  const fs::path real_root = fs::canonical(root, error);
+  const std::string real_utf8 = utf8_path::to_utf8(real);
+  const fs::path real_root = fs::canonical(utf8_path::from_utf8(root), error);
   if (error) return why = "the texture folder '" + root + "' does not exist", std::vector<std::uint8_t>{};
   const fs::path inside = real.lexically_relative(real_root);
   bool allowed = !inside.empty() && *inside.begin() != "..";
-  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(real.string(), other);
+  for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(real_utf8, other);
   if (!allowed)
     return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
   // The signature from the first bytes alone: a large file that is not an image is never read whole.
-  const std::string format = image_format(real.string());
+  const std::string format = image_format(real_utf8);
   if (format != "png" && format != "jpeg") return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
-  std::vector<std::uint8_t> bytes = read_file_bytes(real.string());
+  std::vector<std::uint8_t> bytes = read_file_bytes(real_utf8);
   mime = image_type(bytes);
   if (mime.empty()) return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
   return bytes;
@@ -561,9 +569,9 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     write_file_atomic(path, glb);
     written.bytes = glb.size();
   } else {
-    const std::filesystem::path gltf_path(path);
-    const std::string bin_name = uri_safe(gltf_path.stem().string()) + ".bin";
-    written.bin = (gltf_path.parent_path() / bin_name).string();
+    const std::filesystem::path gltf_path = utf8_path::from_utf8(path);
+    const std::string bin_name = uri_safe(utf8_path::to_utf8(gltf_path.stem())) + ".bin";
+    written.bin = utf8_path::to_utf8(gltf_path.parent_path() / bin_name);  // bin_name is ASCII
     buffer["uri"] = bin_name;
     doc["buffers"] = Json::array({std::move(buffer)});
     const std::string json = dump(doc);

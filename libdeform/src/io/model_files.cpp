@@ -6,12 +6,13 @@
 #include <filesystem>
 
 #include "deform/runtime/error.hpp"
+#include "utf8_path.hpp"
 namespace deform {
 
 Model load_model(const std::string& obj_path, const std::string& sk_path, const std::string& skw_path,
                  Warnings* warnings, int influences, const ReferencePolicy& policy) {
   Model model;
-  model.name = std::filesystem::path(obj_path).stem().string();
+  model.name = utf8_path::to_utf8(utf8_path::from_utf8(obj_path).stem());
   model.mesh = read_obj(obj_path, warnings, policy);
   model.skeleton = read_sk(sk_path);
   // read_skw rejects a vertex count other than the mesh's and bone ids outside the skeleton, naming the line; the

@@ -7,13 +7,14 @@
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
 #include "obj_text.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 
 std::string obj_text::resolve_path(const std::string& folder, std::string_view name) {
-  const std::filesystem::path file{std::string(name)};
-  if (file.is_absolute()) return file.lexically_normal().generic_string();
-  return (std::filesystem::path(folder) / file).lexically_normal().generic_string();
+  const std::filesystem::path file = utf8_path::from_utf8(name);
+  if (file.is_absolute()) return utf8_path::generic_utf8(file.lexically_normal());
+  return utf8_path::generic_utf8((utf8_path::from_utf8(folder) / file).lexically_normal());
 }
 
 namespace {
@@ -138,15 +139,21 @@ std::vector<Material> obj_text::parse_mtl_confined(std::string_view text, const 
       material.illum = static_cast<int>(model);
     } else {  // map_Kd
       const std::string_view file = parse_map_file(tokens, place, keyword);
-      material.diffuse_map = obj_text::resolve_path(base_folder, file);
+      try {
+        material.diffuse_map = obj_text::resolve_path(base_folder, file);
+      } catch (const Error&) {  // only on Windows, where a path is the wide name its UTF-8 spells
+        place.fail(keyword, "the file name is not UTF-8");
+      }
       // Confined to the model's folder (a texture is read later, by a copy or a renderer): refused here, at once.
       // (An MTL file in a subfolder of the model's: its names are made absolute, relative to the MTL's folder.)
       const std::string named =
-          base_folder == root ? std::string(file) : std::filesystem::absolute(material.diffuse_map).string();
+          base_folder == root
+              ? std::string(file)
+              : utf8_path::to_utf8(std::filesystem::absolute(utf8_path::from_utf8(material.diffuse_map)));
       const std::string real =
           resolve_referenced_file_in(root, name, named, "map_Kd", policy, ReferenceSyntax::path, place.line);
       std::error_code error;
-      if (!std::filesystem::is_regular_file(real, error))
+      if (!std::filesystem::is_regular_file(utf8_path::from_utf8(real), error))
         obj_text::warn(warnings, name, place.line,
                        "texture " + obj_text::quoted(file) + " not found (looked for '" + material.diffuse_map + "')");
     }

@@ -13,6 +13,7 @@
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
 #include "obj_text.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 namespace {
@@ -223,7 +224,7 @@ class ObjParser {
       whole_path.clear();  // refused as a whole: each name is resolved (and refused) on its own below
     }
     std::error_code error;
-    if (!whole_path.empty() && std::filesystem::is_regular_file(whole_path, error)) {
+    if (!whole_path.empty() && std::filesystem::is_regular_file(utf8_path::from_utf8(whole_path), error)) {
       read_material_library(whole, place);
       return;
     }
@@ -238,7 +239,7 @@ class ObjParser {
         resolve_referenced_file_in(base_folder_, name_, file, "mtllib", policy_, ReferenceSyntax::path, place.line);
     const std::string path = obj_text::resolve_path(base_folder_, file);
     std::error_code error;
-    if (!std::filesystem::is_regular_file(real, error)) {
+    if (!std::filesystem::is_regular_file(utf8_path::from_utf8(real), error)) {
       obj_text::warn(warnings_, name_, place.line,
                      "MTL file " + obj_text::quoted(file) + " not found (looked for '" + path + "')");
       return;
@@ -247,7 +248,7 @@ class ObjParser {
     if (std::find(read_libraries_.begin(), read_libraries_.end(), real) != read_libraries_.end()) return;
     read_libraries_.push_back(real);
     mesh_.material_libraries.push_back(path);
-    const std::string folder = std::filesystem::path(path).parent_path().generic_string();
+    const std::string folder = utf8_path::generic_utf8(utf8_path::from_utf8(path).parent_path());
     for (Material& material : obj_text::parse_mtl_confined(read_file_text(real), path, folder.empty() ? "." : folder,
                                                            base_folder_, warnings_, policy_)) {
       if (material_index_.contains(material.name)) {
@@ -337,7 +338,7 @@ Mesh parse_obj(std::string_view text, const std::string& name, const std::string
 
 Mesh read_obj(const std::string& path, Warnings* warnings, const ReferencePolicy& policy) {
   const std::string text = read_file_text(path);
-  const std::string folder = std::filesystem::path(path).parent_path().generic_string();
+  const std::string folder = utf8_path::generic_utf8(utf8_path::from_utf8(path).parent_path());
   return parse_obj(text, path, folder.empty() ? "." : folder, warnings, policy);
 }
 

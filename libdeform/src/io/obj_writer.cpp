@@ -13,6 +13,7 @@
 #include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
 #include "float_text.hpp"
+#include "utf8_path.hpp"
 namespace deform {
 namespace {
 
@@ -159,14 +160,14 @@ void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::v
 std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path) {
   namespace fs = std::filesystem;
   std::error_code error;
-  const fs::path folder = fs::absolute(fs::path(obj_path), error).lexically_normal().parent_path();
+  const fs::path folder = fs::absolute(utf8_path::from_utf8(obj_path), error).lexically_normal().parent_path();
   std::string out;
   for (const std::string& library : mesh.material_libraries) {
-    const fs::path absolute = fs::absolute(library, error).lexically_normal();
+    const fs::path absolute = fs::absolute(utf8_path::from_utf8(library), error).lexically_normal();
     fs::path relative = absolute.lexically_relative(folder);
     if (relative.empty()) relative = absolute;  // another root: no relative path exists
     if (!out.empty()) out.push_back(' ');
-    out.append(relative.generic_string());
+    out.append(utf8_path::generic_utf8(relative));
   }
   return out;
 }

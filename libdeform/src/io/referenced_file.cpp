@@ -15,11 +15,23 @@
 #endif
 
 #include "deform/runtime/error.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 namespace {
 
 namespace fs = std::filesystem;
+using utf8_path::from_utf8;
+using utf8_path::to_utf8;
+
+// The path a UTF-8 string names; empty where it names none (on Windows, bytes that are not UTF-8).
+fs::path path_or_empty(const std::string& utf8) {
+  try {
+    return from_utf8(utf8);
+  } catch (const Error&) {
+    return {};
+  }
+}
 
 // `path` with every existing component's links resolved and the rest normalised; empty when it cannot be resolved
 // (a component that exists but cannot be examined).
@@ -75,13 +87,15 @@ std::string resolve_referenced_file_in(const std::string& folder, const std::str
   const std::string name = syntax == ReferenceSyntax::uri ? decode_uri_reference(reference) : std::string(reference);
   if (name.empty()) refuse(referrer, line, key, "names no file");
   if (name.find('\0') != std::string::npos) refuse(referrer, line, key, "the file name holds a NUL byte");
-  const fs::path base = folder.empty() ? fs::path(".") : fs::path(folder);
-  const fs::path named(name);
+  const fs::path base = folder.empty() ? fs::path(".") : from_utf8(folder);
+  const fs::path named = path_or_empty(name);
+  if (named.empty()) refuse(referrer, line, key, "the file name is not UTF-8");
   const fs::path real = canonical_or_empty(named.is_absolute() ? named : base / named);
   const fs::path real_folder = canonical_or_empty(base);
-  if (!real.empty() && below(real, real_folder)) return real.string();
+  if (!real.empty() && below(real, real_folder)) return to_utf8(real);
   for (const std::string& allowed : policy.allow_outside)
-    if (!real.empty() && !allowed.empty() && below(real, canonical_or_empty(allowed))) return real.string();
+    if (!real.empty() && !allowed.empty() && below(real, canonical_or_empty(path_or_empty(allowed))))
+      return to_utf8(real);
   // Nothing about the file itself is said (not whether it exists, nor its size): only what the model wrote. Kept
   // short, as a message is cut at 200 bytes (error.hpp) and the name is what the reader needs.
   refuse(referrer, line, key,
@@ -90,23 +104,23 @@ std::string resolve_referenced_file_in(const std::string& folder, const std::str
 
 std::string resolve_referenced_file(const std::string& referrer, std::string_view reference, const std::string& key,
                                     const ReferencePolicy& policy, ReferenceSyntax syntax, std::int64_t line) {
-  const std::string folder = fs::path(referrer).parent_path().string();
+  const std::string folder = to_utf8(from_utf8(referrer).parent_path());
   return resolve_referenced_file_in(folder.empty() ? "." : folder, referrer, reference, key, policy, syntax, line);
 }
 
 bool lies_inside(const std::string& path, const std::string& folder) {
   if (path.empty() || folder.empty()) return false;
-  return below(canonical_or_empty(path), canonical_or_empty(folder));
+  return below(canonical_or_empty(path_or_empty(path)), canonical_or_empty(path_or_empty(folder)));
 }
 
 std::string image_format(const std::string& path) {
   std::array<unsigned char, 32> head{};
   std::size_t size = 0;
 #ifdef _WIN32
-  // Only a regular file is read (a device or pipe name is not); the path's bytes are UTF-8.
-  const fs::path file(std::u8string(path.begin(), path.end()));
+  // Only a regular file is read (a device or pipe name is not).
+  const fs::path file = path_or_empty(path);
   std::error_code error;
-  if (!fs::is_regular_file(file, error)) return {};
+  if (file.empty() || !fs::is_regular_file(file, error)) return {};
   std::ifstream in(file, std::ios::binary);
   if (!in) return {};
   in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
@@ -141,7 +155,7 @@ std::string image_format(const std::string& path) {
   if (starts("8BPS"sv)) return "psd";
   if (starts("RIFF"sv) && starts("WEBP"sv, 8)) return "webp";
   if (starts("BM"sv)) return "bmp";
-  std::string extension = fs::path(path).extension().string();
+  std::string extension = to_utf8(path_or_empty(path).extension());
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (extension == ".tga" && size >= 18) return "tga";
   return {};
