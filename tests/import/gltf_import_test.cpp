@@ -410,9 +410,9 @@ TEST_CASE("embedded PNG and JPEG textures are kept as their bytes: imported, exp
   CHECK(*back.model.mesh.materials[0].diffuse_image == png);
   REQUIRE(back.model.mesh.materials[2].diffuse_image);
   CHECK(*back.model.mesh.materials[2].diffuse_image == jpeg);
-  const auto sorted_v = [](const std::vector<glm::vec2>& uvs) {  // v flipped on the way out and back in
+  const auto sorted_v = [](const std::vector<glm::vec2>& coordinates) {  // v flipped on the way out and back in
     std::vector<float> v;
-    for (const glm::vec2& uv : uvs) v.push_back(uv.y);
+    for (const glm::vec2& c : coordinates) v.push_back(c.y);
     std::sort(v.begin(), v.end());
     return v;
   };
