@@ -104,7 +104,12 @@ void crowd(benchmark::State& state) {
   state.counters["bytes_per_instance"] = crowd.bytes_per_instance;
 }
 
-BENCHMARK(crowd)->Name("crowd/builtin_1000")->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(
-    benchmark::kMillisecond);
+BENCHMARK(crowd)
+    ->Name("crowd/builtin_1000")
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -44,7 +44,8 @@ struct Scene {
       const glm::ivec3 c = glm::clamp(glm::ivec3(frame.to_lattice(p) * 32.0f), glm::ivec3(0), glm::ivec3(31));
       return c.x + 32 * (c.y + 32 * c.z);
     };
-    std::sort(positions.begin(), positions.end(), [&](const glm::vec3& a, const glm::vec3& b) { return key(a) < key(b); });
+    std::sort(positions.begin(), positions.end(),
+              [&](const glm::vec3& a, const glm::vec3& b) { return key(a) < key(b); });
   }
 };
 
@@ -182,8 +183,13 @@ BENCHMARK_CAPTURE(bezier333, avx2, Isa::avx2)->Name("ffd/bezier333_avx2")->Apply
 BENCHMARK_CAPTURE(bspline, avx2, Isa::avx2)->Name("ffd/bspline_avx2")->Apply(one_thread);
 BENCHMARK_CAPTURE(bezier333, neon, Isa::neon)->Name("ffd/bezier333_neon")->Apply(one_thread);
 BENCHMARK_CAPTURE(bspline, neon, Isa::neon)->Name("ffd/bspline_neon")->Apply(one_thread);
-BENCHMARK(bspline_random_order)->Name("ffd/bspline_random_order")->Args({1000000, 1, 0})->Args({1000000, 1, 1})
-    ->ArgNames({"vertices", "threads", "normals"})->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(bspline_random_order)
+    ->Name("ffd/bspline_random_order")
+    ->Args({1000000, 1, 0})
+    ->Args({1000000, 1, 1})
+    ->ArgNames({"vertices", "threads", "normals"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(bezier_degree)->Name("ffd/bezier_degree")->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
 BENCHMARK(reference333)->Name("ffd/reference333")->Arg(1500)->Arg(100000)->Unit(benchmark::kMicrosecond);
 

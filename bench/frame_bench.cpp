@@ -137,8 +137,7 @@ void whole_frame_morph(benchmark::State& state) {
   }
   const deform::Rig rig = deform::builtin_rig(model);
   deform::Character c(std::move(model), rig);
-  c.reach(c.skeleton().find("hand_l"),
-          c.bone_position(c.skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
+  c.reach(c.skeleton().find("hand_l"), c.bone_position(c.skeleton().find("clavicle_l")) + glm::vec3(1.0f, 0.2f, 0.1f));
   const deform::Animation walk = deform::builtin_walk(c.model());
   deform::Animation face;
   face.duration = 1.0f;

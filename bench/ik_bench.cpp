@@ -75,7 +75,8 @@ void solve_loop(benchmark::State& state, deform::IkMethod method, bool escape_st
     deform::chain_base(chains[i], pose.rotations, pose.translations, job.base);
     job.run();
     const auto stop = std::chrono::steady_clock::now();
-    if (times.size() < times.capacity()) times.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
+    if (times.size() < times.capacity())
+      times.push_back(std::chrono::duration<double, std::micro>(stop - start).count());
     benchmark::DoNotOptimize(pose.rotations.data());
     iterations += result.iterations;
     reached += result.reached;

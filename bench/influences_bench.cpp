@@ -40,7 +40,8 @@ InfluenceData make_data(int influences, bool mixed) {
     const int n = mixed && i % 10 != 3 ? 4 : influences;
     const auto first = static_cast<int>(rng() % bone_count);
     bones.clear(), values.clear();
-    for (int k = 0; k < n; ++k) bones.push_back(std::uint16_t((first + 3 * k) % bone_count)), values.push_back(positive(rng));
+    for (int k = 0; k < n; ++k)
+      bones.push_back(std::uint16_t((first + 3 * k) % bone_count)), values.push_back(positive(rng));
     deform::append_influences(d.weights, bones, values);
   }
   d.out_positions.resize(vertex_count);
@@ -83,8 +84,16 @@ void skin_influences(benchmark::State& state, deform::SkinningMethod method, boo
 }
 
 using deform::SkinningMethod;
-BENCHMARK_CAPTURE(skin_influences, lbs, SkinningMethod::lbs, false)->Name("skin_influences/lbs")->Arg(4)->Arg(8)->Arg(16);
-BENCHMARK_CAPTURE(skin_influences, dqs, SkinningMethod::dqs, false)->Name("skin_influences/dqs")->Arg(4)->Arg(8)->Arg(16);
+BENCHMARK_CAPTURE(skin_influences, lbs, SkinningMethod::lbs, false)
+    ->Name("skin_influences/lbs")
+    ->Arg(4)
+    ->Arg(8)
+    ->Arg(16);
+BENCHMARK_CAPTURE(skin_influences, dqs, SkinningMethod::dqs, false)
+    ->Name("skin_influences/dqs")
+    ->Arg(4)
+    ->Arg(8)
+    ->Arg(16);
 BENCHMARK_CAPTURE(skin_influences, lbs_mixed, SkinningMethod::lbs, true)->Name("skin_influences/lbs_mixed")->Arg(8);
 BENCHMARK_CAPTURE(skin_influences, dqs_mixed, SkinningMethod::dqs, true)->Name("skin_influences/dqs_mixed")->Arg(8);
 

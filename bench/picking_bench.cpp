@@ -24,7 +24,8 @@ void sphere(int triangles, std::vector<glm::vec3>& positions, std::vector<std::u
   const auto at = [segments](int r, int s) { return static_cast<std::uint32_t>(r * segments + (s % segments)); };
   for (int r = 0; r < rings; ++r)
     for (int s = 0; s < segments; ++s)
-      indices.insert(indices.end(), {at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s), at(r + 1, s + 1), at(r, s + 1)});
+      indices.insert(indices.end(),
+                     {at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s), at(r + 1, s + 1), at(r, s + 1)});
 }
 
 std::vector<deform::Ray> rays(int count) {
@@ -77,7 +78,8 @@ void pick_refit(benchmark::State& state) {
   float phase = 0.0f;
   for (auto _ : state) {
     phase += 0.01f;
-    for (std::size_t p = 0; p < moved.size(); ++p) moved[p] = positions[p] * (1.0f + 0.1f * std::sin(phase + positions[p].y));
+    for (std::size_t p = 0; p < moved.size(); ++p)
+      moved[p] = positions[p] * (1.0f + 0.1f * std::sin(phase + positions[p].y));
     benchmark::DoNotOptimize(bvh.refit(moved));
   }
   state.SetItemsProcessed(state.iterations() * static_cast<long>(bvh.triangle_count()));

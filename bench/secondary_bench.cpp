@@ -28,9 +28,12 @@ void spring_chain(benchmark::State& state) {
   std::vector<deform::Bone> bones(std::size_t(links) + 1);
   bones[0] = {"root", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}};
   for (int i = 1; i <= links; ++i)
-    bones[std::size_t(i)] = {"link" + std::to_string(i), i - 1,
+    bones[std::size_t(i)] = {"link" + std::to_string(i),
+                             i - 1,
                              i < links ? std::vector<std::int32_t>{i + 1} : std::vector<std::int32_t>{},
-                             glm::vec3(0.1f, 0.0f, 0.0f), glm::vec3(0.0f), {}};
+                             glm::vec3(0.1f, 0.0f, 0.0f),
+                             glm::vec3(0.0f),
+                             {}};
   const deform::Skeleton skeleton(bones);
   deform::SpringChainSpec chain;
   chain.name = "tail";
@@ -40,8 +43,8 @@ void spring_chain(benchmark::State& state) {
   chain.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
   chain.radius = 0.01f;
   chain.colliders = {0};
-  deform::SpringChains springs(skeleton, {chain}, {{0, glm::vec3(0.3f, -0.25f, 0.0f), glm::vec3(0.6f, -0.25f, 0.0f),
-                                                   0.1f}});
+  deform::SpringChains springs(skeleton, {chain},
+                               {{0, glm::vec3(0.3f, -0.25f, 0.0f), glm::vec3(0.6f, -0.25f, 0.0f), 0.1f}});
   std::vector<glm::mat4> world(skeleton.bone_count()), rate(world.size()), palette(world.size());
   int frame = 0;
   for (auto _ : state) {

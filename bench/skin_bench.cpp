@@ -127,14 +127,22 @@ using deform::Isa;
 using deform::SkinningMethod;
 BENCHMARK_CAPTURE(run_skin, lbs, SkinningMethod::lbs, Isa::automatic)->Name("skin/lbs")->Apply(sizes_and_threads);
 BENCHMARK_CAPTURE(run_skin, dqs, SkinningMethod::dqs, Isa::automatic)->Name("skin/dqs")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, lbs_stream, SkinningMethod::lbs, Isa::automatic, true)->Name("skin/lbs_stream")->Apply(sizes_and_threads);
-BENCHMARK_CAPTURE(run_skin, dqs_stream, SkinningMethod::dqs, Isa::automatic, true)->Name("skin/dqs_stream")->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, lbs_stream, SkinningMethod::lbs, Isa::automatic, true)
+    ->Name("skin/lbs_stream")
+    ->Apply(sizes_and_threads);
+BENCHMARK_CAPTURE(run_skin, dqs_stream, SkinningMethod::dqs, Isa::automatic, true)
+    ->Name("skin/dqs_stream")
+    ->Apply(sizes_and_threads);
 BENCHMARK_CAPTURE(run_skin, lbs_avx2, SkinningMethod::lbs, Isa::avx2)->Name("skin/lbs_avx2")->Apply(sizes_one_thread);
 BENCHMARK_CAPTURE(run_skin, dqs_avx2, SkinningMethod::dqs, Isa::avx2)->Name("skin/dqs_avx2")->Apply(sizes_one_thread);
 BENCHMARK_CAPTURE(run_skin, lbs_neon, SkinningMethod::lbs, Isa::neon)->Name("skin/lbs_neon")->Apply(sizes_one_thread);
 BENCHMARK_CAPTURE(run_skin, dqs_neon, SkinningMethod::dqs, Isa::neon)->Name("skin/dqs_neon")->Apply(sizes_one_thread);
-BENCHMARK_CAPTURE(run_skin, lbs_portable, SkinningMethod::lbs, Isa::portable)->Name("skin/lbs_portable")->Apply(sizes_one_thread);
-BENCHMARK_CAPTURE(run_skin, dqs_portable, SkinningMethod::dqs, Isa::portable)->Name("skin/dqs_portable")->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, lbs_portable, SkinningMethod::lbs, Isa::portable)
+    ->Name("skin/lbs_portable")
+    ->Apply(sizes_one_thread);
+BENCHMARK_CAPTURE(run_skin, dqs_portable, SkinningMethod::dqs, Isa::portable)
+    ->Name("skin/dqs_portable")
+    ->Apply(sizes_one_thread);
 BENCHMARK(skin_lbs_reference)->Name("skin/lbs_reference")->Apply(sizes_one_thread);
 
 }  // namespace

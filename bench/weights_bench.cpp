@@ -1,6 +1,7 @@
 // Bind-time benchmarks of automatic weights (docs/performance.md, docs/weights.md): weights/heat, weights/voxel
-// (resolution 128) and weights/distance on the built-in character (2,850 points, 33 bones) and on the same character with every triangle
-// split in four twice (40k points: the "35,000-point mesh" of the targets, rounded up). Items = points.
+// (resolution 128) and weights/distance on the built-in character (2,850 points, 33 bones) and on the same character
+// with every triangle split in four twice (40k points: the "35,000-point mesh" of the targets, rounded up). Items =
+// points.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

@@ -66,12 +66,11 @@ void bind_character(py::module_& m) {
             return py::cast(std::make_shared<deform::Model>(self.cast<deform::Character&>().model()));
           },
           "A copy of the character's model (bind pose).")
-      .def_property_readonly(
-          "skeleton",
-          [](py::object self) {
-            return py::cast(&self.cast<deform::Character&>().skeleton(), py::return_value_policy::reference_internal,
-                            self);
-          })
+      .def_property_readonly("skeleton",
+                             [](py::object self) {
+                               return py::cast(&self.cast<deform::Character&>().skeleton(),
+                                               py::return_value_policy::reference_internal, self);
+                             })
       .def_property_readonly("point_count", [](const deform::Character& c) { return c.positions().size(); })
       .def_property_readonly("lattice_count", [](const deform::Character& c) { return c.deformers().lattice_count(); })
       .def_property(
@@ -250,7 +249,8 @@ void bind_character(py::module_& m) {
           [](deform::Character& c, const FloatArray& weights) {
             if (weights.ndim() != 1)
               throw deform::Error::invalid_argument("morph_weights", "expected a 1-D array, one weight per target");
-            check(c.set_morph_weights(std::span<const float>(weights.data(), static_cast<std::size_t>(weights.size()))));
+            check(
+                c.set_morph_weights(std::span<const float>(weights.data(), static_cast<std::size_t>(weights.size()))));
           },
           "The morph weights update() applies (get: a copy; set: one finite weight per target). A new character "
           "starts from the targets' default weights.")

@@ -66,9 +66,11 @@ void bind_jobs(py::module_& m) {
         const std::span<const glm::vec3> in = as_vec3(positions, "positions");
         if (bone_indices.ndim() != 2 || bone_indices.shape(1) != 4 ||
             static_cast<std::size_t>(bone_indices.shape(0)) != in.size())
-          throw deform::Error::invalid_argument("bone_indices", "expected an array of shape (N, 4), N = len(positions)");
+          throw deform::Error::invalid_argument("bone_indices",
+                                                "expected an array of shape (N, 4), N = len(positions)");
         if (rows_of(bone_weights, 4, "bone_weights") != in.size())
-          throw deform::Error::invalid_argument("bone_weights", "expected an array of shape (N, 4), N = len(positions)");
+          throw deform::Error::invalid_argument("bone_weights",
+                                                "expected an array of shape (N, 4), N = len(positions)");
         const std::vector<glm::mat4> palette = matrices_in(matrices);
 
         py::array_t<float> result;
@@ -76,7 +78,8 @@ void bind_jobs(py::module_& m) {
           result = py::array_t<float>::ensure(*out);
           if (!result || result.ptr() != out->ptr() || !(result.flags() & py::array::c_style) || !result.writeable() ||
               result.ndim() != 2 || result.shape(0) != static_cast<py::ssize_t>(in.size()) || result.shape(1) != 3)
-            throw deform::Error::invalid_argument("out", "expected a writeable C-contiguous float32 array of shape (N, 3)");
+            throw deform::Error::invalid_argument("out",
+                                                  "expected a writeable C-contiguous float32 array of shape (N, 3)");
         } else {
           result = py::array_t<float>({static_cast<py::ssize_t>(in.size()), py::ssize_t{3}});
         }
@@ -116,8 +119,8 @@ void bind_jobs(py::module_& m) {
       .def_readonly("distance", &deform::IkResult::distance)
       .def_readonly("iterations", &deform::IkResult::iterations)
       .def("__repr__", [](const deform::IkResult& r) {
-        return "IkResult(reached=" + std::string(r.reached ? "True" : "False") + ", distance=" +
-               std::to_string(r.distance) + ", iterations=" + std::to_string(r.iterations) + ")";
+        return "IkResult(reached=" + std::string(r.reached ? "True" : "False") +
+               ", distance=" + std::to_string(r.distance) + ", iterations=" + std::to_string(r.iterations) + ")";
       });
 
   m.def(
@@ -127,7 +130,8 @@ void bind_jobs(py::module_& m) {
          std::optional<FloatArray> pole, float weight, bool limits, float soften) {
         if (pose.rotations.size() != skeleton.bone_count() || pose.translations.size() != skeleton.bone_count())
           throw deform::Error::invalid_argument("pose", "the pose does not have one entry per bone");
-        deform::IkChain chain = deform::make_chain(skeleton, resolve_bone(skeleton, root), resolve_bone(skeleton, effector));
+        deform::IkChain chain =
+            deform::make_chain(skeleton, resolve_bone(skeleton, root), resolve_bone(skeleton, effector));
         if (!limits)
           for (auto& l : chain.limits) l = deform::EulerLimits{};
         deform::RigidTransform base;
@@ -190,11 +194,13 @@ void bind_jobs(py::module_& m) {
       "parent and grandparent, root = grandparent). pole: a model-space point the chain's middle bends toward. "
       "weight: blend with the input pose in [0, 1]. limits: keep the skeleton's Euler DOF limits (False: free "
       "joints; two_bone clamps its closed-form answer into them, which can move the effector off the target when "
-      "the pole asks for a bend the joints do not allow). soften: two_bone's approach to full extension in [0, 1]. Returns IkResult.");
+      "the pole asks for a bend the joints do not allow). soften: two_bone's approach to full extension in [0, 1]. "
+      "Returns IkResult.");
 
   m.def(
       "effector_position",
-      [](const deform::Skeleton& skeleton, const deform::Pose& pose, const py::object& root, const py::object& effector) {
+      [](const deform::Skeleton& skeleton, const deform::Pose& pose, const py::object& root,
+         const py::object& effector) {
         const deform::IkChain chain =
             deform::make_chain(skeleton, resolve_bone(skeleton, root), resolve_bone(skeleton, effector));
         const glm::vec3 p = deform::effector_position(chain, pose.rotations, pose.translations);
@@ -206,16 +212,17 @@ void bind_jobs(py::module_& m) {
   py::class_<deform::ElasticLattice>(m, "ElasticLattice",
                                      "Points springing toward moving rest positions (a damped oscillator per point, "
                                      "optionally with neighbour springs on a grid).")
-      .def(py::init([](const FloatArray& rest, float stiffness, float damping_ratio, float mass) {
-             deform::ElasticSettings settings;
-             settings.oscillator.stiffness = stiffness;
-             settings.oscillator.damping_ratio = damping_ratio;
-             settings.oscillator.mass = mass;
-             deform::require_valid_settings(settings);
-             return deform::ElasticLattice(as_vec3(rest, "rest"), settings);
-           }),
-           py::arg("rest"), py::arg("stiffness") = 150.0f, py::arg("damping_ratio") = 0.2f, py::arg("mass") = 1.0f,
-           "Starts at rest on `rest` (N, 3) (copied). stiffness k > 0, damping_ratio >= 0 (< 1 under-damped), mass > 0.")
+      .def(
+          py::init([](const FloatArray& rest, float stiffness, float damping_ratio, float mass) {
+            deform::ElasticSettings settings;
+            settings.oscillator.stiffness = stiffness;
+            settings.oscillator.damping_ratio = damping_ratio;
+            settings.oscillator.mass = mass;
+            deform::require_valid_settings(settings);
+            return deform::ElasticLattice(as_vec3(rest, "rest"), settings);
+          }),
+          py::arg("rest"), py::arg("stiffness") = 150.0f, py::arg("damping_ratio") = 0.2f, py::arg("mass") = 1.0f,
+          "Starts at rest on `rest` (N, 3) (copied). stiffness k > 0, damping_ratio >= 0 (< 1 under-damped), mass > 0.")
       .def(
           "step",
           [](deform::ElasticLattice& e, float dt, const FloatArray& rest) { check(e.step(dt, as_vec3(rest, "rest"))); },
@@ -227,7 +234,8 @@ void bind_jobs(py::module_& m) {
           py::arg("rest"), "Puts every point at rest on `rest`, with zero velocity.")
       .def("__len__", &deform::ElasticLattice::size)
       .def_property_readonly(
-          "positions", [](py::object self) { return vec3_view(self.cast<deform::ElasticLattice&>().positions(), self, false); },
+          "positions",
+          [](py::object self) { return vec3_view(self.cast<deform::ElasticLattice&>().positions(), self, false); },
           "(N, 3) read-only view of the current positions (shares memory; updated by step()).")
       .def_property_readonly(
           "velocities",

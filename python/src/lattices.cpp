@@ -37,7 +37,8 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
              frame.require_valid();
              return Lattice(frame, to_ivec3(counts, "degree or point_counts"));
            }),
-           py::arg("origin"), py::arg("size"), py::arg(counts_name) = 3 + std::is_same_v<Lattice, deform::BsplineLattice>,
+           py::arg("origin"), py::arg("size"),
+           py::arg(counts_name) = 3 + std::is_same_v<Lattice, deform::BsplineLattice>,
            "The axis-aligned box [origin, origin + size] (size > 0 on every axis).")
       .def_static(
           "around",
@@ -60,8 +61,9 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
                                const glm::ivec3 c = l.point_counts();
                                return py::make_tuple(c.x, c.y, c.z);
                              })
-      .def_property_readonly("origin",
-                             [](const Lattice& l) { return py::make_tuple(l.frame().origin.x, l.frame().origin.y, l.frame().origin.z); })
+      .def_property_readonly(
+          "origin",
+          [](const Lattice& l) { return py::make_tuple(l.frame().origin.x, l.frame().origin.y, l.frame().origin.z); })
       .def(
           "index",
           [](const Lattice& l, int i, int j, int k) {
@@ -71,8 +73,8 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
             if (i < 0 || j < 0 || k < 0 || i >= c.x || j >= c.y || k >= c.z)
               throw py::index_error("control point (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
                                     std::to_string(k) + ") is outside the lattice's point counts (" +
-                                    std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
-                                    std::to_string(c.z) + ")");
+                                    std::to_string(c.x) + ", " + std::to_string(c.y) + ", " + std::to_string(c.z) +
+                                    ")");
             return l.index(i, j, k);
           },
           py::arg("i"), py::arg("j"), py::arg("k"),
@@ -154,15 +156,16 @@ void bind_lattice_class(py::module_& m, const char* name, const char* counts_nam
 void bind_lattices(py::module_& m) {
   py::class_<deform::LatticeBinding>(m, "LatticeBinding", "Points bound to a lattice (from Lattice.bind).")
       .def_property_readonly("bound_count", [](const deform::LatticeBinding& b) { return b.vertex_count; })
-      .def_property_readonly("vertices",
-                             [](const deform::LatticeBinding& b) {
-                               std::vector<std::uint32_t> v;
-                               for (std::uint32_t i : b.vertices)
-                                 if (i != deform::LatticeBinding::no_vertex) v.push_back(i);
-                               std::sort(v.begin(), v.end());
-                               return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(v.size()), v.data());
-                             },
-                             "Sorted indices of the bound points (a new array).");
+      .def_property_readonly(
+          "vertices",
+          [](const deform::LatticeBinding& b) {
+            std::vector<std::uint32_t> v;
+            for (std::uint32_t i : b.vertices)
+              if (i != deform::LatticeBinding::no_vertex) v.push_back(i);
+            std::sort(v.begin(), v.end());
+            return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(v.size()), v.data());
+          },
+          "Sorted indices of the bound points (a new array).");
   bind_lattice_class<deform::BezierLattice>(
       m, "BezierLattice", "degree",
       "A Bézier volume (free-form deformation, Sederberg & Parry 1986): degree per axis 1..16 (an int or 3).");

@@ -106,9 +106,10 @@ std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bo
 using namespace deform_python;
 
 PYBIND11_MODULE(deform, m) {
-  m.doc() = "libdeform on NumPy: skinning, IK, Bezier/B-spline lattices, elastic lattices and the Character.\n\n"
-            "Arrays are float32. A C-contiguous float32 (N, 3) input is read in place; anything else is converted "
-            "(one copy). Properties documented as views share memory with their object and keep it alive.";
+  m.doc() =
+      "libdeform on NumPy: skinning, IK, Bezier/B-spline lattices, elastic lattices and the Character.\n\n"
+      "Arrays are float32. A C-contiguous float32 (N, 3) input is read in place; anything else is converted "
+      "(one copy). Properties documented as views share memory with their object and keep it alive.";
 
   error_type = py::reinterpret_borrow<py::object>(
       PyErr_NewExceptionWithDoc("deform.Error",
@@ -126,18 +127,19 @@ PYBIND11_MODULE(deform, m) {
                            "Every bone's local rotation (quaternion x, y, z, w) and translation. `rotations` (B, 4) "
                            "and `translations` (B, 3) are writeable views of the pose's storage.")
       .def(py::init<>())
-      .def_property_readonly(
-          "rotations",
-          [](py::object self) {
-            auto& p = self.cast<deform::Pose&>();
-            return view(p.rotations.empty() ? nullptr : &p.rotations[0].x, p.rotations.size(), 4, self, true);
-          })
+      .def_property_readonly("rotations",
+                             [](py::object self) {
+                               auto& p = self.cast<deform::Pose&>();
+                               return view(p.rotations.empty() ? nullptr : &p.rotations[0].x, p.rotations.size(), 4,
+                                           self, true);
+                             })
       .def_property_readonly("translations",
                              [](py::object self) {
                                auto& p = self.cast<deform::Pose&>();
                                return vec3_view(p.translations, self, true);
                              })
-      .def("copy", [](const deform::Pose& p) { return p; }, "An independent copy.")
+      .def(
+          "copy", [](const deform::Pose& p) { return p; }, "An independent copy.")
       .def("__len__", [](const deform::Pose& p) { return p.rotations.size(); });
 
   py::class_<deform::Skeleton>(m, "Skeleton")
@@ -149,20 +151,22 @@ PYBIND11_MODULE(deform, m) {
                                for (const deform::Bone& b : s.bones()) names.push_back(b.name);
                                return names;
                              })
-      .def_property_readonly("parents",
-                             [](const deform::Skeleton& s) {
-                               py::array_t<std::int32_t> out(static_cast<py::ssize_t>(s.bone_count()));
-                               for (std::size_t i = 0; i < s.bone_count(); ++i) out.mutable_data()[i] = s.bones()[i].parent;
-                               return out;
-                             },
-                             "Parent id per bone, -1 for the root (a copy).")
+      .def_property_readonly(
+          "parents",
+          [](const deform::Skeleton& s) {
+            py::array_t<std::int32_t> out(static_cast<py::ssize_t>(s.bone_count()));
+            for (std::size_t i = 0; i < s.bone_count(); ++i) out.mutable_data()[i] = s.bones()[i].parent;
+            return out;
+          },
+          "Parent id per bone, -1 for the root (a copy).")
       .def("find", &deform::Skeleton::find, py::arg("name"), "Bone id of `name`, -1 when none.")
-      .def("limits",
-           [](const deform::Skeleton& s, const py::object& bone) {
-             const deform::DofLimits& l = s.bone(bone_id(s, bone)).limits;
-             return py::make_tuple(py::make_tuple(l.min.x, l.min.y, l.min.z), py::make_tuple(l.max.x, l.max.y, l.max.z));
-           },
-           py::arg("bone"), "(min, max) Euler limits in degrees (X, Y, Z) of a bone (id or name).")
+      .def(
+          "limits",
+          [](const deform::Skeleton& s, const py::object& bone) {
+            const deform::DofLimits& l = s.bone(bone_id(s, bone)).limits;
+            return py::make_tuple(py::make_tuple(l.min.x, l.min.y, l.min.z), py::make_tuple(l.max.x, l.max.y, l.max.z));
+          },
+          py::arg("bone"), "(min, max) Euler limits in degrees (X, Y, Z) of a bone (id or name).")
       .def(
           "within_limits",
           [](const deform::Skeleton& s, const deform::Pose& pose, const py::object& bone, float slack) {
@@ -176,8 +180,9 @@ PYBIND11_MODULE(deform, m) {
           py::arg("pose"), py::arg("bone"), py::arg("slack") = 1e-3f,
           "Whether a bone's rotation in `pose` is within its Euler DOF limits (to `slack` degrees).")
       .def("bind_pose", &deform::Skeleton::bind_pose)
-      .def_property_readonly("bind_world", [](const deform::Skeleton& s) { return matrices_out(s.bind_world()); },
-                             "(B, 4, 4) bind world matrices, row-major (a copy).")
+      .def_property_readonly(
+          "bind_world", [](const deform::Skeleton& s) { return matrices_out(s.bind_world()); },
+          "(B, 4, 4) bind world matrices, row-major (a copy).")
       .def(
           "set_euler",
           [](const deform::Skeleton& s, deform::Pose& pose, const py::object& bone, const FloatArray& degrees,
@@ -193,24 +198,29 @@ PYBIND11_MODULE(deform, m) {
 
   // --- model ---
   py::class_<deform::Model, std::shared_ptr<deform::Model>>(m, "Model",
-                                                             "A mesh, its skeleton and skin weights. positions, "
-                                                             "bone_indices and bone_weights are writeable views of the "
-                                                             "model's storage.")
+                                                            "A mesh, its skeleton and skin weights. positions, "
+                                                            "bone_indices and bone_weights are writeable views of the "
+                                                            "model's storage.")
       .def_readwrite("name", &deform::Model::name)
-      .def_property_readonly("skeleton", [](py::object self) { return py::cast(&self.cast<deform::Model&>().skeleton,
-                                                                               py::return_value_policy::reference_internal, self); })
+      .def_property_readonly("skeleton",
+                             [](py::object self) {
+                               return py::cast(&self.cast<deform::Model&>().skeleton,
+                                               py::return_value_policy::reference_internal, self);
+                             })
       .def_property_readonly("point_count", [](const deform::Model& md) { return md.mesh.point_count(); })
-      .def_property_readonly("positions",
-                             [](py::object self) { return vec3_view(self.cast<deform::Model&>().mesh.positions, self, true); })
-      .def_property_readonly("triangles",
-                             [](const deform::Model& md) {
-                               const auto& t = md.mesh.triangles;
-                               py::array_t<std::uint32_t> out({static_cast<py::ssize_t>(t.size() / 3), py::ssize_t{3}});
-                               for (std::size_t i = 0; i < t.size(); ++i) out.mutable_data()[i] = md.mesh.vertex_point[t[i]];
-                               return out;
-                             },
-                             "(T, 3) uint32 triangles as indices into positions (a new array; the mesh stores them "
-                             "over render vertices).")
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return vec3_view(self.cast<deform::Model&>().mesh.positions, self, true); })
+      .def_property_readonly(
+          "triangles",
+          [](const deform::Model& md) {
+            const auto& t = md.mesh.triangles;
+            py::array_t<std::uint32_t> out({static_cast<py::ssize_t>(t.size() / 3), py::ssize_t{3}});
+            for (std::size_t i = 0; i < t.size(); ++i) out.mutable_data()[i] = md.mesh.vertex_point[t[i]];
+            return out;
+          },
+          "(T, 3) uint32 triangles as indices into positions (a new array; the mesh stores them "
+          "over render vertices).")
       .def_property_readonly("bone_indices",
                              [](py::object self) {
                                auto& w = self.cast<deform::Model&>().weights.bones;
@@ -231,7 +241,8 @@ PYBIND11_MODULE(deform, m) {
             md.weights = std::move(w);
           },
           py::arg("bone_indices"), py::arg("bone_weights"), "Replaces the skin weights (copies the arrays).")
-      .def("copy", [](const deform::Model& md) { return md; }, "An independent copy.")
+      .def(
+          "copy", [](const deform::Model& md) { return md; }, "An independent copy.")
       .def(
           "save",
           [](const deform::Model& md, const std::string& obj, const std::string& sk, const std::string& skw) {
@@ -273,10 +284,12 @@ PYBIND11_MODULE(deform, m) {
       "builtin_character", []() { return std::make_shared<deform::Model>(deform::builtin_character()); },
       "The built-in rigged humanoid (33 bones: the body's 29 and a ponytail's 4; 2,850 points; about 13 ms).");
   m.def(
-      "default_rig", [](const deform::Model& md, const py::object& effector) {
+      "default_rig",
+      [](const deform::Model& md, const py::object& effector) {
         return deform::default_rig(md, effector.is_none() ? -1 : bone_id(md.skeleton, effector));
       },
-      py::arg("model"), py::arg("effector") = py::none(), "Three lattices on the limb ending at `effector` (default: a hand).");
+      py::arg("model"), py::arg("effector") = py::none(),
+      "Three lattices on the limb ending at `effector` (default: a hand).");
   m.def(
       "builtin_rig", [](const deform::Model& md) { return deform::builtin_rig(md); }, py::arg("model"),
       "The rig of the built-in character (three lattices on the left arm).");
@@ -287,7 +300,8 @@ PYBIND11_MODULE(deform, m) {
       "builtin_clips", [](const deform::Model& md) { return deform::builtin_clips(md); }, py::arg("model"),
       "The built-in character's clips: idle, walk, run and wave (a list of Animation).");
   m.def(
-      "read_rig", [](const std::string& path, const deform::Model& md) {
+      "read_rig",
+      [](const std::string& path, const deform::Model& md) {
         return deform::read_rig_json(path, md.skeleton, md.mesh.point_count());
       },
       py::arg("path"), py::arg("model"), "Reads a rig JSON file for `model`.");

@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
   deform::BezierLattice lattice(frame, glm::ivec3(3));
   std::vector<glm::vec3> rest_positions(mesh.vertex_count());  // per render vertex
   for (std::size_t r = 0; r < rest_positions.size(); ++r) rest_positions[r] = mesh.positions[mesh.vertex_point[r]];
-  const deform::LatticeBinding binding = deform::bind_lattice(lattice, rest_positions);  // once: each vertex's (u, v, w)
+  const deform::LatticeBinding binding =
+      deform::bind_lattice(lattice, rest_positions);  // once: each vertex's (u, v, w)
   std::vector<glm::vec3> positions = rest_positions, normals = mesh.vertex_normals;
   sample::MeshRenderer renderer;
   deform::GpuBezierLattice gpu;
@@ -98,9 +99,12 @@ int main(int argc, char** argv) {
             for (int i = 0; i < n.x; ++i) {
               const glm::vec3 p = lattice.control_points()[lattice.index(i, j, k)];
               f.overlay->point(p, glm::vec3(0.3f, 0.8f, 1.0f), 6.0f);
-              if (i + 1 < n.x) f.overlay->line(p, lattice.control_points()[lattice.index(i + 1, j, k)], glm::vec3(0.3f, 0.6f, 0.9f));
-              if (j + 1 < n.y) f.overlay->line(p, lattice.control_points()[lattice.index(i, j + 1, k)], glm::vec3(0.3f, 0.6f, 0.9f));
-              if (k + 1 < n.z) f.overlay->line(p, lattice.control_points()[lattice.index(i, j, k + 1)], glm::vec3(0.3f, 0.6f, 0.9f));
+              if (i + 1 < n.x)
+                f.overlay->line(p, lattice.control_points()[lattice.index(i + 1, j, k)], glm::vec3(0.3f, 0.6f, 0.9f));
+              if (j + 1 < n.y)
+                f.overlay->line(p, lattice.control_points()[lattice.index(i, j + 1, k)], glm::vec3(0.3f, 0.6f, 0.9f));
+              if (k + 1 < n.z)
+                f.overlay->line(p, lattice.control_points()[lattice.index(i, j, k + 1)], glm::vec3(0.3f, 0.6f, 0.9f));
             }
       },
       [&] { gpu.release(); });  // while the context lives

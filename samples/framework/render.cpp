@@ -49,7 +49,8 @@ void OrbitCamera::handle(const Input& input, glm::ivec2 viewport) {
 }
 
 glm::vec3 OrbitCamera::eye() const {
-  return target + distance * glm::vec3(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
+  return target +
+         distance * glm::vec3(std::cos(pitch) * std::sin(yaw), std::sin(pitch), std::cos(pitch) * std::cos(yaw));
 }
 
 glm::mat4 OrbitCamera::view() const { return glm::lookAt(eye(), target, glm::vec3(0, 1, 0)); }
@@ -145,7 +146,6 @@ void main() { result = vec4(colour, 1.0); })";
 GLuint build_program(const char* vertex_source, const char* fragment_source) {
   return link({compile(GL_VERTEX_SHADER, vertex_source), compile(GL_FRAGMENT_SHADER, fragment_source)});
 }
-
 
 // ---------------------------------------------------------------------------------------------------------------
 // MeshRenderer
@@ -260,10 +260,11 @@ void MeshRenderer::draw(const glm::mat4& model, const glm::mat4& view, const glm
   glBindVertexArray(vao_);
   for (const deform::Submesh& s : mesh_->submeshes) {
     const deform::Material fallback;
-    const deform::Material& m =
-        s.material >= 0 && std::size_t(s.material) < mesh_->materials.size() ? mesh_->materials[std::size_t(s.material)]
-                                                                               : fallback;
-    const GLuint texture = s.material >= 0 && std::size_t(s.material) < textures_.size() ? textures_[std::size_t(s.material)] : 0;
+    const deform::Material& m = s.material >= 0 && std::size_t(s.material) < mesh_->materials.size()
+                                    ? mesh_->materials[std::size_t(s.material)]
+                                    : fallback;
+    const GLuint texture =
+        s.material >= 0 && std::size_t(s.material) < textures_.size() ? textures_[std::size_t(s.material)] : 0;
     glUniform3fv(glGetUniformLocation(program_, "ka"), 1, glm::value_ptr(m.ambient));
     glUniform3fv(glGetUniformLocation(program_, "kd"), 1, glm::value_ptr(m.diffuse));
     glUniform3fv(glGetUniformLocation(program_, "ks"), 1, glm::value_ptr(m.specular));

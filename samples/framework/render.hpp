@@ -20,13 +20,13 @@ namespace sample {
 // Mouse and keyboard state of the current frame, the scene's only: the native window leaves out what ImGui's panel
 // takes; in the browser the panel is HTML beside the canvas.
 struct Input {
-  glm::vec2 mouse{0.0f};         // pixels, origin top-left
+  glm::vec2 mouse{0.0f};  // pixels, origin top-left
   glm::vec2 mouse_delta{0.0f};
   float scroll = 0.0f;
   bool left_down = false, left_pressed = false, left_released = false;
   bool right_down = false, middle_down = false;
   bool shift = false;
-  int key_pressed = 0;           // last GLFW key pressed this frame (0 if none)
+  int key_pressed = 0;  // last GLFW key pressed this frame (0 if none)
 };
 
 // Orbit camera: right drag orbits, middle drag (or shift + right) pans, wheel zooms.

@@ -40,8 +40,8 @@ int run_sample(int argc, char** argv, const char* title, const std::function<voi
     window.begin_frame();
     camera.handle(window.input(), window.framebuffer_size());
     Frame fr;
-    fr.time = headless ? float(f) / 60.0f
-                       : std::chrono::duration<float>(std::chrono::steady_clock::now() - start).count();
+    fr.time =
+        headless ? float(f) / 60.0f : std::chrono::duration<float>(std::chrono::steady_clock::now() - start).count();
     fr.dt = headless ? 1.0f / 60.0f : std::min(0.1f, fr.time - last);
     last = fr.time;
     fr.view = camera.view();

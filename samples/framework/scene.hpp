@@ -21,7 +21,8 @@ struct SceneNode {
 class Scene {
  public:
   // Adds a node under `parent` (-1 for a root); returns its index.
-  int add(std::string name, int parent = -1, glm::vec3 translation = glm::vec3(0.0f), glm::vec3 scale = glm::vec3(1.0f));
+  int add(std::string name, int parent = -1, glm::vec3 translation = glm::vec3(0.0f),
+          glm::vec3 scale = glm::vec3(1.0f));
   SceneNode& node(int index) { return nodes_[std::size_t(index)]; }
   const SceneNode& node(int index) const { return nodes_[std::size_t(index)]; }
   int size() const { return int(nodes_.size()); }

@@ -65,7 +65,8 @@ deform::Mesh make_sphere(float radius, int rings, int segments, glm::vec3 colour
     }
   for (int r = 0; r < rings; ++r)
     for (int s = 0; s < segments; ++s) {
-      const auto a = static_cast<std::uint32_t>(r * (segments + 1) + s), b = a + static_cast<std::uint32_t>(segments + 1);
+      const auto a = static_cast<std::uint32_t>(r * (segments + 1) + s),
+                 b = a + static_cast<std::uint32_t>(segments + 1);
       m.triangles.insert(m.triangles.end(), {a, b, a + 1, a + 1, b, b + 1});
     }
   m.submeshes.push_back({0, static_cast<std::uint32_t>(m.triangle_count()), 0, "ball", ""});

@@ -108,14 +108,14 @@ struct Options {
   std::vector<std::string> props;
   std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
-  float inertia = 1.0f;  // while a clip plays, the scale of each lattice's tuned inertia (scaled_inertia)
+  float inertia = 1.0f;       // while a clip plays, the scale of each lattice's tuned inertia (scaled_inertia)
   float blend_weight = 0.5f;  // the second clip's weight
-  bool bare = false;  // the character alone: no floor, props, overlays or panel (for pixel tests)
-  bool gpu = false;   // start with the deformation (skinning and lattices) on the GPU
-  bool dqs = false;   // start with dual quaternion skinning
-  bool swing_twist = false;  // reach with swing-twist joint limits
-  char up = 0;        // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
-  char lattices = 'a';  // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
+  bool bare = false;          // the character alone: no floor, props, overlays or panel (for pixel tests)
+  bool gpu = false;           // start with the deformation (skinning and lattices) on the GPU
+  bool dqs = false;           // start with dual quaternion skinning
+  bool swing_twist = false;   // reach with swing-twist joint limits
+  char up = 0;                // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
+  char lattices = 'a';        // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
   std::optional<glm::vec3> reach, pole;
 };
 
@@ -160,14 +160,13 @@ Options parse_options(int argc, char** argv) {
       o.blend_weight = std::strtof(text.c_str(), &end);
       if (text.empty() || *end || !(o.blend_weight >= 0.0f && o.blend_weight <= 1.0f))
         fail("--blend-weight: '" + text + "' is not in [0, 1]");
-    }
-    else if (a == "--inertia") {
+    } else if (a == "--inertia") {
       const std::string text = next();
       char* end = nullptr;
       o.inertia = std::strtof(text.c_str(), &end);
-      if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f)) fail("--inertia: '" + text + "' is not in [0, 1]");
-    }
-    else if (a == "--morph") {
+      if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f))
+        fail("--inertia: '" + text + "' is not in [0, 1]");
+    } else if (a == "--morph") {
       const std::string list = next();
       std::size_t at = 0;
       while (at <= list.size()) {
@@ -181,8 +180,7 @@ Options parse_options(int argc, char** argv) {
         o.morphs.emplace_back(item.substr(0, colon), w);
         at = comma + 1;
       }
-    }
-    else if (a == "--weight-map") o.weight_map = next();
+    } else if (a == "--weight-map") o.weight_map = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
     else if (a == "--reach") o.reach = parse_vec3(next(), "--reach");
@@ -196,19 +194,16 @@ Options parse_options(int argc, char** argv) {
       const std::string limits = next();
       if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
       o.swing_twist = limits == "swing-twist";
-    }
-    else if (a == "--up") {
+    } else if (a == "--up") {
       const std::string up = next();
       if (up != "y" && up != "z") fail("--up: '" + up + "' is not y or z");
       o.up = up[0];
-    }
-    else if (a == "--lattices") {
+    } else if (a == "--lattices") {
       const std::string shown = next();
       if (shown != "none" && shown != "active" && shown != "all")
         fail("--lattices: '" + shown + "' is not none, active or all");
       o.lattices = shown == "none" ? 'n' : shown == "all" ? 'e' : 'a';
-    }
-    else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
+    } else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
     else if (a == "--height") o.height = std::max(64, parse_int(next(), "--height"));
     else if (a.rfind("--", 0) == 0) fail("unknown option " + a + "\n" + usage);
     else if (o.model.empty()) o.model = a;
@@ -228,8 +223,8 @@ glm::quat upright(glm::vec3 up) {
 // The model the options name (model_loading: the CLI loads the same way); an OBJ without --weights gets automatic
 // weights. Exits with a message when the options name no loadable model.
 model_loading::LoadedModel load(const Options& o) {
-  const bool is_obj = o.model.size() > 4 && (o.model.substr(o.model.size() - 4) == ".obj" ||
-                                             o.model.substr(o.model.size() - 4) == ".OBJ");
+  const bool is_obj = o.model.size() > 4 &&
+                      (o.model.substr(o.model.size() - 4) == ".obj" || o.model.substr(o.model.size() - 4) == ".OBJ");
   if (is_obj && o.skeleton.empty()) fail(o.model + ": an OBJ needs --skeleton S.sk");
   model_loading::LoadedModel loaded = model_loading::load_model(
       {.path = o.model, .skeleton = o.skeleton, .weights = o.weights, .automatic_weights = true, .references = {}});
@@ -276,12 +271,14 @@ class Viewer {
     inertia_ = options.inertia;
     base_model_ = loaded.model;
     // The built-in character stretches whichever limb is nearest the click: its rig with lattices on every limb.
-    rig_ = !options.rig.empty() ? deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count())
-           : loaded.builtin     ? deform::builtin_full_rig(loaded.model)
-                                : model_loading::starting_rig(loaded);
+    rig_ = !options.rig.empty()
+               ? deform::read_rig_json(options.rig, base_model_.skeleton, base_model_.mesh.point_count())
+           : loaded.builtin ? deform::builtin_full_rig(loaded.model)
+                            : model_loading::starting_rig(loaded);
     if (options.pole) pole_ = *options.pole, use_pole_ = true;
-    lattice_display_ = options.lattices == 'n' ? LatticeDisplay::none
-                       : options.lattices == 'e' ? LatticeDisplay::all : LatticeDisplay::active;
+    lattice_display_ = options.lattices == 'n'   ? LatticeDisplay::none
+                       : options.lattices == 'e' ? LatticeDisplay::all
+                                                 : LatticeDisplay::active;
     if (options.swing_twist) reach_limits_ = deform::Character::JointLimits::swing_twist;
     rebuild_character();
     if (!options.weight_map.empty()) {
@@ -338,7 +335,8 @@ class Viewer {
     ball_mesh_ = sample::make_sphere(extent * 0.025f, 12, 24, glm::vec3(1.0f, 0.55f, 0.1f));
     for (const std::string& path : options.props) {
       props_.push_back(std::make_unique<deform::Mesh>(deform::read_obj(path)));
-      prop_nodes_.push_back(scene_.add(path, world_node_, glm::vec3(extent * 0.6f * float(props_.size()), b.min.y, 0.0f)));
+      prop_nodes_.push_back(
+          scene_.add(path, world_node_, glm::vec3(extent * 0.6f * float(props_.size()), b.min.y, 0.0f)));
     }
     place_floor();  // --clip and --blend chose clips before the floor existed
     scene_.update();
@@ -375,7 +373,8 @@ class Viewer {
   // The lattices drawn in the last frame (the overlay; 0 with --bare).
   int lattices_shown() const {
     return options_.bare || lattice_display_ == LatticeDisplay::none
-               ? 0 : int(std::count(lattice_shown_.begin(), lattice_shown_.end(), char(1)));
+               ? 0
+               : int(std::count(lattice_shown_.begin(), lattice_shown_.end(), char(1)));
   }
   // The image row (from the top) of the floor under the point drawn lowest on the screen, through the camera: the
   // row of the silhouette's lowest pixels when the character stands on the floor, below it when the character
@@ -464,8 +463,8 @@ class Viewer {
     ImGui::Begin("libdeform", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
     // What the panel hides on the left, for the next fit of the camera (none when collapsed or moved elsewhere).
     const ImVec2 panel_at = ImGui::GetWindowPos(), panel_size = ImGui::GetWindowSize();
-    panel_right_ = !ImGui::IsWindowCollapsed() && panel_at.x < 0.3f * float(size.x) ? panel_at.x + panel_size.x + 10.0f
-                                                                                     : 0.0f;
+    panel_right_ =
+        !ImGui::IsWindowCollapsed() && panel_at.x < 0.3f * float(size.x) ? panel_at.x + panel_size.x + 10.0f : 0.0f;
     ImGui::Text("%s: %zu points, %zu bones", base_model_.name.c_str(), base_model_.mesh.point_count(),
                 base_model_.skeleton.bone_count());
     ImGui::Text("frame %.2f ms, deformation %.3f ms", frame_ms, deform_ms_);
@@ -584,13 +583,14 @@ class Viewer {
       reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
       bool swing_twist = character_->reach_limits == deform::Character::JointLimits::swing_twist;
       if (ImGui::Checkbox("swing-twist limits", &swing_twist)) {
-        reach_limits_ = swing_twist ? deform::Character::JointLimits::swing_twist
-                                    : deform::Character::JointLimits::euler;
+        reach_limits_ =
+            swing_twist ? deform::Character::JointLimits::swing_twist : deform::Character::JointLimits::euler;
         reach_changed = true;
       }
       if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("each joint of the reach chain limited by a twist range and a swing cone (drawn in cyan)\n"
-                          "made from its Euler limits, instead of the Euler box");
+        ImGui::SetTooltip(
+            "each joint of the reach chain limited by a twist range and a swing cone (drawn in cyan)\n"
+            "made from its Euler limits, instead of the Euler box");
       if (reach_changed) apply_reach_settings();
     }
 
@@ -667,8 +667,9 @@ class Viewer {
   // palette and GpuLatticeFields adds its lattices, all in the renderer's vertex buffer (whose UVs stay as created).
   void set_gpu(bool on) {
     if (on && character_->morph_target_count() > 0) {  // GpuSkinning skins the bind positions, not the morphed ones
-      std::fprintf(stderr, "deform_viewer: the model has morph targets, which the GPU path does not apply; "
-                           "deforming on the CPU\n");
+      std::fprintf(stderr,
+                   "deform_viewer: the model has morph targets, which the GPU path does not apply; "
+                   "deforming on the CPU\n");
       on = false;
     }
     gpu_ = on && gpu_available_;
@@ -866,8 +867,8 @@ class Viewer {
 
   bool camera_fitted() const {
     return camera_.target == fitted_camera_.target && camera_.distance == fitted_camera_.distance &&
-           camera_.shift_x == fitted_camera_.shift_x &&
-           camera_.yaw == fitted_camera_.yaw && camera_.pitch == fitted_camera_.pitch;
+           camera_.shift_x == fitted_camera_.shift_x && camera_.yaw == fitted_camera_.yaw &&
+           camera_.pitch == fitted_camera_.pitch;
   }
 
   // Plays clip `clip` (-1: none, the bind pose) from its start.
@@ -892,8 +893,8 @@ class Viewer {
     const deform::Animation& first = clips_[std::size_t(clip_)];
     const deform::Animation& second = clips_[std::size_t(blend_clip_)];
     // The second clip's time at the first's phase (its own time when either has no length).
-    const float t2 = first.duration > 0.0f && second.duration > 0.0f
-                         ? first.local_time(t) / first.duration * second.duration : t;
+    const float t2 =
+        first.duration > 0.0f && second.duration > 0.0f ? first.local_time(t) / first.duration * second.duration : t;
     sample_one(first, t, first_);
     sample_one(second, t2, second_);
     const deform::BlendLayer layers[] = {{first_.rotations, first_.translations, 1.0f - blend_weight_, {}},
@@ -918,7 +919,8 @@ class Viewer {
       if (blend_clip_ >= 0) {
         const deform::Animation& second = clips_[std::size_t(blend_clip_)];
         const float t2 = first.duration > 0.0f && second.duration > 0.0f
-                             ? first.local_time(clip_time_) / first.duration * second.duration : clip_time_;
+                             ? first.local_time(clip_time_) / first.duration * second.duration
+                             : clip_time_;
         const std::vector<deform::MorphTarget>& targets = character_->model().morph_targets;
         for (std::size_t k = 0; k < targets.size(); ++k) morph_second_[k] = targets[k].default_weight;
         (void)deform::sample_morph_weights(second, t2, morph_second_);
@@ -950,7 +952,8 @@ class Viewer {
   // The panel's shape for every lattice (DeformerHierarchy::set_shape).
   void apply_shape() {
     try {
-      for (std::size_t i = 0; i < character_->deformers().lattice_count(); ++i) character_->deformers().set_shape(i, shape_);
+      for (std::size_t i = 0; i < character_->deformers().lattice_count(); ++i)
+        character_->deformers().set_shape(i, shape_);
     } catch (const deform::Error& e) {
       std::fprintf(stderr, "warning: %s\n", e.what());
     }
@@ -989,7 +992,7 @@ class Viewer {
   void handle_keys(int key) {
     if (key == GLFW_KEY_D)
       character_->skinning = character_->skinning == deform::SkinningMethod::lbs ? deform::SkinningMethod::dqs
-                                                                                  : deform::SkinningMethod::lbs;
+                                                                                 : deform::SkinningMethod::lbs;
     if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
     if (key == GLFW_KEY_L)  // active limb, all, none, active again
       lattice_display_ = lattice_display_ == LatticeDisplay::active ? LatticeDisplay::all
@@ -1056,8 +1059,7 @@ class Viewer {
     // The limb a click would move, under a mouse that moves freely over the scene: its lattices are the active ones.
     // Not in headless runs, whose pictures must not depend on where the display's cursor happens to be.
     if (options_.screenshot.empty() && lattice_display_ == LatticeDisplay::active &&
-        in.mouse_delta != glm::vec2(0.0f) && !in.left_down &&
-        !in.right_down && !in.middle_down) {
+        in.mouse_delta != glm::vec2(0.0f) && !in.left_down && !in.right_down && !in.middle_down) {
       const auto p = pick(in.mouse);
       hovered_effector_ =
           p ? deform::nearest_reach_effector(*character_, transform_point(glm::inverse(character_world()), *p)) : -1;
@@ -1081,8 +1083,9 @@ class Viewer {
       const glm::vec3 forward = glm::normalize(camera_.target - camera_.eye());
       const float along = glm::dot(ray.direction, forward);
       if (along > 1e-4f) {
-        target_ = transform_point(glm::inverse(character_world()),
-                                  ray.origin + ray.direction * (drag_depth_ - glm::dot(ray.origin - camera_.eye(), forward)) / along);
+        target_ = transform_point(
+            glm::inverse(character_world()),
+            ray.origin + ray.direction * (drag_depth_ - glm::dot(ray.origin - camera_.eye(), forward)) / along);
         last_reach_ = character_->reach(effector_, target_);
       }
     } else if (in.left_released) {
@@ -1150,7 +1153,9 @@ class Viewer {
         const auto cps = character_->control_points(l);
         const glm::ivec3 n = character_->deformers().spec(l).degree + 1;
         const float stretch = character_->deformers().stretch(l) / std::max(1e-6f, character_->deformers().length(l));
-        auto at = [&](int i, int j, int k) { return transform_point(to_world, cps[std::size_t(i + n.x * (j + n.y * k))]); };
+        auto at = [&](int i, int j, int k) {
+          return transform_point(to_world, cps[std::size_t(i + n.x * (j + n.y * k))]);
+        };
         for (int k = 0; k < n.z; ++k)
           for (int j = 0; j < n.y; ++j)
             for (int i = 0; i < n.x; ++i) {
@@ -1179,7 +1184,8 @@ class Viewer {
         const glm::vec3 head = transform_point(to_world, character_->bone_position(std::int32_t(b)));
         const std::int32_t parent = sk.bone(std::int32_t(b)).parent;
         if (parent >= 0)
-          overlay_.line(transform_point(to_world, character_->bone_position(parent)), head, glm::vec3(1.0f, 0.9f, 0.3f));
+          overlay_.line(transform_point(to_world, character_->bone_position(parent)), head,
+                        glm::vec3(1.0f, 0.9f, 0.3f));
         overlay_.point(head, std::int32_t(b) == effector_ ? glm::vec3(1, 0.3f, 0.2f) : glm::vec3(1, 1, 1), 7.0f);
       }
     }
@@ -1203,8 +1209,9 @@ class Viewer {
       if (reaching_) {
         const deform::Skeleton& sk = character_->skeleton();
         const std::int32_t middle = sk.bone(effector_).parent;
-        if (middle >= 0) overlay_.line(transform_point(to_world, character_->bone_position(middle)), pole,
-                                       glm::vec3(0.9f, 0.2f, 0.9f));
+        if (middle >= 0)
+          overlay_.line(transform_point(to_world, character_->bone_position(middle)), pole,
+                        glm::vec3(0.9f, 0.2f, 0.9f));
       }
     }
     overlay_.flush(projection * view, true);
@@ -1221,8 +1228,8 @@ class Viewer {
     world_rotations_.resize(sk.bone_count());
     for (const std::int32_t b : sk.order()) {
       const std::int32_t parent = sk.bone(b).parent;
-      world_rotations_[std::size_t(b)] =
-          (parent >= 0 ? world_rotations_[std::size_t(parent)] : glm::quat(1, 0, 0, 0)) * pose.rotations[std::size_t(b)];
+      world_rotations_[std::size_t(b)] = (parent >= 0 ? world_rotations_[std::size_t(parent)] : glm::quat(1, 0, 0, 0)) *
+                                         pose.rotations[std::size_t(b)];
     }
     const glm::vec3 cyan(0.2f, 0.9f, 1.0f);
     for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
@@ -1237,7 +1244,8 @@ class Viewer {
       constexpr int steps = 24;
       for (int i = 0; i <= steps; ++i) {
         const float phi = glm::two_pi<float>() * float(i) / float(steps);
-        const glm::vec3 swing = limits->swing1 * std::cos(phi) * limits->reference + limits->swing2 * std::sin(phi) * side;
+        const glm::vec3 swing =
+            limits->swing1 * std::cos(phi) * limits->reference + limits->swing2 * std::sin(phi) * side;
         const float angle = glm::length(swing);
         const glm::quat turn = angle > 1e-6f ? glm::angleAxis(angle, swing / angle) : glm::quat(1, 0, 0, 0);
         const glm::vec3 rim = transform_point(to_world, head + frame * (turn * limits->axis) * length);
@@ -1275,18 +1283,18 @@ class Viewer {
   sample::OverlayRenderer overlay_;
   sample::OrbitCamera camera_;
   sample::OrbitCamera fitted_camera_;  // the camera fit_camera() chose last (C fits again)
-  float panel_right_ = 350.0f;          // pixels: the right edge of the panel over the window's left (0: none)
+  float panel_right_ = 350.0f;         // pixels: the right edge of the panel over the window's left (0: none)
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
   bool reaching_ = false, show_skeleton_ = true;
   LatticeDisplay lattice_display_ = LatticeDisplay::active;
   std::vector<char> lattice_shown_;     // per lattice: drawn this frame (lattice_display_; sized by rebuild)
   std::int32_t hovered_effector_ = -1;  // the limb a click at the mouse would move (-1: none)
-  int weight_bone_ = -1;  // the bone whose weights the weight map shows; -1: none
+  int weight_bone_ = -1;                // the bone whose weights the weight map shows; -1: none
   bool playing_ = true;
-  deform::StretchShape shape_;           // the panel's rubber shape, for every lattice
-  float max_stretch_ = -1.0f;            // the panel's stretch bound (-1: the rig's, taken at the first build)
-  glm::vec3 pole_{0.0f, 0.0f, 1.0f};     // the reach pole, model space (--pole, the panel, shift+click)
+  deform::StretchShape shape_;        // the panel's rubber shape, for every lattice
+  float max_stretch_ = -1.0f;         // the panel's stretch bound (-1: the rig's, taken at the first build)
+  glm::vec3 pole_{0.0f, 0.0f, 1.0f};  // the reach pole, model space (--pole, the panel, shift+click)
   bool use_pole_ = false;
   deform::Character::JointLimits reach_limits_ = deform::Character::JointLimits::euler;
   deform::Character::ReachSolver reach_solver_ = deform::Character::ReachSolver::ccd;  // (two-bone: Euler limits only)
@@ -1295,22 +1303,22 @@ class Viewer {
   int clip_ = -1;
   Clock::time_point long_frame_at_{};  // the last frame longer than the clamp: when, how long, simulated as
   float long_frame_ms_ = 0.0f, long_frame_simulated_ms_ = 0.0f;
-  std::vector<const char*> clip_names_;  // "(none)", then each clip's name (the panel's list)
-  deform::Pose bind_pose_, pose_, later_;  // the clip sampled now and a millisecond later, over the bind pose
-  deform::Pose first_, second_;            // the two clips of a blend, before blending (sample_clip's scratch)
-  int blend_clip_ = -1;                    // the clip blended with clip_ (-1: none)
-  float blend_weight_ = 0.5f;              // its weight; clip_ has 1 - blend_weight_
-  float speed_ = 1.0f;                   // playback rate
-  bool jiggle_ = true;                   // lattices with inertia while a clip plays
-  float inertia_ = 1.0f;                 // the scale of each lattice's tuned inertia
-  bool cut_ = true;                      // the next frame's pose is a jump, not motion (see frame())
-  deform::Bounds rest_bounds_;                     // the bind pose, upright: its floor, its framing
-  std::vector<deform::Bounds> clip_bounds_;        // each clip's sampled poses, upright (posed_bounds)
-  float floor_height_ = 0.0f;                      // the eye's height above a floor
-  std::vector<char> morph_held_;     // per morph target: the panel (or --morph) holds its weight
-  std::vector<float> morph_hold_;    // ... at this weight
-  std::vector<float> morph_second_;  // the blended second clip's morph weights (sized once)
-  std::vector<float> clip_floors_;                 // the floor under each clip (lowest_height)
+  std::vector<const char*> clip_names_;      // "(none)", then each clip's name (the panel's list)
+  deform::Pose bind_pose_, pose_, later_;    // the clip sampled now and a millisecond later, over the bind pose
+  deform::Pose first_, second_;              // the two clips of a blend, before blending (sample_clip's scratch)
+  int blend_clip_ = -1;                      // the clip blended with clip_ (-1: none)
+  float blend_weight_ = 0.5f;                // its weight; clip_ has 1 - blend_weight_
+  float speed_ = 1.0f;                       // playback rate
+  bool jiggle_ = true;                       // lattices with inertia while a clip plays
+  float inertia_ = 1.0f;                     // the scale of each lattice's tuned inertia
+  bool cut_ = true;                          // the next frame's pose is a jump, not motion (see frame())
+  deform::Bounds rest_bounds_;               // the bind pose, upright: its floor, its framing
+  std::vector<deform::Bounds> clip_bounds_;  // each clip's sampled poses, upright (posed_bounds)
+  float floor_height_ = 0.0f;                // the eye's height above a floor
+  std::vector<char> morph_held_;             // per morph target: the panel (or --morph) holds its weight
+  std::vector<float> morph_hold_;            // ... at this weight
+  std::vector<float> morph_second_;          // the blended second clip's morph weights (sized once)
+  std::vector<float> clip_floors_;           // the floor under each clip (lowest_height)
   float clip_time_ = 0.0f, deform_ms_ = 0.0f, drag_depth_ = 1.0f, pick_radius_ = 1.0f;
   std::int32_t effector_ = -1;
   glm::vec3 target_{0.0f};
@@ -1348,13 +1356,14 @@ int main(int argc, char** argv) {
       }
       const glm::vec3 e = viewer.effector_position();
       const glm::vec3 up = viewer.up();
-      std::printf("{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
-                  "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
-                  "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f}\n",
-                  options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
-                  viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z,
-                  double(viewer.floor_y()), double(viewer.lowest_y()), viewer.morph_weights_text().c_str(),
-                  viewer.lattices_shown(), double(viewer.floor_row()));
+      std::printf(
+          "{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
+          "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
+          "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f}\n",
+          options.screenshot.c_str(), options.frames, window.renderer_name().c_str(),
+          viewer.gpu_lattices() ? "true" : "false", double(up.x), double(up.y), double(up.z), e.x, e.y, e.z,
+          double(viewer.floor_y()), double(viewer.lowest_y()), viewer.morph_weights_text().c_str(),
+          viewer.lattices_shown(), double(viewer.floor_row()));
       return 0;
     }
     // A frame longer than max_dt (a stall, a dragged window) is simulated as max_dt, so a stall never lands as one

@@ -33,7 +33,6 @@ namespace {
 
 constexpr const char* canvas_id = "#canvas";
 
-
 glm::vec3 heat(float t) {  // 0 blue, 0.5 green, 1 red (the native viewer's lattice colours)
   t = std::clamp(t, 0.0f, 1.0f);
   return t < 0.5f ? glm::mix(glm::vec3(0.2f, 0.4f, 1.0f), glm::vec3(0.2f, 1.0f, 0.3f), 2.0f * t)
@@ -176,9 +175,8 @@ class WebViewer {
                   "\"points\": %zu, \"bones\": %zu, \"lattices\": %zu, \"canvas\": [%d, %d]}",
                   frames_, reaching_ ? "true" : "false",
                   effector_ >= 0 ? character_->skeleton().bone(effector_).name.c_str() : "",
-                  double(character_->stretch()),
-                  double(last_reach_.residual), double(pixel.x), double(float(size_.y) - pixel.y), double(wrist.x),
-                  double(float(size_.y) - wrist.y), clip.c_str(),
+                  double(character_->stretch()), double(last_reach_.residual), double(pixel.x),
+                  double(float(size_.y) - pixel.y), double(wrist.x), double(float(size_.y) - wrist.y), clip.c_str(),
                   double(clip_time_), double(deform_ms_), model_.mesh.point_count(), model_.skeleton.bone_count(),
                   character_->deformers().lattice_count(), size_.x, size_.y);
     return state_;
@@ -272,8 +270,8 @@ class WebViewer {
 
   // The nearest scene point under the mouse: the character's current triangles (through the BVH) or the floor.
   std::optional<glm::vec3> pick(glm::vec2 pixel) {
-    const deform::Ray ray = deform::ray_from_pixel(camera_.view(), camera_.projection(aspect()), pixel,
-                                                   glm::vec4(0, 0, size_.x, size_.y));
+    const deform::Ray ray =
+        deform::ray_from_pixel(camera_.view(), camera_.projection(aspect()), pixel, glm::vec4(0, 0, size_.x, size_.y));
     std::optional<glm::vec3> best;
     float best_distance = std::numeric_limits<float>::infinity();
     bvh_.refit(character_->positions());

@@ -12,13 +12,12 @@
 #include "deform/c/deform.h"
 
 static int failures = 0;
-#define CHECK(cond)                                                                  \
-  do {                                                                               \
-    if (!(cond)) {                                                                   \
-      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, \
-              #cond, deform_last_error());                                           \
-      ++failures;                                                                    \
-    }                                                                                \
+#define CHECK(cond)                                                                                                 \
+  do {                                                                                                              \
+    if (!(cond)) {                                                                                                  \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, #cond, deform_last_error()); \
+      ++failures;                                                                                                   \
+    }                                                                                                               \
   } while (0)
 
 /* A small deterministic generator, so that the cases are the same on every run. */
@@ -131,8 +130,8 @@ static void character_reaches_stretches_and_springs_back(void) {
       const float t = (float)n / 60.0f, lead = 1e-3f;
       translations[2] = hips_z + 0.1f * sinf(6.28318531f * t);
       later_translations[2] = hips_z + 0.1f * sinf(6.28318531f * (t + lead));
-      CHECK(deform_character_set_pose_moving(mover, rotations, translations, later_rotations, later_translations,
-                                             lead, bones) == DEFORM_OK);
+      CHECK(deform_character_set_pose_moving(mover, rotations, translations, later_rotations, later_translations, lead,
+                                             bones) == DEFORM_OK);
       CHECK(deform_character_update(mover, n == 0 ? 0.0f : 1.0f / 60.0f) == DEFORM_OK);
       CHECK(deform_character_bone_position(mover, fingers, paths[run][n]) == DEFORM_OK);
     }
@@ -236,7 +235,8 @@ static void skinning_matches_a_plain_reference(void) {
     for (int v = 0; v < vertices; ++v) {
       double sum = 0.0, w[4];
       for (int k = 0; k < 4; ++k) sum += (w[k] = k < 1 + v % 4 ? uniform(0.01, 1.0) : 0.0);
-      for (int k = 0; k < 4; ++k) weights[4 * v + k] = (float)(w[k] / sum), ids[4 * v + k] = (uint16_t)(uniform(0, bones - 1e-9));
+      for (int k = 0; k < 4; ++k)
+        weights[4 * v + k] = (float)(w[k] / sum), ids[4 * v + k] = (uint16_t)(uniform(0, bones - 1e-9));
       for (int a = 0; a < 3; ++a) positions[3 * v + a] = (float)uniform(-1, 1);
     }
     CHECK(deform_skin_lbs(palette, bones, ids, weights, positions, vertices, out) == DEFORM_OK);
@@ -336,7 +336,7 @@ static void delta_mush_smooths_a_bent_elbow(void) {
   double worst = 0.0;
   for (size_t p = 0; p < points; ++p)
     worst = fmax(worst, distance3(deform_character_positions(mushed) + 3 * p, rest + 3 * p));
-  CHECK(worst < 1e-5);  /* the rest pose back (the character is about 2 units tall) */
+  CHECK(worst < 1e-5); /* the rest pose back (the character is about 2 units tall) */
   /* The left elbow bent 100 degrees about x. */
   CHECK(deform_character_bind_pose(plain, rotations, translations, bones) == DEFORM_OK);
   const int32_t forearm = deform_character_find_bone(plain, "forearm_l");
@@ -354,13 +354,13 @@ static void delta_mush_smooths_a_bent_elbow(void) {
     CHECK(deform_character_update(mushed, 0.0f) == DEFORM_OK);
     moved = 0.0;
     for (size_t p = 0; p < points; ++p)
-      moved = fmax(moved,
-                   distance3(deform_character_positions(mushed) + 3 * p, deform_character_positions(plain) + 3 * p));
-    if (pass == 0) CHECK(moved > 1e-3);  /* smoothed */
-    else CHECK(moved == 0.0);            /* a mask of zeros: every point as skinned */
+      moved =
+          fmax(moved, distance3(deform_character_positions(mushed) + 3 * p, deform_character_positions(plain) + 3 * p));
+    if (pass == 0) CHECK(moved > 1e-3); /* smoothed */
+    else CHECK(moved == 0.0);           /* a mask of zeros: every point as skinned */
     if (pass == 0) CHECK(deform_character_set_delta_mush(mushed, 10, 0.5f, zeros, points) == DEFORM_OK);
   }
-  CHECK(deform_character_set_delta_mush(mushed, 0, 0.5f, NULL, 0) == DEFORM_OK);  /* off */
+  CHECK(deform_character_set_delta_mush(mushed, 0, 0.5f, NULL, 0) == DEFORM_OK); /* off */
   free(rest);
   free(zeros);
   free(rotations);

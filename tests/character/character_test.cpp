@@ -24,7 +24,6 @@
 #include <string>
 #include <vector>
 
-
 using deform::Character;
 
 namespace {
@@ -639,7 +638,7 @@ TEST_CASE("the full rig: each limb reaches a far target with its own lattices; n
 
   struct Limb {
     std::int32_t effector;
-    const char* top;     // the limb's first lattice bone
+    const char* top;      // the limb's first lattice bone
     glm::vec3 direction;  // from the top of the limb toward the target
   };
   const Limb limbs[] = {{hand_l, "upperarm_l", {1.0f, 0.3f, 0.3f}},
@@ -674,7 +673,8 @@ TEST_CASE("the full rig: each limb reaches a far target with its own lattices; n
     }
     // The chain's joints stay within their limits.
     for (const std::int32_t b : c.reach_chain().first(c.reach_chain().size() - 1)) {
-      CHECK(deform::within_limits(deform::euler_from_quat(c.pose().rotations[std::size_t(b)]), s.bone(b).limits, 0.05f));
+      CHECK(
+          deform::within_limits(deform::euler_from_quat(c.pose().rotations[std::size_t(b)]), s.bone(b).limits, 0.05f));
     }
     c.release();
   }
@@ -696,7 +696,8 @@ TEST_CASE("a Character skins with every influence: extras beyond four as Skinnin
   deform::Model four = model;
   deform::drop_extra_influences(four.weights);
   deform::Pose pose = model.skeleton.bind_pose();
-  for (std::int32_t b = 1; b < std::int32_t(bones); b += 3) model.skeleton.set_euler(pose, b, glm::vec3(20.0f, -15.0f, 10.0f));
+  for (std::int32_t b = 1; b < std::int32_t(bones); b += 3)
+    model.skeleton.set_euler(pose, b, glm::vec3(20.0f, -15.0f, 10.0f));
   // The expected positions: forward kinematics and one SkinningJob with the extras.
   const std::vector<glm::vec3> expected = import_test::skin(model, pose);
   Character c(std::move(model));

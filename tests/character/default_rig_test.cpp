@@ -141,48 +141,82 @@ TEST_CASE("survey_rig reads Mixamo, rigify, Unreal, VRM and unnamed humanoids al
   const std::vector<Convention> conventions = {
       {"Mixamo",
        [&](const std::string& role, char side) {
-         const std::string w = words(role, {{"hips", "Hips"}, {"spine", "Spine"}, {"chest", "Spine2"},
-                                            {"neck", "Neck"}, {"head", "Head"}, {"clavicle", "Shoulder"},
-                                            {"upperarm", "Arm"}, {"twist", "ArmTwist"}, {"forearm", "ForeArm"},
-                                            {"hand", "Hand"}, {"finger", "HandMiddle1"}, {"thigh", "UpLeg"},
-                                            {"shin", "Leg"}, {"foot", "Foot"}, {"toe", "ToeBase"},
-                                            {"handik", "HandIK"}, {"pole", "ElbowPole"}});
+         const std::string w = words(role, {{"hips", "Hips"},
+                                            {"spine", "Spine"},
+                                            {"chest", "Spine2"},
+                                            {"neck", "Neck"},
+                                            {"head", "Head"},
+                                            {"clavicle", "Shoulder"},
+                                            {"upperarm", "Arm"},
+                                            {"twist", "ArmTwist"},
+                                            {"forearm", "ForeArm"},
+                                            {"hand", "Hand"},
+                                            {"finger", "HandMiddle1"},
+                                            {"thigh", "UpLeg"},
+                                            {"shin", "Leg"},
+                                            {"foot", "Foot"},
+                                            {"toe", "ToeBase"},
+                                            {"handik", "HandIK"},
+                                            {"pole", "ElbowPole"}});
          return "mixamorig:" + std::string(side == 'L' ? "Left" : side == 'R' ? "Right" : "") + w;
        }},
       {"rigify",
        [&](const std::string& role, char side) {
-         const std::string w = words(role, {{"hips", "spine"}, {"spine", "spine.001"}, {"chest", "spine.003"},
-                                            {"neck", "spine.004"}, {"head", "spine.006"}, {"clavicle", "shoulder"},
-                                            {"upperarm", "upper_arm"}, {"twist", "upper_arm_twist"},
-                                            {"finger", "f_middle.01"}, {"thigh", "thigh"}, {"toe", "toe"},
-                                            {"handik", "MCH-hand_ik"}, {"pole", "MCH-elbow_pole"}});
+         const std::string w = words(role, {{"hips", "spine"},
+                                            {"spine", "spine.001"},
+                                            {"chest", "spine.003"},
+                                            {"neck", "spine.004"},
+                                            {"head", "spine.006"},
+                                            {"clavicle", "shoulder"},
+                                            {"upperarm", "upper_arm"},
+                                            {"twist", "upper_arm_twist"},
+                                            {"finger", "f_middle.01"},
+                                            {"thigh", "thigh"},
+                                            {"toe", "toe"},
+                                            {"handik", "MCH-hand_ik"},
+                                            {"pole", "MCH-elbow_pole"}});
          const std::string prefix = w.starts_with("MCH-") ? "" : "DEF-";
          return prefix + w + (side == 'L' ? ".L" : side == 'R' ? ".R" : "");
        }},
       {"Unreal",
        [&](const std::string& role, char side) {
-         const std::string w = words(role, {{"hips", "pelvis"}, {"spine", "spine_01"}, {"chest", "spine_03"},
-                                            {"neck", "neck_01"}, {"forearm", "lowerarm"},
+         const std::string w = words(role, {{"hips", "pelvis"},
+                                            {"spine", "spine_01"},
+                                            {"chest", "spine_03"},
+                                            {"neck", "neck_01"},
+                                            {"forearm", "lowerarm"},
                                             {"twist", "upperarm_twist_01"},
-                                            {"finger", "middle_01"}, {"shin", "calf"}, {"toe", "ball"},
-                                            {"handik", "ik_hand"}, {"pole", "ik_elbow_pole"}});
+                                            {"finger", "middle_01"},
+                                            {"shin", "calf"},
+                                            {"toe", "ball"},
+                                            {"handik", "ik_hand"},
+                                            {"pole", "ik_elbow_pole"}});
          return w + (side == 'L' ? "_l" : side == 'R' ? "_r" : "");
        }},
       {"VRM",
        [&](const std::string& role, char side) {
-         const std::string w = words(role, {{"hips", "hips"}, {"chest", "upperChest"}, {"clavicle", "Shoulder"},
-                                            {"upperarm", "UpperArm"}, {"twist", "UpperArmTwist"},
-                                            {"forearm", "LowerArm"}, {"hand", "Hand"}, {"finger", "MiddleProximal"},
-                                            {"thigh", "UpperLeg"}, {"shin", "LowerLeg"}, {"foot", "Foot"},
-                                            {"toe", "Toes"}, {"handik", "HandIKTarget"}, {"pole", "ElbowPole"}});
+         const std::string w = words(role, {{"hips", "hips"},
+                                            {"chest", "upperChest"},
+                                            {"clavicle", "Shoulder"},
+                                            {"upperarm", "UpperArm"},
+                                            {"twist", "UpperArmTwist"},
+                                            {"forearm", "LowerArm"},
+                                            {"hand", "Hand"},
+                                            {"finger", "MiddleProximal"},
+                                            {"thigh", "UpperLeg"},
+                                            {"shin", "LowerLeg"},
+                                            {"foot", "Foot"},
+                                            {"toe", "Toes"},
+                                            {"handik", "HandIKTarget"},
+                                            {"pole", "ElbowPole"}});
          return side == 0 ? w : std::string(side == 'L' ? "left" : "right") + w;
        }},
       // No telling names at all: the structure alone (sides from +X).
       {"unnamed",
        [&](const std::string& role, char side) {
-         static const std::vector<std::string> roles = {"hips", "spine", "chest", "neck", "head", "clavicle",
-                                                        "upperarm", "twist", "forearm", "hand", "finger", "thigh",
-                                                        "shin", "foot", "toe", "handik", "pole"};
+         static const std::vector<std::string> roles = {"hips",     "spine", "chest",   "neck",   "head",   "clavicle",
+                                                        "upperarm", "twist", "forearm", "hand",   "finger", "thigh",
+                                                        "shin",     "foot",  "toe",     "handik", "pole"};
          const auto at = std::find(roles.begin(), roles.end(), role) - roles.begin();
          return "j" + std::to_string(at) + (side == 'L' ? "a" : side == 'R' ? "b" : "");
        }},
@@ -193,13 +227,14 @@ TEST_CASE("survey_rig reads Mixamo, rigify, Unreal, VRM and unnamed humanoids al
   }
 }
 
-TEST_CASE("survey_rig: a four-legged creature gets four legs, a neck and a tail; an arm without a clavicle reaches "
-          "from the shoulder") {
+TEST_CASE(
+    "survey_rig: a four-legged creature gets four legs, a neck and a tail; an arm without a clavicle reaches "
+    "from the shoulder") {
   // Unnamed bones: a dog-like body along +Z, the root at the pelvis, the tail behind it, the neck and head ahead.
-  std::vector<Spec> s = {{"root", "", {0, 0.6f, 0}}, {"s1", "root", {0, 0.62f, 0.25f}}, {"s2", "s1", {0, 0.62f, 0.5f}},
-                         {"n1", "s2", {0, 0.75f, 0.6f}}, {"n2", "n1", {0, 0.85f, 0.7f}}, {"hd", "n2", {0, 0.9f, 0.8f}},
-                         {"t1", "root", {0, 0.62f, -0.1f}}, {"t2", "t1", {0, 0.66f, -0.25f}},
-                         {"t3", "t2", {0, 0.7f, -0.4f}}};
+  std::vector<Spec> s = {
+      {"root", "", {0, 0.6f, 0}},        {"s1", "root", {0, 0.62f, 0.25f}}, {"s2", "s1", {0, 0.62f, 0.5f}},
+      {"n1", "s2", {0, 0.75f, 0.6f}},    {"n2", "n1", {0, 0.85f, 0.7f}},    {"hd", "n2", {0, 0.9f, 0.8f}},
+      {"t1", "root", {0, 0.62f, -0.1f}}, {"t2", "t1", {0, 0.66f, -0.25f}},  {"t3", "t2", {0, 0.7f, -0.4f}}};
   for (const float x : {1.0f, -1.0f}) {
     const std::string k = x > 0 ? "a" : "b";
     for (const auto& [at, parent, z] : {std::tuple{"f", "s2", 0.5f}, std::tuple{"h", "root", 0.0f}}) {
@@ -257,8 +292,7 @@ void check_reach_moves_only_the_limb(deform::Model model, const deform::Rig& rig
   // Every limb's end is one the viewer's click may reach with (reach_effectors), a hand without a lattice included.
   const std::vector<std::int32_t> effectors = deform::reach_effectors(character);
   for (const deform::Limb& limb : survey.limbs)
-    if (limb.kind != LimbKind::tail)
-      CHECK(std::count(effectors.begin(), effectors.end(), limb.chain.back()) == 1);
+    if (limb.kind != LimbKind::tail) CHECK(std::count(effectors.begin(), effectors.end(), limb.chain.back()) == 1);
   character.update(1.0f / 60.0f);
   std::vector<glm::vec3> before(static_cast<std::size_t>(bones));
   for (std::int32_t b = 0; b < bones; ++b) before[std::size_t(b)] = character.bone_position(b);
@@ -276,8 +310,8 @@ void check_reach_moves_only_the_limb(deform::Model model, const deform::Rig& rig
     const glm::vec3 shoulder = reacher.bone_position(limb.chain.front());
     const glm::vec3 out = reacher.bone_position(hand) - shoulder;
     // A bit away from the hand: outward and forward by a tenth of the body's size.
-    const glm::vec3 target = reacher.bone_position(hand) + 0.1f * size * glm::normalize(out + 0.5f * glm::length(out) *
-                                                                                          glm::vec3(0, 0, 1));
+    const glm::vec3 target =
+        reacher.bone_position(hand) + 0.1f * size * glm::normalize(out + 0.5f * glm::length(out) * glm::vec3(0, 0, 1));
     const deform::ReachResult result = reacher.reach(hand, target);
     REQUIRE(result.status);
     REQUIRE(reacher.reach_chain().front() == limb.chain.front());
@@ -340,11 +374,17 @@ TEST_CASE("the rigged characters of assimp-testmodels: hands and feet, reaches t
   const std::string dir = "/usr/share/assimp/models/";
   const Case cases[] = {
       // mrfixit skins its hands to IK goals under the spine (HandGoal.L): the arm still ends at Hand.L.
-      {"IQM/mrfixit.iqm", false, {"Hand.L", "Hand.R", "UpperFoot.L", "UpperFoot.R"},
+      {"IQM/mrfixit.iqm",
+       false,
+       {"Hand.L", "Hand.R", "UpperFoot.L", "UpperFoot.R"},
        {"UpperArm.L", "UpperArm.R", "Thigh.L", "Thigh.R"}},
-      {"X/BCN_Epileptic.X", false, {"B_Hand_Left", "B_Hand_Right", "B_Ankle_Left", "B_Ankle_Right"},
+      {"X/BCN_Epileptic.X",
+       false,
+       {"B_Hand_Left", "B_Hand_Right", "B_Ankle_Left", "B_Ankle_Right"},
        {"B_Clavicle_Left", "B_Clavicle_Right", "B_Hip_Left", "B_Hip_Right"}},
-      {"X/Testwuson.X", true, {"ForeLeg_L_03", "ForeLeg_R_03", "HindLeg_L_03", "HindLeg_R_03", "Neck", "Tail06"},
+      {"X/Testwuson.X",
+       true,
+       {"ForeLeg_L_03", "ForeLeg_R_03", "HindLeg_L_03", "HindLeg_R_03", "Neck", "Tail06"},
        {"ForeLeg_L_01", "ForeLeg_R_01", "HindLeg_L_01", "HindLeg_R_01", "Spine_Front04", "Tail01"}},
   };
   for (const Case& c : cases) {

@@ -1,5 +1,6 @@
 // The per-frame path allocates nothing: 1,000 frames of pose, reach, update and normals (transported, then
-// recomputed) on the built-in character and on an imported one, with a global operator new that counts (this executable's own, so no other test sees it).
+// recomputed) on the built-in character and on an imported one, with a global operator new that counts (this
+// executable's own, so no other test sees it).
 #include <doctest/doctest.h>
 
 #include <atomic>
@@ -32,8 +33,8 @@ constexpr float dt = 1.0f / 60.0f;
 // What a frame loop saw, counted without allocating (doctest's assertions stay out of the loop).
 struct Tally {
   long allocations = 0;
-  int refused = 0;           // calls that returned a failure Status
-  const char* reason = "";   // the first one's reason
+  int refused = 0;          // calls that returned a failure Status
+  const char* reason = "";  // the first one's reason
   int reaches = 0;
   float largest_stretch = 0.0f;
   float normals_checksum = 0.0f;
@@ -66,8 +67,9 @@ TEST_CASE("the counting operator new sees the library's allocations") {
   CHECK(c.positions().size() > 1000);
 }
 
-TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach (pole, swing-twist, two-bone), release, "
-          "update, normals") {
+TEST_CASE(
+    "1,000 frames of the built-in character allocate nothing: pose, reach (pole, swing-twist, two-bone), release, "
+    "update, normals") {
   // Held in a vector, moved there after construction: a move keeps the storage the frame relies on.
   std::vector<Character> characters;
   characters.push_back(deform::make_builtin_character());
@@ -102,7 +104,7 @@ TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach 
     if (reaching) {
       const int phase = (frame - 100) / 60;
       const std::int32_t effector = phase == 2 ? hand_r : phase == 4 ? foot_l : hand_l;
-      const glm::vec3 target = effector == hand_l ? shoulder + glm::vec3(0.9f + 0.1f * float(phase), 0.2f, 0.3f)
+      const glm::vec3 target = effector == hand_l   ? shoulder + glm::vec3(0.9f + 0.1f * float(phase), 0.2f, 0.3f)
                                : effector == hand_r ? glm::vec3(-0.4f, 1.3f, 0.4f)
                                                     : glm::vec3(0.2f, 0.3f, 0.3f);
       // Phases 1 and 3 reach with a pole, 3 with swing-twist limits too (the chain is rebuilt with them), 5 with the
@@ -127,8 +129,9 @@ TEST_CASE("1,000 frames of the built-in character allocate nothing: pose, reach 
   CHECK(std::abs(c.stretch()) < 0.05f * tally.largest_stretch);  // 500 frames after the release: settled back
 }
 
-TEST_CASE("1,000 frames of secondary motion allocate nothing: a clip with its lead, spring chains, inertial lattices, "
-          "reach") {
+TEST_CASE(
+    "1,000 frames of secondary motion allocate nothing: a clip with its lead, spring chains, inertial lattices, "
+    "reach") {
   const deform::Model model = deform::builtin_character();
   deform::Rig rig = deform::builtin_rig(model);
   for (deform::LatticeSpec& lattice : rig.lattices) lattice.motion = {1.0f, glm::vec3(0.0f, -9.81f, 0.0f), 1.0f};
@@ -173,8 +176,9 @@ TEST_CASE("1,000 frames of secondary motion allocate nothing: a clip with its le
   check(tally);
 }
 
-TEST_CASE("1,000 frames of a morphed character allocate nothing: weights from a clip, by name and index, reach, "
-          "update, normals (transported and recomputed)") {
+TEST_CASE(
+    "1,000 frames of a morphed character allocate nothing: weights from a clip, by name and index, reach, "
+    "update, normals (transported and recomputed)") {
   deform::Model model = deform::builtin_character();
   // Two targets: one over every point (with normal deltas), one sparse over every third point.
   for (int k = 0; k < 2; ++k) {

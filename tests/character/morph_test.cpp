@@ -308,16 +308,17 @@ std::string morph_skin_gltf() {
   std::vector<std::uint16_t> indices;
   for (std::uint16_t r = 0; r < 4; ++r) {
     const std::uint16_t a = std::uint16_t(2 * r);
-    indices.insert(indices.end(), {a, std::uint16_t(a + 1), std::uint16_t(a + 3), a, std::uint16_t(a + 3),
-                                   std::uint16_t(a + 2)});
+    indices.insert(indices.end(),
+                   {a, std::uint16_t(a + 1), std::uint16_t(a + 3), a, std::uint16_t(a + 3), std::uint16_t(a + 2)});
   }
   const int index = doc.accessor(indices, "SCALAR", 5123);
-  const int ibm = doc.accessor(std::vector<float>{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1,
+  const int ibm = doc.accessor(std::vector<float>{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0,  0, 1,
                                                   1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, -1, 0, 1},
                                "MAT4", 5126);
   const int times = doc.accessor(std::vector<float>{0.0f, 0.6f, 1.0f}, "SCALAR", 5126, R"(, "min": [0], "max": [1])");
   const float s35 = std::sin(0.5f * 35.0f * 3.14159265f / 180.0f), c35 = std::cos(0.5f * 35.0f * 3.14159265f / 180.0f);
-  const float s20 = std::sin(-0.5f * 20.0f * 3.14159265f / 180.0f), c20 = std::cos(-0.5f * 20.0f * 3.14159265f / 180.0f);
+  const float s20 = std::sin(-0.5f * 20.0f * 3.14159265f / 180.0f),
+              c20 = std::cos(-0.5f * 20.0f * 3.14159265f / 180.0f);
   const int rotation = doc.accessor(std::vector<float>{0, 0, 0, 1, 0, 0, s35, c35, 0, 0, s20, c20}, "VEC4", 5126);
   const int morph_weights = doc.accessor(std::vector<float>{0.0f, 0.0f, 1.0f, 0.5f, 0.2f, 1.0f}, "SCALAR", 5126);
   const auto n = [](int i) { return std::to_string(i); };
@@ -326,12 +327,17 @@ std::string morph_skin_gltf() {
       R"({"name": "hips", "children": [1]}, {"name": "spine", "translation": [0, 1, 0]},)"
       R"({"name": "body", "mesh": 0, "skin": 0}],)"
       R"("meshes": [{"name": "bar", "weights": [0.25, 0], "extras": {"targetNames": ["bulge", "lean"]},)"
-      R"( "primitives": [{"attributes": {"POSITION": )" + n(position) + R"(, "JOINTS_0": )" + n(joint) +
-      R"(, "WEIGHTS_0": )" + n(weight) + R"(}, "indices": )" + n(index) + R"(, "targets": [{"POSITION": )" +
-      n(bulge_target) + R"(}, {"POSITION": )" + n(lean_target) + R"(}]}]}],)"
-      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" + n(ibm) + R"(}],)"
-      R"("animations": [{"name": "move", "samplers": [{"input": )" + n(times) + R"(, "output": )" + n(rotation) +
-      R"(}, {"input": )" + n(times) + R"(, "output": )" + n(morph_weights) + R"(}], "channels": [)"
+      R"( "primitives": [{"attributes": {"POSITION": )" +
+      n(position) + R"(, "JOINTS_0": )" + n(joint) + R"(, "WEIGHTS_0": )" + n(weight) + R"(}, "indices": )" + n(index) +
+      R"(, "targets": [{"POSITION": )" + n(bulge_target) + R"(}, {"POSITION": )" + n(lean_target) +
+      R"(}]}]}],)"
+      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" +
+      n(ibm) +
+      R"(}],)"
+      R"("animations": [{"name": "move", "samplers": [{"input": )" +
+      n(times) + R"(, "output": )" + n(rotation) + R"(}, {"input": )" + n(times) + R"(, "output": )" +
+      n(morph_weights) +
+      R"(}], "channels": [)"
       R"({"sampler": 0, "target": {"node": 1, "path": "rotation"}},)"
       R"({"sampler": 1, "target": {"node": 2, "path": "weights"}}]}])";
   return doc.json(body);
@@ -341,9 +347,8 @@ std::string morph_skin_gltf() {
 
 TEST_CASE("a glTF morph + skin file through the Character gives what `deform skin --clip` gives") {
   // A folder of this run's own (several builds may run the suite at once on one machine).
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() /
-      ("deform_character_morph_test_" + std::to_string(std::random_device{}()));
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("deform_character_morph_test_" + std::to_string(std::random_device{}()));
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "morph_skin.gltf").string();
   std::ofstream(path, std::ios::binary) << morph_skin_gltf();

@@ -27,8 +27,8 @@ struct AngleStats {
     for (std::size_t v = 0; v < fast.size(); ++v) {
       if (glm::dot(exact[v], exact[v]) < 0.5f) continue;
       if (!skip.empty() && skip[v]) continue;
-      const double c = std::clamp(double(glm::dot(fast[v], exact[v])) /
-                                      std::sqrt(double(glm::dot(fast[v], fast[v])) * double(glm::dot(exact[v], exact[v]))),
+      const double c = std::clamp(double(glm::dot(fast[v], exact[v])) / std::sqrt(double(glm::dot(fast[v], fast[v])) *
+                                                                                  double(glm::dot(exact[v], exact[v]))),
                                   -1.0, 1.0);
       const double degrees = std::acos(c) * 180.0 / 3.14159265358979323846;
       sum += degrees;
@@ -194,10 +194,8 @@ TEST_CASE("instances share the bind data and deform like a character of their ow
     for (int k = 0; k < 4; ++k)
       moved_by_ponytail |= m.weights.weights[p][k] > 0.0f && std::int32_t(m.weights.bones[p][k]) >= ponytail;
     const float d = glm::length(crowd[1].positions()[p] - m.mesh.positions[p]);
-    if (moved_by_ponytail)
-      settled = std::max(settled, d);
-    else
-      REQUIRE(d < 1e-5f);
+    if (moved_by_ponytail) settled = std::max(settled, d);
+    else REQUIRE(d < 1e-5f);
   }
   CHECK(settled > 0.0f);
   CHECK(settled < 0.08f);

@@ -42,8 +42,10 @@ struct Walk {
   deform::Animation clip;
   deform::Pose pose, later;
   explicit Walk(const deform::Rig& rig)
-      : character(deform::builtin_character(), rig), clip(deform::builtin_walk(character.model())),
-        pose(character.skeleton().bind_pose()), later(pose) {}
+      : character(deform::builtin_character(), rig),
+        clip(deform::builtin_walk(character.model())),
+        pose(character.skeleton().bind_pose()),
+        later(pose) {}
   void sample(float t, deform::Pose& into) {
     into = character.skeleton().bind_pose();
     deform::SamplingJob job;
@@ -78,7 +80,7 @@ std::vector<glm::vec3> walk_points(const deform::Rig& rig, double hz, bool lead,
     if (n == 0 || !motion_study::at_checkpoint(times[n])) continue;
     out.push_back(walk.character.bone_position(hand));
     out.push_back(walk.character.springs().chain_count() > 0 ? walk.character.springs().points(0).back()
-                                                            : glm::vec3(0.0f));
+                                                             : glm::vec3(0.0f));
   }
   return out;
 }
@@ -105,8 +107,8 @@ TEST_CASE("the jiggle is real: the walking hand leaves the rigid walk's path, an
   // A reached pose while walking: the reach still arrives (the reached joints ride with the body).
   Walk walk(jiggling_rig(model));
   walk.frame(0.0, 0.0f, true);
-  const glm::vec3 target = walk.character.bone_position(walk.character.skeleton().find("clavicle_l")) +
-                           glm::vec3(0.9f, 0.1f, 0.3f);
+  const glm::vec3 target =
+      walk.character.bone_position(walk.character.skeleton().find("clavicle_l")) + glm::vec3(0.9f, 0.1f, 0.3f);
   float distance = 0.0f;
   for (int n = 1; n <= 180; ++n) {
     walk.sample(float(n) / 60.0f, walk.pose);
@@ -180,8 +182,8 @@ TEST_CASE("the built-in ponytail swings behind the walking head, stays out of th
   }
   MESSAGE("ponytail swing " << swing << " m; nearest chest " << nearest_chest << ", neck " << nearest_neck << ", head "
                             << nearest_head);
-  CHECK(swing > 0.01f);   // centimetres off the rigidly carried ponytail
-  CHECK(swing < 0.15f);   // ... a swing, not a flail
+  CHECK(swing > 0.01f);                           // centimetres off the rigidly carried ponytail
+  CHECK(swing < 0.15f);                           // ... a swing, not a flail
   CHECK(nearest_chest >= 0.11f + 0.02f - 1e-3f);  // the capsules' radii plus the chain's
   CHECK(nearest_neck >= 0.055f + 0.02f - 1e-3f);
   CHECK(nearest_head >= 0.085f + 0.02f - 0.01f);  // the head's capsule, its axis estimated from neck → head
@@ -276,8 +278,8 @@ TEST_CASE("flesh on imported characters: default_rig at the tuned inertia keeps 
     const auto clip = std::find_if(imported.clips.begin(), imported.clips.end(),
                                    [&](const deform::Animation& a) { return a.name == clip_name; });
     REQUIRE(clip != imported.clips.end());
-    const motion_study::FleshMeasure m = motion_study::measure_flesh(
-        imported.model, *clip, rig, 60.0, motion_study::measured_seconds(*clip), 1.0f);
+    const motion_study::FleshMeasure m =
+        motion_study::measure_flesh(imported.model, *clip, rig, 60.0, motion_study::measured_seconds(*clip), 1.0f);
     INFO("limb " << m.limb_percent << "% (" << m.worst_limb << "), volume " << m.volume_percent << "% ("
                  << m.worst_lattice << "), jiggle " << m.jiggle_percent() << "% of the height");
     CHECK(m.limbs.size() == 4);  // two arms and two legs, or four legs

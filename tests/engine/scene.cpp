@@ -29,10 +29,10 @@
 
 namespace {
 
-constexpr int rate = 60;              // frames per second
-constexpr int release_frame = 60;     // released after 1 s of reaching
-constexpr int walk_frame = 150;       // walks from 2.5 s (1.5 s after the release: settled)
-constexpr int last_frame = 240;       // 1.5 s of walking
+constexpr int rate = 60;                      // frames per second
+constexpr int release_frame = 60;             // released after 1 s of reaching
+constexpr int walk_frame = 150;               // walks from 2.5 s (1.5 s after the release: settled)
+constexpr int last_frame = 240;               // 1.5 s of walking
 const glm::vec3 far_point{1.6f, 1.5f, 0.3f};  // beyond the left arm's reach from the bind pose
 // Stretching (the overshoot), held, springing back, settled, walking (the first steps, then in stride).
 constexpr int kept[] = {15, 60, 70, 90, 150, 165, 200, 240};
@@ -89,9 +89,11 @@ std::string run() {
   if (!(reach.stretch > 0.1f)) throw SceneError("the far point asks for no stretch: it is not far");
   check(hero.update(0.0f), "the first frame");
 
-  std::string out = "# libdeform engine scene: the built-in character reaching for (1.6, 1.5, 0.3), released at "
-                    "frame " + std::to_string(release_frame) + ", walking from frame " + std::to_string(walk_frame) +
-                    ", " + std::to_string(rate) + " frames per second\n";
+  std::string out =
+      "# libdeform engine scene: the built-in character reaching for (1.6, 1.5, 0.3), released at "
+      "frame " +
+      std::to_string(release_frame) + ", walking from frame " + std::to_string(walk_frame) + ", " +
+      std::to_string(rate) + " frames per second\n";
   // How far the hand is from the point: held (the stretch covers what IK left), and settled after the release
   // (back to what IK alone reached: reach.residual).
   float held_gap = 0.0f, settled_gap = 0.0f;
@@ -118,10 +120,11 @@ std::string run() {
   }
   // The scene as described: the stretched arm holds the hand at the point (within a tenth of what IK left), and
   // released, the arm springs back to its length: the hand where IK alone put it (within 2% of that distance).
-  std::printf("reach: IK left %.4f m, stretch asked %.4f m; the hand %.4f m from the point at frame %d, %.4f m at "
-              "frame %d; %zu frames kept\n",
-              double(reach.residual), double(reach.stretch), double(held_gap), release_frame, double(settled_gap),
-              walk_frame - 1, std::size(kept));
+  std::printf(
+      "reach: IK left %.4f m, stretch asked %.4f m; the hand %.4f m from the point at frame %d, %.4f m at "
+      "frame %d; %zu frames kept\n",
+      double(reach.residual), double(reach.stretch), double(held_gap), release_frame, double(settled_gap),
+      walk_frame - 1, std::size(kept));
   if (!(held_gap < 0.1f * reach.residual)) throw SceneError("the stretched arm does not hold the hand at the point");
   if (!(std::abs(settled_gap - reach.residual) < 0.02f * reach.residual))
     throw SceneError("released, the arm has not sprung back to its length");

@@ -86,9 +86,10 @@ TEST_CASE("counts are those of the thesis' test character, give or take") {
 TEST_CASE("skeleton: names, a valid tree, bones along their local +Y") {
   const deform::Skeleton& s = character().skeleton;
   CHECK(s.bone(0).name == "hips");
-  for (const char* name : {"spine", "chest", "neck", "head", "clavicle_l", "upperarm_l", "forearm_l", "hand_l",
-                           "fingers1_l", "fingers2_l", "thumb1_l", "thumb2_l", "thigh_l", "shin_l", "foot_l", "toe_l",
-                           "clavicle_r", "upperarm_r", "forearm_r", "hand_r", "thigh_r", "shin_r", "foot_r", "toe_r"})
+  for (const char* name :
+       {"spine",      "chest",      "neck",      "head",     "clavicle_l", "upperarm_l", "forearm_l", "hand_l",
+        "fingers1_l", "fingers2_l", "thumb1_l",  "thumb2_l", "thigh_l",    "shin_l",     "foot_l",    "toe_l",
+        "clavicle_r", "upperarm_r", "forearm_r", "hand_r",   "thigh_r",    "shin_r",     "foot_r",    "toe_r"})
     CHECK(s.find(name) >= 0);
   // The ponytail's bones come after the body's 29, so the body's ids stay those of the 29-bone character.
   REQUIRE(s.bone_count() == 33);
@@ -104,7 +105,7 @@ TEST_CASE("skeleton: names, a valid tree, bones along their local +Y") {
     if (bone.children.empty()) continue;
     const glm::vec3 t = s.bone(bone.children.front()).bind_translation;
     INFO(bone.name);
-    if (b == 0) continue;  // the root's +Y is forward (documented)
+    if (b == 0) continue;       // the root's +Y is forward (documented)
     if (bone.name == "head") {  // the ponytail branches off the back of the skull (documented): 16 cm up, 8.5 cm back
       CHECK(s.bone(bone.children.front()).name == "ponytail1");
       CHECK(std::abs(t.x) < 1e-6f);
@@ -189,7 +190,7 @@ TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1]
 
   // Fourteen parts (groups, atlas cells) of one surface.
   REQUIRE(mesh.submeshes.size() == 14);
-  const char* names[] = {"torso", "neck", "head", "arm_l", "arm_r", "hand_l", "hand_r",
+  const char* names[] = {"torso",   "neck",    "head",  "arm_l", "arm_r",  "hand_l", "hand_r",
                          "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
   for (std::size_t i = 0; i < 14; ++i) CHECK(mesh.submeshes[i].group == names[i]);
   // Every edge of the body is used exactly twice, once in each direction: closed and consistently oriented; the
@@ -210,7 +211,8 @@ TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1]
       component[find(p[k])] = find(p[(k + 1) % 3]);
     }
     volume += glm::dot(glm::dvec3(mesh.positions[p[0]]),
-                       glm::cross(glm::dvec3(mesh.positions[p[1]]), glm::dvec3(mesh.positions[p[2]]))) / 6.0;
+                       glm::cross(glm::dvec3(mesh.positions[p[1]]), glm::dvec3(mesh.positions[p[2]]))) /
+              6.0;
   }
   bool closed = true;
   for (const auto& [edge, count] : edges)
@@ -223,7 +225,8 @@ TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1]
   CHECK(pieces == 1);
   // Euler characteristic 2: a sphere's topology (no handles, no pinches).
   CHECK(static_cast<long>(mesh.point_count()) - static_cast<long>(edges.size() / 2) +
-            static_cast<long>(mesh.triangle_count()) == 2);
+            static_cast<long>(mesh.triangle_count()) ==
+        2);
 
   REQUIRE(mesh.vertex_uvs.size() == mesh.vertex_count());
   REQUIRE(mesh.vertex_normals.size() == mesh.vertex_count());
@@ -265,8 +268,10 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
       if (m.weights.weights[i][k] == 0.0f) continue;
       const deform::BoneSegment& seg = segments[m.weights.bones[i][k]];
       const glm::vec3 axis = seg.tail - seg.head;
-      const float t = glm::dot(axis, axis) > 0 ? std::clamp(glm::dot(p - seg.head, axis) / glm::dot(axis, axis), 0.f, 1.f) : 0.f;
-      INFO("point " << i << " (" << p.x << ", " << p.y << ", " << p.z << "), bone " << s.bone(m.weights.bones[i][k]).name);
+      const float t =
+          glm::dot(axis, axis) > 0 ? std::clamp(glm::dot(p - seg.head, axis) / glm::dot(axis, axis), 0.f, 1.f) : 0.f;
+      INFO("point " << i << " (" << p.x << ", " << p.y << ", " << p.z << "), bone "
+                    << s.bone(m.weights.bones[i][k]).name);
       REQUIRE(glm::length(p - (seg.head + t * axis)) < 0.35f);
     }
     for (const char* side : {"_l", "_r"}) {
@@ -326,7 +331,8 @@ TEST_CASE("the texture: painted skin, clothes and a face, without grid lines") {
   auto texel = [&](int part, float u, float v) {
     const float cell = 128.0f, margin = 0.04f, inner = 1.0f - 2.0f * margin;
     const auto column = static_cast<std::size_t>(static_cast<float>(part % 4) * cell + cell * (margin + inner * u));
-    const auto from_bottom = static_cast<std::size_t>(static_cast<float>(part / 4) * cell + cell * (margin + inner * v));
+    const auto from_bottom =
+        static_cast<std::size_t>(static_cast<float>(part / 4) * cell + cell * (margin + inner * v));
     const std::size_t i = ((511u - from_bottom) * 512u + column) * 3u;
     return glm::ivec3(t[i], t[i + 1], t[i + 2]);
   };
@@ -348,7 +354,8 @@ TEST_CASE("the texture: painted skin, clothes and a face, without grid lines") {
     for (std::size_t column = 0; column + 1 < 512; ++column) {
       if ((column + 1) % 128 == 0) continue;  // the border between two cells
       for (std::size_t k = 0; k < 3; ++k)
-        steepest = std::max(steepest, std::abs(int(t[(row * 512 + column) * 3 + k]) - int(t[(row * 512 + column + 1) * 3 + k])));
+        steepest = std::max(steepest,
+                            std::abs(int(t[(row * 512 + column) * 3 + k]) - int(t[(row * 512 + column + 1) * 3 + k])));
     }
   CHECK(steepest < 120);  // 89 here (the eyes); a checker's grid line steps by 150 or more
   CHECK_THROWS_AS(deform::builtin_texture(100), deform::Error);
@@ -384,7 +391,8 @@ TEST_CASE("samples/data/builtin.* hold exactly the character the library builds"
   const deform::Skeleton sk = deform::read_sk(data_path("builtin.sk"));
   CHECK(std::equal(sk.bones().begin(), sk.bones().end(), m.skeleton.bones().begin(), m.skeleton.bones().end()));
 
-  const deform::SkinWeights skw = deform::read_skw(data_path("builtin.skw"), m.mesh.point_count(), m.skeleton.bone_count());
+  const deform::SkinWeights skw =
+      deform::read_skw(data_path("builtin.skw"), m.mesh.point_count(), m.skeleton.bone_count());
   REQUIRE(skw.size() == m.weights.size());
   for (std::size_t i = 0; i < skw.size(); ++i) {
     REQUIRE(skw.bones[i] == m.weights.bones[i]);
@@ -490,7 +498,8 @@ TEST_CASE("clips: idle, walk, run and wave, smooth loops within the limits") {
         if (glm::dot(before, q) < 0.0f) before = -before;
         if (glm::dot(after, q) < 0.0f) after = -after;
         const glm::quat in = (q - before) / h, out = (after - q) / h;
-        largest_jump = std::max(largest_jump, glm::length(glm::vec4(out.x - in.x, out.y - in.y, out.z - in.z, out.w - in.w)));
+        largest_jump =
+            std::max(largest_jump, glm::length(glm::vec4(out.x - in.x, out.y - in.y, out.z - in.z, out.w - in.w)));
         largest_speed = std::max(largest_speed, glm::length(glm::vec4(out.x, out.y, out.z, out.w)));
       }
     }
@@ -532,6 +541,7 @@ TEST_CASE("builtin_full_rig: builtin_rig's arm lattices, then the right arm and 
   // id, so not exactly as many).
   for (const std::size_t l : {0, 1, 2, 6, 7, 8}) {
     INFO(bones[l]);
-    CHECK(double(c.deformers().bound_count(l + 3)) == doctest::Approx(double(c.deformers().bound_count(l))).epsilon(0.05));
+    CHECK(double(c.deformers().bound_count(l + 3)) ==
+          doctest::Approx(double(c.deformers().bound_count(l))).epsilon(0.05));
   }
 }

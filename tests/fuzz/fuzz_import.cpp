@@ -35,9 +35,13 @@ const char* extension_for(std::string_view bytes) {
 // One scratch folder per fuzzing process, removed at exit.
 const std::filesystem::path& scratch() {
   static const std::filesystem::path folder = [] {
-    std::filesystem::path p = std::filesystem::temp_directory_path() / ("deform_fuzz_import_" + std::to_string(::getpid()));
+    std::filesystem::path p =
+        std::filesystem::temp_directory_path() / ("deform_fuzz_import_" + std::to_string(::getpid()));
     std::filesystem::create_directories(p);
-    std::atexit([] { std::error_code ignored; std::filesystem::remove_all(scratch(), ignored); });
+    std::atexit([] {
+      std::error_code ignored;
+      std::filesystem::remove_all(scratch(), ignored);
+    });
     return p;
   }();
   return folder;

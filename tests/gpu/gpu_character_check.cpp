@@ -1,10 +1,11 @@
 // Checks deform::GpuLatticeFields (deform/gpu/lattice.hpp, the viewer's GPU lattices) against the CPU: the built-in
 // character reaches for an out-of-reach target and stretches; one deform::Character deforms completely on the CPU, a
 // twin with lattice_fields = false is skinned on the CPU, uploaded into an interleaved vertex buffer as an application
-// would, and gets its lattice fields added there by the GPU. At several frames (stretching, overshooting, springing back after a release), for lattice degrees 3 and
-// 1, and 5 with neighbour springs (which make the fields non-affine), the buffer's positions must match the CPU's to
-// 1e-4 of the model's size, its UVs and normals must be what was uploaded to the bit, and the fields must really move
-// the arm (else the check proves nothing). Exits 1 on a failure, 0 with "skipped" when the context lacks OpenGL 4.3.
+// would, and gets its lattice fields added there by the GPU. At several frames (stretching, overshooting, springing
+// back after a release), for lattice degrees 3 and 1, and 5 with neighbour springs (which make the fields non-affine),
+// the buffer's positions must match the CPU's to 1e-4 of the model's size, its UVs and normals must be what was
+// uploaded to the bit, and the fields must really move the arm (else the check proves nothing). Exits 1 on a failure, 0
+// with "skipped" when the context lacks OpenGL 4.3.
 #include "hidden_context.hpp"  // epoxy first
 
 #include <algorithm>
@@ -39,7 +40,7 @@ class VertexBuffer {
     std::vector<float> data(positions.size() * floats_per_vertex);
     for (std::size_t r = 0; r < positions.size(); ++r) {
       const glm::vec2 uv = mesh_.vertex_uvs.empty() ? glm::vec2(0.0f) : mesh_.vertex_uvs[r];
-      const float vertex[floats_per_vertex] = {uv.x,         uv.y,         normals[r].x, normals[r].y,
+      const float vertex[floats_per_vertex] = {uv.x,         uv.y,           normals[r].x,   normals[r].y,
                                                normals[r].z, positions[r].x, positions[r].y, positions[r].z};
       std::memcpy(data.data() + r * floats_per_vertex, vertex, sizeof vertex);
     }
@@ -119,10 +120,11 @@ bool check_degree(int degree, bool springs) {
     }
     largest_field = std::max(largest_field, field);
     const bool pass = worst <= tolerance * size && changed == 0;
-    std::printf("%s degree %d%s frame %2d: stretch %.4f m, GPU vs CPU %.2e of the size (field up to %.2e), "
-                "%zu UVs/normals changed\n",
-                pass ? "ok  " : "FAIL", degree, springs ? " + springs" : "", frame, double(cpu.stretch()),
-                double(worst / size), double(field / size), changed);
+    std::printf(
+        "%s degree %d%s frame %2d: stretch %.4f m, GPU vs CPU %.2e of the size (field up to %.2e), "
+        "%zu UVs/normals changed\n",
+        pass ? "ok  " : "FAIL", degree, springs ? " + springs" : "", frame, double(cpu.stretch()), double(worst / size),
+        double(field / size), changed);
     ok = ok && pass;
   }
   // The fields carry the stretch: a GPU path that added nothing would fail here.

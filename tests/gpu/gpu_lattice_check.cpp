@@ -52,7 +52,8 @@ glm::vec3 random_unit(std::mt19937& rng) {
 deform::LatticeFrame random_frame(std::mt19937& rng) {
   std::uniform_real_distribution<float> origin(-5.0f, 5.0f), scale(0.5f, 2.0f), shear(-0.2f, 0.2f);
   const glm::vec3 axis = random_unit(rng);
-  const glm::mat3 rotation = glm::mat3_cast(glm::angleAxis(std::uniform_real_distribution<float>(0.0f, 6.28f)(rng), axis));
+  const glm::mat3 rotation =
+      glm::mat3_cast(glm::angleAxis(std::uniform_real_distribution<float>(0.0f, 6.28f)(rng), axis));
   glm::mat3 shape(1.0f);
   shape[1][0] = shear(rng), shape[2][0] = shear(rng), shape[2][1] = shear(rng);
   const glm::mat3 m = rotation * shape;
@@ -122,8 +123,8 @@ bool check(const Case& c) {
     return false;
   }
 
-  // The draw path: an interleaved buffer (GpuVertexLayout's default: u v, nx ny nz, x y z) filled with a pattern that must survive outside the
-  // written slots.
+  // The draw path: an interleaved buffer (GpuVertexLayout's default: u v, nx ny nz, x y z) filled with a pattern that
+  // must survive outside the written slots.
   constexpr int stride = 8;
   std::vector<float> pattern(positions.size() * stride);
   for (std::size_t i = 0; i < pattern.size(); ++i) pattern[i] = 1000.0f + 0.5f * float(i);
@@ -157,8 +158,8 @@ bool check(const Case& c) {
     if (c.collapse != Case::none) kept_error = std::max(kept_error, glm::length(cpu_normals[p] - normals[p]));
     position_error = std::max(position_error, glm::length(gpu_positions[p] - cpu_positions[p]) / size);
     normal_error = std::max(normal_error, glm::length(gpu_normals[p] - cpu_normals[p]));
-    into_error = std::max({into_error, glm::length(into_position - cpu_positions[p]) / size,
-                           glm::length(into_normal - cpu_normals[p])});
+    into_error = std::max(
+        {into_error, glm::length(into_position - cpu_positions[p]) / size, glm::length(into_normal - cpu_normals[p])});
     if (!std::isfinite(gpu_positions[p].x + gpu_positions[p].y + gpu_positions[p].z)) position_error = INFINITY;
   }
   const bool ok = position_error <= tolerance && normal_error <= tolerance && into_error <= tolerance &&
@@ -166,11 +167,11 @@ bool check(const Case& c) {
   const char* collapse = c.collapse == Case::to_point    ? ", collapsed to a point"
                          : c.collapse == Case::onto_line ? ", collapsed onto a line"
                                                          : "";
-  std::printf("%s degree (%d,%d,%d) seed %u%s: %zu bound, %zu outside; max |GPU-CPU| position %.3g (of size), "
-              "normal %.3g, vertex buffer %.3g; changed outside %zu; normals not kept %.3g\n",
-              ok ? "ok  " : "FAIL", c.degree.x, c.degree.y, c.degree.z, c.seed, collapse, binding.vertex_count,
-              outside, double(position_error), double(normal_error), double(into_error), changed_outside,
-              double(kept_error));
+  std::printf(
+      "%s degree (%d,%d,%d) seed %u%s: %zu bound, %zu outside; max |GPU-CPU| position %.3g (of size), "
+      "normal %.3g, vertex buffer %.3g; changed outside %zu; normals not kept %.3g\n",
+      ok ? "ok  " : "FAIL", c.degree.x, c.degree.y, c.degree.z, c.seed, collapse, binding.vertex_count, outside,
+      double(position_error), double(normal_error), double(into_error), changed_outside, double(kept_error));
   return ok;
 }
 
@@ -183,7 +184,8 @@ bool check_refusals() {
   const deform::BezierLattice bezier(frame, glm::ivec3(2));
   const deform::LatticeBinding bezier_binding = deform::bind_lattice(bezier, points);
   deform::GpuBezierLattice gpu;
-  bool ok = !gpu.create(deform::bind_lattice(bspline, points)) && !gpu.create(bezier_binding, std::span(points).first(1));
+  bool ok =
+      !gpu.create(deform::bind_lattice(bspline, points)) && !gpu.create(bezier_binding, std::span(points).first(1));
   ok = ok && gpu.create(bezier_binding) && !gpu.evaluate(std::span(bezier.control_points()).first(26));
   GLuint buffer = 0;
   glGenBuffers(1, &buffer);
@@ -243,9 +245,10 @@ void bench_one(const char* name, const deform::BezierLattice& lattice, const def
     gpu.read_back(positions, normals_out);
   });
   glDeleteBuffers(1, &buffer);
-  std::printf("%-34s %7zu vertices: CPU kernel (1 thread) %8.3f ms, GPU into vertex buffer %8.3f ms, "
-              "GPU + read back %8.3f ms\n",
-              name, binding.vertex_count, cpu * 1e3, into * 1e3, read * 1e3);
+  std::printf(
+      "%-34s %7zu vertices: CPU kernel (1 thread) %8.3f ms, GPU into vertex buffer %8.3f ms, "
+      "GPU + read back %8.3f ms\n",
+      name, binding.vertex_count, cpu * 1e3, into * 1e3, read * 1e3);
 }
 
 // Per-frame times with normals, tricubic: the ffd_lattice sample's bound render vertices, and 100k points in a box.
@@ -287,9 +290,17 @@ int main(int argc, char** argv) {
     return gpu_test::run_in_context("gpu_lattice_check", timings, false);
   }
   return gpu_test::run_in_context("gpu_lattice_check", [] {
-    const Case cases[] = {{{1, 1, 1}, 1}, {{1, 1, 1}, 2}, {{3, 3, 3}, 3}, {{3, 3, 3}, 4}, {{2, 4, 5}, 5},
-                          {{2, 4, 5}, 6}, {{6, 6, 6}, 7}, {{6, 6, 6}, 8}, {{16, 2, 1}, 9},
-                          {{3, 3, 3}, 10, Case::to_point}, {{6, 6, 6}, 11, Case::onto_line},
+    const Case cases[] = {{{1, 1, 1}, 1},
+                          {{1, 1, 1}, 2},
+                          {{3, 3, 3}, 3},
+                          {{3, 3, 3}, 4},
+                          {{2, 4, 5}, 5},
+                          {{2, 4, 5}, 6},
+                          {{6, 6, 6}, 7},
+                          {{6, 6, 6}, 8},
+                          {{16, 2, 1}, 9},
+                          {{3, 3, 3}, 10, Case::to_point},
+                          {{6, 6, 6}, 11, Case::onto_line},
                           {{16, 2, 1}, 12, Case::onto_line}};
     bool ok = check_refusals();
     for (const Case& c : cases) ok = check(c) && ok;

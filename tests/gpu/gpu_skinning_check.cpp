@@ -186,9 +186,8 @@ glm::dvec3 reference_lbs(const std::vector<glm::mat4>& palette, glm::u16vec4 b, 
   return glm::dvec3(blended * glm::dvec4(glm::dvec3(p), 1.0)) / sum;
 }
 
-glm::dvec3 reference_dqs(const std::vector<deform::DualQuat>& dq, const std::vector<glm::mat3>& scales,
-                         glm::u16vec4 b, glm::vec4 w, glm::vec3 p, glm::vec3 n_in, glm::dvec3& normal,
-                         double& scale2) {
+glm::dvec3 reference_dqs(const std::vector<deform::DualQuat>& dq, const std::vector<glm::mat3>& scales, glm::u16vec4 b,
+                         glm::vec4 w, glm::vec3 p, glm::vec3 n_in, glm::dvec3& normal, double& scale2) {
   const glm::dquat pivot(dq[b[0]].real);
   glm::dquat real(0.0, 0.0, 0.0, 0.0), dual(0.0, 0.0, 0.0, 0.0);
   glm::dmat3 s(0.0);
@@ -288,11 +287,10 @@ bool check_random(unsigned seed) {
             worst.position = std::max(worst.position, double(glm::length(p - cpu_p[i])) / size);
             glm::dvec3 ref_normal;
             double scale2 = 0.0;
-            const glm::dvec3 ref =
-                dqs ? reference_dqs(dq, scales, skin.bones[i], skin.weights[i], skin.positions[i], skin.normals[i],
-                                    ref_normal, scale2)
-                    : reference_lbs(palette, skin.bones[i], skin.weights[i], skin.positions[i], skin.normals[i],
-                                    ref_normal, scale2);
+            const glm::dvec3 ref = dqs ? reference_dqs(dq, scales, skin.bones[i], skin.weights[i], skin.positions[i],
+                                                       skin.normals[i], ref_normal, scale2)
+                                       : reference_lbs(palette, skin.bones[i], skin.weights[i], skin.positions[i],
+                                                       skin.normals[i], ref_normal, scale2);
             worst.reference = std::max(worst.reference, glm::length(glm::dvec3(p) - ref) / size);
             // Normal directions are compared where the normal map does not nearly collapse: |cof(A)·n| against
             // |A|², or the blended real part's length for DQS. LBS under 180° of twist has such vertices.
@@ -301,17 +299,17 @@ bool check_random(unsigned seed) {
               ++worst.ill_conditioned;
               continue;
             }
-            worst.normal = std::max({worst.normal, angle_between(nn, cpu_n[i]),
-                                     angle_between(nn, glm::vec3(glm::normalize(ref_normal)))});
+            worst.normal = std::max(
+                {worst.normal, angle_between(nn, cpu_n[i]), angle_between(nn, glm::vec3(glm::normalize(ref_normal)))});
           }
           const bool pass = worst.position <= position_tolerance && worst.reference <= position_tolerance &&
                             worst.normal <= normal_tolerance && worst.others_changed == 0;
           const char* kinds[] = {"rigid", "uniform scale", "scale+shear"};
-          std::printf("%s seed %u %s %-13s layout %2d: position vs CPU %.2e, vs double %.2e (of %.2f); normals "
-                      "%.2e rad (%zu ill-conditioned skipped); %zu other floats changed\n",
-                      pass ? "ok  " : "FAIL", seed, dqs ? "DQS" : "LBS", kinds[int(kind)], layout.floats_per_vertex,
-                      worst.position, worst.reference, size, worst.normal, worst.ill_conditioned,
-                      worst.others_changed);
+          std::printf(
+              "%s seed %u %s %-13s layout %2d: position vs CPU %.2e, vs double %.2e (of %.2f); normals "
+              "%.2e rad (%zu ill-conditioned skipped); %zu other floats changed\n",
+              pass ? "ok  " : "FAIL", seed, dqs ? "DQS" : "LBS", kinds[int(kind)], layout.floats_per_vertex,
+              worst.position, worst.reference, size, worst.normal, worst.ill_conditioned, worst.others_changed);
           ok = ok && pass;
         }
       }
@@ -470,14 +468,16 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs, bool l
     }
     largest_field = std::max(largest_field, moved);
     const std::string what = std::string(method == deform::SkinningMethod::dqs ? "DQS" : "LBS") + " degree " +
-                             std::to_string(degree) + (springs ? " + springs" : "") + " frame " + std::to_string(frame) +
-                             " whole deformation" + (lattice_normals ? ", lattice normals" : "");
+                             std::to_string(degree) + (springs ? " + springs" : "") + " frame " +
+                             std::to_string(frame) + " whole deformation" +
+                             (lattice_normals ? ", lattice normals" : "");
     // Positions against the full CPU deformation; normals against its transported ones (turned by the lattices), or
     // without lattice normals, against the skinned surface's.
     const double turned = lattice_normals ? largest_angle(cpu.normals(), skinned.normals()) : -1.0;
     largest_turn = std::max(largest_turn, turned);
     ok = compare(what.c_str(), buffer, mesh, cpu.positions(), lattice_normals ? cpu.normals() : skinned.normals(),
-                 &moved, turned) && ok;
+                 &moved, turned) &&
+         ok;
   }
   if (!(largest_field > 1e-2 * diagonal(cpu.positions())) || (lattice_normals && !(largest_turn > 1e-2))) {
     std::printf("FAIL whole: the lattices moved or turned nothing, the check proves nothing\n");
@@ -645,8 +645,8 @@ bool check_refusals() {
     ok = ok && without.create_additive(h.binding(0), h.bound_weights(0), mesh.vertex_point);
     expect("normals, plain call", with.evaluate_into(h.displacements(0), vertices.name()),
            "an additive lattice with normals also takes its mapped points and to_bind");
-    expect("mapped count", with.evaluate_into(h.displacements(0), std::span(mapped).first(3), glm::mat3(1.0f),
-                                              vertices.name()),
+    expect("mapped count",
+           with.evaluate_into(h.displacements(0), std::span(mapped).first(3), glm::mat3(1.0f), vertices.name()),
            "the mapped point count differs from the binding's");
     expect("no normals", without.evaluate_into(h.displacements(0), mapped, glm::mat3(1.0f), vertices.name()),
            "not an additive lattice with normals");
@@ -748,9 +748,10 @@ void bench_character() {
     fields.apply_into(gpu_pose.deformers(), buffer.name());
     glFinish();
   });
-  std::printf("built-in character, full rig, walk (%zu render vertices): CPU update + normals %.3f ms; CPU posing "
-              "only %.3f ms; posing + GPU skinning and lattices + glFinish %.3f ms\n",
-              model.mesh.vertex_count(), cpu_ms, pose_ms, gpu_ms);
+  std::printf(
+      "built-in character, full rig, walk (%zu render vertices): CPU update + normals %.3f ms; CPU posing "
+      "only %.3f ms; posing + GPU skinning and lattices + glFinish %.3f ms\n",
+      model.mesh.vertex_count(), cpu_ms, pose_ms, gpu_ms);
 }
 
 int bench() {

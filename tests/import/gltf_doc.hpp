@@ -34,8 +34,8 @@ struct Doc {
     const std::size_t offset = data.size();
     data.resize(offset + values.size() * sizeof(T));
     std::memcpy(data.data() + offset, values.data(), values.size() * sizeof(T));
-    views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(offset) +
-                    R"(, "byteLength": )" + std::to_string(values.size() * sizeof(T)) + "}");
+    views.push_back(R"({"buffer": 0, "byteOffset": )" + std::to_string(offset) + R"(, "byteLength": )" +
+                    std::to_string(values.size() * sizeof(T)) + "}");
     const std::size_t width = std::string(type) == "SCALAR" ? 1 : std::string(type) == "MAT4" ? 16 : type[3] - '0';
     accessors.push_back(R"({"bufferView": )" + std::to_string(views.size() - 1) + R"(, "componentType": )" +
                         std::to_string(component) + R"(, "count": )" + std::to_string(values.size() / width) +

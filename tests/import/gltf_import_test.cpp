@@ -56,8 +56,9 @@ Strip strip(Doc& doc, float x0) {
       w.insert(w.end(), {1.0f - float(r) / 2.0f, float(r) / 2.0f, 0.0f, 0.0f});
     }
   const std::vector<std::uint16_t> i = {0, 1, 3, 0, 3, 2, 2, 3, 5, 2, 5, 4};
-  return {doc.accessor(p, "VEC3", 5126, R"(, "min": [)" + std::to_string(x0 - 0.5f) + R"(, 0, 0], "max": [)" +
-                                             std::to_string(x0 + 0.5f) + ", 2, 0]"),
+  return {doc.accessor(p, "VEC3", 5126,
+                       R"(, "min": [)" + std::to_string(x0 - 0.5f) + R"(, 0, 0], "max": [)" +
+                           std::to_string(x0 + 0.5f) + ", 2, 0]"),
           doc.accessor(j, "VEC4", 5123), doc.accessor(w, "VEC4", 5126), doc.accessor(i, "SCALAR", 5123)};
 }
 std::string primitive(const Strip& s) {
@@ -65,9 +66,7 @@ std::string primitive(const Strip& s) {
          std::to_string(s.joints) + R"(, "WEIGHTS_0": )" + std::to_string(s.weights) + R"(}, "indices": )" +
          std::to_string(s.indices) + "}";
 }
-std::vector<float> translation_ibm(float x, float y) {
-  return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -x, -y, 0, 1};
-}
+std::vector<float> translation_ibm(float x, float y) { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -x, -y, 0, 1}; }
 
 }  // namespace
 
@@ -87,11 +86,15 @@ TEST_CASE("two rigs with the same joint names each skin their own mesh with thei
       R"({"name": "Hips", "children": [1]}, {"name": "Spine", "translation": [0, 1, 0]},)"
       R"({"name": "Hips", "translation": [5, 0, 0], "children": [3]}, {"name": "Spine", "translation": [0, 1, 0]},)"
       R"({"name": "a", "mesh": 0, "skin": 0}, {"name": "b", "mesh": 1, "skin": 1}],)"
-      R"("meshes": [{"primitives": [)" + primitive(a) + R"(]}, {"primitives": [)" + primitive(b) + R"(]}],)"
-      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" + std::to_string(ia) +
-      R"(}, {"joints": [2, 3], "inverseBindMatrices": )" + std::to_string(ib) + R"(}],)"
-      R"("animations": [{"name": "wave", "samplers": [{"input": )" + std::to_string(times) +
-      R"(, "output": )" + std::to_string(step) + R"(, "interpolation": "STEP"}],)"
+      R"("meshes": [{"primitives": [)" +
+      primitive(a) + R"(]}, {"primitives": [)" + primitive(b) +
+      R"(]}],)"
+      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" +
+      std::to_string(ia) + R"(}, {"joints": [2, 3], "inverseBindMatrices": )" + std::to_string(ib) +
+      R"(}],)"
+      R"("animations": [{"name": "wave", "samplers": [{"input": )" +
+      std::to_string(times) + R"(, "output": )" + std::to_string(step) +
+      R"(, "interpolation": "STEP"}],)"
       R"("channels": [{"sampler": 0, "target": {"node": 3, "path": "rotation"}}]}])";
   const deform::ImportedModel imported = deform::import_model(write("two_rigs.gltf", doc.json(body)));
   const deform::Skeleton& skeleton = imported.model.skeleton;
@@ -119,7 +122,8 @@ TEST_CASE("two rigs with the same joint names each skin their own mesh with thei
   }
   CHECK(found);
   bool repeated_names_warned = false;
-  for (const std::string& w : imported.warnings) repeated_names_warned |= w.find("share their name") != std::string::npos;
+  for (const std::string& w : imported.warnings)
+    repeated_names_warned |= w.find("share their name") != std::string::npos;
   CHECK(repeated_names_warned);
 }
 
@@ -152,11 +156,12 @@ TEST_CASE("quantised positions, sparse accessors, cubic splines; every influence
   const int sparse_value = doc.accessor(std::vector<float>{0, 2, 0}, "VEC3", 5126);
   const int times = doc.accessor(std::vector<float>{0, 1}, "SCALAR", 5126, R"(, "min": [0], "max": [1])");
   doc.accessors.push_back(R"({"componentType": 5126, "count": 2, "type": "VEC3", "sparse": {"count": 1,)"
-                          R"( "indices": {"bufferView": )" + std::to_string(sparse_index) +
-                          R"(, "componentType": 5123}, "values": {"bufferView": )" + std::to_string(sparse_value) + "}}}");
+                          R"( "indices": {"bufferView": )" +
+                          std::to_string(sparse_index) + R"(, "componentType": 5123}, "values": {"bufferView": )" +
+                          std::to_string(sparse_value) + "}}}");
   const int sparse_output = static_cast<int>(doc.accessors.size() - 1);
   // A cubic spline rotation: (in-tangent, value, out-tangent) per key.
-  const int cubic = doc.accessor(std::vector<float>{0, 0, 0.5f, 0, 0, 0, 0, 1, 0, 0, 0.5f, 0,
+  const int cubic = doc.accessor(std::vector<float>{0, 0, 0.5f, 0, 0, 0, 0,          1,          0, 0, 0.5f, 0,
                                                     0, 0, 0.1f, 0, 0, 0, 0.3826834f, 0.9238795f, 0, 0, 0.1f, 0},
                                  "VEC4", 5126);
   std::vector<float> ibms;
@@ -172,14 +177,18 @@ TEST_CASE("quantised positions, sparse accessors, cubic splines; every influence
       R"({"name": "j2", "translation": [0, 0.1, 0], "children": [3]}, {"name": "j3", "translation": [0, 0.1, 0], "children": [4]},)"
       R"({"name": "j4", "translation": [0, 0.1, 0], "children": [5]}, {"name": "j5", "translation": [0, 0.1, 0]},)"
       R"({"name": "body", "mesh": 0, "skin": 0}],)"
-      R"("meshes": [{"name": "blob", "primitives": [{"attributes": {"POSITION": )" + std::to_string(positions) +
-      R"(, "JOINTS_0": )" + std::to_string(joints0) + R"(, "WEIGHTS_0": )" + std::to_string(weights0) +
-      R"(, "JOINTS_1": )" + std::to_string(joints1) + R"(, "WEIGHTS_1": )" + std::to_string(weights1) +
-      R"(}, "targets": [{"POSITION": )" + std::to_string(target) + R"(}]}]}],)"
-      R"("skins": [{"joints": [0, 1, 2, 3, 4, 5], "inverseBindMatrices": )" + std::to_string(ibm) + R"(}],)"
-      R"("animations": [{"samplers": [{"input": )" + std::to_string(times) + R"(, "output": )" +
-      std::to_string(sparse_output) + R"(}, {"input": )" + std::to_string(times) + R"(, "output": )" +
-      std::to_string(cubic) + R"(, "interpolation": "CUBICSPLINE"}], "channels": [)"
+      R"("meshes": [{"name": "blob", "primitives": [{"attributes": {"POSITION": )" +
+      std::to_string(positions) + R"(, "JOINTS_0": )" + std::to_string(joints0) + R"(, "WEIGHTS_0": )" +
+      std::to_string(weights0) + R"(, "JOINTS_1": )" + std::to_string(joints1) + R"(, "WEIGHTS_1": )" +
+      std::to_string(weights1) + R"(}, "targets": [{"POSITION": )" + std::to_string(target) +
+      R"(}]}]}],)"
+      R"("skins": [{"joints": [0, 1, 2, 3, 4, 5], "inverseBindMatrices": )" +
+      std::to_string(ibm) +
+      R"(}],)"
+      R"("animations": [{"samplers": [{"input": )" +
+      std::to_string(times) + R"(, "output": )" + std::to_string(sparse_output) + R"(}, {"input": )" +
+      std::to_string(times) + R"(, "output": )" + std::to_string(cubic) +
+      R"(, "interpolation": "CUBICSPLINE"}], "channels": [)"
       R"({"sampler": 0, "target": {"node": 0, "path": "translation"}},)"
       R"({"sampler": 1, "target": {"node": 1, "path": "rotation"}}]}])";
   const deform::ImportedModel imported = deform::import_model(write("quantised.gltf", doc.json(body)));
@@ -247,7 +256,8 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
   };
   const std::string buffer36 = R"("buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,)"
                                R"(AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}])";
-  const std::string view = R"("bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 12, "byteLength": 6}],)";
+  const std::string view =
+      R"("bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 12, "byteLength": 6}],)";
   auto doc = [&](const std::string& accessors, const std::string& extra = "") {
     return R"({"asset": {"version": "2.0"}, )" + triangle + ", " + view + R"("accessors": [)" + accessors + "], " +
            buffer36 + extra + "}";
@@ -259,8 +269,8 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
     const std::string plain = R"("indices": 1})";
     morphed.replace(morphed.find(plain), plain.size(), R"("indices": 1, "targets": [{"POSITION": 2}]})");
     return R"({"asset": {"version": "2.0"}, )" + morphed + ", " + view + R"("accessors": [)" + good_positions +
-           R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}, )" + target + "], " +
-           buffer36 + "}";
+           R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}, )" + target + "], " + buffer36 +
+           "}";
   };
   const Case cases[] = {
       {"morph_count.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"})"),
@@ -269,29 +279,34 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
        "accessors[2] (meshes[0].primitives[0].targets[0] POSITION): element type"},
       {"morph_ok.gltf", morph_doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"})"),
        "meshes[0].primitives[0].indices: index 1"},  // a well-formed target: the import goes on to the indices
-      {"past_view.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},)"
-                             R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"past_view.gltf",
+       doc(R"({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},)"
+           R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "accessors[0] (meshes[0].primitives[0] POSITION): 4 elements from byte 0 run past the end of bufferView 0"},
-      {"huge_count.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 4611686018427387904,)"
-                              R"( "type": "VEC3"}, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"huge_count.gltf",
+       doc(R"({"bufferView": 0, "componentType": 5126, "count": 4611686018427387904,)"
+           R"( "type": "VEC3"}, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "run past the end of bufferView 0"},
-      {"bufferless.gltf", doc(R"({"componentType": 5126, "count": 4611686018427387904, "type": "VEC3"},)"
-                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"bufferless.gltf",
+       doc(R"({"componentType": 5126, "count": 4611686018427387904, "type": "VEC3"},)"
+           R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "elements without a bufferView"},
-      {"index.gltf", doc(good_positions + R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"index.gltf",
+       doc(good_positions + R"(, {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "meshes[0].primitives[0].indices: index 1 (16256"},
-      {"no_accessor.gltf", doc(good_positions + R"(, {"bufferView": 7, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"no_accessor.gltf",
+       doc(good_positions + R"(, {"bufferView": 7, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "accessor[1] invalid bufferView"},  // tinygltf's own check
-      {"wrong_type.gltf", doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"},)"
-                              R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
+      {"wrong_type.gltf",
+       doc(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"},)"
+           R"({"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"})"),
        "accessors[0] (meshes[0].primitives[0] POSITION): element type"},
       {"view_outside.gltf",
        R"({"asset": {"version": "2.0"}, )" + triangle +
            R"(, "bufferViews": [{"buffer": 0, "byteOffset": 30, "byteLength": 36}], "accessors": [)" + good_positions +
            "], " + buffer36 + "}",
        "out of bounds"},  // tinygltf's own check
-      {"two_parents.gltf",
-       R"({"asset": {"version": "2.0"}, "nodes": [{"children": [2]}, {"children": [2]}, {}]})",
+      {"two_parents.gltf", R"({"asset": {"version": "2.0"}, "nodes": [{"children": [2]}, {"children": [2]}, {}]})",
        "nodes[1].children: node 2 has more than one parent"},
       {"cycle.gltf", R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"children": [0]}]})",
        "nodes[0].children: node 0 has more than one parent"},
@@ -345,19 +360,27 @@ TEST_CASE("embedded PNG and JPEG textures are kept as their bytes: imported, exp
     p.insert(p.size() - 1, R"(, "material": )" + std::to_string(m));
     primitives += (m ? ", " : "") + p;
   }
-  const std::string body =
-      R"("scene": 0, "scenes": [{"nodes": [0, 2]}], "nodes": [)"
-      R"({"name": "Hips", "children": [1]}, {"name": "Spine", "translation": [0, 1, 0]},)"
-      R"({"name": "skin", "mesh": 0, "skin": 0}], "meshes": [{"primitives": [)" + primitives + R"(]}],)"
-      R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" + std::to_string(ibms) + R"(}],)"
-      R"("materials": [{"name": "a", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
-      R"({"name": "b", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
-      R"({"name": "c", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},)"
-      R"({"name": "d", "pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}}],)"
-      R"("textures": [{"source": 0}, {"source": 1}, {"source": 2}],)"
-      R"("images": [{"bufferView": )" + std::to_string(png_view) + R"(, "mimeType": "image/png"},)"
-      R"({"uri": "data:image/jpeg;base64,)" + gltf_doc::base64(jpeg) + R"("},)"
-      R"({"bufferView": )" + std::to_string(gif_view) + R"(, "mimeType": "image/png"}])";
+  const std::string body = R"("scene": 0, "scenes": [{"nodes": [0, 2]}], "nodes": [)"
+                           R"({"name": "Hips", "children": [1]}, {"name": "Spine", "translation": [0, 1, 0]},)"
+                           R"({"name": "skin", "mesh": 0, "skin": 0}], "meshes": [{"primitives": [)" +
+                           primitives +
+                           R"(]}],)"
+                           R"("skins": [{"joints": [0, 1], "inverseBindMatrices": )" +
+                           std::to_string(ibms) +
+                           R"(}],)"
+                           R"("materials": [{"name": "a", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
+                           R"({"name": "b", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},)"
+                           R"({"name": "c", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},)"
+                           R"({"name": "d", "pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}}],)"
+                           R"("textures": [{"source": 0}, {"source": 1}, {"source": 2}],)"
+                           R"("images": [{"bufferView": )" +
+                           std::to_string(png_view) +
+                           R"(, "mimeType": "image/png"},)"
+                           R"({"uri": "data:image/jpeg;base64,)" +
+                           gltf_doc::base64(jpeg) +
+                           R"("},)"
+                           R"({"bufferView": )" +
+                           std::to_string(gif_view) + R"(, "mimeType": "image/png"}])";
   const std::string path = write("embedded_textures.gltf", doc.json(body));
   for (const bool isolated : {false, true}) {
     CAPTURE(isolated);

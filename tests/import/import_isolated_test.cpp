@@ -107,8 +107,7 @@ TEST_CASE("a 2 KB glTF whose nodes form a DAG of 2^24 paths is refused or stoppe
     out << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [)";
     constexpr int levels = 24;
     for (int i = 0; i < levels; ++i)
-      for (int twin = 0; twin < 2; ++twin)
-        out << R"({"children": [)" << 2 * (i + 1) << "," << 2 * (i + 1) + 1 << "]},";
+      for (int twin = 0; twin < 2; ++twin) out << R"({"children": [)" << 2 * (i + 1) << "," << 2 * (i + 1) + 1 << "]},";
     out << R"({"mesh": 0}, {"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],)"
         << R"("accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",)"
         << R"("min": [0, 0, 0], "max": [1, 1, 0]}], "bufferViews": [{"buffer": 0, "byteLength": 36}],)"

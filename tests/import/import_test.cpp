@@ -162,8 +162,8 @@ struct AssimpReference {
         const glm::dmat4 g = rest.at(bone_node) * to_dmat(bone->mOffsetMatrix);
         double spread = 0.0;
         for (int c = 0; c < 4 && !drawn.empty(); ++c) spread = std::max(spread, glm::length(g[c] - drawn[0][c]));
-        const double reach = std::max({1.0, glm::length(glm::dvec3(g[3])),
-                                       drawn.empty() ? 0.0 : glm::length(glm::dvec3(drawn[0][3]))});
+        const double reach =
+            std::max({1.0, glm::length(glm::dvec3(g[3])), drawn.empty() ? 0.0 : glm::length(glm::dvec3(drawn[0][3]))});
         agree = agree && spread <= 1e-4 * reach;
         drawn.push_back(g);
         for (unsigned w = 0; w < bone->mNumWeights; ++w)
@@ -255,7 +255,7 @@ const Expected rigged_models[] = {
     {"X/Testwuson.X", 37, 3},
     {"X/anim_test.x", 4, 1},
     {"FBX/animation_with_skeleton.fbx", 14, 1},  // one bone weighs only as a fifth or later influence
-    {"FBX/huesitos.fbx", 8, 1},  // 9 skin bones, one of them without any weight
+    {"FBX/huesitos.fbx", 8, 1},                  // 9 skin bones, one of them without any weight
     {"glTF2/simple_skin/simple_skin.gltf", 2, 1},
     {"Collada/box_nested_animation.dae", 1, 1},
 };
@@ -474,9 +474,9 @@ TEST_CASE("export copies the model's own image textures, names the copies in the
   }
   std::vector<deform::Material>& materials = imported.model.mesh.materials;
   materials[0].diffuse_map = texture.string();
-  materials[1].diffuse_map = not_image.string();                                   // not an image
+  materials[1].diffuse_map = not_image.string();                                  // not an image
   materials[2].diffuse_map = (folder / "source" / ".." / "secret.png").string();  // outside, by ..
-  materials[3].diffuse_map = link.string();                                        // outside, by a link
+  materials[3].diffuse_map = link.string();                                       // outside, by a link
   materials[4].diffuse_map = "/etc/passwd";
   deform::ExportOptions options;
   options.texture_root = (folder / "source").string();
@@ -640,5 +640,6 @@ TEST_CASE("bone names from a file are made fit for a .sk: printable, valid UTF-8
   // And they write and read back as a .sk.
   const deform::ExportedFiles files =
       deform::export_native(imported.model, (fs::temp_directory_path() / "deform_odd_names_out").string());
-  CHECK(deform::load_model(files.obj, files.sk, files.skw).skeleton.bone_count() == imported.model.skeleton.bone_count());
+  CHECK(deform::load_model(files.obj, files.sk, files.skw).skeleton.bone_count() ==
+        imported.model.skeleton.bone_count());
 }

@@ -160,7 +160,7 @@ TEST_CASE("mrfixit.iqm imports with its 75 joints, skin and clip; the bind pose 
   REQUIRE(imported.clips.size() == 1);
   CHECK(imported.clips[0].name == "idle");
   CHECK(imported.clips[0].duration == doctest::Approx(100.0 / 24.0));  // 101 frames at 24 fps, not marked looping
-  CHECK(imported.clips[0].channels.size() == 75);  // one per joint
+  CHECK(imported.clips[0].channels.size() == 75);                      // one per joint
 
   const Iqm file{read_bytes(path)};
   std::vector<glm::dvec3> rest;
@@ -357,8 +357,8 @@ TEST_CASE("an IQM material naming a texture outside the model's folder is refuse
   fs::remove_all(root);
   fs::create_directories(root / "m");
   const fs::path model = root / "m" / "fixit.iqm";
-  std::ofstream(model, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                               static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(model, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   CHECK_THROWS_WITH_AS(deform::import_model(model.string()), doctest::Contains(".material"), deform::Error);
   deform::ImportOptions options;
   options.references.allow_outside = {root.string()};

@@ -1,5 +1,6 @@
 #pragma once
-// Test helper for the importer and character tests: a model's points skinned (LBS, every influence, the extras too) by a pose.
+// Test helper for the importer and character tests: a model's points skinned (LBS, every influence, the extras too) by
+// a pose.
 #include <doctest/doctest.h>
 
 #include <glm/glm.hpp>

@@ -15,8 +15,8 @@
 namespace {
 
 struct Expected {
-  const char* path;       // under /usr/share/assimp/models
-  double heat_mean;       // % of the diagonal, as docs/weights.md reports it
+  const char* path;  // under /usr/share/assimp/models
+  double heat_mean;  // % of the diagonal, as docs/weights.md reports it
   double heat_p99;
   double heat_max;
 };
@@ -41,7 +41,7 @@ void check_model(const Expected& e) {
   const weights_study::Figures h = weights_study::compare(imported.model, imported.clips, heat.weights);
   const weights_study::Figures d = weights_study::compare(imported.model, imported.clips, distance);
   MESSAGE(std::string(e.path) << ": heat mean " << h.mean_percent << "%, p99 " << h.p99_percent << "%; distance mean "
-                 << d.mean_percent << "%, p99 " << d.p99_percent << "%");
+                              << d.mean_percent << "%, p99 " << d.p99_percent << "%");
   REQUIRE(h.poses > 0);
   CHECK(h.mean_percent <= 1.1 * e.heat_mean);
   CHECK(h.p99_percent <= 1.1 * e.heat_p99);

@@ -8,9 +8,9 @@
 #include <string>
 
 #ifndef _WIN32
-#  include <fcntl.h>
-#  include <sys/stat.h>
-#  include <unistd.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #endif
 
 #include "deform/io/atomic_file.hpp"

@@ -41,7 +41,8 @@ struct Folder {
 };
 
 std::uint32_t u32(const std::vector<std::uint8_t>& b, std::size_t at) {
-  return std::uint32_t(b[at]) | std::uint32_t(b[at + 1]) << 8 | std::uint32_t(b[at + 2]) << 16 | std::uint32_t(b[at + 3]) << 24;
+  return std::uint32_t(b[at]) | std::uint32_t(b[at + 1]) << 8 | std::uint32_t(b[at + 2]) << 16 |
+         std::uint32_t(b[at + 3]) << 24;
 }
 
 // A quad (two triangles, four points, one submesh) with a two-bone skeleton.
@@ -78,7 +79,8 @@ std::vector<float> floats(const Json& doc, const std::vector<std::uint8_t>& bin,
 
 }  // namespace
 
-TEST_CASE("write_gltf: a .glb holds the skinned mesh, its skeleton and clips in two chunks, and nothing else is written") {
+TEST_CASE(
+    "write_gltf: a .glb holds the skinned mesh, its skeleton and clips in two chunks, and nothing else is written") {
   const Folder folder("deform_gltf_glb_test");
   deform::Animation clip;
   clip.name = "wave";
@@ -129,7 +131,8 @@ TEST_CASE("write_gltf: a .glb holds the skinned mesh, its skeleton and clips in 
   CHECK(doc["animations"][0]["channels"][0]["target"] == Json{{"node", 1}, {"path", "rotation"}});
 }
 
-TEST_CASE("write_gltf: a .gltf writes NAME.bin beside it; baked frames become sparse morph targets selected by weights") {
+TEST_CASE(
+    "write_gltf: a .gltf writes NAME.bin beside it; baked frames become sparse morph targets selected by weights") {
   const Folder folder("deform_gltf_bake_test");
   const deform::Model model = quad();
   deform::BakedFrames baked;

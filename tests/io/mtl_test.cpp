@@ -61,9 +61,10 @@ TEST_CASE("mtl: every supported statement") {
 TEST_CASE("mtl: texture paths — relative to the MTL folder, absolute kept, blanks allowed, missing warned") {
   deform::Warnings warnings;
   // An absolute path outside the MTL's folder is refused unless its folder is allowed (referenced_file.hpp).
-  const std::string text = "newmtl a\nmap_Kd textures/../textures/checker.png\n"
-                           "newmtl b\nmap_Kd /abs/path/t.png\n"
-                           "newmtl c\nmap_Kd my texture.png\n";
+  const std::string text =
+      "newmtl a\nmap_Kd textures/../textures/checker.png\n"
+      "newmtl b\nmap_Kd /abs/path/t.png\n"
+      "newmtl c\nmap_Kd my texture.png\n";
   CHECK_THROWS_WITH_AS(parse(text), doctest::Contains("t.mtl: line 4: map_Kd: refused"), deform::Error);
   deform::ReferencePolicy policy;
   policy.allow_outside = {"/abs"};

@@ -22,12 +22,36 @@ constexpr std::string_view obj_seed =
     "f -1//-1 -2//-2 -3//1\nusemtl checker\nf 1/1/1 2/2/2 3/3/1 4/1/2 5/2/1\nl 1 2\nf 5 \\\n 4 3\n";
 
 // Tokens that stress numbers and indices.
-constexpr std::string_view nasty_tokens[] = {
-    "0",          "-0",      "99999999999999999999", "-9223372036854775808", "4294967296", "4294967295",
-    "2147483648", "-1",      "1e39",                 "1e-50",                "nan",        "-inf",
-    "1/",         "//",      "1//",                  "/1/1",                 "1/1/1/1",    "+",
-    "-",          ".",       "e5",                   "0x10",                 "\\",         "#",
-    "f",          "v",       "mtllib",               "usemtl",               "-s",         "map_Kd"};
+constexpr std::string_view nasty_tokens[] = {"0",
+                                             "-0",
+                                             "99999999999999999999",
+                                             "-9223372036854775808",
+                                             "4294967296",
+                                             "4294967295",
+                                             "2147483648",
+                                             "-1",
+                                             "1e39",
+                                             "1e-50",
+                                             "nan",
+                                             "-inf",
+                                             "1/",
+                                             "//",
+                                             "1//",
+                                             "/1/1",
+                                             "1/1/1/1",
+                                             "+",
+                                             "-",
+                                             ".",
+                                             "e5",
+                                             "0x10",
+                                             "\\",
+                                             "#",
+                                             "f",
+                                             "v",
+                                             "mtllib",
+                                             "usemtl",
+                                             "-s",
+                                             "map_Kd"};
 
 std::string mutate(std::string text, std::mt19937& random) {
   const int edits = 1 + int(random() % 4);
@@ -122,7 +146,8 @@ TEST_CASE("fuzz: mutated OBJ texts parse consistently or throw deform::Error") {
 }
 
 TEST_CASE("fuzz: mutated MTL texts parse or throw deform::Error") {
-  const std::string seed = deform::read_file_text(data_folder + "/cube.mtl") + "d -halo 0.5\nmap_Kd -o 1 2 -mm 0 1 x.png\n";
+  const std::string seed =
+      deform::read_file_text(data_folder + "/cube.mtl") + "d -halo 0.5\nmap_Kd -o 1 2 -mm 0 1 x.png\n";
   std::mt19937 random(77);
   int parsed = 0, rejected = 0;
   for (int round = 0; round < 6000; ++round) {

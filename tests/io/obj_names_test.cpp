@@ -20,11 +20,10 @@ namespace {
 
 // Bytes that break lines, comments, continuations and trimming, mixed with plain ones and any byte at all.
 std::string random_name(std::mt19937& random) {
-  static const char tricky[] = {' ', '\\', '#', '\n', '\r', '\t', '\v', '\f', '\0', '\x7f', 'a', 'b', '_', '%', '\xff',
-                                '\xc3'};
+  static const char tricky[] = {' ',  '\\',   '#', '\n', '\r', '\t', '\v',   '\f',
+                                '\0', '\x7f', 'a', 'b',  '_',  '%',  '\xff', '\xc3'};
   std::string name(random() % 9, ' ');
-  for (char& c : name)
-    c = random() % 4 == 0 ? static_cast<char>(random() % 256) : tricky[random() % sizeof tricky];
+  for (char& c : name) c = random() % 4 == 0 ? static_cast<char>(random() % 256) : tricky[random() % sizeof tricky];
   return name;
 }
 

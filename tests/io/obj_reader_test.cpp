@@ -91,8 +91,9 @@ TEST_CASE("obj: face form v — one render vertex per point, computed normals") 
 
 TEST_CASE("obj: face form v/vt — split where UVs differ") {
   // Two triangles sharing points 1 and 3 (0-based 0 and 2) with different UVs on the second.
-  const Mesh mesh = parse(std::string(square) + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5 0.25\n"
-                                                "f 1/1 2/2 3/3\nf 1/5 3/3 4/4\n");
+  const Mesh mesh = parse(std::string(square) +
+                          "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5 0.25\n"
+                          "f 1/1 2/2 3/3\nf 1/5 3/3 4/4\n");
   CHECK(mesh.vertex_point == std::vector<std::uint32_t>{0, 1, 2, 0, 3});
   REQUIRE(mesh.vertex_uvs.size() == 5);
   CHECK(mesh.vertex_uvs[0] == glm::vec2(0, 0));
@@ -120,20 +121,23 @@ TEST_CASE("obj: face form v/vt/vn — deduplicated by the whole triple") {
 }
 
 TEST_CASE("obj: negative indices are relative to the elements read so far") {
-  const Mesh relative = parse("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
-                              "f -3/-3/-1 -2/-2/-1 -1/-1/-1\n"
-                              "v 5 5 5\nf -4 -3 -1\n");
-  const Mesh absolute = parse("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
-                              "f 1/1/1 2/2/1 3/3/1\n"
-                              "v 5 5 5\nf 1 2 4\n");
+  const Mesh relative = parse(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+      "f -3/-3/-1 -2/-2/-1 -1/-1/-1\n"
+      "v 5 5 5\nf -4 -3 -1\n");
+  const Mesh absolute = parse(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+      "f 1/1/1 2/2/1 3/3/1\n"
+      "v 5 5 5\nf 1 2 4\n");
   CHECK(corner_points(relative) == std::vector<std::uint32_t>{0, 1, 2, 0, 1, 3});
   CHECK(corner_points(relative) == corner_points(absolute));
   CHECK(relative.vertex_uvs == absolute.vertex_uvs);
 }
 
 TEST_CASE("obj: polygons are fan-triangulated and kept whole for writing") {
-  const Mesh mesh = parse("v 0 0 0\nv 2 0 0\nv 3 1 0\nv 2 2 0\nv 0 2 0\nv -1 1 0\n"
-                          "f 1 2 3 4 5 6\nf 1 2 3\n");
+  const Mesh mesh = parse(
+      "v 0 0 0\nv 2 0 0\nv 3 1 0\nv 2 2 0\nv 0 2 0\nv -1 1 0\n"
+      "f 1 2 3 4 5 6\nf 1 2 3\n");
   CHECK(mesh.face_sizes == std::vector<std::uint32_t>{6, 3});
   CHECK(mesh.face_corners.size() == 9);
   CHECK(mesh.triangle_count() == 5);
@@ -197,8 +201,8 @@ TEST_CASE("obj: cube fixture with MTL, materials and a texture resolved relative
 
 TEST_CASE("obj: a missing MTL is a warning naming file and line; the mesh still loads") {
   deform::Warnings warnings;
-  const Mesh mesh = parse("# header\nmtllib missing.mtl cube.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
-                          &warnings);
+  const Mesh mesh =
+      parse("# header\nmtllib missing.mtl cube.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n", &warnings);
   REQUIRE(warnings.messages.size() == 1);
   CHECK(warnings.messages[0].starts_with("t.obj: line 2: MTL file 'missing.mtl' not found"));
   CHECK(mesh.materials.size() == 2);  // cube.mtl on the same line was still read
@@ -309,8 +313,7 @@ TEST_CASE("obj: malformed lines throw deform::Error with file, line and element"
 }
 
 TEST_CASE("obj: read_obj of a missing file throws naming the file") {
-  CHECK_THROWS_WITH_AS(deform::read_obj("/nonexistent/x.obj"), doctest::Contains("/nonexistent/x.obj"),
-                       deform::Error);
+  CHECK_THROWS_WITH_AS(deform::read_obj("/nonexistent/x.obj"), doctest::Contains("/nonexistent/x.obj"), deform::Error);
 }
 
 TEST_CASE("obj: an unsupported statement of garbage is reported in one bounded, printable line") {

@@ -39,8 +39,9 @@ void check_same(const Mesh& a, const Mesh& b) {
 }  // namespace
 
 TEST_CASE("obj writer: exact text of a quad and a triangle") {
-  const Mesh mesh = deform::parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.1 0.2 0.3\nvt 0 0\nvt 1 0.5\n"
-                                      "g top\nf 1/1 2/2 3/1 4/2\nf 1/1 3/1 5/2\n");
+  const Mesh mesh = deform::parse_obj(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.1 0.2 0.3\nvt 0 0\nvt 1 0.5\n"
+      "g top\nf 1/1 2/2 3/1 4/2\nf 1/1 3/1 5/2\n");
   // Positions replaced by the caller's (a deformation): point 4 moved; points without faces are written too.
   std::vector<glm::vec3> moved = mesh.positions;
   moved[1] = {2.5f, -1.0f, 1e-7f};
@@ -49,7 +50,8 @@ TEST_CASE("obj writer: exact text of a quad and a triangle") {
         "v 0 0 0\nv 2.5 -1 1e-07\nv 1 1 0\nv 0 1 0\nv 0.1 0.2 0.3\n"
         "vt 0 0\nvt 1 0.5\nvt 0 0\nvt 1 0.5\nvt 1 0.5\n"
         "g top\nf 1/1 2/2 3/3 4/4\nf 1/1 3/3 5/5\n");
-  const std::string plain = deform::format_obj(mesh, moved, {}, {.mtllib = "", .write_normals = false, .write_uvs = false});
+  const std::string plain =
+      deform::format_obj(mesh, moved, {}, {.mtllib = "", .write_normals = false, .write_uvs = false});
   CHECK(plain.ends_with("g top\nf 1 2 3 4\nf 1 3 5\n"));
   const std::string normals = deform::format_obj(mesh, moved, {}, {.mtllib = "", .write_uvs = false});
   CHECK(normals.find("vn 0 0 1\n") != std::string::npos);
@@ -97,8 +99,8 @@ TEST_CASE("obj writer: an OBJ written elsewhere names the input's MTL files rela
   std::filesystem::create_directories(deep);
   std::filesystem::copy_file(DEFORM_TEST_DATA "/mesh/cube.mtl", data / "cube.mtl");
   std::filesystem::copy(DEFORM_TEST_DATA "/mesh/textures", data / "textures");  // cube.mtl's map_Kd
-  deform::write_file_atomic((data / "cube.obj").string(), deform::format_obj(cube, cube.positions, {},
-                                                                              {.mtllib = "cube.mtl"}));
+  deform::write_file_atomic((data / "cube.obj").string(),
+                            deform::format_obj(cube, cube.positions, {}, {.mtllib = "cube.mtl"}));
   const Mesh input = deform::read_obj((data / "cube.obj").string());
   CHECK(deform::material_libraries_for(input, (data / "same.obj").string()) == "cube.mtl");
   CHECK(deform::material_libraries_for(input, (deep / "o.obj").string()) == "../../data/cube.mtl");

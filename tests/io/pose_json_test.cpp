@@ -113,8 +113,8 @@ TEST_CASE("pose JSON nested a million levels deep is refused in one pass, naming
                        doctest::Contains("deep.json: byte 73: JSON nested deeper than 64 levels"), deform::Error);
   // Brackets inside strings do not count.
   const std::string quoted = "{\"bones\": {\"" + std::string(100, '[') + "\": {}}}";
-  CHECK_THROWS_WITH_AS(deform::parse_pose_json(quoted, deform::Skeleton(skeleton_test::arm_bones()), true, "q.json"), doctest::Contains("no such bone"),
-                       deform::Error);
+  CHECK_THROWS_WITH_AS(deform::parse_pose_json(quoted, deform::Skeleton(skeleton_test::arm_bones()), true, "q.json"),
+                       doctest::Contains("no such bone"), deform::Error);
 }
 
 TEST_CASE("a pose of 65,535 bones reads in O(bones log bones)") {

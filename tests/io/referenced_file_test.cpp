@@ -73,9 +73,9 @@ TEST_CASE("referenced files: inside the model's folder they resolve to canonical
 
 TEST_CASE("referenced files: '..', absolute paths and percent-encoding out of the folder are refused") {
   const Tree tree;
-  for (const std::string& reference : {std::string("../secret.txt"), std::string("sub/../../secret.txt"),
-                                       (tree.root / "secret.txt").string(), std::string("/etc/passwd"),
-                                       std::string("../missing-outside.txt")}) {
+  for (const std::string& reference :
+       {std::string("../secret.txt"), std::string("sub/../../secret.txt"), (tree.root / "secret.txt").string(),
+        std::string("/etc/passwd"), std::string("../missing-outside.txt")}) {
     CAPTURE(reference);
     const std::string message = refusal(tree.referrer, reference, "mtllib");
     CHECK(message.find(tree.referrer) != std::string::npos);
@@ -160,7 +160,9 @@ TEST_CASE("referenced files: the OBJ reader confines mtllib and map_Kd, and neve
 
 TEST_CASE("referenced files: warnings print names from files on one line") {
   const Tree tree;
-  Tree::write(tree.model / "m.obj", "mtllib a\x01" "b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  Tree::write(tree.model / "m.obj",
+              "mtllib a\x01"
+              "b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   deform::Warnings warnings;
   deform::read_obj(tree.referrer, &warnings);
   REQUIRE(warnings.messages.size() == 1);
@@ -231,8 +233,7 @@ TEST_CASE("referenced files: UTF-8 names outside ASCII, read, confined, named an
   CHECK(deform::image_format(texture) == "png");
   Tree::write(folder / u8"ailleurs_Ω.mtl", str(u8"newmtl b\nmap_Kd ../dehors_Ω.png\n"));
   Tree::write(folder / u8"fuite_日本.obj", str(u8"mtllib ailleurs_Ω.mtl\n") + triangle);
-  CHECK_THROWS_WITH_AS(deform::read_obj(utf8(folder / u8"fuite_日本.obj")), doctest::Contains("map_Kd"),
-                       deform::Error);
+  CHECK_THROWS_WITH_AS(deform::read_obj(utf8(folder / u8"fuite_日本.obj")), doctest::Contains("map_Kd"), deform::Error);
   ReferencePolicy policy;
   policy.allow_outside = {utf8(tree.root)};
   CHECK(deform::read_obj(utf8(folder / u8"fuite_日本.obj"), nullptr, policy).materials[0].diffuse_map ==
@@ -292,8 +293,8 @@ TEST_CASE("referenced files: names that are not UTF-8") {
   Tree::write(tree.model / "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
   fs::copy_file(DEFORM_TEST_DATA "/skeleton/arm.sk", tree.model / "t.sk");
   Tree::write(tree.model / "t.skw", "skw 1\nvertices 3\n0 0 1\n1 1 1\n2 1 1\n");
-  deform::Model model = deform::load_model(utf8(tree.model / "t.obj"), utf8(tree.model / "t.sk"),
-                                           utf8(tree.model / "t.skw"));
+  deform::Model model =
+      deform::load_model(utf8(tree.model / "t.obj"), utf8(tree.model / "t.sk"), utf8(tree.model / "t.skw"));
   model.mesh.materials.assign(1, deform::Material{});
   model.mesh.materials[0].diffuse_map = texture;
   deform::GltfExportOptions options;

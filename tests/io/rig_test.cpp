@@ -177,8 +177,9 @@ TEST_CASE("secondary motion: lattice motion and spring chains are written and re
   CHECK(doc["lattices"][1]["motion"]["along_bound"] == doctest::Approx(0.02));
   // The part: absent (a file from before parts) it is unspecified and is not written back; given, it is kept.
   CHECK(partial.lattices[0].motion.part == deform::BodyPart::unspecified);
-  CHECK_FALSE(nlohmann::json::parse(deform::format_rig_json(partial, model().skeleton))["lattices"][0]["motion"]
-                  .contains("part"));
+  CHECK_FALSE(
+      nlohmann::json::parse(deform::format_rig_json(partial, model().skeleton))["lattices"][0]["motion"].contains(
+          "part"));
   using deform::BodyPart;
   for (const BodyPart part : {BodyPart::upper_limb, BodyPart::lower_limb, BodyPart::hand, BodyPart::foot,
                               BodyPart::torso, BodyPart::head, BodyPart::appendage}) {
@@ -277,7 +278,8 @@ TEST_CASE("bad rig files: the error names the file and the key") {
       {R"({"rig": 1, "reach": {"effector": "hand_l", "root": "thigh_l"}, "lattices": []})", "key 'reach.root'"},
       {R"({"rig": 1, "model": "hero.fbx", "lattices": []})", "key 'model'"},
       {R"({"rig": 1, "model": {"obj": "a.obj"}, "lattices": []})", "key 'model.skeleton'"},
-      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"inertia": 2}}]})", "key 'lattices[0].motion.inertia'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"inertia": 2}}]})",
+       "key 'lattices[0].motion.inertia'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"gravity": [0, 1]}}]})",
        "key 'lattices[0].motion.gravity'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"units_per_metre": 0}}]})",
@@ -291,8 +293,7 @@ TEST_CASE("bad rig files: the error names the file and the key") {
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": ""}}]})", "key 'lattices[0].motion.part'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": 3}}]})", "key 'lattices[0].motion.part'"},
       {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": null}}]})", "key 'lattices[0].motion.part'"},
-      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": "Hand"}}]})",
-       "key 'lattices[0].motion.part'"},
+      {R"({"rig": 1, "lattices": [)" + lattice + R"(, "motion": {"part": "Hand"}}]})", "key 'lattices[0].motion.part'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": []}]}})",
        "key 'springs.chains[0].bones'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck", "chest"]}]}})",
@@ -302,7 +303,8 @@ TEST_CASE("bad rig files: the error names the file and the key") {
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck"], "colliders": [0]}]}})",
        "key 'springs.chains[0].colliders[0]'"},
       {R"({"rig": 1, "lattices": [], "springs": {"chains": [{"name": "t", "bones": ["neck"]},
-           {"name": "t", "bones": ["head"]}]}})", "used twice"},
+           {"name": "t", "bones": ["head"]}]}})",
+       "used twice"},
       {R"({"rig": 1, "lattices": [], "springs": {"colliders": [{"bone": "head", "start": [0, 0, 0], "radius": 0}]}})",
        "key 'springs.colliders[0].radius'"},
       {R"({"rig": 1, "lattices": [], "springs": {"substep": 2}})", "key 'springs.substep'"},
@@ -344,7 +346,8 @@ TEST_CASE("default_rig puts lattices on every limb, or on the chosen effector's,
   CHECK(deform::parse_rig_json(text, renamed.skeleton, renamed.mesh.point_count(), "chains.json") == by_name);
   CHECK_THROWS_WITH_AS(
       deform::parse_rig_json(R"({"rig": 1, "reach": {"chains": [{"effector": "foot_l", "root": "hand_l"}]},
-                                 "lattices": []})", renamed.skeleton, renamed.mesh.point_count(), "bad.json"),
+                                 "lattices": []})",
+                             renamed.skeleton, renamed.mesh.point_count(), "bad.json"),
       doctest::Contains("reach.chains[0].root"), deform::Error);
 
   // A reach chain whose root is not above its effector does not bind.

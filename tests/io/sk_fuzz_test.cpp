@@ -88,10 +88,8 @@ TEST_CASE("fuzz .sk: 30000 mutants parse or throw deform::Error; what parses wri
     std::vector<std::uint8_t> bytes = valid;
     const std::size_t edits = 1 + pick(rng, 3);
     for (std::size_t e = 0; e < edits; ++e) {
-      if (pick(rng, 3) == 0)
-        plant_int(bytes, rng);
-      else
-        mutate(bytes, rng, alphabet);
+      if (pick(rng, 3) == 0) plant_int(bytes, rng);
+      else mutate(bytes, rng, alphabet);
     }
     try {
       const deform::Skeleton s = deform::parse_sk(bytes, "fuzz.sk");

@@ -56,14 +56,27 @@ bool same_bits(T a, T b) {
 
 TEST_CASE("append_shortest writes std::to_chars's plain form of a float") {
   const std::vector<std::pair<float, std::string_view>> cases = {
-      {0.1f, "0.1"},          {-3.0f, "-3"},          {1e-7f, "1e-07"},       {1e5f, "1e+05"},
-      {1e4f, "10000"},        {0.001f, "0.001"},      {1e-4f, "1e-04"},      {1.5e-5f, "1.5e-05"},
+      {0.1f, "0.1"},
+      {-3.0f, "-3"},
+      {1e-7f, "1e-07"},
+      {1e5f, "1e+05"},
+      {1e4f, "10000"},
+      {0.001f, "0.001"},
+      {1e-4f, "1e-04"},
+      {1.5e-5f, "1.5e-05"},
       {123456789.0f, "123456792"},  // fixed, so the exact integer and not the shortest digits "12345679" + "0"
-      {9.8765434e11f, "987654324224"}, {3e10f, "3e+10"}, {4294967296.0f, "4294967296"},
-      {-0.0f, "-0"},          {0.0f, "0"},            {3.4028235e38f, "3.4028235e+38"},
-      {1e-45f, "1e-45"},      {-1.17549435e-38f, "-1.1754944e-38"},
-      {std::numeric_limits<float>::infinity(), "inf"}, {-std::numeric_limits<float>::infinity(), "-inf"},
-      {std::numeric_limits<float>::quiet_NaN(), "nan"}, {-std::numeric_limits<float>::quiet_NaN(), "-nan"}};
+      {9.8765434e11f, "987654324224"},
+      {3e10f, "3e+10"},
+      {4294967296.0f, "4294967296"},
+      {-0.0f, "-0"},
+      {0.0f, "0"},
+      {3.4028235e38f, "3.4028235e+38"},
+      {1e-45f, "1e-45"},
+      {-1.17549435e-38f, "-1.1754944e-38"},
+      {std::numeric_limits<float>::infinity(), "inf"},
+      {-std::numeric_limits<float>::infinity(), "-inf"},
+      {std::numeric_limits<float>::quiet_NaN(), "nan"},
+      {-std::numeric_limits<float>::quiet_NaN(), "-nan"}};
   for (const auto& [value, text] : cases) CHECK(deform::detail::shortest_text(value) == text);
   // Every 65,521st bit pattern, and every power of two with its neighbours (where the round-trip interval is
   // lopsided): each reads back as the same float, and is std::to_chars's text where the library has one.
@@ -71,8 +84,7 @@ TEST_CASE("append_shortest writes std::to_chars's plain form of a float") {
   for (std::uint64_t b = 0; b <= 0xffffffffu; b += 65521) patterns.push_back(static_cast<std::uint32_t>(b));
   for (std::uint32_t exponent = 0; exponent < 256; ++exponent)
     for (std::uint32_t sign : {0u, 0x80000000u})
-      for (std::uint32_t mantissa : {0u, 1u, 2u, 0x7fffffu})
-        patterns.push_back(sign | exponent << 23 | mantissa);
+      for (std::uint32_t mantissa : {0u, 1u, 2u, 0x7fffffu}) patterns.push_back(sign | exponent << 23 | mantissa);
   for (const std::uint32_t b : patterns) {
     const float x = float_from_bits(b);
     const std::string text = deform::detail::shortest_text(x);
@@ -126,9 +138,9 @@ TEST_CASE("read_decimal reads what std::from_chars reads, with its errors") {
       {".5", std::errc(), 2, 0.5f},
       {"5.", std::errc(), 2, 5.0f},
       {"1e3x", std::errc(), 3, 1000.0f},
-      {"1e", std::errc(), 1, 1.0f},   // an exponent without digits is not part of the number
+      {"1e", std::errc(), 1, 1.0f},  // an exponent without digits is not part of the number
       {"2e+", std::errc(), 1, 2.0f},
-      {"0x1p3", std::errc(), 1, 0.0f},  // no hexadecimal: "0", then 'x'
+      {"0x1p3", std::errc(), 1, 0.0f},    // no hexadecimal: "0", then 'x'
       {"1e-45", std::errc(), 5, 1e-45f},  // the smallest denormal
       {"0e999", std::errc(), 5, 0.0f},
       {"-0", std::errc(), 2, -0.0f},

@@ -243,9 +243,9 @@ TEST_CASE("Delta Mush gives the rest pose back on the built-in character") {
 #if defined(DEFORM_HAVE_IMPORT)
 TEST_CASE("Delta Mush gives the rest pose back on the rigged models of assimp-testmodels") {
   const std::string dir = "/usr/share/assimp/models/";
-  for (const char* path : {"IQM/mrfixit.iqm", "X/BCN_Epileptic.X", "X/Testwuson.X", "X/anim_test.x",
-                           "FBX/animation_with_skeleton.fbx", "FBX/huesitos.fbx", "Collada/box_nested_animation.dae",
-                           "glTF2/simple_skin/simple_skin.gltf"}) {
+  for (const char* path :
+       {"IQM/mrfixit.iqm", "X/BCN_Epileptic.X", "X/Testwuson.X", "X/anim_test.x", "FBX/animation_with_skeleton.fbx",
+        "FBX/huesitos.fbx", "Collada/box_nested_animation.dae", "glTF2/simple_skin/simple_skin.gltf"}) {
     CAPTURE(path);
     REQUIRE_MESSAGE(std::filesystem::exists(dir + path), path << " is missing: install Debian's assimp-testmodels");
     deform::ImportedModel imported = deform::import_model(dir + path);
@@ -259,8 +259,8 @@ TEST_CASE("Delta Mush gives the rest pose back on the rigged models of assimp-te
     std::size_t framed = 0;
     for (std::size_t i = 0; i < b.point_count(); ++i) framed += !b.pinned[i];
     MESSAGE(std::string(path) << ": rest pose within " << error / size << " of the size (skinning alone "
-                 << max_distance(c.positions(), mesh.positions) / size << "); " << framed << " of " << b.point_count()
-                 << " points framed");
+                              << max_distance(c.positions(), mesh.positions) / size << "); " << framed << " of "
+                              << b.point_count() << " points framed");
     CHECK(error <= 1e-6 * size);
   }
 }

@@ -40,9 +40,7 @@ Skeleton make_skeleton(std::vector<Bone> bones) {
 // height, a centre point on each cap) as its own island. Render vertex = point.
 void add_cylinder(Mesh& mesh, glm::vec3 base, float radius, float height, int rings = 21, int sides = 12) {
   const auto first = static_cast<std::uint32_t>(mesh.positions.size());
-  auto index = [&](int ring, int side) {
-    return first + static_cast<std::uint32_t>(ring * sides + (side % sides));
-  };
+  auto index = [&](int ring, int side) { return first + static_cast<std::uint32_t>(ring * sides + (side % sides)); };
   for (int r = 0; r < rings; ++r)
     for (int s = 0; s < sides; ++s) {
       const float angle = 2.0f * 3.14159265f * static_cast<float>(s) / static_cast<float>(sides);
@@ -74,7 +72,8 @@ void add_box(Mesh& mesh, glm::vec3 min, glm::vec3 max) {
   const auto f = static_cast<std::uint32_t>(mesh.positions.size());
   for (int i = 0; i < 8; ++i)
     mesh.positions.push_back({(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z});
-  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                     {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads)
     mesh.triangles.insert(mesh.triangles.end(), {f + q[0], f + q[1], f + q[2], f + q[0], f + q[2], f + q[3]});
   while (mesh.vertex_point.size() < mesh.positions.size())
@@ -135,7 +134,7 @@ TEST_CASE("heat weights on a two-bone cylinder: sums of 1, monotone along the ax
       previous = w;
     }
   }
-  CHECK(weight_of(r.weights, 0, 0) > 0.95f);                                      // y = 0
+  CHECK(weight_of(r.weights, 0, 0) > 0.95f);                                              // y = 0
   CHECK(weight_of(r.weights, static_cast<std::size_t>((rings - 1) * sides), 1) > 0.95f);  // y = 2
   // Symmetric about the joint: the ring at y = 1 is shared about half and half.
   const float middle = weight_of(r.weights, static_cast<std::size_t>(10 * sides), 1);
@@ -150,10 +149,10 @@ TEST_CASE("heat weights: a hand resting against a thigh keeps its arm's weights 
                                            bone(1, {0, -0.5f, 0}, "shin"), bone(0, {0.51f, -0.05f, 0}, "forearm"),
                                            bone(3, {0, -0.5f, 0}, "hand")});
   Mesh mesh;
-  add_cylinder(mesh, {0.3f, 0.0f, 0}, 0.06f, 1.0f);     // leg
-  add_cylinder(mesh, {0.51f, 0.95f, 0}, 0.04f, 0.5f);   // forearm
+  add_cylinder(mesh, {0.3f, 0.0f, 0}, 0.06f, 1.0f);    // leg
+  add_cylinder(mesh, {0.51f, 0.95f, 0}, 0.04f, 0.5f);  // forearm
   const std::size_t hand_first = mesh.point_count();
-  add_cylinder(mesh, {0.51f, 0.65f, 0}, 0.12f, 0.3f);   // hand
+  add_cylinder(mesh, {0.51f, 0.65f, 0}, 0.12f, 0.3f);  // hand
   const std::size_t hand_end = mesh.point_count();
 
   auto leg_weight = [&](const SkinWeights& w) {

@@ -34,15 +34,16 @@ TEST_CASE("vertices outside the box or outside the chosen set are bit-identical"
   std::vector<std::uint32_t> chosen;
   for (std::uint32_t i = 0; i < in.size(); i += 3) chosen.push_back(i);
   for (int kind = 0; kind < 2; ++kind) {
-    const auto binding = kind == 0 ? deform::bind_lattice(BezierLattice(frame), in, chosen) : deform::bind_lattice(BsplineLattice(frame, glm::ivec3(7, 5, 6)), in, chosen);
+    const auto binding = kind == 0 ? deform::bind_lattice(BezierLattice(frame), in, chosen)
+                                   : deform::bind_lattice(BsplineLattice(frame, glm::ivec3(7, 5, 6)), in, chosen);
     const auto points = kind == 0 ? bezier.control_points() : bspline.control_points();
     std::vector<glm::vec3> normals(in.size(), glm::vec3(0.0f, 0.6f, 0.8f));
     const auto out = evaluate(binding, points, in, &normals);
     std::size_t moved = 0, expected_moved = 0;
     for (std::size_t i = 0; i < in.size(); ++i) {
       const glm::vec3 uvw = frame.to_lattice(in[i]);
-      const bool inside = glm::all(glm::greaterThanEqual(uvw, glm::vec3(0.0f))) &&
-                          glm::all(glm::lessThanEqual(uvw, glm::vec3(1.0f)));
+      const bool inside =
+          glm::all(glm::greaterThanEqual(uvw, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(uvw, glm::vec3(1.0f)));
       if (inside && i % 3 == 0) {
         ++expected_moved;
         moved += out[i] != in[i];
@@ -90,14 +91,14 @@ TEST_CASE("selection by skin weight, by box, and vertex list files") {
 namespace {
 
 // A bone's bind and current world matrices, and a lattice living in its frame along +x.
-const glm::mat4 bind_world = glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(1.0f, 0.5f, 0.0f)), 0.5f,
-                                         glm::vec3(0, 0, 1));
+const glm::mat4 bind_world =
+    glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(1.0f, 0.5f, 0.0f)), 0.5f, glm::vec3(0, 0, 1));
 
 std::vector<glm::vec3> around_bone(std::mt19937& rng, std::size_t count) {
   std::vector<glm::vec3> out;  // bind-pose world positions, bone-local x in [-0.5, 2.5]
   for (std::size_t i = 0; i < count; ++i)
-    out.push_back(glm::vec3(bind_world * glm::vec4(uniform(rng, -0.5f, 2.5f), uniform(rng, -0.6f, 0.6f),
-                                                   uniform(rng, -0.6f, 0.6f), 1.0f)));
+    out.push_back(glm::vec3(
+        bind_world * glm::vec4(uniform(rng, -0.5f, 2.5f), uniform(rng, -0.6f, 0.6f), uniform(rng, -0.6f, 0.6f), 1.0f)));
   return out;
 }
 
@@ -156,8 +157,9 @@ TEST_CASE("lattice in bind space, then skinning: no seam at the lattice border")
   // Two bones along +x: the root at the origin, the child at x = 2, bent 60° in the pose. Vertices along a line
   // through the child's lattice [2.5, 3.5] × [-0.5, 0.5]², with weights blending around the joint.
   const glm::mat4 bind[2] = {glm::mat4(1.0f), glm::translate(glm::mat4(1.0f), glm::vec3(2, 0, 0))};
-  const glm::mat4 world[2] = {glm::rotate(glm::mat4(1.0f), 0.2f, glm::vec3(0, 1, 0)),
-                              glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(2, 0, 0)), 1.05f, glm::vec3(0, 0, 1))};
+  const glm::mat4 world[2] = {
+      glm::rotate(glm::mat4(1.0f), 0.2f, glm::vec3(0, 1, 0)),
+      glm::rotate(glm::translate(glm::mat4(1.0f), glm::vec3(2, 0, 0)), 1.05f, glm::vec3(0, 0, 1))};
   std::vector<glm::vec3> positions;
   std::vector<float> child_weight;
   const float eps = 1e-4f;
@@ -167,7 +169,8 @@ TEST_CASE("lattice in bind space, then skinning: no seam at the lattice border")
       child_weight.push_back(glm::clamp((x - 1.5f) / 1.5f, 0.0f, 1.0f));
     }
   auto pipeline = [&](const BezierLattice& lattice) {
-    const auto binding = deform::bind_lattice(BezierLattice(lattice.frame(), lattice.degree()), positions, glm::inverse(bind[1]));
+    const auto binding =
+        deform::bind_lattice(BezierLattice(lattice.frame(), lattice.degree()), positions, glm::inverse(bind[1]));
     const auto deformed = evaluate(binding, carried(lattice.control_points(), bind[1]), positions);
     std::vector<glm::vec3> skinned;  // reference linear blend skinning with T_C = T_W · T_B⁻¹
     for (std::size_t i = 0; i < deformed.size(); ++i) {
@@ -213,8 +216,7 @@ TEST_CASE("run_parallel and any split into block ranges give the single-threaded
   for (int kind = 0; kind < 2; ++kind) {
     const auto binding = kind == 0 ? deform::bind_lattice(bezier, in) : deform::bind_lattice(bspline, in);
     const auto points = kind == 0 ? bezier.control_points() : bspline.control_points();
-    std::vector<glm::vec3> normals(in.size(), glm::vec3(1, 0, 0)), parallel_positions = in,
-                                   parallel_normals = normals;
+    std::vector<glm::vec3> normals(in.size(), glm::vec3(1, 0, 0)), parallel_positions = in, parallel_normals = normals;
     const auto serial = evaluate(binding, points, in, &normals);
     deform::LatticeEvaluateJob job;
     job.binding = &binding;
@@ -226,7 +228,8 @@ TEST_CASE("run_parallel and any split into block ranges give the single-threaded
     CHECK(parallel_positions == serial);
     CHECK(parallel_normals == normals);
     // Random block ranges, every block once, on every kernel copy: each gives that copy's run() bits.
-    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
+    for (const deform::Isa isa :
+         {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
       if (!deform::isa_available(isa)) continue;
       CAPTURE(std::string(deform::isa_name(isa)));
       job.isa = isa;

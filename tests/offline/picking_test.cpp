@@ -50,7 +50,9 @@ void random_mesh(std::mt19937& random, int n, int loose, std::vector<glm::vec3>&
       positions.emplace_back(float(i) / float(n) * 2.0f - 1.0f, 0.3f * unit(random), float(j) / float(n) * 2.0f - 1.0f);
   const auto at = [n](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
   for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) indices.insert(indices.end(), {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    for (int i = 0; i < n; ++i)
+      indices.insert(indices.end(),
+                     {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
   for (int t = 0; t < loose; ++t) {
     const glm::vec3 centre(unit(random), unit(random), unit(random));
     for (int c = 0; c < 3; ++c) {
@@ -236,12 +238,14 @@ TEST_CASE("a camera ray through a pixel passes through what that pixel shows") {
   }
   // The centre pixel looks along the view direction.
   const Ray centre = ray_from_pixel(view, projection, glm::vec2(400, 300), viewport);
-  CHECK(glm::dot(centre.direction, glm::normalize(glm::vec3(0, 0.5f, 0) - glm::vec3(1, 2, 5))) == doctest::Approx(1.0f));
+  CHECK(glm::dot(centre.direction, glm::normalize(glm::vec3(0, 0.5f, 0) - glm::vec3(1, 2, 5))) ==
+        doctest::Approx(1.0f));
   // A pick of a quad in front of the camera through the pixel it projects to.
   const std::vector<glm::vec3> quad = {{-1, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 1, 0}};
   const std::vector<std::uint32_t> tris = {0, 1, 2, 0, 2, 3};
   const glm::vec3 w = glm::project(glm::vec3(0.5f, 0.25f, 0), view, projection, viewport);
-  const RayHit hit = intersect_triangles(ray_from_pixel(view, projection, glm::vec2(w.x, 600.0f - w.y), viewport), quad, tris);
+  const RayHit hit =
+      intersect_triangles(ray_from_pixel(view, projection, glm::vec2(w.x, 600.0f - w.y), viewport), quad, tris);
   REQUIRE(hit.hit);
   CHECK(hit.triangle == 0);
 }

@@ -56,7 +56,7 @@ void check_normalised(const SkinWeights& w, std::size_t points, std::size_t bone
       REQUIRE(w.bones[i][k] < bones);
       if (x > 0.0f) ++used;
       if (k > 0) REQUIRE(x <= w.weights[i][k - 1]);  // strongest first
-      if (x == 0.0f) REQUIRE(w.bones[i][k] == 0);     // unused slots: bone 0, weight 0
+      if (x == 0.0f) REQUIRE(w.bones[i][k] == 0);    // unused slots: bone 0, weight 0
       sum += x;
     }
     REQUIRE(used >= 1);
@@ -192,8 +192,8 @@ TEST_CASE("only the nearest bone, its parent and its children compete") {
     CHECK(weight_of(w, i, 4) > 0.0f);
   }
   // Siblings do not compete: a point on the left arm of a Y-shaped skeleton gets nothing from the right arm.
-  const Skeleton y = make_skeleton({bone(-1, {0, 0, 0}), bone(0, {0, 1, 0}), bone(1, {0.3f, 0.3f, 0}),
-                                    bone(1, {-0.3f, 0.3f, 0})});
+  const Skeleton y =
+      make_skeleton({bone(-1, {0, 0, 0}), bone(0, {0, 1, 0}), bone(1, {0.3f, 0.3f, 0}), bone(1, {-0.3f, 0.3f, 0})});
   const std::vector<glm::vec3> left = {{0.35f, 1.4f, 0.0f}, {0.45f, 1.45f, 0.05f}};
   const SkinWeights wy = deform::compute_automatic_weights(left, y, soft);
   CHECK(weight_of(wy, 0, 2) > 0.5f);
@@ -249,8 +249,8 @@ TEST_CASE("random skeletons and points agree with the reference method") {
         // Near the 0.1% cut-off or a tie of the k-th place the float and double versions may keep different
         // sets; the difference is then below 0.2%.
         INFO("trial " << trial << " point " << i << " bone " << b << " of " << s.bone_count() << " k "
-             << o.max_influences << " leaf " << o.leaf_length << " got " << w.bones[i][0] << ":" << w.weights[i][0]
-             << " " << w.bones[i][1] << ":" << w.weights[i][1]);
+                      << o.max_influences << " leaf " << o.leaf_length << " got " << w.bones[i][0] << ":"
+                      << w.weights[i][0] << " " << w.bones[i][1] << ":" << w.weights[i][1]);
         REQUIRE(std::abs(weight_of(w, i, static_cast<int>(b)) - expected[b]) <= 2e-3);
         ++checked;
       }

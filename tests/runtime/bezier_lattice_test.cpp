@@ -31,7 +31,7 @@ TEST_CASE("degree 1: moving one corner is trilinear interpolation (hand-computed
   CHECK(out[0].x == doctest::Approx(1.125f).epsilon(1e-6));
   CHECK(out[0].y == doctest::Approx(2.0f).epsilon(1e-6));
   CHECK(out[1].x == doctest::Approx(3.0f).epsilon(1e-6));  // the corner itself moves by the whole offset
-  CHECK(out[2] == glm::vec3(0, 0, 0));                      // the opposite corner does not move
+  CHECK(out[2] == glm::vec3(0, 0, 0));                     // the opposite corner does not move
   CHECK(out[3].x == doctest::Approx(2.5f).epsilon(1e-6));  // (1, 0.5, 1): weight 0.5
 }
 
@@ -90,8 +90,8 @@ TEST_CASE("a collapsed lattice keeps the input normals on every kernel copy") {
       for (std::size_t i = 0; i < in.size(); ++i) {
         kept = kept && normals[i] == normals_in[i];
         const glm::vec3 offset = out[i] - point;
-        const float off_line = onto_line ? glm::length(glm::cross(offset, along)) / glm::length(along)
-                                         : glm::length(offset);
+        const float off_line =
+            onto_line ? glm::length(glm::cross(offset, along)) / glm::length(along) : glm::length(offset);
         on_the_collapse = on_the_collapse && off_line < 1e-4f;
       }
       INFO("degree " << d << std::string(onto_line ? ", onto a line" : ", to a point"));
@@ -111,7 +111,8 @@ TEST_CASE("affine precision: an affine map of the control points maps the vertic
     affine[3] = glm::vec4(uniform3(rng, -3.0f, 3.0f), 1.0f);
     for (glm::vec3& p : lattice.control_points()) p = glm::vec3(affine * glm::vec4(p, 1.0f));
     const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
-    const auto out = evaluate(deform::bind_lattice(BezierLattice(frame, lattice.degree()), in), lattice.control_points(), in);
+    const auto out =
+        evaluate(deform::bind_lattice(BezierLattice(frame, lattice.degree()), in), lattice.control_points(), in);
     for (std::size_t i = 0; i < in.size(); ++i) {
       const glm::vec3 expected(affine * glm::vec4(in[i], 1.0f));
       INFO("degree " << d << " vertex " << i);
@@ -154,8 +155,8 @@ TEST_CASE("optimised kernel = pow/binomial reference to 1e-5 over thousands of r
       const glm::dvec3 uvw(frame.to_lattice(in[i]));
       const glm::dvec3 ref = lattice_reference::bezier(lattice.control_points(), degree, uvw);
       // The world Jacobian is ∂Q/∂(u,v,w) · M⁻¹.
-      const glm::dmat3 jac = lattice_reference::bezier_jacobian(lattice.control_points(), degree, uvw) *
-                             glm::inverse(axes);
+      const glm::dmat3 jac =
+          lattice_reference::bezier_jacobian(lattice.control_points(), degree, uvw) * glm::inverse(axes);
       const glm::dvec3 ref_normal = lattice_reference::transform_normal(jac, glm::dvec3(normals_in[i]));
       INFO("trial " << trial << " degree " << degree.x << "," << degree.y << "," << degree.z << " vertex " << i);
       CHECK(dist(out[i], ref) < 1e-5 * (1.0 + glm::length(ref)));
@@ -239,7 +240,8 @@ TEST_CASE("weights: the field added by each point's weight and the normals blend
     const std::vector<glm::vec3> normals_in = random_normals(rng, in.size());
 
     const glm::dmat3 axes(glm::dvec3(frame.u_axis), glm::dvec3(frame.v_axis), glm::dvec3(frame.w_axis));
-    for (const deform::Isa isa : {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
+    for (const deform::Isa isa :
+         {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
       if (!deform::isa_available(isa)) continue;
       std::vector<glm::vec3> positions = in, normals = normals_in, normals_only = normals_in;
       deform::LatticeEvaluateJob job;

@@ -81,7 +81,8 @@ TEST_CASE("B-spline affine precision and optimised = Cox-de Boor reference to 1e
     std::vector<glm::vec3> normals(in.size());
     for (glm::vec3& n : normals) n = glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(1e-3f, 0.0f, 0.0f));
     const std::vector<glm::vec3> normals_in = normals;
-    const auto out = evaluate(deform::bind_lattice(BsplineLattice(frame, counts), in), lattice.control_points(), in, &normals);
+    const auto out =
+        evaluate(deform::bind_lattice(BsplineLattice(frame, counts), in), lattice.control_points(), in, &normals);
     for (std::size_t i = 0; i < in.size(); ++i) {
       const glm::vec3 uvw = frame.to_lattice(in[i]);
       if (glm::any(glm::lessThan(uvw, glm::vec3(0.0f))) || glm::any(glm::greaterThan(uvw, glm::vec3(1.0f)))) continue;
@@ -124,7 +125,8 @@ TEST_CASE("a B-spline control point moves only the vertices of the 4x4x4 cells a
   // Point 6 weighs on cells 3..6, i.e. parameters (0.3, 0.7) per axis.
   std::vector<glm::vec3> in;
   for (int i = 0; i <= 20; ++i) in.push_back(glm::vec3(0.05f * static_cast<float>(i), 0.5f, 0.5f));
-  const auto out = evaluate(deform::bind_lattice(BsplineLattice(lattice.frame(), glm::ivec3(13)), in), lattice.control_points(), in);
+  const auto out =
+      evaluate(deform::bind_lattice(BsplineLattice(lattice.frame(), glm::ivec3(13)), in), lattice.control_points(), in);
   for (std::size_t i = 0; i < in.size(); ++i) {
     INFO("x = " << in[i].x);
     if (in[i].x < 0.29f || in[i].x > 0.71f) CHECK(dist(out[i], in[i]) < 1e-6);  // the rest map, to rounding

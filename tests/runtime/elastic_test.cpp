@@ -254,7 +254,8 @@ TEST_CASE("settling time follows ζ and k") {
       CAPTURE(zeta);
       const ElasticSettings s = settings_with(k, zeta);
       const double predicted = deform::settling_time(s.oscillator, tolerance);
-      const double damped_half_period = std::numbers::pi / (deform::angular_frequency(s.oscillator) * std::sqrt(1.0 - zeta * zeta));
+      const double damped_half_period =
+          std::numbers::pi / (deform::angular_frequency(s.oscillator) * std::sqrt(1.0 - zeta * zeta));
       const double measured = measured_settling(s);
       // The envelope bound is never beaten by more than half a damped period (one lobe of the oscillation).
       CHECK(measured <= predicted + dt);
@@ -279,7 +280,8 @@ TEST_CASE("only the under-damped regime overshoots") {
     for (const Sample& sample : run) lowest = std::min(lowest, sample.x);
     if (zeta < 1.0f) {
       // First undershoot of an under-damped release: exp(-ζπ/√(1-ζ²)).
-      CHECK(-lowest == doctest::Approx(std::exp(-zeta * std::numbers::pi / std::sqrt(1.0 - zeta * zeta))).epsilon(0.01));
+      CHECK(-lowest ==
+            doctest::Approx(std::exp(-zeta * std::numbers::pi / std::sqrt(1.0 - zeta * zeta))).epsilon(0.01));
     } else {
       CHECK(lowest >= -1e-6f);
     }

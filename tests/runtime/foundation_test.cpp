@@ -14,7 +14,8 @@ namespace fs = std::filesystem;
 TEST_CASE("Error formats file, position and element") {
   CHECK(std::string(deform::Error::at_line("a.obj", 12, "vertex 3", "bad index").what()) ==
         "a.obj: line 12: vertex 3: bad index");
-  CHECK(std::string(deform::Error::at_byte("b.sk", 412, "bone 3", "overrun").what()) == "b.sk: byte 412: bone 3: overrun");
+  CHECK(std::string(deform::Error::at_byte("b.sk", 412, "bone 3", "overrun").what()) ==
+        "b.sk: byte 412: bone 3: overrun");
   CHECK(std::string(deform::Error::in_file("", "", "empty").what()) == "<memory>: empty");
   const auto e = deform::Error::at_byte("b.sk", 7, "", "x");
   CHECK(e.where() == deform::Error::Where::byte);

@@ -225,7 +225,7 @@ TEST_CASE("the stretch follows the bones: rotate the limb and the displacement t
 TEST_CASE("lattices compose down the hierarchy: parent, carried control points, summed stretch") {
   const Limb limb = make_limb();
   DeformerHierarchy h = deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights,
-                      {spec_on("upper", 1), spec_on("fore", 2), spec_on("hand", 3)});
+                                               {spec_on("upper", 1), spec_on("fore", 2), spec_on("hand", 3)});
   CHECK(h.parent(0) == -1);
   CHECK(h.parent(1) == 0);
   CHECK(h.parent(2) == 1);
@@ -425,8 +425,8 @@ TEST_CASE("bad set-ups throw naming the lattice; bad per-frame calls return fals
   const Limb limb = make_limb();
   const auto throws_with = [&](LatticeSpec spec, const char* text) {
     CAPTURE(text);
-    CHECK_THROWS_WITH_AS(deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec}), doctest::Contains(text),
-                         deform::Error);
+    CHECK_THROWS_WITH_AS(deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec}),
+                         doctest::Contains(text), deform::Error);
   };
   LatticeSpec spec = spec_on("fore", 7);
   throws_with(spec, "lattice 'fore'");
@@ -452,8 +452,9 @@ TEST_CASE("bad set-ups throw naming the lattice; bad per-frame calls return fals
   spec = spec_on("fore", 2);
   spec.elastic.oscillator.mass = 0.0f;
   throws_with(spec, "mass");
-  CHECK_THROWS_WITH_AS(deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec_on("a", 1), spec_on("a", 2)}),
-                       doctest::Contains("twice"), deform::Error);
+  CHECK_THROWS_WITH_AS(
+      deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec_on("a", 1), spec_on("a", 2)}),
+      doctest::Contains("twice"), deform::Error);
 
   DeformerHierarchy h = deform::bind_hierarchy(limb.skeleton, limb.points, limb.weights, {spec_on("fore", 2)});
   CHECK(std::string(h.set_stretch_target(0, -1.0f).reason()) == "stretch not finite and > -length");
@@ -621,7 +622,8 @@ TEST_CASE("the length floor: a lattice squashed to half shows at least 70% of it
   const glm::vec3 middle = squashed[12 * 24];
   CHECK(glm::length(glm::vec2(middle.x, middle.z)) > 0.2f / std::sqrt(0.71f));
   // Every ring keeps at least 70% of its rest spacing.
-  for (int r = 0; r + 1 < 25; ++r) CHECK(squashed[std::size_t((r + 1) * 24)].y - squashed[std::size_t(r * 24)].y >= 0.7f * 0.04f);
+  for (int r = 0; r + 1 < 25; ++r)
+    CHECK(squashed[std::size_t((r + 1) * 24)].y - squashed[std::size_t(r * 24)].y >= 0.7f * 0.04f);
 }
 
 TEST_CASE("the shape is a function of the springs' state: frame-rate independent through an under-damped release") {

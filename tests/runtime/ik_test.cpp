@@ -167,8 +167,8 @@ std::optional<glm::quat> tied_answer(glm::quat rotation, const DofLimits& limits
   };
   const glm::vec3 canonical = euler_from_quat(rotation);
   const glm::vec3 first = nearest_turn(canonical);
-  const glm::vec3 second = nearest_turn(
-      glm::vec3(wrap(canonical.x + 180.0f), wrap(180.0f - canonical.y), wrap(canonical.z + 180.0f)));
+  const glm::vec3 second =
+      nearest_turn(glm::vec3(wrap(canonical.x + 180.0f), wrap(180.0f - canonical.y), wrap(canonical.z + 180.0f)));
   if (std::abs(excess(first) - excess(second)) > 1e-3f) return std::nullopt;
   return quat_from_euler(clamp_euler(excess(second) < excess(first) ? first : second, limits));
 }
@@ -288,7 +288,8 @@ TEST_CASE("euler_within_limits: the triple the limits mean, within them; the rot
 // The issue's contract, over random chains with limits up to ±180° on every axis: what the CLI prints of a solve
 // (format_pose_bones_json: euler_within_limits of each joint) is within the limits, and reading it back as `deform
 // skin --pose` does (parse_pose_json, clamping) gives the solver's own effector.
-TEST_CASE("property: printed angles of CCD and FABRIK solves are within limits up to ±180° and give the solver's effector") {
+TEST_CASE(
+    "property: printed angles of CCD and FABRIK solves are within limits up to ±180° and give the solver's effector") {
   std::mt19937 random(20261123);
   int cases = 0, non_canonical = 0;
   float worst = 0.0f;
@@ -308,8 +309,8 @@ TEST_CASE("property: printed angles of CCD and FABRIK solves are within limits u
     REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
     const glm::vec3 solved = effector_position(chain, pose.rotations, pose.translations);
     const std::span<const std::int32_t> bones(chain.bones);
-    const Pose printed = parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}",
-                                         rig.skeleton);
+    const Pose printed =
+        parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}", rig.skeleton);
     for (std::size_t k = 0; k < joints; ++k) {
       const auto b = static_cast<std::size_t>(chain.bones[k]);
       const DofLimits& limits = rig.skeleton.bones()[b].limits;
@@ -430,7 +431,9 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
     for (std::size_t k = 0; k < chain.joint_count(); ++k)
       if ((c + k) % 3 != 0) {
         const glm::vec3 bone = rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k + 1])].bind_translation;
-        set_swing_twist(chain, k, swing_twist_from_euler(rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits, bone));
+        set_swing_twist(
+            chain, k,
+            swing_twist_from_euler(rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits, bone));
       }
     const glm::vec3 target = ik_test::random_reachable_target(random, rig);
     Pose pose = rig.skeleton.bind_pose();
@@ -441,10 +444,15 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
     REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
     for (std::size_t k = 0; k < chain.joint_count(); ++k) {
       const glm::quat q = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
-      if (chain.swing_twist[k].active) CHECK(reference_within(chain.swing_twist[k], reference_swing_twist(chain.swing_twist[k], q), 1e-4));
-      else CHECK(ik_test::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
+      if (chain.swing_twist[k].active)
+        CHECK(reference_within(chain.swing_twist[k], reference_swing_twist(chain.swing_twist[k], q), 1e-4));
+      else
+        CHECK(
+            ik_test::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
     }
-    CHECK(result.distance == doctest::Approx(glm::length(reference_effector(rig.skeleton, pose, rig.effector) - target)).scale(rig.length).epsilon(1e-3));
+    CHECK(result.distance == doctest::Approx(glm::length(reference_effector(rig.skeleton, pose, rig.effector) - target))
+                                 .scale(rig.length)
+                                 .epsilon(1e-3));
     reached += result.reached;
     ++cases;
   }
@@ -758,7 +766,8 @@ TEST_CASE("a pole swivels CCD and FABRIK chains toward it, keeping the effector;
     const RandomChain rig = ik_test::random_chain(random, 2 + c % 4, free_joints);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     const glm::vec3 target = ik_test::random_reachable_target(random, rig);
-    const glm::vec3 pole = ik_test::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_test::random_direction(random);
+    const glm::vec3 pole =
+        ik_test::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_test::random_direction(random);
     IkSettings settings;
     settings.tolerance = 1e-4f * rig.length;
     settings.max_iterations = 200;
@@ -807,13 +816,15 @@ TEST_CASE("weight blends the solve with the input pose: 0 leaves it bit-identica
     REQUIRE(solve_with(method, chain, half, target, settings, std::nullopt, 0.5f, half_result));
     CHECK(std::memcmp(zero.rotations.data(), start.rotations.data(), start.rotations.size() * sizeof(glm::quat)) == 0);
     CHECK(zero_result.iterations == 0);
-    CHECK(zero_result.distance ==
-          doctest::Approx(glm::length(reference_effector(rig.skeleton, start, rig.effector) - target)).scale(rig.length));
+    CHECK(
+        zero_result.distance ==
+        doctest::Approx(glm::length(reference_effector(rig.skeleton, start, rig.effector) - target)).scale(rig.length));
     CHECK(std::memcmp(full.rotations.data(), plain.rotations.data(), plain.rotations.size() * sizeof(glm::quat)) == 0);
     CHECK(full_result.distance == plain_result.distance);
     check_pose(rig, start, half);
-    CHECK(half_result.distance ==
-          doctest::Approx(glm::length(reference_effector(rig.skeleton, half, rig.effector) - target)).scale(rig.length));
+    CHECK(
+        half_result.distance ==
+        doctest::Approx(glm::length(reference_effector(rig.skeleton, half, rig.effector) - target)).scale(rig.length));
     // Halfway: each joint is the shortest-path slerp halfway from its input to the solve, clamped.
     for (std::size_t k = 0; k < chain.joint_count(); ++k) {
       const auto b = static_cast<std::size_t>(chain.bones[k]);
@@ -842,7 +853,8 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
     REQUIRE(solve(IkMethod::ccd, chain, pose, target, settings, result));
     // One sweep turns each joint by at most 2 degrees.
     for (std::size_t b = 1; b <= rig.joints; ++b) {
-      const float angle = glm::degrees(glm::angle(glm::normalize(glm::conjugate(before.rotations[b]) * pose.rotations[b])));
+      const float angle =
+          glm::degrees(glm::angle(glm::normalize(glm::conjugate(before.rotations[b]) * pose.rotations[b])));
       CHECK(std::min(angle, 360.0f - angle) <= 2.0f + 1e-2f);
     }
     settings.max_iterations = 400;
@@ -854,7 +866,8 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
   CHECK(reached >= 198);
 }
 
-TEST_CASE("non-finite targets, poses and bases, overflowing chains, bad settings and scratch are refused, writing nothing") {
+TEST_CASE(
+    "non-finite targets, poses and bases, overflowing chains, bad settings and scratch are refused, writing nothing") {
   std::mt19937 random(4);
   const RandomChain rig = ik_test::random_chain(random, 2);
   const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);

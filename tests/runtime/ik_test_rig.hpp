@@ -61,7 +61,8 @@ inline deform::DofLimits random_wide_limits(std::mt19937& random) {
 inline glm::vec3 random_in_limits(std::mt19937& random, const deform::DofLimits& limits) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   glm::vec3 e;
-  for (int axis = 0; axis < 3; ++axis) e[axis] = limits.min[axis] + unit(random) * (limits.max[axis] - limits.min[axis]);
+  for (int axis = 0; axis < 3; ++axis)
+    e[axis] = limits.min[axis] + unit(random) * (limits.max[axis] - limits.min[axis]);
   return e;
 }
 

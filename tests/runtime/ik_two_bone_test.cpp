@@ -206,8 +206,7 @@ TEST_CASE("two-bone matches the double-precision reference over 6,000 random lim
     REQUIRE(solved.status);
     const Heads out = heads(solved.rotations, solved.translations);
     const glm::dvec3 target(p.target);
-    const Reference ref =
-        reference(input, target, a, b, read_pole, p.soften, p.max_stretch, p.swivel);
+    const Reference ref = reference(input, target, a, b, read_pole, p.soften, p.max_stretch, p.swivel);
     const double limb_scale = reach * ref.stretch;
 
     // The stretch used, the translations written with it; the bones keep their lengths times the stretch.
@@ -283,8 +282,8 @@ TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between turns each 
     CHECK(std::memcmp(none.rotations.data(), pose.rotations.data(), sizeof(glm::quat) * 4) == 0);
     CHECK(std::memcmp(none.translations.data(), pose.translations.data(), sizeof(glm::vec3) * 4) == 0);
     CHECK(none.stretch == 1.0f);
-    CHECK(none.result.distance == doctest::Approx(glm::length(input.effector - glm::dvec3(p.target)))
-                                      .scale(reach).epsilon(1e-5));
+    CHECK(none.result.distance ==
+          doctest::Approx(glm::length(input.effector - glm::dvec3(p.target))).scale(reach).epsilon(1e-5));
 
     p.weight = 1.0f;
     const Solve full = run_job(limb.chain, pose, p, 1e-4f);
@@ -317,8 +316,9 @@ TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between turns each 
   }
 }
 
-TEST_CASE("two-bone soften: the limb's extension is continuous and increasing in the target's distance, decreasing "
-          "in soften, and below the reach") {
+TEST_CASE(
+    "two-bone soften: the limb's extension is continuous and increasing in the target's distance, decreasing "
+    "in soften, and below the reach") {
   const Limb limb = make_limb();
   std::mt19937 random(5);
   for (int c = 0; c < 50; ++c) {
@@ -349,8 +349,8 @@ TEST_CASE("two-bone soften: the limb's extension is continuous and increasing in
       }
       const double step = 2.0 * reach / steps;
       for (std::size_t i = 1; i < extension.size(); ++i) {
-        CHECK(extension[i] >= extension[i - 1] - 2e-6 * reach);          // increasing
-        CHECK(extension[i] - extension[i - 1] <= step + 2e-6 * reach);   // continuous: slope at most 1
+        CHECK(extension[i] >= extension[i - 1] - 2e-6 * reach);         // increasing
+        CHECK(extension[i] - extension[i - 1] <= step + 2e-6 * reach);  // continuous: slope at most 1
       }
       if (!previous_soften.empty())
         for (std::size_t i = 0; i < extension.size(); ++i) CHECK(extension[i] <= previous_soften[i] + 2e-6 * reach);
@@ -370,8 +370,7 @@ TEST_CASE("two-bone pole: the middle joint moves continuously as the target cros
     const double a = glm::length(glm::dvec3(pose.translations[2])), b = glm::length(glm::dvec3(pose.translations[3]));
     // The line within 65° of the pose's effector direction: the pose's bend direction, carried onto the line by the
     // shortest arc, then turns slowly with the target (the shortest arc's own singularity is the opposite direction).
-    const glm::dvec3 line =
-        glm::normalize(glm::normalize(input.effector - input.root) + 0.9 * random_unit(random));
+    const glm::dvec3 line = glm::normalize(glm::normalize(input.effector - input.root) + 0.9 * random_unit(random));
     const double r = std::abs(a - b) + (a + b - std::abs(a - b)) * (0.2 + 0.6 * unit(random));
     Params p;
     p.pole = glm::vec3(c % 4 < 2 ? line : -line);  // the target crosses the pole's line on the pole's side, or opposite
@@ -425,18 +424,31 @@ TEST_CASE("two-bone degenerate targets and poles give finite poses") {
     const double reach = glm::length(glm::dvec3(pose.translations[2])) + glm::length(glm::dvec3(pose.translations[3]));
     for (int kind = 0; kind < 6; ++kind) {
       Params p;
-      const double fold = std::abs(glm::length(glm::dvec3(pose.translations[2])) -
-                                   glm::length(glm::dvec3(pose.translations[3])));
+      const double fold =
+          std::abs(glm::length(glm::dvec3(pose.translations[2])) - glm::length(glm::dvec3(pose.translations[3])));
       p.target = glm::vec3(input.root + direction * (0.5 * (fold + reach)));  // reachable, the limb bent
       p.soften = c % 2 == 0 ? 0.5f : 0.0f;
       p.max_stretch = 2.0f;
       switch (kind) {
-        case 0: p.target = glm::vec3(input.root); p.pole = glm::vec3(direction); break;   // target on the root
-        case 1: p.pole = glm::vec3(direction); break;                                     // pole along the line
-        case 2: p.pole = glm::vec3(-direction); break;                                    // and opposite
-        case 3: p.kind = PoleKind::point; p.pole = glm::vec3(input.root); break;          // pole point on the root
-        case 4: p.kind = PoleKind::point; p.pole = p.target; p.swivel = 45.0f; break;     // pole point on the target
-        default: p.pole = glm::vec3(0.0f); p.swivel = -90.0f; break;                      // no pole, a swivel
+        case 0:
+          p.target = glm::vec3(input.root);
+          p.pole = glm::vec3(direction);
+          break;                                        // target on the root
+        case 1: p.pole = glm::vec3(direction); break;   // pole along the line
+        case 2: p.pole = glm::vec3(-direction); break;  // and opposite
+        case 3:
+          p.kind = PoleKind::point;
+          p.pole = glm::vec3(input.root);
+          break;  // pole point on the root
+        case 4:
+          p.kind = PoleKind::point;
+          p.pole = p.target;
+          p.swivel = 45.0f;
+          break;  // pole point on the target
+        default:
+          p.pole = glm::vec3(0.0f);
+          p.swivel = -90.0f;
+          break;  // no pole, a swivel
       }
       const Solve solved = run_job(limb.chain, pose, p, 1e-4f);
       REQUIRE(solved.status);
@@ -473,8 +485,9 @@ TEST_CASE("two-bone with limits, soften, stretch and weight never leaves the lim
   }
 }
 
-TEST_CASE("two-bone validate refuses bad parameters and zero-length bones with reasons, writing nothing; run "
-          "allocates nothing") {
+TEST_CASE(
+    "two-bone validate refuses bad parameters and zero-length bones with reasons, writing nothing; run "
+    "allocates nothing") {
   const Limb limb = make_limb();
   std::mt19937 random(1);
   const LimbPose pose = random_limb_pose(random);

@@ -57,7 +57,8 @@ inline double cox_de_boor(int degree, int first_knot, double x) {
          (first_knot + degree + 1 - x) / degree * cox_de_boor(degree - 1, first_knot + 1, x);
 }
 
-// Q(u, v, w) = Σ P_ijk N(s_u − i + 3) N(s_v − j + 3) N(s_w − k + 3), s = u · cells; the last cell is closed at s = cells.
+// Q(u, v, w) = Σ P_ijk N(s_u − i + 3) N(s_v − j + 3) N(s_w − k + 3), s = u · cells; the last cell is closed at s =
+// cells.
 inline glm::dvec3 bspline(std::span<const glm::vec3> p, glm::ivec3 counts, glm::dvec3 uvw) {
   const glm::dvec3 cells = glm::dvec3(counts - 3);
   glm::dvec3 s = uvw * cells;
@@ -67,7 +68,8 @@ inline glm::dvec3 bspline(std::span<const glm::vec3> p, glm::ivec3 counts, glm::
   for (int k = 0; k < counts.z; ++k)
     for (int j = 0; j < counts.y; ++j)
       for (int i = 0; i < counts.x; ++i) {
-        const double b = cox_de_boor(3, 0, s.x - i + 3) * cox_de_boor(3, 0, s.y - j + 3) * cox_de_boor(3, 0, s.z - k + 3);
+        const double b =
+            cox_de_boor(3, 0, s.x - i + 3) * cox_de_boor(3, 0, s.y - j + 3) * cox_de_boor(3, 0, s.z - k + 3);
         if (b != 0.0) q += b * glm::dvec3(p[static_cast<std::size_t>(i + counts.x * (j + counts.y * k))]);
       }
   return q;

@@ -99,7 +99,8 @@ TEST_CASE("MorphJob::validate and run say what is wrong and write nothing") {
   CHECK_THROWS_WITH_AS(require_valid_morph_targets(targets, 3, "m.gltf"), doctest::Contains("not strictly ascending"),
                        Error);
   targets[0].points = {0, 3};
-  CHECK_THROWS_WITH_AS(require_valid_morph_targets(targets, 3, "m.gltf"), doctest::Contains("point out of range"), Error);
+  CHECK_THROWS_WITH_AS(require_valid_morph_targets(targets, 3, "m.gltf"), doctest::Contains("point out of range"),
+                       Error);
   std::vector<float> two = {1.0f, 2.0f};
   job.weights = two;
   CHECK(std::string(job.validate().reason()) == "weights and targets differ in count");
@@ -129,5 +130,6 @@ TEST_CASE("morph channels: step, linear and cubic spline weights; sample_morph_w
   CHECK(std::string(sample_morph_weights(clip, 0.5f, short_weights).reason()) == "morph channel target out of range");
   CHECK(short_weights == std::vector<float>(2, 0.0f));
   clip.morph_channels.push_back(step);
-  CHECK_THROWS_WITH_AS(clip.require_valid(0, "clip.gltf"), doctest::Contains("two morph channels for one target"), Error);
+  CHECK_THROWS_WITH_AS(clip.require_valid(0, "clip.gltf"), doctest::Contains("two morph channels for one target"),
+                       Error);
 }

@@ -46,11 +46,11 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<std::uint32_t> tria
 // The ways to get normals: the one-shot function and VertexNormalsJob with each kernel copy this CPU runs.
 enum class Path { function, bound_portable, bound_avx2, bound_avx512, bound_neon, bound_simd128 };
 deform::Isa isa_of(Path path) {
-  return path == Path::bound_avx512 ? deform::Isa::avx512
-         : path == Path::bound_avx2 ? deform::Isa::avx2
-         : path == Path::bound_neon ? deform::Isa::neon
+  return path == Path::bound_avx512    ? deform::Isa::avx512
+         : path == Path::bound_avx2    ? deform::Isa::avx2
+         : path == Path::bound_neon    ? deform::Isa::neon
          : path == Path::bound_simd128 ? deform::Isa::simd128
-                                    : deform::Isa::portable;
+                                       : deform::Isa::portable;
 }
 const std::vector<Path> all_paths = [] {
   std::vector<Path> paths;
@@ -111,13 +111,12 @@ void check_near(const glm::vec3& a, const glm::vec3& b, float tolerance = 1e-5f)
 Mesh cube(bool flip) {
   const std::vector<glm::vec3> corners = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                           {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  const std::uint32_t quads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+  const std::uint32_t quads[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                     {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
   std::vector<std::uint32_t> triangles;
   for (const auto& q : quads) {
-    if (flip)
-      triangles.insert(triangles.end(), {q[0], q[1], q[3], q[1], q[2], q[3]});
-    else
-      triangles.insert(triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    if (flip) triangles.insert(triangles.end(), {q[0], q[1], q[3], q[1], q[2], q[3]});
+    else triangles.insert(triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
   }
   return make_mesh(corners, triangles);
 }
@@ -132,10 +131,8 @@ Mesh flat_grid(int n, int m, std::mt19937& random) {
   for (int i = 0; i + 1 < n; ++i)
     for (int j = 0; j + 1 < m; ++j) {
       const auto a = std::uint32_t(i * m + j), b = a + std::uint32_t(m), c = b + 1, d = a + 1;
-      if (random() % 2)
-        triangles.insert(triangles.end(), {a, b, c, a, c, d});
-      else
-        triangles.insert(triangles.end(), {a, b, d, b, c, d});
+      if (random() % 2) triangles.insert(triangles.end(), {a, b, c, a, c, d});
+      else triangles.insert(triangles.end(), {a, b, d, b, c, d});
     }
   return make_mesh(positions, triangles);
 }
@@ -161,10 +158,8 @@ Mesh torus(int n, int m, std::mt19937& random) {
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < m; ++j) {
       const auto a = std::uint32_t(i * (m + 1) + j), b = a + std::uint32_t(m + 1), c = b + 1, d = a + 1;
-      if (random() % 2)
-        mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
-      else
-        mesh.triangles.insert(mesh.triangles.end(), {a, b, d, b, c, d});
+      if (random() % 2) mesh.triangles.insert(mesh.triangles.end(), {a, b, c, a, c, d});
+      else mesh.triangles.insert(mesh.triangles.end(), {a, b, d, b, c, d});
     }
   return mesh;
 }
@@ -219,7 +214,9 @@ OmMesh to_openmesh(const Mesh& mesh) {
   OmMesh om;
   for (const glm::vec3& p : mesh.positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const auto vh = [&](int k) { return OmMesh::VertexHandle(int(mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]])); };
+    const auto vh = [&](int k) {
+      return OmMesh::VertexHandle(int(mesh.vertex_point[mesh.triangles[3 * t + std::size_t(k)]]));
+    };
     REQUIRE(om.add_face(vh(0), vh(1), vh(2)).is_valid());
   }
   return om;
@@ -303,10 +300,17 @@ TEST_CASE("normals: degenerate triangles, cancelling faces and non-finite points
   // Points 0-2: a real triangle (+z). 3-5: exactly collinear (zero cross product). 6-8: one triangle and its mirror
   // image (the same points reversed), whose contributions cancel exactly. 9: NaN. 10: infinite.
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
-  Mesh mesh = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-                         {0, 0, 1}, {1, 1, 1}, {2, 2, 1},
-                         {0, 0, 2}, {1, 0, 2}, {0, 1, 2},
-                         {nan, 0, 0}, {inf, 0, 0}},
+  Mesh mesh = make_mesh({{0, 0, 0},
+                         {1, 0, 0},
+                         {0, 1, 0},
+                         {0, 0, 1},
+                         {1, 1, 1},
+                         {2, 2, 1},
+                         {0, 0, 2},
+                         {1, 0, 2},
+                         {0, 1, 2},
+                         {nan, 0, 0},
+                         {inf, 0, 0}},
                         {0, 1, 2, 3, 4, 5, 6, 7, 8, 8, 7, 6, 9, 1, 2, 3, 4, 9, 10, 4, 5});
   // Enough copies of the real triangle to fill two blocks of 16 and part of a third (padding lanes).
   for (int copy = 0; copy < 35; ++copy) mesh.triangles.insert(mesh.triangles.end(), {0, 1, 2});
@@ -315,8 +319,8 @@ TEST_CASE("normals: degenerate triangles, cancelling faces and non-finite points
     const auto normals = normals_of(mesh, path);
     for (const glm::vec3& n : normals) CHECK((std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z)));
     for (std::size_t p = 0; p < 3; ++p) check_near(normals[p], glm::vec3(0, 0, 1));  // the NaN triangle adds nothing
-    for (std::size_t p = 6; p < 9; ++p) CHECK(normals[p] == glm::vec3(0.0f));       // cancelled
-    CHECK(normals[9] == glm::vec3(0.0f));  // only in a NaN triangle
+    for (std::size_t p = 6; p < 9; ++p) CHECK(normals[p] == glm::vec3(0.0f));        // cancelled
+    CHECK(normals[9] == glm::vec3(0.0f));                                            // only in a NaN triangle
     CHECK(normals[3] == glm::vec3(0.0f));  // only in the collinear and NaN triangles
   }
 }

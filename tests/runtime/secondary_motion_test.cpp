@@ -37,7 +37,9 @@ struct State1 {
 State1 rk4_oscillator(double omega, double zeta, State1 s, double t, const std::function<double(double)>& f,
                       int steps = 20000) {
   const double h = t / steps;
-  const auto accel = [&](double time, double y, double v) { return -omega * omega * y - 2 * zeta * omega * v + f(time); };
+  const auto accel = [&](double time, double y, double v) {
+    return -omega * omega * y - 2 * zeta * omega * v + f(time);
+  };
   for (int i = 0; i < steps; ++i) {
     const double t0 = i * h;
     const double k1y = s.v, k1v = accel(t0, s.y, s.v);
@@ -182,8 +184,8 @@ MovingLimb moving_limb() {
   return limb;
 }
 
-deform::DeformerHierarchy inertial_hierarchy(const MovingLimb& limb, const deform::LatticeMotion& motion,
-                                             double omega, double zeta) {
+deform::DeformerHierarchy inertial_hierarchy(const MovingLimb& limb, const deform::LatticeMotion& motion, double omega,
+                                             double zeta) {
   deform::LatticeSpec spec;
   spec.name = "arm";
   spec.bone = 1;
@@ -246,7 +248,8 @@ TEST_CASE("inertial lattice: against a double-precision reference of the forced 
   deform::DeformerHierarchy probe = inertial_hierarchy(limb, lattice_motion, 9.0, 0.2);
   glm::dvec3 x(0.0);
   for (int k = 0; k < 2; ++k)
-    for (int j = 0; j < 2; ++j) x += 0.25 * glm::dvec3(probe.rest_lattice(0).control_points()[probe.rest_lattice(0).index(2, j, k)]);
+    for (int j = 0; j < 2; ++j)
+      x += 0.25 * glm::dvec3(probe.rest_lattice(0).control_points()[probe.rest_lattice(0).index(2, j, k)]);
   const auto forcing = [&](double t, int axis) {
     const double e = 1e-4;
     const auto r = [&](double s) { return glm::dvec3(motion.at(s) * glm::dvec4(x, 1.0)); };
@@ -260,7 +263,9 @@ TEST_CASE("inertial lattice: against a double-precision reference of the forced 
   for (int c = 1; c <= 30; ++c) {
     glm::dvec3 y;
     for (int axis = 0; axis < 3; ++axis)
-      y[axis] = rk4_oscillator(9.0, 0.2, {}, c / 15.0, [&](double t) { return forcing(t, axis); }, 4000 * c).y;
+      y[axis] = rk4_oscillator(
+                    9.0, 0.2, {}, c / 15.0, [&](double t) { return forcing(t, axis); }, 4000 * c)
+                    .y;
     const double along = glm::dot(y, u);
     reference.push_back(y + u * (bound * std::tanh(along / bound) - along));
   }
@@ -302,7 +307,8 @@ TEST_CASE("inertial lattice: the same curve at 15, 30, 60, 144, 240 Hz and a jit
   }
 }
 
-TEST_CASE("inertial lattice: no inertia and no gravity is the bone-frame lattice exactly; steady motion excites nothing") {
+TEST_CASE(
+    "inertial lattice: no inertia and no gravity is the bone-frame lattice exactly; steady motion excites nothing") {
   const MovingLimb limb = moving_limb();
   const Motion motion;
   deform::DeformerHierarchy plain = inertial_hierarchy(limb, {}, 9.0, 0.2);
@@ -387,7 +393,7 @@ TEST_CASE("inertial lattice: the motion moves whole slices across the bone and a
     CHECK(across > 0.05f * h.length(0));        // the jiggle across the bone is free
     if (bound < 1.0f) {
       CHECK(along <= bound * h.length(0) * (1.0f + 1e-5f));  // tanh saturates at the bound, to rounding
-      CHECK(along > 0.5f * bound * h.length(0));  // ... and along it, up to the bound
+      CHECK(along > 0.5f * bound * h.length(0));             // ... and along it, up to the bound
     } else {
       CHECK(along > 0.05f * h.length(0));  // unbounded, the swing would stretch the limb by more than 5%
     }
@@ -473,9 +479,12 @@ deform::Skeleton chain_skeleton(int links, float length) {
   std::vector<deform::Bone> bones(std::size_t(links) + 1);
   bones[0] = {"root", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}};
   for (int i = 1; i <= links; ++i) {
-    bones[std::size_t(i)] = {"link" + std::to_string(i), i - 1, i < links ? std::vector<std::int32_t>{i + 1}
-                                                                          : std::vector<std::int32_t>{},
-                             glm::vec3(i == 1 ? 0.1f : length, 0, 0), glm::vec3(0.0f), {}};
+    bones[std::size_t(i)] = {"link" + std::to_string(i),
+                             i - 1,
+                             i < links ? std::vector<std::int32_t>{i + 1} : std::vector<std::int32_t>{},
+                             glm::vec3(i == 1 ? 0.1f : length, 0, 0),
+                             glm::vec3(0.0f),
+                             {}};
   }
   return deform::Skeleton(bones);
 }
@@ -517,7 +526,8 @@ std::vector<glm::vec3> run_whip(const deform::Skeleton& skeleton, const std::vec
     std::vector<glm::mat4> world = chain_world(skeleton, whip.root(times[n]));
     const glm::dmat4 root_rate = (whip.root(times[n] + 1e-6) - whip.root(times[n] - 1e-6)) / 2e-6;
     std::vector<glm::mat4> rate(world.size());
-    for (std::size_t b = 0; b < world.size(); ++b) rate[b] = glm::mat4(root_rate * glm::dmat4(skeleton.bind_world()[b]));
+    for (std::size_t b = 0; b < world.size(); ++b)
+      rate[b] = glm::mat4(root_rate * glm::dmat4(skeleton.bind_world()[b]));
     const float dt = n == 0 ? 0.0f : float(times[n] - times[n - 1]);
     REQUIRE(springs.run(dt, world, rates ? std::span<const glm::mat4>(rate) : std::span<const glm::mat4>()));
     if (closest != nullptr && !colliders.empty()) {
@@ -612,7 +622,8 @@ TEST_CASE("spring chain: a whip is the same at 15-240 Hz and jittered (0.5%, 2% 
   for (const bool with_collider : {false, true}) {
     deform::SpringChainSpec chain = spec;
     if (with_collider) chain.colliders = {0};
-    const std::vector<deform::SpringCollider> colliders = with_collider ? std::vector{ball} : std::vector<deform::SpringCollider>{};
+    const std::vector<deform::SpringCollider> colliders =
+        with_collider ? std::vector{ball} : std::vector<deform::SpringCollider>{};
     std::vector<glm::vec3> at_unit;
     for (const double scale : {1.0, 0.01, 100.0}) {
       Whip whip;

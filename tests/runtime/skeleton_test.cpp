@@ -293,15 +293,16 @@ TEST_CASE("a skeleton whose bind transforms overflow is refused, naming the bone
   bones[0].children = {1};
   bones[1].parent = 0, bones[1].children = {2}, bones[1].bind_translation = glm::vec3(3e38f, 0.0f, 0.0f);
   bones[2].parent = 1, bones[2].bind_translation = glm::vec3(3e38f, 0.0f, 0.0f);  // finite alone, infinite summed
-  CHECK_THROWS_WITH_AS(deform::Skeleton(bones, "huge.sk"), doctest::Contains("huge.sk: bone 2: bind transform overflows"),
-                       deform::Error);
+  CHECK_THROWS_WITH_AS(deform::Skeleton(bones, "huge.sk"),
+                       doctest::Contains("huge.sk: bone 2: bind transform overflows"), deform::Error);
 }
 
 TEST_CASE("find and key over 65,535 bones: lowest id of a name, #ID for shared, empty and '#' names") {
   std::vector<deform::Bone> bones(65535);
   for (std::size_t i = 0; i < bones.size(); ++i) {
     bones[i].name = "b" + std::to_string(i);
-    if (i > 0) bones[i].parent = static_cast<std::int32_t>((i - 1) / 2), bones[(i - 1) / 2].children.push_back(std::int32_t(i));
+    if (i > 0)
+      bones[i].parent = static_cast<std::int32_t>((i - 1) / 2), bones[(i - 1) / 2].children.push_back(std::int32_t(i));
   }
   bones[10].name = bones[20].name = "twin";
   bones[30].name = "";

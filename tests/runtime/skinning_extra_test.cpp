@@ -39,8 +39,8 @@ void reference_lbs(std::span<const glm::mat4> palette, const std::vector<Influen
 
 // DQS over any number of influences, the first influence's real part the antipodality pivot (Kavan et al. 2007);
 // with scales, S = Σ wₖ Sₖ / Σ wₖ first.
-void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3> scales, const std::vector<Influence>& in,
-                   glm::vec3 p, glm::vec3 n, glm::dvec3& out_p, glm::dvec3& out_n) {
+void reference_dqs(std::span<const DualQuat> palette, std::span<const glm::mat3> scales,
+                   const std::vector<Influence>& in, glm::vec3 p, glm::vec3 n, glm::dvec3& out_p, glm::dvec3& out_n) {
   const glm::dquat pivot(palette[in[0].bone].real);
   glm::dquat real(0.0, 0.0, 0.0, 0.0), dual(0.0, 0.0, 0.0, 0.0);
   glm::dmat3 s(0.0);
@@ -212,7 +212,8 @@ TEST_CASE("up to 16 influences: the general path equals the double reference on 
             double worst = 0.0;
             for (std::size_t i = 0; i < count; ++i) {
               glm::dvec3 p, n;
-              if (method == SkinningMethod::lbs) reference_lbs(matrices, c.influences[i], c.positions[i], c.normals[i], p, n);
+              if (method == SkinningMethod::lbs)
+                reference_lbs(matrices, c.influences[i], c.positions[i], c.normals[i], p, n);
               else reference_dqs(dq, job.scales, c.influences[i], c.positions[i], c.normals[i], p, n);
               worst = std::max({worst, error_3(p, got_p[i]), error_3(n, got_n[i])});
               ++cases;

@@ -174,8 +174,7 @@ double max_error_vs_reference(SkinningJob job, const Vertices& v, Layout layout,
     glm::dvec3 p, n;
     if (job.method == SkinningMethod::lbs)
       reference_lbs(matrices, v.bones[i], v.weights[i], v.positions[i], v.normals[i], p, n);
-    else
-      reference_dqs(dual_quats, scales, v.bones[i], v.weights[i], v.positions[i], v.normals[i], p, n);
+    else reference_dqs(dual_quats, scales, v.bones[i], v.weights[i], v.positions[i], v.normals[i], p, n);
     worst = std::max(worst, error_3(p, job.out_positions.data() + i * stride / 4));
     if (normals) worst = std::max(worst, error_3(n, job.out_normals.data() + i * stride / 4));
   }
@@ -214,34 +213,34 @@ TEST_CASE("every kernel equals the reference to 1e-5: random palettes, weights, 
         for (Layout layout : {Layout::separate, Layout::interleaved})
           for (bool normals : {true, false})
             for (std::size_t count : counts)
-            for (int palette_size : {0, 1, 2}) {  // AVX-512: tables for <= 32 and <= 64 bones, a general path above
-              CAPTURE(isa_name(isa));
-              CAPTURE(int(method));
-              CAPTURE(scaled);
-              CAPTURE(int(layout));
-              CAPTURE(normals);
-              CAPTURE(count);
-              CAPTURE(palette_size);
-              const int bones = palette_size == 0   ? 1 + int(count % 32)
-                                : palette_size == 1 ? 33 + int(count % 32)
-                                                    : 65 + int(count % 40);
-              const std::vector<glm::mat4> matrices = random_palette(rng, bones, 150.0f, scaled);
-              const DqsPalette dq = dqs_palette(matrices);
-              CHECK(dq.has_scale == scaled);
-              Vertices v = random_vertices(rng, count, bones);
-              // 33 to 64 bones: runs of 24 vertices (not block-aligned) on bones below 32 alone, so that blocks all
-              // below 32 (the narrow lookups), all mixed and partly mixed occur.
-              if (palette_size == 1)
-                for (std::size_t i = 0; i < count; ++i)
-                  if ((i / 24) % 2 == 0) v.bones[i] %= glm::u16vec4(32);
-              SkinningJob job;
-              job.method = method;
-              job.isa = isa;
-              job.matrices = matrices;
-              job.dual_quats = dq.dual_quats;
-              if (dq.has_scale) job.scales = dq.scales;
-              CHECK(max_error_vs_reference(job, v, layout, normals, matrices, dq.dual_quats, job.scales) <= 1e-5);
-            }
+              for (int palette_size : {0, 1, 2}) {  // AVX-512: tables for <= 32 and <= 64 bones, a general path above
+                CAPTURE(isa_name(isa));
+                CAPTURE(int(method));
+                CAPTURE(scaled);
+                CAPTURE(int(layout));
+                CAPTURE(normals);
+                CAPTURE(count);
+                CAPTURE(palette_size);
+                const int bones = palette_size == 0   ? 1 + int(count % 32)
+                                  : palette_size == 1 ? 33 + int(count % 32)
+                                                      : 65 + int(count % 40);
+                const std::vector<glm::mat4> matrices = random_palette(rng, bones, 150.0f, scaled);
+                const DqsPalette dq = dqs_palette(matrices);
+                CHECK(dq.has_scale == scaled);
+                Vertices v = random_vertices(rng, count, bones);
+                // 33 to 64 bones: runs of 24 vertices (not block-aligned) on bones below 32 alone, so that blocks all
+                // below 32 (the narrow lookups), all mixed and partly mixed occur.
+                if (palette_size == 1)
+                  for (std::size_t i = 0; i < count; ++i)
+                    if ((i / 24) % 2 == 0) v.bones[i] %= glm::u16vec4(32);
+                SkinningJob job;
+                job.method = method;
+                job.isa = isa;
+                job.matrices = matrices;
+                job.dual_quats = dq.dual_quats;
+                if (dq.has_scale) job.scales = dq.scales;
+                CHECK(max_error_vs_reference(job, v, layout, normals, matrices, dq.dual_quats, job.scales) <= 1e-5);
+              }
 }
 
 TEST_CASE("isa: the automatic path is the best available one; names; forced paths report availability") {
@@ -364,7 +363,8 @@ TEST_CASE("weights that do not sum to one are renormalised") {
     for (SkinningMethod method : {SkinningMethod::lbs, SkinningMethod::dqs}) {
       std::vector<glm::vec3> a(64), b(64);
       SkinningJob job;
-      job.isa = isa, job.method = method, job.matrices = palette, job.dual_quats = dq.dual_quats, job.scales = dq.scales;
+      job.isa = isa, job.method = method, job.matrices = palette, job.dual_quats = dq.dual_quats,
+      job.scales = dq.scales;
       job.bone_indices = v.bones, job.bone_weights = v.weights;
       job.in_positions = as_floats((v.positions)), job.out_positions = as_floats(a);
       REQUIRE(job.run());
@@ -422,7 +422,7 @@ TEST_CASE("compute_dual_quat_palette: rigid, scaled and mirrored matrices recomp
   std::mt19937 rng(5);
   std::vector<glm::mat4> matrices = random_palette(rng, 6, 180.0f, true);
   matrices.push_back(glm::scale(glm::mat4(1.0f), glm::vec3(-1.0f, 2.0f, 0.5f)));  // mirroring
-  matrices.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(1, 2, 3)));         // rigid
+  matrices.push_back(glm::translate(glm::mat4(1.0f), glm::vec3(1, 2, 3)));        // rigid
   const DqsPalette dq = dqs_palette(matrices);
   CHECK(dq.has_scale);
   for (std::size_t i = 0; i < matrices.size(); ++i) {
@@ -642,9 +642,9 @@ TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1
     CHECK(reason(dqs.validate()) == why);
   }
   // The ends of the accepted sums, and a tiny but normal weight beside a large one.
-  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
-                            glm::vec4(0.0f, max_skin_weight_sum, 0.0f, 0.0f), glm::vec4(1.0f, 1e-30f, 0.0f, 0.0f),
-                            glm::vec4(255.0f, 0.0f, 0.0f, 0.0f)}) {
+  for (const glm::vec4 w :
+       {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f), glm::vec4(0.0f, max_skin_weight_sum, 0.0f, 0.0f),
+        glm::vec4(1.0f, 1e-30f, 0.0f, 0.0f), glm::vec4(255.0f, 0.0f, 0.0f, 0.0f)}) {
     weights[9] = w;
     CHECK(good.validate());
     CHECK(dqs.validate());
@@ -652,9 +652,9 @@ TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1
   weights[9] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
   REQUIRE(good.validate());
   // Each accepted extreme gives finite positions and unit normals on every path.
-  for (const glm::vec4 w : {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f),
-                            glm::vec4(max_skin_weight_sum, 0.0f, 0.0f, 0.0f),
-                            glm::vec4(0.0f, min_skin_weight_sum, 0.0f, 0.0f)}) {
+  for (const glm::vec4 w :
+       {glm::vec4(min_skin_weight_sum, 0.0f, 0.0f, 0.0f), glm::vec4(max_skin_weight_sum, 0.0f, 0.0f, 0.0f),
+        glm::vec4(0.0f, min_skin_weight_sum, 0.0f, 0.0f)}) {
     std::vector<glm::vec4> extreme(10, w);
     const std::vector<glm::vec3> normals_in(10, glm::normalize(glm::vec3(1.0f, 2.0f, 3.0f)));
     for (Isa isa : available_isas())

@@ -94,8 +94,7 @@ glm::vec3 parse_vec3(const std::string& text, std::string_view what) {
   for (int axis = 0; axis < 3; ++axis) {
     const std::size_t comma = text.find(',', start);
     const bool last = axis == 2;
-    if (last != (comma == std::string::npos))
-      throw UsageError(std::string(what) + ": '" + text + "' is not X,Y,Z");
+    if (last != (comma == std::string::npos)) throw UsageError(std::string(what) + ": '" + text + "' is not X,Y,Z");
     const std::string part = text.substr(start, last ? std::string::npos : comma - start);
     const double d = parse_number(part, what);
     // A point in space (a target, a pole): beyond 1e18 the squared distances to it overflow a float, and a result
@@ -137,9 +136,7 @@ void print_json_in_order(const nlohmann::ordered_json& document) {
 
 // Warnings quote names and paths from files: control characters are escaped (the readers do; this keeps any other
 // message to one line as well).
-void note(const std::string& message) {
-  std::cerr << "deform: " << deform::escape_control_characters(message) << '\n';
-}
+void note(const std::string& message) { std::cerr << "deform: " << deform::escape_control_characters(message) << '\n'; }
 
 nlohmann::json to_json(glm::vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 

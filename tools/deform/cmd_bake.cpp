@@ -236,7 +236,8 @@ int bake_ffd(const Args& args) {
     // s = 1 on the last frame exactly: the displaced lattice itself, so that frame is `deform ffd`'s output.
     const float s = timing.frames == 1 ? 1.0f : float(double(k) / double(timing.frames - 1));
     const std::span<glm::vec3> points = current.control_points();
-    for (std::size_t i = 0; i < points.size(); ++i) points[i] = k + 1 == timing.frames ? to[i] : from[i] + s * (to[i] - from[i]);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      points[i] = k + 1 == timing.frames ? to[i] : from[i] + s * (to[i] - from[i]);
     std::vector<glm::vec3> positions = mesh.positions;
     deform::LatticeEvaluateJob job;
     job.binding = &binding;
@@ -252,8 +253,8 @@ int bake_ffd(const Args& args) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--target", "--clip", "--release-at", "--seconds", "--fps", "--dt",
-                                          "--lattice", "--out"};
+  std::vector<std::string> value_flags = {"--target", "--clip", "--release-at", "--seconds",
+                                          "--fps",    "--dt",   "--lattice",    "--out"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {

@@ -78,8 +78,9 @@ int run_native(const Args& args, const std::string& out) {
 }
 #else
 int run_native(const Args&, const std::string&) {
-  note("'export' to native files needs the importer component (deform::import, Assimp), which this build lacks; "
-       "--format gltf works without it");
+  note(
+      "'export' to native files needs the importer component (deform::import, Assimp), which this build lacks; "
+      "--format gltf works without it");
   return exit_failure;
 }
 #endif

@@ -56,8 +56,8 @@ int run(const std::vector<std::string>& argv) {
 
   // The rest lattice binds (so (u, v, w) are those of the undeformed mesh); the displaced points evaluate.
   const deform::BezierLattice rest(lattice.frame(), lattice.degree(), lattice_path);
-  const deform::LatticeBinding binding =
-      doc.has_vertices ? deform::bind_lattice(rest, mesh.positions, doc.vertices) : deform::bind_lattice(rest, mesh.positions);
+  const deform::LatticeBinding binding = doc.has_vertices ? deform::bind_lattice(rest, mesh.positions, doc.vertices)
+                                                          : deform::bind_lattice(rest, mesh.positions);
   std::vector<glm::vec3> positions = mesh.positions;
   deform::LatticeEvaluateJob job;
   job.binding = &binding;

@@ -24,8 +24,9 @@ std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name
 }
 
 int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--effector", "--target", "--root", "--solver", "--max-iterations",
-                                          "--tolerance", "--limits", "--pole", "--soften", "--stretch", "--swivel"};
+  std::vector<std::string> value_flags = {"--effector",       "--target",    "--root",   "--solver",
+                                          "--max-iterations", "--tolerance", "--limits", "--pole",
+                                          "--soften",         "--stretch",   "--swivel"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   // A skeleton alone (S.sk) names its bones; any model, or a rig, also brings a rig whose reach chain is the default.
@@ -87,7 +88,8 @@ int run(const std::vector<std::string>& argv) {
   if (limits != "euler" && limits != "swing-twist")
     throw UsageError("--limits: '" + limits + "' is not euler or swing-twist");
   const bool swing_twist = limits == "swing-twist";
-  if (swing_twist && solver == "two-bone") throw UsageError("--limits swing-twist: the two-bone solver has Euler limits only");
+  if (swing_twist && solver == "two-bone")
+    throw UsageError("--limits swing-twist: the two-bone solver has Euler limits only");
 
   deform::Pose pose = skeleton.bind_pose();
   deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
@@ -96,8 +98,9 @@ int run(const std::vector<std::string>& argv) {
   // (deform::swing_twist_from_euler).
   if (swing_twist)
     for (std::size_t k = 0; k < chain.joint_count(); ++k)
-      deform::set_swing_twist(chain, k, deform::swing_twist_from_euler(
-          skeleton.bone(chain.bones[k]).limits, skeleton.bone(chain.bones[k + 1]).bind_translation));
+      deform::set_swing_twist(chain, k,
+                              deform::swing_twist_from_euler(skeleton.bone(chain.bones[k]).limits,
+                                                             skeleton.bone(chain.bones[k + 1]).bind_translation));
   settings.tolerance = 1e-4f * deform::chain_length(chain, pose.translations);
   if (auto t = args.value("--tolerance")) {
     const double tolerance = parse_number(*t, "--tolerance");
@@ -202,7 +205,8 @@ const Command ik_command = {
     "  --soften F          0..1: approach full extension softly over that fraction of the reach, default 0\n"
     "  --stretch MAX       >= 1: the bones may lengthen up to MAX times to reach; prints \"stretch\", default 1\n"
     "  --swivel DEGREES    -360..360: turn of the bend plane about root -> target, default 0\n"
-    "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", (\"stretch\",) \"effector\": [x, y, z], \"bones\": {...}}; `bones`\n"
+    "Prints {\"solver\", \"reached\", \"distance\", \"iterations\", (\"stretch\",) \"effector\": [x, y, z], \"bones\": "
+    "{...}}; `bones`\n"
     "holds every chain bone's local rotation (Euler degrees) and translation, ready for `deform skin --pose`.\n"
     "An unreachable target is not an error: the closest pose found, \"reached\": false.\n",
     run};

@@ -92,7 +92,9 @@ std::string lower_extension(const std::string& path) {
   Json limbs = Json::array();
   for (const deform::Limb& limb : survey.limbs)
     limbs.push_back({{"kind", deform::limb_kind_name(limb.kind)},
-                     {"side", limb.side > 0 ? "left" : limb.side < 0 ? "right" : "middle"},
+                     {"side", limb.side > 0   ? "left"
+                              : limb.side < 0 ? "right"
+                                              : "middle"},
                      {"root", name(limb.chain.front())},
                      {"effector", name(limb.chain.back())},
                      {"chain", names(limb.chain)},
@@ -110,15 +112,9 @@ std::string lower_extension(const std::string& path) {
     springs.push_back({{"name", chain.name}, {"bones", names(chain.bones)}});
   Json skipped = Json::array();
   for (const auto& [bone, why] : survey.skipped) skipped.push_back({{"bone", skeleton.key(bone)}, {"why", why}});
-  return {{"naming", survey.naming},
-          {"four_legged", survey.four_legged},
-          {"up", vec3(survey.up)},
-          {"pelvis", name(survey.pelvis)},
-          {"chest", name(survey.chest)},
-          {"limbs", std::move(limbs)},
-          {"reach", std::move(reach)},
-          {"lattices", std::move(lattices)},
-          {"spring_chains", std::move(springs)},
+  return {{"naming", survey.naming},       {"four_legged", survey.four_legged}, {"up", vec3(survey.up)},
+          {"pelvis", name(survey.pelvis)}, {"chest", name(survey.chest)},       {"limbs", std::move(limbs)},
+          {"reach", std::move(reach)},     {"lattices", std::move(lattices)},   {"spring_chains", std::move(springs)},
           {"skipped", std::move(skipped)}};
 }
 
@@ -161,8 +157,10 @@ int run(const std::vector<std::string>& argv) {
         const char* names[3] = {"step", "linear", "cubic_spline"};
         for (int i = 0; i < 3; ++i)
           if (used[i]) interpolation.push_back(names[i]);
-        clips.push_back({{"name", clip.name}, {"duration", deform::shortest_double(clip.duration)},
-                         {"channels", clip.channels.size()}, {"interpolation", std::move(interpolation)},
+        clips.push_back({{"name", clip.name},
+                         {"duration", deform::shortest_double(clip.duration)},
+                         {"channels", clip.channels.size()},
+                         {"interpolation", std::move(interpolation)},
                          {"morph_channels", clip.morph_channels.size()}});
       }
       info["clips"] = std::move(clips);
@@ -171,7 +169,9 @@ int run(const std::vector<std::string>& argv) {
       // New keys only (the ones above are fixed): morph targets by name and mesh, and the most influences a point has.
       Json morphs = Json::array();
       for (const deform::MorphTarget& t : imported.model.morph_targets)
-        morphs.push_back({{"name", t.name}, {"mesh", t.mesh}, {"default_weight", deform::shortest_double(t.default_weight)},
+        morphs.push_back({{"name", t.name},
+                          {"mesh", t.mesh},
+                          {"default_weight", deform::shortest_double(t.default_weight)},
                           {"points", t.points.size()}});
       info["morph_targets"] = std::move(morphs);
       std::size_t most = 0;
@@ -219,9 +219,11 @@ const Command info_command = {
     "  MODEL     any format the importer reads (glTF, FBX, .x, ...; builds with deform::import): the mesh keys\n"
     "            (\"vertices\": distinct points) and, when rigged, \"bones\": B and \"clips\": [{\"name\",\n"
     "            \"duration\" (seconds), \"channels\", \"interpolation\": the samplers its tracks use, of step,\n"
-    "            linear, cubic_spline, \"morph_channels\": the morph targets it animates}], then \"morph_targets\": [{\"name\", \"mesh\", \"default_weight\",\n"
+    "            linear, cubic_spline, \"morph_channels\": the morph targets it animates}], then \"morph_targets\": "
+    "[{\"name\", \"mesh\", \"default_weight\",\n"
     "            \"points\" (the points it moves)}] (for `deform skin --morph NAME:W`) and \"max_influences\" (the\n"
-    "            most bones one point is skinned by), and when rigged \"skins\": [{\"name\", \"joints\", \"meshes\": the\n"
+    "            most bones one point is skinned by), and when rigged \"skins\": [{\"name\", \"joints\", \"meshes\": "
+    "the\n"
     "            names of the meshes it deforms}] (glTF: every skin of the file; other formats: one). Importer\n"
     "            warnings go to stderr.\n"
     "  --rig     (a rigged MODEL) adds \"rig\": the default rig's choices and why: \"naming\" (the name map\n"

@@ -70,9 +70,9 @@ constexpr const char* usage =
 double shortest(double value) { return std::isfinite(value) ? deform::shortest_double(float(value)) : 0.0; }
 
 int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--target",     "--clip",       "--release-at", "--seconds", "--dt",
-                                          "--effector",   "--integrator", "--min-length", "--volume",  "--inertia",
-                                          "--save-rig"};
+  std::vector<std::string> value_flags = {"--target", "--clip",     "--release-at", "--seconds",
+                                          "--dt",     "--effector", "--integrator", "--min-length",
+                                          "--volume", "--inertia",  "--save-rig"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {
@@ -169,7 +169,8 @@ int run(const std::vector<std::string>& argv) {
   // (n·dt lands a rounding error away from T). The seed's Verlet assumes equal steps, so with a Verlet lattice the
   // release waits for the first step that starts at or after T, as it always did.
   bool split = true;
-  for (const deform::LatticeSpec& spec : rig.lattices) split = split && spec.elastic.integrator != deform::Integrator::verlet;
+  for (const deform::LatticeSpec& spec : rig.lattices)
+    split = split && spec.elastic.integrator != deform::Integrator::verlet;
   const double snap = 1e-9 * dt;
   bool released = false;
   const auto let_go = [&] {

@@ -211,11 +211,11 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, co
       const std::size_t comma = std::min(list->find(',', at), list->size());
       const std::string item = list->substr(at, comma - at);
       const std::size_t colon = item.rfind(':');
-      if (colon == std::string::npos || colon == 0)
-        throw UsageError("--morph: '" + item + "' is not NAME:WEIGHT");
+      if (colon == std::string::npos || colon == 0) throw UsageError("--morph: '" + item + "' is not NAME:WEIGHT");
       const std::string name = item.substr(0, colon);
       const auto weight = static_cast<float>(parse_number(item.substr(colon + 1), "--morph " + name));
-      if (!std::isfinite(weight)) throw UsageError("--morph " + name + ": '" + item.substr(colon + 1) + "' is out of float range");
+      if (!std::isfinite(weight))
+        throw UsageError("--morph " + name + ": '" + item.substr(colon + 1) + "' is out of float range");
       bool found = false;
       for (std::size_t k = 0; k < targets.size(); ++k)
         if (targets[k].name == name) weights[k] = weight, found = true;
@@ -237,7 +237,8 @@ int run(const std::vector<std::string>& argv) {
   const Args args(argv, value_flags, switch_flags);
 
   const std::string method_name = args.value("--method").value_or("lbs");
-  if (method_name != "lbs" && method_name != "dqs") throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
+  if (method_name != "lbs" && method_name != "dqs")
+    throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
   const bool animated = args.has("--clip") || args.has("--blend");
   const std::string pose_path = animated ? std::string() : args.required("--pose");
   // Parsed before the model loads, so a malformed item fails fast.
@@ -303,7 +304,8 @@ int run(const std::vector<std::string>& argv) {
     morph.run();
     for (std::size_t p = 0; p < rest.size(); ++p)
       if (!std::isfinite(rest[p].x) || !std::isfinite(rest[p].y) || !std::isfinite(rest[p].z) ||
-          !std::isfinite(normal_deltas[p].x) || !std::isfinite(normal_deltas[p].y) || !std::isfinite(normal_deltas[p].z))
+          !std::isfinite(normal_deltas[p].x) || !std::isfinite(normal_deltas[p].y) ||
+          !std::isfinite(normal_deltas[p].z))
         throw deform::Error::in_file(loaded.source, "morph targets",
                                      "the weights move point " + std::to_string(p) + " beyond float range");
   }
@@ -319,8 +321,7 @@ int run(const std::vector<std::string>& argv) {
     vertex_positions[r] = rest[point];
     vertex_normals[r] = mesh.vertex_normals[r] + normal_deltas[point];
   }
-  if (render_vertices > 0)
-    skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
+  if (render_vertices > 0) skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
   if (mush_iterations > 0) {
     // Delta Mush of the skinned points, bound on the rest points; the normals then come from the mushed surface.
     const deform::DeltaMushBinding binding =
@@ -404,7 +405,8 @@ const Command skin_command = {
     "N` writes up to 16).\n"
     "--allow-outside DIR (repeatable): files the model names (MTL, textures, buffers) may also come from DIR; by\n"
     "default only its own folder is read, and a file named elsewhere is refused with exit 2 (docs/security.md).\n"
-    "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, z]}}}.\n"
+    "Written atomically. Pose JSON: {\"bones\": {\"NAME\": {\"rotation\": [rx, ry, rz], \"translation\": [x, y, "
+    "z]}}}.\n"
     "--clip samples a clip of the model (the built-in character's: idle, walk, run, wave) at T seconds; --blend\n"
     "samples several at T and blends them by weight (>= 0, normalised; below a sum of 0.1 the bind pose joins in).\n"
     "Prints {\"method\", \"model\", \"vertices\", \"normals\", \"bones\", \"bones_posed\", \"limits\",\n"

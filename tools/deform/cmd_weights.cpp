@@ -34,7 +34,8 @@ constexpr const char* usage =
     "                  inside the voxelised volume, then falloff and smoothing as for distance.\n"
     "  distance        distance to each bone segment, only the nearest bone, its parent and its children competing,\n"
     "                  inverse-distance falloff, then one-ring smoothing (docs/builtin-character.md).\n"
-    "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"max_influences\", \"warnings\",\n"
+    "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"max_influences\", "
+    "\"warnings\",\n"
     "\"output\"}. Each warning (a bone that gets no vertex, an island of the mesh that sees no bone) goes to stderr.\n"
     "\n"
     "options:\n"
@@ -65,8 +66,9 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 }
 
 int run(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--skeleton", "--out", "--method", "--heat", "--oblique-penalty", "--resolution", "--falloff",
-                         "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length", "--allow-outside"},
+  const Args args(argv,
+                  {"--skeleton", "--out", "--method", "--heat", "--oblique-penalty", "--resolution", "--falloff",
+                   "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length", "--allow-outside"},
                   {"--builtin"});
   const std::string out = args.required("--out");
   const std::string method = args.value("--method").value_or("heat");

@@ -11,13 +11,14 @@
 
 namespace {
 
-const cli::Command* const commands[] = {&cli::info_command, &cli::skin_command,     &cli::weights_command,
-                                        &cli::ik_command,   &cli::ffd_command,      &cli::simulate_command,
+const cli::Command* const commands[] = {&cli::info_command,   &cli::skin_command, &cli::weights_command,
+                                        &cli::ik_command,     &cli::ffd_command,  &cli::simulate_command,
                                         &cli::export_command, &cli::bake_command};
 
 void print_usage(std::ostream& out) {
   out << "usage: deform [--help] [--version] COMMAND [ARGS...]\n\n"
-         "libdeform " DEFORM_VERSION_STRING " command-line tool. Results are JSON on stdout; messages on stderr.\n"
+         "libdeform " DEFORM_VERSION_STRING
+         " command-line tool. Results are JSON on stdout; messages on stderr.\n"
          "Exit status: 0 success, 2 bad usage or invalid input, 1 any other failure (a full disk, permissions).\n"
          "\ncommands:\n";
   for (const cli::Command* c : commands) {
@@ -61,8 +62,7 @@ int main(int argc, char** argv) {
   try {
     return command->run(rest);
   } catch (const cli::UsageError& e) {
-    std::cerr << "deform " << command->name << ": " << e.what() << "\n(see `deform " << command->name
-              << " --help`)\n";
+    std::cerr << "deform " << command->name << ": " << e.what() << "\n(see `deform " << command->name << " --help`)\n";
     return cli::exit_invalid;
   } catch (const deform::Error& e) {
     std::cerr << "deform " << command->name << ": " << e.what() << '\n';

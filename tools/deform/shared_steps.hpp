@@ -40,10 +40,10 @@ std::string read_rig_text(const std::string& path);
 inline const std::vector<std::string> rig_value_flags = {"--skeleton", "--weights", "--max-influences", "--rig",
                                                          "--allow-outside"};
 struct RiggedModel {
-  model_loading::LoadedModel loaded;     // its clips: the file's for an import, builtin_clips for the built-in one
+  model_loading::LoadedModel loaded;  // its clips: the file's for an import, builtin_clips for the built-in one
   deform::Rig rig;
-  deform::RigModel named;                // the model's files as read (paths from the current folder), for save_rig
-  std::string texture_root;              // the model's folder ("." for the built-in character)
+  deform::RigModel named;    // the model's files as read (paths from the current folder), for save_rig
+  std::string texture_root;  // the model's folder ("." for the built-in character)
 };
 // With `need_rig` false and no rig file, `rig` is left empty instead (a command that names its bones itself need not
 // fail where the default rig would).

@@ -36,10 +36,10 @@ struct ModelRequest {
 
 struct LoadedModel {
   deform::Model model;
-  std::string source;          // "builtin" or the path, for messages
-  bool builtin = false;        // the built-in character (builtin_character())
-  bool imported = false;       // read through deform::import: `clips` and `up` come from the file
-  bool rigged = true;          // false for a static import (one bone "root", every point weighted to it)
+  std::string source;                    // "builtin" or the path, for messages
+  bool builtin = false;                  // the built-in character (builtin_character())
+  bool imported = false;                 // read through deform::import: `clips` and `up` come from the file
+  bool rigged = true;                    // false for a static import (one bone "root", every point weighted to it)
   std::vector<deform::Animation> clips;  // an import's animation clips; empty otherwise
   glm::vec3 up{0.0f, 1.0f, 0.0f};        // the up axis an imported file declares; +Y otherwise
   std::vector<std::string> warnings;     // non-fatal findings, one line each, naming their file

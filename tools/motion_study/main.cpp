@@ -37,8 +37,8 @@ int whole_character(bool check) {
   for (const char* clip : {"walk", "run"}) {
     const deform::Rig rig = motion_study::tuned_full_rig();
     for (const float inertia : {-1.0f, 1.0f}) {
-      const motion_study::CharacterPaths reference = motion_study::play_character(rig, clip, 240.0, seconds, 3.0,
-                                                                                  inertia);
+      const motion_study::CharacterPaths reference =
+          motion_study::play_character(rig, clip, 240.0, seconds, 3.0, inertia);
       const double all = motion_study::amplitude_of(reference.surface);
       const double tail = motion_study::amplitude_of(reference.ponytail);
       for (const double hz : {30.0, 60.0, 144.0}) {
@@ -79,8 +79,9 @@ bool imported_flesh(const char* csv) {
     for (const deform::Animation& clip : imported.clips) {
       if (clip.name != c.clip) continue;
       if (!header) {
-        std::printf("| model | clip | lattices | limbs | inertia | largest limb length change | largest lattice volume "
-                    "change | largest jiggle, model units (%% of height) |\n|---|---|---:|---:|---|---:|---:|---:|\n");
+        std::printf(
+            "| model | clip | lattices | limbs | inertia | largest limb length change | largest lattice volume "
+            "change | largest jiggle, model units (%% of height) |\n|---|---|---:|---:|---|---:|---:|---:|\n");
         header = true;
       }
       const double seconds = motion_study::measured_seconds(clip);
@@ -189,15 +190,17 @@ int run(int argc, char** argv) {
     };
   };
   const auto walk = [](Method method) {
-    return [=](const std::vector<double>& times, double scale) { return motion_study::walk_hand(method, times, scale); };
+    return
+        [=](const std::vector<double>& times, double scale) { return motion_study::walk_hand(method, times, scale); };
   };
   struct Target {
     motion_study::Row row;
-    double spread;           // the target for spread_percent (libdeform rows; 0: none)
-    double spread_from_30;   // for spread_without_15_percent
+    double spread;          // the target for spread_percent (libdeform rows; 0: none)
+    double spread_from_30;  // for spread_without_15_percent
   };
   std::vector<Target> rows = {
-      {motion_study::measure("whip, 6-link chain", "libdeform", whip_seconds, whip(Method::libdeform, false)), 0.5, 0.5},
+      {motion_study::measure("whip, 6-link chain", "libdeform", whip_seconds, whip(Method::libdeform, false)), 0.5,
+       0.5},
       {motion_study::measure("whip, 6-link chain", "naive (VRM)", whip_seconds, whip(Method::naive, false)), 0, 0},
       {motion_study::measure("whip + collider", "libdeform", whip_seconds, whip(Method::libdeform, true)), 2.0, 2.0},
       {motion_study::measure("whip + collider", "naive (VRM)", whip_seconds, whip(Method::naive, true)), 0, 0},

@@ -104,7 +104,8 @@ class VrmChain {
         const glm::mat4& m = world[std::size_t(c.bone)];
         const glm::vec3 a(m * glm::vec4(c.start, 1.0f)), b(m * glm::vec4(c.end, 1.0f));
         const glm::vec3 ab = b - a;
-        const float along = glm::dot(ab, ab) > 0.0f ? std::clamp(glm::dot(next - a, ab) / glm::dot(ab, ab), 0.0f, 1.0f) : 0.0f;
+        const float along =
+            glm::dot(ab, ab) > 0.0f ? std::clamp(glm::dot(next - a, ab) / glm::dot(ab, ab), 0.0f, 1.0f) : 0.0f;
         const glm::vec3 nearest = a + ab * along;
         const float reach = (c.radius + joint_.hit_radius) * scale;
         if (glm::length(next - nearest) < reach) {
@@ -141,9 +142,12 @@ struct Whip {
     std::vector<deform::Bone> bones(std::size_t(links) + 1);
     bones[0] = {"root", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}};
     for (int i = 1; i <= links; ++i)
-      bones[std::size_t(i)] = {"link" + std::to_string(i), i - 1,
+      bones[std::size_t(i)] = {"link" + std::to_string(i),
+                               i - 1,
                                i < links ? std::vector<std::int32_t>{i + 1} : std::vector<std::int32_t>{},
-                               glm::vec3(i == 1 ? 0.1f : link, 0.0f, 0.0f), glm::vec3(0.0f), {}};
+                               glm::vec3(i == 1 ? 0.1f : link, 0.0f, 0.0f),
+                               glm::vec3(0.0f),
+                               {}};
     return deform::Skeleton(bones);
   }
   glm::dmat4 root(double t, double scale) const {
@@ -164,7 +168,9 @@ inline deform::VrmSpringJoint whip_joint() {
   return joint;
 }
 
-inline deform::SpringCollider whip_collider() { return {0, glm::vec3(0.55f, -0.35f, 0.0f), glm::vec3(0.55f, -0.35f, 0.0f), 0.2f}; }
+inline deform::SpringCollider whip_collider() {
+  return {0, glm::vec3(0.55f, -0.35f, 0.0f), glm::vec3(0.55f, -0.35f, 0.0f), 0.2f};
+}
 
 enum class Method { libdeform, naive };
 
@@ -220,7 +226,8 @@ inline ScaledCharacter scaled_builtin(double scale) {
   c.model.skeleton = deform::Skeleton(bones);
   c.walk = deform::builtin_walk(deform::builtin_character());
   for (deform::Channel& channel : c.walk.channels) {
-    for (auto* values : {&channel.translation.values, &channel.translation.in_tangents, &channel.translation.out_tangents})
+    for (auto* values :
+         {&channel.translation.values, &channel.translation.in_tangents, &channel.translation.out_tangents})
       for (glm::vec3& v : *values) v *= float(scale);
   }
   return c;
@@ -361,17 +368,17 @@ inline double amplitude_of(const std::vector<Path>& run) {
 // How the jiggle of `rig`'s lattices (their motion as the rig has it) deforms a character over a clip, against the
 // same clip with every lattice's inertia 0 (the rigid clip), every 1/30 s:
 struct FleshMeasure {
-  double limb_percent = 0.0;     // the largest change of a limb's length (from its upper limb's joint to its hand's
-                                 // or foot's, between the skin points nearest those joints in the bind pose), % of
-                                 // the rigid one's
-  double volume_percent = 0.0;   // the largest change of a lattice's volume (its control grid's cells), %
-  double jiggle = 0.0;           // the largest distance of a skin point from the rigid clip's, model units
-  double height = 0.0;           // the bind pose's extent along its tallest axis, model units (jiggle's yardstick)
+  double limb_percent = 0.0;    // the largest change of a limb's length (from its upper limb's joint to its hand's
+                                // or foot's, between the skin points nearest those joints in the bind pose), % of
+                                // the rigid one's
+  double volume_percent = 0.0;  // the largest change of a lattice's volume (its control grid's cells), %
+  double jiggle = 0.0;          // the largest distance of a skin point from the rigid clip's, model units
+  double height = 0.0;          // the bind pose's extent along its tallest axis, model units (jiggle's yardstick)
   std::string worst_limb, worst_lattice;
-  std::vector<double> times;                       // the samples' times
-  std::vector<std::string> limbs;                  // "upper-end" bone keys: upperarm_l-hand_l, thigh_r-foot_r, ...
-  std::vector<std::vector<double>> limb_length;    // per limb, its length at every sample
-  std::vector<std::vector<double>> rigid_length;   // the same in the rigid clip
+  std::vector<double> times;                      // the samples' times
+  std::vector<std::string> limbs;                 // "upper-end" bone keys: upperarm_l-hand_l, thigh_r-foot_r, ...
+  std::vector<std::vector<double>> limb_length;   // per limb, its length at every sample
+  std::vector<std::vector<double>> rigid_length;  // the same in the rigid clip
   double jiggle_percent() const { return height > 0.0 ? 100.0 * jiggle / height : 0.0; }
 };
 
@@ -385,9 +392,9 @@ inline double grid_volume(std::span<const glm::vec3> p, glm::ivec3 counts) {
   for (int k = 0; k + 1 < counts.z; ++k)
     for (int j = 0; j + 1 < counts.y; ++j)
       for (int i = 0; i + 1 < counts.x; ++i) {
-        const glm::dvec3 c000 = at(i, j, k), c100 = at(i + 1, j, k), c010 = at(i, j + 1, k),
-                         c110 = at(i + 1, j + 1, k), c001 = at(i, j, k + 1), c101 = at(i + 1, j, k + 1),
-                         c011 = at(i, j + 1, k + 1), c111 = at(i + 1, j + 1, k + 1);
+        const glm::dvec3 c000 = at(i, j, k), c100 = at(i + 1, j, k), c010 = at(i, j + 1, k), c110 = at(i + 1, j + 1, k),
+                         c001 = at(i, j, k + 1), c101 = at(i + 1, j, k + 1), c011 = at(i, j + 1, k + 1),
+                         c111 = at(i + 1, j + 1, k + 1);
         // The cube's six tetrahedra around its diagonal c000-c111.
         volume += tet(c000, c100, c110, c111) + tet(c000, c110, c010, c111) + tet(c000, c010, c011, c111) +
                   tet(c000, c011, c001, c111) + tet(c000, c001, c101, c111) + tet(c000, c101, c100, c111);
@@ -534,8 +541,8 @@ Row measure(std::string motion, std::string method, double seconds, Run run) {
   Row row{std::move(motion), std::move(method), spread_of(runs).percent(), 0.0, 0.0};
   row.spread_without_15_percent = spread_of(std::vector<Path>(runs.begin() + 1, runs.end())).percent();
   for (const double scale : {0.01, 100.0})
-    row.scale_percent =
-        std::max(row.scale_percent, scale_mismatch_percent(runs[2], run(frame_times(60.0, seconds, false), scale), scale));
+    row.scale_percent = std::max(row.scale_percent,
+                                 scale_mismatch_percent(runs[2], run(frame_times(60.0, seconds, false), scale), scale));
   return row;
 }
 

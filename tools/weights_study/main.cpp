@@ -90,12 +90,14 @@ int main(int argc, char** argv) {
     else paths.push_back(a);
   }
   if (paths.empty() || samples < 1) {
-    std::fprintf(stderr, "usage: weights_study [--samples N] [--all-bones] [--detail] [--heat C] [--oblique K] "
-                         "[--no-visibility] [--max-influences N] [--resolution N] MODEL...\n");
+    std::fprintf(stderr,
+                 "usage: weights_study [--samples N] [--all-bones] [--detail] [--heat C] [--oblique K] "
+                 "[--no-visibility] [--max-influences N] [--resolution N] MODEL...\n");
     return 2;
   }
-  std::printf("| model | points | bones (deforming) | clips (poses) | method | mean | p99 | max | strongest bone differs "
-              "| bind time |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| model | points | bones (deforming) | clips (poses) | method | mean | p99 | max | strongest bone differs "
+      "| bind time |\n|---|---|---|---|---|---|---|---|---|---|\n");
   int failures = 0;
   for (const std::string& path : paths) {
     try {
@@ -126,7 +128,8 @@ int main(int argc, char** argv) {
         const auto start = std::chrono::steady_clock::now();
         deform::WeightsResult r = deform::compute_heat_weights(model.mesh, model.skeleton, o);
         const double took = seconds_since(start);
-        for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: heat: %s\n", file_name(path).c_str(), w.c_str());
+        for (const std::string& w : r.warnings)
+          std::fprintf(stderr, "%s: heat: %s\n", file_name(path).c_str(), w.c_str());
         runs.push_back({"heat", std::move(r.weights), took, r.warnings.size()});
       }
       {
@@ -136,7 +139,8 @@ int main(int argc, char** argv) {
         const auto start = std::chrono::steady_clock::now();
         deform::WeightsResult r = deform::compute_voxel_weights(model.mesh, model.skeleton, o);
         const double took = seconds_since(start);
-        for (const std::string& w : r.warnings) std::fprintf(stderr, "%s: voxel: %s\n", file_name(path).c_str(), w.c_str());
+        for (const std::string& w : r.warnings)
+          std::fprintf(stderr, "%s: voxel: %s\n", file_name(path).c_str(), w.c_str());
         runs.push_back({"voxel", std::move(r.weights), took, r.warnings.size()});
       }
       if (detail) print_worst(model, imported.clips, runs[1].weights, samples);  // heat, the default

@@ -110,8 +110,8 @@ deform_status deform_character_load(const char* obj_path, const char* sk_path, c
 }
 
 deform_status deform_character_load_allowing(const char* obj_path, const char* sk_path, const char* skw_path,
-                                             const char* rig_path, const char* const* allow_outside,
-                                             size_t allow_count, deform_character** out) {
+                                             const char* rig_path, const char* const* allow_outside, size_t allow_count,
+                                             deform_character** out) {
   if (out == nullptr || obj_path == nullptr || sk_path == nullptr || skw_path == nullptr)
     return fail_argument("deform_character_load: a path or out is NULL");
   if (allow_count > 0 && allow_outside == nullptr)
@@ -156,8 +156,8 @@ deform_status deform_character_set_pose(deform_character* character, const float
 deform_status deform_character_set_pose_moving(deform_character* character, const float* rotations_xyzw,
                                                const float* translations, const float* later_rotations_xyzw,
                                                const float* later_translations, float lead, size_t bone_count) {
-  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr ||
-      later_rotations_xyzw == nullptr || later_translations == nullptr)
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr || later_rotations_xyzw == nullptr ||
+      later_translations == nullptr)
     return fail_argument("deform_character_set_pose_moving: a handle or array is NULL");
   if (bone_count != character->pose.rotations.size())
     return fail_argument("deform_character_set_pose_moving: bone_count differs from the skeleton's");
@@ -167,7 +167,7 @@ deform_status deform_character_set_pose_moving(deform_character* character, cons
 }
 
 deform_status deform_character_bind_pose(const deform_character* character, float* rotations_xyzw, float* translations,
-                                        size_t bone_count) {
+                                         size_t bone_count) {
   if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr)
     return fail_argument("deform_character_bind_pose: a handle or array is NULL");
   const deform::Skeleton& skeleton = character->character.skeleton();
@@ -234,7 +234,8 @@ deform_status deform_character_set_delta_mush(deform_character* character, int i
 
 deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
                                      deform_reach_result* result) {
-  if (character == nullptr || target == nullptr) return fail_argument("deform_character_reach: a handle or target is NULL");
+  if (character == nullptr || target == nullptr)
+    return fail_argument("deform_character_reach: a handle or target is NULL");
   const deform::ReachResult reached = character->character.reach(effector, glm::vec3(target[0], target[1], target[2]));
   if (!reached.status) return refused(reached.status);
   if (result != nullptr) *result = {reached.residual, reached.stretch, reached.distance, reached.iterations};
@@ -295,7 +296,8 @@ deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uin
 
 deform_status deform_lattice_create(const float origin[3], const float size[3], int degree_u, int degree_v,
                                     int degree_w, deform_lattice** out) {
-  if (origin == nullptr || size == nullptr || out == nullptr) return fail_argument("deform_lattice_create: NULL argument");
+  if (origin == nullptr || size == nullptr || out == nullptr)
+    return fail_argument("deform_lattice_create: NULL argument");
   if (!finite3(origin) || !finite3(size)) return fail_argument("deform_lattice_create: origin or size is not finite");
   if (!(size[0] > 0.0f && size[1] > 0.0f && size[2] > 0.0f))
     return fail_argument("deform_lattice_create: size is not positive on every axis");
@@ -320,7 +322,8 @@ float* deform_lattice_control_points(deform_lattice* lattice, size_t* count) {
 }
 
 deform_status deform_lattice_bind(deform_lattice* lattice, const float* points, size_t count) {
-  if (lattice == nullptr || (points == nullptr && count > 0)) return fail_argument("deform_lattice_bind: NULL argument");
+  if (lattice == nullptr || (points == nullptr && count > 0))
+    return fail_argument("deform_lattice_bind: NULL argument");
   return guarded([&] {
     lattice->binding = deform::bind_lattice(lattice->lattice, {reinterpret_cast<const glm::vec3*>(points), count});
     lattice->bound_count = count;
@@ -331,7 +334,8 @@ deform_status deform_lattice_bind(deform_lattice* lattice, const float* points, 
 deform_status deform_lattice_evaluate(const deform_lattice* lattice, float* out, size_t count) {
   if (lattice == nullptr || out == nullptr) return fail_argument("deform_lattice_evaluate: NULL argument");
   if (!lattice->binding) return fail_argument("deform_lattice_evaluate: no points are bound (deform_lattice_bind)");
-  if (count != lattice->bound_count) return fail_argument("deform_lattice_evaluate: count differs from the bound count");
+  if (count != lattice->bound_count)
+    return fail_argument("deform_lattice_evaluate: count differs from the bound count");
   deform::LatticeEvaluateJob job;
   job.binding = &*lattice->binding;
   job.control_points = lattice->lattice.control_points();

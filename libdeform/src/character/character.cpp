@@ -327,8 +327,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     if (reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
       chain_.swing_twist.resize(chain_.joint_count());
       for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
-        chain_.swing_twist[k] = swing_twist_from_euler(skel.bone(chain_.bones[k]).limits,
-                                                       skel.bone(chain_.bones[k + 1]).bind_translation);
+        chain_.swing_twist[k] =
+            swing_twist_from_euler(skel.bone(chain_.bones[k]).limits, skel.bone(chain_.bones[k + 1]).bind_translation);
         chain_.limits[k] = EulerLimits{};
       }
     }

@@ -82,10 +82,14 @@ std::vector<Bone> character_bones() {
   // take the back's weights.
   // Each bone points along its local +Y. Its first bone is the head's only child, so the head's weight segment
   // (docs/builtin-character.md, "Automatic weights") runs from the head to the ponytail's root.
-  bones.push_back({"ponytail1", 4, {}, {0.0f, 0.16f, -0.085f}, {-120.0f, 0.0f, 0.0f}, limits({-170, -45, -45}, {-70, 45, 45})});
-  bones.push_back({"ponytail2", 29, {}, {0.0f, 0.10f, 0.0f}, {-40.0f, 0.0f, 0.0f}, limits({-90, -45, -45}, {10, 45, 45})});
-  bones.push_back({"ponytail3", 30, {}, {0.0f, 0.07f, 0.0f}, {-15.0f, 0.0f, 0.0f}, limits({-65, -45, -45}, {35, 45, 45})});
-  bones.push_back({"ponytail4", 31, {}, {0.0f, 0.07f, 0.0f}, {-5.0f, 0.0f, 0.0f}, limits({-55, -45, -45}, {45, 45, 45})});
+  bones.push_back(
+      {"ponytail1", 4, {}, {0.0f, 0.16f, -0.085f}, {-120.0f, 0.0f, 0.0f}, limits({-170, -45, -45}, {-70, 45, 45})});
+  bones.push_back(
+      {"ponytail2", 29, {}, {0.0f, 0.10f, 0.0f}, {-40.0f, 0.0f, 0.0f}, limits({-90, -45, -45}, {10, 45, 45})});
+  bones.push_back(
+      {"ponytail3", 30, {}, {0.0f, 0.07f, 0.0f}, {-15.0f, 0.0f, 0.0f}, limits({-65, -45, -45}, {35, 45, 45})});
+  bones.push_back(
+      {"ponytail4", 31, {}, {0.0f, 0.07f, 0.0f}, {-5.0f, 0.0f, 0.0f}, limits({-55, -45, -45}, {45, 45, 45})});
   for (std::size_t b = 1; b < bones.size(); ++b)
     bones[static_cast<std::size_t>(bones[b].parent)].children.push_back(static_cast<std::int32_t>(b));
   return bones;
@@ -98,11 +102,25 @@ std::vector<Bone> character_bones() {
 // surface (every cage quad becomes 16). Every face keeps the body part (OBJ group, atlas cell) of its cage face.
 
 enum BodyPart : int {
-  torso, neck, head_part, arm_l, arm_r, hand_l, hand_r, thumb_l, thumb_r, leg_l, leg_r, foot_l, foot_r, hair_part
+  torso,
+  neck,
+  head_part,
+  arm_l,
+  arm_r,
+  hand_l,
+  hand_r,
+  thumb_l,
+  thumb_r,
+  leg_l,
+  leg_r,
+  foot_l,
+  foot_r,
+  hair_part
 };
 constexpr int body_part_count = 14;
-const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",  "arm_l", "arm_r",  "hand_l", "hand_r",
-                                                     "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
+const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",    "arm_l",   "arm_r",
+                                                      "hand_l", "hand_r", "thumb_l", "thumb_r", "leg_l",
+                                                      "leg_r",  "foot_l", "foot_r",  "hair"};
 
 struct Cage {
   std::vector<glm::vec3> points;
@@ -165,16 +183,17 @@ Cage body_cage() {
   struct TorsoRing {
     float y, rx, rz, dz;
   };
-  const TorsoRing torso_rings[] = {
-      {0.80f, 0.160f, 0.115f, 0.000f}, {0.98f, 0.165f, 0.120f, -0.005f}, {1.18f, 0.150f, 0.115f, 0.005f},
-      {1.37f, 0.185f, 0.120f, 0.000f}, {1.535f, 0.170f, 0.095f, 0.000f}};
+  const TorsoRing torso_rings[] = {{0.80f, 0.160f, 0.115f, 0.000f},
+                                   {0.98f, 0.165f, 0.120f, -0.005f},
+                                   {1.18f, 0.150f, 0.115f, 0.005f},
+                                   {1.37f, 0.185f, 0.120f, 0.000f},
+                                   {1.535f, 0.170f, 0.095f, 0.000f}};
   const float c = std::tan(std::numbers::pi_v<float> / 8.0f);  // 0.414: octagon corners on the flat faces
   const glm::vec2 octagon[8] = {{1, c}, {c, 1}, {-c, 1}, {-1, c}, {-1, -c}, {-c, -1}, {c, -1}, {1, -c}};
   std::vector<std::array<std::uint32_t, 8>> rings;
   for (const TorsoRing& r : torso_rings) {
     std::array<std::uint32_t, 8> ring{};
-    for (std::size_t k = 0; k < 8; ++k)
-      ring[k] = cage.add({r.rx * octagon[k].x, r.y, r.rz * octagon[k].y + r.dz});
+    for (std::size_t k = 0; k < 8; ++k) ring[k] = cage.add({r.rx * octagon[k].x, r.y, r.rz * octagon[k].y + r.dz});
     rings.push_back(ring);
   }
   // Angles grow from +X towards +Z, so seen from outside (+Y is up) a side quad runs k → k+1 on the upper ring first.
@@ -223,13 +242,12 @@ Cage body_cage() {
       const float a = glm::radians(angle_deg);  // the tube's direction (0, cos a, sin a), as a bone's Euler X
       return Cage::TubeLoop{centre, x, {0.0f, -std::sin(a), std::cos(a)}, r1, r2};
     };
-    cage.extrude_tube(back, x, y,
-                      {loop({0.0f, 1.775f, -0.140f}, -100.0f, 0.034f, 0.032f),
-                       loop({0.0f, 1.705f, -0.178f}, -135.0f, 0.028f, 0.027f),
-                       loop({0.0f, 1.632f, -0.200f}, -165.0f, 0.030f, 0.028f),
-                       loop({0.0f, 1.567f, -0.205f}, -178.0f, 0.024f, 0.022f),
-                       loop({0.0f, 1.515f, -0.205f}, -180.0f, 0.012f, 0.011f)},
-                      hair_part);
+    cage.extrude_tube(
+        back, x, y,
+        {loop({0.0f, 1.775f, -0.140f}, -100.0f, 0.034f, 0.032f), loop({0.0f, 1.705f, -0.178f}, -135.0f, 0.028f, 0.027f),
+         loop({0.0f, 1.632f, -0.200f}, -165.0f, 0.030f, 0.028f), loop({0.0f, 1.567f, -0.205f}, -178.0f, 0.024f, 0.022f),
+         loop({0.0f, 1.515f, -0.205f}, -180.0f, 0.012f, 0.011f)},
+        hair_part);
   }
   for (int s = 0; s < 2; ++s) {
     const float side = s == 0 ? 1.0f : -1.0f;
@@ -276,9 +294,7 @@ Cage body_cage() {
       if (centre.y < 0.1f && centre.z > 0.03f) instep = f;
     }
     cage.parts[instep] = s == 0 ? foot_l : foot_r;
-    cage.extrude(instep, x, y,
-                 {{{lx, 0.040f, 0.19f}, 0.048f, 0.040f}},
-                 s == 0 ? foot_l : foot_r);
+    cage.extrude(instep, x, y, {{{lx, 0.040f, 0.19f}, 0.048f, 0.040f}}, s == 0 ? foot_l : foot_r);
   }
   return cage;
 }
@@ -298,7 +314,8 @@ Cage subdivide(const Cage& in) {
   std::vector<std::vector<std::size_t>> edge_faces;
   auto edge = [&](std::uint32_t a, std::uint32_t b) {
     const auto key = std::minmax(a, b);
-    const auto [it, inserted] = edge_index.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(edges.size()));
+    const auto [it, inserted] =
+        edge_index.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(edges.size()));
     if (inserted) {
       edges.push_back({key.first, key.second});
       edge_faces.emplace_back();
@@ -334,7 +351,8 @@ Cage subdivide(const Cage& in) {
   for (std::size_t e = 0; e < edges.size(); ++e) {
     const auto& f = edge_faces[e];
     if (f.size() != 2) throw Error::in_file("builtin character", "body cage", "is not a closed 2-manifold");
-    out.points.push_back(0.25f * (in.points[edges[e][0]] + in.points[edges[e][1]] + face_point[f[0]] + face_point[f[1]]));
+    out.points.push_back(0.25f *
+                         (in.points[edges[e][0]] + in.points[edges[e][1]] + face_point[f[0]] + face_point[f[1]]));
   }
   const auto face_base = static_cast<std::uint32_t>(out.points.size());
   for (const glm::vec3& c : face_point) out.points.push_back(c);
@@ -390,8 +408,8 @@ glm::vec2 part_uv(int part, glm::vec3 p) {
   const glm::vec3 radial = d - glm::dot(d, t) * t;
   const glm::vec3 front = glm::normalize(a.front - glm::dot(a.front, t) * t);
   const float r = glm::length(radial);
-  const float u = r > 1e-6f ? std::acos(std::clamp(glm::dot(radial / r, front), -1.0f, 1.0f)) / std::numbers::pi_v<float>
-                            : 0.5f;
+  const float u =
+      r > 1e-6f ? std::acos(std::clamp(glm::dot(radial / r, front), -1.0f, 1.0f)) / std::numbers::pi_v<float> : 0.5f;
   return {u, v};
 }
 
@@ -444,7 +462,8 @@ void build_body(Mesh& mesh) {
       std::array<std::uint32_t, 4> v{};
       for (std::size_t k = 0; k < 4; ++k) {
         const std::uint32_t p = body.faces[f][k];
-        const auto [it, inserted] = vertex_of.try_emplace({p, part}, static_cast<std::uint32_t>(mesh.vertex_point.size()));
+        const auto [it, inserted] =
+            vertex_of.try_emplace({p, part}, static_cast<std::uint32_t>(mesh.vertex_point.size()));
         if (inserted) {
           mesh.vertex_point.push_back(p);
           const glm::vec2 uv = part_uv(part, mesh.positions[p]);
@@ -457,8 +476,7 @@ void build_body(Mesh& mesh) {
       const auto& q = body.faces[f];
       if (glm::length(P[q[0]] - P[q[2]]) <= glm::length(P[q[1]] - P[q[3]]))
         mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
-      else
-        mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[3], v[1], v[2], v[3]});
+      else mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[3], v[1], v[2], v[3]});
     }
     mesh.submeshes.push_back(
         {first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0, "builtin", body_part_names[part]});
@@ -567,7 +585,7 @@ glm::vec3 painted(int part, float u, float v) {
     case 5:
     case 6:
     case 7:
-    case 8: c = mix3(skin, blush, 0.2f); break;  // hands and thumbs: a little pinker
+    case 8: c = mix3(skin, blush, 0.2f); break;                    // hands and thumbs: a little pinker
     case 13: c = mix3(hair, hair * 0.75f, 0.5f + strokes); break;  // the ponytail: hair, streaked along its length
     default: c = glm::vec3(0.75f); break;
   }
@@ -598,8 +616,8 @@ std::vector<std::uint8_t> builtin_texture(int size) {
       const float v = std::clamp(((t - static_cast<float>(cy) * cell) / cell - atlas_margin) / inner, 0.0f, 1.0f);
       const glm::vec3 c = painted(cy * atlas_cells + cx, u, v);
       for (int k = 0; k < 3; ++k)
-        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 + static_cast<std::size_t>(k)] =
-            static_cast<std::uint8_t>(std::lround(255.0f * c[k]));
+        pixels[(static_cast<std::size_t>(row) * n + static_cast<std::size_t>(column)) * 3 +
+               static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(std::lround(255.0f * c[k]));
     }
   return pixels;
 }

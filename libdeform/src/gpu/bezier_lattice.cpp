@@ -290,8 +290,8 @@ Status GpuBezierLattice::upload(glm::ivec3 point_counts, const glm::mat3& normal
     return Status::failure("the driver rejected the compute shader (shader_log() has its message)");
   }
   const auto location = [&](const char* name) { return glGetUniformLocation(program_, name); };
-  uniforms_ = {location("first_vertex"), location("vertex_count"), location("normal_basis"),
-               location("with_normals"), location("scatter"),      location("additive"),
+  uniforms_ = {location("first_vertex"), location("vertex_count"),    location("normal_basis"),
+               location("with_normals"), location("scatter"),         location("additive"),
                location("stride"),       location("position_offset"), location("normal_offset"),
                location("to_bind"),      location("noise_floor2")};
 
@@ -361,7 +361,8 @@ void GpuBezierLattice::dispatch(std::span<const glm::vec3> control_points, unsig
 Status GpuBezierLattice::evaluate(std::span<const glm::vec3> control_points) {
   if (!program_) return Status::failure("nothing was created");
   if (additive_) return Status::failure("an additive lattice only adds into a vertex buffer");
-  if (control_points.size() != std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
+  if (control_points.size() !=
+      std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
     return Status::failure("the control point count differs from the binding's");
   dispatch(control_points, results_, false, GpuVertexLayout{6, 0, 3});
   return {};
@@ -389,7 +390,8 @@ Status GpuBezierLattice::read_back(std::span<glm::vec3> positions, std::span<glm
 Status GpuBezierLattice::validate_into(std::span<const glm::vec3> control_points, unsigned int vertex_buffer,
                                        const GpuVertexLayout& layout) const {
   if (!program_) return Status::failure("nothing was created");
-  if (control_points.size() != std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
+  if (control_points.size() !=
+      std::size_t(point_counts_.x) * std::size_t(point_counts_.y) * std::size_t(point_counts_.z))
     return Status::failure("the control point count differs from the binding's");
   if (layout.floats_per_vertex <= 0 || layout.position_offset < 0 || layout.normal_offset < 0 ||
       layout.position_offset + 3 > layout.floats_per_vertex || layout.normal_offset + 3 > layout.floats_per_vertex)
@@ -433,8 +435,7 @@ Status GpuBezierLattice::validate_into(std::span<const glm::vec3> displacements,
 Status GpuBezierLattice::evaluate_into(std::span<const glm::vec3> displacements,
                                        std::span<const glm::vec3> mapped_points, const glm::mat3& to_bind,
                                        unsigned int vertex_buffer, const GpuVertexLayout& layout) {
-  if (const Status status = validate_into(displacements, mapped_points, vertex_buffer, layout); !status)
-    return status;
+  if (const Status status = validate_into(displacements, mapped_points, vertex_buffer, layout); !status) return status;
   dispatch(displacements, vertex_buffer, true, layout, mapped_points, to_bind);
   glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   return {};

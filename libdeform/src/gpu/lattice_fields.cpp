@@ -40,8 +40,8 @@ Status GpuLatticeFields::create(const DeformerHierarchy& hierarchy, std::span<co
     // Carried points only translate: their normals stay as skinned, so the carried lattices take none.
     Status status =
         lattices_[l].create_additive(hierarchy.binding(l), hierarchy.bound_weights(l), vertex_point, normals);
-    if (status) status = carried_[l].create_additive(carried_binding(hierarchy, l), hierarchy.carried_weights(l),
-                                                     vertex_point);
+    if (status)
+      status = carried_[l].create_additive(carried_binding(hierarchy, l), hierarchy.carried_weights(l), vertex_point);
     if (!status) {
       clear();
       return status;
@@ -75,8 +75,7 @@ void GpuLatticeFields::add_fields(const DeformerHierarchy& hierarchy, unsigned i
     }
     const std::span<glm::vec3> mapped(mapped_points_.data(), hierarchy.rest_lattice(l).point_count());
     hierarchy.mapped_points(l, mapped);
-    lattices_[l].evaluate_into(hierarchy.displacements(l), mapped, hierarchy.normals_to_bind(l), vertex_buffer,
-                               layout);
+    lattices_[l].evaluate_into(hierarchy.displacements(l), mapped, hierarchy.normals_to_bind(l), vertex_buffer, layout);
   }
 }
 
@@ -97,9 +96,9 @@ Status GpuLatticeFields::apply_into(const DeformerHierarchy& hierarchy, unsigned
   // ends with the barrier that orders the next one's read-modify-write of the same positions after it.
   for (std::size_t l = 0; l < lattices_.size(); ++l)
     if (hierarchy.active(l))
-      carried_[l].evaluate_into(std::span<const glm::vec3>(carried_points_.data() + l * carried_point_count,
-                                                           carried_point_count),
-                                vertex_buffer, layout);
+      carried_[l].evaluate_into(
+          std::span<const glm::vec3>(carried_points_.data() + l * carried_point_count, carried_point_count),
+          vertex_buffer, layout);
   add_fields(hierarchy, vertex_buffer, layout);
   return {};
 }

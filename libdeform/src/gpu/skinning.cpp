@@ -206,8 +206,8 @@ Status GpuSkinning::create(const GpuSkinningBind& bind) {
     const glm::u16vec4 b = bind.bone_indices[p];
     const glm::vec4 w = bind.bone_weights[p];
     positions.insert(positions.end(), {x.x, x.y, x.z});
-    indices.insert(indices.end(), {std::uint32_t(b.x) | std::uint32_t(b.y) << 16,
-                                   std::uint32_t(b.z) | std::uint32_t(b.w) << 16});
+    indices.insert(indices.end(),
+                   {std::uint32_t(b.x) | std::uint32_t(b.y) << 16, std::uint32_t(b.z) | std::uint32_t(b.w) << 16});
     weights.insert(weights.end(), {w.x, w.y, w.z, w.w});
     if (!bind.normals.empty()) {
       const glm::vec3 n = bind.normals[r];
@@ -221,8 +221,8 @@ Status GpuSkinning::create(const GpuSkinningBind& bind) {
     return Status::failure("the driver rejected the compute shader (shader_log() has its message)");
   }
   const auto location = [&](const char* name) { return glGetUniformLocation(program_, name); };
-  uniforms_ = {location("first_vertex"), location("vertex_count"), location("method"),
-               location("scaled"),       location("with_normals"), location("bones"),
+  uniforms_ = {location("first_vertex"), location("vertex_count"),    location("method"),
+               location("scaled"),       location("with_normals"),    location("bones"),
                location("stride"),       location("position_offset"), location("normal_offset")};
   count_ = count;
   bones_ = bind.bone_count;
@@ -260,8 +260,7 @@ Status GpuSkinning::validate_into(std::size_t palette_size, unsigned int vertex_
 
 Status GpuSkinning::skin_into(SkinningMethod method, std::span<const glm::mat4> palette, unsigned int vertex_buffer,
                               const GpuVertexLayout& layout) {
-  if (method != SkinningMethod::lbs && method != SkinningMethod::dqs)
-    return Status::failure("unknown skinning method");
+  if (method != SkinningMethod::lbs && method != SkinningMethod::dqs) return Status::failure("unknown skinning method");
   if (const Status status = validate_into(palette.size(), vertex_buffer, layout); !status) return status;
   if (method == SkinningMethod::dqs) {
     bool has_scale = false;

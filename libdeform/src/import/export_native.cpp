@@ -91,7 +91,7 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
 
   // Textures: one copy per distinct source; a name already taken by another source gets an index prefix.
   std::vector<Material> materials = model.mesh.materials;
-  std::map<std::string, std::string> copy_of;  // source -> file name in `folder`
+  std::map<std::string, std::string> copy_of;                             // source -> file name in `folder`
   std::map<const std::vector<std::uint8_t>*, std::string> file_of_image;  // embedded image -> file name in `folder`
   std::map<std::string, std::string> checked;  // source -> why refused ("" if not): each is checked once per export
   for (Material& material : materials) {
@@ -149,10 +149,11 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
     const std::size_t points = drop_extra_influences(folded, &largest);
     char dropped[32];
     std::snprintf(dropped, sizeof dropped, "%.4g", double(largest));
-    files.warnings.push_back(names[3] + ": " + std::to_string(points) +
-                             " vertices have more than 4 influences, more than .skw readers keep by default: the strongest 4 "
-                             "written, renormalised (largest weight dropped: " + std::string(dropped) +
-                             " of the vertex's total); the model skins differently from the import there");
+    files.warnings.push_back(
+        names[3] + ": " + std::to_string(points) +
+        " vertices have more than 4 influences, more than .skw readers keep by default: the strongest 4 "
+        "written, renormalised (largest weight dropped: " +
+        std::string(dropped) + " of the vertex's total); the model skins differently from the import there");
   }
   if (!model.morph_targets.empty())
     files.warnings.push_back(names[0] + ": " + std::to_string(model.morph_targets.size()) +

@@ -125,8 +125,8 @@ ApprovedFiles approve_buffers(const std::string& path, const std::string& base, 
     if (!buffers[i].is_object() || !buffers[i].contains("uri") || !buffers[i]["uri"].is_string()) continue;
     const std::string& uri = buffers[i]["uri"].get_ref<const std::string&>();
     if (tinygltf::IsDataURI(uri)) continue;
-    const std::string real = resolve_referenced_file(path, uri, "buffers[" + std::to_string(i) + "].uri", policy,
-                                                     ReferenceSyntax::uri);
+    const std::string real =
+        resolve_referenced_file(path, uri, "buffers[" + std::to_string(i) + "].uri", policy, ReferenceSyntax::uri);
     files.approved[tinygltf::JoinPath(base, tinygltf::dlib::urldecode(uri))] = real;
   }
   return files;
@@ -236,8 +236,8 @@ struct Reader {
     const auto& data = gltf.buffers[static_cast<std::size_t>(view.buffer)].data;
     if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
       fail(view_element, "bytes " + std::to_string(view.byteOffset) + " + " + std::to_string(view.byteLength) +
-                             " lie outside buffer " + std::to_string(view.buffer) + " (" +
-                             std::to_string(data.size()) + " bytes)");
+                             " lie outside buffer " + std::to_string(view.buffer) + " (" + std::to_string(data.size()) +
+                             " bytes)");
     return {data.data() + view.byteOffset, view.byteLength};
   }
 
@@ -285,8 +285,8 @@ struct Reader {
     if (a.sparse.isSparse) {
       const std::string sparse = element + ".sparse";
       if (a.sparse.count < 0 || static_cast<std::size_t>(a.sparse.count) > a.count)
-        fail(sparse, "count " + std::to_string(a.sparse.count) + " is not within the accessor's " +
-                         std::to_string(a.count));
+        fail(sparse,
+             "count " + std::to_string(a.sparse.count) + " is not within the accessor's " + std::to_string(a.count));
       const auto n = static_cast<std::size_t>(a.sparse.count);
       const int index_type = a.sparse.indices.componentType;
       const std::size_t index_size = component_size(index_type);
@@ -304,7 +304,8 @@ struct Reader {
       for (std::size_t k = 0; k < n; ++k) {
         const auto target = static_cast<std::size_t>(component(ibytes + ioffset + k * index_size, index_type, false));
         if (target >= a.count)
-          fail(sparse + ".indices", "index " + std::to_string(target) + " is not below count " + std::to_string(a.count));
+          fail(sparse + ".indices",
+               "index " + std::to_string(target) + " is not below count " + std::to_string(a.count));
         for (std::size_t c = 0; c < components; ++c)
           out[target * components + c] =
               component(vbytes + voffset + k * element_bytes + c * size, a.componentType, a.normalized);
@@ -369,14 +370,16 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     std::memcpy(header, bytes.data(), 20);
     if (header[1] != 2) throw Error::in_file(path, "GLB header", "version " + std::to_string(header[1]) + ", not 2");
     if (header[2] > bytes.size() || header[2] < 20)
-      throw Error::in_file(path, "GLB header", "length " + std::to_string(header[2]) + " is not the file's " +
-                                                   std::to_string(bytes.size()) + " bytes");
+      throw Error::in_file(
+          path, "GLB header",
+          "length " + std::to_string(header[2]) + " is not the file's " + std::to_string(bytes.size()) + " bytes");
     if (header[4] != 0x4E4F534Au || std::uint64_t{header[3]} + 20 > header[2])
-      throw Error::in_file(path, "GLB header", "the first chunk is not JSON within the file (" +
-                                                   std::to_string(header[3]) + " bytes claimed)");
+      throw Error::in_file(
+          path, "GLB header",
+          "the first chunk is not JSON within the file (" + std::to_string(header[3]) + " bytes claimed)");
     approved = approve_buffers(path, base, text(20, header[3]), options.references);
-    loaded = loader.LoadBinaryFromMemory(&gltf, &error, &warning, bytes.data(),
-                                         static_cast<unsigned int>(bytes.size()), base);
+    loaded = loader.LoadBinaryFromMemory(&gltf, &error, &warning, bytes.data(), static_cast<unsigned int>(bytes.size()),
+                                         base);
   } else {
     approved = approve_buffers(path, base, text(0, bytes.size()), options.references);
     loaded = loader.LoadASCIIFromString(&gltf, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
@@ -497,9 +500,9 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   bool any_animation = false;
   for (const tinygltf::Animation& animation : gltf.animations)
     for (const tinygltf::AnimationChannel& channel : animation.channels)
-      any_animation = any_animation || (channel.target_node >= 0 &&
-                                        static_cast<std::size_t>(channel.target_node) < node_count &&
-                                        nodes[static_cast<std::size_t>(channel.target_node)].in_scene);
+      any_animation =
+          any_animation || (channel.target_node >= 0 && static_cast<std::size_t>(channel.target_node) < node_count &&
+                            nodes[static_cast<std::size_t>(channel.target_node)].in_scene);
   const bool any_skin = std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.skin >= 0; });
   const bool rigged = any_skin || any_animation;
   result.rigged = rigged;
@@ -652,10 +655,11 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
     const Split rest = split(glm::mat4(nodes[static_cast<std::size_t>(n)].global));
     bool exact = glm::length(rest.axis_scale - bind_split[b].axis_scale) <= 1e-4f * glm::length(rest.axis_scale);
     // A shear or mirror in this bone's world, or a non-uniform scale passed on to children, is not a rigid motion.
-    const bool has_children = std::any_of(bones.begin(), bones.end(),
-                                          [&](const Bone& other) { return other.parent == static_cast<std::int32_t>(b); });
-    exact = exact && (rest.similarity || (!has_children && glm::determinant(glm::mat3(rest.rigid())) > 0.0f &&
-                                          glm::determinant(glm::mat3(nodes[static_cast<std::size_t>(n)].global)) > 0.0));
+    const bool has_children = std::any_of(
+        bones.begin(), bones.end(), [&](const Bone& other) { return other.parent == static_cast<std::int32_t>(b); });
+    exact =
+        exact && (rest.similarity || (!has_children && glm::determinant(glm::mat3(rest.rigid())) > 0.0f &&
+                                      glm::determinant(glm::mat3(nodes[static_cast<std::size_t>(n)].global)) > 0.0));
     if (!exact) ++approximate;
   }
   if (approximate > 0)
@@ -678,7 +682,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       std::string name = source.name;
       for (char& c : name)
         if (std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20) c = '_';
-      if (name.empty() || std::find(used.begin(), used.end(), name) != used.end()) name = "material" + std::to_string(m);
+      if (name.empty() || std::find(used.begin(), used.end(), name) != used.end())
+        name = "material" + std::to_string(m);
       used.push_back(name);
       material.name = name;
       const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
@@ -756,8 +761,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         target.mesh = source.name;
         if (names.IsArray() && k < names.ArrayLen() && names.Get(static_cast<int>(k)).IsString())
           target.name = names.Get(static_cast<int>(k)).Get<std::string>();
-        else
-          target.name = "target" + std::to_string(k);
+        else target.name = "target" + std::to_string(k);
         if (k < defaults.size()) {
           if (!std::isfinite(defaults[k]))
             reader.fail(mesh_element + ".weights", "weight " + std::to_string(k) + " is not finite");
@@ -772,7 +776,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       const tinygltf::Primitive& primitive = source.primitives[pi];
       const std::string element = mesh_element + ".primitives[" + std::to_string(pi) + "]";
       const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
-      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         ++skipped_primitives;
         continue;
       }
@@ -794,7 +799,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       std::vector<std::vector<double>> joint_sets, weight_sets;
       if (instance.skin >= 0) {
         for (int set = 0;; ++set) {
-          const std::string joints_name = "JOINTS_" + std::to_string(set), weights_name = "WEIGHTS_" + std::to_string(set);
+          const std::string joints_name = "JOINTS_" + std::to_string(set),
+                            weights_name = "WEIGHTS_" + std::to_string(set);
           const bool has_joints = primitive.attributes.count(joints_name) > 0;
           const bool has_weights = primitive.attributes.count(weights_name) > 0;
           if (!has_joints && !has_weights) break;
@@ -810,13 +816,15 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
                                               " targets where another primitive of the mesh has " +
                                               std::to_string(target_count));
       // Each target's POSITION and NORMAL displacements (sparse accessors applied by read), empty when absent.
-      std::vector<std::vector<double>> target_positions(primitive.targets.size()), target_normals(primitive.targets.size());
+      std::vector<std::vector<double>> target_positions(primitive.targets.size()),
+          target_normals(primitive.targets.size());
       for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
         const std::string target_element = element + ".targets[" + std::to_string(k) + "]";
         for (const auto& [name, accessor] : primitive.targets[k]) {
           if (name != "POSITION" && name != "NORMAL") continue;  // TANGENT and others do not move points
           std::vector<double> values = reader.read(accessor, {3}, target_element + " " + name);
-          if (values.size() != count * 3) reader.fail(target_element + "." + name, "has not as many elements as POSITION");
+          if (values.size() != count * 3)
+            reader.fail(target_element + "." + name, "has not as many elements as POSITION");
           for (const double d : values)
             if (!std::isfinite(d)) reader.fail(target_element + "." + name, "a displacement is not finite");
           (name == "POSITION" ? target_positions[k] : target_normals[k]) = std::move(values);
@@ -853,9 +861,9 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         if (influences_of.empty()) {
           if (skin != nullptr) ++unweighted;
           // glTF leaves such a vertex undefined; three.js and others leave it where the skin's space puts it.
-          influences.bones[0] = skin != nullptr ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(
-                                                      skin->joints[0])])
-                                                : rigid_bone;
+          influences.bones[0] =
+              skin != nullptr ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(skin->joints[0])])
+                              : rigid_bone;
           influences.weights[0] = 1.0f;
         } else {
           // Every influence is kept: the four strongest in the slots, the rest as extras (SkinWeights).
@@ -909,8 +917,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
               dp = delta_matrix * glm::dvec3(target_positions[k][3 * v], target_positions[k][3 * v + 1],
                                              target_positions[k][3 * v + 2]);
             if (!target_normals[k].empty())
-              dn = normal_matrix * glm::dvec3(target_normals[k][3 * v], target_normals[k][3 * v + 1],
-                                              target_normals[k][3 * v + 2]);
+              dn = normal_matrix *
+                   glm::dvec3(target_normals[k][3 * v], target_normals[k][3 * v + 1], target_normals[k][3 * v + 2]);
             if (dp == glm::dvec3(0.0) && dn == glm::dvec3(0.0)) continue;  // sparse: only the points it moves
             target.points.push_back(point);
             target.position_deltas.push_back(reader.narrow(dp, element + " target " + std::to_string(k)));
@@ -918,9 +926,9 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
           }
         }
         mesh.vertex_point.push_back(found->second);
-        glm::dvec3 normal = normals.empty() ? glm::dvec3(0.0)
-                                            : normal_matrix * glm::dvec3(normals[3 * v], normals[3 * v + 1],
-                                                                         normals[3 * v + 2]);
+        glm::dvec3 normal = normals.empty()
+                                ? glm::dvec3(0.0)
+                                : normal_matrix * glm::dvec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
         const double length = glm::length(normal);
         normal = std::isfinite(length) && length > 0.0 ? normal / length : glm::dvec3(0.0, 0.0, 1.0);
         mesh.vertex_normals.emplace_back(normal);
@@ -952,7 +960,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       submesh.object = gltf.nodes[static_cast<std::size_t>(instance.node)].name;
       submesh.group = source.name;
       auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-        for (std::uint32_t corner : {a, b, c}) mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
+        for (std::uint32_t corner : {a, b, c})
+          mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
       };
       if (mode == TINYGLTF_MODE_TRIANGLES) {
         for (std::size_t i = 0; i + 2 < indices.size(); i += 3) triangle(indices[i], indices[i + 1], indices[i + 2]);
@@ -995,7 +1004,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
   for (std::size_t b = 0; b < bones.size(); ++b) {
     if (node_of_bone[b] < 0) continue;
     const std::int32_t parent = nodes[static_cast<std::size_t>(node_of_bone[b])].parent;
-    if (parent >= 0) translation_scale[b] = glm::dvec3(split(glm::mat4(nodes[static_cast<std::size_t>(parent)].global)).axis_scale);
+    if (parent >= 0)
+      translation_scale[b] = glm::dvec3(split(glm::mat4(nodes[static_cast<std::size_t>(parent)].global)).axis_scale);
   }
   std::vector<std::pair<glm::vec3, glm::quat>> rest(bones.size());
   std::vector<bool> differs(bones.size(), false);
@@ -1090,8 +1100,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       const auto b = static_cast<std::size_t>(bone);
       const std::size_t width = target == "rotation" ? 4 : 3;
       std::size_t components = 0;
-      const std::vector<double> values =
-          reader.read(sampler.output, {width}, sampler_element + ".output", &components);
+      const std::vector<double> values = reader.read(sampler.output, {width}, sampler_element + ".output", &components);
       const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
       if (values.size() != times.size() * width * per_key)
         reader.fail(sampler_element + ".output", std::to_string(values.size() / width) + " elements for " +
@@ -1105,9 +1114,7 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       Channel& out = clip.channels[static_cast<std::size_t>(channel_of_bone[b])];
       const NodeInfo& node = nodes[static_cast<std::size_t>(channel.target_node)];
       // Element k of key i: in-tangent, value, out-tangent for a cubic spline, else the value.
-      auto element_at = [&](std::size_t key, std::size_t part) {
-        return &values[(key * per_key + part) * width];
-      };
+      auto element_at = [&](std::size_t key, std::size_t part) { return &values[(key * per_key + part) * width]; };
       auto fill = [&](auto& track, auto convert) {
         track.interpolation = interpolation;
         double last = -std::numeric_limits<double>::infinity();
@@ -1140,9 +1147,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
         fill(out.scale, [&](const double* v, bool) {
           return reader.narrow(glm::dvec3(v[0], v[1], v[2]) / node.scale, sampler_element + ".output");
         });
-        const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(), [](glm::vec3 s) {
-          return glm::length(s - glm::vec3(1.0f)) <= 1e-4f;
-        });
+        const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(),
+                                              [](glm::vec3 s) { return glm::length(s - glm::vec3(1.0f)) <= 1e-4f; });
         if (!constant_one) ++scaled_bones;
       }
     }
@@ -1166,7 +1172,8 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       reader.fail(animation_element, "key times are not finite or negative");
     const std::string element = "clip '" + clip.name + "'";
     if (dropped > 0)
-      warnings.push_back(element + ": " + std::to_string(dropped) + " keys at or before their predecessor's time dropped");
+      warnings.push_back(element + ": " + std::to_string(dropped) +
+                         " keys at or before their predecessor's time dropped");
     if (scaled_bones > 0)
       warnings.push_back(element + ": " + std::to_string(scaled_bones) +
                          " bones animate scale, which a Pose cannot hold (ignored)");

@@ -126,8 +126,8 @@ Material convert_material(const aiScene& scene, const aiMaterial& source, std::s
       std::replace(path.begin(), path.end(), '\\', '/');
       // Confined to the model's folder like every file a model names (resolve_referenced_file); first, as it
       // refuses a name that is no path (not UTF-8, on Windows).
-      const std::string real = resolve_referenced_file(
-          file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy);
+      const std::string real =
+          resolve_referenced_file(file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy);
       fs::path resolved = utf8_path::from_utf8(path);
       if (resolved.is_relative()) resolved = utf8_path::from_utf8(file).parent_path() / resolved;
       m.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
@@ -550,8 +550,8 @@ ImportedModel import_any(const std::string& path, const ImportOptions& options) 
           extra_ids.add(vertex_weights[begin + k].bone, vertex_weights[begin + k].weight / total);
         extras = extra_ids.take();
       }
-      const auto [found, inserted] =
-          point_of_key.emplace(point_key(position, influences, extras), static_cast<std::uint32_t>(mesh.positions.size()));
+      const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, extras),
+                                                          static_cast<std::uint32_t>(mesh.positions.size()));
       if (inserted) {
         const auto point = static_cast<std::uint32_t>(mesh.positions.size());
         mesh.positions.push_back(position);

@@ -14,19 +14,19 @@
 #include <vector>
 
 #ifdef _WIN32
-#  ifndef NOMINMAX
-#    define NOMINMAX
-#  endif
-#  ifndef WIN32_LEAN_AND_MEAN
-#    define WIN32_LEAN_AND_MEAN
-#  endif
-#  include <windows.h>
+#ifndef NOMINMAX
+#define NOMINMAX
+#endif
+#ifndef WIN32_LEAN_AND_MEAN
+#define WIN32_LEAN_AND_MEAN
+#endif
+#include <windows.h>
 #else
-#  include <fcntl.h>
-#  include <poll.h>
-#  include <spawn.h>
-#  include <sys/wait.h>
-#  include <unistd.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #endif
 
 #include "deform/import/import.hpp"
@@ -71,7 +71,8 @@ struct Pipe {
   int read = -1, write = -1;
   Pipe() {
     int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw Error::invalid_argument("import", std::string("pipe: ") + std::strerror(errno));
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+      throw Error::invalid_argument("import", std::string("pipe: ") + std::strerror(errno));
     read = fds[0], write = fds[1];
   }
   ~Pipe() {
@@ -95,10 +96,8 @@ std::vector<std::string> worker_environment(std::uint64_t max_memory_bytes) {
   std::string asan_options;
   for (char** e = environ; e != nullptr && *e != nullptr; ++e) {
     const std::string_view entry = *e;
-    if (entry.rfind("ASAN_OPTIONS=", 0) == 0)
-      asan_options = std::string(entry.substr(13)) + ":";
-    else
-      env.emplace_back(entry);
+    if (entry.rfind("ASAN_OPTIONS=", 0) == 0) asan_options = std::string(entry.substr(13)) + ":";
+    else env.emplace_back(entry);
   }
   if (max_memory_bytes > 0) {
     const std::uint64_t megabytes = std::max<std::uint64_t>(1, max_memory_bytes >> 20);
@@ -128,13 +127,20 @@ std::vector<std::string> worker_arguments(const std::string& worker, const std::
                                           const ImportOptions& options, const IsolationLimits& limits,
                                           long long parent) {
   std::vector<std::string> args = {worker,
-                                   "--max-memory", std::to_string(limits.max_memory_bytes),
-                                   "--max-stack", std::to_string(limits.max_stack_bytes),
-                                   "--max-cpu-seconds", cpu_seconds(limits.max_seconds),
-                                   "--parent", std::to_string(parent),
-                                   "--ticks-per-second", std::to_string(options.default_ticks_per_second),
-                                   "--loop", options.loop_clips ? "1" : "0",
-                                   "--", path};
+                                   "--max-memory",
+                                   std::to_string(limits.max_memory_bytes),
+                                   "--max-stack",
+                                   std::to_string(limits.max_stack_bytes),
+                                   "--max-cpu-seconds",
+                                   cpu_seconds(limits.max_seconds),
+                                   "--parent",
+                                   std::to_string(parent),
+                                   "--ticks-per-second",
+                                   std::to_string(options.default_ticks_per_second),
+                                   "--loop",
+                                   options.loop_clips ? "1" : "0",
+                                   "--",
+                                   path};
   // The reference policy travels as one --allow-outside per folder, before "--" (the worker confines as we would).
   for (const std::string& folder : options.references.allow_outside)
     args.insert(args.end() - 2, {"--allow-outside", folder});
@@ -152,8 +158,8 @@ Error worker_failed(const std::string& path, int code, std::string messages) {
   // The worker prints deform::Error's what(), which already names the file; anything else is passed on as is.
   const std::string prefix = path + ": ";
   if (messages.rfind(prefix, 0) == 0) messages.erase(0, prefix.size());
-  return Error::in_file(path, "", messages.empty() ? "the importer failed (exit " + std::to_string(code) + ")"
-                                                   : messages);
+  return Error::in_file(path, "",
+                        messages.empty() ? "the importer failed (exit " + std::to_string(code) + ")" : messages);
 }
 
 #ifdef _WIN32
@@ -196,8 +202,9 @@ struct OwnedHandle {
   }
 };
 
-std::string windows_error(const char* what) { return std::string(what) + " (Windows error " +
-                                                      std::to_string(GetLastError()) + ")"; }
+std::string windows_error(const char* what) {
+  return std::string(what) + " (Windows error " + std::to_string(GetLastError()) + ")";
+}
 
 #endif
 
@@ -344,8 +351,9 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   if (exit_code >= 0xC0000000u) {
     char code[16];
     std::snprintf(code, sizeof code, "0x%08lX", static_cast<unsigned long>(exit_code));
-    throw Error::in_file(path, "", std::string("the importer crashed (exception ") + code + ") reading it" +
-                                       (messages.empty() ? "" : ": " + messages));
+    throw Error::in_file(path, "",
+                         std::string("the importer crashed (exception ") + code + ") reading it" +
+                             (messages.empty() ? "" : ": " + messages));
   }
   if (exit_code != 0) throw worker_failed(path, static_cast<int>(exit_code), messages);
   return wire::decode(answer, path);
@@ -356,8 +364,7 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
 ImportedModel import_model_isolated(const std::string& path, const ImportOptions& options,
                                     const IsolationLimits& limits) {
   const std::string worker = find_worker(limits.worker);
-  std::vector<std::string> args =
-      worker_arguments(worker, path, options, limits, static_cast<long long>(::getpid()));
+  std::vector<std::string> args = worker_arguments(worker, path, options, limits, static_cast<long long>(::getpid()));
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -374,7 +381,8 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   pid_t pid = -1;
   const int spawned = ::posix_spawn(&pid, worker.c_str(), &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) throw Error::in_file(path, "", "cannot start the importer process: " + std::string(std::strerror(spawned)));
+  if (spawned != 0)
+    throw Error::in_file(path, "", "cannot start the importer process: " + std::string(std::strerror(spawned)));
   out.close_write();
   err.close_write();
 
@@ -386,7 +394,8 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
   std::string stopped;
   std::uint8_t buffer[1 << 16];
   while (out.read >= 0 || err.read >= 0) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       stopped = "took more than " + seconds_text(limits.max_seconds) + " s";
       break;
@@ -431,11 +440,12 @@ ImportedModel import_model_isolated(const std::string& path, const ImportOptions
                              messages.find("AddressSanitizer: allocator is out of memory") != std::string::npos ||
                              messages.find("AddressSanitizer: requested allocation size") != std::string::npos;
   if (out_of_memory && !(WIFEXITED(status) && WEXITSTATUS(status) == 0))
-    throw Error::in_file(path, "", "the import needed more than " + std::to_string(limits.max_memory_bytes) +
-                                       " bytes of memory");
+    throw Error::in_file(path, "",
+                         "the import needed more than " + std::to_string(limits.max_memory_bytes) + " bytes of memory");
   if (WIFSIGNALED(status)) {
-    throw Error::in_file(path, "", "the importer crashed (signal " + signal_name(WTERMSIG(status)) +
-                                       ") reading it" + (messages.empty() ? "" : ": " + messages));
+    throw Error::in_file(path, "",
+                         "the importer crashed (signal " + signal_name(WTERMSIG(status)) + ") reading it" +
+                             (messages.empty() ? "" : ": " + messages));
   }
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
   if (code != 0) throw worker_failed(path, code, messages);

@@ -217,8 +217,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
   file.range(h.ofs_joints, h.num_joints, 48, "joints");
   file.range(h.ofs_poses, h.num_poses, 88, "poses");
   file.range(h.ofs_anims, h.num_anims, 20, "anims");
-  file.range(h.ofs_frames, h.num_frames, std::uint64_t{2} * std::max<std::uint64_t>(h.num_framechannels, 1),
-             "frames");
+  file.range(h.ofs_frames, h.num_frames, std::uint64_t{2} * std::max<std::uint64_t>(h.num_framechannels, 1), "frames");
   auto text = [&](std::uint32_t at, std::uint64_t record, const std::string& element) {
     return file.text(h.ofs_text, h.num_text, at, record, element);
   };
@@ -616,8 +615,7 @@ ImportedModel import_iqm(const std::string& path, const ImportOptions& options) 
         const float time = static_cast<float>(key / rate);
         if (key == 0 || moves_t) {
           channel.translation.times.push_back(time);
-          channel.translation.values.push_back(parent_scale(j) *
-                                               glm::vec3(glm::dvec3(value[0], value[1], value[2])));
+          channel.translation.values.push_back(parent_scale(j) * glm::vec3(glm::dvec3(value[0], value[1], value[2])));
         }
         if (key == 0 || moves_r) {
           glm::dquat q(value[6], value[3], value[4], value[5]);

@@ -299,10 +299,10 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) r.fail("a position is not finite");
   // The extra influences as SkinningJob::validate wants them (sizes, order, bones); morph targets as MorphJob does.
   const SkinWeights& sw = model.weights;
-  if (sw.extra_points.empty() ? !(sw.extra_offsets.empty() && sw.extra_bones.empty() && sw.extra_weights.empty())
-                              : sw.extra_offsets.size() != sw.extra_points.size() + 1 || sw.extra_offsets.front() != 0 ||
-                                    sw.extra_offsets.back() != sw.extra_bones.size() ||
-                                    sw.extra_bones.size() != sw.extra_weights.size())
+  if (sw.extra_points.empty()
+          ? !(sw.extra_offsets.empty() && sw.extra_bones.empty() && sw.extra_weights.empty())
+          : sw.extra_offsets.size() != sw.extra_points.size() + 1 || sw.extra_offsets.front() != 0 ||
+                sw.extra_offsets.back() != sw.extra_bones.size() || sw.extra_bones.size() != sw.extra_weights.size())
     r.fail("extra influences are inconsistent");
   for (std::size_t j = 0; j < sw.extra_points.size(); ++j)
     if (sw.extra_points[j] >= points || (j > 0 && sw.extra_points[j] <= sw.extra_points[j - 1]) ||

@@ -16,15 +16,15 @@
 #include <string_view>
 
 #ifdef _WIN32
-#  include <fcntl.h>
-#  include <io.h>
+#include <fcntl.h>
+#include <io.h>
 #else
-#  include <csignal>
-#  include <sys/resource.h>
-#  include <unistd.h>
+#include <csignal>
+#include <sys/resource.h>
+#include <unistd.h>
 #endif
 #ifdef __linux__
-#  include <sys/prctl.h>
+#include <sys/prctl.h>
 #endif
 
 #include "deform/import/import.hpp"

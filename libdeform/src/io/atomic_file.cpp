@@ -8,17 +8,17 @@
 #include <random>
 
 #ifdef _WIN32
-#  ifndef NOMINMAX
-#    define NOMINMAX
-#  endif
-#  ifndef WIN32_LEAN_AND_MEAN
-#    define WIN32_LEAN_AND_MEAN
-#  endif
-#  include <windows.h>
+#ifndef NOMINMAX
+#define NOMINMAX
+#endif
+#ifndef WIN32_LEAN_AND_MEAN
+#define WIN32_LEAN_AND_MEAN
+#endif
+#include <windows.h>
 #else
-#  include <fcntl.h>
-#  include <sys/stat.h>
-#  include <unistd.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #endif
 
 #include "deform/runtime/error.hpp"
@@ -55,35 +55,24 @@ int errno_from_windows(DWORD code) {
     case ERROR_INVALID_DRIVE:
     case ERROR_BAD_NETPATH:
     case ERROR_BAD_NET_NAME:
-    case ERROR_INVALID_NAME:
-      return ENOENT;
-    case ERROR_DIRECTORY:
-      return ENOTDIR;
-    case ERROR_FILENAME_EXCED_RANGE:
-      return ENAMETOOLONG;
-    case ERROR_CANT_RESOLVE_FILENAME:
-      return ELOOP;
+    case ERROR_INVALID_NAME: return ENOENT;
+    case ERROR_DIRECTORY: return ENOTDIR;
+    case ERROR_FILENAME_EXCED_RANGE: return ENAMETOOLONG;
+    case ERROR_CANT_RESOLVE_FILENAME: return ELOOP;
     case ERROR_FILE_EXISTS:
-    case ERROR_ALREADY_EXISTS:
-      return EEXIST;
+    case ERROR_ALREADY_EXISTS: return EEXIST;
     case ERROR_ACCESS_DENIED:
     case ERROR_SHARING_VIOLATION:
     case ERROR_LOCK_VIOLATION:
-    case ERROR_WRITE_PROTECT:
-      return EACCES;
+    case ERROR_WRITE_PROTECT: return EACCES;
     case ERROR_DISK_FULL:
-    case ERROR_HANDLE_DISK_FULL:
-      return ENOSPC;
-    case ERROR_NOT_SAME_DEVICE:
-      return EXDEV;
+    case ERROR_HANDLE_DISK_FULL: return ENOSPC;
+    case ERROR_NOT_SAME_DEVICE: return EXDEV;
     case ERROR_NOT_ENOUGH_MEMORY:
-    case ERROR_OUTOFMEMORY:
-      return ENOMEM;
+    case ERROR_OUTOFMEMORY: return ENOMEM;
     case ERROR_NOT_SUPPORTED:
-    case ERROR_INVALID_FUNCTION:
-      return ENOSYS;
-    default:
-      return EIO;
+    case ERROR_INVALID_FUNCTION: return ENOSYS;
+    default: return EIO;
   }
 }
 
@@ -113,8 +102,8 @@ FileStatus file_status(const std::string& path) {
   }
   // A name the console or a device answers to (NUL, CON) has attributes but is no disk file.
   Handle file{CreateFileW(from_utf8(path).c_str(), 0, share_all, nullptr, OPEN_EXISTING, 0, nullptr)};
-  status.kind = file.h == INVALID_HANDLE_VALUE || GetFileType(file.h) == FILE_TYPE_DISK ? FileKind::regular
-                                                                                         : FileKind::other;
+  status.kind =
+      file.h == INVALID_HANDLE_VALUE || GetFileType(file.h) == FILE_TYPE_DISK ? FileKind::regular : FileKind::other;
   return status;
 }
 
@@ -131,8 +120,7 @@ bool rename_over(const std::string& from, const std::string& to) {
 
 // Moves `from` to `to`, which must not exist (a temporary or backup name; never replaces a file).
 bool rename_new(const std::string& from, const std::string& to) {
-  return MoveFileExW(from_utf8(from).c_str(), from_utf8(to).c_str(), MOVEFILE_WRITE_THROUGH) != 0 ||
-         failed_windows();
+  return MoveFileExW(from_utf8(from).c_str(), from_utf8(to).c_str(), MOVEFILE_WRITE_THROUGH) != 0 || failed_windows();
 }
 
 bool hard_link(const std::string& existing, const std::string& link) {
@@ -148,8 +136,8 @@ bool keep_mode_and_owner(const std::string&, const FileStatus&) { return true; }
 struct NewFile {
   Handle file;
   bool create(const std::string& path) {
-    file.h = CreateFileW(from_utf8(path).c_str(), GENERIC_WRITE, 0, nullptr, CREATE_NEW, FILE_ATTRIBUTE_NORMAL,
-                         nullptr);
+    file.h =
+        CreateFileW(from_utf8(path).c_str(), GENERIC_WRITE, 0, nullptr, CREATE_NEW, FILE_ATTRIBUTE_NORMAL, nullptr);
     return file.h != INVALID_HANDLE_VALUE || failed_windows();
   }
   bool write(const std::uint8_t* data, std::size_t size) {
@@ -317,8 +305,8 @@ Container read_all(const std::string& path, std::uint64_t max_bytes) {
   }
   const auto size = static_cast<std::uint64_t>(bytes.QuadPart);
   if (size > max_bytes)
-    throw Error::in_file(path, "", "file is " + std::to_string(size) + " bytes, more than the limit of " +
-                                       std::to_string(max_bytes));
+    throw Error::in_file(
+        path, "", "file is " + std::to_string(size) + " bytes, more than the limit of " + std::to_string(max_bytes));
   Container data(static_cast<std::size_t>(size), {});
   std::size_t done = 0;
   while (done < data.size()) {  // a file that shrinks while read ends early; one that grows is read to `size`
@@ -341,8 +329,7 @@ Container read_all(const std::string& path, std::uint64_t max_bytes) {
 void write_direct(const std::string& target, const std::string& named, const std::vector<std::uint8_t>& data) {
   // O_NONBLOCK: a FIFO without a reader is refused (ENXIO) instead of blocking this process for ever.
   Descriptor out{::open(target.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK)};
-  if (out.fd < 0 && errno == ENXIO)
-    throw Error::environment(named, "is a FIFO that no process reads: nothing written");
+  if (out.fd < 0 && errno == ENXIO) throw Error::environment(named, "is a FIFO that no process reads: nothing written");
   if (out.fd < 0) throw system_error(named, "cannot open for writing", errno);
   const int flags = ::fcntl(out.fd, F_GETFL);
   if (flags < 0 || ::fcntl(out.fd, F_SETFL, flags & ~O_NONBLOCK) != 0)
@@ -385,8 +372,8 @@ Container read_all(const std::string& path, std::uint64_t max_bytes) {
   if (!S_ISREG(info.st_mode)) throw Error::in_file(path, "", "is not a regular file (a device, FIFO or socket)");
   const auto size = static_cast<std::uint64_t>(info.st_size);
   if (size > max_bytes)
-    throw Error::in_file(path, "", "file is " + std::to_string(size) + " bytes, more than the limit of " +
-                                       std::to_string(max_bytes));
+    throw Error::in_file(
+        path, "", "file is " + std::to_string(size) + " bytes, more than the limit of " + std::to_string(max_bytes));
   Container data(static_cast<std::size_t>(size), {});
   std::size_t done = 0;
   while (done < data.size()) {  // a file that shrinks while read ends early; one that grows is read to `size`
@@ -536,14 +523,13 @@ void FileTransaction::commit() {
         const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
         if (injected_failure()) throw system_error(entry.named, "cannot keep a backup of it", errno);
         for (int attempt = 0; attempt < 16 && entry.backup.empty(); ++attempt) {
-          std::string backup = to_utf8(folder / from_utf8("." + to_utf8(target.filename()) + ".deform-bak-" +
-                                                         random_suffix()));
+          std::string backup =
+              to_utf8(folder / from_utf8("." + to_utf8(target.filename()) + ".deform-bak-" + random_suffix()));
           // A hard link leaves the target in place; a file system without them gets a rename (the target is then
           // missing until the staged file lands, never changed).
           if (hard_link(entry.target, backup) || (errno != EEXIST && rename_new(entry.target, backup)))
             entry.backup = std::move(backup);
-          else if (errno != EEXIST)
-            throw system_error(entry.named, "cannot keep a backup of it", errno);
+          else if (errno != EEXIST) throw system_error(entry.named, "cannot keep a backup of it", errno);
         }
         if (entry.backup.empty()) throw system_error(entry.named, "cannot keep a backup of it", EEXIST);
       }
@@ -568,17 +554,13 @@ void FileTransaction::commit() {
 void FileTransaction::roll_back() noexcept {
   for (auto entry = entries_.rbegin(); entry != entries_.rend(); ++entry) {
     if (entry->placed) {
-      if (!entry->backup.empty())
-        rename_over(entry->backup, entry->target);
-      else if (!entry->existed)
-        remove_file(entry->target);
+      if (!entry->backup.empty()) rename_over(entry->backup, entry->target);
+      else if (!entry->existed) remove_file(entry->target);
     } else {
       if (!entry->backup.empty()) {
         // Backed up but not replaced: a hard link is removed; a rename is undone.
-        if (file_status(entry->target).kind != FileKind::missing)
-          remove_file(entry->backup);
-        else
-          rename_new(entry->backup, entry->target);
+        if (file_status(entry->target).kind != FileKind::missing) remove_file(entry->backup);
+        else rename_new(entry->backup, entry->target);
       }
       if (!entry->temp.empty()) remove_file(entry->temp);
     }
@@ -589,7 +571,8 @@ void FileTransaction::roll_back() noexcept {
 }
 
 void write_file_atomic(const std::string& path, std::string_view text) {
-  write_file_atomic(path, std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+  write_file_atomic(path,
+                    std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
 }  // namespace deform

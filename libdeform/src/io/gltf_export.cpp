@@ -99,10 +99,10 @@ glm::vec3 unit_or_z(glm::vec3 n) {
   return n / length;
 }
 
-// A VEC3 morph-target accessor holding `displacement` sparsely: the elements with a component beyond `tolerance`. No element:
-// no bufferView and no sparse block (the accessor reads as zeros). Returns the accessor and adds its stored count.
-// The sparse parts of every morph target, gathered into two buffer views (indices, values) so that the JSON holds
-// one small accessor per target and attribute, not two buffer views each.
+// A VEC3 morph-target accessor holding `displacement` sparsely: the elements with a component beyond `tolerance`. No
+// element: no bufferView and no sparse block (the accessor reads as zeros). Returns the accessor and adds its stored
+// count. The sparse parts of every morph target, gathered into two buffer views (indices, values) so that the JSON
+// holds one small accessor per target and attribute, not two buffer views each.
 struct SparseData {
   std::vector<std::uint32_t> indices;
   std::vector<float> values;
@@ -128,7 +128,10 @@ int sparse_vec3(Builder& b, SparseData& sparse, const std::vector<glm::vec3>& di
   }
   if (count > 0) {
     a["sparse"] = {{"count", count},
-                   {"indices", {{"bufferView", 0}, {"byteOffset", first_index * sizeof(std::uint32_t)}, {"componentType", unsigned_int_type}}},
+                   {"indices",
+                    {{"bufferView", 0},
+                     {"byteOffset", first_index * sizeof(std::uint32_t)},
+                     {"componentType", unsigned_int_type}}},
                    {"values", {{"bufferView", 0}, {"byteOffset", first_value * sizeof(float)}}}};
     sparse.patch.push_back(b.accessors.size());
   }
@@ -150,9 +153,11 @@ const char* interpolation_name(Interpolation i) {
 std::vector<float> track_output(const Track<glm::vec3>& t) {
   std::vector<float> out;
   for (std::size_t k = 0; k < t.times.size(); ++k) {
-    if (t.interpolation == Interpolation::cubic_spline) out.insert(out.end(), {t.in_tangents[k].x, t.in_tangents[k].y, t.in_tangents[k].z});
+    if (t.interpolation == Interpolation::cubic_spline)
+      out.insert(out.end(), {t.in_tangents[k].x, t.in_tangents[k].y, t.in_tangents[k].z});
     out.insert(out.end(), {t.values[k].x, t.values[k].y, t.values[k].z});
-    if (t.interpolation == Interpolation::cubic_spline) out.insert(out.end(), {t.out_tangents[k].x, t.out_tangents[k].y, t.out_tangents[k].z});
+    if (t.interpolation == Interpolation::cubic_spline)
+      out.insert(out.end(), {t.out_tangents[k].x, t.out_tangents[k].y, t.out_tangents[k].z});
   }
   return out;
 }
@@ -204,8 +209,7 @@ std::vector<std::uint8_t> texture_bytes(const std::string& texture, const std::s
   const fs::path inside = real.lexically_relative(real_root);
   bool allowed = !inside.empty() && *inside.begin() != "..";
   for (const std::string& other : policy.allow_outside) allowed = allowed || lies_inside(real_utf8, other);
-  if (!allowed)
-    return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
+  if (!allowed) return why = "it lies outside the model's folder '" + root + "'", std::vector<std::uint8_t>{};
   // The signature from the first bytes alone: a large file that is not an image is never read whole.
   const std::string format = image_format(real_utf8);
   if (format != "png" && format != "jpeg") return why = "it is not a PNG or JPEG file", std::vector<std::uint8_t>{};
@@ -239,14 +243,17 @@ void check_baked(const BakedFrames& baked, const Model& model) {
     throw Error::invalid_argument("baked.normals", "empty, or one entry per frame");
   for (std::size_t k = 0; k < frames; ++k) {
     if (!std::isfinite(baked.times[k]) || baked.times[k] < 0.0f || (k > 0 && !(baked.times[k] > baked.times[k - 1])))
-      throw Error::invalid_argument("baked.times[" + std::to_string(k) + "]", "times must be finite, >= 0 and increasing");
+      throw Error::invalid_argument("baked.times[" + std::to_string(k) + "]",
+                                    "times must be finite, >= 0 and increasing");
     if (baked.positions[k].size() != model.mesh.point_count())
-      throw Error::invalid_argument("baked.positions[" + std::to_string(k) + "]", "one position per mesh point expected");
+      throw Error::invalid_argument("baked.positions[" + std::to_string(k) + "]",
+                                    "one position per mesh point expected");
     for (const glm::vec3& p : baked.positions[k])
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         throw Error::invalid_argument("baked.positions[" + std::to_string(k) + "]", "a position is not finite");
     if (!baked.normals.empty() && baked.normals[k].size() != model.mesh.vertex_count())
-      throw Error::invalid_argument("baked.normals[" + std::to_string(k) + "]", "one normal per render vertex expected");
+      throw Error::invalid_argument("baked.normals[" + std::to_string(k) + "]",
+                                    "one normal per render vertex expected");
   }
 }
 
@@ -255,8 +262,7 @@ void check_baked(const BakedFrames& baked, const Model& model) {
 GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options) {
   const std::string ext = lower_extension(path);
   const bool binary = ext == ".glb";
-  if (!binary && ext != ".gltf")
-    throw Error::invalid_argument(path, "a glTF file name ends in .gltf or .glb");
+  if (!binary && ext != ".gltf") throw Error::invalid_argument(path, "a glTF file name ends in .gltf or .glb");
   const Mesh& mesh = model.mesh;
   const Skeleton& skeleton = model.skeleton;
   if (mesh.triangle_count() == 0) throw Error::invalid_argument(path, "the mesh has no triangles");
@@ -280,7 +286,8 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   std::vector<glm::vec3> base_positions(vertices);
   for (std::size_t r = 0; r < vertices; ++r) base_positions[r] = mesh.positions.at(mesh.vertex_point[r]);
   std::vector<glm::vec3> base_normals(vertices, glm::vec3(0.0f, 0.0f, 1.0f));
-  for (std::size_t r = 0; r < vertices && r < mesh.vertex_normals.size(); ++r) base_normals[r] = unit_or_z(mesh.vertex_normals[r]);
+  for (std::size_t r = 0; r < vertices && r < mesh.vertex_normals.size(); ++r)
+    base_normals[r] = unit_or_z(mesh.vertex_normals[r]);
   // Influence set s of render vertex r is vertex_joints[s][r] / vertex_weights[s][r]: set 0 the point's four slots,
   // sets 1, 2, ... its extra influences four at a time (JOINTS_1 / WEIGHTS_1, ...), all normalised to sum 1 together.
   std::vector<std::vector<glm::u16vec4>> vertex_joints;
@@ -337,9 +344,9 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
   Json materials = Json::array();
   Json images = Json::array(), textures = Json::array();
   {
-    std::vector<std::pair<std::string, int>> embedded;  // texture path -> texture index
+    std::vector<std::pair<std::string, int>> embedded;                   // texture path -> texture index
     std::vector<std::pair<const std::vector<std::uint8_t>*, int>> kept;  // embedded image -> texture index
-    std::map<std::string, std::string> refused;         // texture path -> why: each is checked, and read, once
+    std::map<std::string, std::string> refused;  // texture path -> why: each is checked, and read, once
     for (const Material& m : mesh.materials) {
       int texture = -1;
       if (m.diffuse_image && mesh.vertex_uvs.size() == vertices) {  // the model's own embedded image: kept as is
@@ -361,10 +368,8 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
         if (texture < 0) {
           std::string why, mime;
           std::vector<std::uint8_t> bytes;
-          if (const auto known = refused.find(m.diffuse_map); known != refused.end())
-            why = known->second;
-          else
-            bytes = texture_bytes(m.diffuse_map, options.texture_root, options.references, why, mime);
+          if (const auto known = refused.find(m.diffuse_map); known != refused.end()) why = known->second;
+          else bytes = texture_bytes(m.diffuse_map, options.texture_root, options.references, why, mime);
           if (bytes.empty()) {
             refused.emplace(m.diffuse_map, why);
             written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
@@ -414,7 +419,8 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     if (mesh.vertex_uvs.size() == vertices) {
       std::vector<float> uvs;
       uvs.reserve(used.size() * 2);
-      for (const std::uint32_t r : used) uvs.insert(uvs.end(), {mesh.vertex_uvs[r].x, 1.0f - mesh.vertex_uvs[r].y});  // glTF's v runs down
+      for (const std::uint32_t r : used)
+        uvs.insert(uvs.end(), {mesh.vertex_uvs[r].x, 1.0f - mesh.vertex_uvs[r].y});  // glTF's v runs down
       attributes["TEXCOORD_0"] = b.floats(uvs, 2, "VEC2", array_buffer, false);
     }
     for (std::size_t set = 0; set < vertex_joints.size(); ++set) {
@@ -429,21 +435,26 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
         weight_data.insert(weight_data.end(), {w[0], w[1], w[2], w[3]});
       }
       const int jv = b.view(joint_data.data(), joint_data.size() * sizeof(std::uint16_t), array_buffer);
-      attributes["JOINTS_" + std::to_string(set)] = b.push({{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
+      attributes["JOINTS_" + std::to_string(set)] = b.push(
+          {{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
       attributes["WEIGHTS_" + std::to_string(set)] = b.floats(weight_data, 4, "VEC4", array_buffer, false);
     }
     const int iv = b.view(indices.data(), indices.size() * sizeof(std::uint32_t), element_array_buffer);
-    Json primitive = {{"attributes", std::move(attributes)},
-                      {"indices", b.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
-                      {"mode", 4}};
+    Json primitive = {
+        {"attributes", std::move(attributes)},
+        {"indices",
+         b.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
+        {"mode", 4}};
     if (s.material >= 0 && std::size_t(s.material) < mesh.materials.size()) primitive["material"] = s.material;
     if (!skinned) {  // baked frames: one morph target per frame
       const BakedFrames& baked = *options.baked;
       Json targets = Json::array();
       for (std::size_t k = 0; k < baked.times.size(); ++k) {
-        Json target = {{"POSITION", sparse_vec3(b, sparse, displacements(k, used, false), baked.position_tolerance, true, written.sparse_values)}};
+        Json target = {{"POSITION", sparse_vec3(b, sparse, displacements(k, used, false), baked.position_tolerance,
+                                                true, written.sparse_values)}};
         if (!baked.normals.empty())
-          target["NORMAL"] = sparse_vec3(b, sparse, displacements(k, used, true), baked.normal_tolerance, false, written.sparse_values);
+          target["NORMAL"] = sparse_vec3(b, sparse, displacements(k, used, true), baked.normal_tolerance, false,
+                                         written.sparse_values);
         targets.push_back(std::move(target));
       }
       frame_count = targets.size();
@@ -472,7 +483,8 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     for (std::size_t i = 0; i < skeleton.bone_count(); ++i) {
       const Bone& bone = skeleton.bone(static_cast<std::int32_t>(i));
       Json node = {{"name", skeleton.key(static_cast<std::int32_t>(i))}};
-      if (bone.bind_translation != glm::vec3(0.0f)) node["translation"] = {bone.bind_translation.x, bone.bind_translation.y, bone.bind_translation.z};
+      if (bone.bind_translation != glm::vec3(0.0f))
+        node["translation"] = {bone.bind_translation.x, bone.bind_translation.y, bone.bind_translation.z};
       if (bone.bind_rotation != glm::vec3(0.0f)) {
         const glm::quat q = glm::normalize(quat_from_euler(bone.bind_rotation));
         node["rotation"] = {q.x, q.y, q.z, q.w};
@@ -498,16 +510,18 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     for (const Animation& clip : options.clips) {
       clip.require_valid(skeleton.bone_count(), "clip '" + clip.name + "'");
       Json samplers = Json::array(), channels = Json::array();
-      const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components, const char* type) {
+      const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components,
+                           const char* type) {
         if (track.empty()) return;
         if (track.times.front() < 0.0f) {
-          written.warnings.push_back("clip '" + clip.name + "': the " + property + " track of bone '" + skeleton.key(bone) +
-                                     "' has keys before t = 0, which glTF cannot hold: left out");
+          written.warnings.push_back("clip '" + clip.name + "': the " + property + " track of bone '" +
+                                     skeleton.key(bone) + "' has keys before t = 0, which glTF cannot hold: left out");
           return;
         }
         const int input = b.floats(track.times, 1, "SCALAR", 0, true);
         const int output = b.floats(track_output(track), components, type, 0, false);
-        samplers.push_back({{"input", input}, {"output", output}, {"interpolation", interpolation_name(track.interpolation)}});
+        samplers.push_back(
+            {{"input", input}, {"output", output}, {"interpolation", interpolation_name(track.interpolation)}});
         channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", bone}, {"path", property}}}});
       };
       for (const Channel& channel : clip.channels) {
@@ -555,7 +569,8 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     std::string json = dump(doc);
     while (json.size() % 4) json += ' ';
     const std::uint64_t total = 12 + 8 + json.size() + 8 + b.bin.size();
-    if (total > std::numeric_limits<std::uint32_t>::max()) throw Error::invalid_argument(path, "the file would exceed 4 GiB");
+    if (total > std::numeric_limits<std::uint32_t>::max())
+      throw Error::invalid_argument(path, "the file would exceed 4 GiB");
     std::vector<std::uint8_t> glb;
     glb.reserve(total);
     const auto u32 = [&glb](std::uint32_t v) {

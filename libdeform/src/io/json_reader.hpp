@@ -13,8 +13,9 @@
 namespace deform::detail {
 
 // Parses a whole document of at most 64 levels of nesting (deeper: Error::at_byte where it goes too deep, checked in
-// one pass before anything is built). Malformed JSON throws Error::at_byte (0-based offset of the byte where parsing stopped,
-// message "malformed JSON: ..."); a number the parser cannot hold (1e999) throws Error::in_file ("invalid JSON").
+// one pass before anything is built). Malformed JSON throws Error::at_byte (0-based offset of the byte where parsing
+// stopped, message "malformed JSON: ..."); a number the parser cannot hold (1e999) throws Error::in_file ("invalid
+// JSON").
 nlohmann::json parse_json(std::string_view text, const std::string& file);
 
 // One value of a parsed document and its key path: "" for the root, then `.key` for a member and `[i]` for an

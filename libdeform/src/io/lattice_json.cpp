@@ -98,10 +98,11 @@ std::vector<std::uint32_t> parse_vertex_list(std::string_view text, std::size_t 
       if (ec != std::errc() || ptr != token.data() + token.size())
         throw Error::at_line(name, line, element, "'" + std::string(token) + "' is not a vertex index (0-based)");
       if (value >= point_count)
-        throw Error::at_line(name, line, element,
-                             "vertex " + std::to_string(value) + " is out of range (" + std::to_string(point_count) +
-                                 " vertices)");
-      if (seen[value]) throw Error::at_line(name, line, element, "vertex " + std::to_string(value) + " is listed twice");
+        throw Error::at_line(
+            name, line, element,
+            "vertex " + std::to_string(value) + " is out of range (" + std::to_string(point_count) + " vertices)");
+      if (seen[value])
+        throw Error::at_line(name, line, element, "vertex " + std::to_string(value) + " is listed twice");
       seen[value] = true;
       out.push_back(static_cast<std::uint32_t>(value));
       i = end;

@@ -19,8 +19,9 @@ Model load_model(const std::string& obj_path, const std::string& sk_path, const 
   // checks below hold the Model invariant whatever the reader does.
   model.weights = read_skw(skw_path, model.mesh.point_count(), model.skeleton.bone_count(), influences);
   if (model.weights.size() != model.mesh.point_count() || model.weights.weights.size() != model.weights.size())
-    throw Error::in_file(skw_path, "", "has " + std::to_string(model.weights.size()) + " vertices, " + obj_path +
-                                           " has " + std::to_string(model.mesh.point_count()));
+    throw Error::in_file(skw_path, "",
+                         "has " + std::to_string(model.weights.size()) + " vertices, " + obj_path + " has " +
+                             std::to_string(model.mesh.point_count()));
   for (std::size_t v = 0; v < model.weights.size(); ++v)
     for (int k = 0; k < max_influences; ++k)
       if (model.weights.bones[v][k] >= model.skeleton.bone_count())

@@ -24,9 +24,9 @@ using obj_text::Tokens;
 
 // MTL statements this reader knows but does not use (PBR extensions, other maps, refraction): skipped silently.
 constexpr std::array<std::string_view, 28> ignored_statements = {
-    "Ke",    "Ni",    "Tf",     "sharpness", "map_Ka", "map_Ks", "map_Ns", "map_d",  "map_Tr", "map_bump",
-    "bump",  "map_Bump", "disp", "decal",    "refl",   "norm",   "Pr",     "Pm",     "Ps",     "Pc",
-    "Pcr",   "aniso", "anisor", "map_Pr",    "map_Pm", "map_Ps", "map_Ke", "map_RMA"};
+    "Ke",   "Ni",       "Tf",     "sharpness", "map_Ka", "map_Ks", "map_Ns", "map_d",  "map_Tr", "map_bump",
+    "bump", "map_Bump", "disp",   "decal",     "refl",   "norm",   "Pr",     "Pm",     "Ps",     "Pc",
+    "Pcr",  "aniso",    "anisor", "map_Pr",    "map_Pm", "map_Ps", "map_Ke", "map_RMA"};
 
 // `Ka`/`Kd`/`Ks`: one grey value or r g b.
 glm::vec3 parse_colour(Tokens& tokens, const Place& place, std::string_view element) {
@@ -134,7 +134,8 @@ std::vector<Material> obj_text::parse_mtl_confined(std::string_view text, const 
       std::string_view token;
       if (!tokens.next(token)) place.fail(keyword, "missing illumination model");
       const std::int64_t model = obj_text::parse_integer(token, place, keyword);
-      if (model < 0 || model > 10) place.fail(keyword, "illumination model " + std::to_string(model) + " is not 0 to 10");
+      if (model < 0 || model > 10)
+        place.fail(keyword, "illumination model " + std::to_string(model) + " is not 0 to 10");
       if (tokens.next(token)) place.fail(keyword, "unexpected " + obj_text::quoted(token));
       material.illum = static_cast<int>(model);
     } else {  // map_Kd

@@ -109,8 +109,8 @@ class ObjParser {
     const auto available = static_cast<std::int64_t>(count);
     if (index == 0) place.fail(element(), std::string(kind) + " index 0 (OBJ indices start at 1, or -1 for the last)");
     if (index > available || index < -available)
-      place.fail(element(), std::string(kind) + " index " + std::to_string(index) + " is out of range: " +
-                                std::to_string(count) + " `" + kind + "` above this line");
+      place.fail(element(), std::string(kind) + " index " + std::to_string(index) +
+                                " is out of range: " + std::to_string(count) + " `" + kind + "` above this line");
     return static_cast<std::uint32_t>(index > 0 ? index - 1 : available + index);
   }
 
@@ -130,14 +130,11 @@ class ObjParser {
       if (slash1 != npos) vt = corner.substr(slash1 + 1, slash2 == npos ? npos : slash2 - slash1 - 1);
       if (slash2 != npos) vn = corner.substr(slash2 + 1);
       CornerForm form = CornerForm::position;
-      if (slash2 != npos)
-        form = vt.empty() ? CornerForm::position_normal : CornerForm::position_uv_normal;
-      else if (slash1 != npos)
-        form = CornerForm::position_uv;
+      if (slash2 != npos) form = vt.empty() ? CornerForm::position_normal : CornerForm::position_uv_normal;
+      else if (slash1 != npos) form = CornerForm::position_uv;
       if (v.empty() || (slash1 != npos && slash2 == npos && vt.empty()) || (slash2 != npos && vn.empty()))
         fail("malformed corner " + obj_text::quoted(corner));
-      if (face_.empty())
-        face_form = form;
+      if (face_.empty()) face_form = form;
       else if (form != face_form)
         fail(std::string("corner form ") + form_text(form) + " mixed with " + form_text(face_form) + " in one face");
 
@@ -146,8 +143,7 @@ class ObjParser {
       const std::uint32_t normal = vn.empty() ? none : resolve_index(vn, normals_.size(), "vn", place, number);
       face_.push_back(render_vertex(point, uv, normal));
     }
-    if (face_.size() < 3)
-      place.fail("f", "a face needs at least 3 corners, found " + std::to_string(face_.size()));
+    if (face_.size() < 3) place.fail("f", "a face needs at least 3 corners, found " + std::to_string(face_.size()));
     if (face_.size() > none / 3 || mesh_.face_corners.size() > none - face_.size())
       place.fail("f", "too many face corners");
 
@@ -218,8 +214,8 @@ class ObjParser {
     if (whole.empty()) place.fail("mtllib", "missing file name");
     std::string whole_path;
     try {
-      whole_path = resolve_referenced_file_in(base_folder_, name_, whole, "mtllib", policy_, ReferenceSyntax::path,
-                                              place.line);
+      whole_path =
+          resolve_referenced_file_in(base_folder_, name_, whole, "mtllib", policy_, ReferenceSyntax::path, place.line);
     } catch (const Error&) {
       whole_path.clear();  // refused as a whole: each name is resolved (and refused) on its own below
     }
@@ -314,16 +310,17 @@ class ObjParser {
   };
   struct TripleHash {
     std::size_t operator()(const Triple& t) const noexcept {
-      return std::hash<std::uint64_t>()((std::uint64_t(t.point) << 32 | t.uv) ^ (std::uint64_t(t.normal) * 0x9e3779b97f4a7c15ull));
+      return std::hash<std::uint64_t>()((std::uint64_t(t.point) << 32 | t.uv) ^
+                                        (std::uint64_t(t.normal) * 0x9e3779b97f4a7c15ull));
     }
   };
   std::unordered_map<Triple, std::uint32_t, TripleHash> long_chains_;  // render vertices of points with long chains
-  std::vector<std::uint32_t> face_;                   // render vertices of the face being read
+  std::vector<std::uint32_t> face_;                                    // render vertices of the face being read
 
   SubmeshState state_;
   bool state_changed_ = false;
-  std::size_t name_bytes_ = 0;      // bytes of names copied into submeshes so far
-  std::size_t max_name_bytes_ = 0;  // 64 MiB + 4 × the file's size
+  std::size_t name_bytes_ = 0;                // bytes of names copied into submeshes so far
+  std::size_t max_name_bytes_ = 0;            // 64 MiB + 4 × the file's size
   std::vector<SubmeshState> submesh_states_;  // one per submesh
   std::unordered_map<std::string, std::int32_t> material_index_;
   obj_text::SkippedStatements skipped_;

@@ -179,8 +179,8 @@ inline int parse_floats(Tokens& tokens, float* out, int min, int max, const Plac
   std::string_view token;
   while (tokens.next(token)) {
     if (count == max)
-      place.fail(element, "too many numbers (expected " + (min == max ? std::to_string(max)
-                                                                        : std::to_string(min) + " to " + std::to_string(max)) +
+      place.fail(element, "too many numbers (expected " +
+                              (min == max ? std::to_string(max) : std::to_string(min) + " to " + std::to_string(max)) +
                               ")");
     out[count++] = parse_float(token, place, element);
   }
@@ -209,17 +209,15 @@ class SkippedStatements {
         ++kind.count;
         return;
       }
-    if (kinds_.size() < max_kinds)
-      kinds_.push_back({std::string(keyword), line, 1});
-    else
-      ++others_;
+    if (kinds_.size() < max_kinds) kinds_.push_back({std::string(keyword), line, 1});
+    else ++others_;
   }
   void report(Warnings* warnings, const std::string& file) const {
     for (const auto& kind : kinds_)
       warn(warnings, file, kind.first_line,
-           "statement " + obj_text::quoted(kind.keyword) + " is not supported: " + std::to_string(kind.count) + " skipped");
-    if (others_ > 0)
-      warn(warnings, file, 0, std::to_string(others_) + " more unsupported statements skipped");
+           "statement " + obj_text::quoted(kind.keyword) + " is not supported: " + std::to_string(kind.count) +
+               " skipped");
+    if (others_ > 0) warn(warnings, file, 0, std::to_string(others_) + " more unsupported statements skipped");
   }
 
  private:
@@ -239,8 +237,7 @@ std::string resolve_path(const std::string& folder, std::string_view name);
 
 // parse_mtl with its textures (`map_Kd`) resolved in `base_folder` and confined to `root`, the folder of the model
 // that named the MTL file, and the folders `policy` allows (resolve_referenced_file): a texture elsewhere is refused.
-std::vector<Material> parse_mtl_confined(std::string_view text, const std::string& name,
-                                         const std::string& base_folder, const std::string& root, Warnings* warnings,
-                                         const ReferencePolicy& policy);
+std::vector<Material> parse_mtl_confined(std::string_view text, const std::string& name, const std::string& base_folder,
+                                         const std::string& root, Warnings* warnings, const ReferencePolicy& policy);
 
 }  // namespace deform::obj_text

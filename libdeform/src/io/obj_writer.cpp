@@ -85,7 +85,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
                        const ObjWriteOptions& options) {
   if (positions.size() != mesh.point_count())
     throw Error::invalid_argument("positions", std::to_string(positions.size()) + " positions for " +
-                                                         std::to_string(mesh.point_count()) + " points");
+                                                   std::to_string(mesh.point_count()) + " points");
   // Nothing non-finite is ever written: a NaN in an output file is a silent corruption downstream.
   for (std::size_t p = 0; p < positions.size(); ++p)
     if (!std::isfinite(positions[p].x) || !std::isfinite(positions[p].y) || !std::isfinite(positions[p].z))
@@ -95,7 +95,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
   const bool write_uvs = options.write_uvs && !mesh.vertex_uvs.empty();
   if (write_normals && normals.size() != mesh.vertex_count())
     throw Error::invalid_argument("normals", std::to_string(normals.size()) + " normals for " +
-                                                       std::to_string(mesh.vertex_count()) + " render vertices");
+                                                 std::to_string(mesh.vertex_count()) + " render vertices");
   if (write_normals)
     for (std::size_t r = 0; r < normals.size(); ++r)
       if (!std::isfinite(normals[r].x) || !std::isfinite(normals[r].y) || !std::isfinite(normals[r].z))
@@ -120,8 +120,7 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
       if (submesh.triangle_count == 0) continue;
       if (current ? submesh.object != current->object : !submesh.object.empty())
         append_statement(out, "o", submesh.object);
-      if (current ? submesh.group != current->group : !submesh.group.empty())
-        append_statement(out, "g", submesh.group);
+      if (current ? submesh.group != current->group : !submesh.group.empty()) append_statement(out, "g", submesh.group);
       if (!options.mtllib.empty() && (current ? submesh.material != current->material : submesh.material >= 0)) {
         const bool named = submesh.material >= 0 && std::size_t(submesh.material) < mesh.materials.size();
         append_statement(out, "usemtl",

@@ -7,11 +7,11 @@
 #include <filesystem>
 
 #ifdef _WIN32
-#  include <fstream>
+#include <fstream>
 #else
-#  include <fcntl.h>
-#  include <sys/stat.h>
-#  include <unistd.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #endif
 
 #include "deform/runtime/error.hpp"
@@ -55,8 +55,7 @@ bool below(const fs::path& inner, const fs::path& outer) {
   return i != inner.end() && !i->empty();
 }
 
-[[noreturn]] void refuse(const std::string& referrer, std::int64_t line, const std::string& key,
-                         std::string message) {
+[[noreturn]] void refuse(const std::string& referrer, std::int64_t line, const std::string& key, std::string message) {
   if (line > 0) throw Error::at_line(referrer, line, key, std::move(message));
   throw Error::in_file(referrer, key, std::move(message));
 }

@@ -49,12 +49,9 @@ ElasticSettings read_elastic(const JsonReader& r) {
   if (r.has("mass")) e.oscillator.mass = r.at("mass").number(0.0f, big, true);
   if (r.has("integrator")) {
     const std::string name = r.at("integrator").text();
-    if (name == "exact")
-      e.integrator = Integrator::exact;
-    else if (name == "verlet")
-      e.integrator = Integrator::verlet;
-    else
-      r.at("integrator").fail("must be \"exact\" or \"verlet\"");
+    if (name == "exact") e.integrator = Integrator::exact;
+    else if (name == "verlet") e.integrator = Integrator::verlet;
+    else r.at("integrator").fail("must be \"exact\" or \"verlet\"");
   }
   if (r.has("verlet_kd")) e.verlet_kd = r.at("verlet_kd").number(0.0f, 1.0f);
   if (r.has("springs")) {
@@ -85,8 +82,9 @@ LatticeMotion read_motion(const JsonReader& r) {
     const JsonReader part = r.at("part");
     const std::optional<BodyPart> named = body_part_named(part.text());
     if (!named)
-      part.fail("must be \"upper_limb\", \"lower_limb\", \"hand\", \"foot\", \"torso\", \"head\", \"appendage\" or "
-                "\"unspecified\"");
+      part.fail(
+          "must be \"upper_limb\", \"lower_limb\", \"hand\", \"foot\", \"torso\", \"head\", \"appendage\" or "
+          "\"unspecified\"");
     motion.part = *named;
   }
   if (r.has("inertia")) motion.inertia = r.at("inertia").number(0.0f, 1.0f);
@@ -119,8 +117,8 @@ void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
   const JsonReader chains = r.at("chains");
   for (std::size_t i = 0; i < chains.array_size(); ++i) {
     const JsonReader c = chains.at(i);
-    c.expect_object({"name", "bones", "tip", "frequency", "damping_ratio", "gravity", "units_per_metre", "radius",
-                     "colliders"});
+    c.expect_object(
+        {"name", "bones", "tip", "frequency", "damping_ratio", "gravity", "units_per_metre", "radius", "colliders"});
     SpringChainSpec chain;
     chain.name = c.at("name").text();
     if (chain.name.empty()) c.at("name").fail("must not be empty");
@@ -152,7 +150,9 @@ void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
   }
 }
 
-ojson vec3_json(glm::vec3 v) { return ojson::array({shortest_double(v.x), shortest_double(v.y), shortest_double(v.z)}); }
+ojson vec3_json(glm::vec3 v) {
+  return ojson::array({shortest_double(v.x), shortest_double(v.y), shortest_double(v.z)});
+}
 
 RigModel read_model(const JsonReader& root) {
   RigModel model;
@@ -381,7 +381,8 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
                         {"radius", shortest_double(c.radius)},
                         {"colliders", c.colliders}});
     }
-    document["springs"] = {{"substep", shortest_double(rig.spring_substep)}, {"colliders", colliders}, {"chains", chains}};
+    document["springs"] = {
+        {"substep", shortest_double(rig.spring_substep)}, {"colliders", colliders}, {"chains", chains}};
   }
   return document.dump(2) + "\n";
 }

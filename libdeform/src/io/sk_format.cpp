@@ -200,8 +200,8 @@ std::vector<std::uint8_t> format_sk(const Skeleton& skeleton) {
     const Bone& b = skeleton.bones()[i];
     if (b.name.size() >= name_bytes || b.name.find('\0') != std::string::npos || !valid_utf8(b.name))
       throw Error::invalid_argument(bone_element(static_cast<std::int64_t>(i)),
-                           "name of " + std::to_string(b.name.size()) +
-                               " bytes cannot be written (.sk names are UTF-8, at most 79 bytes, no NUL)");
+                                    "name of " + std::to_string(b.name.size()) +
+                                        " bytes cannot be written (.sk names are UTF-8, at most 79 bytes, no NUL)");
     std::array<char, name_bytes> name{};
     std::memcpy(name.data(), b.name.data(), b.name.size());
     w.bytes(name.data(), name.size());

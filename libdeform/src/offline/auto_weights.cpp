@@ -65,9 +65,9 @@ void store_strongest(std::vector<Influence>& list, int keep, std::size_t point, 
 // The per-bone data the distance test needs, computed once.
 struct SegmentTest {
   glm::vec3 head;
-  glm::vec3 axis;       // tail - head
+  glm::vec3 axis;  // tail - head
   float length_squared;
-  float behind_scale;   // behind_head_penalty for non-root bones, 1 for the root
+  float behind_scale;  // behind_head_penalty for non-root bones, 1 for the root
 };
 
 // Squared distance from p to the bone, with the part behind the head scaled (see weights.hpp).
@@ -118,8 +118,7 @@ SkinWeights unsmoothed_weights(std::span<const glm::vec3> points, const Skeleton
   std::vector<Influence> list;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const glm::vec3 p = points[i];
-    if (!finite(p))
-      throw Error::in_file("automatic weights", "vertex " + std::to_string(i), "position is not finite");
+    if (!finite(p)) throw Error::in_file("automatic weights", "vertex " + std::to_string(i), "position is not finite");
     std::size_t nearest = bone_count;
     for (std::size_t b = 0; b < bone_count; ++b) {
       d2[b] = distance_squared(tests[b], p);

@@ -44,10 +44,9 @@ NameHint read_name(const std::string& original) {
     if (std::isalpha(static_cast<unsigned char>(c))) letters += c;
   if (low.starts_with("mch-") || low.starts_with("org-") || low.starts_with("ik_") || low.starts_with("ik-") ||
       letters.starts_with("ik") || letters.ends_with("ik") || has_word(low, "_ik") || has_word(low, ".ik") ||
-      has_word(letters, "ikl") || has_word(letters, "ikr") || has_word(letters, "goal") ||
-      has_word(letters, "pole") || has_word(letters, "twist") || has_word(letters, "target") ||
-      has_word(letters, "ctrl") || has_word(letters, "control") || has_word(letters, "helper") ||
-      has_word(letters, "roll")) {
+      has_word(letters, "ikl") || has_word(letters, "ikr") || has_word(letters, "goal") || has_word(letters, "pole") ||
+      has_word(letters, "twist") || has_word(letters, "target") || has_word(letters, "ctrl") ||
+      has_word(letters, "control") || has_word(letters, "helper") || has_word(letters, "roll")) {
     hint.role = Role::helper;
   }
   // Side markers: VRoid's J_Bip_L_, Mixamo's and VRM's Left/left prefix, Blender's .L/_L/-L suffix, l_ prefixes.
@@ -87,26 +86,24 @@ NameHint read_name(const std::string& original) {
   };
   // Exact words first (Mixamo's "Arm" and "Leg", VRM's "UpperArm"), then words contained ("bipthigh").
   static constexpr Entry exact[] = {
-      {"hand", Role::hand},           {"wrist", Role::hand},          {"arm", Role::upper_arm},
-      {"upperarm", Role::upper_arm},  {"forearm", Role::forearm},     {"lowerarm", Role::forearm},
-      {"shoulder", Role::clavicle},   {"clavicle", Role::clavicle},   {"collar", Role::clavicle},
-      {"upleg", Role::thigh},         {"upperleg", Role::thigh},      {"thigh", Role::thigh},
-      {"leg", Role::shin},            {"lowerleg", Role::shin},       {"shin", Role::shin},
-      {"calf", Role::shin},           {"foot", Role::foot},           {"ankle", Role::foot},
-      {"head", Role::head},           {"neck", Role::head},           {"tail", Role::tail}};
+      {"hand", Role::hand},          {"wrist", Role::hand},        {"arm", Role::upper_arm},
+      {"upperarm", Role::upper_arm}, {"forearm", Role::forearm},   {"lowerarm", Role::forearm},
+      {"shoulder", Role::clavicle},  {"clavicle", Role::clavicle}, {"collar", Role::clavicle},
+      {"upleg", Role::thigh},        {"upperleg", Role::thigh},    {"thigh", Role::thigh},
+      {"leg", Role::shin},           {"lowerleg", Role::shin},     {"shin", Role::shin},
+      {"calf", Role::shin},          {"foot", Role::foot},         {"ankle", Role::foot},
+      {"head", Role::head},          {"neck", Role::head},         {"tail", Role::tail}};
   for (const Entry& e : exact)
     if (word == e.word) hint.role = e.role;
   if (hint.role == Role::none) {
-    static constexpr Entry contained[] = {{"forearm", Role::forearm}, {"lowerarm", Role::forearm},
-                                          {"upperarm", Role::upper_arm}, {"clavicle", Role::clavicle},
-                                          {"thigh", Role::thigh},       {"calf", Role::shin},
-                                          {"shin", Role::shin},         {"hand", Role::hand},
-                                          {"wrist", Role::hand},        {"foot", Role::foot},
-                                          {"ankle", Role::foot},        {"hindleg", Role::thigh},
-                                          {"backleg", Role::thigh},     {"rearleg", Role::thigh},
-                                          {"foreleg", Role::upper_arm}, {"frontleg", Role::upper_arm},
-                                          {"tail", Role::tail},         {"neck", Role::head},
-                                          {"head", Role::head}};
+    static constexpr Entry contained[] = {
+        {"forearm", Role::forearm},    {"lowerarm", Role::forearm}, {"upperarm", Role::upper_arm},
+        {"clavicle", Role::clavicle},  {"thigh", Role::thigh},      {"calf", Role::shin},
+        {"shin", Role::shin},          {"hand", Role::hand},        {"wrist", Role::hand},
+        {"foot", Role::foot},          {"ankle", Role::foot},       {"hindleg", Role::thigh},
+        {"backleg", Role::thigh},      {"rearleg", Role::thigh},    {"foreleg", Role::upper_arm},
+        {"frontleg", Role::upper_arm}, {"tail", Role::tail},        {"neck", Role::head},
+        {"head", Role::head}};
     for (const Entry& e : contained)
       if (has_word(word, e.word)) {
         hint.role = e.role;
@@ -136,7 +133,7 @@ struct Body {
   std::int32_t bones = 0;
   std::vector<double> own, subtree;
   std::vector<NameHint> hints;
-  std::vector<bool> relevant;  // carries skin weight itself or below, and is no helper
+  std::vector<bool> relevant;                       // carries skin weight itself or below, and is no helper
   std::vector<std::vector<std::int32_t>> children;  // relevant children only
   std::vector<glm::vec3> head;
   std::vector<float> reach;         // how far b's relevant bones (b included) reach from b's parent's head
@@ -192,8 +189,9 @@ Body make_body(const Model& model, RigSurvey& survey) {
     if (!(body.subtree[b] > 0.0)) {
       survey.skipped.emplace_back(std::int32_t(b), "no vertex is skinned to it or to a bone below it");
     } else if (!(real[b] > 0.0)) {
-      survey.skipped.emplace_back(std::int32_t(b), "a helper's name (twist, IK, pole, target, control) and no "
-                                                   "other skinned bone below it");
+      survey.skipped.emplace_back(std::int32_t(b),
+                                  "a helper's name (twist, IK, pole, target, control) and no "
+                                  "other skinned bone below it");
     } else {
       body.relevant[b] = true;
     }
@@ -286,11 +284,12 @@ Limb make_limb(const Body& body, const Branch& branch, LimbKind kind, const std:
         std::find(limb.lattices.begin(), limb.lattices.end(), branch.path[i]) == limb.lattices.end())
       limb.lattices.push_back(branch.path[i]);
   const Skeleton& sk = body.skeleton;
-  limb.why = why + "; " + (s.named ? "'" + sk.bone(branch.path[s.end]).name + "' by its name"
-                                   : "the end after the two longest bones ('" + sk.bone(branch.path[s.upper]).name +
-                                         "', '" + sk.bone(branch.path[s.lower]).name + "')");
-  limb.why += kind == LimbKind::arm && s.root < s.upper ? "; the reach starts at the clavicle"
-              : kind == LimbKind::arm                   ? "; no clavicle: the reach starts at the shoulder"
+  limb.why = why + "; " +
+             (s.named ? "'" + sk.bone(branch.path[s.end]).name + "' by its name"
+                      : "the end after the two longest bones ('" + sk.bone(branch.path[s.upper]).name + "', '" +
+                            sk.bone(branch.path[s.lower]).name + "')");
+  limb.why += kind == LimbKind::arm && s.root < s.upper          ? "; the reach starts at the clavicle"
+              : kind == LimbKind::arm                            ? "; no clavicle: the reach starts at the shoulder"
               : kind == LimbKind::neck || kind == LimbKind::tail ? ""
                                                                  : "; the reach starts at the hip joint";
   return limb;
@@ -515,9 +514,9 @@ RigSurvey survey_rig(const Model& model) {
     if (branch.from < 0 || branch.path.size() < 2) continue;
     const bool arm = hint.role == Role::hand;
     ++added;
-    survey.limbs.push_back(make_limb(body, branch, arm ? LimbKind::arm : LimbKind::leg,
-                                     std::string(arm ? "an arm" : "a leg") + " ending at a bone named '" +
-                                         sk.bone(bone).name + "'"));
+    survey.limbs.push_back(
+        make_limb(body, branch, arm ? LimbKind::arm : LimbKind::leg,
+                  std::string(arm ? "an arm" : "a leg") + " ending at a bone named '" + sk.bone(bone).name + "'"));
   }
 
   // A four-legged creature's neck (the chest's branch that is not a front leg) and tail (the pelvis' branch that
@@ -529,8 +528,7 @@ RigSurvey survey_rig(const Model& model) {
       float far = 0.0f;
       bool named = false;
       for (const std::int32_t c : body.children[std::size_t(from)]) {
-        if (c == skip.a.path.front() || c == skip.b.path.front() || (avoid >= 0 && sk.is_ancestor(c, avoid)))
-          continue;
+        if (c == skip.a.path.front() || c == skip.b.path.front() || (avoid >= 0 && sk.is_ancestor(c, avoid))) continue;
         bool names = false;
         for (const std::int32_t b : body.main_path(c)) names = names || body.hints[std::size_t(b)].role == role;
         const float e = body.extent(c);

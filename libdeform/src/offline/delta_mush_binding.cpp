@@ -27,15 +27,15 @@ glm::dvec3 dvec(const glm::vec4& p) { return glm::dvec3(p.x, p.y, p.z); }
 
 DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& settings) {
   if (settings.iterations < 0 || std::uint32_t(settings.iterations) > max_delta_mush_iterations)
-    throw Error::invalid_argument(element, "iterations must be within [0, " +
-                                               std::to_string(max_delta_mush_iterations) + "]");
+    throw Error::invalid_argument(element,
+                                  "iterations must be within [0, " + std::to_string(max_delta_mush_iterations) + "]");
   if (!(settings.step > 0.0f && settings.step <= 1.0f))
     throw Error::invalid_argument(element, "step must be within (0, 1]");
   const std::size_t n = mesh.point_count();
   if (n >= std::size_t{0xffffffffu}) throw Error::invalid_argument(element, "2^32 - 1 points or more");
   if (!settings.mask.empty() && settings.mask.size() != n)
-    throw Error::invalid_argument(element, "mask has " + std::to_string(settings.mask.size()) + " weights for " +
-                                               std::to_string(n) + " points");
+    throw Error::invalid_argument(
+        element, "mask has " + std::to_string(settings.mask.size()) + " weights for " + std::to_string(n) + " points");
   for (std::size_t i = 0; i < settings.mask.size(); ++i)
     if (!(settings.mask[i] >= 0.0f && settings.mask[i] <= 1.0f))
       throw Error::invalid_argument(element, "point " + std::to_string(i) + ": mask weight not within [0, 1]");
@@ -63,7 +63,7 @@ DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& sett
   // Fans: for each triangle (a, b, c) of distinct points, a gets (b, c), b gets (c, a), c gets (a, b), so that every
   // cross product turns the same way as the triangle.
   b.fan_offsets.assign(n + 1, 0);
-  const auto corners = [&](std::size_t t, std::uint32_t (&p)[3]) {
+  const auto corners = [&](std::size_t t, std::uint32_t(&p)[3]) {
     for (int c = 0; c < 3; ++c) p[c] = mesh.vertex_point[mesh.triangles[3 * t + std::size_t(c)]];
     return p[0] != p[1] && p[1] != p[2] && p[0] != p[2];
   };
@@ -94,8 +94,8 @@ DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& sett
     const float m = settings.mask.empty() ? 1.0f : settings.mask[i];
     const std::uint32_t ring = b.ring_offsets[i + 1] - b.ring_offsets[i];
     b.pinned[i] = m == 0.0f;
-    b.smoothing[i] = ring == 0 || m == 0.0f ? glm::vec2(1.0f, 0.0f)
-                                            : glm::vec2(1.0f - m * b.step, m * b.step / float(ring));
+    b.smoothing[i] =
+        ring == 0 || m == 0.0f ? glm::vec2(1.0f, 0.0f) : glm::vec2(1.0f - m * b.step, m * b.step / float(ring));
   }
   b.tangent_neighbour.assign(n, DeltaMushBinding::no_frame);
   b.deltas.assign(n, glm::vec3(0.0f));
@@ -149,8 +149,8 @@ DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& sett
     // How far the frame's rounding and the input's moves the result: a perturbation δ of the smoothed points turns
     // the frame by about δ / scale, and the point by |d| · δ / scale, scale the smaller of the fan's edge scale
     // (√(|normal| / triangles)) and the tangent edge's part in the plane.
-    const double scale = std::min(std::sqrt(nl / double(b.fan_offsets[i + 1] - b.fan_offsets[i])),
-                                  std::sqrt(best * best_length2));
+    const double scale =
+        std::min(std::sqrt(nl / double(b.fan_offsets[i + 1] - b.fan_offsets[i])), std::sqrt(best * best_length2));
     if (!(glm::length(d) <= max_amplification * scale)) {
       b.tangent_neighbour[i] = DeltaMushBinding::no_frame;
       b.pinned[i] = 1;

@@ -37,8 +37,7 @@ void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
     fail("max_influences", "must be 1 to " + std::to_string(max_requested_influences));
   if (!std::isfinite(o.heat) || o.heat <= 0.0f) fail("heat", "must be finite and > 0");
   if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
-  if (!std::isfinite(o.oblique_penalty) || o.oblique_penalty < 0.0f)
-    fail("oblique_penalty", "must be finite and >= 0");
+  if (!std::isfinite(o.oblique_penalty) || o.oblique_penalty < 0.0f) fail("oblique_penalty", "must be finite and >= 0");
   if (!o.deforming.empty()) {
     if (o.deforming.size() != bone_count) fail("deforming", "must be empty or hold one entry per bone");
     if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
@@ -172,7 +171,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   };
   std::sort(order.begin(), order.end(), less);
   std::vector<std::uint32_t> welded(point_count);
-  std::vector<glm::vec3> position;     // per surface vertex
+  std::vector<glm::vec3> position;         // per surface vertex
   std::vector<std::uint32_t> first_point;  // per surface vertex: its lowest point index
   for (std::size_t k = 0; k < point_count; ++k) {
     const std::uint32_t p = order[k];
@@ -418,8 +417,7 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     system.setFromTriplets(entries.begin(), entries.end());
     entries = {};
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(system);
-    if (solver.info() != Eigen::Success)
-      throw Error::invalid_argument("mesh", "the heat system could not be factored");
+    if (solver.info() != Eigen::Success) throw Error::invalid_argument("mesh", "the heat system could not be factored");
 
     std::vector<std::uint8_t> heats(bone_count, 0);
     for (std::uint32_t v = 0; v < n; ++v)

@@ -29,7 +29,8 @@ glm::vec3 transform_point(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m 
 }  // namespace
 
 DeformerHierarchy bind_hierarchy(const Skeleton& skeleton, std::span<const glm::vec3> bind_positions,
-                                 const SkinWeights& weights, std::vector<LatticeSpec> specs, const std::string& source) {
+                                 const SkinWeights& weights, std::vector<LatticeSpec> specs,
+                                 const std::string& source) {
   const std::size_t point_count = bind_positions.size();
   if (weights.size() != point_count) {
     throw Error::in_file(source, "", "skin weights do not match the point count");

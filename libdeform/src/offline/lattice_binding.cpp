@@ -14,7 +14,6 @@ namespace deform {
 
 namespace detail {
 
-
 std::vector<BoundVertex> collect_inside(const LatticeFrame& frame, std::span<const glm::vec3> positions,
                                         std::span<const std::uint32_t> candidates, bool all,
                                         const glm::mat4& to_lattice) {
@@ -24,11 +23,10 @@ std::vector<BoundVertex> collect_inside(const LatticeFrame& frame, std::span<con
   for (std::size_t c = 0; c < count; ++c) {
     const std::size_t p = all ? c : candidates[c];
     if (p >= positions.size() || p >= LatticeBinding::no_vertex)
-      throw Error::invalid_argument("candidate " + std::to_string(c),
-                           "point " + std::to_string(p) + " is out of range (" + std::to_string(positions.size()) +
-                               " points)");
-    if (!finite(positions[p]))
-      throw Error::invalid_argument("vertex " + std::to_string(p), "position is not finite");
+      throw Error::invalid_argument(
+          "candidate " + std::to_string(c),
+          "point " + std::to_string(p) + " is out of range (" + std::to_string(positions.size()) + " points)");
+    if (!finite(positions[p])) throw Error::invalid_argument("vertex " + std::to_string(p), "position is not finite");
     const glm::vec3 x = identity ? positions[p] : glm::vec3(to_lattice * glm::vec4(positions[p], 1.0f));
     const glm::vec3 uvw = frame.to_lattice(x);
     if (glm::all(glm::greaterThanEqual(uvw, glm::vec3(0.0f))) && glm::all(glm::lessThanEqual(uvw, glm::vec3(1.0f))))

@@ -81,8 +81,8 @@ std::vector<std::uint32_t> order_vertices_by_point(Mesh& mesh) {
 
   constexpr std::uint32_t none = 0xffffffffu;
   std::vector<std::uint32_t> slot_of(vertices, none);  // previous render vertex -> new index
-  std::vector<std::uint8_t> taken(vertices, 0);  // new index in use
-  std::vector<std::uint8_t> placed(points, 0);   // the point has its render vertex p (p < vertices)
+  std::vector<std::uint8_t> taken(vertices, 0);        // new index in use
+  std::vector<std::uint8_t> placed(points, 0);         // the point has its render vertex p (p < vertices)
   for (std::size_t v = 0; v < vertices; ++v) {
     const std::uint32_t p = mesh.vertex_point[v];
     if (p < vertices && !placed[p]) slot_of[v] = p, taken[p] = 1, placed[p] = 1;

@@ -15,8 +15,8 @@ constexpr int bin_count = 16;
 constexpr int max_depth = 64;  // traversal stack; SAH splits stop at depth 32, median splits add at most 31 levels
 
 // Möller & Trumbore 1997, two-sided. Writes t (along the unit `direction`) and the barycentrics of corners 1 and 2.
-inline bool hit_triangle(glm::vec3 origin, glm::vec3 direction, glm::vec3 p0, glm::vec3 p1, glm::vec3 p2,
-                         float& t, float& u, float& v) {
+inline bool hit_triangle(glm::vec3 origin, glm::vec3 direction, glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, float& t,
+                         float& u, float& v) {
   const glm::vec3 e1 = p1 - p0, e2 = p2 - p0;
   const glm::vec3 p = glm::cross(direction, e2);
   const float det = glm::dot(e1, p);
@@ -82,8 +82,8 @@ RayHit intersect_triangles(const Ray& ray, std::span<const glm::vec3> positions,
   float limit = max_distance;
   for (std::size_t i = 0; i + 2 < indices.size(); i += 3) {
     float t, u, v;
-    if (hit_triangle(ray.origin, direction, positions[indices[i]], positions[indices[i + 1]],
-                     positions[indices[i + 2]], t, u, v) &&
+    if (hit_triangle(ray.origin, direction, positions[indices[i]], positions[indices[i + 1]], positions[indices[i + 2]],
+                     t, u, v) &&
         (t < limit || (t == limit && !best.hit))) {
       limit = t;
       best = RayHit{true, static_cast<std::uint32_t>(i / 3), glm::vec3(1.0f - u - v, u, v), t};
@@ -98,12 +98,11 @@ void TriangleBvh::build(std::span<const glm::vec3> positions, std::span<const st
   if (indices.size() / 3 >= (std::size_t{1} << 31)) throw Error::invalid_argument("", "too many triangles");
   for (std::size_t i = 0; i < indices.size(); ++i)
     if (indices[i] >= positions.size())
-      throw Error::invalid_argument("triangle " + std::to_string(i / 3),
-                           "index " + std::to_string(indices[i]) + " out of range (" +
-                               std::to_string(positions.size()) + " points)");
+      throw Error::invalid_argument(
+          "triangle " + std::to_string(i / 3),
+          "index " + std::to_string(indices[i]) + " out of range (" + std::to_string(positions.size()) + " points)");
   for (std::size_t i = 0; i < positions.size(); ++i)
-    if (!finite(positions[i]))
-      throw Error::invalid_argument("point " + std::to_string(i), "position is not finite");
+    if (!finite(positions[i])) throw Error::invalid_argument("point " + std::to_string(i), "position is not finite");
 
   const auto triangles = static_cast<std::uint32_t>(indices.size() / 3);
   nodes_.clear();
@@ -123,7 +122,9 @@ void TriangleBvh::build(std::span<const glm::vec3> positions, std::span<const st
   nodes_.reserve(2 * static_cast<std::size_t>(triangles));
   nodes_.push_back(Node{glm::vec3(0.0f), 0, glm::vec3(0.0f), triangles});
 
-  struct Task { std::uint32_t node, depth; };
+  struct Task {
+    std::uint32_t node, depth;
+  };
   std::vector<Task> tasks{{0, 0}};
   while (!tasks.empty()) {
     const Task task = tasks.back();
@@ -166,11 +167,13 @@ void TriangleBvh::build(std::span<const glm::vec3> positions, std::span<const st
         const float cost = prefix.half_area() * static_cast<float>(prefix_count) + suffix_cost[b];
         if (prefix_count > 0 && prefix_count < count && cost < best_cost) best_cost = cost, best_split = b;
       }
-      if (best_split > 0) middle = std::partition(begin, end, [&](std::uint32_t id) { return bin_of(id) < best_split; });
+      if (best_split > 0)
+        middle = std::partition(begin, end, [&](std::uint32_t id) { return bin_of(id) < best_split; });
     }
     if (middle == begin || middle == end) {  // all centres equal, or depth running out: split at the median
       middle = begin + count / 2;
-      std::nth_element(begin, middle, end, [&](std::uint32_t l, std::uint32_t r) { return centres[l][axis] < centres[r][axis]; });
+      std::nth_element(begin, middle, end,
+                       [&](std::uint32_t l, std::uint32_t r) { return centres[l][axis] < centres[r][axis]; });
     }
     const auto left_count = static_cast<std::uint32_t>(middle - begin);
     const auto left = static_cast<std::uint32_t>(nodes_.size());

@@ -122,7 +122,8 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
     char text[32];
     std::snprintf(text, sizeof text, "%g", double(largest));
     throw Error::invalid_argument("mesh", std::string("the points' bounding box is too large to voxelise: coordinates "
-                                                      "up to ") + text + ", more than 1e18");
+                                                      "up to ") +
+                                              text + ", more than 1e18");
   }
   if (!(longest > 1e-7f * largest) || !(longest > 1e-30f))
     throw Error::invalid_argument("mesh", "the points' bounding box has no size (all " + std::to_string(point_count) +
@@ -154,8 +155,8 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
   {
     std::vector<std::size_t> stack{0};
     state[0] = outside;
-    const std::array<glm::ivec3, 6> steps{glm::ivec3(1, 0, 0), glm::ivec3(-1, 0, 0), glm::ivec3(0, 1, 0),
-                                          glm::ivec3(0, -1, 0), glm::ivec3(0, 0, 1), glm::ivec3(0, 0, -1)};
+    const std::array<glm::ivec3, 6> steps{glm::ivec3(1, 0, 0),  glm::ivec3(-1, 0, 0), glm::ivec3(0, 1, 0),
+                                          glm::ivec3(0, -1, 0), glm::ivec3(0, 0, 1),  glm::ivec3(0, 0, -1)};
     while (!stack.empty()) {
       const std::size_t at = stack.back();
       stack.pop_back();
@@ -247,8 +248,7 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
 
   // --- one Dijkstra per deforming bone; each point's distance read at its voxel ---
   std::vector<std::int32_t> point_voxel(point_count);
-  for (std::size_t i = 0; i < point_count; ++i)
-    point_voxel[i] = volume_id[grid.index(grid.cell(mesh.positions[i]))];
+  for (std::size_t i = 0; i < point_count; ++i) point_voxel[i] = volume_id[grid.index(grid.cell(mesh.positions[i]))];
   std::vector<float> distance(point_count * bone_count, unreached);
   std::vector<float> field(volume_cell.size());
   std::vector<std::array<std::int32_t, 26>> neighbours(volume_cell.size());
@@ -315,8 +315,8 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
         for (const auto& [a, e] : shapes[b].segments) {
           const glm::vec3 axis = e - a;
           const float length2 = glm::dot(axis, axis);
-          const float t = length2 > 0.0f ? std::clamp(glm::dot(mesh.positions[i] - a, axis) / length2, 0.0f, 1.0f)
-                                         : 0.0f;
+          const float t =
+              length2 > 0.0f ? std::clamp(glm::dot(mesh.positions[i] - a, axis) / length2, 0.0f, 1.0f) : 0.0f;
           const float dd = glm::length(mesh.positions[i] - (a + t * axis));
           if (dd < best) {
             best = dd;
@@ -334,7 +334,8 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
       add(nearest);
       const Bone& n = skeleton.bones()[nearest];
       std::int32_t up = n.parent;
-      while (up >= 0 && !deforms(static_cast<std::size_t>(up))) up = skeleton.bones()[static_cast<std::size_t>(up)].parent;
+      while (up >= 0 && !deforms(static_cast<std::size_t>(up)))
+        up = skeleton.bones()[static_cast<std::size_t>(up)].parent;
       if (up >= 0) add(static_cast<std::size_t>(up));
       for (std::int32_t c : n.children)
         if (deforms(static_cast<std::size_t>(c))) add(static_cast<std::size_t>(c));

@@ -8,7 +8,8 @@ namespace deform {
 namespace {
 
 template <class T>
-void require_valid_track(const Track<T>& track, const char* what, const std::string& source, const std::string& element) {
+void require_valid_track(const Track<T>& track, const char* what, const std::string& source,
+                         const std::string& element) {
   auto fail = [&](const std::string& message) {
     throw Error::in_file(source, element, std::string(what) + " track: " + message);
   };

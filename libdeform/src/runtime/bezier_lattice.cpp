@@ -46,9 +46,9 @@ BezierLattice::BezierLattice(const LatticeFrame& frame, glm::ivec3 degree, const
   const char* axis = "lmn";
   for (int a = 0; a < 3; ++a)
     if (degree[a] < 1 || degree[a] > max_bezier_degree)
-      throw Error::in_file(source, std::string("degree ") + axis[a],
-                           "degree " + std::to_string(degree[a]) + " is outside [1, " +
-                               std::to_string(max_bezier_degree) + "]");
+      throw Error::in_file(
+          source, std::string("degree ") + axis[a],
+          "degree " + std::to_string(degree[a]) + " is outside [1, " + std::to_string(max_bezier_degree) + "]");
   points_.resize(static_cast<std::size_t>(point_counts_.x) * point_counts_.y * point_counts_.z);
   reset();
 }

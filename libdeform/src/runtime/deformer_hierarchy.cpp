@@ -105,8 +105,7 @@ LatticeMotion default_lattice_motion(BodyPart part) noexcept {
 float scaled_inertia(BodyPart part, float scale) {
   if (!(scale >= 0.0f && scale <= 1.0f))
     throw Error::invalid_argument("<lattice motion>", "inertia scale must be in [0, 1]");
-  if (body_part_name(part).empty())
-    throw Error::invalid_argument("<lattice motion>", "motion part is not a BodyPart");
+  if (body_part_name(part).empty()) throw Error::invalid_argument("<lattice motion>", "motion part is not a BodyPart");
   return scale * default_lattice_motion(part).inertia;  // a tuned inertia is in [0, 1]: so is the product
 }
 
@@ -205,8 +204,8 @@ DeformerHierarchy::DeformerHierarchy(const Skeleton& skeleton, std::vector<Bound
     for (int k = 0; k < counts.z; ++k)
       for (int j = 0; j < counts.y; ++j)
         for (int i = 0; i < counts.x; ++i)
-          lattice.regular_rest = lattice.regular_rest &&
-                                 lattice.rest.control_points()[lattice.rest.index(i, j, k)] == lattice.rest.rest_point(i, j, k);
+          lattice.regular_rest = lattice.regular_rest && lattice.rest.control_points()[lattice.rest.index(i, j, k)] ==
+                                                             lattice.rest.rest_point(i, j, k);
     lattice.rest_velocity.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_start.assign(lattice.rest.point_count(), glm::vec3(0.0f));
     lattice.accel_end.assign(lattice.rest.point_count(), glm::vec3(0.0f));
@@ -347,7 +346,7 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
     const float s = i == 0 ? ratio[1] : i == last ? ratio[last] : 0.5f * (ratio[i] + ratio[i + 1]);
     // s^(-volume/2); for full compensation (the default) 1/√s, to float rounding, without a pow.
     const float ratio_s = std::max(s, min_volume_ratio);
-    slices.scale[i] = volume == 1.0f ? 1.0f / std::sqrt(ratio_s)
+    slices.scale[i] = volume == 1.0f  ? 1.0f / std::sqrt(ratio_s)
                       : volume > 0.0f ? std::pow(ratio_s, -0.5f * volume)
                                       : 1.0f;
   }

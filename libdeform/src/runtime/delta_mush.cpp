@@ -273,7 +273,8 @@ std::span<const glm::vec4> DeltaMushJob::smoothed() const noexcept {
 bool delta_mush_frame(const DeltaMushBinding& binding, std::span<const glm::vec4> smoothed, std::uint32_t point,
                       glm::mat3& frame) noexcept {
   const std::size_t n = binding.point_count();
-  if (point >= n || smoothed.size() != n || binding.tangent_neighbour.size() != n || binding.fan_offsets.size() != n + 1)
+  if (point >= n || smoothed.size() != n || binding.tangent_neighbour.size() != n ||
+      binding.fan_offsets.size() != n + 1)
     return false;
   glm::vec3 tangent, bitangent, normal;
   if (!frame_of(binding, smoothed.data(), point, tangent, bitangent, normal)) return false;

@@ -54,8 +54,7 @@ std::string escape_control_characters(std::string_view text) {
   return escaped;
 }
 
-Error::Error(Kind kind, std::string file, Where where, std::int64_t position, std::string element,
-             std::string message)
+Error::Error(Kind kind, std::string file, Where where, std::int64_t position, std::string element, std::string message)
     : std::runtime_error(format(kind, file, where, position, shortened(element), shortened(message))),
       kind_(kind),
       file_(std::move(file)),

@@ -30,9 +30,8 @@ void sweep(const IkChain& chain, PoseView pose, const Scratch& scratch, glm::vec
 
 }  // namespace
 
-IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
-                   const IkSettings& settings, float length, const Scratch& scratch,
-                   std::uint32_t& random_state) noexcept {
+IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, const IkSettings& settings,
+                   float length, const Scratch& scratch, std::uint32_t& random_state) noexcept {
   const std::size_t joints = chain.joint_count();
   const std::span<const EulerLimits> limits = chain.limits;
   const std::span<glm::quat> frames = scratch.frames;

@@ -90,8 +90,9 @@ IkChain make_chain(const Skeleton& skeleton, std::int32_t root, std::int32_t eff
   if (root < 0 || root >= count) throw Error::invalid_argument(bone_name(root), "root bone out of range");
   if (effector < 0 || effector >= count) throw Error::invalid_argument(bone_name(effector), "effector out of range");
   if (root == effector || !skeleton.is_ancestor(root, effector))
-    throw Error::invalid_argument(bone_name(effector), "root '" + skeleton.key(root) +
-                                                           "' is not an ancestor of effector '" + skeleton.key(effector) + "'");
+    throw Error::invalid_argument(
+        bone_name(effector),
+        "root '" + skeleton.key(root) + "' is not an ancestor of effector '" + skeleton.key(effector) + "'");
   IkChain chain;
   if (const Status status = assign_chain(chain, skeleton, root, effector); !status)
     throw Error::invalid_argument(bone_name(effector), status.reason());
@@ -318,8 +319,7 @@ float swivel_toward_pole(const IkChain& chain, PoseView pose, const Frame& base,
   const std::size_t joints = chain.joint_count();
   if (joints < 2) return distance;
   // Acceptable: reached stays reached; otherwise no farther than the solve (float rounding of the turn allowed).
-  const float allowed =
-      distance <= tolerance ? tolerance : distance + 1e-6f * glm::length(heads[joints] - heads[0]);
+  const float allowed = distance <= tolerance ? tolerance : distance + 1e-6f * glm::length(heads[joints] - heads[0]);
   // The root turns first; when its limits keep the middle off the pole's side (a clavicle turns little), the next
   // joint turns the rest of the chain about its own line to the effector, and so on down to the last joint with a
   // middle after it.
@@ -356,8 +356,8 @@ StepCap cap_for(float max_radians) noexcept {
   return {std::cos(max_radians), glm::vec2(std::cos(0.5f * max_radians), std::sin(0.5f * max_radians))};
 }
 
-void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
-                       std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept {
+void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base, std::span<glm::quat> frames,
+                       std::span<glm::vec3> heads, glm::vec3 target) noexcept {
   for (std::size_t k = 0; k < chain.joint_count(); ++k) {
     const glm::quat parent = k == 0 ? base : frames[k - 1];
     glm::quat& local = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
@@ -368,8 +368,8 @@ void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
     frames[k] = parent * local;
     heads[k + 1] = heads[k] + frames[k] * offset;
   }
-  frames[chain.joint_count()] = frames[chain.joint_count() - 1] *
-                                pose.rotations[static_cast<std::size_t>(chain.bones.back())];
+  frames[chain.joint_count()] =
+      frames[chain.joint_count() - 1] * pose.rotations[static_cast<std::size_t>(chain.bones.back())];
 }
 
 namespace {
@@ -421,15 +421,14 @@ void damped_least_squares_step(const IkChain& chain, std::span<const EulerLimits
       angle += static_cast<double>(glm::dot(columns[3 * k + static_cast<std::size_t>(axis)], y));
       // A free axis wraps into [-π, π]; one already there is what remainder() returns for it (n = 0), without the
       // libm call that most steps' free axes would otherwise pay.
-      if (max - min < 2.0 * std::numbers::pi)
-        angle = std::clamp(angle, min, max);
-      else if (std::abs(angle) > std::numbers::pi)
-        angle = std::remainder(angle, 2.0 * std::numbers::pi);
+      if (max - min < 2.0 * std::numbers::pi) angle = std::clamp(angle, min, max);
+      else if (std::abs(angle) > std::numbers::pi) angle = std::remainder(angle, 2.0 * std::numbers::pi);
     }
     glm::quat& rotation = pose.rotations[static_cast<std::size_t>(chain.bones[k])];
     rotation = quat_at(angles[k], axis_dirs[k]);
     // A swing-twist joint (free Euler entry) is projected; its angles follow the projected rotation.
-    if (const SwingTwistLimits* cone = swing_twist_of(chain, k); cone != nullptr && clamp_swing_twist(*cone, rotation)) {
+    if (const SwingTwistLimits* cone = swing_twist_of(chain, k);
+        cone != nullptr && clamp_swing_twist(*cone, rotation)) {
       EulerAngles euler;
       limit_euler(limit, rotation, euler);
       angles[k] = euler.angle;
@@ -448,8 +447,7 @@ void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseVie
     pose.rotations[static_cast<std::size_t>(chain.bones[k])] = saved[k];
 }
 
-void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state,
-                    float degrees) noexcept {
+void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state, float degrees) noexcept {
   auto uniform = [&state]() {  // xorshift32, in [-1, 1)
     state ^= state << 13;
     state ^= state >> 17;

@@ -19,15 +19,15 @@ struct PoseView {
 
 // The scratch of one iterative solve, carved from the job's bytes (IkJob::scratch_size).
 struct Scratch {
-  std::span<glm::dvec3> angles;   // Euler angles per joint (stall escape)
-  std::span<glm::quat> frames;    // model-space rotation per chain bone
-  std::span<glm::quat> best;      // best joint rotations seen
-  std::span<glm::vec3> heads;     // model-space head per chain bone
-  std::span<glm::vec3> columns;   // Jacobian columns, 3 per joint (stall escape)
-  std::span<glm::vec3> goals;     // FABRIK's joint positions, per chain bone
-  std::span<float> lengths;       // FABRIK's segment lengths, per joint
-  std::span<glm::quat> input;     // the joints' input rotations (a weight below 1 blends back toward them)
-  std::span<glm::quat> first;     // the first solve's joint rotations, while a pole seeds a second
+  std::span<glm::dvec3> angles;    // Euler angles per joint (stall escape)
+  std::span<glm::quat> frames;     // model-space rotation per chain bone
+  std::span<glm::quat> best;       // best joint rotations seen
+  std::span<glm::vec3> heads;      // model-space head per chain bone
+  std::span<glm::vec3> columns;    // Jacobian columns, 3 per joint (stall escape)
+  std::span<glm::vec3> goals;      // FABRIK's joint positions, per chain bone
+  std::span<float> lengths;        // FABRIK's segment lengths, per joint
+  std::span<glm::quat> input;      // the joints' input rotations (a weight below 1 blends back toward them)
+  std::span<glm::quat> first;      // the first solve's joint rotations, while a pole seeds a second
   std::span<glm::vec4> axis_dirs;  // per joint, the X and Y Euler directions a least-squares step left (the next's)
 };
 
@@ -46,9 +46,8 @@ bool faces_pole(const IkChain& chain, std::span<const glm::vec3> heads, glm::vec
 
 // The two iterative solves; the job has checked every input. `random_state` is the stall escape's generator state;
 // `length` is chain_length of the pose.
-IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
-                   const IkSettings& settings, float length, const Scratch& scratch,
-                   std::uint32_t& random_state) noexcept;
+IkResult solve_ccd(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target, const IkSettings& settings,
+                   float length, const Scratch& scratch, std::uint32_t& random_state) noexcept;
 IkResult solve_fabrik(const IkChain& chain, PoseView pose, const Frame& base, glm::vec3 target,
                       const IkSettings& settings, const Scratch& scratch, std::uint32_t& random_state) noexcept;
 
@@ -124,7 +123,6 @@ inline glm::dvec2 scaled_half_angle(glm::dvec2 d, double length) noexcept {
   return d.x >= 0.0 ? glm::dvec2(length + d.x, d.y) : glm::dvec2(std::abs(d.y), std::copysign(length - d.x, d.y));
 }
 
-
 // Re-aims a clamped joint: turns one Euler axis at a time (x, then y, then z, each to its best angle within its
 // limits, a 1-D problem with a closed form) so that `carried` — a point in the joint's own frame relative to its
 // head, such as the effector — comes as close to `wanted` — in the parent's frame, relative to the head — as the
@@ -150,8 +148,8 @@ bool clamp_joint(const EulerLimits& limits, glm::quat& local, bool reaim, glm::v
 // for an out-of-reach target this is the straight chain, the answer an unconstrained chain minimises the distance
 // with, which CCD only approaches slowly (the distance is second order in the joints' deviation from it).
 // `frames` and `heads` hold the chain's FK for `pose` on entry and are updated.
-void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base,
-                       std::span<glm::quat> frames, std::span<glm::vec3> heads, glm::vec3 target) noexcept;
+void point_segments_at(const IkChain& chain, PoseView pose, glm::quat base, std::span<glm::quat> frames,
+                       std::span<glm::vec3> heads, glm::vec3 target) noexcept;
 
 // One damped least-squares step (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian transpose,
 // pseudoinverse and damped least squares methods") on the joints' Euler angles: Δθ = Jᵀ (J Jᵀ + λ² I)⁻¹ (target −
@@ -170,9 +168,7 @@ void save_joints(const IkChain& chain, PoseView pose, std::span<glm::quat> saved
 void load_joints(const IkChain& chain, std::span<const glm::quat> saved, PoseView pose) noexcept;
 
 // Rotates every joint by up to `degrees` per Euler axis at random (xorshift32 on `state`), then clamps it.
-void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state,
-                    float degrees) noexcept;
-
+void perturb_joints(const IkChain& chain, PoseView pose, std::uint32_t& state, float degrees) noexcept;
 
 // A CCD sweep or FABRIK pass that fails to shorten the distance above the out-of-reach floor by this fraction has
 // slowed to a crawl: damped least-squares steps take over (chosen by measurement, docs/ik.md and

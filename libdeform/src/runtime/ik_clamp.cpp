@@ -29,8 +29,10 @@ inline double polynomial_atan2(double y, double x) {
   const double base = low ? 0.0 : (high ? 0.5 * pi : 0.25 * pi);
   const double t = denominator > 0.0 ? numerator / denominator : 0.0;  // (0, 0) gives 0, as std::atan2
   const double s = t * t;
-  const double angle = base + t * (0.99999998126461132 + s * (-0.33332785771926865 + s * (0.19974082415557812 +
-                                   s * (-0.13848490212692172 + s * 0.079762918079436945))));
+  const double angle =
+      base + t * (0.99999998126461132 +
+                  s * (-0.33332785771926865 +
+                       s * (0.19974082415557812 + s * (-0.13848490212692172 + s * 0.079762918079436945))));
   const double quadrant = x < 0.0 ? pi - angle : angle;
   return y < 0.0 ? -quadrant : quadrant;
 }
@@ -90,10 +92,14 @@ glm::dvec2 direction(double angle) {
   // are within 5e-13.
   const auto quarter = static_cast<long>(angle * (2.0 / pi) + (angle >= 0.0 ? 0.5 : -0.5));
   const double r = angle - static_cast<double>(quarter) * (0.5 * pi), r2 = r * r;
-  const double sine = r * (1.0 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 +
-                                r2 * (-1.0 / 39916800 + r2 * (1.0 / 6227020800.0)))))));
-  const double cosine = 1.0 + r2 * (-1.0 / 2 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 +
-                              r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+  const double sine =
+      r * (1.0 + r2 * (-1.0 / 6 +
+                       r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800 +
+                                                                                        r2 * (1.0 / 6227020800.0)))))));
+  const double cosine =
+      1.0 +
+      r2 * (-1.0 / 2 +
+            r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
   switch (quarter & 3) {
     case 0: return {cosine, sine};
     case 1: return {-sine, cosine};
@@ -124,7 +130,7 @@ inline glm::quat quaternion_of(const detail::EulerAngles& euler) noexcept {
 // memory to quaternion_of; the options are constants there).
 template <bool angles_needed, bool raw_directions>
 DEFORM_ALWAYS_INLINE inline bool limit_euler_inline(const EulerLimits& limits, glm::quat rotation,
-                                                      detail::EulerAngles& euler) noexcept {
+                                                    detail::EulerAngles& euler) noexcept {
   using detail::EulerAngles;
   // R = Rx(a) · Ry(b) · Rz(c): R02 = sin b, (R22, −R12) = cos b (cos a, sin a), (R00, −R01) = cos b (cos c, sin c);
   // at cos b = 0 only a ± c is defined and all of it goes on x: (R11, R21) = (cos a, sin a), c = 0 (as
@@ -266,10 +272,15 @@ glm::quat quat_at(glm::dvec3 angle, glm::vec4& xy_dirs) noexcept {
     const double a = angle[axis];
     if (std::abs(a) <= pi) {
       const double r = 0.25 * a, r2 = r * r;
-      const double sine = r * (1.0 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 +
-                                    r2 * (-1.0 / 39916800 + r2 * (1.0 / 6227020800.0)))))));
-      const double cosine = 1.0 + r2 * (-1.0 / 2 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 +
-                                  r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+      const double sine =
+          r *
+          (1.0 + r2 * (-1.0 / 6 +
+                       r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800 +
+                                                                                        r2 * (1.0 / 6227020800.0)))))));
+      const double cosine =
+          1.0 + r2 * (-1.0 / 2 +
+                      r2 * (1.0 / 24 +
+                            r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
       half[axis] = glm::dvec2(cosine * cosine - sine * sine, 2.0 * cosine * sine);
     } else {
       half[axis] = direction(0.5 * a);
@@ -435,9 +446,9 @@ SwingTwistLimits swing_twist_from_euler(const DofLimits& euler, glm::vec3 axis) 
   const int t = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2), i = (t + 1) % 3, j = (t + 2) % 3;
   const bool flipped = a[t] < 0.0;
   auto larger_bound = [&](int k) { return std::max(std::abs(euler.min[k]), std::abs(euler.max[k])); };
-  SwingTwistLimits limits = make_swing_twist_limits(glm::vec3(a), larger_bound(i), larger_bound(j),
-                                                    flipped ? -euler.max[t] : euler.min[t],
-                                                    flipped ? -euler.min[t] : euler.max[t]);
+  SwingTwistLimits limits =
+      make_swing_twist_limits(glm::vec3(a), larger_bound(i), larger_bound(j), flipped ? -euler.max[t] : euler.min[t],
+                              flipped ? -euler.min[t] : euler.max[t]);
   glm::dvec3 e(0.0);
   e[i] = 1.0;
   limits.reference = glm::vec3(perpendicular(a, e));

@@ -73,8 +73,8 @@ struct Solved {
 // Steps 1–4 of ik.hpp. `upper` and `lower` are the normalised input rotations; `u` and `lower_offset` the middle and
 // effector bones' translations (lengths a, b > 0); `to_target` and `pole` are in the root parent's frame relative to
 // the root's head (`pole` already a vector, from the root for a point).
-Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec3 u, glm::vec3 lower_offset,
-             double a, double b, glm::vec3 to_target, glm::vec3 pole) noexcept {
+Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec3 u, glm::vec3 lower_offset, double a,
+             double b, glm::vec3 to_target, glm::vec3 pole) noexcept {
   const EulerLimits* limits = job.chain->limits.data();  // root, middle
   Solved out;
   // 1. The limb's root–effector distance c: the target's, softened near full extension, at least the folded limb's.
@@ -90,16 +90,15 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   // c² for the law of cosines: unsoftened, min(r², reach²) kept at least fold², which is c · c to rounding without
   // waiting for the square root of r² (the longest path into the bend).
   const double c2 = job.soften > 0.0f ? c * c : std::max(std::min(r2, reach * reach), fold * fold);
-  if (job.max_stretch > 1.0f && r > c && c > 0.0)
-    out.stretch = std::min(r / c, static_cast<double>(job.max_stretch));
+  if (job.max_stretch > 1.0f && r > c && c > 0.0) out.stretch = std::min(r / c, static_cast<double>(job.max_stretch));
 
   // 2. In the upper bone's frame, the middle joint turns about the bend axis until |u + v| = c: the turn (current −
   //    wanted interior angle) from cosines and sines, the wanted one's from the law of cosines.
   glm::vec3 v = lower * lower_offset;  // middle → effector, upper's frame
   const glm::dvec3 cross = glm::cross(glm::dvec3(u), glm::dvec3(v));
   const double sine = glm::length(cross);  // a · b · sin(interior angle)
-  glm::vec3 axis;                // unit
-  glm::vec3 turn_axis;           // axis times turn_axis_length: the turn's quaternion need not wait for the division
+  glm::vec3 axis;                          // unit
+  glm::vec3 turn_axis;  // axis times turn_axis_length: the turn's quaternion need not wait for the division
   float turn_axis_length = 1.0f;
   if (sine < 1e-7 * a * b) {  // straight or folded: bend toward the pole, or about any perpendicular
     const glm::vec3 upper_pole = glm::conjugate(upper) * pole;
@@ -120,8 +119,8 @@ Solved solve(const TwoBoneIkJob& job, glm::quat upper, glm::quat lower, glm::vec
   const glm::dvec2 turn(current.x * wanted.x + current.y * wanted.y, current.y * wanted.x - current.x * wanted.y);
   lower = turn_quat(turn_axis, turn, a * b, turn_axis_length) * lower;
   // v turned (Rodrigues, v ⊥ axis), or from the pose again when the limit moved the joint (the clamp normalises).
-  const glm::vec3 turned_v = static_cast<float>(turn.x * inverse_ab) * v +
-                             static_cast<float>(turn.y * inverse_ab) * glm::cross(axis, v);
+  const glm::vec3 turned_v =
+      static_cast<float>(turn.x * inverse_ab) * v + static_cast<float>(turn.y * inverse_ab) * glm::cross(axis, v);
   out.clamped = clamp_joint(limits[1], lower);
   v = out.clamped ? lower * lower_offset : turned_v;
   // The bend plane's normal, u × v, or the turn's axis where the limb ends straight or folded.
@@ -238,9 +237,8 @@ bool passes(const TwoBoneIkJob& job, float& a, float& b) noexcept {
   const auto needed = static_cast<std::size_t>(chain->max_bone) + 1;
   const bool fits = (chain->max_bone >= 0) & (job.rotations.size() >= needed) & (job.translations.size() >= needed) &
                     (job.stretched_translations.empty() | (job.stretched_translations.size() >= needed));
-  const bool in_range = (job.tolerance >= 0.0f) & (job.soften >= 0.0f) & (job.soften <= 1.0f) &
-                        (job.weight >= 0.0f) & (job.weight <= 1.0f) & (job.max_stretch >= 1.0f) &
-                        (std::abs(job.swivel_degrees) <= 360.0f) &
+  const bool in_range = (job.tolerance >= 0.0f) & (job.soften >= 0.0f) & (job.soften <= 1.0f) & (job.weight >= 0.0f) &
+                        (job.weight <= 1.0f) & (job.max_stretch >= 1.0f) & (std::abs(job.swivel_degrees) <= 360.0f) &
                         ((job.pole_kind == PoleKind::direction) | (job.pole_kind == PoleKind::point));
   if (!(fits & in_range)) return false;
   const glm::quat r = job.base.rotation;

@@ -299,8 +299,8 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
     // lanes read a harmless (0, 0, 1).
     alignas(64) float in[3][lanes], out[3][lanes];
     for (int lane = 0; lane < lanes; ++lane) {
-      const glm::vec3 nrm = vertex[lane] != deform::LatticeBinding::no_vertex ? a.normals_in[vertex[lane]]
-                                                                             : glm::vec3(0.0f, 0.0f, 1.0f);
+      const glm::vec3 nrm =
+          vertex[lane] != deform::LatticeBinding::no_vertex ? a.normals_in[vertex[lane]] : glm::vec3(0.0f, 0.0f, 1.0f);
       in[0][lane] = nrm.x, in[1][lane] = nrm.y, in[2][lane] = nrm.z;
     }
     const glm::mat3& g = a.normal_basis;
@@ -326,8 +326,8 @@ inline void bezier_block(const deform::detail::KernelArgs& a, std::size_t block,
       const float scale2 = ux * ux + uy * uy + uz * uz + vx * vx + vy * vy + vz * vz + wx * wx + wy * wy + wz * wz;
       const float floor2 = noise2 * scale2 * (mx * mx + my * my + mz * mz);
       constexpr float largest = 3.40282347e38f;
-      const bool usable = length2 > floor2 && std::abs(rx) <= largest && std::abs(ry) <= largest &&
-                          std::abs(rz) <= largest;
+      const bool usable =
+          length2 > floor2 && std::abs(rx) <= largest && std::abs(ry) <= largest && std::abs(rz) <= largest;
       out[0][lane] = usable ? rx : ix, out[1][lane] = usable ? ry : iy, out[2][lane] = usable ? rz : iz;
     }
     if (weight) {

@@ -102,8 +102,7 @@ Status compute_vertex_normals(const Mesh& mesh, std::span<const glm::vec3> posit
 
 VertexNormalsBinding bind_vertex_normals(const Mesh& mesh) {
   const std::size_t point_count = mesh.point_count(), vertex_count = mesh.vertex_count();
-  if (mesh.triangles.size() % 3 != 0)
-    throw Error::invalid_argument("mesh", "triangle index count not a multiple of 3");
+  if (mesh.triangles.size() % 3 != 0) throw Error::invalid_argument("mesh", "triangle index count not a multiple of 3");
   for (const std::uint32_t point : mesh.vertex_point)
     if (point >= point_count) throw Error::invalid_argument("mesh", "vertex_point index out of range");
   if (mesh.triangles.size() >= std::numeric_limits<std::uint32_t>::max())
@@ -243,8 +242,8 @@ InPlaceGather plan_in_place_gather(std::span<const std::uint32_t> map, std::size
   for (std::size_t v = 0; v < count; ++v)
     if (pending[v] && readers[v] == 0) ready.push(std::uint32_t(v));
   plan.moves.reserve(2 * (remaining + remaining / 8 + 1));
-  const auto held = std::uint32_t(count);      // the slot past the destinations
-  std::uint32_t saved = none;                 // the slot whose value is held
+  const auto held = std::uint32_t(count);  // the slot past the destinations
+  std::uint32_t saved = none;              // the slot whose value is held
   std::size_t scan = 0;
   while (remaining > 0) {
     while (!ready.empty()) {

@@ -15,9 +15,9 @@ namespace deform::detail {
 // atan(t) ≈ t · P(t²) on [0, 1], P of degree 7 in t²: minimax for the absolute error, fitted for libdeform by Remez
 // exchange in long double. Max error 3.7e-8 in exact arithmetic, 1.4e-7 evaluated in float (checked on every float of
 // [0, 1]).
-inline constexpr float atan_coefficients[8] = {9.999993443e-01f, -3.332985938e-01f, 1.994656622e-01f,
-                                               -1.390862912e-01f, 9.642197192e-02f, -5.591232702e-02f,
-                                               2.186295763e-02f, -4.054567311e-03f};
+inline constexpr float atan_coefficients[8] = {9.999993443e-01f,  -3.332985938e-01f, 1.994656622e-01f,
+                                               -1.390862912e-01f, 9.642197192e-02f,  -5.591232702e-02f,
+                                               2.186295763e-02f,  -4.054567311e-03f};
 
 // atan2(y, x) for y > 0: the angle at a triangle corner whose edges e1, e2 give y = |e1 × e2| and x = e1 · e2, in
 // (0, π), within 5e-7 rad of the exact angle (polynomial, the rounding of the ratio and of π). Cost: one division and

@@ -57,10 +57,9 @@ inline void triangle_contributions(const deform::VertexNormalsBinding& binding, 
     const bool degenerate = !(twice_area > 0.0f);
     const float weight[3] = {angle_a * inverse_area, angle_b * inverse_area, angle_c * inverse_area};
     DEFORM_UNROLL
-    for (int k = 0; k < 3; ++k)
-      DEFORM_UNROLL
-      for (int axis = 0; axis < 3; ++axis)
-        contribution[k][axis][lane] = degenerate ? 0.0f : weight[k] * area_normal[axis];
+    for (int k = 0; k < 3; ++k) DEFORM_UNROLL
+    for (int axis = 0; axis < 3; ++axis)
+      contribution[k][axis][lane] = degenerate ? 0.0f : weight[k] * area_normal[axis];
   }
 }
 
@@ -78,8 +77,8 @@ void DEFORM_NORMALS_ENTRY(const NormalsKernelArgs& args) noexcept {
   const std::uint32_t* triangle_points = binding.triangle_points.data();
   const std::size_t begin = args.begin, end = args.end;
   const std::size_t first_owned = binding.triangle_offsets[begin], last_owned = binding.triangle_offsets[end];
-  glm::vec4* sums = args.scratch;                              // per point
-  glm::vec4* parked = args.scratch + binding.point_count;      // per corner
+  glm::vec4* sums = args.scratch;                          // per point
+  glm::vec4* parked = args.scratch + binding.point_count;  // per corner
   std::uint32_t triangle[lanes];
   alignas(64) float contribution[3][3][lanes];
 

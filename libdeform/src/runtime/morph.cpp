@@ -7,7 +7,6 @@
 namespace deform {
 namespace {
 
-
 // Empty when the target is valid for `point_count` points, else what is wrong.
 const char* target_problem(const MorphTarget& t, std::size_t point_count) noexcept {
   if (t.position_deltas.size() != t.points.size()) return "position deltas and points differ in count";
@@ -35,7 +34,8 @@ Status sizes_ok(const MorphJob& job) noexcept {
 
 }  // namespace
 
-void require_valid_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count, const std::string& source) {
+void require_valid_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count,
+                                 const std::string& source) {
   for (std::size_t k = 0; k < targets.size(); ++k)
     if (const char* problem = target_problem(targets[k], point_count))
       throw Error::in_file(source, "morph target " + std::to_string(k) + " '" + targets[k].name + "'", problem);

@@ -21,6 +21,7 @@ struct BoneProblem {
 
 // The first rule `bones` breaks, or nothing. When it returns nothing, `order` (if given, bone_count() entries) holds
 // the bone ids parent-before-child, breadth-first from bone 0 through the child lists. Cost O(bones + children).
-DEFORM_RUNTIME_API std::optional<BoneProblem> find_bone_problem(std::span<const Bone> bones, std::span<std::int32_t> order = {});
+DEFORM_RUNTIME_API std::optional<BoneProblem> find_bone_problem(std::span<const Bone> bones,
+                                                                std::span<std::int32_t> order = {});
 
 }  // namespace deform::detail

@@ -8,8 +8,8 @@
 
 namespace deform {
 
-std::size_t append_influences(SkinWeights& weights, std::span<const std::uint16_t> bones,
-                              std::span<const float> values, std::uint16_t fallback_bone) {
+std::size_t append_influences(SkinWeights& weights, std::span<const std::uint16_t> bones, std::span<const float> values,
+                              std::uint16_t fallback_bone) {
   // Merge repeated bones (summed, in double), drop non-positive weights, strongest first, lower bone on a tie.
   std::vector<std::pair<std::uint16_t, double>> list;
   const std::size_t n = std::min(bones.size(), values.size());

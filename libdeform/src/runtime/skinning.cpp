@@ -47,8 +47,8 @@ Status layout_ok(const SkinningJob& job) noexcept {
              job.extra_offsets.front() != 0 || job.extra_vertices.back() >= count) {
     return Status::failure("extra influences are inconsistent");
   }
-  if (Status s = stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count,
-                           "in_positions stride invalid", "in_positions too short");
+  if (Status s = stream_ok(job.in_positions.size_bytes(), job.in_positions_stride, count, "in_positions stride invalid",
+                           "in_positions too short");
       !s)
     return s;
   if (Status s = stream_ok(job.out_positions.size_bytes(), job.out_positions_stride, count,
@@ -158,11 +158,10 @@ Status SkinningJob::run(std::size_t begin, std::size_t end) const noexcept {
   }
   const auto j = static_cast<std::size_t>(std::lower_bound(extra_vertices.begin(), extra_vertices.end(), begin) -
                                           extra_vertices.begin());
-  const auto j_end = static_cast<std::size_t>(std::lower_bound(extra_vertices.begin() + std::ptrdiff_t(j),
-                                                         extra_vertices.end(), end) -
-                                        extra_vertices.begin());
-  const bool in_place = out_positions.data() == in_positions.data() ||
-                        (!in_normals.empty() && out_normals.data() == in_normals.data());
+  const auto j_end = static_cast<std::size_t>(
+      std::lower_bound(extra_vertices.begin() + std::ptrdiff_t(j), extra_vertices.end(), end) - extra_vertices.begin());
+  const bool in_place =
+      out_positions.data() == in_positions.data() || (!in_normals.empty() && out_normals.data() == in_normals.data());
   if (!in_place) {
     // Outputs apart from inputs: the four-influence kernel over the whole range (whole blocks, the fast way), then
     // the general kernel over the listed vertices, which reads their untouched inputs and overwrites their results.

@@ -36,9 +36,7 @@ inline F16 rcp(F16 x) {
   const __m512 y = _mm512_rcp14_ps(x.v);
   return {_mm512_mul_ps(y, _mm512_fnmadd_ps(x.v, y, _mm512_set1_ps(2.0f)))};
 }
-inline F16 flip_sign(F16 w, F16 d) {
-  return {_mm512_xor_ps(w.v, _mm512_and_ps(d.v, _mm512_set1_ps(-0.0f)))};
-}
+inline F16 flip_sign(F16 w, F16 d) { return {_mm512_xor_ps(w.v, _mm512_and_ps(d.v, _mm512_set1_ps(-0.0f)))}; }
 
 inline __m512 unpacklo_pd(__m512 a, __m512 b) {
   return _mm512_castpd_ps(_mm512_unpacklo_pd(_mm512_castps_pd(a), _mm512_castps_pd(b)));
@@ -135,8 +133,8 @@ struct Avx512 {
   // are words 2l (influences 0, 1) and 2l + 1 (influences 2, 3).
   static __m512i raw_bone_ids(const SkinningJob& job, std::size_t i, int k) {
     const __m512i* p = reinterpret_cast<const __m512i*>(&job.bone_indices[i]);
-    const __m512i words = _mm512_add_epi32(
-        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30), _mm512_set1_epi32(k >> 1));
+    const __m512i words = _mm512_add_epi32(_mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
+                                           _mm512_set1_epi32(k >> 1));
     const __m512i pair = _mm512_permutex2var_epi32(_mm512_loadu_si512(p), words, _mm512_loadu_si512(p + 1));
     return (k & 1) != 0 ? _mm512_srli_epi32(pair, 16) : pair;
   }

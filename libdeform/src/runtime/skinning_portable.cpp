@@ -166,7 +166,8 @@ void skin_extra_vertices(const SkinningJob& job, std::size_t j_begin, std::size_
         store3(stream_at(job.out_positions, job.out_positions_stride, i),
                (a0 * p.x + a1 * p.y + a2 * p.z + t) * (1.0f / sum[l]));
         if (normals)
-          store3(stream_at(job.out_normals, job.out_normals_stride, i), normalize_or_zero(cofactor_times(a0, a1, a2, n)));
+          store3(stream_at(job.out_normals, job.out_normals_stride, i),
+                 normalize_or_zero(cofactor_times(a0, a1, a2, n)));
         continue;
       }
       const float inverse_length = 1.0f / std::sqrt(glm::dot(c0[l], c0[l]));

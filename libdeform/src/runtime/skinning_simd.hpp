@@ -50,7 +50,7 @@ void cross3(const V a[3], const V b[3], V out[3]) {
 // constants reloaded every block).
 template <class Isa>
 DEFORM_ALWAYS_INLINE inline void skin_lbs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
-                                                  bool stream) noexcept {
+                                                bool stream) noexcept {
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
   V a[12], w[4], p[3], n[3], out[3];
@@ -59,7 +59,8 @@ DEFORM_ALWAYS_INLINE inline void skin_lbs_block(const SkinningJob& job, const Is
   isa.load3(job.in_positions.data(), job.in_positions_stride, i, p);
   if (normals) isa.load3(job.in_normals.data(), job.in_normals_stride, i, n);
   const V inverse_sum = rcp((w[0] + w[1]) + (w[2] + w[3]));
-  for (int r = 0; r < 3; ++r) out[r] = fma(a[r], p[0], fma(a[3 + r], p[1], fma(a[6 + r], p[2], a[9 + r]))) * inverse_sum;
+  for (int r = 0; r < 3; ++r)
+    out[r] = fma(a[r], p[0], fma(a[3 + r], p[1], fma(a[6 + r], p[2], a[9 + r]))) * inverse_sum;
   isa.store3(job.out_positions.data(), job.out_positions_stride, i, out, stream);
   if (normals) {
     // Cofactor matrix of the blended 3×3 (columns a1×a2, a2×a0, a0×a1) times the normal.
@@ -75,7 +76,7 @@ DEFORM_ALWAYS_INLINE inline void skin_lbs_block(const SkinningJob& job, const Is
 
 template <class Isa>
 DEFORM_ALWAYS_INLINE inline void skin_dqs_block(const SkinningJob& job, const Isa& isa, std::size_t i,
-                                                  bool stream) noexcept {
+                                                bool stream) noexcept {
   using V = typename Isa::V;
   const bool normals = !job.in_normals.empty();
   const V two = Isa::splat(2.0f);

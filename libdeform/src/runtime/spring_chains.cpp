@@ -76,7 +76,8 @@ SpringChainSpec vrm_spring_settings(const VrmSpringJoint& joint, float bone_leng
   spec.frequency = float(omega / (2.0 * std::numbers::pi));
   spec.damping_ratio = float(-std::log1p(-double(joint.drag_force)) * rate / (2.0 * omega));
   const float length = glm::length(joint.gravity_dir);
-  spec.gravity = length > 0.0f ? joint.gravity_dir / length * float(double(joint.gravity_power) * rate) : glm::vec3(0.0f);
+  spec.gravity =
+      length > 0.0f ? joint.gravity_dir / length * float(double(joint.gravity_power) * rate) : glm::vec3(0.0f);
   spec.units_per_metre = 1.0f;
   spec.radius = joint.hit_radius;
   return spec;
@@ -286,8 +287,8 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
       const glm::vec3 from_head = p - head;
       const float distance = glm::length(from_head);
       const glm::vec3 along = distance > 1e-12f * length ? from_head * (1.0f / distance)
-                              : length > 0.0f             ? bone * (1.0f / length)
-                                                          : bone;
+                              : length > 0.0f            ? bone * (1.0f / length)
+                                                         : bone;
       p = head + along * length;
       v -= glm::dot(v - head_velocity, along) * along;
     };
@@ -383,7 +384,8 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
   }
   for (std::size_t c = 0; c < colliders_.size(); ++c)
     collider_end_radius_[c] = colliders_[c].radius * matrix_scale(world[std::size_t(colliders_[c].bone)]);
-  for (Chain& chain : chains_) chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
+  for (Chain& chain : chains_)
+    chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
   // A pose that changed while no time passed is a jump (a cut, a teleport): the chains start again on it, at rest.
   if (started_ && dt == 0.0f) started_ = std::equal(end_points_.begin(), end_points_.end(), start_points_.begin());
   if (!started_) {
@@ -454,9 +456,9 @@ void SpringChains::prefetch() const noexcept {
   prefetch_span(point_local_);
   prefetch_span(governed_);
   prefetch_span(inverse_bind_);
-  for (const auto* points : {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_,
-                             &positions_, &velocities_, &rests_, &report_positions_, &report_velocities_,
-                             &report_rests_, &heads_, &drawn_})
+  for (const auto* points :
+       {&start_points_, &start_velocities_, &end_points_, &end_velocities_, &sample_points_, &positions_, &velocities_,
+        &rests_, &report_positions_, &report_velocities_, &report_rests_, &heads_, &drawn_})
     prefetch_span(*points);
   prefetch_span(collider_start_radius_);
   prefetch_span(collider_end_radius_);

@@ -154,8 +154,8 @@ typedef struct deform_lattice deform_lattice;
 
 /* A Bezier lattice over the box [origin, origin + size] of the given degree per axis (1..16), its control points
  * at rest. */
-DEFORM_C_API deform_status deform_lattice_create(const float origin[3], const float size[3], int degree_u,
-                                                 int degree_v, int degree_w, deform_lattice** out);
+DEFORM_C_API deform_status deform_lattice_create(const float origin[3], const float size[3], int degree_u, int degree_v,
+                                                 int degree_w, deform_lattice** out);
 DEFORM_C_API void deform_lattice_destroy(deform_lattice* lattice);
 /* The control points, i-fastest ((degree_u+1) * (degree_v+1) * (degree_w+1) points, 3 floats each): a view into the
  * lattice to read and write freely, valid until destroy. `count` (may be NULL) receives the number of points. */

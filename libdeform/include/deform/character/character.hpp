@@ -19,8 +19,9 @@
 //
 // A frame: pose (set_pose, e.g. from a SamplingJob) → IK (reach, on the chain alone) → update(dt): forward kinematics
 // once (LocalToWorldJob: world matrices and skinning palette), the spring chains bending the pose, the lattices'
-// springs' step, skinning, the lattices' carried points and fields → normals() on demand. Nothing on that path allocates; everything it needs is sized at
-// construction. Characters are movable values (a std::vector of them is fine).
+// springs' step, skinning, the lattices' carried points and fields → normals() on demand. Nothing on that path
+// allocates; everything it needs is sized at construction. Characters are movable values (a std::vector of them is
+// fine).
 //
 // Normals (NormalsMode): transported by default — each point's bind-pose normal (angle-weighted, from the bind
 // positions) goes through the skinning (cofactor of the blended matrix) and the lattices (cofactor of their map's
@@ -90,10 +91,10 @@ class DEFORM_CHARACTER_API Character {
   ~Character() = default;
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
-  // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default morph weights, the
-  // settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max stretch), the
-  // lattices' current elastic settings, shapes and motion, and the spring chains' settings copied. Allocates that state only (about
-  // 142 KB for the built-in character; docs/performance.md, "2026-11-24, late").
+  // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default
+  // morph weights, the settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max
+  // stretch), the lattices' current elastic settings, shapes and motion, and the spring chains' settings copied.
+  // Allocates that state only (about 142 KB for the built-in character; docs/performance.md, "2026-11-24, late").
   Character instance() const;
 
   const Model& model() const noexcept { return bind_->model; }
@@ -137,7 +138,8 @@ class DEFORM_CHARACTER_API Character {
   // weight was set (no targets, or all 0). A caller that deforms elsewhere (deform_on_cpu = false) morphs itself —
   // MorphJob over model().morph_targets with morph_weights() — as update() then does not.
   std::span<const glm::vec3> morphed_bind_positions() const noexcept {
-    return morphed_ ? std::span<const glm::vec3>(morphed_positions_) : std::span<const glm::vec3>(model().mesh.positions);
+    return morphed_ ? std::span<const glm::vec3>(morphed_positions_)
+                    : std::span<const glm::vec3>(model().mesh.positions);
   }
 
   // Delta Mush (runtime/delta_mush.hpp), an optional smoothing stage after the lattices, off by default: update()
@@ -207,16 +209,17 @@ class DEFORM_CHARACTER_API Character {
   // construction when the effector changes. Cost: up to 17 CCD solves of the chain (microseconds), no full FK.
   // Called again each frame while the body moves (after each set_pose), it re-solves on the new pose: a reach held so
   // (the same effector, not released, a target within a tenth of the chain's length of the last) is solved without
-  // the stall escape's random restarts, so it follows its target smoothly. A reach that starts, and a release, move the limb at once: the next update() takes that as a
-  // jump, not as motion — the lattices and spring chains on the limb start again from the new pose.
+  // the stall escape's random restarts, so it follows its target smoothly. A reach that starts, and a release, move the
+  // limb at once: the next update() takes that as a jump, not as motion — the lattices and spring chains on the limb
+  // start again from the new pose.
   ReachResult reach(std::int32_t effector, glm::vec3 target);
   // Lets go: every stretch target back to zero; the pose reached stays.
   void release();
 
   // Advances the springs by dt seconds and deforms the held pose: FK once (twice with a lead), the spring chains,
-  // the lattices' springs, skinning, lattices (see the top of this file). Refuses, changing nothing, a dt that is negative or not finite. The later stages cannot refuse for a pose
-  // set by set_pose or reach; should one, update reports its reason, never success. No allocation;
-  // O(bones + points + bound points · lattice cost).
+  // the lattices' springs, skinning, lattices (see the top of this file). Refuses, changing nothing, a dt that is
+  // negative or not finite. The later stages cannot refuse for a pose set by set_pose or reach; should one, update
+  // reports its reason, never success. No allocation; O(bones + points + bound points · lattice cost).
   Status update(float dt);
 
   // Cache hints for the state the next update() and normals() read and write (deform/runtime/prefetch.hpp): no
@@ -294,7 +297,7 @@ class DEFORM_CHARACTER_API Character {
   DeformerHierarchy hierarchy_;
   SpringChains springs_;
   Pose pose_;
-  Pose later_;        // set_pose(pose, later, lead): the pose lead_ seconds later (lead_ 0: none)
+  Pose later_;  // set_pose(pose, later, lead): the pose lead_ seconds later (lead_ 0: none)
   float lead_ = 0.0f;
   std::vector<glm::mat4> world_;
   std::vector<glm::mat4> world_later_;  // ... its world matrices and the bones' rates d(world)/dt
@@ -303,7 +306,7 @@ class DEFORM_CHARACTER_API Character {
   std::vector<DualQuat> dual_quats_;
   std::vector<glm::mat3> scales_;
   std::vector<glm::vec3> positions_;
-  std::vector<glm::vec3> point_normals_;     // transported: one per point, as of update() (empty when in place)
+  std::vector<glm::vec3> point_normals_;  // transported: one per point, as of update() (empty when in place)
   std::vector<glm::vec3> normals_;  // one per render vertex (in place: per point until normals(), and a scratch entry)
   std::vector<glm::vec4> normals_scratch_;  // VertexNormalsJob::scratch (allocated for the recomputed mode only)
   // Morph targets: one weight per target; the morphed bind positions and normals, one per point (allocated only when
@@ -316,9 +319,9 @@ class DEFORM_CHARACTER_API Character {
   bool transported_current_ = false;  // the last update() transported point_normals_
   bool normals_current_ = false;
   std::int32_t effector_ = -1;
-  bool reaching_ = false;         // a reach is held (reach() since the last release())
-  glm::vec3 reach_target_{0.0f};  // the last reach's target
-  std::int32_t jumped_root_ = -1;  // the root of a limb a reach snapped or let go since the last update(), or -1
+  bool reaching_ = false;               // a reach is held (reach() since the last release())
+  glm::vec3 reach_target_{0.0f};        // the last reach's target
+  std::int32_t jumped_root_ = -1;       // the root of a limb a reach snapped or let go since the last update(), or -1
   std::vector<std::size_t> stretched_;  // lattices of the last reach (capacity: every lattice)
   // reach()'s working storage, sized at construction: the chain (rebuilt when the effector changes), the pose being
   // solved, the IK scratch and the joints' model-space matrices for the deepest chain, the chain's lattices.

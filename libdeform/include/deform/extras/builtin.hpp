@@ -21,9 +21,9 @@ namespace deform {
 
 // The character: name "builtin", 2,850 points and 5,696 triangles, one closed surface (a box-modelled cage refined by
 // two Catmull–Clark subdivisions) in 14 body parts (triangles only, UVs in an atlas, normals), one material "skin" with
-// map_Kd "builtin.png", 33 bones with anatomical DOF limits (the body's 29, then a ponytail's 4: ids 29–32), and the weights
-// compute_automatic_weights() gives with default options. Deterministic: every call gives the same values (across
-// platforms, to within the rounding of their sin/exp/pow). Cost: about 4 ms; allocates the model.
+// map_Kd "builtin.png", 33 bones with anatomical DOF limits (the body's 29, then a ponytail's 4: ids 29–32), and the
+// weights compute_automatic_weights() gives with default options. Deterministic: every call gives the same values
+// (across platforms, to within the rounding of their sin/exp/pow). Cost: about 4 ms; allocates the model.
 DEFORM_EXTRAS_API Model builtin_character();
 
 // The texture the material names: `size` × `size` RGB pixels (row 0 = top, i.e. v = 1), 8 bits per channel, painted
@@ -34,8 +34,9 @@ DEFORM_EXTRAS_API std::vector<std::uint8_t> builtin_texture(int size = 512);
 
 // The rig of the built-in character (builtin_character(); model.builtin set): three lattices on the left arm — upper
 // arm, forearm, hand — with under-damped springs, reach chain clavicle_l → hand_l — and the ponytail as a spring chain
-// (2.75 Hz, damping ratio 0.4, gravity) kept out of capsules on the head, neck and chest. Throws deform::Error when `model`
-// lacks those bones. Tests, benchmarks and docs pin numbers from it: builtin_full_rig() is the rig with every limb.
+// (2.75 Hz, damping ratio 0.4, gravity) kept out of capsules on the head, neck and chest. Throws deform::Error when
+// `model` lacks those bones. Tests, benchmarks and docs pin numbers from it: builtin_full_rig() is the rig with every
+// limb.
 DEFORM_EXTRAS_API Rig builtin_rig(const Model& model);
 // The built-in rig on every limb: builtin_rig()'s three left-arm lattices first (same names, same order), then the
 // same three mirrored on the right arm (upperarm_r, forearm_r, hand_r) and three on each leg (thigh, shin, foot: _l,

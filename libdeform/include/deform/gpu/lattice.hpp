@@ -173,8 +173,7 @@ class DEFORM_GPU_API GpuLatticeFields {
   // DeformerHierarchy::apply(positions, normals) does (Character's transported normals): the buffer's normals must
   // then be the skinned ones (GpuSkinning with normals, or the CPU's). Per frame that costs a second contraction per
   // vertex and the upload of each active lattice's mapped points.
-  Status create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point,
-                bool normals = false);
+  Status create(const DeformerHierarchy& hierarchy, std::span<const std::uint32_t> vertex_point, bool normals = false);
   // Deletes every lattice's GL objects (needs the context current).
   void clear() noexcept {
     lattices_.clear();
@@ -203,9 +202,9 @@ class DEFORM_GPU_API GpuLatticeFields {
   void add_fields(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout);
 
   std::vector<GpuBezierLattice> lattices_;
-  std::vector<GpuBezierLattice> carried_;     // per lattice: its carried points (see create())
-  std::vector<glm::vec3> carried_points_;     // per lattice, 8 control points (the far displacement), per frame
-  std::vector<glm::vec3> mapped_points_;      // with normals: the largest lattice's mapped points, per frame
+  std::vector<GpuBezierLattice> carried_;  // per lattice: its carried points (see create())
+  std::vector<glm::vec3> carried_points_;  // per lattice, 8 control points (the far displacement), per frame
+  std::vector<glm::vec3> mapped_points_;   // with normals: the largest lattice's mapped points, per frame
   bool normals_ = false;
 };
 

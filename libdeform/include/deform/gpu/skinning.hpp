@@ -28,9 +28,9 @@ namespace deform {
 // vertex_point[r] of the per-point arrays (Mesh::vertex_point; empty = vertex r is point r), so a point split at a UV
 // or normal seam is skinned once per render vertex and nothing is gathered per frame.
 struct GpuSkinningBind {
-  std::span<const glm::vec3> positions;        // per point, bind pose
-  std::span<const glm::u16vec4> bone_indices;  // per point: four influences (SkinWeights::bones)
-  std::span<const glm::vec4> bone_weights;     // per point (SkinWeights::weights), as SkinningJob::validate accepts
+  std::span<const glm::vec3> positions;         // per point, bind pose
+  std::span<const glm::u16vec4> bone_indices;   // per point: four influences (SkinWeights::bones)
+  std::span<const glm::vec4> bone_weights;      // per point (SkinWeights::weights), as SkinningJob::validate accepts
   std::span<const std::uint32_t> vertex_point;  // render vertex -> point; empty: one vertex per point
   // Bind normals per *render vertex* (vertex_point.size() entries, or one per point when vertex_point is empty):
   // Mesh::vertex_normals, or Character::bind_normals() gathered through vertex_point to get Character::normals().

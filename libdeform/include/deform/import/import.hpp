@@ -80,11 +80,11 @@ DEFORM_IMPORT_API ImportedModel import_model(const std::string& path, const Impo
 
 // Limits of an isolated import (import_model_isolated): what the importer process may use before it is stopped.
 struct IsolationLimits {
-  std::uint64_t max_memory_bytes = 4ull << 30;   // its address space (in a worker built with AddressSanitizer,
-                                                 // whose shadow needs more: ASan's limit on resident memory)
-  std::uint64_t max_stack_bytes = 64ull << 20;   // deep node hierarchies recurse inside Assimp
-  double max_seconds = 60.0;                     // wall-clock time, then it is killed
-  std::uint64_t max_output_bytes = 4ull << 30;   // the model it sends back
+  std::uint64_t max_memory_bytes = 4ull << 30;  // its address space (in a worker built with AddressSanitizer,
+                                                // whose shadow needs more: ASan's limit on resident memory)
+  std::uint64_t max_stack_bytes = 64ull << 20;  // deep node hierarchies recurse inside Assimp
+  double max_seconds = 60.0;                    // wall-clock time, then it is killed
+  std::uint64_t max_output_bytes = 4ull << 30;  // the model it sends back
   // The importer executable (deform-import-worker). Empty: $DEFORM_IMPORT_WORKER, then the one this build made, then
   // the installed one (LIBEXECDIR/deform-import-worker).
   std::string worker;

@@ -14,7 +14,8 @@ inline constexpr std::uint64_t max_file_bytes = 1ull << 30;
 
 // Reads a whole file. Throws deform::Error (naming `path`) when it cannot be opened, is not a regular file (a FIFO,
 // device or socket would block or never end) or is larger than `max_bytes`.
-DEFORM_IO_API std::vector<std::uint8_t> read_file_bytes(const std::string& path, std::uint64_t max_bytes = max_file_bytes);
+DEFORM_IO_API std::vector<std::uint8_t> read_file_bytes(const std::string& path,
+                                                        std::uint64_t max_bytes = max_file_bytes);
 DEFORM_IO_API std::string read_file_text(const std::string& path, std::uint64_t max_bytes = max_file_bytes);
 
 // Writes `data` to what `path` names without changing its kind: a regular file is replaced atomically (a temporary
@@ -58,13 +59,13 @@ class DEFORM_IO_API FileTransaction {
   void commit();
 
   struct Entry {
-    std::string named;    // the path as given, for messages
-    std::string target;   // the file written: `named` with symbolic links followed
-    std::string temp;     // the staged temporary file; empty for a direct (device, FIFO) target
-    std::string backup;   // the previous file's backup, while commit() runs
+    std::string named;                 // the path as given, for messages
+    std::string target;                // the file written: `named` with symbolic links followed
+    std::string temp;                  // the staged temporary file; empty for a direct (device, FIFO) target
+    std::string backup;                // the previous file's backup, while commit() runs
     std::vector<std::uint8_t> direct;  // what a device or FIFO target gets
-    bool existed = false;  // a regular file was at `target` when staged
-    bool placed = false;   // commit() renamed the temporary over `target`
+    bool existed = false;              // a regular file was at `target` when staged
+    bool placed = false;               // commit() renamed the temporary over `target`
   };
 
  private:

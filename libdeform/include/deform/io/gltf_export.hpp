@@ -70,13 +70,14 @@ struct GltfWritten {
 
 // Writes `model` as glTF 2.0 at `path` (.gltf or .glb). The mesh: one primitive per non-empty submesh, holding the
 // render vertices its triangles use (each: its point's position, its normal normalised, TEXCOORD_0 as (u, 1 - v)
-// when the mesh has UVs), with its material's diffuse colour and opacity as the base colour, or its diffuse texture (see
-// `texture_root`) times its opacity. Without
-// `baked`: a skin whose joints are the bones (node i = bone i, named Skeleton::key(i), its bind translation and
-// rotation as the node's TRS; inverseBindMatrices from Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from
-// `model.weights`, and the clips. Throws deform::Error of kind argument for another extension, a model whose weights
-// do not match its points, a mesh without triangles, or inconsistent `baked` frames; deform::Error naming the file
-// when a file cannot be written. Cost: O(vertices · (1 + frames) + frames² + keys) time and the file's size in memory.
-DEFORM_IO_API GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options = {});
+// when the mesh has UVs), with its material's diffuse colour and opacity as the base colour, or its diffuse texture
+// (see `texture_root`) times its opacity. Without `baked`: a skin whose joints are the bones (node i = bone i, named
+// Skeleton::key(i), its bind translation and rotation as the node's TRS; inverseBindMatrices from
+// Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from `model.weights`, and the clips. Throws deform::Error of
+// kind argument for another extension, a model whose weights do not match its points, a mesh without triangles, or
+// inconsistent `baked` frames; deform::Error naming the file when a file cannot be written. Cost: O(vertices · (1 +
+// frames) + frames² + keys) time and the file's size in memory.
+DEFORM_IO_API GltfWritten write_gltf(const std::string& path, const Model& model,
+                                     const GltfExportOptions& options = {});
 
 }  // namespace deform

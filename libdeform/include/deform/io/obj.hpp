@@ -29,14 +29,14 @@ DEFORM_IO_API Mesh read_obj(const std::string& path, Warnings* warnings = nullpt
 // Parses OBJ text held in memory; `name` is used in messages, MTL files are resolved relative to `base_folder` and
 // confined to it (and `policy`'s folders) as read_obj confines them to the OBJ's folder.
 DEFORM_IO_API Mesh parse_obj(std::string_view text, const std::string& name = "<memory>",
-                          const std::string& base_folder = ".", Warnings* warnings = nullptr,
-                          const ReferencePolicy& policy = {});
+                             const std::string& base_folder = ".", Warnings* warnings = nullptr,
+                             const ReferencePolicy& policy = {});
 
 // Parses MTL text; `name` for messages, texture paths resolved relative to `base_folder` and confined to it (and
 // `policy`'s folders): a `map_Kd` outside throws deform::Error.
 DEFORM_IO_API std::vector<Material> parse_mtl(std::string_view text, const std::string& name,
-                                           const std::string& base_folder, Warnings* warnings = nullptr,
-                                           const ReferencePolicy& policy = {});
+                                              const std::string& base_folder, Warnings* warnings = nullptr,
+                                              const ReferencePolicy& policy = {});
 
 // Options for write_obj.
 struct ObjWriteOptions {
@@ -53,10 +53,10 @@ struct ObjWriteOptions {
 // Throws deform::Error (kind argument) when a span has the wrong size or a position or normal is not finite: nothing
 // non-finite is written.
 DEFORM_IO_API std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions,
-                                  std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
+                                     std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
 // Writes format_obj() to `path` atomically. Throws deform::Error on failure.
 DEFORM_IO_API void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::vec3> positions,
-                          std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
+                             std::span<const glm::vec3> normals = {}, const ObjWriteOptions& options = {});
 // The ObjWriteOptions::mtllib value with which an OBJ written to `obj_path` uses the MTL files `mesh` was read with:
 // each of mesh.material_libraries relative to obj_path's folder (absolute when no relative path exists), joined by
 // spaces. Empty when the mesh has none (a mesh built in code, or an OBJ without `mtllib`).

@@ -19,7 +19,7 @@ DEFORM_IO_API RigModel parse_rig_model(std::string_view json, const std::string&
 // malformed JSON, a missing, unknown or mistyped key, an unknown bone, a non-finite number, a value out of range, a
 // vertex out of range or repeated, a repeated lattice name, or a "parent" that is not the lattice the bones imply.
 DEFORM_IO_API Rig parse_rig_json(std::string_view json, const Skeleton& skeleton, std::size_t point_count,
-                              const std::string& name = "<memory>");
+                                 const std::string& name = "<memory>");
 DEFORM_IO_API Rig read_rig_json(const std::string& path, const Skeleton& skeleton, std::size_t point_count);
 // The rig as JSON text (every field written, except a lattice's min_length_fraction and volume where they have
 // StretchShape's defaults; floats shortest-exact): parse_rig_json(format_rig_json(r)) == r.

@@ -31,7 +31,8 @@ struct DeltaMushSettings {
 // DeltaMushJob computes them (the job's own passes), so that the rest pose comes back to within float rounding.
 // Throws deform::Error (kind argument, element "delta mush") for iterations out of range ("iterations must be within
 // [0, 10000]"), a step not within (0, 1], a mask not one per point or a mask weight not within [0, 1] (naming the
-// point), rest points that are not finite (naming the point), and what build_point_topology throws. O(iterations · (points + edges) + triangles · log triangles); allocates the binding.
+// point), rest points that are not finite (naming the point), and what build_point_topology throws. O(iterations ·
+// (points + edges) + triangles · log triangles); allocates the binding.
 DEFORM_OFFLINE_API DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& settings = {});
 
 }  // namespace deform

@@ -41,13 +41,13 @@
 namespace deform {
 
 struct HeatWeightsOptions {
-  int max_influences = 4;     // 1 .. deform::max_requested_influences (16); past 4 in SkinWeights' extras
-  float heat = 1.0f;          // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
-  float leaf_length = 1.0f;   // >= 0: a leaf bone's length as a multiple of its distance to its parent
+  int max_influences = 4;    // 1 .. deform::max_requested_influences (16); past 4 in SkinWeights' extras
+  float heat = 1.0f;         // > 0: c of H = c / d²; 1 is the paper's value, higher = sharper joints
+  float leaf_length = 1.0f;  // >= 0: a leaf bone's length as a multiple of its distance to its parent
   // >= 0: how much farther a bone seen obliquely counts when the nearest is chosen (step 2 above; 0 = the plain
   // distance, the paper's rule). docs/weights.md has the measurements behind 0.3.
   float oblique_penalty = 0.3f;
-  bool visibility = true;     // false: the nearest bone heats each point whether it sees it or not
+  bool visibility = true;  // false: the nearest bone heats each point whether it sees it or not
   // An island (a connected piece of the surface) none of whose points sees a bone past the rest of the mesh (a
   // garment around a limb, a plate on a tail) looks again past its own triangles only; false: it is bound rigidly.
   bool island_visibility = true;
@@ -70,8 +70,7 @@ DEFORM_OFFLINE_API WeightsResult compute_heat_weights(const Mesh& mesh, const Sk
 
 // One warning per bone (of those `deforming` allows; empty = all) that has positive weight on no point:
 // "bone 'NAME' (id N) gets no vertex". For any method's weights. O(points + bones).
-DEFORM_OFFLINE_API std::vector<std::string> bones_without_vertices(const SkinWeights& weights,
-                                                                   const Skeleton& skeleton,
+DEFORM_OFFLINE_API std::vector<std::string> bones_without_vertices(const SkinWeights& weights, const Skeleton& skeleton,
                                                                    const std::vector<std::uint8_t>& deforming = {});
 
 }  // namespace deform

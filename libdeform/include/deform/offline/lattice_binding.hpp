@@ -34,9 +34,10 @@ DEFORM_OFFLINE_API LatticeBinding bind_lattice(const BsplineLattice& lattice, st
 
 // The points a bone's skin weights select: weight of `bone` > `threshold` (thesis §9.4.1). Ascending order.
 DEFORM_OFFLINE_API std::vector<std::uint32_t> select_by_weight(const SkinWeights& weights, std::uint16_t bone,
-                                                       float threshold);
+                                                               float threshold);
 // The points inside a frame's box, (u, v, w) of `to_lattice · p` in [0, 1]³. Ascending order.
-DEFORM_OFFLINE_API std::vector<std::uint32_t> select_inside(const LatticeFrame& frame, std::span<const glm::vec3> positions,
-                                                    const glm::mat4& to_lattice = glm::mat4(1.0f));
+DEFORM_OFFLINE_API std::vector<std::uint32_t> select_inside(const LatticeFrame& frame,
+                                                            std::span<const glm::vec3> positions,
+                                                            const glm::mat4& to_lattice = glm::mat4(1.0f));
 
 }  // namespace deform

@@ -25,22 +25,22 @@ struct Ray {
 // the near plane, direction unit length. view/projection as for rendering (clip z in [-1, 1]); a zero-sized viewport
 // or a singular projection·view gives a non-finite ray, which intersect() never hits.
 DEFORM_OFFLINE_API Ray ray_from_pixel(const glm::mat4& view, const glm::mat4& projection, glm::vec2 pixel,
-                              glm::vec4 viewport) noexcept;
+                                      glm::vec4 viewport) noexcept;
 
 // The nearest hit of a ray.
 struct RayHit {
   bool hit = false;
-  std::uint32_t triangle = 0;       // index of the triangle (indices[3·triangle ..]) as given to build()
-  glm::vec3 barycentric{0.0f};      // weights of the triangle's three corners at the hit point (sum 1)
-  float distance = 0.0f;            // world units from the ray origin
+  std::uint32_t triangle = 0;   // index of the triangle (indices[3·triangle ..]) as given to build()
+  glm::vec3 barycentric{0.0f};  // weights of the triangle's three corners at the hit point (sum 1)
+  float distance = 0.0f;        // world units from the ray origin
 };
 
 // The nearest intersection of `ray` with the triangles `indices` (3 per triangle, into `positions`) by testing every
 // triangle: O(triangles). Triangles are two-sided; degenerate ones are never hit; a hit farther than `max_distance`
 // is not reported. Indices must be in range (not checked: this is the reference the BVH is tested against).
 DEFORM_OFFLINE_API RayHit intersect_triangles(const Ray& ray, std::span<const glm::vec3> positions,
-                                      std::span<const std::uint32_t> indices,
-                                      float max_distance = std::numeric_limits<float>::infinity()) noexcept;
+                                              std::span<const std::uint32_t> indices,
+                                              float max_distance = std::numeric_limits<float>::infinity()) noexcept;
 
 // A bounding volume hierarchy over triangles (binned surface-area heuristic, at most 4 triangles per leaf). Built
 // once per topology; refit() follows a deforming mesh each frame without reallocating; intersect() answers a ray in
@@ -77,9 +77,9 @@ class DEFORM_OFFLINE_API TriangleBvh {
     std::uint32_t count = 0;  // leaf: triangle count (>= 1); interior: 0
   };
   std::vector<Node> nodes_;
-  std::vector<std::uint32_t> triangle_ids_;  // slot -> triangle index as given to build()
-  std::vector<std::uint32_t> corner_points_; // slot -> its three point indices
-  std::vector<glm::vec3> corners_;           // slot -> its three corner positions (current)
+  std::vector<std::uint32_t> triangle_ids_;   // slot -> triangle index as given to build()
+  std::vector<std::uint32_t> corner_points_;  // slot -> its three point indices
+  std::vector<glm::vec3> corners_;            // slot -> its three corner positions (current)
   std::size_t point_count_ = 0;
 };
 

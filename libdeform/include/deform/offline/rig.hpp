@@ -56,18 +56,18 @@ enum class LimbKind : std::uint8_t { arm, leg, front_leg, hind_leg, neck, tail, 
 DEFORM_OFFLINE_API const char* limb_kind_name(LimbKind kind) noexcept;
 struct Limb {
   LimbKind kind = LimbKind::limb;
-  int side = 0;                      // +1 the character's left, -1 its right, 0 the middle
-  std::vector<std::int32_t> chain;   // the reach chain, root first (clavicle or shoulder, hip joint), effector last
+  int side = 0;                        // +1 the character's left, -1 its right, 0 the middle
+  std::vector<std::int32_t> chain;     // the reach chain, root first (clavicle or shoulder, hip joint), effector last
   std::vector<std::int32_t> lattices;  // the bones that get an elastic lattice (upper, lower, hand or foot)
-  std::string why;                   // how it was found, in words
+  std::string why;                     // how it was found, in words
 };
 struct RigSurvey {
   std::vector<Limb> limbs;  // arms (left, right), legs (left, right), then a quadruped's neck; a tail last
   // Bones left out of every limb, each with the reason: no vertex is skinned to it or below it (IK goals, poles,
   // helper roots), a helper's name (twist, IK, pole, target, control) with no skinned bone below it.
   std::vector<std::pair<std::int32_t, std::string>> skipped;
-  std::int32_t pelvis = -1;  // the bone the legs (hind legs) branch from, -1 when none was found
-  std::int32_t chest = -1;   // the bone the arms (front legs) branch from
+  std::int32_t pelvis = -1;        // the bone the legs (hind legs) branch from, -1 when none was found
+  std::int32_t chest = -1;         // the bone the arms (front legs) branch from
   glm::vec3 up{0.0f, 1.0f, 0.0f};  // model-space up, against the legs' direction in the bind pose
   bool four_legged = false;
   std::string naming;  // the name map that matched ("Mixamo", "Blender" (rigify, metarig), "Unreal mannequin", "VRM",

@@ -12,9 +12,10 @@ namespace deform {
 // Point adjacency (edges taken in point space, so UV/normal seams are not boundaries): each point's one-ring and the
 // mesh's boundary edges. Built once at bind time for smoothing and seam checks; O(T log T) for T triangles.
 struct PointTopology {
-  std::vector<std::uint32_t> neighbour_offsets;  // point_count() + 1 entries; neighbours of p: [offsets[p], offsets[p+1])
-  std::vector<std::uint32_t> neighbours;         // each point's one-ring, ascending, no duplicates, never p itself
-  std::vector<std::uint32_t> boundary_edges;     // pairs (a, b), a < b, of edges used by exactly one triangle, sorted
+  std::vector<std::uint32_t>
+      neighbour_offsets;                      // point_count() + 1 entries; neighbours of p: [offsets[p], offsets[p+1])
+  std::vector<std::uint32_t> neighbours;      // each point's one-ring, ascending, no duplicates, never p itself
+  std::vector<std::uint32_t> boundary_edges;  // pairs (a, b), a < b, of edges used by exactly one triangle, sorted
 
   // The points sharing a triangle edge with `point` (empty for an isolated point).
   std::span<const std::uint32_t> point_neighbours(std::uint32_t point) const noexcept {

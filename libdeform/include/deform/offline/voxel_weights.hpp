@@ -30,11 +30,11 @@
 namespace deform {
 
 struct VoxelWeightsOptions {
-  int resolution = 128;              // 8 .. 1024: voxels along the longest side of the bounding box
-  float falloff_power = 4.0f;        // > 0; higher = sharper transitions at the joints
-  float leaf_length = 1.0f;          // >= 0: a leaf bone's length as a multiple of its distance to its parent
-  int max_influences = 4;            // 1 .. deform::max_influences
-  int smoothing_iterations = 2;      // >= 0: passes of one-ring averaging
+  int resolution = 128;          // 8 .. 1024: voxels along the longest side of the bounding box
+  float falloff_power = 4.0f;    // > 0; higher = sharper transitions at the joints
+  float leaf_length = 1.0f;      // >= 0: a leaf bone's length as a multiple of its distance to its parent
+  int max_influences = 4;        // 1 .. deform::max_influences
+  int smoothing_iterations = 2;  // >= 0: passes of one-ring averaging
   // Per bone id, 0 for a bone that must get no weight; empty = every bone deforms. At least one bone must deform.
   std::vector<std::uint8_t> deforming;
 };

@@ -53,10 +53,10 @@ DEFORM_OFFLINE_API std::vector<BoneSegment> bone_segments(const Skeleton& skelet
 // triangles. Cost O(points × bones + smoothing_iterations × edges); allocates the result and the point adjacency.
 // Throws deform::Error for invalid options or a non-finite point (naming the vertex).
 DEFORM_OFFLINE_API SkinWeights compute_automatic_weights(const Mesh& mesh, const Skeleton& skeleton,
-                                                 const AutoWeightsOptions& options = {});
+                                                         const AutoWeightsOptions& options = {});
 
 // The same for bare points, without adjacency (smoothing_iterations is ignored). Cost O(points × bones).
 DEFORM_OFFLINE_API SkinWeights compute_automatic_weights(std::span<const glm::vec3> points, const Skeleton& skeleton,
-                                                 const AutoWeightsOptions& options = {});
+                                                         const AutoWeightsOptions& options = {});
 
 }  // namespace deform

@@ -51,8 +51,8 @@ struct DeltaMushBinding {
   // The frame: normal = Σ cross(x_a − xᵢ, x_b − xᵢ) over the triangles (i, a, b) around i, in their winding (twice the
   // area-weighted normal); tangent = x_t − xᵢ without its normal part, t = tangent_neighbour[i]; bitangent =
   // normal × tangent.
-  std::vector<std::uint32_t> fan_offsets;   // point i's triangles: pairs fans[2·fan_offsets[i] .. 2·fan_offsets[i+1])
-  std::vector<std::uint32_t> fans;          // (a, b) per triangle around the point
+  std::vector<std::uint32_t> fan_offsets;  // point i's triangles: pairs fans[2·fan_offsets[i] .. 2·fan_offsets[i+1])
+  std::vector<std::uint32_t> fans;         // (a, b) per triangle around the point
   std::vector<std::uint32_t> tangent_neighbour;  // per point; no_frame for a pinned point
   // The rest point minus its smoothed rest position, in the frame's (tangent, bitangent, normal) coordinates (0 for a
   // pinned point).

@@ -71,9 +71,9 @@ DEFORM_RUNTIME_API void require_valid_shape(const StretchShape& shape);
 
 // What a lattice's bone is, for the default secondary motion of a rig (default_lattice_motion).
 enum class BodyPart : std::uint8_t {
-  upper_limb,   // upper arm, thigh: the flesh between two joints
-  lower_limb,   // forearm, shin
-  hand,         // a limb's end that carries nothing below it
+  upper_limb,  // upper arm, thigh: the flesh between two joints
+  lower_limb,  // forearm, shin
+  hand,        // a limb's end that carries nothing below it
   foot,
   torso,        // spine, chest, belly, hips
   head,         // head, neck
@@ -157,11 +157,11 @@ struct LatticeSpec {
 // a mesh: what the per-frame path reads.
 struct BoundLattice {
   LatticeSpec spec;
-  BezierLattice rest{LatticeFrame{}};  // the rest lattice in its bone's bind frame (U along the bone)
-  glm::vec3 axis{0.0f, 1.0f, 0.0f};    // unit U in the bone's frame
-  float length = 0.0f;                 // |U|, model units
-  LatticeBinding binding;              // the points the Bézier field moves
-  std::vector<float> lane_weights;     // their selection weights, per binding lane (0 in padding lanes)
+  BezierLattice rest{LatticeFrame{}};         // the rest lattice in its bone's bind frame (U along the bone)
+  glm::vec3 axis{0.0f, 1.0f, 0.0f};           // unit U in the bone's frame
+  float length = 0.0f;                        // |U|, model units
+  LatticeBinding binding;                     // the points the Bézier field moves
+  std::vector<float> lane_weights;            // their selection weights, per binding lane (0 in padding lanes)
   std::vector<std::uint32_t> carried_points;  // points beyond the far face, carried by it
   std::vector<float> carried_weights;         // their selection weights
 };
@@ -204,8 +204,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // when invalid (require_valid_shape) or the index is out of range.
   void set_shape(std::size_t lattice, const StretchShape& shape);
 
-  // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid (require_valid_motion)
-  // or the index is out of range.
+  // Changes a lattice's inertia and gravity, keeping its state. Throws deform::Error when invalid
+  // (require_valid_motion) or the index is out of range.
   void set_motion(std::size_t lattice, const LatticeMotion& motion);
   // Every lattice's inertia at `scale` of its part's tuned inertia (scaled_inertia), the rest of its motion and its
   // state kept: 1 the tuned jiggle, 0 none. Throws deform::Error, changing nothing, when `scale` is not in [0, 1].
@@ -328,7 +328,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     float length = 0.0f;
     std::shared_ptr<const Binding> bound;
     std::int32_t parent = -1;
-    glm::mat4 bind_world{1.0f};           // the bone's bind world matrix and its inverse
+    glm::mat4 bind_world{1.0f};  // the bone's bind world matrix and its inverse
     glm::mat4 inverse_bind_world{1.0f};
     // Per frame (update): the control points are the world displacements (displacements(); point_displacement).
     BezierLattice field{LatticeFrame{}};
@@ -339,8 +339,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     // Per frame (update): the far face's displacement; world control points.
     glm::vec3 far_displacement{0.0f};
     mutable std::vector<glm::vec3> world_points;  // for drawing, computed by control_points()
-    glm::mat4 bone_world{1.0f};            // the bone's world matrix as of update()
-    glm::mat3 linear{1.0f};                // the bone's world 3×3 (rotation, with any scale)
+    glm::mat4 bone_world{1.0f};                   // the bone's world matrix as of update()
+    glm::mat3 linear{1.0f};                       // the bone's world 3×3 (rotation, with any scale)
     // Secondary motion (step with world): the bone's matrix and rate at the last step, each slice centre's world
     // rest velocity over the last step (linear motion; the first point_counts().x entries), and this step's
     // accelerations in the bone's frame, per control point (its slice's).
@@ -385,7 +385,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   std::vector<std::int32_t> bone_parents_;  // the skeleton's, per bone
   std::vector<Lattice> lattices_;
   mutable bool drawing_current_ = false;  // world_points as of the last update()
-  std::size_t point_count_ = 0;            // the mesh's points, which apply() takes
+  std::size_t point_count_ = 0;           // the mesh's points, which apply() takes
 };
 
 }  // namespace deform

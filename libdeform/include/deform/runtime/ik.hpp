@@ -34,7 +34,7 @@ namespace deform {
 // (cos, sin) directions, so that clamp_rotation needs no sin, cos or atan2 call. An IkChain holds one per joint.
 // The default is free, as DofLimits{}.
 struct EulerLimits {
-  glm::dvec3 min{-std::numbers::pi}, max{std::numbers::pi};  // radians, DofLimits' bounds
+  glm::dvec3 min{-std::numbers::pi}, max{std::numbers::pi};      // radians, DofLimits' bounds
   glm::dvec2 min_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of min per axis
   glm::dvec2 max_dir[3]{{-1.0, 0.0}, {-1.0, 0.0}, {-1.0, 0.0}};  // (cos, sin) of max per axis
   bool free = true;  // min <= -180° and max >= 180° on every axis: every rotation is within the limits
@@ -68,9 +68,9 @@ DEFORM_RUNTIME_API bool clamp_rotation(const EulerLimits& limits, glm::quat& rot
 // twist_max]. Projection (clamp_swing_twist) moves (s1, s2) to the nearest point of the ellipse in that plane (for a
 // circular cone: the same swing axis, the angle cut to the cone) and τ to its nearer limit around the circle.
 struct SwingTwistLimits {
-  glm::vec3 axis{1.0f, 0.0f, 0.0f};       // unit, the joint's frame
-  glm::vec3 reference{0.0f, 1.0f, 0.0f};  // unit, perpendicular to axis
-  float swing1 = std::numbers::pi_v<float>, swing2 = std::numbers::pi_v<float>;  // radians, [0, π]
+  glm::vec3 axis{1.0f, 0.0f, 0.0f};                                                     // unit, the joint's frame
+  glm::vec3 reference{0.0f, 1.0f, 0.0f};                                                // unit, perpendicular to axis
+  float swing1 = std::numbers::pi_v<float>, swing2 = std::numbers::pi_v<float>;         // radians, [0, π]
   float twist_min = -std::numbers::pi_v<float>, twist_max = std::numbers::pi_v<float>;  // radians, within [-π, π]
   bool active = false;  // an IkChain joint uses these instead of its Euler limits
 };
@@ -200,11 +200,11 @@ struct DEFORM_RUNTIME_API IkJob {
   std::span<const glm::vec3> translations;  // local translations, as many
   glm::vec3 target{0.0f};                   // model space
   IkSettings settings;
-  std::span<std::byte> scratch;             // scratch_size() bytes or more, aligned to scratch_alignment
+  std::span<std::byte> scratch;  // scratch_size() bytes or more, aligned to scratch_alignment
   // In/out, optional: the stall escape's generator state, carried from solve to solve. Null: every solve starts from
   // ik_random_seed, so equal inputs give equal outputs.
   std::uint32_t* random_state = nullptr;
-  IkResult* result = nullptr;               // out, optional
+  IkResult* result = nullptr;  // out, optional
   // Optional pole (hint), model space, used when `use_pole`: the point the chain's middle (the mean of the heads of
   // the joints after the root; a one-joint chain has none) bends toward. Applied after the solve as a swivel of the
   // whole chain about the line from the root's head to the effector's head, which leaves the effector where it is:

@@ -23,7 +23,8 @@ enum class Isa : std::uint8_t {
 // True when the copies for `isa` are in this build and the CPU runs them (automatic and portable always are). Reads
 // the CPU's features once (the first call, thread-safe) and a cached flag after that.
 DEFORM_RUNTIME_API bool isa_available(Isa isa) noexcept;
-// What `automatic` runs here: neon on aarch64; simd128 in a WebAssembly build with it; avx512, else avx2, else portable on x86-64; else portable.
+// What `automatic` runs here: neon on aarch64; simd128 in a WebAssembly build with it; avx512, else avx2, else portable
+// on x86-64; else portable.
 DEFORM_RUNTIME_API Isa isa_best() noexcept;
 // "automatic", "portable", "avx2", "avx512", "neon", "simd128"; "unknown" for a value outside the enum.
 DEFORM_RUNTIME_API const char* isa_name(Isa isa) noexcept;

@@ -4,7 +4,8 @@
 // normals, bone-bound lattices (eq. 42) and direct manipulation (Hsu, Hughes & Kaufman 1992). docs/lattices.md.
 //
 // Two steps, as everywhere in libdeform:
-//  - bind (once, deform::offline: offline/lattice_binding.hpp): choose the points (inside the box, an index list, a bone's skin weights) and precompute each one's
+//  - bind (once, deform::offline: offline/lattice_binding.hpp): choose the points (inside the box, an index list, a
+//  bone's skin weights) and precompute each one's
 //    lattice parameters. Allocates; O(points).
 //  - evaluate (per frame): LatticeEvaluateJob reads the control points — a plain flat array that any module (an
 //    elastic solver, an editor) rewrites each frame — and writes the bound points only. No allocation, no locks.
@@ -65,7 +66,7 @@ struct DEFORM_RUNTIME_API LatticeBinding {
   static constexpr std::uint32_t no_vertex = std::numeric_limits<std::uint32_t>::max();
 
   LatticeKind kind = LatticeKind::bezier;
-  glm::ivec3 point_counts{0};  // control points per axis of the lattice it was made for
+  glm::ivec3 point_counts{0};    // control points per axis of the lattice it was made for
   glm::mat3 normal_basis{1.0f};  // maps an input normal to the lattice's parameter space (cofactor of the frame)
   std::size_t vertex_count = 0;  // bound vertices, padding lanes excluded
   std::uint32_t max_vertex = 0;  // largest bound vertex index (valid when vertex_count > 0)
@@ -107,7 +108,8 @@ class DEFORM_RUNTIME_API BezierLattice {
   // Puts every control point back on its rest position.
   void reset() noexcept;
 
-  // Q(u, v, w) for one point, O(lmn), no allocation. For tools and tests; bind_lattice (offline) + LatticeEvaluateJob for meshes.
+  // Q(u, v, w) for one point, O(lmn), no allocation. For tools and tests; bind_lattice (offline) + LatticeEvaluateJob
+  // for meshes.
   glm::vec3 evaluate(glm::vec3 uvw) const noexcept;
   // ∂Q/∂(u, v, w) as the columns of a matrix (derivatives of the Bernstein basis). O(lmn).
   glm::mat3 jacobian(glm::vec3 uvw) const noexcept;
@@ -221,6 +223,7 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
 
 // out[i] = matrix · (in[i], 1): carries lattice-space control points into another space (a bone's world or bind
 // frame) once per frame, so the per-vertex work stays the same. `out` may alias `in`; sizes must match (else false).
-DEFORM_RUNTIME_API bool transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix, std::span<glm::vec3> out);
+DEFORM_RUNTIME_API bool transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix,
+                                         std::span<glm::vec3> out);
 
 }  // namespace deform

@@ -23,13 +23,13 @@ namespace deform {
 // One MTL `newmtl`. Colours are linear RGB as written in the file; defaults are MTL's own.
 struct Material {
   std::string name;
-  glm::vec3 ambient{0.2f};    // Ka
-  glm::vec3 diffuse{0.8f};    // Kd
-  glm::vec3 specular{0.0f};   // Ks
-  float opacity = 1.0f;       // d (or 1 - Tr)
-  float shininess = 0.0f;     // Ns
-  int illum = 2;              // illum
-  std::string diffuse_map;    // map_Kd, resolved relative to the MTL file's folder; empty if none
+  glm::vec3 ambient{0.2f};   // Ka
+  glm::vec3 diffuse{0.8f};   // Kd
+  glm::vec3 specular{0.0f};  // Ks
+  float opacity = 1.0f;      // d (or 1 - Tr)
+  float shininess = 0.0f;    // Ns
+  int illum = 2;             // illum
+  std::string diffuse_map;   // map_Kd, resolved relative to the MTL file's folder; empty if none
   // An embedded texture's encoded image (PNG or JPEG bytes, as a glTF/GLB file holds it), when the texture lives
   // inside the model file rather than beside it; diffuse_map is then empty. Shared, so that copies of a Model (one
   // per Character instance) do not copy the image. Null if none.
@@ -51,9 +51,10 @@ struct Mesh {
 
   // --- render vertices ---
   std::vector<std::uint32_t> vertex_point;  // render vertex -> point index (size = render vertex count)
-  std::vector<glm::vec3> vertex_normals;    // per render vertex; from `vn` as written, or computed where a corner has none
-  std::vector<glm::vec2> vertex_uvs;        // per render vertex ((0, 0) where a corner has no `vt`); empty when no
-                                            // face corner uses a `vt`
+  std::vector<glm::vec3>
+      vertex_normals;                 // per render vertex; from `vn` as written, or computed where a corner has none
+  std::vector<glm::vec2> vertex_uvs;  // per render vertex ((0, 0) where a corner has no `vt`); empty when no
+                                      // face corner uses a `vt`
 
   // --- triangles (3 render-vertex indices each), grouped by submesh ---
   std::vector<std::uint32_t> triangles;

@@ -10,10 +10,10 @@
 namespace deform {
 
 struct Model {
-  std::string name;      // for messages and output names ("builtin", a file stem)
+  std::string name;  // for messages and output names ("builtin", a file stem)
   Mesh mesh;
   Skeleton skeleton;
-  SkinWeights weights;   // one entry per mesh point (mesh.point_count())
+  SkinWeights weights;  // one entry per mesh point (mesh.point_count())
   // Morph targets over the mesh's points, applied before skinning (MorphJob); an Animation's morph channels name
   // them by index. Empty for models without blend shapes.
   std::vector<MorphTarget> morph_targets;

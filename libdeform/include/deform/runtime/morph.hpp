@@ -23,9 +23,9 @@ namespace deform {
 // `normal_deltas` is empty (the target leaves normals alone) or has one per point. The morphed normal is the rest
 // normal plus the weighted normal deltas, renormalised by whoever uses it (skinning renormalises).
 struct MorphTarget {
-  std::string name;                        // may be empty; the CLI names targets by it
-  std::string mesh;                        // the name of the mesh (glTF mesh) the target belongs to, for listings
-  float default_weight = 0.0f;             // the weight when nothing animates or overrides it
+  std::string name;             // may be empty; the CLI names targets by it
+  std::string mesh;             // the name of the mesh (glTF mesh) the target belongs to, for listings
+  float default_weight = 0.0f;  // the weight when nothing animates or overrides it
   std::vector<std::uint32_t> points;
   std::vector<glm::vec3> position_deltas;
   std::vector<glm::vec3> normal_deltas;
@@ -35,7 +35,7 @@ struct MorphTarget {
 // Checks targets against a mesh of `point_count` points: points strictly ascending and in range, deltas sized as
 // above and finite. Throws deform::Error naming `source` and the target.
 DEFORM_RUNTIME_API void require_valid_morph_targets(std::span<const MorphTarget> targets, std::size_t point_count,
-                                               const std::string& source = "<memory>");
+                                                    const std::string& source = "<memory>");
 
 // The morph job: out[i] = rest[i] + Σₖ weights[k] · Δₖ[i] over the targets that move point i, for positions and,
 // when both normal spans are given, normals (not renormalised). The elements are the points: run(begin, end) writes
@@ -44,7 +44,7 @@ DEFORM_RUNTIME_API void require_valid_morph_targets(std::span<const MorphTarget>
 // No allocation, no locks, no I/O.
 struct DEFORM_RUNTIME_API MorphJob {
   std::span<const MorphTarget> targets;
-  std::span<const float> weights;           // one per target; a zero weight skips its target
+  std::span<const float> weights;  // one per target; a zero weight skips its target
   std::span<const glm::vec3> rest_positions;
   std::span<const glm::vec3> rest_normals;  // optional: empty, or one per point (both normal spans or neither)
   std::span<glm::vec3> out_positions;       // one per point

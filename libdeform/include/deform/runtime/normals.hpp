@@ -115,7 +115,6 @@ struct DEFORM_RUNTIME_API VertexNormalsJob {
   Status run(std::size_t begin, std::size_t end) const noexcept;
 };
 
-
 // A gather done in place: after it, values[v] = (values before)[map[v]] for every v < map.size(), where every map
 // entry is < sources <= map.size() — one array holding first one value per source (e.g. per point) and then, once
 // gathered, one per destination (e.g. per render vertex), plus one entry of scratch at its end. What it saves over a

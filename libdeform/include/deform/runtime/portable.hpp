@@ -14,32 +14,32 @@
 //                          the running CPU's x86 features, for choosing a kernel copy (isa.cpp); where the compiler
 //                          has no such query, every feature reads as absent and the portable kernels run.
 #if defined(__GNUC__) || defined(__clang__)
-#  define DEFORM_ALWAYS_INLINE [[gnu::always_inline]]
-#  define DEFORM_NOINLINE [[gnu::noinline]]
-#  define DEFORM_UNROLL _Pragma("GCC unroll 16")  // Clang reads it too
-#  define DEFORM_PREFETCH(address, for_writing) __builtin_prefetch((address), (for_writing), 3)
-#  if defined(__x86_64__) || defined(__i386__)
-#    define DEFORM_X86_CPU_INIT() __builtin_cpu_init()
-#    define DEFORM_X86_CPU_SUPPORTS(feature) (__builtin_cpu_supports(feature) != 0)
-#  endif
+#define DEFORM_ALWAYS_INLINE [[gnu::always_inline]]
+#define DEFORM_NOINLINE [[gnu::noinline]]
+#define DEFORM_UNROLL _Pragma("GCC unroll 16")  // Clang reads it too
+#define DEFORM_PREFETCH(address, for_writing) __builtin_prefetch((address), (for_writing), 3)
+#if defined(__x86_64__) || defined(__i386__)
+#define DEFORM_X86_CPU_INIT() __builtin_cpu_init()
+#define DEFORM_X86_CPU_SUPPORTS(feature) (__builtin_cpu_supports(feature) != 0)
+#endif
 #elif defined(_MSC_VER)
-#  include <intrin.h>
-#  define DEFORM_ALWAYS_INLINE [[msvc::forceinline]]
-#  define DEFORM_NOINLINE [[msvc::noinline]]
-#  define DEFORM_UNROLL
-#  if defined(_M_X64) || defined(_M_IX86)
-#    define DEFORM_PREFETCH(address, for_writing) \
-      _mm_prefetch(static_cast<const char*>(static_cast<const void*>(address)), _MM_HINT_T0)
-#  else
-#    define DEFORM_PREFETCH(address, for_writing) ((void)(address), (void)(for_writing))
-#  endif
+#include <intrin.h>
+#define DEFORM_ALWAYS_INLINE [[msvc::forceinline]]
+#define DEFORM_NOINLINE [[msvc::noinline]]
+#define DEFORM_UNROLL
+#if defined(_M_X64) || defined(_M_IX86)
+#define DEFORM_PREFETCH(address, for_writing) \
+  _mm_prefetch(static_cast<const char*>(static_cast<const void*>(address)), _MM_HINT_T0)
 #else
-#  define DEFORM_ALWAYS_INLINE
-#  define DEFORM_NOINLINE
-#  define DEFORM_UNROLL
-#  define DEFORM_PREFETCH(address, for_writing) ((void)(address), (void)(for_writing))
+#define DEFORM_PREFETCH(address, for_writing) ((void)(address), (void)(for_writing))
+#endif
+#else
+#define DEFORM_ALWAYS_INLINE
+#define DEFORM_NOINLINE
+#define DEFORM_UNROLL
+#define DEFORM_PREFETCH(address, for_writing) ((void)(address), (void)(for_writing))
 #endif
 #if !defined(DEFORM_X86_CPU_INIT)
-#  define DEFORM_X86_CPU_INIT() ((void)0)
-#  define DEFORM_X86_CPU_SUPPORTS(feature) ((void)(feature), false)
+#define DEFORM_X86_CPU_INIT() ((void)0)
+#define DEFORM_X86_CPU_SUPPORTS(feature) ((void)(feature), false)
 #endif

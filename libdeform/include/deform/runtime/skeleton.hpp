@@ -29,11 +29,11 @@ struct DofLimits {
 };
 
 struct Bone {
-  std::string name;                      // may be empty or shared; ids are the reference
-  std::int32_t parent = -1;              // id of the parent, -1 for the root
-  std::vector<std::int32_t> children;    // ids, in file order
-  glm::vec3 bind_translation{0.0f};      // relative to the parent
-  glm::vec3 bind_rotation{0.0f};         // Euler X·Y·Z, degrees, relative to the parent
+  std::string name;                    // may be empty or shared; ids are the reference
+  std::int32_t parent = -1;            // id of the parent, -1 for the root
+  std::vector<std::int32_t> children;  // ids, in file order
+  glm::vec3 bind_translation{0.0f};    // relative to the parent
+  glm::vec3 bind_rotation{0.0f};       // Euler X·Y·Z, degrees, relative to the parent
   DofLimits limits;
   bool operator==(const Bone&) const = default;
 };
@@ -86,7 +86,7 @@ class DEFORM_RUNTIME_API Skeleton {
   std::vector<std::int32_t> order_;
   std::vector<glm::mat4> bind_world_;
   std::vector<glm::mat4> inverse_bind_world_;
-  std::vector<std::int32_t> by_name_;       // bone ids sorted by (name, id), for find()
+  std::vector<std::int32_t> by_name_;      // bone ids sorted by (name, id), for find()
   std::vector<std::uint8_t> unique_name_;  // per bone: 1 when key() is its name, 0 when it is "#ID"
 };
 
@@ -106,9 +106,9 @@ DEFORM_RUNTIME_API glm::vec3 clamp_euler(glm::vec3 degrees, const DofLimits& lim
 // limit of x, then y refitted to it and clamped, then z refitted to both and clamped: at y = ±90° (gimbal lock,
 // where only x ± z is defined) x goes to the value within its limits nearest the triple's that leaves the remainder
 // for z within z's limits, where one exists. So quat_from_euler of the result is the
-// rotation itself when it is within the limits (to 1e-5 rad; float rounding far from gimbal lock), and whatever is printed from it reads back unchanged through
-// set_euler's clamp. Limits within [-180, 180]; a non-unit rotation is normalised, a zero or non-finite one reads as
-// the identity. Double precision, a few atan2 calls.
+// rotation itself when it is within the limits (to 1e-5 rad; float rounding far from gimbal lock), and whatever is
+// printed from it reads back unchanged through set_euler's clamp. Limits within [-180, 180]; a non-unit rotation is
+// normalised, a zero or non-finite one reads as the identity. Double precision, a few atan2 calls.
 DEFORM_RUNTIME_API glm::vec3 euler_within_limits(glm::quat rotation, const DofLimits& limits) noexcept;
 // True when every angle is within its axis' limits (with `slack` degrees of tolerance).
 DEFORM_RUNTIME_API bool within_limits(glm::vec3 degrees, const DofLimits& limits, float slack = 1e-3f) noexcept;

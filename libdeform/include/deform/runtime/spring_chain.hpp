@@ -41,15 +41,15 @@ struct SpringCollider {
 
 // One chain of spring bones.
 struct SpringChainSpec {
-  std::string name;                  // unique among the chains
-  std::vector<std::int32_t> bones;   // root first, each bone the parent of the next; at least one
-  glm::vec3 tip{0.0f};               // the last bone's tail in its local frame; zero: its first child's bind head,
-                                     // else its own offset from its parent continued
-  float frequency = 2.0f;            // Hz, in (0, 1000]: each tail's natural frequency toward the animated pose
-  float damping_ratio = 0.3f;        // in [0, 1000]: < 1 overshoots and settles, 1 returns without overshoot
-  glm::vec3 gravity{0.0f};           // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model; at most 1e6 long
-  float units_per_metre = 1.0f;      // model units in a metre (100 for centimetres), in (0, 1e6]
-  float radius = 0.0f;               // each tail's collision radius, model units at bind scale, in [0, 1e6]
+  std::string name;                      // unique among the chains
+  std::vector<std::int32_t> bones;       // root first, each bone the parent of the next; at least one
+  glm::vec3 tip{0.0f};                   // the last bone's tail in its local frame; zero: its first child's bind head,
+                                         // else its own offset from its parent continued
+  float frequency = 2.0f;                // Hz, in (0, 1000]: each tail's natural frequency toward the animated pose
+  float damping_ratio = 0.3f;            // in [0, 1000]: < 1 overshoots and settles, 1 returns without overshoot
+  glm::vec3 gravity{0.0f};               // m/s², model space, e.g. {0, -9.81, 0} for a +Y-up model; at most 1e6 long
+  float units_per_metre = 1.0f;          // model units in a metre (100 for centimetres), in (0, 1e6]
+  float radius = 0.0f;                   // each tail's collision radius, model units at bind scale, in [0, 1e6]
   std::vector<std::uint32_t> colliders;  // indices into the colliders the chains share
   bool operator==(const SpringChainSpec&) const = default;
 };
@@ -62,11 +62,11 @@ DEFORM_RUNTIME_API void require_valid_chain_settings(const SpringChainSpec& chai
 //   next = tail + (tail - previous)·(1 - dragForce) + restDirection·stiffness·Δt + gravityDir·gravityPower·Δt,
 // then back to the bone's length: per-frame factors, so its motion changes with the frame rate.
 struct VrmSpringJoint {
-  float stiffness = 1.0f;                   // stiffness, >= 0
-  float drag_force = 0.4f;                  // dragForce, in [0, 1)
-  float gravity_power = 0.0f;               // gravityPower, >= 0
+  float stiffness = 1.0f;                    // stiffness, >= 0
+  float drag_force = 0.4f;                   // dragForce, in [0, 1)
+  float gravity_power = 0.0f;                // gravityPower, >= 0
   glm::vec3 gravity_dir{0.0f, -1.0f, 0.0f};  // gravityDir
-  float hit_radius = 0.0f;                  // hitRadius, metres, >= 0
+  float hit_radius = 0.0f;                   // hitRadius, metres, >= 0
 };
 
 // The chain settings (frequency, damping ratio, gravity, radius; units_per_metre 1: VRM is in metres) that move as
@@ -122,16 +122,16 @@ class DEFORM_RUNTIME_API SpringChains {
   std::span<const glm::vec3> points(std::size_t chain) const;
 
  private:
-  struct Oscillator {  // one sub-step's maps (double-computed, stored as float)
+  struct Oscillator {                      // one sub-step's maps (double-computed, stored as float)
     float py = 1, pv = 0, vy = 0, vv = 1;  // oscillator_step
     float pg = 0, vg = 0;                  // forced_step for a constant acceleration
   };
   struct Chain {
     SpringChainSpec spec;
-    Oscillator fixed;        // the maps of one whole sub-step
-    std::size_t first = 0;   // its first joint in the flat arrays (one per bone); its points start at first + index
-    std::size_t count = 0;   // bones
-    glm::vec3 tip{0.0f};     // the last bone's tail, bone-local
+    Oscillator fixed;         // the maps of one whole sub-step
+    std::size_t first = 0;    // its first joint in the flat arrays (one per bone); its points start at first + index
+    std::size_t count = 0;    // bones
+    glm::vec3 tip{0.0f};      // the last bone's tail, bone-local
     float bind_scale = 1.0f;  // the first bone's scale in the bind pose
     float scale = 1.0f;       // ... and as of the last run
     bool restart = false;     // restart(): at rest on the animated pose at the next run
@@ -153,11 +153,11 @@ class DEFORM_RUNTIME_API SpringChains {
   std::vector<Chain> chains_;
   std::vector<SpringCollider> colliders_;
   float substep_ = default_substep;
-  std::vector<std::int32_t> point_bone_;     // per point (chains' first heads and tails, then colliders' ends):
-                                             // the bone whose matrix places it
-  std::vector<glm::vec3> point_local_;       // ... and where in that bone's frame
-  std::vector<std::int32_t> governed_;       // per bone: the joint that moves it, or -1
-  std::vector<glm::mat4> inverse_bind_;      // per bone
+  std::vector<std::int32_t> point_bone_;  // per point (chains' first heads and tails, then colliders' ends):
+                                          // the bone whose matrix places it
+  std::vector<glm::vec3> point_local_;    // ... and where in that bone's frame
+  std::vector<std::int32_t> governed_;    // per bone: the joint that moves it, or -1
+  std::vector<glm::mat4> inverse_bind_;   // per bone
   // Animated points at the last run (start of this step) and now, with velocities; the sample at a sub-step.
   std::vector<glm::vec3> start_points_, start_velocities_, end_points_, end_velocities_;
   std::vector<glm::vec3> sample_points_;
