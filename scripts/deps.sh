@@ -1,7 +1,7 @@
 # Sourced by scripts/test and scripts/demo: installs the Debian packages libdeform needs when they are missing.
 # As root it runs apt-get; otherwise it prints the one `sudo apt-get install` line and stops.
 deform_packages=(
-  build-essential cmake pkg-config python3 clang libclang-rt-14-dev
+  build-essential cmake pkg-config python3 clang libclang-rt-14-dev clang-format
   libglm-dev doctest-dev libopenmesh-dev nlohmann-json3-dev libbenchmark-dev
   libassimp-dev assimp-testmodels libeigen3-dev libtinygltf-dev libfast-float-dev libdragonbox-dev
   libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth

@@ -32,6 +32,7 @@ NOT_RUN = {
     "./scripts/demo": "the viewer under Xvfb is the viewer_smoke_xvfb test, the CLI half the commands below",
     "./scripts/web": "it serves until stopped; scripts/test builds the page and opens it in headless Chromium",
     "./scripts/fuzz": "the suite runs every fuzzer for a fixed number of inputs (the fuzz_* tests)",
+    "./scripts/format": "it rewrites the sources; the source_format test runs it with --check",
     "cmake ": "the build itself: scripts/test builds, consumer_links_installed_library installs and links",
     "cc ": "a C program built against the installed package: consumer_links_installed_library builds it so",
     "python3 -m pip install": "it builds the whole library through CMake (minutes); docs/python.md says how it was checked",
