@@ -12,7 +12,10 @@ target_compile_options(deform_warnings INTERFACE
   $<$<AND:$<CXX_COMPILER_ID:GNU,Clang>,$<NOT:$<STREQUAL:${CMAKE_SYSTEM_PROCESSOR},x86_64>>>:-ffp-contract=off>)
 
 if(DEFORM_SANITIZE)
-  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  # _GLIBCXX_ASSERTIONS: libstdc++ checks operator[] and front()/back(), so an accessor's index precondition
+  # (DeformerHierarchy::spec(l), l < lattice_count()) is checked here, where release builds take it on trust.
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+                      -D_GLIBCXX_ASSERTIONS)
   add_link_options(-fsanitize=address,undefined)
 endif()
 

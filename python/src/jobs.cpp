@@ -203,7 +203,8 @@ void bind_jobs(py::module_& m) {
          const py::object& effector) {
         const deform::IkChain chain =
             deform::make_chain(skeleton, resolve_bone(skeleton, root), resolve_bone(skeleton, effector));
-        const glm::vec3 p = deform::effector_position(chain, pose.rotations, pose.translations);
+        glm::vec3 p(0.0f);
+        check(deform::effector_position(chain, pose.rotations, pose.translations, p));
         return py::make_tuple(p.x, p.y, p.z);
       },
       py::arg("skeleton"), py::arg("pose"), py::arg("root"), py::arg("effector"),

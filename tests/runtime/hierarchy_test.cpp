@@ -668,7 +668,12 @@ TEST_CASE("set_shape changes the shape, refuses bad values and bad indices") {
   h.set_shape(0, {0.5f, 0.0f});
   CHECK(h.stretch(0) > -0.5f);
   CHECK_THROWS_AS(h.set_shape(0, {0.7f, 2.0f}), deform::Error);
-  CHECK_THROWS_AS(h.set_shape(1, {}), std::out_of_range);
+  CHECK_THROWS_AS(h.set_shape(1, {}), deform::Error);
+  CHECK_THROWS_AS(h.set_motion(1, {}), deform::Error);
+  CHECK_THROWS_AS(h.set_elastic(1, {}), deform::Error);
+  // The per-frame restart refuses a bad index with a Status, and takes a good one.
+  CHECK_FALSE(h.restart_motion(1));
+  CHECK(h.restart_motion(0));
   LatticeSpec bad = spec_on("limb", 1);
   bad.shape.min_length_fraction = -0.5f;
   CHECK_THROWS_AS(deform::bind_hierarchy(tube.skeleton, tube.points, tube.weights, {bad}), deform::Error);

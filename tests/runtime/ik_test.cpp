@@ -307,7 +307,7 @@ TEST_CASE(
     settings.max_iterations = 100;
     IkResult result;
     REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
-    const glm::vec3 solved = effector_position(chain, pose.rotations, pose.translations);
+    const glm::vec3 solved = ik_test::effector_of(chain, pose.rotations, pose.translations);
     const std::span<const std::int32_t> bones(chain.bones);
     const Pose printed =
         parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}", rig.skeleton);
@@ -318,7 +318,7 @@ TEST_CASE(
       CHECK(angles_within(e, limits));
       non_canonical += !within_limits(euler_from_quat(pose.rotations[b]), limits, 1e-3f);
     }
-    const float moved = glm::length(effector_position(chain, printed.rotations, printed.translations) - solved);
+    const float moved = glm::length(ik_test::effector_of(chain, printed.rotations, printed.translations) - solved);
     CHECK(moved <= 2e-5f * rig.length);
     worst = std::max(worst, moved / rig.length);
     ++cases;
@@ -493,7 +493,7 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
   CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, 99), Error);
   // effector_position and chain_base agree with the skeleton module's FK.
   const Pose pose = ik_test::random_in_limit_pose(random, rig);
-  const glm::vec3 e = effector_position(chain, pose.rotations, pose.translations);
+  const glm::vec3 e = ik_test::effector_of(chain, pose.rotations, pose.translations);
   CHECK(glm::length(e - reference_effector(rig.skeleton, pose, rig.effector)) < 1e-5f * rig.length);
   std::vector<glm::mat4> world(rig.skeleton.bone_count());
   REQUIRE(world_matrices(rig.skeleton, pose, world));
@@ -506,7 +506,10 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
   // Spans too short: nothing computed.
   const std::span<const glm::quat> short_rotations = std::span<const glm::quat>(pose.rotations).first(4);
   CHECK_FALSE(chain_base(chain, short_rotations, pose.translations, base));
-  CHECK(effector_position(chain, short_rotations, pose.translations) == glm::vec3(0.0f));
+  glm::vec3 unwritten(7.0f);
+  CHECK_FALSE(effector_position(chain, short_rotations, pose.translations, unwritten));
+  CHECK(unwritten == glm::vec3(7.0f));
+  CHECK_FALSE(effector_position(IkChain{}, pose.rotations, pose.translations, unwritten));
   CHECK(chain_length(chain, std::span<const glm::vec3>(pose.translations).first(4)) == 0.0f);
 }
 
@@ -601,8 +604,8 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
     CHECK_FALSE(fabrik.reached);
     CHECK(std::abs(ccd.distance - best) <= slack);
     CHECK(std::abs(fabrik.distance - best) <= slack);
-    CHECK(std::abs(glm::length(effector_position(chain, ccd_pose.rotations, ccd_pose.translations) - target) - best) <=
-          slack);
+    CHECK(std::abs(glm::length(ik_test::effector_of(chain, ccd_pose.rotations, ccd_pose.translations) - target) -
+                   best) <= slack);
   }
 }
 
@@ -1035,7 +1038,7 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     REQUIRE(solve_two_bone(chain, far_pose, far_target, pole, 1e-5f * rig.length, result));
     CHECK_FALSE(result.reached);
     CHECK(std::abs(result.distance - 0.5f * rig.length) <= 1e-5f * rig.length);
-    CHECK(glm::length(effector_position(chain, far_pose.rotations, far_pose.translations) -
+    CHECK(glm::length(ik_test::effector_of(chain, far_pose.rotations, far_pose.translations) -
                       (root + glm::normalize(far_target - root) * rig.length)) <= 2e-5f * rig.length);
   }
 }

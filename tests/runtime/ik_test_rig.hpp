@@ -2,6 +2,8 @@
 // Seeded random rigs for the IK tests and benchmarks: a base bone, a chain of k joints plus its effector, a sibling.
 #include <cmath>
 #include <random>
+#include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "deform/runtime/ik.hpp"
@@ -110,11 +112,19 @@ inline deform::Pose random_in_limit_pose(std::mt19937& random, const RandomChain
   return pose;
 }
 
+// effector_position for a pose that holds the chain (a refusal is a test failure, as an exception).
+inline glm::vec3 effector_of(const deform::IkChain& chain, std::span<const glm::quat> rotations,
+                             std::span<const glm::vec3> translations) {
+  glm::vec3 position(0.0f);
+  if (!deform::effector_position(chain, rotations, translations, position))
+    throw std::logic_error("effector_position refused the pose");
+  return position;
+}
+
 // A target the chain can reach: the effector of a random in-limit pose.
 inline glm::vec3 random_reachable_target(std::mt19937& random, const RandomChain& rig) {
   const deform::Pose pose = random_in_limit_pose(random, rig);
-  return deform::effector_position(deform::make_chain(rig.skeleton, rig.root, rig.effector), pose.rotations,
-                                   pose.translations);
+  return effector_of(deform::make_chain(rig.skeleton, rig.root, rig.effector), pose.rotations, pose.translations);
 }
 
 inline glm::vec3 chain_root_head(const deform::Pose& pose) {

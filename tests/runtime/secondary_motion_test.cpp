@@ -722,6 +722,9 @@ TEST_CASE("spring chains: bad set-ups throw naming the chain or collider; bad pe
   deform::SpringChainSpec tuned = whole_chain(4);
   tuned.damping_ratio = -1.0f;
   CHECK_THROWS_AS(springs.set_settings(0, tuned), deform::Error);
+  CHECK_THROWS_AS(springs.set_settings(1, whole_chain(4)), deform::Error);
+  CHECK_FALSE(springs.restart(1));
+  CHECK(springs.restart(0));
 }
 
 TEST_CASE("vrm_spring_settings: at 60 Hz the converted chain moves as VRM's update does; bad parameters refused") {

@@ -163,7 +163,11 @@ int run(const std::vector<std::string>& argv) {
   // (`deform skin --pose P --no-limits`).
   const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones, !swing_twist);
   const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton, !swing_twist);
-  const glm::vec3 reached_point = deform::effector_position(chain, printed.rotations, printed.translations);
+  glm::vec3 reached_point(0.0f);
+  if (const deform::Status status =
+          deform::effector_position(chain, printed.rotations, printed.translations, reached_point);
+      !status)
+    throw deform::Error::invalid_argument("the printed pose", status.reason());
   const float distance = glm::length(reached_point - target);
 
   nlohmann::ordered_json out;

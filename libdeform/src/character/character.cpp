@@ -431,7 +431,9 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     }
     const float growth2 = glm::dot(growth, growth);
     if (!(growth2 > 0.0f)) break;
-    const glm::vec3 gap = target - effector_position(chain_, work_.rotations, work_.translations);
+    glm::vec3 reached(0.0f);
+    if (!effector_position(chain_, work_.rotations, work_.translations, reached)) break;  // spans fit: made for it
+    const glm::vec3 gap = target - reached;
     const float next = std::clamp(lambda + glm::dot(gap, growth) / growth2, 0.0f, rig_.max_stretch);
     if (next == lambda && round > 0) break;
     lambda = next;
@@ -526,9 +528,9 @@ Status Character::update(float dt) {
     // A reach that started or ended moved its limb at once: the lattices and spring chains there start again from
     // the pose as it is, rather than feeling the snap as motion.
     for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l)
-      if (skel.is_ancestor(jumped_root_, hierarchy_.spec(l).bone)) hierarchy_.restart_motion(l);
+      if (skel.is_ancestor(jumped_root_, hierarchy_.spec(l).bone)) (void)hierarchy_.restart_motion(l);  // in range
     for (std::size_t c = 0; c < springs_.chain_count(); ++c)
-      if (skel.is_ancestor(jumped_root_, springs_.spec(c).bones.front())) springs_.restart(c);
+      if (skel.is_ancestor(jumped_root_, springs_.spec(c).bones.front())) (void)springs_.restart(c);
     jumped_root_ = -1;
   }
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;

@@ -265,8 +265,14 @@ Status DeformerHierarchy::set_stretch_target(std::size_t index, float stretch) {
   return {};
 }
 
-float DeformerHierarchy::stretch(std::size_t index) const {
-  const Lattice& lattice = lattices_.at(index);
+Status DeformerHierarchy::restart_motion(std::size_t index) noexcept {
+  if (index >= lattices_.size()) return Status::failure("lattice index out of range");
+  lattices_[index].motion_known = false;
+  return {};
+}
+
+float DeformerHierarchy::stretch(std::size_t index) const noexcept {
+  const Lattice& lattice = lattices_[index];
   float sum = 0.0f;
   for (std::uint32_t n : lattice.far_face) {
     sum += glm::dot(lattice.elastic.positions()[n] - lattice.rest.control_points()[n], lattice.axis);
@@ -352,14 +358,20 @@ void DeformerHierarchy::shape_slices(const Lattice& lattice, SliceShape& slices)
   }
 }
 
+DeformerHierarchy::Lattice& DeformerHierarchy::configured(std::size_t index) {
+  if (index >= lattices_.size())
+    throw Error::invalid_argument("lattice " + std::to_string(index), "lattice index out of range");
+  return lattices_[index];
+}
+
 void DeformerHierarchy::set_shape(std::size_t index, const StretchShape& shape) {
-  Lattice& lattice = lattices_.at(index);
+  Lattice& lattice = configured(index);
   require_valid_shape(shape);
   lattice.spec.shape = shape;
 }
 
 void DeformerHierarchy::set_elastic(std::size_t index, const ElasticSettings& settings) {
-  Lattice& lattice = lattices_.at(index);
+  Lattice& lattice = configured(index);
   lattice.elastic.set_settings(settings);
   lattice.spec.elastic = settings;
   lattice.along_dt = -1.0;
@@ -487,7 +499,7 @@ Status DeformerHierarchy::step_lattice(Lattice& lattice, float dt, const glm::ma
 }
 
 void DeformerHierarchy::set_motion(std::size_t index, const LatticeMotion& motion) {
-  Lattice& lattice = lattices_.at(index);
+  Lattice& lattice = configured(index);
   require_valid_motion(motion);
   lattice.spec.motion = motion;
 }
@@ -567,8 +579,8 @@ Status DeformerHierarchy::update(std::span<const glm::mat4> world) {
   return {};
 }
 
-std::span<const glm::vec3> DeformerHierarchy::control_points(std::size_t index) const {
-  const Lattice& wanted = lattices_.at(index);
+std::span<const glm::vec3> DeformerHierarchy::control_points(std::size_t index) const noexcept {
+  const Lattice& wanted = lattices_[index];
   if (!drawing_current_) {
     // Every lattice's field is known, so each can be carried by those above it.
     for (const Lattice& lattice : lattices_) {
@@ -653,8 +665,8 @@ Status DeformerHierarchy::apply(std::span<glm::vec3> positions, std::span<glm::v
   return {};
 }
 
-void DeformerHierarchy::mapped_points(std::size_t index, std::span<glm::vec3> out) const {
-  const Lattice& lattice = lattices_.at(index);
+void DeformerHierarchy::mapped_points(std::size_t index, std::span<glm::vec3> out) const noexcept {
+  const Lattice& lattice = lattices_[index];
   const std::span<const glm::vec3> rest = lattice.rest.control_points();
   if (out.size() != rest.size()) return;
   // The lattice's map without its translation: x (bone bind frame) -> linear · x + D(x), whose Jacobian is the
@@ -662,8 +674,8 @@ void DeformerHierarchy::mapped_points(std::size_t index, std::span<glm::vec3> ou
   for (std::size_t n = 0; n < rest.size(); ++n) out[n] = lattice.linear * rest[n] + lattice.field.control_points()[n];
 }
 
-glm::mat3 DeformerHierarchy::normals_to_bind(std::size_t index) const {
-  const Lattice& lattice = lattices_.at(index);
+glm::mat3 DeformerHierarchy::normals_to_bind(std::size_t index) const noexcept {
+  const Lattice& lattice = lattices_[index];
   // The binding takes normals in the bind pose's model space: the skinned normal taken back there by the inverse of
   // its map, cof(linear · inverse bind)⁻¹ ∝ (linear · inverse bind)ᵀ (a positive scale dropped).
   return glm::transpose(lattice.linear * glm::mat3(lattice.inverse_bind_world));

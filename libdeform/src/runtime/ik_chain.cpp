@@ -129,9 +129,11 @@ Status chain_base(const IkChain& chain, std::span<const glm::quat> rotations, st
   return {};
 }
 
-glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
-                            std::span<const glm::vec3> translations) noexcept {
-  if (!spans_fit(chain, rotations.size(), translations.size()) || chain.bones.empty()) return glm::vec3(0.0f);
+Status effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
+                         std::span<const glm::vec3> translations, glm::vec3& position) noexcept {
+  if (chain.bones.empty()) return Status::failure("the chain has no bones");
+  if (!spans_fit(chain, rotations.size(), translations.size()))
+    return Status::failure("pose spans do not hold every chain bone");
   detail::Frame frame;
   for (const std::int32_t id : chain.ancestors) {
     const auto b = static_cast<std::size_t>(id);
@@ -143,7 +145,8 @@ glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rot
     frame.translation += frame.rotation * translations[b];
     frame.rotation = frame.rotation * rotations[b];
   }
-  return frame.translation;
+  position = frame.translation;
+  return {};
 }
 
 std::size_t IkJob::scratch_size() const noexcept { return chain == nullptr ? 0 : scratch_size(chain->joint_count()); }

@@ -102,10 +102,10 @@ Status LatticeEvaluateJob::run(std::size_t begin, std::size_t end) const noexcep
   return {};
 }
 
-bool transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix, std::span<glm::vec3> out) {
-  if (in.size() != out.size()) return false;
+Status transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix, std::span<glm::vec3> out) noexcept {
+  if (in.size() != out.size()) return Status::failure("in and out differ in size");
   for (std::size_t i = 0; i < in.size(); ++i) out[i] = glm::vec3(matrix * glm::vec4(in[i], 1.0f));
-  return true;
+  return {};
 }
 
 }  // namespace deform

@@ -184,7 +184,9 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
 }
 
 void SpringChains::set_settings(std::size_t chain, const SpringChainSpec& settings) {
-  Chain& target = chains_.at(chain);
+  if (chain >= chains_.size())
+    throw Error::invalid_argument("spring chain " + std::to_string(chain), "spring chain index out of range");
+  Chain& target = chains_[chain];
   SpringChainSpec checked = settings;
   checked.name = target.spec.name;
   checked.tip = target.spec.tip;
@@ -197,8 +199,8 @@ void SpringChains::set_settings(std::size_t chain, const SpringChainSpec& settin
   target.fixed = oscillator(target, substep_);
 }
 
-std::span<const glm::vec3> SpringChains::points(std::size_t chain) const {
-  const Chain& c = chains_.at(chain);
+std::span<const glm::vec3> SpringChains::points(std::size_t chain) const noexcept {
+  const Chain& c = chains_[chain];
   return std::span<const glm::vec3>(drawn_).subspan(c.first + chain, c.count + 1);
 }
 

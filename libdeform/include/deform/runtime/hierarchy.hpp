@@ -177,28 +177,35 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   DeformerHierarchy(const Skeleton& skeleton, std::vector<BoundLattice> lattices, std::size_t point_count);
 
   std::size_t lattice_count() const noexcept { return lattices_.size(); }
-  const LatticeSpec& spec(std::size_t lattice) const { return lattices_.at(lattice).spec; }
+  // Read accessors taking a lattice index never throw: they require lattice < lattice_count(), as
+  // std::vector::operator[] does (the sanitizer build checks it, with _GLIBCXX_ASSERTIONS). Setters refuse a bad
+  // index: the per-frame ones with a Status, the configuration ones (set_elastic, set_shape, set_motion) with
+  // deform::Error.
+  const LatticeSpec& spec(std::size_t lattice) const noexcept { return lattices_[lattice].spec; }
   // The lattice index with this name, or -1.
   std::int32_t find(std::string_view name) const noexcept;
   // The nearest lattice whose bone is a proper ancestor of this lattice's bone, or -1 (the hierarchy of fig. 54).
-  std::int32_t parent(std::size_t lattice) const { return lattices_.at(lattice).parent; }
+  std::int32_t parent(std::size_t lattice) const noexcept { return lattices_[lattice].parent; }
   // The rest lattice in its bone's bind frame (frame, degree, rest control points).
-  const BezierLattice& rest_lattice(std::size_t lattice) const { return lattices_.at(lattice).rest; }
+  const BezierLattice& rest_lattice(std::size_t lattice) const noexcept { return lattices_[lattice].rest; }
   // Its length along the bone, |U|, model units.
-  float length(std::size_t lattice) const { return lattices_.at(lattice).length; }
+  float length(std::size_t lattice) const noexcept { return lattices_[lattice].length; }
   // Points moved by the lattice's Bézier field, and points it carries (beyond its far face).
-  std::size_t bound_count(std::size_t lattice) const { return lattices_.at(lattice).bound->binding.vertex_count; }
-  std::size_t carried_count(std::size_t lattice) const { return lattices_.at(lattice).bound->carried_points.size(); }
+  std::size_t bound_count(std::size_t lattice) const noexcept { return lattices_[lattice].bound->binding.vertex_count; }
+  std::size_t carried_count(std::size_t lattice) const noexcept {
+    return lattices_[lattice].bound->carried_points.size();
+  }
 
   // The stretch the lattice springs toward, model units along its bone (negative squashes). Refuses, changing
   // nothing, a lattice index out of range or a stretch that is not finite and > -length(). O(control points), no
   // allocation.
   Status set_stretch_target(std::size_t lattice, float stretch);
-  float stretch_target(std::size_t lattice) const { return lattices_.at(lattice).target; }
+  float stretch_target(std::size_t lattice) const noexcept { return lattices_[lattice].target; }
   // The stretch it shows now: the far face's displacement along the bone (model units), after the length floor of
   // its StretchShape (so length() + stretch() >= min_length_fraction · length()). O(control points).
-  float stretch(std::size_t lattice) const;
-  // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid.
+  float stretch(std::size_t lattice) const noexcept;
+  // Changes a lattice's elastic settings keeping its state. Throws deform::Error when invalid or the index is out
+  // of range.
   void set_elastic(std::size_t lattice, const ElasticSettings& settings);
   // Changes a lattice's length floor and volume compensation; shown from the next update(). Throws deform::Error
   // when invalid (require_valid_shape) or the index is out of range.
@@ -211,8 +218,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // state kept: 1 the tuned jiggle, 0 none. Throws deform::Error, changing nothing, when `scale` is not in [0, 1].
   void set_inertia_scale(float scale);
   // The lattice's next step takes its bone's motion as it is then, with no jolt, as the first step does: for a bone
-  // that jumped (a reach that snapped the limb). Throws std::out_of_range for a bad index.
-  void restart_motion(std::size_t lattice) { lattices_.at(lattice).motion_known = false; }
+  // that jumped (a reach that snapped the limb). Refuses a lattice index out of range. No allocation.
+  Status restart_motion(std::size_t lattice) noexcept;
 
   // Advances every lattice's springs by dt seconds (see ElasticLattice::step), the bones held still: no lattice
   // feels its bone's motion, gravity still pulls. Refuses, changing nothing, a dt that is negative or not finite.
@@ -265,25 +272,27 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // What evaluating a lattice's field takes, for callers of apply_carried():
   // Its binding, made at construction: the bound points (mesh point indices, each once, in 16-lane blocks, padding
   // lanes LatticeBinding::no_vertex) and their (u, v, w) in the lattice's rest frame (bone bind space).
-  const LatticeBinding& binding(std::size_t lattice) const { return lattices_.at(lattice).bound->binding; }
+  const LatticeBinding& binding(std::size_t lattice) const noexcept { return lattices_[lattice].bound->binding; }
   // One selection weight per binding lane (binding(l).vertices.size() entries, 0 in padding lanes): in (0, 1].
-  std::span<const float> bound_weights(std::size_t lattice) const { return lattices_.at(lattice).bound->lane_weights; }
+  std::span<const float> bound_weights(std::size_t lattice) const noexcept {
+    return lattices_[lattice].bound->lane_weights;
+  }
   // As of update(): the control points of the lattice's displacement field, world space, i-fastest (point_counts of
   // rest_lattice(l)); evaluating binding(l) with them gives each bound point's displacement before its weight.
-  std::span<const glm::vec3> displacements(std::size_t lattice) const {
-    return lattices_.at(lattice).field.control_points();
+  std::span<const glm::vec3> displacements(std::size_t lattice) const noexcept {
+    return lattices_[lattice].field.control_points();
   }
   // What apply_carried() adds, for callers that add it themselves (e.g. on a GPU, GpuLatticeFields::apply_into): the
   // points beyond the lattice's far face (mesh point indices, made at construction), their selection weights (one
   // per point, in (0, 1]), and, as of update(), the far face's displacement δ, world space: apply_carried() adds
   // carried_weights(l)[n] · far_displacement(l) to point carried_points(l)[n] for every active lattice l.
-  std::span<const std::uint32_t> carried_points(std::size_t lattice) const {
-    return lattices_.at(lattice).bound->carried_points;
+  std::span<const std::uint32_t> carried_points(std::size_t lattice) const noexcept {
+    return lattices_[lattice].bound->carried_points;
   }
-  std::span<const float> carried_weights(std::size_t lattice) const {
-    return lattices_.at(lattice).bound->carried_weights;
+  std::span<const float> carried_weights(std::size_t lattice) const noexcept {
+    return lattices_[lattice].bound->carried_weights;
   }
-  glm::vec3 far_displacement(std::size_t lattice) const { return lattices_.at(lattice).far_displacement; }
+  glm::vec3 far_displacement(std::size_t lattice) const noexcept { return lattices_[lattice].far_displacement; }
   // What apply(positions, normals) turns the normals by, for callers that do it themselves (GpuLatticeFields with
   // normals), as of update(): the lattice's map without its translation as control points, linear · rest +
   // displacements(l), written into `out` (rest_lattice(l).point_count() entries; nothing is written otherwise), and
@@ -294,11 +303,11 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // and weights = bound_weights(l) does both (apply() itself, for a rest lattice on its frame's regular grid, gets
   // the same Jacobian to rounding in one evaluation of the displacements, the frame's edges mapped by the bone as an
   // offset). No allocation.
-  void mapped_points(std::size_t lattice, std::span<glm::vec3> out) const;
-  glm::mat3 normals_to_bind(std::size_t lattice) const;
+  void mapped_points(std::size_t lattice, std::span<glm::vec3> out) const noexcept;
+  glm::mat3 normals_to_bind(std::size_t lattice) const noexcept;
   // As of update(): false when the lattice is at rest (no control point is displaced by more than 1e-7 of its
   // length), which apply() skips.
-  bool active(std::size_t lattice) const { return lattices_.at(lattice).active; }
+  bool active(std::size_t lattice) const noexcept { return lattices_[lattice].active; }
   // The displacement update() gives a point `bind_point` (bind-pose world space) that moves with `bone` with full
   // weight: e.g. a bone's head, an IK effector. O(lattices).
   glm::vec3 point_displacement(std::int32_t bone, glm::vec3 bind_point) const noexcept;
@@ -306,7 +315,7 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
   // elastically displaced points, plus what the lattices above carry them by. Computed for every lattice at the first
   // call after an update() (O(control points · lattices)), which keeps them out of a frame that does not draw them;
   // like the other calls, not to be made from two threads at once. The span is valid until the next update().
-  std::span<const glm::vec3> control_points(std::size_t lattice) const;
+  std::span<const glm::vec3> control_points(std::size_t lattice) const noexcept;
 
  private:
   // What bind_hierarchy computed for a lattice and no frame changes: shared by the copies of a hierarchy (a
@@ -364,6 +373,8 @@ class DEFORM_RUNTIME_API DeformerHierarchy {
     bool active = false;
   };
   void stretch_points(Lattice& lattice) const;
+  // The lattice a configuration setter changes; throws deform::Error for an index out of range.
+  Lattice& configured(std::size_t index);
   Status step_lattice(Lattice& lattice, float dt, const glm::mat4* world, const glm::mat4* world_rate);
   // Per slice along U (rest_lattice(l).point_counts().x of them): the shift along the bone the length floor adds to
   // the slice's mean displacement and the slice's scale across the bone.

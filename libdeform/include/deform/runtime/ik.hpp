@@ -151,10 +151,10 @@ DEFORM_RUNTIME_API Status chain_base(const IkChain& chain, std::span<const glm::
                                      std::span<const glm::vec3> translations, RigidTransform& base) noexcept;
 
 // The model-space position of the effector's head (forward kinematics of the ancestors and the chain only, on
-// quaternions, as chain_base). Spans indexed by bone id; (0, 0, 0) when they have max_bone or fewer entries.
-// O(depth of the effector), no allocation.
-DEFORM_RUNTIME_API glm::vec3 effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
-                                               std::span<const glm::vec3> translations) noexcept;
+// quaternions, as chain_base), into `position`. Spans indexed by bone id. Refuses, writing nothing, a chain with no
+// bones or spans that do not hold every bone of the chain and its ancestors. O(depth of the effector), no allocation.
+DEFORM_RUNTIME_API Status effector_position(const IkChain& chain, std::span<const glm::quat> rotations,
+                                            std::span<const glm::vec3> translations, glm::vec3& position) noexcept;
 
 // How an iterative solve stops and steps.
 struct IkSettings {

@@ -222,8 +222,9 @@ struct DEFORM_RUNTIME_API LatticeEvaluateJob {
 };
 
 // out[i] = matrix · (in[i], 1): carries lattice-space control points into another space (a bone's world or bind
-// frame) once per frame, so the per-vertex work stays the same. `out` may alias `in`; sizes must match (else false).
-DEFORM_RUNTIME_API bool transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix,
-                                         std::span<glm::vec3> out);
+// frame) once per frame, so the per-vertex work stays the same. `out` may alias `in`. Refuses, writing nothing,
+// spans of different sizes. No allocation.
+DEFORM_RUNTIME_API Status transform_points(std::span<const glm::vec3> in, const glm::mat4& matrix,
+                                           std::span<glm::vec3> out) noexcept;
 
 }  // namespace deform

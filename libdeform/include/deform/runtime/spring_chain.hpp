@@ -105,21 +105,27 @@ class DEFORM_RUNTIME_API SpringChains {
   // The next run() starts on the animated pose, at rest (after a teleport, say).
   void reset() noexcept { started_ = false; }
   // The next run() starts this chain again on its animated pose, at rest; the others go on (a limb that jumped: a
-  // reach that starts or ends). Throws std::out_of_range for a bad index.
-  void restart(std::size_t chain) { chains_.at(chain).restart = true; }
+  // reach that starts or ends). Refuses a chain index out of range. No allocation.
+  Status restart(std::size_t chain) noexcept {
+    if (chain >= chains_.size()) return Status::failure("spring chain index out of range");
+    chains_[chain].restart = true;
+    return {};
+  }
 
   // Cache hints for the state the next run() reads and writes (deform/runtime/prefetch.hpp): no effect on it.
   void prefetch() const noexcept;
 
   std::size_t chain_count() const noexcept { return chains_.size(); }
-  const SpringChainSpec& spec(std::size_t chain) const { return chains_.at(chain).spec; }
+  // Read accessors taking a chain index never throw: they require chain < chain_count(), as
+  // std::vector::operator[] does (the sanitizer build checks it, with _GLIBCXX_ASSERTIONS).
+  const SpringChainSpec& spec(std::size_t chain) const noexcept { return chains_[chain].spec; }
   std::span<const SpringCollider> colliders() const noexcept { return colliders_; }
   float substep() const noexcept { return substep_; }
   // Changes a chain's frequency, damping, gravity, units and radius (its bones, tip and colliders stay), keeping the
   // state. Throws deform::Error when invalid or the index is out of range.
   void set_settings(std::size_t chain, const SpringChainSpec& settings);
   // As of the last run(): the chain's first head and its tails, world space (bones + 1 points, for drawing).
-  std::span<const glm::vec3> points(std::size_t chain) const;
+  std::span<const glm::vec3> points(std::size_t chain) const noexcept;
 
  private:
   struct Oscillator {                      // one sub-step's maps (double-computed, stored as float)
