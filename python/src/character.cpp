@@ -123,49 +123,56 @@ void bind_character(py::module_& m) {
           },
           py::arg("chain"), "(B + 1, 3) read-only view of a spring chain's first head and tails, as of update().")
       .def_property(
-          "skinning", [](const deform::Character& c) { return method_name(c.skinning); },
-          [](deform::Character& c, const std::string& name) { c.skinning = parse_method(name); }, "'lbs' or 'dqs'.")
+          "skinning", [](const deform::Character& c) { return method_name(c.settings.skinning); },
+          [](deform::Character& c, const std::string& name) { c.settings.skinning = parse_method(name); },
+          "'lbs' or 'dqs'.")
       .def_property(
           "reach_solver",
           [](const deform::Character& c) {
-            return std::string(c.reach_solver == deform::Character::ReachSolver::ccd ? "ccd" : "two_bone");
+            return std::string(c.settings.reach_solver == deform::Character::ReachSolver::ccd ? "ccd" : "two_bone");
           },
           [](deform::Character& c, const std::string& name) {
-            if (name == "ccd") c.reach_solver = deform::Character::ReachSolver::ccd;
-            else if (name == "two_bone") c.reach_solver = deform::Character::ReachSolver::two_bone;
+            if (name == "ccd") c.settings.reach_solver = deform::Character::ReachSolver::ccd;
+            else if (name == "two_bone") c.settings.reach_solver = deform::Character::ReachSolver::two_bone;
             else throw deform::Error::invalid_argument("reach_solver", "expected 'ccd' or 'two_bone'");
           },
           "'ccd' (the rig's chain) or 'two_bone' (the limb ending at the effector).")
       .def_property(
           "reach_limits",
           [](const deform::Character& c) {
-            return std::string(c.reach_limits == deform::Character::JointLimits::euler ? "euler" : "swing_twist");
+            return std::string(c.settings.reach_limits == deform::Character::JointLimits::euler ? "euler"
+                                                                                                : "swing_twist");
           },
           [](deform::Character& c, const std::string& name) {
-            if (name == "euler") c.reach_limits = deform::Character::JointLimits::euler;
-            else if (name == "swing_twist") c.reach_limits = deform::Character::JointLimits::swing_twist;
+            if (name == "euler") c.settings.reach_limits = deform::Character::JointLimits::euler;
+            else if (name == "swing_twist") c.settings.reach_limits = deform::Character::JointLimits::swing_twist;
             else throw deform::Error::invalid_argument("reach_limits", "expected 'euler' or 'swing_twist'");
           },
           "How reach() limits the joints: 'euler' (the skeleton's DOF limits) or 'swing_twist' (derived from them).")
       .def_property(
           "reach_pole",
           [](const deform::Character& c) -> py::object {
-            if (!c.use_reach_pole) return py::none();
-            return py::make_tuple(c.reach_pole.x, c.reach_pole.y, c.reach_pole.z);
+            if (!c.settings.use_reach_pole) return py::none();
+            return py::make_tuple(c.settings.reach_pole.x, c.settings.reach_pole.y, c.settings.reach_pole.z);
           },
           [](deform::Character& c, std::optional<FloatArray> pole) {
-            c.use_reach_pole = pole.has_value();
-            if (pole) c.reach_pole = to_vec3(*pole, "reach_pole");
+            c.settings.use_reach_pole = pole.has_value();
+            if (pole) c.settings.reach_pole = to_vec3(*pole, "reach_pole");
           },
           "A model-space point the chain's middle bends toward (an elbow hint), or None.")
-      .def_readwrite("reach_soften", &deform::Character::reach_soften, "two_bone: softening in [0, 1].")
       .def_property(
-          "ik_max_iterations", [](const deform::Character& c) { return c.ik.max_iterations; },
+          "reach_soften", [](const deform::Character& c) { return c.settings.reach_soften; },
+          [](deform::Character& c, float soften) { c.settings.reach_soften = soften; },
+          "two_bone: softening in [0, 1].")
+      .def_property(
+          "ik_max_iterations", [](const deform::Character& c) { return c.settings.ik.max_iterations; },
           [](deform::Character& c, int n) {
             if (n < 1) throw deform::Error::invalid_argument("ik_max_iterations", "must be >= 1");
-            c.ik.max_iterations = n;
+            c.settings.ik.max_iterations = n;
           })
-      .def_readwrite("lattice_fields", &deform::Character::lattice_fields)
+      .def_property(
+          "lattice_fields", [](const deform::Character& c) { return c.settings.lattice_fields; },
+          [](deform::Character& c, bool on) { c.settings.lattice_fields = on; })
       .def(
           "set_delta_mush",
           [](deform::Character& c, int iterations, float step, std::optional<FloatArray> mask) {

@@ -18,7 +18,7 @@
 // the panel shows each weight as a slider, and moving one (or --morph NAME:W) holds it until "follow the clip".
 //
 // Deformation on the GPU (--gpu, the panel or G; OpenGL 4.3): the character only poses on the CPU
-// (Character::deform_on_cpu = false); deform::GpuSkinning skins it into the vertex buffer from the palette and
+// (Character::settings.deform_on_cpu = false); deform::GpuSkinning skins it into the vertex buffer from the palette and
 // deform::GpuLatticeFields::apply_into adds the lattices' carried points and fields there. --up z stands a
 // Z-up model upright by turning its scene node; imported files say their up axis themselves where Assimp reads it.
 //
@@ -354,7 +354,7 @@ class Viewer {
     }
     overlay_.create();
     scene_.update();
-    if (options.dqs) character_->skinning = deform::SkinningMethod::dqs;
+    if (options.dqs) character_->settings.skinning = deform::SkinningMethod::dqs;
     if (options.gpu) {
       if (gpu_available_) set_gpu(true);
       else std::fprintf(stderr, "deform_viewer: --gpu: %s; deforming on the CPU\n", gpu_missing().c_str());
@@ -550,11 +550,11 @@ class Viewer {
     }
 
     if (ImGui::CollapsingHeader("Skinning and GPU")) {
-      int method = character_->skinning == deform::SkinningMethod::dqs;
+      int method = character_->settings.skinning == deform::SkinningMethod::dqs;
       ImGui::RadioButton("LBS", &method, 0);
       ImGui::SameLine();
       ImGui::RadioButton("DQS", &method, 1);
-      character_->skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+      character_->settings.skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
       bool gpu = gpu_;
       ImGui::BeginDisabled(!gpu_available_);
       if (ImGui::Checkbox("GPU deformation", &gpu)) set_gpu(gpu);
@@ -567,8 +567,8 @@ class Viewer {
     }
 
     if (ImGui::CollapsingHeader("Reach")) {
-      ImGui::Checkbox("escape IK stalls", &character_->ik.escape_stalls);
-      ImGui::SliderInt("IK iterations", &character_->ik.max_iterations, 1, 256);
+      ImGui::Checkbox("escape IK stalls", &character_->settings.ik.escape_stalls);
+      ImGui::SliderInt("IK iterations", &character_->settings.ik.max_iterations, 1, 256);
       int solver = reach_solver_ == deform::Character::ReachSolver::two_bone;
       bool reach_changed = ImGui::RadioButton("CCD chain", &solver, 0);
       ImGui::SameLine();
@@ -581,7 +581,7 @@ class Viewer {
       ImGui::SameLine();
       ImGui::TextDisabled("(shift+click places it)");
       reach_changed |= ImGui::DragFloat3("pole at", &pole_.x, 0.01f);
-      bool swing_twist = character_->reach_limits == deform::Character::JointLimits::swing_twist;
+      bool swing_twist = character_->settings.reach_limits == deform::Character::JointLimits::swing_twist;
       if (ImGui::Checkbox("swing-twist limits", &swing_twist)) {
         reach_limits_ =
             swing_twist ? deform::Character::JointLimits::swing_twist : deform::Character::JointLimits::euler;
@@ -696,7 +696,7 @@ class Viewer {
         gpu_ = false;
       }
     }
-    character_->deform_on_cpu = !gpu_;
+    character_->settings.deform_on_cpu = !gpu_;
   }
 
   // The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer
@@ -961,11 +961,11 @@ class Viewer {
 
   // The panel's pole and stretch bound; a reach in progress is solved again with them.
   void apply_reach_settings() {
-    character_->reach_pole = pole_;
-    character_->use_reach_pole = use_pole_;
-    character_->reach_limits = reach_limits_;
-    character_->reach_solver = reach_solver_;
-    character_->reach_soften = soften_;
+    character_->settings.reach_pole = pole_;
+    character_->settings.use_reach_pole = use_pole_;
+    character_->settings.reach_limits = reach_limits_;
+    character_->settings.reach_solver = reach_solver_;
+    character_->settings.reach_soften = soften_;
     character_->set_max_stretch(max_stretch_);
     if (reaching_) last_reach_ = character_->reach(effector_, target_);
   }
@@ -991,8 +991,9 @@ class Viewer {
 
   void handle_keys(int key) {
     if (key == GLFW_KEY_D)
-      character_->skinning = character_->skinning == deform::SkinningMethod::lbs ? deform::SkinningMethod::dqs
-                                                                                 : deform::SkinningMethod::lbs;
+      character_->settings.skinning = character_->settings.skinning == deform::SkinningMethod::lbs
+                                          ? deform::SkinningMethod::dqs
+                                          : deform::SkinningMethod::lbs;
     if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
     if (key == GLFW_KEY_L)  // active limb, all, none, active again
       lattice_display_ = lattice_display_ == LatticeDisplay::active ? LatticeDisplay::all
@@ -1128,7 +1129,8 @@ class Viewer {
     if (gpu_) {
       // Only the palette and the lattices' control points travel; the vertices never leave the GPU.
       const GLuint vertex_buffer = renderer_->vertex_buffer();
-      deform::Status status = gpu_skinning_.skin_into(character_->skinning, character_->palette(), vertex_buffer);
+      deform::Status status =
+          gpu_skinning_.skin_into(character_->settings.skinning, character_->palette(), vertex_buffer);
       if (status) status = gpu_fields_.apply_into(character_->deformers(), vertex_buffer);
       if (!status) {
         std::fprintf(stderr, "deform_viewer: GPU deformation refused: %s; deforming on the CPU\n", status.reason());

@@ -138,7 +138,7 @@ class WebViewer {
       (void)character_->set_max_stretch(max_stretch_);
     } else if (name == "volume") shape_.volume = std::clamp(v, 0.0f, 1.0f), apply_shape();
     else if (name == "dqs")
-      character_->skinning = v != 0.0f ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+      character_->settings.skinning = v != 0.0f ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
     else if (name == "skeleton") show_skeleton_ = v != 0.0f;
     else if (name == "lattices") show_lattices_ = v != 0.0f;
     else if (name == "bare") bare_ = v != 0.0f;  // the character alone: no floor, ball or overlays (pixel tests)

@@ -138,8 +138,8 @@ TEST_CASE("reach with a pole: the elbow turns toward the pole within the arm's l
       const glm::vec3 hand = c.bone_position(arm.hand);
       const glm::vec3 target = shoulder + 0.7f * (hand - shoulder) + glm::vec3(0.0f, -0.1f, 0.1f);
       const glm::vec3 pole = shoulder + glm::vec3(0.0f, 0.0f, side);
-      c.reach_pole = pole;
-      c.use_reach_pole = use_pole;
+      c.settings.reach_pole = pole;
+      c.settings.use_reach_pole = use_pole;
       REQUIRE(c.reach(arm.hand, target).status);
       run_for(c, 0.5, 1.0f / 60.0f);
       CHECK(glm::length(c.bone_position(arm.hand) - target) < 1e-3f);
@@ -157,7 +157,7 @@ TEST_CASE("reach with a pole: the elbow turns toward the pole within the arm's l
 TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone and twist range") {
   Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
-  c.reach_limits = Character::JointLimits::swing_twist;
+  c.settings.reach_limits = Character::JointLimits::swing_twist;
   std::mt19937 random(5);
   std::uniform_real_distribution<float> offset(-0.4f, 0.4f);
   const glm::vec3 shoulder = c.bone_position(c.skeleton().find("upperarm_l"));
@@ -184,7 +184,7 @@ TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone
     }
   }
   CHECK(reached > 20);
-  c.reach_limits = Character::JointLimits::euler;
+  c.settings.reach_limits = Character::JointLimits::euler;
   REQUIRE(c.reach(arm.hand, shoulder + glm::vec3(0.3f, 0.0f, 0.1f)).status);
   CHECK(c.reach_swing_twist(0) == nullptr);
 }
@@ -192,7 +192,7 @@ TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone
 TEST_CASE("reach with the two-bone solver: the limb below the effector's grandparent, soften, stretch for the rest") {
   Character c = deform::make_builtin_character();
   const Arm arm = left_arm(c);
-  c.reach_solver = Character::ReachSolver::two_bone;
+  c.settings.reach_solver = Character::ReachSolver::two_bone;
   const std::int32_t upperarm = c.skeleton().find("upperarm_l");
   const glm::vec3 shoulder = c.bone_position(upperarm);
   const glm::vec3 hand = c.bone_position(arm.hand);
@@ -208,19 +208,19 @@ TEST_CASE("reach with the two-bone solver: the limb below the effector's grandpa
   CHECK(glm::length(c.bone_position(arm.hand) - near) < 1e-3f);
   // Soften leaves the arm short of a target at its full length; the lattices stretch to cover it.
   const glm::vec3 full = shoulder + glm::normalize(hand - shoulder + glm::vec3(0.0f, -0.2f, 0.2f)) * limb * 0.999f;
-  c.reach_soften = 0.0f;
+  c.settings.reach_soften = 0.0f;
   const float hard = c.reach(arm.hand, full).residual;
-  c.reach_soften = 0.3f;
+  c.settings.reach_soften = 0.3f;
   result = c.reach(arm.hand, full);
   REQUIRE(result.status);
   CHECK(result.residual > hard + 0.01f * limb);
   CHECK(result.stretch > 0.0f);
   CHECK(result.distance < 0.05f * result.residual + 1e-4f);  // soften applies to the stretched limb too
   // Out of range, or with swing-twist limits, reach refuses and changes nothing.
-  c.reach_soften = 1.5f;
+  c.settings.reach_soften = 1.5f;
   CHECK_FALSE(c.reach(arm.hand, full).status);
-  c.reach_soften = 0.0f;
-  c.reach_limits = Character::JointLimits::swing_twist;
+  c.settings.reach_soften = 0.0f;
+  c.settings.reach_limits = Character::JointLimits::swing_twist;
   CHECK_FALSE(c.reach(arm.hand, full).status);
 }
 
@@ -422,8 +422,8 @@ TEST_CASE("on the real mesh the stretched forearm has no seam; without the hiera
 
 TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them gives the whole deformation") {
   Character whole = deform::make_builtin_character(), split = deform::make_builtin_character();
-  CHECK(whole.lattice_fields);
-  split.lattice_fields = false;
+  CHECK(whole.settings.lattice_fields);
+  split.settings.lattice_fields = false;
   const Arm arm = left_arm(whole);
   std::mt19937 rng(77);
   const deform::DeformerHierarchy& h = split.deformers();
@@ -475,9 +475,9 @@ TEST_CASE("lattice_fields = false leaves the fields to the caller: adding them g
 
 TEST_CASE("deform_on_cpu = false only poses: skinning palette() and applying the hierarchy gives the deformation") {
   Character whole = deform::make_builtin_character(), posing = deform::make_builtin_character();
-  CHECK(whole.deform_on_cpu);
-  posing.deform_on_cpu = false;
-  CHECK_FALSE(posing.instance().deform_on_cpu);  // instance() copies the setting
+  CHECK(whole.settings.deform_on_cpu);
+  posing.settings.deform_on_cpu = false;
+  CHECK_FALSE(posing.instance().settings.deform_on_cpu);  // instance() copies the setting
   const std::vector<glm::vec3> before(posing.positions().begin(), posing.positions().end());
   const deform::Model& model = posing.model();
   REQUIRE(posing.bind_normals().size() == model.mesh.point_count());
@@ -563,6 +563,25 @@ TEST_CASE("a Character made without a rig has no lattices, whatever its model") 
   REQUIRE(c.update(1.0f / 60.0f));
 }
 
+TEST_CASE("rig() is the rig as tuned: each lattice and spring chain spec is held once, where it is changed") {
+  const deform::Model model = deform::builtin_character();
+  const deform::Rig given = deform::builtin_full_rig(model);
+  REQUIRE_FALSE(given.spring_chains.empty());
+  Character c(model, given);
+  CHECK(c.rig() == given);
+  const deform::StretchShape shape{0.4f, 0.5f};
+  c.deformers().set_shape(1, shape);
+  deform::SpringChainSpec chain = c.springs().spec(0);
+  chain.frequency *= 2.0f;
+  c.springs().set_settings(0, chain);
+  const deform::Rig tuned = c.rig();
+  CHECK(tuned.lattices[1].shape == shape);
+  CHECK(tuned.spring_chains[0].frequency == chain.frequency);
+  CHECK(tuned.lattices[0] == given.lattices[0]);
+  // An instance starts from the tuned rig.
+  CHECK(c.instance().rig() == tuned);
+}
+
 TEST_CASE("characters moved into a std::vector deform bit for bit as unmoved ones") {
   static_assert(std::is_nothrow_move_constructible_v<Character> && std::is_nothrow_move_assignable_v<Character>);
   static_assert(!std::is_copy_constructible_v<Character>);
@@ -578,7 +597,7 @@ TEST_CASE("characters moved into a std::vector deform bit for bit as unmoved one
   }
   Character spare = std::move(moved[1]);
   moved[1] = std::move(spare);
-  moved[2].skinning = unmoved[2]->skinning = deform::SkinningMethod::dqs;
+  moved[2].settings.skinning = unmoved[2]->settings.skinning = deform::SkinningMethod::dqs;
 
   const auto frame = [](Character& c, std::size_t n, int f) {
     const Arm arm = left_arm(c);

@@ -109,11 +109,11 @@ TEST_CASE(
                                                     : glm::vec3(0.2f, 0.3f, 0.3f);
       // Phases 1 and 3 reach with a pole, 3 with swing-twist limits too (the chain is rebuilt with them), 5 with the
       // two-bone solver and soften.
-      c.use_reach_pole = phase % 2 == 1;
-      c.reach_pole = shoulder + glm::vec3(0.0f, -0.5f, 1.0f);
-      c.reach_limits = phase == 3 ? Character::JointLimits::swing_twist : Character::JointLimits::euler;
-      c.reach_solver = phase == 5 ? Character::ReachSolver::two_bone : Character::ReachSolver::ccd;
-      c.reach_soften = 0.2f;
+      c.settings.use_reach_pole = phase % 2 == 1;
+      c.settings.reach_pole = shoulder + glm::vec3(0.0f, -0.5f, 1.0f);
+      c.settings.reach_limits = phase == 3 ? Character::JointLimits::swing_twist : Character::JointLimits::euler;
+      c.settings.reach_solver = phase == 5 ? Character::ReachSolver::two_bone : Character::ReachSolver::ccd;
+      c.settings.reach_soften = 0.2f;
       const deform::ReachResult result = c.reach(effector, target);
       tally.note(result.status);
       ++tally.reaches;

@@ -137,11 +137,11 @@ TEST_CASE("a morphed, skinned Character equals MorphJob then SkinningJob by hand
   std::vector<glm::vec3> positions, normals;
   for (int round = 0; round < 40; ++round) {
     CAPTURE(round);
-    c.skinning = round % 2 ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+    c.settings.skinning = round % 2 ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
     REQUIRE(c.set_pose(random_pose(rng, c.skeleton())));
     for (std::size_t k = 0; k < c.morph_target_count(); ++k) REQUIRE(c.set_morph_weight(k, weight(rng)));
     REQUIRE(c.update(0.0f));
-    by_hand(c, c.skinning, positions, normals);
+    by_hand(c, c.settings.skinning, positions, normals);
     const std::vector<glm::vec3> got_normals = point_normals(c);
     std::size_t differ = 0;
     for (std::size_t p = 0; p < positions.size(); ++p) {

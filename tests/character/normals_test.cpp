@@ -138,10 +138,10 @@ TEST_CASE("transported normals stay near the recomputed ones over a reach, relea
 
 TEST_CASE("transported normals with dual quaternion skinning") {
   Character fast = deform::make_builtin_character();
-  fast.skinning = deform::SkinningMethod::dqs;
+  fast.settings.skinning = deform::SkinningMethod::dqs;
   Character exact = fast.instance();
   exact.set_normals_mode(Character::NormalsMode::recomputed);
-  CHECK(exact.skinning == deform::SkinningMethod::dqs);
+  CHECK(exact.settings.skinning == deform::SkinningMethod::dqs);
   const std::int32_t hand = fast.skeleton().find("hand_l");
   const glm::vec3 target = fast.bone_position(fast.skeleton().find("clavicle_l")) + glm::vec3(0.9f, 0.2f, 0.3f);
   REQUIRE(fast.reach(hand, target).status);

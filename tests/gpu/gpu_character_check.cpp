@@ -63,7 +63,7 @@ bool check_degree(int degree, bool springs) {
     spec.elastic.springs.stiffness = 300.0f;
   }
   deform::Character cpu(model, rig), gpu(model, rig);
-  gpu.lattice_fields = false;
+  gpu.settings.lattice_fields = false;
   const deform::Mesh& mesh = gpu.model().mesh;
   const deform::Bounds bounds = deform::compute_bounds(mesh.positions);
   const float size = glm::length(bounds.max - bounds.min);

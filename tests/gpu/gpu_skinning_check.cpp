@@ -376,7 +376,7 @@ bool check_clips() {
   bool ok = true;
   for (const deform::SkinningMethod method : {deform::SkinningMethod::lbs, deform::SkinningMethod::dqs}) {
     deform::Character cpu(model);
-    cpu.skinning = method;
+    cpu.settings.skinning = method;
     std::vector<glm::vec3> bind_normals;
     deform::GpuSkinning gpu;
     if (const deform::Status s = gpu.create(character_bind(cpu, bind_normals)); !s) {
@@ -420,11 +420,11 @@ bool check_whole(deform::SkinningMethod method, int degree, bool springs, bool l
     spec.elastic.springs.stiffness = 300.0f;
   }
   deform::Character cpu(model, rig);
-  cpu.skinning = method;
+  cpu.settings.skinning = method;
   deform::Character skinned = cpu.instance();  // the GPU's normals: skinned, not turned by the lattices
-  skinned.lattice_fields = false;
+  skinned.settings.lattice_fields = false;
   deform::Character gpu_pose = cpu.instance();
-  gpu_pose.deform_on_cpu = false;
+  gpu_pose.settings.deform_on_cpu = false;
   const deform::Mesh& mesh = model.mesh;
 
   std::vector<glm::vec3> bind_normals;
@@ -493,16 +493,16 @@ bool check_walk(deform::SkinningMethod method) {
   const deform::Rig rig = deform::builtin_full_rig(model);
   const deform::Animation walk = deform::builtin_walk(model);
   deform::Character cpu(model, rig);
-  cpu.skinning = method;
+  cpu.settings.skinning = method;
   for (std::size_t l = 0; l < cpu.deformers().lattice_count(); ++l) {
     deform::LatticeMotion motion = cpu.deformers().spec(l).motion;
     motion.inertia = 1.0f;
     cpu.deformers().set_motion(l, motion);
   }
   deform::Character skinned = cpu.instance();
-  skinned.lattice_fields = false;
+  skinned.settings.lattice_fields = false;
   deform::Character gpu_pose = cpu.instance();
-  gpu_pose.deform_on_cpu = false;
+  gpu_pose.settings.deform_on_cpu = false;
   const deform::Mesh& mesh = model.mesh;
   std::vector<glm::vec3> bind_normals;
   deform::GpuSkinning skinning;
@@ -712,7 +712,7 @@ void bench_character() {
   const deform::Animation walk = deform::builtin_walk(model);
   deform::Character cpu(model, deform::builtin_full_rig(model));
   deform::Character gpu_pose = cpu.instance();
-  gpu_pose.deform_on_cpu = false;
+  gpu_pose.settings.deform_on_cpu = false;
   std::vector<glm::vec3> bind_normals;
   deform::GpuSkinning skinning;
   deform::GpuLatticeFields fields;
@@ -744,7 +744,7 @@ void bench_character() {
   const double gpu_ms = time_ms([&] {
     pose_next(gpu_pose);
     gpu_pose.update(1.0f / 60.0f);
-    skinning.skin_into(gpu_pose.skinning, gpu_pose.palette(), buffer.name());
+    skinning.skin_into(gpu_pose.settings.skinning, gpu_pose.palette(), buffer.name());
     fields.apply_into(gpu_pose.deformers(), buffer.name());
     glFinish();
   });

@@ -106,6 +106,7 @@ Character::Character(Model model, const Rig& rig)
       throw Error::in_file(bound.name, "morph target '" + target.name + "'", "default weight is not finite");
     }
   }
+  forget_held_specs();
   allocate_frame_state();
   SkinningJob job;
   job.matrices = palette_;
@@ -132,7 +133,23 @@ Character::Character(std::shared_ptr<const BindData> bind, const Rig& rig, const
       later_(pose_),
       work_(pose_) {
   hierarchy_.reset();
+  forget_held_specs();
   allocate_frame_state();
+}
+
+void Character::forget_held_specs() noexcept {
+  rig_.lattices.clear();
+  rig_.spring_chains.clear();
+  rig_.colliders.clear();
+}
+
+Rig Character::rig() const {
+  Rig whole = rig_;
+  for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) whole.lattices.push_back(hierarchy_.spec(l));
+  for (std::size_t c = 0; c < springs_.chain_count(); ++c) whole.spring_chains.push_back(springs_.spec(c));
+  whole.colliders.assign(springs_.colliders().begin(), springs_.colliders().end());
+  whole.spring_substep = springs_.substep();
+  return whole;
 }
 
 void Character::allocate_frame_state() {
@@ -172,23 +189,14 @@ void Character::allocate_frame_state() {
 }
 
 Character Character::instance() const {
-  Character copy(bind_, rig_, hierarchy_);
-  copy.skinning = skinning;
-  copy.lattice_fields = lattice_fields;
-  copy.deform_on_cpu = deform_on_cpu;
-  copy.ik = ik;
-  copy.reach_pole = reach_pole;
-  copy.use_reach_pole = use_reach_pole;
-  copy.reach_solver = reach_solver;
-  copy.reach_soften = reach_soften;
-  copy.reach_limits = reach_limits;
+  Character copy(bind_, rig(), hierarchy_);  // the spring chains made with their current settings
+  copy.settings = settings;
   copy.set_normals_mode(normals_mode_);
   copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
     if (copy.normals_scratch_.empty()) copy.normals_scratch_.resize(bind_->vertex_normals.scratch_size());
   }
-  for (std::size_t c = 0; c < springs_.chain_count(); ++c) copy.springs_.set_settings(c, springs_.spec(c));
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
   return copy;
@@ -294,8 +302,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   // parent of the topmost lattice bone above the effector —
   // that bone itself when its parent is the skeleton's root, which places the whole body (a leg's chain starts at the
   // thigh, not the hips: turning the hips would spin the character to point the leg) — else two bones up.
-  const bool two_bone = reach_solver == ReachSolver::two_bone;
-  if (effector != chain_effector_ || reach_limits != chain_limits_ || reach_solver != chain_solver_) {
+  const bool two_bone = settings.reach_solver == ReachSolver::two_bone;
+  if (effector != chain_effector_ || settings.reach_limits != chain_limits_ || settings.reach_solver != chain_solver_) {
     std::int32_t root = effector == rig_.reach_effector && !two_bone ? rig_.reach_root : -1;
     for (const Rig::ReachChain& chain : rig_.reach_chains)  // (a few entries: a rig's limbs)
       if (chain.effector == effector && effector != rig_.reach_effector && !two_bone) root = chain.root;
@@ -324,7 +332,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
       return result;
     }
     chain_.swing_twist.clear();
-    if (reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
+    if (settings.reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
       chain_.swing_twist.resize(chain_.joint_count());
       for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
         chain_.swing_twist[k] =
@@ -332,8 +340,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
         chain_.limits[k] = EulerLimits{};
       }
     }
-    chain_limits_ = reach_limits;
-    chain_solver_ = reach_solver;
+    chain_limits_ = settings.reach_limits;
+    chain_solver_ = settings.reach_solver;
     chain_effector_ = effector;
   }
   const std::int32_t root = chain_.bones.front();
@@ -365,7 +373,7 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   solve.rotations = work_.rotations;
   solve.translations = work_.translations;
   solve.target = target;
-  solve.settings = ik;
+  solve.settings = settings.ik;
   solve.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
   // A reach held frame after frame (the same effector, not released, the target within a tenth of the chain's length
   // of the last one) is solved without the random restarts of the stall escape, so that the solution moves with its
@@ -377,8 +385,8 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   solve.scratch = ik_scratch_;
   solve.random_state = &random_state;
   solve.result = &ik_result;
-  solve.pole = reach_pole;
-  solve.use_pole = use_reach_pole;
+  solve.pole = settings.reach_pole;
+  solve.use_pole = settings.use_reach_pole;
   if (const Status status = chain_base(chain_, work_.rotations, work_.translations, solve.base); !status) {
     result.status = status;
     return result;
@@ -390,8 +398,9 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   limb.translations = work_.translations;
   limb.target = target;
   limb.tolerance = solve.settings.tolerance;
-  limb.soften = reach_soften;
-  if (use_reach_pole) limb.pole = reach_pole, limb.pole_kind = PoleKind::point;  // else the pose's bend plane
+  limb.soften = settings.reach_soften;
+  if (settings.use_reach_pole)
+    limb.pole = settings.reach_pole, limb.pole_kind = PoleKind::point;  // else the pose's bend plane
   limb.result = &ik_result;
   const auto run_ik = [&] { return two_bone ? limb.run() : solve.run(); };
   if (const Status status = run_ik(); !status) {
@@ -536,7 +545,7 @@ Status Character::update(float dt) {
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
   if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
-  if (!deform_on_cpu) return hierarchy_.update(world_);
+  if (!settings.deform_on_cpu) return hierarchy_.update(world_);
   const bool transport = normals_mode_ == NormalsMode::transported;
   // Morph targets, in bind space before skinning; skipped (the bind arrays skinned directly) when every weight is 0.
   std::span<const glm::vec3> rest_positions = bound.mesh.positions;
@@ -557,7 +566,7 @@ Status Character::update(float dt) {
     rest_positions = morphed_positions_;
   }
   SkinningJob job;
-  job.method = skinning;
+  job.method = settings.skinning;
   job.matrices = palette_;
   job.bone_indices = bound.weights.bones;
   job.bone_weights = bound.weights.weights;
@@ -571,7 +580,7 @@ Status Character::update(float dt) {
     job.in_normals = as_floats(rest_normals);
     job.out_normals = as_floats(point_normals());
   }
-  if (skinning == SkinningMethod::dqs) {
+  if (settings.skinning == SkinningMethod::dqs) {
     bool has_scale = false;
     if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))
       return Status::failure("skinning palette is singular or not finite");
@@ -582,7 +591,7 @@ Status Character::update(float dt) {
   transported_current_ = false;
   if (const Status status = job.run(); !status) return status;
   if (const Status status = hierarchy_.update(world_); !status) return status;
-  if (!lattice_fields) {
+  if (!settings.lattice_fields) {
     // The carried points only translate: their normals stay as skinned.
     if (const Status status = hierarchy_.apply_carried(positions_); !status) return status;
   } else if (const Status status =
@@ -590,7 +599,7 @@ Status Character::update(float dt) {
              !status) {
     return status;
   }
-  if (mush_ && lattice_fields) {
+  if (mush_ && settings.lattice_fields) {
     // Delta Mush after the lattices, in place; the normals are then recomputed from the mushed points.
     DeltaMushJob mush;
     mush.binding = mush_.get();
@@ -604,8 +613,8 @@ Status Character::update(float dt) {
   return {};
 }
 
-void Character::set_delta_mush(const DeltaMushSettings& settings) {
-  auto binding = std::make_shared<const DeltaMushBinding>(bind_delta_mush(bind_->model.mesh, settings));
+void Character::set_delta_mush(const DeltaMushSettings& mush) {
+  auto binding = std::make_shared<const DeltaMushBinding>(bind_delta_mush(bind_->model.mesh, mush));
   if (binding->iterations == 0) return clear_delta_mush();
   std::vector<glm::vec4> scratch(DeltaMushJob::scratch_size(*binding));
   if (normals_scratch_.empty()) normals_scratch_.resize(bind_->vertex_normals.scratch_size());

@@ -92,14 +92,17 @@ class DEFORM_CHARACTER_API Character {
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default
-  // morph weights, the settings below (skinning, lattice_fields, deform_on_cpu, ik, reach options, normals mode, max
-  // stretch), the lattices' current elastic settings, shapes and motion, and the spring chains' settings copied.
+  // morph weights, `settings` whole, the normals mode, max stretch and Delta Mush, the lattices' current elastic
+  // settings, shapes and motion, and the spring chains' settings copied.
   // Allocates that state only (about 142 KB for the built-in character; docs/performance.md, "2026-11-24, late").
   Character instance() const;
 
   const Model& model() const noexcept { return bind_->model; }
   const Skeleton& skeleton() const noexcept { return bind_->model.skeleton; }
-  const Rig& rig() const noexcept { return rig_; }
+  // The rig as it stands now: its lattices' specs as the hierarchy holds them (set_shape, set_motion, set_elastic
+  // change them there) and its spring chains' as springs() holds them, with the rig's reach chains, max_stretch and
+  // model. Each spec is held once, where it is used; this assembles a copy (allocates), e.g. to save the tuned rig.
+  Rig rig() const;
   DeformerHierarchy& deformers() noexcept { return hierarchy_; }
   const DeformerHierarchy& deformers() const noexcept { return hierarchy_; }
 
@@ -159,39 +162,47 @@ class DEFORM_CHARACTER_API Character {
   SpringChains& springs() noexcept { return springs_; }
   const SpringChains& springs() const noexcept { return springs_; }
 
-  SkinningMethod skinning = SkinningMethod::lbs;
-  // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
-  // (DeformerHierarchy::apply_carried instead of apply) for a caller that evaluates them elsewhere, e.g. on a GPU,
-  // from deformers().binding(l), bound_weights(l) and displacements(l); positions() and normals() are then those of
-  // the skinned, carried surface, and adding the fields to positions() gives what true gives.
-  bool lattice_fields = true;
-  // true (the default): update() deforms on the CPU (skinning, then the lattices as lattice_fields says). false:
-  // update() only poses — forward kinematics, the spring chains, the lattices' springs and DeformerHierarchy::update —
-  // for a caller that deforms elsewhere, e.g. the whole deformation on a GPU: deform::GpuSkinning from palette() and
-  // bind_normals(), then deform::GpuLatticeFields::apply_into from deformers() (docs/gpu.md). positions() and
-  // normals() then keep what the last deforming update() gave (the bind pose before any); bone_position() and
-  // control_points() follow the pose as always. Takes effect at the next update().
-  bool deform_on_cpu = true;
-  IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
-  // A pole for reach() (IkJob::pole), used when `use_reach_pole`: a model-space point the chain's middle bends toward
-  // (a knee or elbow hint), applied without losing the target.
-  glm::vec3 reach_pole{0.0f};
-  bool use_reach_pole = false;
-  // The solver reach() uses: CCD over the rig's chain (the default), or the closed-form two-bone solve of the limb
-  // that ends at the effector — its parent and grandparent joints, e.g. upper arm and forearm (TwoBoneIkJob, with
-  // reach_soften and the pole) — for a limb that should bend like one; it takes Euler limits only (with swing_twist
-  // reach_limits, reach() refuses). Takes effect at the next reach().
+  // The solvers and limits reach() can use (Settings::reach_solver, Settings::reach_limits, described there).
   enum class ReachSolver : std::uint8_t { ccd, two_bone };
-  ReachSolver reach_solver = ReachSolver::ccd;
-  // two_bone: how softly the limb approaches full extension, [0, 1] (TwoBoneIkJob::soften); out of range, reach()
-  // refuses. What it leaves short the lattices stretch to cover, like any residual (to within a few percent of it:
-  // the stretched limb is softened again).
-  float reach_soften = 0.0f;
-  // How reach() limits the chain's joints: by the skeleton's Euler limits (the default), or by swing-twist limits
-  // derived from them (swing_twist_from_euler: a twist range about each bone's axis and a swing cone around it, which
-  // may leave the Euler box; the reached pose is kept as solved). Takes effect at the next reach().
   enum class JointLimits : std::uint8_t { euler, swing_twist };
-  JointLimits reach_limits = JointLimits::euler;
+
+  // The knobs that need no check when set: plain values, read by the next update() or reach(), copied whole by
+  // instance(). Settings with an invariant to keep have setters instead (set_max_stretch, set_normals_mode,
+  // set_delta_mush).
+  struct Settings {
+    SkinningMethod skinning = SkinningMethod::lbs;
+    // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
+    // (DeformerHierarchy::apply_carried instead of apply) for a caller that evaluates them elsewhere, e.g. on a GPU,
+    // from deformers().binding(l), bound_weights(l) and displacements(l); positions() and normals() are then those of
+    // the skinned, carried surface, and adding the fields to positions() gives what true gives.
+    bool lattice_fields = true;
+    // true (the default): update() deforms on the CPU (skinning, then the lattices as lattice_fields says). false:
+    // update() only poses — forward kinematics, the spring chains, the lattices' springs and DeformerHierarchy::update
+    // — for a caller that deforms elsewhere, e.g. the whole deformation on a GPU: deform::GpuSkinning from palette()
+    // and bind_normals(), then deform::GpuLatticeFields::apply_into from deformers() (docs/gpu.md). positions() and
+    // normals() then keep what the last deforming update() gave (the bind pose before any); bone_position() and
+    // control_points() follow the pose as always. Takes effect at the next update().
+    bool deform_on_cpu = true;
+    IkSettings ik;  // max_iterations and escape_stalls are used; the tolerance is set per reach
+    // A pole for reach() (IkJob::pole), used when `use_reach_pole`: a model-space point the chain's middle bends toward
+    // (a knee or elbow hint), applied without losing the target.
+    glm::vec3 reach_pole{0.0f};
+    bool use_reach_pole = false;
+    // The solver reach() uses: CCD over the rig's chain (the default), or the closed-form two-bone solve of the limb
+    // that ends at the effector — its parent and grandparent joints, e.g. upper arm and forearm (TwoBoneIkJob, with
+    // reach_soften and the pole) — for a limb that should bend like one; it takes Euler limits only (with swing_twist
+    // reach_limits, reach() refuses). Takes effect at the next reach().
+    ReachSolver reach_solver = ReachSolver::ccd;
+    // two_bone: how softly the limb approaches full extension, [0, 1] (TwoBoneIkJob::soften); out of range, reach()
+    // refuses. What it leaves short the lattices stretch to cover, like any residual (to within a few percent of it:
+    // the stretched limb is softened again).
+    float reach_soften = 0.0f;
+    // How reach() limits the chain's joints: by the skeleton's Euler limits (the default), or by swing-twist limits
+    // derived from them (swing_twist_from_euler: a twist range about each bone's axis and a swing cone around it, which
+    // may leave the Euler box; the reached pose is kept as solved). Takes effect at the next reach().
+    JointLimits reach_limits = JointLimits::euler;
+  };
+  Settings settings;
   // The bones of the last reach's chain, root first, effector last (empty before any).
   std::span<const std::int32_t> reach_chain() const noexcept { return chain_.bones; }
   // Joint k's swing-twist limits in the last reach's chain (reach_limits swing_twist), else null.
@@ -288,12 +299,13 @@ class DEFORM_CHARACTER_API Character {
   };
   Character(std::shared_ptr<const BindData> bind, const Rig& rig, const DeformerHierarchy& hierarchy);
   void allocate_frame_state();
+  void forget_held_specs() noexcept;
   void clamp_pose(Pose& pose) const noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
   std::span<glm::vec3> point_normals() noexcept;
 
   std::shared_ptr<const BindData> bind_;
-  Rig rig_;
+  Rig rig_;  // the rig without its lattices and spring chains, which hierarchy_ and springs_ hold (rig())
   DeformerHierarchy hierarchy_;
   SpringChains springs_;
   Pose pose_;

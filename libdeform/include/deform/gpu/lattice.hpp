@@ -149,9 +149,11 @@ class DEFORM_GPU_API GpuBezierLattice {
 
 // The Bézier fields of a character's lattices on the GPU: one additive GpuBezierLattice per lattice of a
 // DeformerHierarchy (and one for its carried points). Two splits (docs/gpu.md):
-//  - deform::Character::lattice_fields = false: the CPU skins and adds the carried translations, the application
+//  - deform::Character::settings.lattice_fields = false: the CPU skins and adds the carried translations, the
+//  application
 //    uploads those positions into its vertex buffer, add_into() adds every moving lattice's field there;
-//  - deform::Character::deform_on_cpu = false: GpuSkinning writes the skinned buffer, apply_into() adds the carried
+//  - deform::Character::settings.deform_on_cpu = false: GpuSkinning writes the skinned buffer, apply_into() adds the
+//  carried
 //    translations and the fields: the whole deformation on the GPU.
 // Either gives the Character's full deformation to float rounding. Normals stay those in the buffer (of the surface
 // before the fields) unless created with normals, which turns them as the CPU's transported normals are turned.
@@ -192,8 +194,8 @@ class DEFORM_GPU_API GpuLatticeFields {
   // What DeformerHierarchy::apply() adds, all on the GPU: first every active lattice's carried points (render
   // vertices of carried_points(l), + carried_weights(l) · far_displacement(l)), then the fields as add_into() does.
   // For a buffer the GPU skinned (GpuSkinning::skin_into, whose barrier orders it before these), with
-  // Character::deform_on_cpu = false: the CPU then uploads only the palette and the control points. Normals stay as
-  // skinned (the CPU's transported normals also turn by the lattices' Jacobians: docs/gpu.md). Refuses, adding
+  // Character::settings.deform_on_cpu = false: the CPU then uploads only the palette and the control points. Normals
+  // stay as skinned (the CPU's transported normals also turn by the lattices' Jacobians: docs/gpu.md). Refuses, adding
   // nothing, as add_into() does. No allocation.
   Status apply_into(const DeformerHierarchy& hierarchy, unsigned int vertex_buffer, const GpuVertexLayout& layout = {});
 
