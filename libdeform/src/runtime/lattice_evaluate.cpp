@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "deform/runtime/lattice.hpp"
+#include "finite.hpp"
 #include "lattice_kernel.hpp"
 
 namespace deform {
