@@ -4,7 +4,7 @@
 
 #include "deform/runtime/lattice.hpp"
 #include "finite.hpp"
-#include "lattice_kernel.hpp"
+#include "simd/lattice_kernel.hpp"
 
 namespace deform {
 namespace {
