@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "../tests/runtime/ik_test_rig.hpp"
+#include "ik_random_rigs.hpp"  // fixtures/: the random rigs the IK tests use too
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace {
@@ -22,7 +22,7 @@ constexpr int rig_count = 32;
 constexpr int targets_per_rig = 32;
 
 struct Case {
-  ik_test::RandomChain rig;
+  ik_rigs::RandomChain rig;
   std::vector<glm::vec3> targets;
   deform::Pose bind;
 };
@@ -31,8 +31,8 @@ std::vector<Case> make_cases(std::size_t joints, std::uint32_t seed, bool free_j
   std::mt19937 random(seed);
   std::vector<Case> cases;
   for (int r = 0; r < rig_count; ++r) {
-    Case c{ik_test::random_chain(random, joints, free_joints), {}, {}};
-    for (int t = 0; t < targets_per_rig; ++t) c.targets.push_back(ik_test::random_reachable_target(random, c.rig));
+    Case c{ik_rigs::random_chain(random, joints, free_joints), {}, {}};
+    for (int t = 0; t < targets_per_rig; ++t) c.targets.push_back(ik_rigs::random_reachable_target(random, c.rig));
     c.bind = c.rig.skeleton.bind_pose();
     cases.push_back(std::move(c));
   }
@@ -165,7 +165,7 @@ void clamp(benchmark::State& state) {
     bones[b].name = "b" + std::to_string(b);
     bones[b].parent = static_cast<std::int32_t>(b) - 1;
     if (b + 1 < count) bones[b].children = {static_cast<std::int32_t>(b + 1)};
-    bones[b].limits = ik_test::random_limits(random);
+    bones[b].limits = ik_rigs::random_limits(random);
   }
   const deform::Skeleton skeleton(bones);
   std::vector<deform::EulerLimits> limits;

@@ -16,7 +16,7 @@
 #include <numbers>
 #include <vector>
 
-#include "../tests/runtime/normals_reference.hpp"
+#include "normals_reference.hpp"  // fixtures/: the plain reference normals
 #include "fixtures.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"

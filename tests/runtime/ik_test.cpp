@@ -18,12 +18,12 @@
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/io/pose_json.hpp"
-#include "runtime/ik_test_rig.hpp"
+#include "ik_random_rigs.hpp"  // fixtures/: random rigs (the IK benchmarks use them too)
 
 #include "allocation_counter.hpp"  // allocations: a solve allocates nothing
 
 using namespace deform;
-using ik_test::RandomChain;
+using ik_rigs::RandomChain;
 
 namespace {
 
@@ -86,7 +86,7 @@ void check_pose(const RandomChain& rig, const Pose& before, const Pose& after) {
     CHECK(after.translations[b] == before.translations[b]);
     const bool joint = b >= 1 && b <= rig.joints;
     if (!joint) CHECK(after.rotations[b] == before.rotations[b]);
-    else CHECK(ik_test::rotation_within_limits(after.rotations[b], rig.skeleton.bones()[b].limits));
+    else CHECK(ik_rigs::rotation_within_limits(after.rotations[b], rig.skeleton.bones()[b].limits));
   }
 }
 
@@ -102,8 +102,8 @@ Rates reachable_targets(IkMethod method, bool escape_stalls, int cases, std::uin
   std::mt19937 random(seed);
   Rates rates;
   for (int c = 0; c < cases; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 5);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
@@ -189,7 +189,7 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
   double worst = 0.0;
   for (int c = 0; c < 20000; ++c) {
     // The solvers' random limits and limits of every kind; uniform rotations, and every tenth near gimbal lock.
-    const DofLimits limits = c % 2 ? general_limits(random) : ik_test::random_limits(random);
+    const DofLimits limits = c % 2 ? general_limits(random) : ik_rigs::random_limits(random);
     glm::quat rotation = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
     if (c % 10 == 0) {
       const float y = (c % 20 ? 90.0f : -90.0f) - 1e-3f * unit(random);
@@ -203,7 +203,7 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
     glm::quat fast = rotation;
     const bool clamped = clamp_rotation(prepare_limits(limits), fast);
     REQUIRE(clamped == (reference.rotations[0] != rotation));
-    CHECK(ik_test::rotation_within_limits(fast, limits));
+    CHECK(ik_rigs::rotation_within_limits(fast, limits));
     double difference = rotation_difference(fast, reference.rotations[0]);
     if (difference > 4e-6) {
       const std::optional<glm::quat> other = tied_answer(rotation, limits);
@@ -222,7 +222,7 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
   // Strictly within the limits nothing changes, to the bit (after normalisation); free limits change nothing at all.
   // (A rotation made from angles on a bound, a locked axis say, reads back a hair outside and is clamped onto it.)
   for (int c = 0; c < 2000; ++c) {
-    DofLimits limits = ik_test::random_limits(random);
+    DofLimits limits = ik_rigs::random_limits(random);
     glm::vec3 angles;
     for (int axis = 0; axis < 3; ++axis) {
       if (limits.min[axis] == limits.max[axis]) limits.min[axis] -= 10.0f, limits.max[axis] += 10.0f;
@@ -250,9 +250,9 @@ TEST_CASE("euler_within_limits: the triple the limits mean, within them; the rot
   int second_triple = 0;
   double worst = 0.0;
   for (int c = 0; c < 20000; ++c) {
-    const DofLimits limits = ik_test::random_wide_limits(random);
+    const DofLimits limits = ik_rigs::random_wide_limits(random);
     // In-limit rotations (every 8th exactly on a bound, y at ±90° among them): the same rotation back, inside.
-    glm::vec3 angles = ik_test::random_in_limits(random, limits);
+    glm::vec3 angles = ik_rigs::random_in_limits(random, limits);
     if (c % 8 == 0) angles[c % 3] = c % 16 ? limits.min[c % 3] : limits.max[c % 3];
     const glm::quat inside = quat_from_euler(angles);
     const glm::vec3 e = euler_within_limits(inside, limits);
@@ -295,19 +295,19 @@ TEST_CASE(
   float worst = 0.0f;
   for (int c = 0; c < 4000; ++c) {
     const std::size_t joints = 2 + static_cast<std::size_t>(c % 5);
-    const RandomChain rig = ik_test::random_chain(random, joints, false, -1, true);
+    const RandomChain rig = ik_rigs::random_chain(random, joints, false, -1, true);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     // Reachable targets, and every fourth anywhere around (often out of reach: the clamps work hardest there).
-    const glm::vec3 target = c % 4 == 3 ? ik_test::chain_root_head(rig.skeleton.bind_pose()) +
-                                              rig.length * 1.3f * ik_test::random_direction(random)
-                                        : ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = c % 4 == 3 ? ik_rigs::chain_root_head(rig.skeleton.bind_pose()) +
+                                              rig.length * 1.3f * ik_rigs::random_direction(random)
+                                        : ik_rigs::random_reachable_target(random, rig);
     Pose pose = rig.skeleton.bind_pose();
     IkSettings settings;
     settings.tolerance = 1e-4f * rig.length;
     settings.max_iterations = 100;
     IkResult result;
     REQUIRE(solve(c % 2 ? IkMethod::fabrik : IkMethod::ccd, chain, pose, target, settings, result));
-    const glm::vec3 solved = ik_test::effector_of(chain, pose.rotations, pose.translations);
+    const glm::vec3 solved = ik_rigs::effector_of(chain, pose.rotations, pose.translations);
     const std::span<const std::int32_t> bones(chain.bones);
     const Pose printed =
         parse_pose_json("{\"bones\": " + format_pose_bones_json(rig.skeleton, pose, bones) + "}", rig.skeleton);
@@ -318,7 +318,7 @@ TEST_CASE(
       CHECK(angles_within(e, limits));
       non_canonical += !within_limits(euler_from_quat(pose.rotations[b]), limits, 1e-3f);
     }
-    const float moved = glm::length(ik_test::effector_of(chain, printed.rotations, printed.translations) - solved);
+    const float moved = glm::length(ik_rigs::effector_of(chain, printed.rotations, printed.translations) - solved);
     CHECK(moved <= 2e-5f * rig.length);
     worst = std::max(worst, moved / rig.length);
     ++cases;
@@ -365,7 +365,7 @@ SwingTwistLimits random_swing_twist(std::mt19937& random) {
   float t0 = -180.0f + 360.0f * unit(random), t1 = -180.0f + 360.0f * unit(random);
   if (kind > 0.9f) t0 = -180.0f, t1 = 180.0f;
   if (kind > 0.8f && kind <= 0.85f) t1 = t0;  // locked twist
-  return make_swing_twist_limits(ik_test::random_direction(random), swing1, swing2, t0, t1);
+  return make_swing_twist_limits(ik_rigs::random_direction(random), swing1, swing2, t0, t1);
 }
 
 TEST_CASE("swing-twist limits: the split agrees with a plain reference; projection lands inside, nearest, idempotent") {
@@ -426,7 +426,7 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
   std::mt19937 random(9191);
   int reached = 0, cases = 0;
   for (int c = 0; c < 600; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 4);
     IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     for (std::size_t k = 0; k < chain.joint_count(); ++k)
       if ((c + k) % 3 != 0) {
@@ -435,7 +435,7 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
             chain, k,
             swing_twist_from_euler(rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits, bone));
       }
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     Pose pose = rig.skeleton.bind_pose();
     IkSettings settings;
     settings.tolerance = 1e-4f * rig.length;
@@ -448,7 +448,7 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
         CHECK(reference_within(chain.swing_twist[k], reference_swing_twist(chain.swing_twist[k], q), 1e-4));
       else
         CHECK(
-            ik_test::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
+            ik_rigs::rotation_within_limits(q, rig.skeleton.bones()[static_cast<std::size_t>(chain.bones[k])].limits));
     }
     CHECK(result.distance == doctest::Approx(glm::length(reference_effector(rig.skeleton, pose, rig.effector) - target))
                                  .scale(rig.length)
@@ -458,10 +458,10 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
   }
   MESSAGE("swing-twist chains: ", reached, " of ", cases, " reachable-by-Euler targets reached");
   CHECK(reached > cases / 2);
-  IkChain chain = make_chain(ik_test::random_chain(random, 3).skeleton, 1, 4);
+  IkChain chain = make_chain(ik_rigs::random_chain(random, 3).skeleton, 1, 4);
   CHECK_THROWS_AS(set_swing_twist(chain, 3, SwingTwistLimits{}), Error);
   chain.swing_twist.resize(1);
-  Pose pose = ik_test::random_chain(random, 3).skeleton.bind_pose();
+  Pose pose = ik_rigs::random_chain(random, 3).skeleton.bind_pose();
   IkResult result;
   const Status status = solve(IkMethod::ccd, chain, pose, glm::vec3(0.0f), IkSettings{}, result);
   CHECK_FALSE(status);
@@ -470,7 +470,7 @@ TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; b
 
 TEST_CASE("make_chain finds root..effector and rejects anything else") {
   std::mt19937 random(1);
-  const RandomChain rig = ik_test::random_chain(random, 3);
+  const RandomChain rig = ik_rigs::random_chain(random, 3);
   const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
   CHECK(chain.bones == std::vector<std::int32_t>{1, 2, 3, 4});
   CHECK(chain.ancestors == std::vector<std::int32_t>{0});
@@ -492,8 +492,8 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
   CHECK_THROWS_AS(make_chain(rig.skeleton, -1, rig.effector), Error);
   CHECK_THROWS_AS(make_chain(rig.skeleton, rig.root, 99), Error);
   // effector_position and chain_base agree with the skeleton module's FK.
-  const Pose pose = ik_test::random_in_limit_pose(random, rig);
-  const glm::vec3 e = ik_test::effector_of(chain, pose.rotations, pose.translations);
+  const Pose pose = ik_rigs::random_in_limit_pose(random, rig);
+  const glm::vec3 e = ik_rigs::effector_of(chain, pose.rotations, pose.translations);
   CHECK(glm::length(e - reference_effector(rig.skeleton, pose, rig.effector)) < 1e-5f * rig.length);
   std::vector<glm::mat4> world(rig.skeleton.bone_count());
   REQUIRE(world_matrices(rig.skeleton, pose, world));
@@ -515,7 +515,7 @@ TEST_CASE("make_chain finds root..effector and rejects anything else") {
 
 TEST_CASE("assign_chain rebuilds a chain in its own storage: no allocation once reserved, reasons for bad chains") {
   std::mt19937 random(2);
-  const RandomChain rig = ik_test::random_chain(random, 5);
+  const RandomChain rig = ik_rigs::random_chain(random, 5);
   IkChain chain;
   chain.bones.reserve(max_chain_bones);
   chain.ancestors.reserve(rig.skeleton.bone_count());
@@ -582,10 +582,10 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
   std::mt19937 random(99);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (int c = 0; c < 500; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5, /*free_joints=*/true);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 5, /*free_joints=*/true);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     const Pose bind = rig.skeleton.bind_pose();
-    const glm::vec3 root = ik_test::chain_root_head(bind);
+    const glm::vec3 root = ik_rigs::chain_root_head(bind);
     glm::vec3 direction(unit(random), unit(random), unit(random));
     if (glm::length(direction) < 0.1f) direction = glm::vec3(1, 0, 0);
     const glm::vec3 target = root + glm::normalize(direction) * rig.length * (1.05f + 2.0f * (unit(random) + 1.0f));
@@ -604,7 +604,7 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
     CHECK_FALSE(fabrik.reached);
     CHECK(std::abs(ccd.distance - best) <= slack);
     CHECK(std::abs(fabrik.distance - best) <= slack);
-    CHECK(std::abs(glm::length(ik_test::effector_of(chain, ccd_pose.rotations, ccd_pose.translations) - target) -
+    CHECK(std::abs(glm::length(ik_rigs::effector_of(chain, ccd_pose.rotations, ccd_pose.translations) - target) -
                    best) <= slack);
   }
 }
@@ -612,10 +612,10 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
 TEST_CASE("with limits, an unreachable target leaves the pose in limits and no farther than the start") {
   std::mt19937 random(5);
   for (int c = 0; c < 300; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 5);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     const Pose bind = rig.skeleton.bind_pose();
-    const glm::vec3 root = ik_test::chain_root_head(bind);
+    const glm::vec3 root = ik_rigs::chain_root_head(bind);
     const glm::vec3 target = root + glm::vec3(0.6f, -0.8f, 0.0f) * (3.0f * rig.length);
     const float start = glm::length(reference_effector(rig.skeleton, bind, rig.effector) - target);
     for (int which = 0; which < 2; ++which) {
@@ -633,7 +633,7 @@ TEST_CASE("with limits, an unreachable target leaves the pose in limits and no f
 
 TEST_CASE("a starting pose outside the limits is clamped; a solve allocates nothing") {
   std::mt19937 random(11);
-  const RandomChain rig = ik_test::random_chain(random, 4);
+  const RandomChain rig = ik_rigs::random_chain(random, 4);
   Pose pose = rig.skeleton.bind_pose();
   for (std::size_t b = 1; b <= rig.joints; ++b) pose.rotations[b] = glm::angleAxis(3.0f, glm::vec3(0.6f, 0.0f, 0.8f));
   const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
@@ -643,18 +643,18 @@ TEST_CASE("a starting pose outside the limits is clamped; a solve allocates noth
   job.chain = &chain;
   job.rotations = pose.rotations;
   job.translations = pose.translations;
-  job.target = ik_test::random_reachable_target(random, rig);
+  job.target = ik_rigs::random_reachable_target(random, rig);
   job.scratch = scratch;
   job.result = &result;
   CHECK(job.scratch_size() == scratch.size());
-  const RandomChain limb = ik_test::random_chain(random, 2);
+  const RandomChain limb = ik_rigs::random_chain(random, 2);
   const IkChain limb_chain = make_chain(limb.skeleton, limb.root, limb.effector);
   Pose limb_pose = limb.skeleton.bind_pose();
   TwoBoneIkJob two_bone;
   two_bone.chain = &limb_chain;
   two_bone.rotations = limb_pose.rotations;
   two_bone.translations = limb_pose.translations;
-  two_bone.target = ik_test::random_reachable_target(random, limb);
+  two_bone.target = ik_rigs::random_reachable_target(random, limb);
   const long allocations_before = allocations.load();
   REQUIRE(chain_base(chain, pose.rotations, pose.translations, job.base));
   REQUIRE(job.run());
@@ -664,12 +664,12 @@ TEST_CASE("a starting pose outside the limits is clamped; a solve allocates noth
   REQUIRE(two_bone.run());
   CHECK(allocations.load() == allocations_before);
   for (std::size_t b = 1; b <= rig.joints; ++b)
-    CHECK(ik_test::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
+    CHECK(ik_rigs::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
 }
 
 TEST_CASE("IK jobs: count() is 1, run(begin, end) solves for [0, 1), the same as run(); equal inputs, equal outputs") {
   std::mt19937 random(12);
-  const RandomChain rig = ik_test::random_chain(random, 5);
+  const RandomChain rig = ik_rigs::random_chain(random, 5);
   const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
   std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
   for (const IkMethod method : {IkMethod::ccd, IkMethod::fabrik}) {
@@ -678,7 +678,7 @@ TEST_CASE("IK jobs: count() is 1, run(begin, end) solves for [0, 1), the same as
     IkJob job;
     job.method = method;
     job.chain = &chain;
-    job.target = ik_test::random_reachable_target(random, rig);
+    job.target = ik_rigs::random_reachable_target(random, rig);
     job.settings.tolerance = 1e-5f * rig.length;
     job.scratch = scratch;
     REQUIRE(chain_base(chain, first.rotations, first.translations, job.base));
@@ -703,10 +703,10 @@ TEST_CASE("random_state carries the stall escape's generator from solve to solve
   std::mt19937 random(13);
   int kicked = 0;
   for (int c = 0; c < 200 && kicked < 5; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 4);
+    const RandomChain rig = ik_rigs::random_chain(random, 4);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     std::vector<std::byte> scratch(IkJob::scratch_size(chain.joint_count()));
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     Pose pose = rig.skeleton.bind_pose(), again = pose;
     std::uint32_t state = ik_random_seed;
     IkJob job;
@@ -766,11 +766,11 @@ TEST_CASE("a pole swivels CCD and FABRIK chains toward it, keeping the effector;
   int faced = 0, cases = 0, kept = 0;
   for (int c = 0; c < 400; ++c) {
     const bool free_joints = c % 2 == 0;
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 4, free_joints);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 4, free_joints);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     const glm::vec3 pole =
-        ik_test::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_test::random_direction(random);
+        ik_rigs::chain_root_head(rig.skeleton.bind_pose()) + 3.0f * ik_rigs::random_direction(random);
     IkSettings settings;
     settings.tolerance = 1e-4f * rig.length;
     settings.max_iterations = 200;
@@ -802,14 +802,14 @@ TEST_CASE("a pole swivels CCD and FABRIK chains toward it, keeping the effector;
 TEST_CASE("weight blends the solve with the input pose: 0 leaves it bit-identical, 1 is the solve") {
   std::mt19937 random(616);
   for (int c = 0; c < 300; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2 + c % 5);
+    const RandomChain rig = ik_rigs::random_chain(random, 2 + c % 5);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     IkSettings settings;
     settings.tolerance = 1e-4f * rig.length;
     const IkMethod method = c % 2 ? IkMethod::ccd : IkMethod::fabrik;
     // Start out of the limits too: weight 0 must not even clamp.
-    Pose start = ik_test::random_in_limit_pose(random, rig);
+    Pose start = ik_rigs::random_in_limit_pose(random, rig);
     if (c % 3 == 0) start.rotations[1] = glm::normalize(glm::quat(0.3f, 0.9f, -0.2f, 0.4f));
     Pose zero = start, full = start, half = start, plain = start;
     IkResult zero_result, full_result, half_result, plain_result;
@@ -843,8 +843,8 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
   std::mt19937 random(3);
   int reached = 0;
   for (int c = 0; c < 200; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 3, /*free_joints=*/true);
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const RandomChain rig = ik_rigs::random_chain(random, 3, /*free_joints=*/true);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
     IkSettings settings;
@@ -872,7 +872,7 @@ TEST_CASE("max_step_degrees caps each CCD update and still converges") {
 TEST_CASE(
     "non-finite targets, poses and bases, overflowing chains, bad settings and scratch are refused, writing nothing") {
   std::mt19937 random(4);
-  const RandomChain rig = ik_test::random_chain(random, 2);
+  const RandomChain rig = ik_rigs::random_chain(random, 2);
   const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
   Pose pose = rig.skeleton.bind_pose();
   const Pose before = pose;
@@ -1007,11 +1007,11 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
   std::mt19937 random(21);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (int c = 0; c < 2000; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2, /*free_joints=*/true);
+    const RandomChain rig = ik_rigs::random_chain(random, 2, /*free_joints=*/true);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
-    Pose pose = ik_test::random_in_limit_pose(random, rig);
+    Pose pose = ik_rigs::random_in_limit_pose(random, rig);
     const Pose before = pose;
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     const glm::vec3 pole(unit(random), unit(random), unit(random));
     IkResult result;
     REQUIRE(solve_two_bone(chain, pose, target, pole, 1e-5f * rig.length, result));
@@ -1038,7 +1038,7 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     REQUIRE(solve_two_bone(chain, far_pose, far_target, pole, 1e-5f * rig.length, result));
     CHECK_FALSE(result.reached);
     CHECK(std::abs(result.distance - 0.5f * rig.length) <= 1e-5f * rig.length);
-    CHECK(glm::length(ik_test::effector_of(chain, far_pose.rotations, far_pose.translations) -
+    CHECK(glm::length(ik_rigs::effector_of(chain, far_pose.rotations, far_pose.translations) -
                       (root + glm::normalize(far_target - root) * rig.length)) <= 2e-5f * rig.length);
   }
 }
@@ -1046,11 +1046,11 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
 TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole on the line, straight start") {
   std::mt19937 random(8);
   SUBCASE("zero-length upper bone: refused, the pose untouched") {
-    const RandomChain rig = ik_test::random_chain(random, 2, true, /*zero_bone=*/1);
+    const RandomChain rig = ik_rigs::random_chain(random, 2, true, /*zero_bone=*/1);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
-    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const glm::vec3 root = ik_rigs::chain_root_head(pose);
     IkResult result;
     const Status status = solve_two_bone(chain, pose, root + glm::vec3(0, 0, 1), glm::vec3(1, 0, 0), 1e-4f, result);
     CHECK_FALSE(status);
@@ -1058,27 +1058,27 @@ TEST_CASE("two-bone degenerate limbs: zero-length bone, target on the root, pole
     CHECK(pose.rotations == before.rotations);
   }
   SUBCASE("target on the root: folded as far as the bones allow") {
-    const RandomChain rig = ik_test::random_chain(random, 2, true);
+    const RandomChain rig = ik_rigs::random_chain(random, 2, true);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
-    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const glm::vec3 root = ik_rigs::chain_root_head(pose);
     const float a = glm::length(pose.translations[2]), b = glm::length(pose.translations[3]);
     IkResult result;
     REQUIRE(solve_two_bone(chain, pose, root, glm::vec3(0, 1, 0), 1e-4f, result));
     CHECK(result.distance == doctest::Approx(std::abs(a - b)).scale(a + b).epsilon(1e-4));
-    CHECK(ik_test::finite_pose(pose));
+    CHECK(ik_rigs::finite_pose(pose));
   }
   SUBCASE("pole along root→target or zero keeps the bend plane; a straight start bends toward the pole") {
-    const RandomChain rig = ik_test::random_chain(random, 2, true);
+    const RandomChain rig = ik_rigs::random_chain(random, 2, true);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
-    const glm::vec3 root = ik_test::chain_root_head(pose);
+    const glm::vec3 root = ik_rigs::chain_root_head(pose);
     const glm::vec3 target = root + glm::vec3(0.3f, 0.4f, 0.2f) * rig.length;
     IkResult result;
     for (const glm::vec3 pole : {target - root, glm::vec3(0.0f), root - target}) {
       REQUIRE(solve_two_bone(chain, pose, target, pole, 1e-5f * rig.length, result));
       CHECK(result.reached);
-      CHECK(ik_test::finite_pose(pose));
+      CHECK(ik_rigs::finite_pose(pose));
     }
     // Straight limb (every joint at identity, bones along one line) and a pole: bends toward it.
     std::vector<Bone> bones(3);
@@ -1107,11 +1107,11 @@ TEST_CASE("two-bone with limits never leaves them; exact whenever the closed for
   std::mt19937 random(31);
   int exact = 0;
   for (int c = 0; c < 2000; ++c) {
-    const RandomChain rig = ik_test::random_chain(random, 2);
+    const RandomChain rig = ik_rigs::random_chain(random, 2);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     Pose pose = rig.skeleton.bind_pose();
     const Pose before = pose;
-    const glm::vec3 target = ik_test::random_reachable_target(random, rig);
+    const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
     IkResult result;
     REQUIRE(solve_two_bone(chain, pose, target, glm::vec3(0, 0, 1), 1e-4f * rig.length, result));
     check_pose(rig, before, pose);

@@ -16,7 +16,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
-#include "runtime/ik_test_rig.hpp"
+#include "ik_random_rigs.hpp"  // fixtures/: random rigs (the IK benchmarks use them too)
 
 #include "allocation_counter.hpp"  // allocations: a solve allocates nothing
 
@@ -466,22 +466,22 @@ TEST_CASE("two-bone with limits, soften, stretch and weight never leaves the lim
   std::mt19937 random(31);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   for (int c = 0; c < 1000; ++c) {
-    const ik_test::RandomChain rig = ik_test::random_chain(random, 2);
+    const ik_rigs::RandomChain rig = ik_rigs::random_chain(random, 2);
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
-    Pose pose = ik_test::random_in_limit_pose(random, rig);
+    Pose pose = ik_rigs::random_in_limit_pose(random, rig);
     TwoBoneIkJob job;
     job.chain = &chain;
     REQUIRE(chain_base(chain, pose.rotations, pose.translations, job.base));
     job.rotations = pose.rotations;
     job.translations = pose.translations;
-    job.target = ik_test::random_reachable_target(random, rig) * (0.5f + unit(random));
-    job.pole = glm::vec3(ik_test::random_direction(random));
+    job.target = ik_rigs::random_reachable_target(random, rig) * (0.5f + unit(random));
+    job.pole = glm::vec3(ik_rigs::random_direction(random));
     job.soften = unit(random);
     job.weight = unit(random);
     job.max_stretch = 1.0f + 2.0f * unit(random);
     REQUIRE(job.run());
     for (std::size_t b = 1; b <= 2; ++b)
-      CHECK(ik_test::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
+      CHECK(ik_rigs::rotation_within_limits(pose.rotations[b], rig.skeleton.bones()[b].limits));
   }
 }
 

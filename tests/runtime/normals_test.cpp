@@ -25,7 +25,7 @@
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/runtime/parallel.hpp"
-#include "runtime/normals_reference.hpp"
+#include "normals_reference.hpp"  // fixtures/: the plain reference (normals_bench times it too)
 
 namespace {
 

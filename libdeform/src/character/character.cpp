@@ -7,7 +7,7 @@
 
 #include "deform/offline/hierarchy_binding.hpp"
 #include "deform/runtime/prefetch.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 namespace deform {
 namespace {

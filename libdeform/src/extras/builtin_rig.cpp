@@ -4,7 +4,6 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/rig.hpp"
-#include "deform/io/rig_json.hpp"
 #include "deform/extras/builtin.hpp"
 namespace deform {
 

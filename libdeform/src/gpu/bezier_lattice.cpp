@@ -22,8 +22,8 @@ static_assert(sizeof(GLuint) == sizeof(unsigned int), "GL object names are held 
 
 constexpr GLuint group_size = 64;
 
-// The CPU kernel's arithmetic (libdeform/src/runtime/lattice_kernel.inl) in GLSL: Bernstein bases by de Casteljau's
-// triangle, derivatives from the degree n − 1 basis, the contraction over u inside v inside w, and
+// The CPU kernel's arithmetic (libdeform/src/runtime/simd/lattice_kernel.inl) in GLSL: Bernstein bases by de
+// Casteljau's triangle, derivatives from the degree n − 1 basis, the contraction over u inside v inside w, and
 // n' = cofactor(J)·(G·n) normalised, the input normal kept where the Jacobian is degenerate. upload() prepends the
 // version and the degree as a constant, so each lattice gets its own program with loops of known length (unrolled,
 // arrays in registers: several times faster on llvmpipe than a runtime degree).

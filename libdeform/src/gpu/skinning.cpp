@@ -1,5 +1,5 @@
-// GpuSkinning (deform/gpu/skinning.hpp): SkinningJob's portable kernels (libdeform/src/runtime/skinning_portable.cpp)
-// as an OpenGL 4.3 compute shader.
+// GpuSkinning (deform/gpu/skinning.hpp): SkinningJob's portable kernels
+// (libdeform/src/runtime/simd/skinning_portable.cpp) as an OpenGL 4.3 compute shader.
 #include <epoxy/gl.h>  // first: epoxy must precede every other GL header
 
 #include "deform/gpu/skinning.hpp"

@@ -15,7 +15,7 @@
 #include "deform/io/referenced_file.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/runtime/error.hpp"
-#include "io/utf8_path.hpp"
+#include "utf8_path.hpp"
 
 namespace deform {
 namespace {

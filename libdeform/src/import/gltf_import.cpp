@@ -46,9 +46,9 @@ namespace tinygltf = deform_gltf_import::tinygltf;
 #include "deform/io/atomic_file.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
-#include "import/import_common.hpp"
-#include "io/utf8_path.hpp"
-#include "runtime/finite.hpp"
+#include "import_common.hpp"
+#include "utf8_path.hpp"
+#include "finite.hpp"
 namespace deform::import_detail {
 namespace {
 

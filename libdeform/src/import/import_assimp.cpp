@@ -21,9 +21,9 @@
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
-#include "import/import_common.hpp"
-#include "io/utf8_path.hpp"
-#include "runtime/finite.hpp"
+#include "import_common.hpp"
+#include "utf8_path.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

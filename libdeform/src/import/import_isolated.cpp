@@ -31,7 +31,7 @@
 
 #include "deform/import/import.hpp"
 #include "deform/runtime/error.hpp"
-#include "io/utf8_path.hpp"
+#include "utf8_path.hpp"
 #include "wire.hpp"
 
 #ifndef _WIN32

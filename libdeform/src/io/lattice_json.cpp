@@ -12,7 +12,7 @@
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/io/lattice_json.hpp"
 #include "json_reader.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform {
 
 LatticeDocument parse_lattice_json(std::string_view text, std::size_t point_count, const std::string& name) {

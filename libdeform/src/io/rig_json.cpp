@@ -10,7 +10,6 @@
 #include "deform/offline/rig.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/io/text.hpp"
-#include "deform/extras/builtin.hpp"
 #include "json_reader.hpp"
 namespace deform {
 namespace {

@@ -11,7 +11,7 @@
 #include "deform/runtime/skeleton.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/io/pose_json.hpp"
-#include "runtime/skeleton_rules.hpp"
+#include "skeleton_rules.hpp"
 
 namespace deform {
 namespace {

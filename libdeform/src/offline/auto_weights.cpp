@@ -7,7 +7,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/weights.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

@@ -6,7 +6,6 @@
 #include <string>
 #include <vector>
 
-#include "deform/io/rig_json.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/error.hpp"
 namespace deform {

@@ -16,8 +16,8 @@
 #include "deform/offline/picking.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
-#include "offline/bone_shapes.hpp"
-#include "runtime/finite.hpp"
+#include "bone_shapes.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

@@ -2,18 +2,31 @@
 // construction of bindings.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
 #include "deform/offline/lattice_binding.hpp"
-#include "runtime/finite.hpp"
-#include "runtime/lattice_kernel.hpp"
+#include "finite.hpp"
+#include "lattice_cells.hpp"
 
 namespace deform {
 
 namespace detail {
+namespace {
 
+// A point chosen for a lattice: its index, the first control point of its cell (0 for Bézier) and its parameters
+// within the cell.
+struct BoundVertex {
+  std::uint32_t vertex;
+  std::uint32_t first_point;
+  glm::vec3 param;
+};
+
+// The candidates (all points when `all`) whose (u, v, w) under `to_lattice` lies in [0, 1]³, with those parameters
+// in `param`. Throws deform::Error for a candidate out of range or a non-finite position.
 std::vector<BoundVertex> collect_inside(const LatticeFrame& frame, std::span<const glm::vec3> positions,
                                         std::span<const std::uint32_t> candidates, bool all,
                                         const glm::mat4& to_lattice) {
@@ -35,6 +48,8 @@ std::vector<BoundVertex> collect_inside(const LatticeFrame& frame, std::span<con
   return list;
 }
 
+// Groups the vertices into blocks (stable by first_point) and fills a binding.
+// `parameter_scale` = d(cell parameter)/d(u, v, w) per axis (1 for Bézier, the cell counts for a B-spline).
 LatticeBinding make_binding(LatticeKind kind, glm::ivec3 point_counts, const LatticeFrame& frame,
                             glm::vec3 parameter_scale, const glm::mat4& to_lattice, std::vector<BoundVertex> list) {
   std::stable_sort(list.begin(), list.end(),
@@ -67,6 +82,7 @@ LatticeBinding make_binding(LatticeKind kind, glm::ivec3 point_counts, const Lat
   return binding;
 }
 
+}  // namespace
 }  // namespace detail
 
 std::vector<std::uint32_t> select_by_weight(const SkinWeights& weights, std::uint16_t bone, float threshold) {

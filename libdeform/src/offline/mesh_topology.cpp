@@ -7,7 +7,6 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
-#include "deform/io/obj.hpp"
 #include "deform/offline/topology.hpp"
 namespace deform {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/offline/picking.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "deform/runtime/error.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

@@ -6,7 +6,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
-#include "lattice_kernel.hpp"
+#include "simd/lattice_kernel.hpp"
 
 namespace deform {
 namespace detail {

@@ -9,7 +9,7 @@
 
 #include "deform/runtime/parallel.hpp"
 #include "deform/runtime/portable.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>

@@ -7,7 +7,7 @@
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/prefetch.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform {
 namespace {
 

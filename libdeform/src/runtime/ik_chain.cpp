@@ -9,7 +9,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "ik_chain.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 namespace deform {
 

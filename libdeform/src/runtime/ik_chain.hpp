@@ -6,7 +6,7 @@
 #include <span>
 
 #include "deform/runtime/ik.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 namespace deform::detail {
 
 using Frame = RigidTransform;

@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "ik_chain.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 namespace deform {
 namespace {

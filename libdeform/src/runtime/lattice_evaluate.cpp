@@ -3,7 +3,8 @@
 #include <cstdint>
 
 #include "deform/runtime/lattice.hpp"
-#include "lattice_kernel.hpp"
+#include "finite.hpp"
+#include "simd/lattice_kernel.hpp"
 
 namespace deform {
 namespace {

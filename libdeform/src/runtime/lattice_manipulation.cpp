@@ -2,7 +2,7 @@
 // embedded point to a target. With the basis row B (B_ijk at the point), the least-norm solution of B·ΔP = Δq is the
 // pseudo-inverse B⁺ = Bᵀ / (B·Bᵀ), i.e. ΔP_ijk = B_ijk / Σ B² · Δq; the point then lands exactly, as Σ B·ΔP = Δq.
 #include "deform/runtime/lattice.hpp"
-#include "lattice_kernel.hpp"
+#include "simd/lattice_kernel.hpp"
 
 namespace deform {
 

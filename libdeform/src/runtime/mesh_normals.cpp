@@ -10,7 +10,7 @@
 
 #include "deform/runtime/mesh.hpp"
 #include "deform/runtime/normals.hpp"
-#include "mesh_normals_kernel.hpp"
+#include "simd/mesh_normals_kernel.hpp"
 
 namespace deform {
 namespace {

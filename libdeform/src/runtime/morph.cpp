@@ -2,7 +2,7 @@
 #include "deform/runtime/morph.hpp"
 #include <algorithm>
 #include <cmath>
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 namespace deform {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "deform/runtime/error.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 #include "skeleton_rules.hpp"
 
 namespace deform {

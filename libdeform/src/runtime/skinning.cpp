@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "skinning_kernels.hpp"
+#include "simd/skinning_kernels.hpp"
 
 namespace deform {
 namespace {

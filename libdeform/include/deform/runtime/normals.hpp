@@ -7,8 +7,9 @@
 // angle times the triangle's unit normal, then (0, 0, 0) where nothing was added or the contributions cancel
 // (|sum| <= 1e-5), else the sum normalised. A triangle adds nothing when its cross product is zero (repeated or
 // exactly collinear points) or NaN. The normals are always finite: a point of a triangle with an infinite coordinate
-// may get (0, 0, 0). Corner angles come from a polynomial atan2 (src/mesh_normals_kernel.hpp) within 5e-7 rad of the
-// exact angle; a triangle's third corner, π minus the other two, within 1e-6. The two agree to float rounding.
+// may get (0, 0, 0). Corner angles come from a polynomial atan2 (src/runtime/simd/mesh_normals_kernel.hpp) within
+// 5e-7 rad of the exact angle; a triangle's third corner, π minus the other two, within 1e-6. The two agree to float
+// rounding.
 #include <cstddef>
 #include <cstdint>
 #include <span>

@@ -1,11 +1,10 @@
 #pragma once
 // Internal: the arguments of the lattice evaluation kernel and its per-instruction-set entry points.
-#include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <span>
 
 #include "deform/runtime/lattice.hpp"
+#include "lattice_cells.hpp"
 namespace deform::detail {
 
 // A LatticeEvaluateJob that passed its checks, over blocks [begin_block, end_block) of the binding; normals_in and
@@ -38,49 +37,10 @@ void evaluate_lattice_neon(const KernelArgs& args);  // lattice_evaluate_neon.cp
 void evaluate_lattice_simd128(const KernelArgs& args);  // lattice_evaluate_simd128.cpp (WebAssembly builds)
 #endif
 
-}  // namespace deform::detail
-
-#include <vector>
-#include "runtime/finite.hpp"
-
-namespace deform::detail {
-
-// A point chosen for a lattice: its index, the first control point of its cell (0 for Bézier) and its parameters
-// within the cell.
-struct BoundVertex {
-  std::uint32_t vertex;
-  std::uint32_t first_point;
-  glm::vec3 param;
-};
-
-// The candidates (all points when `all`) whose (u, v, w) under `to_lattice` lies in [0, 1]³, with those parameters
-// in `param`. Throws deform::Error for a candidate out of range or a non-finite position.
-std::vector<BoundVertex> collect_inside(const LatticeFrame& frame, std::span<const glm::vec3> positions,
-                                        std::span<const std::uint32_t> candidates, bool all,
-                                        const glm::mat4& to_lattice);
-
-// Groups the vertices into blocks (stable by first_point) and fills a binding.
-// `parameter_scale` = d(cell parameter)/d(u, v, w) per axis (1 for Bézier, the cell counts for a B-spline).
-LatticeBinding make_binding(LatticeKind kind, glm::ivec3 point_counts, const LatticeFrame& frame,
-                            glm::vec3 parameter_scale, const glm::mat4& to_lattice, std::vector<BoundVertex> list);
-
 // Scalar bases for one point. bernstein: B_0..n,n(t) in b[0..n] (de Casteljau's triangle), the degree n − 1 basis in
 // `lower` when not null. bspline_basis: the 4 uniform cubic B-spline weights of a segment at t and (when `d` is not
-// null) their derivatives in t. cell_of: the cell of x ∈ [0, 1] among `cells` (clamped) and t within it.
+// null) their derivatives in t.
 void bernstein(int n, float t, float* b, float* lower) noexcept;
 void bspline_basis(float t, float* b, float* d) noexcept;
-// (The last cell owns x = 1; parameters outside [0, 1] stay on the border cells' polynomials.)
-inline int cell_of(float x, int cells, float& t) noexcept {
-  const float s = x * static_cast<float>(cells);
-  const int c = std::clamp(static_cast<int>(std::floor(s)), 0, cells - 1);
-  t = s - static_cast<float>(c);
-  return c;
-}
-
-// Cofactor matrix det(A)·A^-T (maps normals through A up to a positive factor when det A > 0). The rows of det(A)·A⁻¹
-// are the cross products of A's columns, so they are the columns of det(A)·A^-T.
-inline glm::mat3 cofactor(const glm::mat3& a) noexcept {
-  return glm::mat3(glm::cross(a[1], a[2]), glm::cross(a[2], a[0]), glm::cross(a[0], a[1]));
-}
 
 }  // namespace deform::detail

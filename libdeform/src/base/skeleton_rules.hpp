@@ -1,6 +1,8 @@
 #pragma once
-// Private to libdeform: the hierarchy rules of docs/formats.md, shared by the Skeleton constructor (which
-// names the bone) and the .sk reader (which also names the byte offset of the offending field).
+// Base (private to libdeform, not installed; docs/architecture.md, "Walls"): the hierarchy rules of docs/formats.md,
+// shared by the Skeleton constructor (runtime, which names the bone) and the .sk reader (io, which also names the byte
+// offset of the offending field). find_bone_problem is defined in skeleton.cpp and exported by deform::runtime, but
+// is not in its public headers.
 #include <cstdint>
 #include <optional>
 #include <span>

@@ -1,5 +1,6 @@
 #pragma once
-// Paths between the API's UTF-8 strings and std::filesystem (private to the library).
+// Base (private to libdeform, not installed; docs/architecture.md, "Walls"): paths between the API's UTF-8 strings and
+// std::filesystem, for the layers that touch files (io, import; never runtime).
 // Every path libdeform takes or returns is UTF-8. std::filesystem::path(std::string), path::string() and the file
 // streams' std::string constructors read and write the bytes in the system's narrow encoding: on POSIX that is the
 // bytes themselves, on Windows the ANSI code page, which garbles (or refuses) any name outside ASCII. Every place

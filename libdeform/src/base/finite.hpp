@@ -1,6 +1,6 @@
 #pragma once
-// Private to libdeform (src/ is on every layer's private include path; not installed): whether a value's components
-// are all finite, the check every layer makes on positions, rotations and transforms it is given. Header-only, so it
+// Base (private to libdeform, not installed; docs/architecture.md, "Walls"): whether a value's components are all
+// finite, the check every layer makes on positions, rotations and transforms it is given. Header-only, so it
 // inlines into per-frame code; O(components), no allocation.
 #include <cmath>
 #include <glm/glm.hpp>
