@@ -32,8 +32,8 @@ Bone bone(const char* name, std::int32_t parent, glm::vec3 translation) {
 
 // spine (root) with a head and two arms (upper + hand) on either side of x = 0.
 Skeleton symmetric_skeleton() {
-  std::vector<Bone> bones = {bone("spine", -1, {0, 0, 0}),      bone("head", 0, {0, 1, 0}),
-                             bone("arm.L", 0, {0.5f, 0.8f, 0}), bone("hand.L", 2, {0.5f, 0, 0}),
+  std::vector<Bone> bones = {bone("spine", -1, {0, 0, 0}),       bone("head", 0, {0, 1, 0}),
+                             bone("arm.L", 0, {0.5f, 0.8f, 0}),  bone("hand.L", 2, {0.5f, 0, 0}),
                              bone("arm.R", 0, {-0.5f, 0.8f, 0}), bone("hand.R", 4, {-0.5f, 0, 0})};
   for (std::size_t i = 1; i < bones.size(); ++i)
     bones[static_cast<std::size_t>(bones[i].parent)].children.push_back(static_cast<std::int32_t>(i));
@@ -354,8 +354,8 @@ TEST_CASE("mirror: flip twice gives the input back; a left-only weight appears o
   SkinWeights painted;
   for (std::size_t p = 0; p < mesh.point_count(); ++p) {
     const float x = mesh.positions[p].x;
-    const std::vector<std::uint16_t> bones = x > 0.0f ? std::vector<std::uint16_t>{3, 2}
-                                                      : std::vector<std::uint16_t>{0};
+    const std::vector<std::uint16_t> bones =
+        x > 0.0f ? std::vector<std::uint16_t>{3, 2} : std::vector<std::uint16_t>{0};
     const std::vector<float> values = x > 0.0f ? std::vector<float>{x, 1.0f - x + 0.01f} : std::vector<float>{1.0f};
     deform::append_influences(painted, bones, values);
   }

@@ -46,8 +46,8 @@ constexpr const char* usage =
 
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
-                  {"--skeleton", "--weights", "--out", "--mirror", "--smooth", "--prune", "--limit", "--axis", "--plane",
-                   "--tolerance", "--pattern", "--smooth-factor", "--allow-outside"},
+                  {"--skeleton", "--weights", "--out", "--mirror", "--smooth", "--prune", "--limit", "--axis",
+                   "--plane", "--tolerance", "--pattern", "--smooth-factor", "--allow-outside"},
                   {"--builtin", "--normalize"});
   const std::string out = args.required("--out");
 

@@ -590,10 +590,9 @@ MirrorWeightsResult mirror_weights(const SkinWeights& weights, const Mesh& mesh,
       throw Error::invalid_argument("skeleton", "has no left/right bone pair to find the mirror axis by: give it");
     axis = spread.x >= spread.y && spread.x >= spread.z ? 0 : spread.y >= spread.z ? 1 : 2;
   }
-  const float plane = options.plane ? *options.plane
-                      : result.bone_pairs > 0
-                          ? static_cast<float>(middle_sum[axis] / double(result.bone_pairs))
-                          : 0.0f;
+  const float plane = options.plane           ? *options.plane
+                      : result.bone_pairs > 0 ? static_cast<float>(middle_sum[axis] / double(result.bone_pairs))
+                                              : 0.0f;
   result.axis = axis;
   result.plane = plane;
 

@@ -77,7 +77,8 @@ struct SmoothWeightsOptions {
 // rigger sees as hard seams (the pass is (1 − f)·I + f·D⁻¹A, whose eigenvalues lie in [1 − 2f, 1]). Throws
 // deform::Error (kind argument) for options out of range, weights not one per point, or a triangle index out of
 // range. O(iterations × (edges + points) × influences).
-DEFORM_OFFLINE_API void smooth_weights(SkinWeights& weights, const Mesh& mesh, const SmoothWeightsOptions& options = {});
+DEFORM_OFFLINE_API void smooth_weights(SkinWeights& weights, const Mesh& mesh,
+                                       const SmoothWeightsOptions& options = {});
 
 // The energy smooth_weights lowers: Σ over the distinct edges {a, b} of the mesh's triangles (points welded by
 // exact position as there, so an edge counts once) and over the bones of (w_a(bone) − w_b(bone))². O(edges ×
@@ -105,20 +106,20 @@ enum class MirrorMode {
 
 struct MirrorWeightsOptions {
   MirrorMode mode = MirrorMode::flip;
-  int axis = -1;                // 0, 1, 2 = x, y, z; -1: the axis along which the bone pairs lie farthest apart
-  std::optional<float> plane;   // the symmetry plane's coordinate on `axis`; default: the mean of the bone pairs'
-                                // midpoints there, 0 when the skeleton has no pair
-  float tolerance = -1.0f;      // > 0: a point's mirror lies this close to its reflection; < 0: 0.1% of the points'
-                                // bounding-box diagonal (a point's partner on the plane is itself)
+  int axis = -1;               // 0, 1, 2 = x, y, z; -1: the axis along which the bone pairs lie farthest apart
+  std::optional<float> plane;  // the symmetry plane's coordinate on `axis`; default: the mean of the bone pairs'
+                               // midpoints there, 0 when the skeleton has no pair
+  float tolerance = -1.0f;     // > 0: a point's mirror lies this close to its reflection; < 0: 0.1% of the points'
+                               // bounding-box diagonal (a point's partner on the plane is itself)
   std::vector<std::pair<std::string, std::string>> name_pairs;  // mirrored_bone_name's `pairs`
 };
 
 struct MirrorWeightsResult {
   SkinWeights weights;
-  int axis = 0;               // the axis used
-  float plane = 0.0f;         // the plane used
-  std::size_t bone_pairs = 0; // bones with a partner other than themselves, each pair counted once
-  std::size_t points = 0;     // points that took their mirror's weights
+  int axis = 0;                // the axis used
+  float plane = 0.0f;          // the plane used
+  std::size_t bone_pairs = 0;  // bones with a partner other than themselves, each pair counted once
+  std::size_t points = 0;      // points that took their mirror's weights
 };
 
 // Mirrors the weights left <-> right. A point's mirror is the point nearest to its reflection across the plane
@@ -129,6 +130,7 @@ struct MirrorWeightsResult {
 // weight on such a mirror point but has a side and no partner (element "bone 'NAME' (id N)", naming the name
 // looked for) or a partner name that several bones share. O(points × influences + bones), a sort of the points.
 DEFORM_OFFLINE_API MirrorWeightsResult mirror_weights(const SkinWeights& weights, const Mesh& mesh,
-                                                      const Skeleton& skeleton, const MirrorWeightsOptions& options = {});
+                                                      const Skeleton& skeleton,
+                                                      const MirrorWeightsOptions& options = {});
 
 }  // namespace deform
