@@ -442,3 +442,23 @@ TEST_CASE("heat weights' smoothing option: sums stay 1, the gradient energy shri
   CHECK_THROWS_WITH_AS(deform::compute_heat_weights(model.mesh, model.skeleton, o),
                        doctest::Contains("smoothing_iterations"), deform::Error);
 }
+
+TEST_CASE("weight tools refuse weights that are negative, not finite or inconsistent") {
+  for (float bad : {-0.5f, NAN, INFINITY}) {
+    SkinWeights w;
+    const std::vector<std::uint16_t> b = {0, 1};
+    const std::vector<float> v = {0.5f, 0.5f};
+    deform::append_influences(w, b, v);
+    deform::append_influences(w, b, v);
+    w.weights[1][1] = bad;
+    CHECK_THROWS_WITH_AS(deform::normalize_weights(w), doctest::Contains("point 1: weight"), deform::Error);
+    CHECK_THROWS_AS(deform::prune_weights(w, 0.1f), deform::Error);
+    CHECK_THROWS_AS(deform::limit_influences(w, 1), deform::Error);
+  }
+  SkinWeights w;
+  const std::vector<std::uint16_t> b = {0};
+  const std::vector<float> v = {1.0f};
+  deform::append_influences(w, b, v);
+  w.weights.push_back(glm::vec4(1, 0, 0, 0));  // a weight slot without its bone slot
+  CHECK_THROWS_WITH_AS(deform::normalize_weights(w), doctest::Contains("different number"), deform::Error);
+}

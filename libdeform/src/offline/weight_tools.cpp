@@ -127,7 +127,33 @@ struct Rows {
   std::size_t end(std::size_t p) const { return offsets[p + 1]; }
 };
 
+// Throws deform::Error (kind argument) for weights whose arrays disagree or hold a negative or non-finite weight.
+void check_weights(const SkinWeights& w) {
+  auto fail = [](const std::string& element, const std::string& why) { throw Error::invalid_argument(element, why); };
+  if (w.weights.size() != w.bones.size()) fail("weights", "hold a different number of bone and weight slots");
+  if (w.extra_bones.size() != w.extra_weights.size()) fail("weights", "extras: bones and weights differ in count");
+  if (!w.extra_points.empty() || !w.extra_offsets.empty()) {
+    if (w.extra_offsets.size() != w.extra_points.size() + 1 || w.extra_offsets.front() != 0 ||
+        w.extra_offsets.back() != w.extra_bones.size())
+      fail("weights", "extras: offsets do not match the points and influences");
+    for (std::size_t j = 0; j < w.extra_points.size(); ++j)
+      if (w.extra_points[j] >= w.size() || (j > 0 && w.extra_points[j] <= w.extra_points[j - 1]) ||
+          w.extra_offsets[j + 1] < w.extra_offsets[j])
+        fail("weights", "extras: points out of range or order");
+  }
+  auto check_value = [&](std::size_t point, float value) {
+    if (!std::isfinite(value) || value < 0.0f)
+      fail("point " + std::to_string(point), "weight " + std::to_string(value) + " is negative or not finite");
+  };
+  for (std::size_t p = 0; p < w.size(); ++p)
+    for (int k = 0; k < max_influences; ++k) check_value(p, w.weights[p][k]);
+  for (std::size_t j = 0; j < w.extra_points.size(); ++j)
+    for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e)
+      check_value(w.extra_points[j], w.extra_weights[e]);
+}
+
 Rows to_rows(const SkinWeights& w) {
+  check_weights(w);
   Rows rows;
   rows.offsets.reserve(w.size() + 1);
   std::size_t extra = 0;

@@ -3,7 +3,9 @@
 // which bones deform (glob patterns over bone names), and the tools a rigger applies to weights after binding —
 // normalise, prune, limit, smooth over the surface, mirror left <-> right. All run once, offline; each allocates
 // its result. Every tool leaves each point's weights normalised (summing to 1 within float rounding), strongest
-// first, in SkinWeights' four slots and, past the fourth, its extras (skeleton.hpp).
+// first, in SkinWeights' four slots and, past the fourth, its extras (skeleton.hpp). Every tool throws
+// deform::Error (kind argument) for weights whose arrays disagree in size or hold a negative or non-finite weight
+// (element "point N").
 #include <cstddef>
 #include <cstdint>
 #include <optional>
