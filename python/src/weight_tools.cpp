@@ -12,7 +12,8 @@ namespace deform_python {
 
 void bind_weight_tools(py::module_& m) {
   m.def(
-      "glob_match", [](const std::string& pattern, const std::string& name) { return deform::glob_match(pattern, name); },
+      "glob_match",
+      [](const std::string& pattern, const std::string& name) { return deform::glob_match(pattern, name); },
       py::arg("pattern"), py::arg("name"),
       "Whether a bone name matches a shell-style glob as a whole (*, ?, [abc], [a-z], [!abc], \\c; "
       "docs/weights.md). Raises deform.Error for an unclosed [ or a trailing \\.");
@@ -47,8 +48,9 @@ void bind_weight_tools(py::module_& m) {
       "Drops the influences below `threshold` (0 to 1) and renormalises, in place; a point keeps its strongest. "
       "Returns the number of influences removed.");
   m.def(
-      "limit_influences", [](deform::Model& model, int count) { return deform::limit_influences(model.weights, count); },
-      py::arg("model"), py::arg("count"),
+      "limit_influences",
+      [](deform::Model& model, int count) { return deform::limit_influences(model.weights, count); }, py::arg("model"),
+      py::arg("count"),
       "Keeps each point's `count` strongest influences, renormalised, in place. Returns the number of points that "
       "lost some.");
   m.def(
