@@ -3,11 +3,14 @@
 --deform-bones/--exclude-bones` (globs, `used`), heat's --smoothing, and `deform weights-edit`'s tools, each checked
 for what it promises with arithmetic done here (sums of 1, no weight under the prune threshold, at most N influences,
 the mirror's symmetry, smoothing lowering the sum over the mesh's edges of squared weight differences), plus exit 2
-with the file and line for hostile input and the output untouched.
-Usage: weights_tools_test.py DEFORM SAMPLES_DATA WORK_DIR"""
+with the file and line for hostile input and the output untouched. With MODELS (Debian's assimp-testmodels, in
+builds with the importer), `used` on an import whose skeleton has nodes no vertex is weighted to, and weights-edit
+on an import's own weights.
+Usage: weights_tools_test.py DEFORM SAMPLES_DATA WORK_DIR [MODELS]"""
 import fnmatch, json, os, shutil, subprocess, sys
 
 deform, samples, work = (os.path.abspath(a) for a in sys.argv[1:4])
+models = sys.argv[4] if len(sys.argv) > 4 else None
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 failures = []
@@ -242,6 +245,24 @@ rejected("--smooth: 0 is outside [1, 100]", "weights-edit", "--builtin", "--smoo
 rejected("--smooth-factor applies to --smooth", "weights-edit", "--builtin", "--smooth-factor", "0.3", "--limit", "2")
 rejected("--weights W.skw is required", "weights-edit", os.path.join(samples, "builtin.obj"), "--skeleton", sk,
          "--limit", "2")
+
+# --- an import: mrfixit.iqm's skeleton has 76 nodes, its skin weights 48 of them (IK goals and end nodes not) ---
+if models:
+    mrfixit = os.path.join(models, "IQM", "mrfixit.iqm")
+    r = ok("weights", mrfixit, "--deform-bones", "used", "--out", "mrfixit.skw")
+    check(r and r["bones"] == 76 and r["deforming"] == 48, f"mrfixit --deform-bones used: {r}")
+    all_bones = ok("weights", mrfixit, "--out", "mrfixit-all.skw")
+    check(all_bones and all_bones["deforming"] == 76, f"mrfixit, every bone: {all_bones}")
+    # The bones `used` keeps are exactly those the file's own weights use: weights-edit --normalize without
+    # --weights writes the file's weights, whose bones are the `used` set.
+    ok("weights-edit", mrfixit, "--normalize", "--out", "mrfixit-own.skw")
+    own = set(b for row in read_skw("mrfixit-own.skw") for b in row)
+    check(len(own) == 48, f"mrfixit's own weights use {len(own)} bones")
+    computed = set(b for row in read_skw("mrfixit.skw") for b in row)
+    check(computed <= own, f"--deform-bones used weighted bones the file does not: {sorted(computed - own)}")
+    computed_all = set(b for row in read_skw("mrfixit-all.skw") for b in row)
+    check(not computed_all <= own, "without the mask no helper node got weight: the test shows nothing")
+    rejected("has no mirror point within", "weights-edit", mrfixit, "--mirror", "flip")
 
 for f in failures:
     print("FAIL:", f)
