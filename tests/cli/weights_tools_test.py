@@ -5,9 +5,9 @@ for what it promises with arithmetic done here (sums of 1, no weight under the p
 the mirror's symmetry, smoothing lowering the sum over the mesh's edges of squared weight differences), plus exit 2
 with the file and line for hostile input and the output untouched. With MODELS (Debian's assimp-testmodels, in
 builds with the importer), `used` on an import whose skeleton has nodes no vertex is weighted to, and weights-edit
-on an import's own weights.
+on an import's own weights; and a glTF written here whose skin lists a joint no vertex uses.
 Usage: weights_tools_test.py DEFORM SAMPLES_DATA WORK_DIR [MODELS]"""
-import fnmatch, json, os, shutil, subprocess, sys
+import base64, fnmatch, json, os, shutil, struct, subprocess, sys
 
 deform, samples, work = (os.path.abspath(a) for a in sys.argv[1:4])
 models = sys.argv[4] if len(sys.argv) > 4 else None
@@ -263,6 +263,57 @@ if models:
     computed_all = set(b for row in read_skw("mrfixit-all.skw") for b in row)
     check(not computed_all <= own, "without the mask no helper node got weight: the test shows nothing")
     rejected("has no mirror point within", "weights-edit", mrfixit, "--mirror", "flip")
+
+    # --- a glTF skin with a joint no vertex uses (an IK goal): `used` leaves it out ---
+    blob = b""
+    views, accessors = [], []
+
+    def accessor(values, kind, component=5126, fmt="f", extra=None):
+        global blob
+        while len(blob) % 4:
+            blob += b"\0"
+        data = struct.pack("<%d%s" % (len(values), fmt), *values)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
+        blob += data
+        width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}[kind]
+        accessors.append(dict({"bufferView": len(views) - 1, "componentType": component,
+                               "count": len(values) // width, "type": kind}, **(extra or {})))
+        return len(accessors) - 1
+
+    pos, joints, weights = [], [], []
+    for r in range(5):  # a bar of 5 rows × 2 points from y 0 to 2, on joints 0 and 1 of the skin
+        for side in (-0.2, 0.2):
+            w = min(max(0.5 * r - 0.5, 0.0), 1.0)
+            pos += [side, 0.5 * r, 0.0]
+            joints += [0, 1, 0, 0]
+            weights += [1 - w, w, 0, 0]
+    primitive = {"attributes": {
+        "POSITION": accessor(pos, "VEC3", extra={"min": [-0.2, 0, 0], "max": [0.2, 2, 0]}),
+        "JOINTS_0": accessor(joints, "VEC4", 5121, "B"), "WEIGHTS_0": accessor(weights, "VEC4")},
+        "indices": accessor([i for r in range(4) for i in (2 * r, 2 * r + 1, 2 * r + 3, 2 * r, 2 * r + 3, 2 * r + 2)],
+                            "SCALAR", 5123, "H")}
+    identity = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]
+    inverse_binds = accessor(identity + [0, 0, 0, 1] + identity + [0, -1, 0, 1] + identity + [-0.1, -1.5, 0, 1], "MAT4")
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 3]}],
+           "nodes": [{"name": "hips", "children": [1, 2]}, {"name": "spine", "translation": [0, 1, 0]},
+                     {"name": "goal", "translation": [0.1, 1.5, 0]}, {"name": "body", "mesh": 0, "skin": 0}],
+           "meshes": [{"name": "bar", "primitives": [primitive]}],
+           "skins": [{"joints": [0, 1, 2], "inverseBindMatrices": inverse_binds}],
+           "accessors": accessors, "bufferViews": views,
+           "buffers": [{"byteLength": len(blob),
+                        "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}]}
+    with open(os.path.join(work, "bar.gltf"), "w") as f:
+        json.dump(doc, f)
+    names = [b["name"] for b in ok("info", "bar.gltf").get("skeleton", [])]
+    check("goal" in names, f"bar.gltf: the unused joint is not a bone: {names}")
+    every = ok("weights", "bar.gltf", "--out", "bar-all.skw")
+    masked = ok("weights", "bar.gltf", "--deform-bones", "used", "--out", "bar-used.skw")
+    check(every and masked and every["deforming"] == len(names) and masked["deforming"] == len(names) - 1,
+          f"bar.gltf: every bone {every}, used {masked}")
+    if "goal" in names:
+        goal = names.index("goal")
+        check(any(goal in row for row in read_skw("bar-all.skw")), "bar.gltf: without the mask the goal got no weight")
+        check(not any(goal in row for row in read_skw("bar-used.skw")), "bar.gltf: --deform-bones used weighted the goal")
 
 for f in failures:
     print("FAIL:", f)
