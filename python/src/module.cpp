@@ -539,4 +539,5 @@ PYBIND11_MODULE(deform, m) {
   bind_jobs(m);
   bind_lattices(m);
   bind_character(m);
+  bind_weight_tools(m);
 }

@@ -173,7 +173,7 @@ expect_invalid("--behind-penalty does not apply to --method voxel" --builtin --m
                --out "${WORK}/keep.skw")
 expect_invalid("--resolution" --builtin --method voxel --resolution 4 --out "${WORK}/keep.skw")
 expect_invalid("--falloff does not apply to --method heat" --builtin --falloff 2 --out "${WORK}/keep.skw")
-expect_invalid("--smoothing does not apply to --method heat" --builtin --smoothing 2 --out "${WORK}/keep.skw")
+expect_invalid("--smoothing: 101 is outside [0, 100]" --builtin --smoothing 101 --out "${WORK}/keep.skw")
 expect_invalid("--heat does not apply to --method distance" --builtin --method distance --heat 2
                --out "${WORK}/keep.skw")
 expect_invalid("--heat" --builtin --heat 0 --out "${WORK}/keep.skw")

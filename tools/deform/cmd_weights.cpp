@@ -4,11 +4,10 @@
 #include "cli.hpp"
 #include "model_loading.hpp"
 #include "model_loader.hpp"
-#include "deform/extras/builtin.hpp"
-#include "deform/io/obj.hpp"
 #include "deform/io/sk.hpp"
 #include "deform/offline/heat_weights.hpp"
 #include "deform/offline/voxel_weights.hpp"
+#include "deform/offline/weight_tools.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -34,9 +33,17 @@ constexpr const char* usage =
     "                  inside the voxelised volume, then falloff and smoothing as for distance.\n"
     "  distance        distance to each bone segment, only the nearest bone, its parent and its children competing,\n"
     "                  inverse-distance falloff, then one-ring smoothing (docs/builtin-character.md).\n"
-    "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"max_influences\", "
-    "\"warnings\",\n"
-    "\"output\"}. Each warning (a bone that gets no vertex, an island of the mesh that sees no bone) goes to stderr.\n"
+    "Writes W.skw atomically; prints {\"method\", \"mesh\", \"vertices\", \"bones\", \"deforming\", "
+    "\"max_influences\",\n"
+    "\"warnings\", \"output\"}. Each warning (a bone that gets no vertex, an island of the mesh that sees no bone)\n"
+    "goes to stderr.\n"
+    "\n"
+    "which bones deform (default: all):\n"
+    "  --deform-bones LIST   only the bones whose names match one of LIST's shell-style globs (* any run, ? one\n"
+    "                        character, [abc] [a-z] [!abc] one of a set, \\c the character c), comma-separated,\n"
+    "                        repeatable; the word `used`: the bones the model's own weights use (an import's skin,\n"
+    "                        the built-in character's shipped weights). A glob that matches no bone is an error.\n"
+    "  --exclude-bones LIST  never the bones matching LIST (applied after --deform-bones)\n"
     "\n"
     "options:\n"
     "  --max-influences N   bones per vertex, 1 to 4 (default 4); heat: up to 16, the pairs past the fourth on\n"
@@ -46,6 +53,8 @@ constexpr const char* usage =
     "  --heat C             heat constant of H = C / d^2, > 0 (default 1; higher = sharper joints)\n"
     "  --oblique-penalty K  how much farther a bone seen obliquely counts when the nearest is chosen, >= 0\n"
     "                       (default 0.3; 0 = plain distance)\n"
+    "  --smoothing N        passes of surface smoothing after the solve, 0 to 100 (default 0): half own weights,\n"
+    "                       half the neighbours' mean (deform weights-edit --smooth)\n"
     "voxel only:\n"
     "  --resolution N       voxels along the longest side of the mesh's box, 8 to 1024 (default 128)\n"
     "distance and voxel:\n"
@@ -68,14 +77,15 @@ float number_option(const Args& args, const char* flag, float fallback, float mi
 int run(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"--skeleton", "--out", "--method", "--heat", "--oblique-penalty", "--resolution", "--falloff",
-                   "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length", "--allow-outside"},
+                   "--max-influences", "--smoothing", "--behind-penalty", "--leaf-length", "--allow-outside",
+                   "--deform-bones", "--exclude-bones"},
                   {"--builtin"});
   const std::string out = args.required("--out");
   const std::string method = args.value("--method").value_or("heat");
   if (method != "heat" && method != "voxel" && method != "distance")
     throw UsageError("--method: '" + method + "' is not heat, voxel or distance");
   const std::vector<const char*> not_for =
-      method == "heat"    ? std::vector<const char*>{"--resolution", "--falloff", "--smoothing", "--behind-penalty"}
+      method == "heat"    ? std::vector<const char*>{"--resolution", "--falloff", "--behind-penalty"}
       : method == "voxel" ? std::vector<const char*>{"--heat", "--oblique-penalty", "--behind-penalty"}
                           : std::vector<const char*>{"--heat", "--oblique-penalty", "--resolution"};
   for (const char* flag : not_for)
@@ -97,6 +107,7 @@ int run(const std::vector<std::string>& argv) {
   heat_options.oblique_penalty = number_option(args, "--oblique-penalty", heat_options.oblique_penalty, 0.0f);
   heat_options.leaf_length = options.leaf_length;
   heat_options.max_influences = influences;
+  heat_options.smoothing_iterations = args.value("--smoothing") ? options.smoothing_iterations : 0;
   deform::VoxelWeightsOptions voxel_options;
   if (auto n = args.value("--resolution"))
     voxel_options.resolution = static_cast<int>(parse_integer(*n, "--resolution", 8, 1024));
@@ -105,38 +116,30 @@ int run(const std::vector<std::string>& argv) {
   voxel_options.leaf_length = options.leaf_length;
   voxel_options.max_influences = options.max_influences;
 
-  deform::Mesh mesh;
-  deform::Skeleton skeleton;
-  std::string source;
-  if (args.has("--builtin")) {
-    if (!args.positionals().empty() || args.has("--skeleton"))
-      throw UsageError("--builtin takes no MESH and no --skeleton");
-    deform::Model model = deform::builtin_character();
-    mesh = std::move(model.mesh);
-    skeleton = std::move(model.skeleton);
-    source = "builtin";
-  } else {
-    if (args.positionals().size() != 1) throw UsageError("expected one MESH.obj or MODEL (or --builtin)");
-    source = args.positionals()[0];
-    if (model_loading::importable(source)) {  // an import's mesh and skeleton (its own weights are not used)
-      model_loading::ModelRequest request;
-      request.path = source;
-      request.references = reference_policy(args);
-      model_loading::LoadedModel loaded = model_loading::load_model(request);
-      for (const std::string& w : loaded.warnings) note(w);
-      if (!loaded.rigged && !args.has("--skeleton"))
-        throw deform::Error::in_file(source, "", "the model has no skeleton: give --skeleton S.sk");
-      mesh = std::move(loaded.model.mesh);
-      skeleton =
-          args.has("--skeleton") ? deform::read_sk(args.required("--skeleton")) : std::move(loaded.model.skeleton);
-    } else {
-      const std::string sk = args.required("--skeleton");
-      deform::Warnings warnings;
-      mesh = deform::read_obj(source, &warnings, reference_policy(args));
-      for (const std::string& w : warnings.messages) note(w);
-      skeleton = deform::read_sk(sk);
-    }
+  LoadedModel loaded = load_mesh_and_skeleton(args);
+  const deform::Mesh& mesh = loaded.model.mesh;
+  const deform::Skeleton& skeleton = loaded.model.skeleton;
+  const std::string& source = loaded.source;
+
+  // --- which bones deform: every bone, or those the globs name; `used`: those the model's own weights use ---
+  std::vector<std::string> include = list_values(args, "--deform-bones");
+  const std::vector<std::string> exclude = list_values(args, "--exclude-bones");
+  std::vector<std::uint8_t> deforming, also;
+  const auto used = std::find(include.begin(), include.end(), "used");
+  if (used != include.end()) {
+    if (loaded.model.weights.size() == 0)
+      throw UsageError("--deform-bones used: '" + source +
+                       "' has no weights of its own to take the bones from (an import or --builtin has)");
+    include.erase(std::remove(include.begin(), include.end(), "used"), include.end());
+    also = deform::weighted_bones(loaded.model.weights, skeleton.bone_count());
   }
+  if (!include.empty() || !exclude.empty() || !also.empty())
+    deforming = deform::select_bones(skeleton, include, exclude, also);
+  options.deforming = deforming;
+  heat_options.deforming = deforming;
+  voxel_options.deforming = deforming;
+  std::size_t deforming_count = skeleton.bone_count();
+  if (!deforming.empty()) deforming_count = static_cast<std::size_t>(std::count(deforming.begin(), deforming.end(), 1));
 
   deform::WeightsResult result;
   if (method == "heat") {
@@ -145,7 +148,7 @@ int run(const std::vector<std::string>& argv) {
     result = deform::compute_voxel_weights(mesh, skeleton, voxel_options);
   } else {
     result.weights = deform::compute_automatic_weights(mesh, skeleton, options);
-    result.warnings = deform::bones_without_vertices(result.weights, skeleton);
+    result.warnings = deform::bones_without_vertices(result.weights, skeleton, deforming);
   }
   const deform::SkinWeights& weights = result.weights;
   deform::write_skw(out, weights);
@@ -157,6 +160,7 @@ int run(const std::vector<std::string>& argv) {
               {"mesh", source},
               {"vertices", mesh.point_count()},
               {"bones", skeleton.bone_count()},
+              {"deforming", deforming_count},
               {"max_influences", most},
               {"warnings", result.warnings.size()},
               {"output", out}});

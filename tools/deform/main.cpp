@@ -11,9 +11,9 @@
 
 namespace {
 
-const cli::Command* const commands[] = {&cli::info_command,   &cli::skin_command, &cli::weights_command,
-                                        &cli::ik_command,     &cli::ffd_command,  &cli::simulate_command,
-                                        &cli::export_command, &cli::bake_command};
+const cli::Command* const commands[] = {&cli::info_command,         &cli::skin_command,   &cli::weights_command,
+                                        &cli::weights_edit_command, &cli::ik_command,     &cli::ffd_command,
+                                        &cli::simulate_command,     &cli::export_command, &cli::bake_command};
 
 void print_usage(std::ostream& out) {
   out << "usage: deform [--help] [--version] COMMAND [ARGS...]\n\n"
@@ -23,7 +23,7 @@ void print_usage(std::ostream& out) {
          "\ncommands:\n";
   for (const cli::Command* c : commands) {
     std::string name = c->name;
-    name.resize(10, ' ');
+    name.resize(14, ' ');
     out << "  " << name << c->summary << '\n';
   }
   out << "\n`deform COMMAND --help` describes one command.\n";

@@ -14,6 +14,7 @@
 
 #include "deform/offline/heat_weights.hpp"
 #include "deform/offline/picking.hpp"
+#include "deform/offline/weight_tools.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
 #include "bone_shapes.hpp"
@@ -38,6 +39,7 @@ void check_options(const HeatWeightsOptions& o, std::size_t bone_count) {
   if (!std::isfinite(o.heat) || o.heat <= 0.0f) fail("heat", "must be finite and > 0");
   if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
   if (!std::isfinite(o.oblique_penalty) || o.oblique_penalty < 0.0f) fail("oblique_penalty", "must be finite and >= 0");
+  if (o.smoothing_iterations < 0 || o.smoothing_iterations > 100) fail("smoothing_iterations", "must be 0 to 100");
   if (!o.deforming.empty()) {
     if (o.deforming.size() != bone_count) fail("deforming", "must be empty or hold one entry per bone");
     if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
@@ -469,6 +471,13 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
     }
     const std::uint32_t fallback = heated_by[v] != UINT32_MAX ? heated_by[v] : nearest_any[v];
     store(strongest[v], fallback, result.weights);
+  }
+  if (options.smoothing_iterations > 0) {
+    SmoothWeightsOptions smooth;
+    smooth.iterations = options.smoothing_iterations;
+    smooth.max_influences = options.max_influences;
+    smooth_weights(result.weights, mesh, smooth);
+    prune_weights(result.weights, min_weight);
   }
   for (std::string& w : bones_without_vertices(result.weights, skeleton, options.deforming))
     result.warnings.push_back(std::move(w));

@@ -28,7 +28,8 @@
 //     tail: the body hides the bones) looks again past its own triangles only, with a warning naming it. An island
 //     that still sees none is bound rigidly to the bone nearest most of its points, with a warning naming it.
 //  5. The strongest `max_influences` weights are kept, those under 0.1% of their sum dropped, the rest normalised,
-//     strongest first; past the fourth in SkinWeights' extras.
+//     strongest first; past the fourth in SkinWeights' extras. Then `smoothing_iterations` passes of smoothing over
+//     the surface (none by default).
 // Cost: O(points × bones) for the nearest bones, a ray per point and tried bone (BVH, docs/performance.md), one
 // sparse factorisation (about O(points^1.5) for a surface) and one solve per heated bone.
 #include <cstdint>
@@ -51,6 +52,10 @@ struct HeatWeightsOptions {
   // An island (a connected piece of the surface) none of whose points sees a bone past the rest of the mesh (a
   // garment around a limb, a plate on a tail) looks again past its own triangles only; false: it is bound rigidly.
   bool island_visibility = true;
+  // 0 .. 100: passes of surface smoothing after the cut (smooth_weights, weight_tools.hpp: half own, half the mean
+  // of the neighbours), keeping `max_influences`, then influences under 0.1% dropped again. 0, the default, is the
+  // paper's method; a few passes soften the joints of a coarse mesh.
+  int smoothing_iterations = 0;
   // Per bone id, 0 for a bone that must get no weight (a control or end bone); empty = every bone deforms. At
   // least one bone must deform.
   std::vector<std::uint8_t> deforming;
