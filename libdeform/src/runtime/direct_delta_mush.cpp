@@ -50,27 +50,30 @@ glm::quat nearest_rotation(const glm::mat3& c, glm::quat q) noexcept {
   // g = (S₂₁ − S₁₂, S₀₂ − S₂₀, S₁₀ − S₀₁) and H = trace(S) I − (S + Sᵀ) / 2, positive definite near the maximum
   // (its eigenvalues are sums of two of C's singular values there). Where H is not (far from the maximum), a gradient
   // step of size |g| / |trace S| instead. Quadratic near the answer: from a bone's rotation, 2 to 4 steps.
-  for (int iteration = 0; iteration < 24; ++iteration) {
+  for (int iteration = 0; iteration < 16; ++iteration) {
     const glm::mat3 s = glm::transpose(glm::mat3_cast(q)) * c;
     const glm::vec3 g(s[1][2] - s[2][1], s[2][0] - s[0][2], s[0][1] - s[1][0]);
     const float trace = s[0][0] + s[1][1] + s[2][2];
     glm::mat3 h = -0.5f * (s + glm::transpose(s));
     h[0][0] += trace, h[1][1] += trace, h[2][2] += trace;
-    // Leading minors positive: H positive definite.
-    const float m1 = h[0][0], m2 = h[0][0] * h[1][1] - h[0][1] * h[1][0], m3 = glm::determinant(h);
+    // H positive definite (its leading minors positive): the Newton step; else a gradient step.
+    const float m2 = h[0][0] * h[1][1] - h[0][1] * h[1][0], m3 = glm::determinant(h);
     glm::vec3 omega;
-    if (m1 > 0.0f && m2 > 0.0f && m3 > 0.0f) {
+    if (h[0][0] > 0.0f && m2 > 0.0f && m3 > 0.0f) {
       omega = glm::inverse(h) * g;
     } else {
       const float scale = std::abs(trace);
       if (!(scale > 0.0f)) break;
       omega = g / scale;
     }
-    const float angle = glm::length(omega);
-    if (!(angle > 0.0f) || !std::isfinite(angle)) break;
-    const float step = std::min(angle, 1.0f);  // at most a radian a step
-    q = glm::normalize(q * glm::angleAxis(step, omega / angle));
-    if (angle < 1e-6f) break;
+    const float angle2 = glm::dot(omega, omega);
+    if (!(angle2 > 0.0f) || !std::isfinite(angle2)) break;
+    // At most a radian a step; turned by the quaternion (1, ω/2) normalised (a turn of 2 atan(|ω|/2), |ω| to third
+    // order: no trigonometry, and Newton's convergence kept).
+    if (angle2 > 1.0f) omega /= std::sqrt(angle2);
+    q = glm::normalize(q * glm::quat(1.0f, 0.5f * omega.x, 0.5f * omega.y, 0.5f * omega.z));
+    // Quadratic convergence: after a step of 1e-4 the turn left is about 1e-8, below float rounding of the sums.
+    if (angle2 < 1e-8f) break;
   }
   return q;
 }
