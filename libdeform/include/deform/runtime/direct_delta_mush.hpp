@@ -11,14 +11,13 @@
 // proper), its last column and row the neighbourhood's deformed and rest centroids, and the point goes where Rᵢ carries
 // it about them. Normals turn by Rᵢ.
 //
-// The rest pose: at identity matrices every Qᵢ is the rest moments, whose cross-covariance is symmetric, so Rᵢ is the
-// identity and every point stays put. A covariance of a neighbourhood that is flat, a line or a single point
-// (a lone triangle, a point without neighbours, weights smoothed onto one point) is rank-deficient, and the rotation
-// closest to it is not unique; libigl's implementation then returns a reflection or an arbitrary turn and moves such
-// points at rest. Here the binder adds a small isotropic spread to every moment (each rest point a small ball of
-// variance σᵢ², DirectDeltaMushSettings::regularization), so the covariance is positive definite at rest; under a pose
-// the spread adds σᵢ² Σⱼ ψᵢⱼ Aⱼ (the linear blend of the bones' 3×3 parts), which settles the directions the
-// neighbourhood cannot, as linear blend skinning would.
+// The rest pose: at identity matrices every Qᵢ is the rest moments, whose cross-covariance is symmetric and (the
+// smoothing has no negative entries) positive semi-definite, so Rᵢ is the identity and every point stays put. So that
+// the rotation is unique even where a neighbourhood is flat, a line or a single point (a lone triangle, a point
+// without neighbours), the binder adds a small isotropic spread to every moment (each rest point a small ball of
+// variance σᵢ², DirectDeltaMushSettings::regularization): the covariance is then positive definite at rest. Under a
+// pose the spread adds σᵢ² Σⱼ ψᵢⱼ Aⱼ (the linear blend of the bones' 3×3 parts), which settles the directions the
+// neighbourhood cannot, as linear blend skinning would. Rᵢ is a unit quaternion: never a reflection.
 #include <cstddef>
 #include <cstdint>
 #include <span>
