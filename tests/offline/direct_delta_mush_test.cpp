@@ -457,6 +457,9 @@ TEST_CASE("Direct Delta Mush: isolated points, zero weights and non-manifold mes
   broken = mesh;
   broken.triangles[2] = 1u << 30;
   CHECK_THROWS_AS((void)deform::bind_direct_delta_mush(broken, tube.weights), deform::Error);
+  broken = mesh;
+  for (glm::vec3& p : broken.positions) p *= 1e25f;  // finite points, squares beyond float
+  refused(broken, tube.weights, {}, "its moments overflow float");
 
   // The job: wrong spans and a malformed binding refused with a reason, nothing written.
   std::vector<glm::vec3> positions(b.point_count(), glm::vec3(7.0f));

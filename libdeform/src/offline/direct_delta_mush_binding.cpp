@@ -254,6 +254,9 @@ DirectDeltaMushBinding bind_direct_delta_mush(const Mesh& mesh, const SkinWeight
     const double trace = s[9] > 0.0 ? s[0] + s[3] + s[5] - (s[6] * s[6] + s[7] * s[7] + s[8] * s[8]) / s[9] : 0.0;
     const double spread = settings.regularization * std::max(trace, 0.0) / (3.0 * std::max(s[9], 1e-300)) + floor;
     for (const Entry& e : list) {
+      for (const double v : e.m)
+        if (!(std::abs(v) + spread * e.m[9] < 1e38))
+          throw point_error(i, "its moments overflow float (the model's scale is too large)");
       DirectDeltaMushMoments m;
       const double grow = spread * e.m[9];
       m.xx = float(e.m[0] + grow), m.xy = float(e.m[1]), m.xz = float(e.m[2]);

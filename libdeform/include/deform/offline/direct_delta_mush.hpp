@@ -36,7 +36,8 @@ struct DirectDeltaMushSettings {
 // their neighbours' smoothed weights. Throws deform::Error (kind argument, element "direct delta mush") for settings
 // out of range (naming the setting), weights not one per point, a weight not finite or negative or a bone index over
 // 65535 (naming the point), rest points not finite (naming the point), a point whose whole connected part of the mesh
-// has no weight ("point N: no bone influences it or any point connected to it"), and what build_point_topology
+// has no weight ("point N: no bone influences it or any point connected to it"), moments beyond float range (a
+// model of about 1e19 units and more: "point N: its moments overflow float ..."), and what build_point_topology
 // throws. Cost: one sparse Cholesky factorisation, then iterations · 10 · bones sparse solves; allocates the binding.
 DEFORM_OFFLINE_API DirectDeltaMushBinding bind_direct_delta_mush(const Mesh& mesh, const SkinWeights& weights,
                                                                  const DirectDeltaMushSettings& settings = {});
