@@ -31,10 +31,6 @@ Status shape_ok(const DirectDeltaMushJob& job) noexcept {
   return {};
 }
 
-glm::mat3 symmetric(const DirectDeltaMushMoments& m) noexcept {
-  return glm::mat3(m.xx, m.xy, m.xz, m.xy, m.yy, m.yz, m.xz, m.yz, m.zz);
-}
-
 // A unit quaternion near the 3×3 part of a bone matrix (its columns normalised; scale and shear only make it a start).
 glm::quat start_rotation(const glm::mat3& a) noexcept {
   const float l0 = glm::length(a[0]), l1 = glm::length(a[1]), l2 = glm::length(a[2]);
@@ -54,13 +50,18 @@ glm::quat nearest_rotation(const glm::mat3& c, glm::quat q) noexcept {
     const glm::mat3 s = glm::transpose(glm::mat3_cast(q)) * c;
     const glm::vec3 g(s[1][2] - s[2][1], s[2][0] - s[0][2], s[0][1] - s[1][0]);
     const float trace = s[0][0] + s[1][1] + s[2][2];
-    glm::mat3 h = -0.5f * (s + glm::transpose(s));
-    h[0][0] += trace, h[1][1] += trace, h[2][2] += trace;
-    // H positive definite (its leading minors positive): the Newton step; else a gradient step.
-    const float m2 = h[0][0] * h[1][1] - h[0][1] * h[1][0], m3 = glm::determinant(h);
+    // H = trace(S) I − (S + Sᵀ) / 2, symmetric: its six entries, and its cofactors (H⁻¹ = cofactors / det).
+    const float h00 = trace - s[0][0], h11 = trace - s[1][1], h22 = trace - s[2][2];
+    const float h01 = -0.5f * (s[0][1] + s[1][0]), h02 = -0.5f * (s[0][2] + s[2][0]), h12 = -0.5f * (s[1][2] + s[2][1]);
+    const float k00 = h11 * h22 - h12 * h12, k01 = h02 * h12 - h01 * h22, k02 = h01 * h12 - h02 * h11;
+    const float k11 = h00 * h22 - h02 * h02, k12 = h01 * h02 - h00 * h12, k22 = h00 * h11 - h01 * h01;
+    const float det = h00 * k00 + h01 * k01 + h02 * k02;
     glm::vec3 omega;
-    if (h[0][0] > 0.0f && m2 > 0.0f && m3 > 0.0f) {
-      omega = glm::inverse(h) * g;
+    // H positive definite (its leading minors positive): the Newton step; else a gradient step.
+    if (h00 > 0.0f && k22 > 0.0f && det > 0.0f) {
+      omega = glm::vec3(k00 * g.x + k01 * g.y + k02 * g.z, k01 * g.x + k11 * g.y + k12 * g.z,
+                        k02 * g.x + k12 * g.y + k22 * g.z) /
+              det;
     } else {
       const float scale = std::abs(trace);
       if (!(scale > 0.0f)) break;
@@ -117,20 +118,34 @@ Status DirectDeltaMushJob::run(std::size_t begin, std::size_t end) const noexcep
       // Relative to where the strongest bone takes the rest point (the anchor).
       const glm::mat4& m0 = palette[b.bones[first]];
       const glm::vec3 anchor = glm::vec3(m0 * glm::vec4(u, 1.0f));
-      glm::mat3 c(0.0f);
-      glm::vec3 q(0.0f), centroid(0.0f);
-      float psi = 0.0f;
+      // C = Σ A P + d pᵀ, q = Σ A p + d ψ (d = M u − anchor), written out in scalars: the compiler keeps the twelve
+      // sums in registers, where glm's matrix temporaries went through memory (a third of the job's time).
+      float c00 = 0.0f, c01 = 0.0f, c02 = 0.0f, c10 = 0.0f, c11 = 0.0f, c12 = 0.0f, c20 = 0.0f, c21 = 0.0f, c22 = 0.0f;
+      float qx = 0.0f, qy = 0.0f, qz = 0.0f, sx = 0.0f, sy = 0.0f, sz = 0.0f, psi = 0.0f;
       for (std::uint32_t e = first; e < last; ++e) {
-        const glm::mat4& m = palette[b.bones[e]];
-        const glm::mat3 a(m);
-        const glm::vec3 d = glm::vec3(m * glm::vec4(u, 1.0f)) - anchor;
+        const float* m = &palette[b.bones[e]][0][0];  // column-major: m[4 · column + row]
+        const float a00 = m[0], a10 = m[1], a20 = m[2], a01 = m[4], a11 = m[5], a21 = m[6], a02 = m[8], a12 = m[9],
+                    a22 = m[10];
+        const float dx = a00 * u.x + a01 * u.y + a02 * u.z + m[12] - anchor.x;
+        const float dy = a10 * u.x + a11 * u.y + a12 * u.z + m[13] - anchor.y;
+        const float dz = a20 * u.x + a21 * u.y + a22 * u.z + m[14] - anchor.z;
         const DirectDeltaMushMoments& o = b.moments[e];
-        const glm::vec3 p(o.x, o.y, o.z);
-        c += a * symmetric(o) + glm::outerProduct(d, p);
-        q += a * p + d * o.w;
-        centroid += p;
-        psi += o.w;
+        c00 += a00 * o.xx + a01 * o.xy + a02 * o.xz + dx * o.x;
+        c01 += a00 * o.xy + a01 * o.yy + a02 * o.yz + dx * o.y;
+        c02 += a00 * o.xz + a01 * o.yz + a02 * o.zz + dx * o.z;
+        c10 += a10 * o.xx + a11 * o.xy + a12 * o.xz + dy * o.x;
+        c11 += a10 * o.xy + a11 * o.yy + a12 * o.yz + dy * o.y;
+        c12 += a10 * o.xz + a11 * o.yz + a12 * o.zz + dy * o.z;
+        c20 += a20 * o.xx + a21 * o.xy + a22 * o.xz + dz * o.x;
+        c21 += a20 * o.xy + a21 * o.yy + a22 * o.yz + dz * o.y;
+        c22 += a20 * o.xz + a21 * o.yz + a22 * o.zz + dz * o.z;
+        qx += a00 * o.x + a01 * o.y + a02 * o.z + dx * o.w;
+        qy += a10 * o.x + a11 * o.y + a12 * o.z + dy * o.w;
+        qz += a20 * o.x + a21 * o.y + a22 * o.z + dz * o.w;
+        sx += o.x, sy += o.y, sz += o.z, psi += o.w;
       }
+      glm::mat3 c(c00, c10, c20, c01, c11, c21, c02, c12, c22);  // columns
+      const glm::vec3 q(qx, qy, qz), centroid(sx, sy, sz);
       if (psi > 0.0f) {
         const float inverse = 1.0f / psi;
         c -= glm::outerProduct(q, centroid * inverse);
