@@ -1,9 +1,12 @@
-// Forward kinematics, skinning (LBS, DQS), IK (CCD, FABRIK, two-bone) and the elastic lattice.
+// Forward kinematics, skinning (LBS, DQS, Direct Delta Mush), IK (CCD, FABRIK, two-bone) and the elastic lattice.
 #include <cstring>
 #include <optional>
 #include <vector>
 
 #include "common.hpp"
+#include "deform/offline/direct_delta_mush.hpp"
+#include "deform/runtime/direct_delta_mush.hpp"
+#include "deform/runtime/model.hpp"
 #include "deform/runtime/elastic.hpp"
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/skeleton.hpp"
@@ -113,6 +116,53 @@ void bind_jobs(py::module_& m) {
       "(N, 4) uint16 bone indices and (N, 4) float32 weights; method 'lbs' or 'dqs'. Returns a new (N, 3) array, or "
       "writes into `out` (a C-contiguous float32 (N, 3) array) and returns it. C-contiguous float32/uint16 inputs "
       "are read in place; the palette is copied (transposed to glm's layout), and converted per call for DQS.");
+
+  py::class_<deform::DirectDeltaMushBinding, std::shared_ptr<deform::DirectDeltaMushBinding>>(
+      m, "DirectDeltaMush",
+      "Direct Delta Mush bound to a model (docs/skinning.md): bind_direct_delta_mush at construction (a sparse "
+      "factorisation: call it at set-up), skin() per frame.")
+      .def(py::init([](const deform::Model& model, int iterations, float step, float translation_blend,
+                       float translation_step, float regularization, float prune) {
+             const deform::DirectDeltaMushSettings settings{iterations,       step,           translation_blend,
+                                                            translation_step, regularization, prune};
+             return std::make_shared<deform::DirectDeltaMushBinding>(
+                 deform::bind_direct_delta_mush(model.mesh, model.weights, settings));
+           }),
+           py::arg("model"), py::arg("iterations") = 4, py::arg("step") = 2.0f, py::arg("translation_blend") = 0.0f,
+           py::arg("translation_step") = 0.5f, py::arg("regularization") = 0.05f, py::arg("prune") = 1e-3f,
+           "Binds `model`'s rest points and weights; the settings as DirectDeltaMushSettings (deform.Error when out "
+           "of range).")
+      .def("__len__", &deform::DirectDeltaMushBinding::point_count)
+      .def_property_readonly("influences", &deform::DirectDeltaMushBinding::influence_count,
+                             "Influences kept over all points (after pruning).")
+      .def(
+          "skin",
+          [](const deform::DirectDeltaMushBinding& binding, const FloatArray& matrices,
+             std::optional<FloatArray> normals) -> py::object {
+            const std::vector<glm::mat4> palette = matrices_in(matrices);
+            const std::size_t n = binding.point_count();
+            py::array_t<float> positions({static_cast<py::ssize_t>(n), py::ssize_t{3}});
+            py::array_t<float> out_normals;
+            deform::DirectDeltaMushJob job;
+            job.binding = &binding;
+            job.matrices = palette;
+            job.out_positions = {reinterpret_cast<glm::vec3*>(positions.mutable_data()), n};
+            if (normals) {
+              job.in_normals = as_vec3(*normals, "normals");
+              out_normals = py::array_t<float>({static_cast<py::ssize_t>(n), py::ssize_t{3}});
+              job.out_normals = {reinterpret_cast<glm::vec3*>(out_normals.mutable_data()), n};
+            }
+            check(job.validate());
+            {
+              py::gil_scoped_release unlocked;
+              check(job.run());
+            }
+            if (normals) return py::make_tuple(positions, out_normals);
+            return positions;
+          },
+          py::arg("matrices"), py::arg("normals") = py::none(),
+          "Skins the bound rest points by a palette of (B, 4, 4) row-major matrices (forward_kinematics' palette). "
+          "Returns a new (N, 3) array, or (positions, normals) when `normals` (N, 3), one per point, is given.");
 
   py::class_<deform::IkResult>(m, "IkResult")
       .def_readonly("reached", &deform::IkResult::reached)

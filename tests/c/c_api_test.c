@@ -369,6 +369,75 @@ static void delta_mush_smooths_a_bent_elbow(void) {
   deform_character_destroy(mushed);
 }
 
+/* Direct Delta Mush on a tube of 12 rings of 8 points along y, two bones (the joint at y = 5.5): the rest pose comes
+ * back, one rigid transform on both bones moves every point and normal rigidly, and bad calls are refused. */
+static void direct_delta_mush_keeps_rest_and_rigid_motion(void) {
+  enum { rings = 12, around = 8, points = rings * around, triangles = 2 * (rings - 1) * around };
+  static float positions[3 * points], weights[4 * points], normals[3 * points], out[3 * points], out_n[3 * points];
+  static uint16_t ids[4 * points];
+  static uint32_t tris[3 * triangles];
+  for (int r = 0; r < rings; ++r)
+    for (int a = 0; a < around; ++a) {
+      const int p = r * around + a;
+      const double angle = 6.2831853 * a / around;
+      positions[3 * p] = (float)cos(angle), positions[3 * p + 1] = (float)r, positions[3 * p + 2] = (float)sin(angle);
+      normals[3 * p] = (float)cos(angle), normals[3 * p + 1] = 0.0f, normals[3 * p + 2] = (float)sin(angle);
+      const double w = fmin(1.0, fmax(0.0, (r - 3.5) / 4.0));
+      ids[4 * p] = 0, ids[4 * p + 1] = 1, ids[4 * p + 2] = 0, ids[4 * p + 3] = 0;
+      weights[4 * p] = (float)(1 - w), weights[4 * p + 1] = (float)w, weights[4 * p + 2] = 0, weights[4 * p + 3] = 0;
+    }
+  int t = 0;
+  for (int r = 0; r + 1 < rings; ++r)
+    for (int a = 0; a < around; ++a) {
+      const uint32_t p0 = (uint32_t)(r * around + a), p1 = (uint32_t)(r * around + (a + 1) % around);
+      const uint32_t q0 = p0 + around, q1 = p1 + around;
+      tris[t++] = p0, tris[t++] = q0, tris[t++] = p1, tris[t++] = p1, tris[t++] = q0, tris[t++] = q1;
+    }
+  deform_ddm* ddm = NULL;
+  CHECK(deform_ddm_create(positions, points, tris, triangles, ids, weights, 0, 0.0f, &ddm) == DEFORM_OK);
+  if (ddm == NULL) return;
+  CHECK(deform_ddm_point_count(ddm) == points);
+  float palette[32];
+  for (int i = 0; i < 32; ++i) palette[i] = (i % 16) % 5 == 0 ? 1.0f : 0.0f; /* two identities */
+  CHECK(deform_ddm_skin(ddm, palette, 2, out, normals, out_n) == DEFORM_OK);
+  double worst = 0.0;
+  for (int i = 0; i < 3 * points; ++i) worst = fmax(worst, fabs(out[i] - positions[i]));
+  CHECK(worst < 1e-5); /* 1e-6 of the tube's size (about 11.2) */
+  random_rigid(palette);
+  memcpy(palette + 16, palette, 16 * sizeof(float));
+  CHECK(deform_ddm_skin(ddm, palette, 2, out, normals, out_n) == DEFORM_OK);
+  worst = 0.0;
+  double worst_n = 0.0;
+  for (int p = 0; p < points; ++p) {
+    const float* x = positions + 3 * p;
+    const float* n = normals + 3 * p;
+    for (int row = 0; row < 3; ++row) {
+      const double e = palette[row] * x[0] + palette[4 + row] * x[1] + palette[8 + row] * x[2] + palette[12 + row];
+      const double en = palette[row] * n[0] + palette[4 + row] * n[1] + palette[8 + row] * n[2];
+      worst = fmax(worst, fabs(e - out[3 * p + row]));
+      worst_n = fmax(worst_n, fabs(en - out_n[3 * p + row]));
+    }
+  }
+  CHECK(worst < 1e-4);
+  CHECK(worst_n < 1e-4);
+  out[0] = 12345.0f;
+  palette[3] = NAN;
+  CHECK(deform_ddm_skin(ddm, palette, 2, out, NULL, NULL) == DEFORM_ERROR_REFUSED);
+  CHECK(strstr(deform_last_error(), "palette matrix is not finite") != NULL);
+  CHECK(deform_ddm_skin(ddm, palette, 1, out, NULL, NULL) == DEFORM_ERROR_REFUSED);
+  CHECK(strstr(deform_last_error(), "palette is too small") != NULL);
+  CHECK(out[0] == 12345.0f);
+  CHECK(deform_ddm_skin(ddm, palette, 2, out, normals, NULL) == DEFORM_ERROR_ARGUMENT);
+  deform_ddm_destroy(ddm);
+  deform_ddm* bad = NULL;
+  CHECK(deform_ddm_create(positions, points, tris, triangles, ids, weights, 1000, 0.0f, &bad) == DEFORM_ERROR_ARGUMENT);
+  CHECK(bad == NULL && strstr(deform_last_error(), "iterations") != NULL);
+  tris[4] = points;
+  CHECK(deform_ddm_create(positions, points, tris, triangles, ids, weights, 0, 0.0f, &bad) == DEFORM_ERROR_ARGUMENT);
+  CHECK(bad == NULL);
+  deform_ddm_destroy(NULL);
+}
+
 int main(void) {
   CHECK(strlen(deform_version()) >= 5);
   CHECK(strcmp(deform_last_error(), "") == 0);
@@ -378,6 +447,7 @@ int main(void) {
   skinning_matches_a_plain_reference();
   lattice_matches_trilinear_interpolation();
   delta_mush_smooths_a_bent_elbow();
+  direct_delta_mush_keeps_rest_and_rigid_motion();
   if (failures) {
     fprintf(stderr, "%d checks failed\n", failures);
     return 1;

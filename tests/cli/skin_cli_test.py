@@ -48,8 +48,8 @@ triple = [mesh, "--skeleton", os.path.join(samples, "builtin.sk"), "--weights", 
 rest_v, rest_vn, rest_faces = read_obj(mesh)
 bind = write("bind.json", '{"bones": {}}')
 
-# Bind pose, both methods, both model sources: every v back where it was, same counts, faces kept.
-for method in ("lbs", "dqs"):
+# Bind pose, every method, both model sources: every v back where it was, same counts, faces kept.
+for method in ("lbs", "dqs", "ddm"):
     for source in (triple, ["--builtin"]):
         out = os.path.join(work, f"bind_{method}_{len(source)}.obj")
         rc, stdout, stderr = run(*source, "--pose", bind, "--method", method, "--out", out)
@@ -66,11 +66,12 @@ for method in ("lbs", "dqs"):
         check(worst < 1e-5, f"bind {method}: a vertex moved by {worst}")
 
 # Rotating the root about X by 30° moves every vertex rigidly about the root's head (0, 0.95, 0): LBS and DQS both
-# give p' = H + Rx(30°) (p - H) and n' = Rx(30°) n. The hips' bind rotation is [90, 0, 0].
+# give p' = H + Rx(30°) (p - H) and n' = Rx(30°) n. The hips' bind rotation is [90, 0, 0]. Direct Delta Mush too: the
+# whole skeleton moves rigidly, so every point's rotation is Rx(30°).
 pose = write("root.json", '{"bones": {"hips": {"rotation": [120, 0, 0]}}}')
 c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
 rx = lambda p: (p[0], c * p[1] - s * p[2], s * p[1] + c * p[2])
-for method in ("lbs", "dqs"):
+for method in ("lbs", "dqs", "ddm"):
     out = os.path.join(work, f"root_{method}.obj")
     rc, stdout, stderr = run(*triple, "--pose", pose, "--method", method, "--out", out)
     check(rc == 0, f"root {method}: exit {rc}: {stderr}")
@@ -124,6 +125,22 @@ if rc1 == 0 and rc2 == 0:
     check(max(moved) > 1e-3 * size, "--mush did not smooth the bent elbow")
     check(sum(m > 1e-5 * size for m in moved) < len(moved) / 2, "--mush moved more than the arm")
     check(len(a[1]) == len(b[1]) and a[2] == b[2], "--mush changed the OBJ's layout")
+
+# --method ddm on a bent elbow: the summary names it, the arm moves, and the points differ from LBS's near the elbow
+# (smoothed) but not everywhere.
+ddm = os.path.join(work, "elbow_ddm.obj")
+rc1, _, _ = run("--builtin", "--pose", elbow, "--out", plain)
+rc2, stdout, stderr = run("--builtin", "--pose", elbow, "--method", "ddm", "--out", ddm)
+check(rc1 == 0 and rc2 == 0, f"--method ddm on a bent elbow: exit {rc2}: {stderr}")
+if rc1 == 0 and rc2 == 0:
+    summary = json.loads(stdout)
+    check(summary["method"] == "ddm" and summary["max_displacement"] > 0.05, f"--method ddm summary {summary}")
+    a, b = read_obj(plain), read_obj(ddm)
+    moved = [math.dist(p, q) for p, q in zip(a[0], b[0])]
+    check(max(moved) > 1e-3 * size, "--method ddm gave LBS's points at the bent elbow")
+    check(sum(m > 1e-3 * size for m in moved) < len(moved) / 2, "--method ddm moved more than the arm")
+    check(len(a[1]) == len(b[1]) and a[2] == b[2], "--method ddm changed the OBJ's layout")
+    check(all(abs(math.hypot(*n) - 1.0) < 1e-5 for n in b[1]), "--method ddm: normals not unit")
 
 # Invalid input: exit 2, nothing on stdout, a message naming the problem, and an existing output left untouched.
 existing = write("existing.obj", "keep me\n")

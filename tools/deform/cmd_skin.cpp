@@ -1,4 +1,4 @@
-// deform skin: deform a rigged mesh by a pose, LBS or DQS (docs/cli.md, docs/cli.md).
+// deform skin: deform a rigged mesh by a pose, LBS, DQS or Direct Delta Mush (docs/cli.md, docs/skinning.md).
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -10,6 +10,7 @@
 #include "deform/io/pose_json.hpp"
 #include "deform/io/text.hpp"
 #include "deform/offline/delta_mush.hpp"
+#include "deform/offline/direct_delta_mush.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/blending.hpp"
 #include "deform/runtime/error.hpp"
@@ -237,8 +238,9 @@ int run(const std::vector<std::string>& argv) {
   const Args args(argv, value_flags, switch_flags);
 
   const std::string method_name = args.value("--method").value_or("lbs");
-  if (method_name != "lbs" && method_name != "dqs")
-    throw UsageError("--method: '" + method_name + "' is not lbs or dqs");
+  if (method_name != "lbs" && method_name != "dqs" && method_name != "ddm")
+    throw UsageError("--method: '" + method_name + "' is not lbs, dqs or ddm");
+  const bool direct_mush = method_name == "ddm";
   const bool animated = args.has("--clip") || args.has("--blend");
   const std::string pose_path = animated ? std::string() : args.required("--pose");
   // Parsed before the model loads, so a malformed item fails fast.
@@ -310,10 +312,7 @@ int run(const std::vector<std::string>& argv) {
                                      "the weights move point " + std::to_string(p) + " beyond float range");
   }
   std::vector<glm::vec3> positions(mesh.point_count());
-  skin(job, model.weights, rest, positions, {}, {}, loaded.source);
   const std::size_t render_vertices = mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count() : 0;
-  const deform::SkinWeights vertex_weights =
-      vertex_weights_of(model.weights, std::span(mesh.vertex_point).first(render_vertices));
   std::vector<glm::vec3> vertex_positions(render_vertices), vertex_normals(render_vertices), normals(render_vertices),
       scratch(render_vertices);
   for (std::size_t r = 0; r < render_vertices; ++r) {
@@ -321,7 +320,32 @@ int run(const std::vector<std::string>& argv) {
     vertex_positions[r] = rest[point];
     vertex_normals[r] = mesh.vertex_normals[r] + normal_deltas[point];
   }
-  if (render_vertices > 0) skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
+  if (direct_mush) {
+    // Direct Delta Mush of the morphed points (each morph offset turned with its point), bound on the rest points;
+    // each render vertex's normal turns with its point's rotation.
+    const deform::DirectDeltaMushBinding binding = deform::bind_direct_delta_mush(mesh, model.weights);
+    std::vector<glm::quat> rotations(mesh.point_count());
+    deform::DirectDeltaMushJob ddm;
+    ddm.binding = &binding;
+    ddm.matrices = palette;
+    ddm.in_positions = rest;
+    ddm.out_positions = positions;
+    ddm.out_rotations = rotations;
+    if (const deform::Status status = ddm.validate(); !status)
+      throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
+    ddm.run();
+    for (std::size_t r = 0; r < render_vertices; ++r) {
+      const glm::vec3 n = rotations[mesh.vertex_point[r]] * vertex_normals[r];
+      const float length = glm::length(n);
+      normals[r] = length > 0.0f ? n / length : glm::vec3(0.0f);
+    }
+  } else {
+    skin(job, model.weights, rest, positions, {}, {}, loaded.source);
+    const deform::SkinWeights vertex_weights =
+        vertex_weights_of(model.weights, std::span(mesh.vertex_point).first(render_vertices));
+    if (render_vertices > 0)
+      skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
+  }
   if (mush_iterations > 0) {
     // Delta Mush of the skinned points, bound on the rest points; the normals then come from the mushed surface.
     const deform::DeltaMushBinding binding =
@@ -389,14 +413,17 @@ int run(const std::vector<std::string>& argv) {
 }  // namespace
 
 const Command skin_command = {
-    "skin", "deform a mesh by a pose (LBS or DQS)",
-    "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json [--method lbs|dqs]\n"
+    "skin", "deform a mesh by a pose (LBS, DQS or Direct Delta Mush)",
+    "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json\n"
+    "                   [--method lbs|dqs|ddm]\n"
     "                   [--mush N [--mush-step S]] [--no-limits] --out OUT.obj\n"
     "       deform skin MODEL (--pose P.json | --clip NAME --time T) [--morph NAME:W[,NAME:W...]] ...\n"
     "                   (MODEL: an import: glTF, FBX, .x, ...)\n"
     "       deform skin (--builtin | MODEL) --blend CLIP:WEIGHT[,CLIP:WEIGHT...] --time T ...\n\n"
     "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
-    "--no-limits) and deforms the mesh: linear blend skinning (lbs, default) or dual quaternion skinning (dqs).\n"
+    "--no-limits) and deforms the mesh: linear blend skinning (lbs, default), dual quaternion skinning (dqs) or\n"
+    "Direct Delta Mush (ddm: the weights smoothed over the mesh at bind time, a rotation per point; slower to bind,\n"
+    "smooth at bent joints, the rest pose exact; docs/skinning.md).\n"
     "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
     "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights (with\n"
     "--blend, the clips' weights averaged by the blend's weights), or the weights --morph gives by target name\n"

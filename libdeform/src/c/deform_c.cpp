@@ -14,6 +14,7 @@
 #include "deform/extras/builtin.hpp"
 #include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
+#include "deform/offline/direct_delta_mush.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
@@ -24,6 +25,10 @@ struct deform_character {
   deform::Character character;
   deform::Pose pose;   // set_pose's staging, sized once so that the call allocates nothing
   deform::Pose later;  // set_pose_moving's second pose, likewise
+};
+
+struct deform_ddm {
+  deform::DirectDeltaMushBinding binding;
 };
 
 struct deform_lattice {
@@ -290,6 +295,56 @@ deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uin
   job.bone_weights = {reinterpret_cast<const glm::vec4*>(weights), vertex_count};
   job.in_positions = {positions, 3 * vertex_count};
   job.out_positions = {out, 3 * vertex_count};
+  if (const deform::Status valid = job.validate(); !valid) return refused(valid);
+  return refused(job.run());
+}
+
+deform_status deform_ddm_create(const float* positions, size_t point_count, const uint32_t* triangles,
+                                size_t triangle_count, const uint16_t* bones, const float* weights, int iterations,
+                                float step, deform_ddm** out) {
+  if (out == nullptr) return fail_argument("deform_ddm_create: out is NULL");
+  *out = nullptr;
+  if ((point_count > 0 && (positions == nullptr || bones == nullptr || weights == nullptr)) ||
+      (triangle_count > 0 && triangles == nullptr))
+    return fail_argument("deform_ddm_create: an array is NULL");
+  return guarded([&] {
+    deform::Mesh mesh;
+    mesh.positions.assign(reinterpret_cast<const glm::vec3*>(positions),
+                          reinterpret_cast<const glm::vec3*>(positions) + point_count);
+    mesh.vertex_point.resize(point_count);
+    for (std::size_t i = 0; i < point_count; ++i) mesh.vertex_point[i] = static_cast<std::uint32_t>(i);
+    mesh.triangles.assign(triangles, triangles + 3 * triangle_count);
+    deform::SkinWeights skin;
+    skin.bones.assign(reinterpret_cast<const glm::u16vec4*>(bones),
+                      reinterpret_cast<const glm::u16vec4*>(bones) + point_count);
+    skin.weights.assign(reinterpret_cast<const glm::vec4*>(weights),
+                        reinterpret_cast<const glm::vec4*>(weights) + point_count);
+    deform::DirectDeltaMushSettings settings;
+    if (iterations != 0) settings.iterations = iterations;
+    if (step != 0.0f) settings.step = step;
+    *out = new deform_ddm{deform::bind_direct_delta_mush(mesh, skin, settings)};
+    return DEFORM_OK;
+  });
+}
+
+void deform_ddm_destroy(deform_ddm* ddm) { delete ddm; }
+
+size_t deform_ddm_point_count(const deform_ddm* ddm) { return ddm == nullptr ? 0 : ddm->binding.point_count(); }
+
+deform_status deform_ddm_skin(const deform_ddm* ddm, const float* palette, size_t bone_count, float* out,
+                              const float* normals, float* out_normals) {
+  if (ddm == nullptr || palette == nullptr || out == nullptr) return fail_argument("deform_ddm_skin: NULL argument");
+  if ((normals == nullptr) != (out_normals == nullptr))
+    return fail_argument("deform_ddm_skin: normals and out_normals must both be given or both be NULL");
+  const std::size_t n = ddm->binding.point_count();
+  deform::DirectDeltaMushJob job;
+  job.binding = &ddm->binding;
+  job.matrices = {reinterpret_cast<const glm::mat4*>(palette), bone_count};
+  job.out_positions = {reinterpret_cast<glm::vec3*>(out), n};
+  if (normals != nullptr) {
+    job.in_normals = {reinterpret_cast<const glm::vec3*>(normals), n};
+    job.out_normals = {reinterpret_cast<glm::vec3*>(out_normals), n};
+  }
   if (const deform::Status valid = job.validate(); !valid) return refused(valid);
   return refused(job.run());
 }

@@ -1,6 +1,7 @@
 /* libdeform's C API (target deform::c): a Character (load, pose, reach, release, update, read the deformed mesh),
- * linear-blend skinning over caller arrays, and Bezier lattices (bind points once, move control points, evaluate),
- * for any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md walks through it.
+ * linear-blend skinning and Direct Delta Mush over caller arrays, and Bezier lattices (bind points once, move control
+ * points, evaluate), for any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md
+ * walks through it.
  *
  * Conventions:
  *  - Objects are opaque handles made by a *_create / *_load function and freed by the matching *_destroy (NULL is
@@ -147,6 +148,29 @@ DEFORM_C_API float deform_character_stretch(const deform_character* character);
 DEFORM_C_API deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uint16_t* bones,
                                            const float* weights, const float* positions, size_t vertex_count,
                                            float* out);
+
+/* ---- Direct Delta Mush over caller arrays (deform/runtime/direct_delta_mush.hpp; docs/skinning.md) ---- */
+
+typedef struct deform_ddm deform_ddm;
+
+/* Binds Direct Delta Mush (bind_direct_delta_mush): `positions`, point_count rest points (3 floats each);
+ * `triangles`, triangle_count triangles of point indices (3 each); `bones` and `weights`, 4 per point as for
+ * deform_skin_lbs. `iterations` and `step` are the smoothing's (0 for either keeps its default, 4 and 2); the other
+ * settings keep their defaults. It allocates and takes time (a sparse factorisation): call it at set-up. Fails with
+ * DEFORM_ERROR_ARGUMENT and a message naming the problem: a setting out of range, a point index out of range, a
+ * point not finite, a weight not finite or negative. */
+DEFORM_C_API deform_status deform_ddm_create(const float* positions, size_t point_count, const uint32_t* triangles,
+                                             size_t triangle_count, const uint16_t* bones, const float* weights,
+                                             int iterations, float step, deform_ddm** out);
+DEFORM_C_API void deform_ddm_destroy(deform_ddm* ddm);
+/* The number of points bound. */
+DEFORM_C_API size_t deform_ddm_point_count(const deform_ddm* ddm);
+/* Skins the bound rest points by `palette` (bone_count matrices, as for deform_skin_lbs) into `out` (point_count * 3
+ * floats). `normals` and `out_normals`: both NULL, or point_count * 3 floats each (one normal per point, turned by its
+ * point's rotation). Refuses (DEFORM_ERROR_REFUSED, nothing written) a palette too small for the weights' bones or
+ * not finite. Allocates nothing. */
+DEFORM_C_API deform_status deform_ddm_skin(const deform_ddm* ddm, const float* palette, size_t bone_count, float* out,
+                                           const float* normals, float* out_normals);
 
 /* ---- Bezier lattices (deform/runtime/lattice.hpp; free-form deformation of any point cloud) ---- */
 

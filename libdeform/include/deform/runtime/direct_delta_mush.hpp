@@ -1,0 +1,101 @@
+#pragma once
+// Direct Delta Mush (Le and Lewis 2019, "Direct Delta Mush Skinning and Variants"): Delta Mush's smoothing folded into
+// per-point, per-bone weights computed once, so that a frame is one pass over the points like linear blend skinning.
+//
+// Bind time (offline/direct_delta_mush.hpp, bind_direct_delta_mush): each bone's weights, and the rest points' first
+// and second moments under them, are smoothed over the mesh by an implicit Laplacian. For point i and bone j that
+// gives a symmetric 4×4 moment matrix Ωᵢⱼ = Σₖ Bᵢₖ wₖⱼ p̃ₖ p̃ₖᵀ (B the smoothing operator, p̃ₖ the rest point k,
+// homogeneous, here taken relative to the rest point i so that no float sum cancels the model's distance from the
+// origin). Per frame (DirectDeltaMushJob): Qᵢ = Σⱼ Mⱼ Ωᵢⱼ is what the bones do to point i's smoothed neighbourhood; its
+// 3×3 cross-covariance gives the point's rotation Rᵢ (the rotation closest to it: a polar decomposition, always
+// proper), its last column and row the neighbourhood's deformed and rest centroids, and the point goes where Rᵢ carries
+// it about them. Normals turn by Rᵢ.
+//
+// The rest pose: at identity matrices every Qᵢ is the rest moments, whose cross-covariance is symmetric and (the
+// smoothing has no negative entries) positive semi-definite, so Rᵢ is the identity and every point stays put. So that
+// the rotation is unique even where a neighbourhood is flat, a line or a single point (a lone triangle, a point
+// without neighbours), the binder adds a small isotropic spread to every moment (each rest point a small ball of
+// variance σᵢ², DirectDeltaMushSettings::regularization): the covariance is then positive definite at rest. Under a
+// pose the spread adds σᵢ² Σⱼ ψᵢⱼ Aⱼ (the linear blend of the bones' 3×3 parts), which settles the directions the
+// neighbourhood cannot, as linear blend skinning would. Rᵢ is a unit quaternion: never a reflection.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "deform/runtime/error.hpp"
+#include "deform/runtime/export.hpp"
+
+namespace deform {
+
+class ThreadPool;
+
+// One influence's moments Ωᵢⱼ, relative to the rest point i: the second moments P (symmetric 3×3: xx, xy, xz, yy, yz,
+// zz), the first moments p (x, y, z) and the smoothed weight ψ (w).
+struct DirectDeltaMushMoments {
+  float xx = 0.0f, xy = 0.0f, xz = 0.0f, yy = 0.0f, yz = 0.0f, zz = 0.0f;
+  float x = 0.0f, y = 0.0f, z = 0.0f;
+  float w = 0.0f;
+};
+
+// What bind_direct_delta_mush builds: read-only data for DirectDeltaMushJob, compressed rows by point.
+struct DirectDeltaMushBinding {
+  std::vector<glm::vec3> rest;                  // the rest points, the origin of each point's moments
+  std::vector<std::uint32_t> offsets;           // point i's influences: [offsets[i], offsets[i + 1]); point_count() + 1
+  std::vector<std::uint16_t> bones;             // per influence: the palette entry; the largest ψ first in each row
+  std::vector<DirectDeltaMushMoments> moments;  // per influence
+  std::uint32_t bone_count = 0;                 // the palette size the influences need (largest bone + 1)
+
+  std::size_t point_count() const noexcept { return rest.size(); }
+  std::size_t influence_count() const noexcept { return bones.size(); }
+};
+
+// The Direct Delta Mush job: one palette (affine matrices, the LBS palette T_W · T_B⁻¹) in, points out. Shape as
+// SkinningJob: validate() once at bind time, run() or run(begin, end) per frame (run_parallel splits it), caller-owned
+// spans, no allocation, no throw; a point's result does not depend on the range it is run in.
+struct DEFORM_RUNTIME_API DirectDeltaMushJob {
+  const DirectDeltaMushBinding* binding = nullptr;
+  std::span<const glm::mat4> matrices;  // at least binding->bone_count, affine (bottom row 0 0 0 1)
+
+  // Optional input points, one per point: empty deforms the binding's rest points; else each point's offset from its
+  // rest point (a morph target's, say) is carried by the point's rotation: out = xᵢ(rest) + Rᵢ (inᵢ − restᵢ).
+  std::span<const glm::vec3> in_positions;
+  std::span<glm::vec3> out_positions;  // one per point, required
+  // Optional normals, one per point: both empty, or both one per point (out = Rᵢ inᵢ renormalised; zero stays zero).
+  std::span<const glm::vec3> in_normals;
+  std::span<glm::vec3> out_normals;
+  // Optional: each point's rotation Rᵢ (unit quaternion), for render-vertex normals or tangents of a mesh whose
+  // vertices split its points (seams): one per point, or empty.
+  std::span<glm::quat> out_rotations;
+
+  static constexpr std::size_t split_multiple = 16;
+  // A point costs about as much as a few dozen LBS vertices, so smaller chunks than SkinningJob's pay a thread.
+  static constexpr std::size_t min_parallel_chunk = 1024;
+
+  // Ok when the call is well formed, else why not: a binding ("no binding"), its arrays consistent ("binding is
+  // malformed: ..."), its moments and rest points finite ("binding is not finite"), a palette of at least bone_count
+  // matrices ("palette is too small"), every matrix finite ("palette matrix is not finite"), the spans one per point
+  // ("positions are not one per point", "normals are not one per point", "rotations are not one per point").
+  // O(points + influences + bones): call it when binding, not every frame.
+  Status validate() const noexcept;
+
+  std::size_t count() const noexcept { return binding ? binding->point_count() : 0; }
+
+  // Points [0, count()) or [begin, end) on this thread. Checks only what is O(1) (the binding's array sizes, the
+  // spans, the range: "range outside the job") and refuses, writing nothing, when that fails. No allocation.
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  // run_parallel over the pool, in chunks of at least `min_chunk` points.
+  Status run(ThreadPool& pool, std::size_t min_chunk = min_parallel_chunk) const noexcept;
+};
+
+// The proper rotation R maximising trace(Rᵀ C) (the rotation of C's polar decomposition, with a reflection turned into
+// the nearest rotation: U diag(1, 1, det UVᵀ) Vᵀ), found by Newton steps on the rotation group from `start`. C must not
+// be close to rank 1 for a unique answer (the binder's spread sees to that for the job). For the job and the tests;
+// no allocation.
+DEFORM_RUNTIME_API glm::quat nearest_rotation(const glm::mat3& c, glm::quat start) noexcept;
+
+}  // namespace deform
