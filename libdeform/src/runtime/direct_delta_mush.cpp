@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "deform/runtime/parallel.hpp"
-#include "runtime/finite.hpp"
+#include "finite.hpp"
 
 namespace deform {
 namespace {
