@@ -14,3 +14,21 @@ def test_figures_script_writes_its_pngs(tmp_path):
         data = (tmp_path / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
     assert "reach: residual after IK 0.919 m" in run.stdout
+
+
+def test_skinning_figures_script_writes_its_png_and_volumes(tmp_path):
+    run = subprocess.run([sys.executable, str(ROOT / "python" / "examples" / "skinning_figures.py"), "--out",
+                          str(tmp_path)], capture_output=True, text=True, timeout=180)
+    assert run.returncode == 0, run.stderr
+    data = (tmp_path / "skinning-methods.png").read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    kept = {}
+    for line in run.stdout.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 4 and cells[2].endswith("%"):
+            kept[(cells[0], cells[1])] = float(cells[2][:-1])
+    assert len(kept) == 8, run.stdout
+    # Every method keeps the arm's volume within 3%; dual quaternions keep it best at the bent elbow (their bulge).
+    assert all(97.0 < v < 101.0 for v in kept.values()), kept
+    bent = {m: v for (p, m), v in kept.items() if p.startswith("elbow")}
+    assert bent["DQS"] == max(bent.values()), bent
