@@ -6,6 +6,8 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/hierarchy.hpp"
+#include "deform/runtime/parallel.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/spring_chain.hpp"
 namespace {
@@ -86,7 +89,97 @@ void lattices_step(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(hierarchy.lattice_count()));
 }
 
+// spring/crowd_1000x32/threads:N (issue #36's target: at most 4 ms a frame on 2 threads): 1,000 characters, each
+// with 32 spring bones (four strands of eight, hair or a skirt, hanging from a chest bone) and two capsule colliders
+// on the chest, at 60 Hz with the bones' rates, every character swinging at its own phase. The characters are
+// split into N contiguous ranges on a ThreadPool, as crowd/builtin_1000 does. Items are characters.
+constexpr std::size_t spring_crowd_size = 1000;
+constexpr int strands = 4, strand_links = 8;
+
+deform::Skeleton strand_skeleton() {
+  std::vector<deform::Bone> bones;
+  bones.push_back({"hips", -1, {1}, glm::vec3(0.0f), glm::vec3(0.0f), {}});
+  std::vector<std::int32_t> strand_roots;
+  for (int s = 0; s < strands; ++s) strand_roots.push_back(2 + s * strand_links);
+  bones.push_back({"chest", 0, strand_roots, glm::vec3(0.0f, 0.3f, 0.0f), glm::vec3(0.0f), {}});
+  for (int s = 0; s < strands; ++s) {
+    const float angle = 6.2831853f * float(s) / float(strands);
+    for (int k = 0; k < strand_links; ++k) {
+      const auto id = std::int32_t(2 + s * strand_links + k);
+      const glm::vec3 offset =
+          k == 0 ? glm::vec3(0.12f * std::cos(angle), 0.1f, 0.12f * std::sin(angle)) : glm::vec3(0.0f, -0.05f, 0.0f);
+      bones.push_back({"strand" + std::to_string(s) + "_" + std::to_string(k),
+                       k == 0 ? 1 : id - 1,
+                       k + 1 < strand_links ? std::vector<std::int32_t>{id + 1} : std::vector<std::int32_t>{},
+                       offset,
+                       glm::vec3(0.0f),
+                       {}});
+    }
+  }
+  return deform::Skeleton(bones);
+}
+
+void spring_crowd(benchmark::State& state) {
+  const deform::Skeleton skeleton = strand_skeleton();
+  std::vector<deform::SpringChainSpec> chains;
+  for (int s = 0; s < strands; ++s) {
+    deform::SpringChainSpec chain;
+    chain.name = "strand" + std::to_string(s);
+    for (int k = 0; k < strand_links; ++k) chain.bones.push_back(2 + s * strand_links + k);
+    chain.frequency = 3.0f;
+    chain.damping_ratio = 0.3f;
+    chain.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+    chain.radius = 0.01f;
+    chain.colliders = {0, 1};
+    chains.push_back(chain);
+  }
+  const std::vector<deform::SpringCollider> colliders = {
+      {1, glm::vec3(-0.08f, -0.1f, 0.0f), glm::vec3(0.08f, -0.1f, 0.0f), 0.1f},
+      {1, glm::vec3(0.0f, -0.3f, -0.05f), glm::vec3(0.0f, -0.3f, 0.05f), 0.12f}};
+  struct Instance {
+    deform::SpringChains springs;
+    std::vector<glm::mat4> world, rate, palette;
+    double phase;
+  };
+  std::vector<Instance> crowd;
+  crowd.reserve(spring_crowd_size);
+  const std::size_t bones = skeleton.bone_count();
+  for (std::size_t i = 0; i < spring_crowd_size; ++i) {
+    crowd.push_back({deform::SpringChains(skeleton, chains, colliders), std::vector<glm::mat4>(bones),
+                     std::vector<glm::mat4>(bones), std::vector<glm::mat4>(bones), 0.37 * double(i)});
+  }
+  const double hz = 60.0;
+  int frame = 0;
+  const std::function<void(std::size_t, std::size_t)> range = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Instance& c = crowd[i];
+      const double t = frame / hz + c.phase;
+      const glm::mat4 root = swing(t), root_rate = (swing(t + 1e-3) - root) / 1e-3f;
+      for (std::size_t b = 0; b < bones; ++b) {  // what the character's FK gives
+        c.world[b] = root * skeleton.bind_world()[b];
+        c.rate[b] = root_rate * skeleton.bind_world()[b];
+      }
+      c.springs.run(float(1.0 / hz), c.world, c.rate, c.palette);
+      benchmark::DoNotOptimize(c.palette.data());
+    }
+  };
+  deform::ThreadPool pool(unsigned(state.range(0)));
+  for (int f = 0; f < 60; ++f, ++frame) range(0, spring_crowd_size);  // every instance under way
+  for (auto _ : state) {
+    pool.parallel_for(spring_crowd_size, 1, range);
+    ++frame;
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(spring_crowd_size));
+}
+
 BENCHMARK(spring_chain)->Name("spring/chain")->ArgNames({"links", "hz"})->Args({6, 60})->Args({6, 240})->Args({24, 60});
 BENCHMARK(lattices_step)->Name("elastic/builtin_lattices_step")->ArgName("inertial")->Arg(0)->Arg(1);
 
 }  // namespace
+BENCHMARK(spring_crowd)
+    ->Name("spring/crowd_1000x32")
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
