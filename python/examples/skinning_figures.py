@@ -4,7 +4,8 @@
 
 Writes skinning-methods.png: the left arm with its elbow bent to 150 degrees (the top row) and its forearm twisted
 by 120 degrees (the bottom row: the candy wrapper), skinned by linear blend skinning, dual quaternions, linear
-blend skinning followed by Delta Mush, and Direct Delta Mush. Prints, per method and pose, how much of the body's
+blend skinning followed by Delta Mush, and Direct Delta Mush; and skinning-methods-mrfixit.png: the same four on a
+real character, assimp-testmodels' mrfixit (--real), its left elbow bent by 100 degrees. Prints, per method and pose, how much of the body's
 volume is kept (the signed volume of the closed mesh, before and after; all of the change is at the arm), and the
 two binds' times in this process (docs/performance.md has the per-frame costs). Needs the deform module and
 matplotlib.
@@ -64,48 +65,74 @@ def skin_all(model, pose, ddm, timings):
     return out
 
 
-def arm_region(model, points, pose):
-    """Triangles of the left arm around the elbow, the elbow, and the direction to look from: across the plane of
-    shoulder, elbow and wrist when the arm bends, else from the front."""
+def arm_region(model, points, pose, arm=("upperarm_l", "forearm_l", "hand_l"), reach=0.3, front=(0.0, 0.15, 1.0)):
+    """Triangles of an arm around the elbow (within `reach` of it), the elbow, and the direction to look from: across
+    the plane of shoulder, elbow and wrist when the arm bends, else `front`."""
     skeleton = model.skeleton
     world, _ = deform.forward_kinematics(skeleton, pose)
-    head = {name: np.array(world[skeleton.find(name)])[:3, 3] for name in ("upperarm_l", "forearm_l", "hand_l")}
-    elbow = head["forearm_l"]
+    shoulder, elbow, wrist = (np.array(world[skeleton.find(name)])[:3, 3] for name in arm)
     triangles = np.asarray(model.triangles)
     centres = points[triangles].mean(axis=1)
-    near = np.linalg.norm(centres - elbow, axis=1) < 0.3
-    across = np.cross(head["forearm_l"] - head["upperarm_l"], head["hand_l"] - head["forearm_l"])
-    if np.linalg.norm(across) < 1e-6:
-        across = np.array([0.0, 0.15, 1.0])
+    near = np.linalg.norm(centres - elbow, axis=1) < reach
+    across = np.cross(elbow - shoulder, wrist - elbow)
+    if np.linalg.norm(across) < 1e-6 * reach * reach:
+        across = np.array(front)
     return triangles[near], elbow, across / np.linalg.norm(across)
 
 
-def draw(ax, points, triangles, centre, look, title):
+def draw(ax, points, triangles, centre, look, title, radius=0.22, up=1):
     faces = points[triangles]
     normals = np.cross(faces[:, 1] - faces[:, 0], faces[:, 2] - faces[:, 0])
     normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
-    light = look + np.array([0.0, 0.6, 0.0])
+    light = look + 0.6 * np.eye(3)[up]
     light /= np.linalg.norm(light)
     shade = 0.25 + 0.75 * np.abs(normals @ light)
     colours = np.clip(np.outer(shade, [0.85, 0.72, 0.62]), 0, 1)
-    # matplotlib draws x, y, z with z up: the model's y (up) goes to the plot's z.
-    swapped = faces[:, :, [0, 2, 1]]
-    ax.add_collection3d(Poly3DCollection(swapped, facecolors=colours, edgecolors="none"))
-    r = 0.22
-    ax.set_xlim(centre[0] - r, centre[0] + r)
-    ax.set_ylim(centre[2] - r, centre[2] + r)
-    ax.set_zlim(centre[1] - r, centre[1] + r)
+    # matplotlib draws x, y, z with z up: the model's up axis (1 for +Y, 2 for +Z) goes to the plot's z.
+    axes = [0, 2, 1] if up == 1 else [0, 1, 2]
+    ax.add_collection3d(Poly3DCollection(faces[:, :, axes], facecolors=colours, edgecolors="none"))
+    c, v = centre[axes], look[axes]
+    ax.set_xlim(c[0] - radius, c[0] + radius)
+    ax.set_ylim(c[1] - radius, c[1] + radius)
+    ax.set_zlim(c[2] - radius, c[2] + radius)
     ax.set_box_aspect((1, 1, 1))
-    # Looking along -look: matplotlib's elevation and azimuth of `look` in the plot's axes (x, z, y).
-    ax.view_init(elev=np.degrees(np.arcsin(look[1])), azim=np.degrees(np.arctan2(look[2], look[0])))
+    # Looking along -look: matplotlib's elevation and azimuth of `look` in the plot's axes.
+    ax.view_init(elev=np.degrees(np.arcsin(v[2])), azim=np.degrees(np.arctan2(v[1], v[0])))
     ax.set_axis_off()
     ax.set_title(title, fontsize=10)
 
 
+# assimp-testmodels' mrfixit (Debian's package, which scripts/deps.sh installs): a game character, +Z up.
+MRFIXIT = pathlib.Path("/usr/share/assimp/models/IQM/mrfixit.iqm")
+
+
+def real_character(path, out):
+    """skinning-methods-mrfixit.png: the same four methods on a real character's left elbow bent by 100 degrees."""
+    if not path.exists():
+        print(f"skipped the real character: {path} is not there")
+        return
+    model = deform.import_model(str(path))["model"]
+    pose = posed(model, "LowerArm.L", (0.0, 0.0, 100.0))
+    skinned = skin_all(model, pose, deform.DirectDeltaMush(model), {})
+    fig = plt.figure(figsize=(12, 3.6), dpi=100)
+    for col, method in enumerate(METHODS):
+        points = skinned[method]
+        region, elbow, _ = arm_region(model, points, pose, ("UpperArm.L", "LowerArm.L", "Hand.L"), reach=1.8)
+        top = np.array([0.0, -0.2, 1.0]) / np.linalg.norm([0.0, -0.2, 1.0])  # from above: the arm bends level
+        ax = fig.add_subplot(1, 4, col + 1, projection="3d")
+        draw(ax, points, region, elbow, top, f"{method}\n{path.stem}, elbow bent 100°", radius=1.5, up=2)
+    fig.tight_layout()
+    fig.savefig(out / "skinning-methods-mrfixit.png")
+    plt.close(fig)
+    print(f"wrote {out}/skinning-methods-mrfixit.png")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--out", default="docs/images", help="folder for the PNG file")
-    out = pathlib.Path(parser.parse_args().out)
+    parser.add_argument("--out", default="docs/images", help="folder for the PNG files")
+    parser.add_argument("--real", default=str(MRFIXIT), help="the rigged model of the second picture")
+    args = parser.parse_args()
+    out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
     model = deform.builtin_character()
@@ -134,6 +161,7 @@ def main():
     fig.tight_layout()
     fig.savefig(out / "skinning-methods.png")
     plt.close(fig)
+    real_character(pathlib.Path(args.real), out)
     print(f"bind: Delta Mush {1e3 * min(timings['bind LBS + Delta Mush']):.1f} ms, "
           f"Direct Delta Mush {1e3 * ddm_bind:.1f} ms (this process, one run)")
     print(f"wrote {out}/skinning-methods.png")
