@@ -283,7 +283,9 @@ rig = {"rig": 1, "model": "builtin", "reach": {"effector": "hand_l", "root": "cl
 with open(os.path.join(work, "jiggle.rig.json"), "w") as f:
     json.dump(rig, f)
 walks = {}
-for name, args in (("walk.glb", ["--builtin"]), ("walk-jiggle.glb", ["--builtin", "--rig", "jiggle.rig.json"])):
+for name, args in (("walk.glb", ["--builtin"]), ("walk-jiggle.glb", ["--builtin", "--rig", "jiggle.rig.json"]),
+                   ("walk-inertia1.glb", ["--builtin", "--inertia", "1"]),
+                   ("walk-inertia0.glb", ["--builtin", "--inertia", "0"])):
     out = run("bake", *args, "--clip", "walk", "--fps", "10", "--out", name)
     written.append(name)
     if out:
@@ -292,12 +294,17 @@ for name, args in (("walk.glb", ["--builtin"]), ("walk-jiggle.glb", ["--builtin"
         check(doc["animations"][0]["name"] == "walk", f"bake {name}: animation {doc['animations'][0]['name']}")
         check(len(doc.get("images", [])) == 1, f"bake {name}: the texture is not embedded")
         walks[name] = frames
-if len(walks) == 2:
+if len(walks) == 4:
     # The walk moves the body; the jiggle moves the left arm's points away from the rigid walk's.
     a, b = walks["walk.glb"], walks["walk-jiggle.glb"]
     check(max(math.dist(p, q) for p, q in zip(a[5], a[0])) > 0.05, "bake --clip walk: the body does not move")
     jiggle = max(math.dist(p, q) for k in range(len(a)) for p, q in zip(a[k], b[k]))
     check(jiggle > 1e-3, f"bake --clip walk --rig jiggle: the lattices' inertia moves no point ({jiggle:g})")
+    # --inertia 1: every lattice at its part's tuned inertia, so the flesh jiggles; 0: the built-in rig's own (none).
+    tuned = max(math.dist(p, q) for k in range(len(a)) for p, q in zip(a[k], walks["walk-inertia1.glb"][k]))
+    check(tuned > 1e-3, f"bake --clip walk --inertia 1: no point jiggles ({tuned:g})")
+    still = max(math.dist(p, q) for k in range(len(a)) for p, q in zip(a[k], walks["walk-inertia0.glb"][k]))
+    check(still == 0.0, f"bake --clip walk --inertia 0 differs from the built-in rig's walk by {still:g}")
 if os.path.exists(wuson):
     out = run("bake", wuson, "--clip", "Wuson_Walk", "--seconds", "0.5", "--fps", "8", "--out", "wuson-walk.glb")
     written.append("wuson-walk.glb")
@@ -313,6 +320,8 @@ run("export", "--builtin", "--format", "gltf", "--out", "x.obj", expect=2)
 run("export", "--builtin", "--format", "fbx", "--out", "x.glb", expect=2)
 run("bake", "--builtin", "--target", "1.3,1.6,0.4", "--fps", "0", "--out", "bad.glb", expect=2)
 run("bake", mesh, "--lattice", "head.json", "--target", "1,1,1", "--out", "bad.glb", expect=2)
+run("bake", mesh, "--lattice", "head.json", "--inertia", "1", "--out", "bad.glb", expect=2)
+run("bake", "--builtin", "--clip", "walk", "--inertia", "1.5", "--out", "bad.glb", expect=2)
 for name in ("x.obj", "x.glb", "bad.glb", "none.glb"):
     check(not os.path.exists(os.path.join(work, name)), f"{name} was written by a failed command")
 

@@ -35,7 +35,7 @@ using Json = nlohmann::json;
 
 constexpr const char* usage =
     "usage: deform bake (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
-    "                   [--release-at T] [--seconds S] [--fps F] [--dt DT] --out FILE.(gltf|glb)\n"
+    "                   [--release-at T] [--inertia F] [--seconds S] [--fps F] [--dt DT] --out FILE.(gltf|glb)\n"
     "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
     "\n"
     "The files a RIG or MESH names are read only from its folder, or a folder --allow-outside DIR (repeatable)\n"
@@ -59,6 +59,9 @@ constexpr const char* usage =
     "  --fps F              frames per second, in (0, 240] (default 30); at most 1000 frames\n"
     "  --dt DT              largest simulation step, seconds (default 1/60); frames and the release split steps\n"
     "  --release-at T       seconds after the reach when the stretch is released (default 1.5)\n"
+    "  --inertia F          how much the lattices lag behind their bones' motion, in [0, 1], as `deform simulate\n"
+    "                       --inertia`: a scale of each lattice's tuned inertia (1 the tuned jiggle, 0 none);\n"
+    "                       default: the rig's own (0 in the default and built-in rigs)\n"
     "\n"
     "Prints {\"gltf\": FILE, \"bin\": path or null, \"bytes\", \"frames\", \"fps\", \"render_vertices\",\n"
     "\"stored_displacements\": sparse values over all frames (positions and normals)}.\n";
@@ -132,7 +135,8 @@ int bake_animated(const Args& args) {
   RiggedModel rigged = load_rigged_model(args);
   embed_builtin_texture(rigged.loaded);
   deform::Model model = std::move(rigged.loaded.model);
-  const deform::Rig rig = std::move(rigged.rig);
+  deform::Rig rig = std::move(rigged.rig);
+  apply_inertia_option(args, rig);
   const std::vector<deform::Animation> clips = std::move(rigged.loaded.clips);
   const deform::Animation* clip = clip_name ? &find_clip_or_fail(clips, *clip_name) : nullptr;
   // A clip alone lasts its own length (once round a loop); a reach, 3 s.
@@ -205,7 +209,7 @@ int bake_animated(const Args& args) {
 int bake_ffd(const Args& args) {
   const std::string out = checked_out(args);
   if (args.positionals().size() != 1) throw UsageError("an FFD bake takes exactly one MESH.obj");
-  for (const char* flag : {"--builtin", "--target", "--clip", "--release-at", "--dt", "--rig"})
+  for (const char* flag : {"--builtin", "--target", "--clip", "--release-at", "--dt", "--rig", "--inertia"})
     if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a reach bake, not an FFD (--lattice)");
   const Timing timing = parse_timing(args, 1.0);
   const std::string mesh_path = args.positionals()[0];
@@ -253,8 +257,8 @@ int bake_ffd(const Args& args) {
 }
 
 int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--target", "--clip", "--release-at", "--seconds",
-                                          "--fps",    "--dt",   "--lattice",    "--out"};
+  std::vector<std::string> value_flags = {"--target", "--clip",    "--release-at", "--seconds", "--fps",
+                                          "--dt",     "--lattice", "--out",        "--inertia"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {

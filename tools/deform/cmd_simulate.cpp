@@ -112,13 +112,7 @@ int run(const std::vector<std::string>& argv) {
     if (!(volume >= 0.0 && volume <= 1.0)) throw UsageError("--volume must be in [0, 1]");
     for (deform::LatticeSpec& spec : rig.lattices) spec.shape.volume = float(volume);
   }
-  if (const auto text = args.value("--inertia")) {
-    const double inertia = parse_number(*text, "--inertia");
-    if (!(inertia >= 0.0 && inertia <= 1.0)) throw UsageError("--inertia must be in [0, 1]");
-    // A scale, so that each part keeps its tuned character: limbs keep their length at any value (docs/cli.md).
-    for (deform::LatticeSpec& spec : rig.lattices)
-      spec.motion.inertia = deform::scaled_inertia(spec.motion.part, float(inertia));
-  }
+  apply_inertia_option(args, rig);
   std::int32_t effector = rig.reach_effector;
   if (const auto name = args.value("--effector")) {
     effector = model.skeleton.find(*name);

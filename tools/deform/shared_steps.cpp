@@ -14,6 +14,7 @@
 #include "deform/io/atomic_file.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
+#include "deform/runtime/hierarchy.hpp"
 #ifdef DEFORM_HAVE_STB
 #include <stb_image_write.h>
 #endif
@@ -101,6 +102,16 @@ std::string read_rig_text(const std::string& path) {
   if (kind != "a rig JSON file" && kind != "a JSON file" && kind != "a file that cannot be read")
     throw deform::Error::in_file(path, "", "expected a rig JSON file (--rig), got " + kind);
   return deform::read_file_text(path);
+}
+
+void apply_inertia_option(const Args& args, deform::Rig& rig) {
+  const auto text = args.value("--inertia");
+  if (!text) return;
+  const double inertia = parse_number(*text, "--inertia");
+  if (!(inertia >= 0.0 && inertia <= 1.0)) throw UsageError("--inertia must be in [0, 1]");
+  // A scale, so that each part keeps its tuned character: limbs keep their length at any value (docs/cli.md).
+  for (deform::LatticeSpec& spec : rig.lattices)
+    spec.motion.inertia = deform::scaled_inertia(spec.motion.part, float(inertia));
 }
 
 RiggedModel load_rigged_model(const Args& args, bool need_rig) {

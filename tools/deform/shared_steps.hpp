@@ -49,6 +49,10 @@ struct RiggedModel {
 // fail where the default rig would).
 RiggedModel load_rigged_model(const Args& args, bool need_rig = true);
 
+// --inertia F (`simulate`, `bake`): every lattice's inertia at F, in [0, 1], of its body part's tuned inertia
+// (deform::scaled_inertia), so that each part keeps its tuned character; nothing without the option.
+void apply_inertia_option(const Args& args, deform::Rig& rig);
+
 // Writes `rig` as a rig file at `path` (atomically) whose "model" names `named`'s files relative to `path`'s folder,
 // so that the file alone brings its model back (`deform simulate RIG.json`).
 void save_rig(const std::string& path, deform::Rig rig, const deform::RigModel& named,
