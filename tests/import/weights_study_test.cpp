@@ -9,6 +9,7 @@
 
 #include "deform/import/import.hpp"
 #include "deform/offline/heat_weights.hpp"
+#include "deform/offline/weight_tools.hpp"
 #include "deform/offline/weights.hpp"
 #include "study.hpp"
 
@@ -29,7 +30,8 @@ void check_model(const Expected& e) {
   const std::filesystem::path path = std::filesystem::path("/usr/share/assimp/models") / e.path;
   REQUIRE_MESSAGE(std::filesystem::exists(path), path.string() << " is missing: install Debian's assimp-testmodels");
   const deform::ImportedModel imported = deform::import_model(path.string());
-  const std::vector<std::uint8_t> deforming = weights_study::painted_bones(imported.model);
+  const std::vector<std::uint8_t> deforming =
+      deform::weighted_bones(imported.model.weights, imported.model.skeleton.bone_count());
   deform::HeatWeightsOptions heat_options;
   heat_options.deforming = deforming;
   const deform::WeightsResult heat =

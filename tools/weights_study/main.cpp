@@ -16,6 +16,7 @@
 
 #include "deform/import/import.hpp"
 #include "deform/offline/heat_weights.hpp"
+#include "deform/offline/weight_tools.hpp"
 #include "deform/offline/voxel_weights.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
@@ -103,7 +104,7 @@ int main(int argc, char** argv) {
     try {
       const deform::ImportedModel imported = deform::import_model(path);
       const deform::Model& model = imported.model;
-      std::vector<std::uint8_t> deforming = weights_study::painted_bones(model);
+      std::vector<std::uint8_t> deforming = deform::weighted_bones(model.weights, model.skeleton.bone_count());
       std::size_t deforming_count = 0;
       for (std::uint8_t d : deforming) deforming_count += d;
       if (all_bones) deforming.clear();

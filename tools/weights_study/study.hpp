@@ -107,15 +107,4 @@ inline Figures compare(const deform::Model& model, const std::vector<deform::Ani
   return f;
 }
 
-// Per bone, 1 when the artist gave it weight on some point (in a slot or past the fourth): the rig's deforming bones.
-inline std::vector<std::uint8_t> painted_bones(const deform::Model& model) {
-  std::vector<std::uint8_t> used(model.skeleton.bone_count(), 0);
-  for (std::size_t i = 0; i < model.weights.size(); ++i)
-    for (int k = 0; k < deform::max_influences; ++k)
-      if (model.weights.weights[i][k] > 0.0f) used[model.weights.bones[i][k]] = 1;
-  for (std::size_t e = 0; e < model.weights.extra_bones.size(); ++e)
-    if (model.weights.extra_weights[e] > 0.0f) used[model.weights.extra_bones[e]] = 1;
-  return used;
-}
-
 }  // namespace weights_study
