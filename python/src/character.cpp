@@ -195,6 +195,22 @@ void bind_character(py::module_& m) {
           [](const deform::Character& c) { return c.delta_mush() ? c.delta_mush()->iterations : 0u; },
           "The Delta Mush stage's iterations, 0 when it is off.")
       .def(
+          "set_direct_delta_mush",
+          [](deform::Character& c, int iterations, float step, float translation_blend, float translation_step,
+             float regularization, float prune) {
+            c.set_direct_delta_mush({iterations, step, translation_blend, translation_step, regularization, prune});
+          },
+          py::arg("iterations") = 4, py::arg("step") = 2.0f, py::arg("translation_blend") = 0.0f,
+          py::arg("translation_step") = 0.5f, py::arg("regularization") = 0.05f, py::arg("prune") = 1e-3f,
+          "Direct Delta Mush as the skinning (docs/skinning.md), in place of `skinning` while bound; the settings as "
+          "deform.DirectDeltaMush's. Binds at once (a sparse factorisation: call it at set-up); raises deform.Error "
+          "for a value out of range, changing nothing.")
+      .def("clear_direct_delta_mush", &deform::Character::clear_direct_delta_mush,
+           "Back to `skinning` (LBS or DQS), the default.")
+      .def_property_readonly(
+          "direct_delta_mush_bound", [](const deform::Character& c) { return c.direct_delta_mush() != nullptr; },
+          "Whether Direct Delta Mush skins the character.")
+      .def(
           "set_max_stretch", [](deform::Character& c, float s) { check(c.set_max_stretch(s)); }, py::arg("max_stretch"),
           "The largest stretch reach() asks of a lattice, in multiples of its length, [0, 1000].")
       .def(

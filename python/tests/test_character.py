@@ -111,3 +111,36 @@ def test_delta_mush_smooths_a_bent_elbow_and_gives_the_rest_back():
             mushed.set_delta_mush(**bad)
     mushed.clear_delta_mush()
     assert mushed.delta_mush_iterations == 0
+
+
+def test_direct_delta_mush_skins_in_place_of_lbs_and_matches_the_job():
+    lbs, ddm = deform.Character.builtin(), deform.Character.builtin()
+    assert not ddm.direct_delta_mush_bound
+    ddm.set_direct_delta_mush(iterations=4, step=2.0)
+    assert ddm.direct_delta_mush_bound
+    ddm.update(0.0)
+    np.testing.assert_allclose(ddm.positions, ddm.model.positions, atol=2e-5)  # the rest pose back
+    for c in (lbs, ddm):
+        pose = c.pose
+        c.skeleton.set_euler(pose, "forearm_l", [110, 0, 0])
+        c.pose = pose
+        c.update(0.0)
+    assert np.abs(ddm.positions - lbs.positions).max() > 1e-3
+    for bad in ({"iterations": 0}, {"step": float("nan")}, {"prune": 0.7}):
+        with pytest.raises(deform.Error):
+            ddm.set_direct_delta_mush(**bad)
+    assert ddm.direct_delta_mush_bound  # the binding in place kept
+    ddm.clear_direct_delta_mush()
+    assert not ddm.direct_delta_mush_bound
+    ddm.update(0.0)
+    np.testing.assert_array_equal(ddm.positions, lbs.positions)  # off: LBS to the bit
+    # Without lattices the character's points are the job's on the same pose's palette.
+    model = deform.Character.builtin().model
+    bare = deform.Character(model)
+    bare.set_direct_delta_mush()
+    pose = bare.pose
+    bare.skeleton.set_euler(pose, "forearm_l", [110, 0, 0])
+    bare.pose = pose
+    bare.update(0.0)
+    _, palette = deform.forward_kinematics(bare.skeleton, bare.pose)
+    np.testing.assert_allclose(bare.positions, deform.DirectDeltaMush(model).skin(palette), atol=1e-5)

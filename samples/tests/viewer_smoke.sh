@@ -6,8 +6,9 @@
 # frame after the reach again with the deformation on the GPU (--gpu), LBS and DQS, which must be the same pictures
 # (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
 # (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held; the
-# lattice overlay drawing the reaching limb's lattices only, unless all are asked for; imported characters framed by
-# the camera and standing on the floor, with and without their clip.
+# lattice overlay drawing the reaching limb's lattices only, unless all are asked for; the bent elbow with Direct
+# Delta Mush and with Delta Mush; imported characters framed by the camera and standing on the floor, with and
+# without their clip.
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -32,6 +33,14 @@ PY
 run --bare --screenshot "$work/near.png" --frames 40 --reach 0.3,1.15,0.3 --at 2
 run --bare --screenshot "$work/near_pole.png" --frames 40 --reach 0.3,1.15,0.3 --at 2 --pole 0.3,0.6,1.5
 "$check" "$work/near.png" "$work/near_pole.png"
+# The same bent elbow skinned by Direct Delta Mush (a rounder elbow) and with Delta Mush after LBS: other pictures
+# than LBS's; both CPU stages, so --gpu with them deforms on the CPU.
+run --bare --skinning ddm --screenshot "$work/near_ddm.png" --frames 40 --reach 0.3,1.15,0.3 --at 2 >/dev/null
+"$check" "$work/near.png" "$work/near_ddm.png"
+run --bare --mush 10 --screenshot "$work/near_mush.png" --frames 40 --reach 0.3,1.15,0.3 --at 2 >/dev/null
+"$check" "$work/near.png" "$work/near_mush.png"
+cpu=$(run --bare --skinning ddm --gpu --screenshot "$work/near_ddm_gpu.png" --frames 5 2>/dev/null)
+grep -q '"gpu_lattices": false' <<<"$cpu" || { echo "$cpu"; exit 1; }
 run --screenshot "$work/swing_twist.png" --frames 30 --reach 0.3,1.15,0.3 --at 2 --pole 0.3,0.6,1.5 \
   --limits swing-twist >/dev/null
 test -s "$work/swing_twist.png"

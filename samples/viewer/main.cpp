@@ -4,6 +4,7 @@
 //
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
 //                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
+//                 [--skinning lbs|dqs|ddm] [--mush N]
 //                 [--up y|z] [--lattices none|active|all]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
@@ -76,6 +77,7 @@ const char* usage =
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
+    "                     [--skinning lbs|dqs|ddm] [--mush N]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
@@ -90,12 +92,14 @@ const char* usage =
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
     "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
     "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
-    "skinning. --up z: the model's up axis is +Z (default: +Y, or what an imported file's metadata says).\n"
+    "skinning. --skinning ddm: Direct Delta Mush (CPU only; --dqs is --skinning dqs). --mush N: Delta Mush with N\n"
+    "iterations after the lattices (CPU only; 0, the default: off). --up z: the model's up axis is +Z (default: +Y, or "
+    "what an imported file's metadata says).\n"
     "--lattices: draw no lattice, the active limb's (default: the one reaching, else the one a click would move),\n"
     "or all of them (L cycles the three).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
     "elbow's hint); right drag orbits; middle drag or\n"
-    "shift+right drag pans; wheel zooms. Keys: D toggles LBS/DQS, S the skeleton,\n"
+    "shift+right drag pans; wheel zooms. Keys: D cycles LBS/DQS/DDM, S the skeleton,\n"
     "L cycles the lattices shown (active limb, all, none), G the GPU deformation, R resets, C frames the\n"
     "character again (the camera fitted to the playing clip), Esc quits.\n";
 
@@ -113,6 +117,8 @@ struct Options {
   bool bare = false;          // the character alone: no floor, props, overlays or panel (for pixel tests)
   bool gpu = false;           // start with the deformation (skinning and lattices) on the GPU
   bool dqs = false;           // start with dual quaternion skinning
+  bool ddm = false;           // start with Direct Delta Mush skinning (--skinning ddm)
+  int mush = 0;               // Delta Mush iterations after the lattices (--mush; 0: off)
   bool swing_twist = false;   // reach with swing-twist joint limits
   char up = 0;                // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   char lattices = 'a';        // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
@@ -190,7 +196,16 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--bare") o.bare = true;
     else if (a == "--gpu") o.gpu = true;
     else if (a == "--dqs") o.dqs = true;
-    else if (a == "--limits") {
+    else if (a == "--skinning") {
+      const std::string method = next();
+      if (method != "lbs" && method != "dqs" && method != "ddm")
+        fail("--skinning: '" + method + "' is not lbs, dqs or ddm");
+      o.dqs = method == "dqs";
+      o.ddm = method == "ddm";
+    } else if (a == "--mush") {
+      o.mush = parse_int(next(), "--mush");
+      if (o.mush > 10000) fail("--mush: more than 10000 iterations");
+    } else if (a == "--limits") {
       const std::string limits = next();
       if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
       o.swing_twist = limits == "swing-twist";
@@ -355,6 +370,9 @@ class Viewer {
     overlay_.create();
     scene_.update();
     if (options.dqs) character_->settings.skinning = deform::SkinningMethod::dqs;
+    ddm_ = options.ddm;
+    mush_iterations_ = options.mush;
+    apply_mush();
     if (options.gpu) {
       if (gpu_available_) set_gpu(true);
       else std::fprintf(stderr, "deform_viewer: --gpu: %s; deforming on the CPU\n", gpu_missing().c_str());
@@ -550,11 +568,24 @@ class Viewer {
     }
 
     if (ImGui::CollapsingHeader("Skinning and GPU")) {
-      int method = character_->settings.skinning == deform::SkinningMethod::dqs;
-      ImGui::RadioButton("LBS", &method, 0);
+      // LBS and DQS are Character::settings.skinning; DDM binds Direct Delta Mush, which takes precedence over it.
+      int method = ddm_ ? 2 : character_->settings.skinning == deform::SkinningMethod::dqs;
+      bool method_changed = ImGui::RadioButton("LBS", &method, 0);
       ImGui::SameLine();
-      ImGui::RadioButton("DQS", &method, 1);
-      character_->settings.skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+      method_changed |= ImGui::RadioButton("DQS", &method, 1);
+      ImGui::SameLine();
+      method_changed |= ImGui::RadioButton("DDM", &method, 2);
+      if (ImGui::IsItemHovered()) {
+        ImGui::SetTooltip("Direct Delta Mush: smooth bends without LBS's collapse; bound on first use, CPU only");
+      }
+      if (method_changed) {
+        if (method < 2)
+          character_->settings.skinning = method ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+        ddm_ = method == 2;
+        apply_mush();
+      }
+      if (ImGui::SliderInt("Delta Mush iterations", &mush_iterations_, 0, 50)) apply_mush();
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("smoothing after the lattices, detail kept; 0: off; CPU only");
       bool gpu = gpu_;
       ImGui::BeginDisabled(!gpu_available_);
       if (ImGui::Checkbox("GPU deformation", &gpu)) set_gpu(gpu);
@@ -666,6 +697,10 @@ class Viewer {
   // The whole deformation on the GPU (on) or the CPU (off): the character only poses, GpuSkinning skins from its
   // palette and GpuLatticeFields adds its lattices, all in the renderer's vertex buffer (whose UVs stay as created).
   void set_gpu(bool on) {
+    if (on && (ddm_ || mush_iterations_ > 0)) {  // GpuSkinning is LBS or DQS, and the GPU path has no Delta Mush
+      std::fprintf(stderr, "deform_viewer: Direct Delta Mush and Delta Mush are CPU stages; deforming on the CPU\n");
+      on = false;
+    }
     if (on && character_->morph_target_count() > 0) {  // GpuSkinning skins the bind positions, not the morphed ones
       std::fprintf(stderr,
                    "deform_viewer: the model has morph targets, which the GPU path does not apply; "
@@ -763,7 +798,19 @@ class Viewer {
     if (max_stretch_ < 0.0f) max_stretch_ = character_->rig().max_stretch;
     apply_shape();
     apply_reach_settings();
+    apply_mush();
     set_gpu(gpu_);
+  }
+
+  // The Character's mush stages as the panel holds them: Direct Delta Mush as the skinning (ddm_) and Delta Mush
+  // after the lattices (mush_iterations_). Binding allocates and takes a moment: only when a choice changes. Either
+  // one turns the GPU deformation off, which has neither.
+  void apply_mush() {
+    if (ddm_ && character_->direct_delta_mush() == nullptr) character_->set_direct_delta_mush({});
+    if (!ddm_) character_->clear_direct_delta_mush();
+    const unsigned mushed = character_->delta_mush() ? character_->delta_mush()->iterations : 0u;
+    if (unsigned(mush_iterations_) != mushed) character_->set_delta_mush({mush_iterations_, 0.5f, {}});
+    if (gpu_ && (ddm_ || mush_iterations_ > 0)) set_gpu(false);
   }
 
   // The floor under what plays: the bind pose's lowest point with no clip, else the clip's floor, the lower of the
@@ -990,10 +1037,17 @@ class Viewer {
   glm::mat4 character_world() const { return scene_.node(model_node_).world; }
 
   void handle_keys(int key) {
-    if (key == GLFW_KEY_D)
-      character_->settings.skinning = character_->settings.skinning == deform::SkinningMethod::lbs
-                                          ? deform::SkinningMethod::dqs
-                                          : deform::SkinningMethod::lbs;
+    if (key == GLFW_KEY_D) {  // LBS, DQS, DDM, LBS again
+      if (ddm_) {
+        ddm_ = false;
+        character_->settings.skinning = deform::SkinningMethod::lbs;
+      } else if (character_->settings.skinning == deform::SkinningMethod::dqs) {
+        ddm_ = true;
+      } else {
+        character_->settings.skinning = deform::SkinningMethod::dqs;
+      }
+      apply_mush();
+    }
     if (key == GLFW_KEY_S) show_skeleton_ = !show_skeleton_;
     if (key == GLFW_KEY_L)  // active limb, all, none, active again
       lattice_display_ = lattice_display_ == LatticeDisplay::active ? LatticeDisplay::all
@@ -1288,6 +1342,8 @@ class Viewer {
   float panel_right_ = 350.0f;         // pixels: the right edge of the panel over the window's left (0: none)
   deform::ElasticSettings elastic_ = unset_elastic();
   int degree_ = 0;
+  bool ddm_ = false;         // Direct Delta Mush skinning (the panel's DDM, D, --skinning ddm)
+  int mush_iterations_ = 0;  // Delta Mush after the lattices (the panel's slider, --mush); 0: off
   bool reaching_ = false, show_skeleton_ = true;
   LatticeDisplay lattice_display_ = LatticeDisplay::active;
   std::vector<char> lattice_shown_;     // per lattice: drawn this frame (lattice_display_; sized by rebuild)

@@ -369,6 +369,58 @@ static void delta_mush_smooths_a_bent_elbow(void) {
   deform_character_destroy(mushed);
 }
 
+/* Direct Delta Mush as the character's skinning: the rest pose comes back; a bent elbow differs from LBS; bad values
+ * are refused; iterations 0 turns it off, giving LBS's points to the bit. */
+static void character_direct_delta_mush(void) {
+  deform_character* plain = NULL;
+  deform_character* ddm = NULL;
+  CHECK(deform_character_create_builtin(&plain) == DEFORM_OK);
+  CHECK(deform_character_create_builtin(&ddm) == DEFORM_OK);
+  if (plain == NULL || ddm == NULL) return;
+  const size_t points = deform_character_point_count(plain), bones = deform_character_bone_count(plain);
+  float* rest = malloc(points * 3 * sizeof(float));
+  float* rotations = malloc(bones * 4 * sizeof(float));
+  float* translations = malloc(bones * 3 * sizeof(float));
+  CHECK(deform_character_copy_positions(plain, rest, points * 3) == DEFORM_OK);
+  CHECK(deform_character_set_direct_delta_mush(NULL, 4, 2.0f) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_direct_delta_mush(ddm, -1, 2.0f) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "iterations") != NULL);
+  CHECK(deform_character_set_direct_delta_mush(ddm, 4, NAN) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "step") != NULL);
+  CHECK(deform_character_set_direct_delta_mush(ddm, 4, 2.0f) == DEFORM_OK);
+  CHECK(deform_character_update(ddm, 0.0f) == DEFORM_OK);
+  double worst = 0.0;
+  for (size_t p = 0; p < points; ++p)
+    worst = fmax(worst, distance3(deform_character_positions(ddm) + 3 * p, rest + 3 * p));
+  CHECK(worst < 1e-4); /* the rest pose back (the character is about 2 units tall) */
+  CHECK(deform_character_bind_pose(plain, rotations, translations, bones) == DEFORM_OK);
+  const int32_t forearm = deform_character_find_bone(plain, "forearm_l");
+  CHECK(forearm >= 0);
+  if (forearm >= 0) {
+    const float half = 0.5f * 100.0f * 3.14159265f / 180.0f;
+    float* q = rotations + 4 * forearm;
+    q[0] = sinf(half), q[1] = 0.0f, q[2] = 0.0f, q[3] = cosf(half);
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    CHECK(deform_character_set_pose(plain, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_set_pose(ddm, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_update(plain, 0.0f) == DEFORM_OK);
+    CHECK(deform_character_update(ddm, 0.0f) == DEFORM_OK);
+    double moved = 0.0;
+    for (size_t p = 0; p < points; ++p)
+      moved =
+          fmax(moved, distance3(deform_character_positions(ddm) + 3 * p, deform_character_positions(plain) + 3 * p));
+    if (pass == 0) CHECK(moved > 1e-3); /* not LBS */
+    else CHECK(moved == 0.0);           /* off: LBS to the bit */
+    if (pass == 0) CHECK(deform_character_set_direct_delta_mush(ddm, 0, 0.0f) == DEFORM_OK);
+  }
+  free(rest);
+  free(rotations);
+  free(translations);
+  deform_character_destroy(plain);
+  deform_character_destroy(ddm);
+}
+
 /* Direct Delta Mush on a tube of 12 rings of 8 points along y, two bones (the joint at y = 5.5): the rest pose comes
  * back, one rigid transform on both bones moves every point and normal rigidly, and bad calls are refused. */
 static void direct_delta_mush_keeps_rest_and_rigid_motion(void) {
@@ -447,6 +499,7 @@ int main(void) {
   skinning_matches_a_plain_reference();
   lattice_matches_trilinear_interpolation();
   delta_mush_smooths_a_bent_elbow();
+  character_direct_delta_mush();
   direct_delta_mush_keeps_rest_and_rigid_motion();
   if (failures) {
     fprintf(stderr, "%d checks failed\n", failures);

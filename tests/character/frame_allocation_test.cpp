@@ -227,6 +227,47 @@ TEST_CASE(
   CHECK(c.morphed_bind_positions().data() != c.model().mesh.positions.data());
 }
 
+TEST_CASE(
+    "600 frames with Direct Delta Mush skinning allocate nothing: morph weights, reach, release, Delta Mush after it, "
+    "normals (transported and recomputed), cleared mid-way") {
+  deform::Model model = deform::builtin_character();
+  deform::MorphTarget swell;
+  swell.name = "swell";
+  for (std::size_t p = 0; p < model.mesh.point_count(); p += 3) {
+    swell.points.push_back(std::uint32_t(p));
+    swell.position_deltas.push_back(glm::vec3(0.0f, 0.01f, 0.02f));
+    swell.normal_deltas.push_back(glm::vec3(0.0f, 0.1f, 0.0f));
+  }
+  model.morph_targets.push_back(std::move(swell));
+  const deform::Rig rig = deform::builtin_rig(model);
+  std::vector<Character> characters;
+  characters.emplace_back(std::move(model), rig);
+  Character& c = characters.front();
+  c.set_normals_mode(Character::NormalsMode::recomputed);  // (its scratch at set-up)
+  c.set_normals_mode(Character::NormalsMode::transported);
+  c.set_direct_delta_mush({});  // binds here, at set-up: the frame then allocates nothing
+  c.set_delta_mush({4, 0.5f, {}});
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  const glm::vec3 shoulder = c.bone_position(c.skeleton().find("clavicle_l"));
+  Tally tally;
+  const long before = allocations.load();
+  for (int frame = 0; frame < 600; ++frame) {
+    tally.note(c.set_morph_weight("swell", 0.5f + 0.5f * std::sin(float(frame) * 0.1f)));
+    if (frame == 200) c.set_normals_mode(Character::NormalsMode::recomputed);
+    if (frame == 550) c.clear_direct_delta_mush();  // back to LBS: freeing the binding allocates nothing
+    if (frame >= 100 && frame < 300) {
+      tally.note(c.reach(hand, shoulder + glm::vec3(1.0f, 0.2f, 0.3f)).status);
+      ++tally.reaches;
+    }
+    if (frame == 300) c.release();
+    tally.note(c.update(dt));
+    tally.normals_checksum += c.normals()[std::size_t(frame) % 100].z;
+    tally.largest_stretch = std::max(tally.largest_stretch, c.stretch());
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+}
+
 #if defined(DEFORM_HAVE_IMPORT)
 TEST_CASE("1,000 frames of an imported character allocate nothing: clip, reach, release, update, normals") {
   const std::string path = "/usr/share/assimp/models/X/Testwuson.X";  // Debian's assimp-testmodels

@@ -237,6 +237,21 @@ deform_status deform_character_set_delta_mush(deform_character* character, int i
   });
 }
 
+deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations, float step) {
+  if (character == nullptr) return fail_argument("deform_character_set_direct_delta_mush: the handle is NULL");
+  return guarded([&] {
+    if (iterations == 0) {
+      character->character.clear_direct_delta_mush();
+      return DEFORM_OK;
+    }
+    deform::DirectDeltaMushSettings settings;
+    settings.iterations = iterations;
+    settings.step = step;
+    character->character.set_direct_delta_mush(settings);  // throws deform::Error (argument), changing nothing
+    return DEFORM_OK;
+  });
+}
+
 deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],
                                      deform_reach_result* result) {
   if (character == nullptr || target == nullptr)

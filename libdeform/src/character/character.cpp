@@ -192,6 +192,7 @@ Character Character::instance() const {
   Character copy(bind_, rig(), hierarchy_);  // the spring chains made with their current settings
   copy.settings = settings;
   copy.set_normals_mode(normals_mode_);
+  copy.direct_mush_ = direct_mush_;  // Direct Delta Mush: the binding shared (its job has no scratch)
   copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
@@ -507,6 +508,36 @@ void Character::prefetch() const noexcept {
   hierarchy_.prefetch();
 }
 
+// LBS or DQS (settings.skinning) of the (morphed) bind points and, transporting, their normals into positions_ and
+// point_normals(). No allocation.
+Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
+                       bool transport) noexcept {
+  const Model& bound = bind_->model;
+  SkinningJob job;
+  job.method = settings.skinning;
+  job.matrices = palette_;
+  job.bone_indices = bound.weights.bones;
+  job.bone_weights = bound.weights.weights;
+  job.extra_vertices = bound.weights.extra_points;
+  job.extra_offsets = bound.weights.extra_offsets;
+  job.extra_bones = bound.weights.extra_bones;
+  job.extra_weights = bound.weights.extra_weights;
+  job.in_positions = as_floats(rest_positions);
+  job.out_positions = as_floats(std::span<glm::vec3>(positions_));
+  if (transport) {
+    job.in_normals = as_floats(rest_normals);
+    job.out_normals = as_floats(point_normals());
+  }
+  if (settings.skinning == SkinningMethod::dqs) {
+    bool has_scale = false;
+    if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))
+      return Status::failure("skinning palette is singular or not finite");
+    job.dual_quats = dual_quats_;
+    if (has_scale) job.scales = scales_;
+  }
+  return job.run();
+}
+
 Status Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
   // A crowd's characters are cold when their update starts: ask for every small array at once, so that their
@@ -565,31 +596,24 @@ Status Character::update(float dt) {
     if (const Status status = morph.run(); !status) return status;
     rest_positions = morphed_positions_;
   }
-  SkinningJob job;
-  job.method = settings.skinning;
-  job.matrices = palette_;
-  job.bone_indices = bound.weights.bones;
-  job.bone_weights = bound.weights.weights;
-  job.extra_vertices = bound.weights.extra_points;
-  job.extra_offsets = bound.weights.extra_offsets;
-  job.extra_bones = bound.weights.extra_bones;
-  job.extra_weights = bound.weights.extra_weights;
-  job.in_positions = as_floats(rest_positions);
-  job.out_positions = as_floats(std::span<glm::vec3>(positions_));
-  if (transport) {
-    job.in_normals = as_floats(rest_normals);
-    job.out_normals = as_floats(point_normals());
-  }
-  if (settings.skinning == SkinningMethod::dqs) {
-    bool has_scale = false;
-    if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))
-      return Status::failure("skinning palette is singular or not finite");
-    job.dual_quats = dual_quats_;
-    if (has_scale) job.scales = scales_;
-  }
   normals_current_ = false;
   transported_current_ = false;
-  if (const Status status = job.run(); !status) return status;
+  if (direct_mush_) {
+    // Direct Delta Mush in place of settings.skinning: the morphed points' offsets from the rest points turn with
+    // their points, and so do the transported normals (the rotation of each point's smoothed neighbourhood).
+    DirectDeltaMushJob ddm;
+    ddm.binding = direct_mush_.get();
+    ddm.matrices = palette_;
+    if (morphed_) ddm.in_positions = rest_positions;
+    ddm.out_positions = positions_;
+    if (transport) {
+      ddm.in_normals = rest_normals;
+      ddm.out_normals = point_normals();
+    }
+    if (const Status status = ddm.run(); !status) return status;
+  } else if (const Status status = skin(rest_positions, rest_normals, transport); !status) {
+    return status;
+  }
   if (const Status status = hierarchy_.update(world_); !status) return status;
   if (!settings.lattice_fields) {
     // The carried points only translate: their normals stay as skinned.
@@ -621,6 +645,21 @@ void Character::set_delta_mush(const DeltaMushSettings& mush) {
   mush_ = std::move(binding);
   mush_scratch_ = std::move(scratch);
 }
+
+void Character::set_direct_delta_mush(const DirectDeltaMushSettings& ddm) {
+  auto binding = std::make_shared<const DirectDeltaMushBinding>(
+      bind_direct_delta_mush(bind_->model.mesh, bind_->model.weights, ddm));
+  // Checked once here, so that update() cannot refuse it: the palette is the skeleton's, the spans one per point.
+  DirectDeltaMushJob job;
+  job.binding = binding.get();
+  job.matrices = palette_;
+  job.out_positions = positions_;
+  if (const Status status = job.validate(); !status)
+    throw Error::invalid_argument("direct delta mush", status.reason());
+  direct_mush_ = std::move(binding);
+}
+
+void Character::clear_direct_delta_mush() noexcept { direct_mush_.reset(); }
 
 void Character::clear_delta_mush() noexcept {
   mush_.reset();

@@ -109,6 +109,14 @@ DEFORM_C_API deform_status deform_character_set_lattice_motion(deform_character*
 DEFORM_C_API deform_status deform_character_set_delta_mush(deform_character* character, int iterations, float step,
                                                            const float* mask, size_t mask_count);
 
+/* Direct Delta Mush as the character's skinning (Character::set_direct_delta_mush, docs/skinning.md "Direct Delta
+ * Mush"), in place of LBS while bound: `iterations` smoothing steps in [0, 100] (0: off, the default: LBS again),
+ * `step` > 0 (2 is the usual); the other settings keep their defaults. Binds at once (allocates and takes time, a
+ * sparse factorisation: call it at set-up); from the next update() the points are skinned by it. DEFORM_ERROR_ARGUMENT
+ * naming the value for one out of range, changing nothing. */
+DEFORM_C_API deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations,
+                                                                  float step);
+
 typedef struct deform_reach_result {
   float residual; /* |target - effector| after IK alone (model units) */
   float stretch;  /* stretch asked of the chain's lattices (model units) */

@@ -52,6 +52,7 @@
 #include "deform/character/export.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/offline/delta_mush.hpp"
+#include "deform/offline/direct_delta_mush.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/hierarchy.hpp"
@@ -92,8 +93,8 @@ class DEFORM_CHARACTER_API Character {
 
   // Another character of the same model and rig, sharing this one's immutable bind data (model(), the normals
   // binding and bind normals: not copied) with its own per-frame state: bind pose, springs at rest, no reach, default
-  // morph weights, `settings` whole, the normals mode, max stretch and Delta Mush, the lattices' current elastic
-  // settings, shapes and motion, and the spring chains' settings copied.
+  // morph weights, `settings` whole, the normals mode, max stretch, Delta Mush and Direct Delta Mush (their bindings
+  // shared), the lattices' current elastic settings, shapes and motion, and the spring chains' settings copied.
   // Allocates that state only (about 142 KB for the built-in character; docs/performance.md, "2026-11-24, late").
   Character instance() const;
 
@@ -158,6 +159,23 @@ class DEFORM_CHARACTER_API Character {
   // The binding in use, or null when the stage is off.
   const DeltaMushBinding* delta_mush() const noexcept { return mush_.get(); }
 
+  // Direct Delta Mush (runtime/direct_delta_mush.hpp) as the skinning, off by default: while it is bound, update()
+  // skins with DirectDeltaMushJob over palette() in place of settings.skinning (which it overrides, LBS or DQS alike,
+  // and which takes effect again once it is cleared); morph targets, the lattices and the Delta Mush stage then run
+  // after it as they do after LBS. The morphed bind points go in as the job's input points (each morph offset turned
+  // with its point). Transported normals (normals_mode()) turn by each point's DDM rotation, the rotation of its
+  // smoothed neighbourhood, so they follow the surface the job makes, not the bones' blended matrix whose cofactor
+  // would disagree with the smoothed positions near joints; recomputed normals are recomputed, as always.
+  // set_direct_delta_mush binds it for this model's mesh and weights (bind_direct_delta_mush: allocates, costs a
+  // sparse factorisation and solves, and throws deform::Error as the binder does, changing nothing: call it at
+  // set-up) and takes effect at the next update(). It runs only when update() deforms (deform_on_cpu; else the caller
+  // skins, with direct_delta_mush() and palette()). Instances share the binding. Off, the frame is what it was without
+  // it, to the bit. No allocation per frame: the job needs no scratch.
+  void set_direct_delta_mush(const DirectDeltaMushSettings& settings);
+  void clear_direct_delta_mush() noexcept;
+  // The binding in use, or null when Direct Delta Mush is off.
+  const DirectDeltaMushBinding* direct_delta_mush() const noexcept { return direct_mush_.get(); }
+
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
   const SpringChains& springs() const noexcept { return springs_; }
@@ -168,8 +186,9 @@ class DEFORM_CHARACTER_API Character {
 
   // The knobs that need no check when set: plain values, read by the next update() or reach(), copied whole by
   // instance(). Settings with an invariant to keep have setters instead (set_max_stretch, set_normals_mode,
-  // set_delta_mush).
+  // set_delta_mush, set_direct_delta_mush).
   struct Settings {
+    // LBS or DQS; a bound Direct Delta Mush (set_direct_delta_mush) takes precedence over it.
     SkinningMethod skinning = SkinningMethod::lbs;
     // true (the default): update() deforms completely. false: update() leaves out the lattices' Bézier fields
     // (DeformerHierarchy::apply_carried instead of apply) for a caller that evaluates them elsewhere, e.g. on a GPU,
@@ -301,6 +320,9 @@ class DEFORM_CHARACTER_API Character {
   void allocate_frame_state();
   void forget_held_specs() noexcept;
   void clamp_pose(Pose& pose) const noexcept;
+  // update()'s LBS or DQS (settings.skinning) of the (morphed) bind points, and their normals when transporting.
+  Status skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
+              bool transport) noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
   std::span<glm::vec3> point_normals() noexcept;
 
@@ -348,6 +370,8 @@ class DEFORM_CHARACTER_API Character {
   // Delta Mush: the binding (shared by instances; null when off) and the job's scratch.
   std::shared_ptr<const DeltaMushBinding> mush_;
   std::vector<glm::vec4> mush_scratch_;
+  // Direct Delta Mush: the binding (shared by instances; null when off). Its job needs no scratch.
+  std::shared_ptr<const DirectDeltaMushBinding> direct_mush_;
 };
 
 // The limbs reach() stretches, for a caller that reaches with "the nearest limb" (a click beside the character):
