@@ -94,8 +94,8 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
 
 // The proper rotation R maximising trace(Rᵀ C) (the rotation of C's polar decomposition, with a reflection turned into
 // the nearest rotation: U diag(1, 1, det UVᵀ) Vᵀ), found by Newton steps on the rotation group from `start`. C must not
-// be close to rank 1 for a unique answer (the binder's spread sees to that for the job). For the job and the tests;
-// no allocation.
+// be close to rank 1 for a unique answer (the binder's spread sees to that for the job). The job runs the
+// same steps on blocks of points at once; this one is for callers and the tests. No allocation.
 DEFORM_RUNTIME_API glm::quat nearest_rotation(const glm::mat3& c, glm::quat start) noexcept;
 
 }  // namespace deform
