@@ -1,6 +1,6 @@
 // Run by ctest in the sanitizer build only (tests/CMakeLists.txt): an accessor's index precondition is checked there.
 // Reading lattice 0 of a hierarchy with none must stop the program with libstdc++'s assertion; reaching the end
-// means the check is off, and ctest then finds no assertion text in the output and fails the test.
+// means the check is off, and precondition_checked.cmake, which runs it, then fails the test.
 #include <cstdio>
 
 #include "deform/runtime/hierarchy.hpp"
