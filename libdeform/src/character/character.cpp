@@ -108,18 +108,7 @@ Character::Character(Model model, const Rig& rig)
   }
   forget_held_specs();
   allocate_frame_state();
-  SkinningJob job;
-  job.matrices = palette_;
-  job.bone_indices = bound.weights.bones;
-  job.bone_weights = bound.weights.weights;
-  job.extra_vertices = bound.weights.extra_points;
-  job.extra_offsets = bound.weights.extra_offsets;
-  job.extra_bones = bound.weights.extra_bones;
-  job.extra_weights = bound.weights.extra_weights;
-  job.in_positions = as_floats(std::span<const glm::vec3>(bound.mesh.positions));
-  job.out_positions = as_floats(std::span<glm::vec3>(positions_));
-  job.in_normals = as_floats(std::span<const glm::vec3>(bind_->point_normals));
-  job.out_normals = as_floats(point_normals());
+  const SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, true);
   if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
   if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
 }
@@ -508,13 +497,12 @@ void Character::prefetch() const noexcept {
   hierarchy_.prefetch();
 }
 
-// LBS or DQS (settings.skinning) of the (morphed) bind points and, transporting, their normals into positions_ and
-// point_normals(). No allocation.
-Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                       bool transport) noexcept {
+// The skinning job of this character's weights and palette, from `rest_positions` (and, transporting, their normals)
+// into positions_ and point_normals(); the method and DQS palette are the caller's. No allocation.
+SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
+                                    bool transport) noexcept {
   const Model& bound = bind_->model;
   SkinningJob job;
-  job.method = settings.skinning;
   job.matrices = palette_;
   job.bone_indices = bound.weights.bones;
   job.bone_weights = bound.weights.weights;
@@ -528,6 +516,15 @@ Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<cons
     job.in_normals = as_floats(rest_normals);
     job.out_normals = as_floats(point_normals());
   }
+  return job;
+}
+
+// LBS or DQS (settings.skinning) of the (morphed) bind points and, transporting, their normals into positions_ and
+// point_normals(). No allocation.
+Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
+                       bool transport) noexcept {
+  SkinningJob job = skinning_job(rest_positions, rest_normals, transport);
+  job.method = settings.skinning;
   if (settings.skinning == SkinningMethod::dqs) {
     bool has_scale = false;
     if (!compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale))

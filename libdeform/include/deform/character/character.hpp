@@ -321,6 +321,8 @@ class DEFORM_CHARACTER_API Character {
   void forget_held_specs() noexcept;
   void clamp_pose(Pose& pose) const noexcept;
   // update()'s LBS or DQS (settings.skinning) of the (morphed) bind points, and their normals when transporting.
+  SkinningJob skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
+                           bool transport) noexcept;
   Status skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
               bool transport) noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
