@@ -1,8 +1,10 @@
 // Skinned positions of a glTF file as three.js computes them (the peer of tests/cli/gltf_peer_test.py).
-// Usage: [MORPHS='{"NAME": W}'] node three_skin.mjs MODEL.gltf|MODEL.glb [ANIMATION_INDEX TIME]
+// Usage: [MORPHS='{"NAME": W}'] node three_skin.mjs MODEL.gltf|MODEL.glb [ANIMATION_INDEX TIME[,TIME...]]
 // Prints {"corners": [[x, y, z], ...], "animations": [names]}: the world position of every triangle corner of every
 // mesh, in scene order (three's traversal, the glTF node order), posed by AnimationMixer at TIME seconds when an
-// animation index is given, else at the node tree's rest. Textures and materials are dropped before loading (there
+// animation index is given, else at the node tree's rest. With several times (a comma-separated list) it prints
+// {"frames": [corners at each time], "animations": [...]} instead, the animation played once and held at its end
+// (LoopOnce, clampWhenFinished), so that a time at the clip's end shows its last key rather than its first. Textures and materials are dropped before loading (there
 // is no DOM to decode images in), and buffers are handed over as data: URIs (node's fetch reads no file: URLs).
 import fs from 'node:fs';
 import path from 'node:path';
@@ -110,36 +112,57 @@ for (const clip of gltf.animations)
       if (length > 0) for (let c = 0; c < 4; ++c) values[i + c] /= length;
     }
   }
+const times = timeArg === undefined ? [] : timeArg.split(',').map(Number);
+let action = null;
 if (animationArg !== undefined) {
-  const mixer = new THREE.AnimationMixer(scene);
-  mixer.clipAction(gltf.animations[Number(animationArg)]).play();
-  mixer.update(Number(timeArg));
+  action = new THREE.AnimationMixer(scene).clipAction(gltf.animations[Number(animationArg)]);
+  if (times.length > 1) {
+    action.setLoop(THREE.LoopOnce);
+    action.clampWhenFinished = true;
+  }
+  action.play();
 }
 // MORPHS='{"NAME": weight, ...}' sets those morph targets' influences (by mesh.extras.targetNames) after the pose.
-if (process.env.MORPHS) {
+const setMorphs = () => {
+  if (!process.env.MORPHS) return;
   const morphs = JSON.parse(process.env.MORPHS);
   scene.traverse((object) => {
     if (!object.morphTargetDictionary) return;
     for (const [name, weight] of Object.entries(morphs))
       if (name in object.morphTargetDictionary) object.morphTargetInfluences[object.morphTargetDictionary[name]] = weight;
   });
-}
-scene.updateMatrixWorld(true);
+};
 scene.traverse((object) => {
   if (object.isSkinnedMesh && extraSets(object.geometry).length > 0) object.applyBoneTransform = skinAllSets;
 });
-const corners = [];
-const v = new THREE.Vector3();
-scene.traverse((object) => {
-  if (!object.isMesh) return;
-  const geometry = object.geometry;
-  const listed = geometry.index ? geometry.index.count : geometry.attributes.position.count;
-  const count = listed - (listed % 3);  // a trailing incomplete triangle draws nothing
-  for (let i = 0; i < count; ++i) {
-    const vertex = geometry.index ? geometry.index.getX(i) : i;
-    object.getVertexPosition(vertex, v);
-    v.applyMatrix4(object.matrixWorld);
-    corners.push([v.x, v.y, v.z]);
+const cornersNow = () => {
+  setMorphs();
+  scene.updateMatrixWorld(true);
+  const corners = [];
+  const v = new THREE.Vector3();
+  scene.traverse((object) => {
+    if (!object.isMesh) return;
+    const geometry = object.geometry;
+    const listed = geometry.index ? geometry.index.count : geometry.attributes.position.count;
+    const count = listed - (listed % 3);  // a trailing incomplete triangle draws nothing
+    for (let i = 0; i < count; ++i) {
+      const vertex = geometry.index ? geometry.index.getX(i) : i;
+      object.getVertexPosition(vertex, v);
+      v.applyMatrix4(object.matrixWorld);
+      corners.push([v.x, v.y, v.z]);
+    }
+  });
+  return corners;
+};
+const animations = gltf.animations.map((a) => a.name);
+if (times.length > 1) {
+  const frames = [];
+  for (const time of times) {
+    action.getMixer().setTime(time);
+    frames.push(cornersNow());
   }
-});
-process.stdout.write(JSON.stringify({ corners, animations: gltf.animations.map((a) => a.name) }));
+  process.stdout.write(JSON.stringify({ frames, animations }));
+} else {
+  if (action) action.getMixer().update(times[0]);
+  process.stdout.write(JSON.stringify({ corners: cornersNow(), animations }));
+}

@@ -1,7 +1,9 @@
-// deform bake: a deformation over time as a glTF 2.0 morph-target animation that any glTF viewer plays
-// (docs/cli.md, docs/gltf-export.md). Two sources: the reach-stretch-release `deform simulate` runs, and a Bézier FFD
-// growing from rest to its full displacement.
+// deform bake: a deformation over time as glTF 2.0 that any glTF viewer plays (docs/cli.md, docs/gltf-export.md):
+// morph targets, one per frame, or (--as bones) a skinning decomposition into extra bones. Two sources: the
+// reach-stretch-release `deform simulate` runs (or a clip with its jiggle), and a Bézier FFD growing from rest to its
+// full displacement.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -22,6 +24,7 @@
 #include "deform/io/text.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/offline/skinning_decomposition.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/lattice.hpp"
@@ -35,14 +38,20 @@ using Json = nlohmann::json;
 
 constexpr const char* usage =
     "usage: deform bake (--builtin | MODEL | RIG) [--rig FILE] (--target X,Y,Z | --clip NAME | both)\n"
-    "                   [--release-at T] [--inertia F] [--seconds S] [--fps F] [--dt DT] --out FILE.(gltf|glb)\n"
+    "                   [--release-at T] [--inertia F] [--seconds S] [--fps F] [--dt DT]\n"
+    "                   [--as morphs | --as bones [--max-bones N] [--influences 4|8]] --out FILE.(gltf|glb)\n"
     "       deform bake MESH.obj --lattice L.json [--seconds S] [--fps F] --out FILE.(gltf|glb)\n"
     "\n"
     "The files a RIG or MESH names are read only from its folder, or a folder --allow-outside DIR (repeatable)\n"
     "names (docs/security.md).\n"
     "Writes a deformation over time as glTF 2.0 that any glTF viewer plays: the mesh at its bind pose plus one morph\n"
     "target per frame (sparse: only the vertices that move), and one animation whose weights show frame k at k/F\n"
-    "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md).\n"
+    "seconds and blend neighbouring frames linearly in between (docs/gltf-export.md). With --as bones, the same "
+    "motion\n"
+    "as ordinary skeletal animation instead: the model's bones with their motion, plus at most N extra bones, each "
+    "the\n"
+    "child of a body bone, whose motion and weights (on the points the deformers move; the others keep theirs) a\n"
+    "skinning decomposition fits to the frames, so that any engine plays, blends and retimes it.\n"
     "\n"
     "  --builtin | MODEL | RIG   what `deform simulate` runs, with the same rig, target, clip and release: the\n"
     "                       built-in character, any model (an import, or MESH.obj --skeleton S.sk --weights W.skw)\n"
@@ -62,9 +71,14 @@ constexpr const char* usage =
     "  --inertia F          how much the lattices lag behind their bones' motion, in [0, 1], as `deform simulate\n"
     "                       --inertia`: a scale of each lattice's tuned inertia (1 the tuned jiggle, 0 none);\n"
     "                       default: the rig's own (0 in the default and built-in rigs)\n"
+    "  --as morphs|bones    what the file holds (default morphs); bones needs a reach or a clip, not an FFD\n"
+    "  --max-bones N        --as bones: at most N extra bones, in [0, 1000] (default 24)\n"
+    "  --influences 4|8     --as bones: at most this many weights per moved point (default 4; 8 writes JOINTS_1)\n"
     "\n"
     "Prints {\"gltf\": FILE, \"bin\": path or null, \"bytes\", \"frames\", \"fps\", \"render_vertices\",\n"
-    "\"stored_displacements\": sparse values over all frames (positions and normals)}.\n";
+    "\"seconds\": the bake's wall-clock time}, and \"stored_displacements\" (sparse values over all frames, positions\n"
+    "and normals) for morphs, or for bones \"extra_bones\", \"moved_points\", \"iterations\", and \"rms_error\" and\n"
+    "\"max_error\": the distance of the bones' skinning from the frames, as fractions of the bounding-box diagonal.\n";
 
 constexpr double max_frames = 1000;
 
@@ -100,29 +114,91 @@ std::string checked_out(const Args& args) {
   return out;
 }
 
-// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none. Textures the model holds
-// in memory (Material::diffuse_image) are embedded whatever it says.
-int write(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked, const Timing& timing,
-          const std::string& texture_root, const deform::ReferencePolicy& references) {
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// --as bones and its settings.
+struct BonesRequest {
+  bool bones = false;
+  deform::DecompositionOptions options;
+};
+
+BonesRequest parse_bones_request(const Args& args) {
+  BonesRequest request;
+  if (const auto as = args.value("--as")) {
+    if (*as != "morphs" && *as != "bones") throw UsageError("--as must be morphs or bones");
+    request.bones = *as == "bones";
+  }
+  if (!request.bones && (args.has("--max-bones") || args.has("--influences")))
+    throw UsageError("--max-bones and --influences belong to --as bones");
+  if (const auto n = args.value("--max-bones")) {
+    const double bones = parse_number(*n, "--max-bones");
+    if (!(bones >= 0.0 && bones <= 1000.0) || bones != std::floor(bones))
+      throw UsageError("--max-bones must be a whole number in [0, 1000]");
+    request.options.max_bones = static_cast<std::size_t>(bones);
+  }
+  if (const auto n = args.value("--influences")) {
+    if (*n != "4" && *n != "8") throw UsageError("--influences must be 4 or 8");
+    request.options.influences = *n == "4" ? 4 : 8;
+  }
+  return request;
+}
+
+deform::GltfExportOptions export_options(const std::string& texture_root, const deform::ReferencePolicy& references) {
   deform::GltfExportOptions options;
-  options.baked = &baked;
   options.texture_root = texture_root;
   options.references = references;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
-  const deform::GltfWritten written = deform::write_gltf(out, model, options);
+  return options;
+}
+
+Json written_json(const deform::GltfWritten& written, const Timing& timing) {
   for (const std::string& w : written.warnings) note(w);
-  print_json(Json{{"gltf", written.gltf},
-                  {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
-                  {"bytes", written.bytes},
-                  {"frames", written.morph_targets},
-                  {"fps", timing.fps},
-                  {"render_vertices", written.vertices},
-                  {"stored_displacements", written.sparse_values}});
+  return Json{{"gltf", written.gltf},   {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
+              {"bytes", written.bytes}, {"frames", timing.frames},
+              {"fps", timing.fps},      {"render_vertices", written.vertices}};
+}
+
+// `texture_root`: the only folder textures are embedded from (the mesh's own); empty: none. Textures the model holds
+// in memory (Material::diffuse_image) are embedded whatever it says.
+int write_morphs(const std::string& out, const deform::Model& model, const deform::BakedFrames& baked,
+                 const Timing& timing, const deform::GltfExportOptions& base, Clock::time_point start) {
+  deform::GltfExportOptions options = base;
+  options.baked = &baked;
+  const deform::GltfWritten written = deform::write_gltf(out, model, options);
+  Json json = written_json(written, timing);
+  json["stored_displacements"] = written.sparse_values;
+  json["seconds"] = seconds_since(start);
+  print_json(json);
+  return exit_ok;
+}
+
+// The frames as bones: the decomposition's skeleton, weights and clip on the rest mesh.
+int write_bones(const std::string& out, deform::Model model, const deform::DecompositionFrames& frames,
+                const BonesRequest& request, const std::string& name, const Timing& timing,
+                const deform::GltfExportOptions& base, Clock::time_point start) {
+  deform::SkinningDecomposition fitted = deform::decompose_skinning(model, frames, request.options, name);
+  model.skeleton = std::move(fitted.skeleton);
+  model.weights = std::move(fitted.weights);
+  deform::GltfExportOptions options = base;
+  options.clips = std::span<const deform::Animation>(&fitted.clip, 1);
+  const deform::GltfWritten written = deform::write_gltf(out, model, options);
+  Json json = written_json(written, timing);
+  json["extra_bones"] = fitted.extra_bones;
+  json["moved_points"] = fitted.moved_points.size();
+  json["iterations"] = fitted.iterations;
+  json["rms_error"] = fitted.rms_error;
+  json["max_error"] = fitted.max_error;
+  json["seconds"] = seconds_since(start);
+  print_json(json);
   return exit_ok;
 }
 
 int bake_animated(const Args& args) {
+  const Clock::time_point start = Clock::now();
   const std::string out = checked_out(args);
+  BonesRequest request = parse_bones_request(args);
   const auto target_text = args.value("--target");
   const auto clip_name = args.value("--clip");
   if (!target_text && !clip_name) throw UsageError("give --target, --clip or both (or MESH.obj --lattice L.json)");
@@ -150,6 +226,8 @@ int bake_animated(const Args& args) {
   if (!character.update(0.0f)) throw std::runtime_error("internal error: the bind pose did not deform");
   const std::span<const glm::vec3> bind_normals = character.normals();
   rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
+  // The extra bones start from the lattices' slices, where the rubber moves the points.
+  if (request.bones) request.options.seeds = deform::decomposition_seeds(character.deformers(), character.skeleton());
 
   // The pose at time t: the clip's, moving as it does (ClipPlayer), then the reach on top.
   std::optional<ClipPlayer> player;
@@ -162,6 +240,7 @@ int bake_animated(const Args& args) {
   };
 
   deform::BakedFrames baked;
+  deform::DecompositionFrames frames;  // --as bones: the bones' matrices and the points, frame by frame
   baked.name = clip != nullptr ? clip->name : "reach";
   baked.position_tolerance = 1e-6f * diagonal(rest.mesh.positions);
   baked.normal_tolerance = 1e-5f;
@@ -171,6 +250,14 @@ int bake_animated(const Args& args) {
       throw UsageError(std::string("a simulation step was refused: ") + status.reason());
   };
   const auto keep = [&](std::size_t k) {
+    if (request.bones) {
+      const std::span<const glm::mat4> palette = character.palette(), bind = character.skeleton().bind_world();
+      std::vector<glm::mat4>& world = frames.bone_world.emplace_back(palette.size());
+      for (std::size_t b = 0; b < palette.size(); ++b) world[b] = palette[b] * bind[b];
+      frames.times.push_back(float(timing.time(k)));
+      frames.positions.emplace_back(character.positions().begin(), character.positions().end());
+      return;
+    }
     baked.times.push_back(float(timing.time(k)));
     baked.positions.emplace_back(character.positions().begin(), character.positions().end());
     const std::span<const glm::vec3> normals = character.normals();
@@ -203,11 +290,16 @@ int bake_animated(const Args& args) {
     now = t;
     keep(k);
   }
-  return write(out, rest, baked, timing, rigged.texture_root, reference_policy(args));
+  const deform::GltfExportOptions options = export_options(rigged.texture_root, reference_policy(args));
+  if (request.bones) return write_bones(out, std::move(rest), frames, request, baked.name, timing, options, start);
+  return write_morphs(out, rest, baked, timing, options, start);
 }
 
 int bake_ffd(const Args& args) {
+  const Clock::time_point start = Clock::now();
   const std::string out = checked_out(args);
+  if (parse_bones_request(args).bones)
+    throw UsageError("--as bones needs a rigged model (a reach or a clip); an FFD bakes as morphs");
   if (args.positionals().size() != 1) throw UsageError("an FFD bake takes exactly one MESH.obj");
   for (const char* flag : {"--builtin", "--target", "--clip", "--release-at", "--dt", "--rig", "--inertia"})
     if (args.has(flag)) throw UsageError(std::string(flag) + " belongs to a reach bake, not an FFD (--lattice)");
@@ -253,12 +345,14 @@ int bake_ffd(const Args& args) {
     baked.normals.push_back(ffd_normals(mesh, current, deformed));
   }
   const std::string folder = std::filesystem::path(mesh_path).parent_path().lexically_normal().string();
-  return write(out, model, baked, timing, folder.empty() ? "." : folder, reference_policy(args));
+  return write_morphs(out, model, baked, timing, export_options(folder.empty() ? "." : folder, reference_policy(args)),
+                      start);
 }
 
 int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--target", "--clip",    "--release-at", "--seconds", "--fps",
-                                          "--dt",     "--lattice", "--out",        "--inertia"};
+  std::vector<std::string> value_flags = {"--target",  "--clip", "--release-at", "--seconds",
+                                          "--fps",     "--dt",   "--lattice",    "--out",
+                                          "--inertia", "--as",   "--max-bones",  "--influences"};
   value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
   const Args args(argv, value_flags, {"--builtin"});
   if (args.help()) {
