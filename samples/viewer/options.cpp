@@ -1,0 +1,148 @@
+// The viewer's command line: the usage text and the parsing of each option, with its checks.
+#include "options.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace viewer {
+namespace {
+
+const char* usage =
+    "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]\n"
+    "                     [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,NAME:W...]] [--prop P.obj]...\n"
+    "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
+    "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
+    "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
+    "                     [--skinning lbs|dqs|ddm] [--mush N]\n"
+    "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
+    "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
+    "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
+    "its files in samples/data), an imported file's own. --inertia F: how much the lattices lag behind the\n"
+    "playing clip, [0, 1], a scale of each lattice's tuned inertia (its body part's): 1 the tuned jiggle\n"
+    "(default), 0 none (the panel's \"jiggle\").\n"
+    "--blend NAME|#N: blend a second clip with the --clip one, in step with its phase; --blend-weight W: the second\n"
+    "clip's weight, [0, 1] (default 0.5; the first has 1 - W; the panel's \"blend with\" and \"blend\").\n"
+    "--morph NAME:W: hold morph target NAME (every target of that name) at weight W over what the clip animates\n"
+    "(the panel's morph sliders; `deform info MODEL` lists the targets).\n"
+    "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
+    "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
+    "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
+    "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
+    "skinning. --skinning ddm: Direct Delta Mush (CPU only; --dqs is --skinning dqs). --mush N: Delta Mush with N\n"
+    "iterations after the lattices (CPU only; 0, the default: off). --up z: the model's up axis is +Z (default: +Y, or "
+    "what an imported file's metadata says).\n"
+    "--lattices: draw no lattice, the active limb's (default: the one reaching, else the one a click would move),\n"
+    "or all of them (L cycles the three).\n"
+    "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
+    "elbow's hint); right drag orbits; middle drag or\n"
+    "shift+right drag pans; wheel zooms. Keys: D cycles LBS/DQS/DDM, S the skeleton,\n"
+    "L cycles the lattices shown (active limb, all, none), G the GPU deformation, R resets, C frames the\n"
+    "character again (the camera fitted to the playing clip), Esc quits.\n";
+
+int parse_int(const std::string& s, const char* what) {
+  char* end = nullptr;
+  const long v = std::strtol(s.c_str(), &end, 10);
+  if (s.empty() || *end || v < 0 || v > 1000000) fail(std::string(what) + ": '" + s + "' is not a count");
+  return int(v);
+}
+
+glm::vec3 parse_vec3(const std::string& s, const char* what) {
+  glm::vec3 v;
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%f,%f,%f%c", &v.x, &v.y, &v.z, &tail) != 3 || !std::isfinite(v.x + v.y + v.z))
+    fail(std::string(what) + ": '" + s + "' is not X,Y,Z");
+  return v;
+}
+
+}  // namespace
+
+[[noreturn]] void fail(const std::string& message) {
+  std::fprintf(stderr, "deform_viewer: %s\n", message.c_str());
+  std::exit(2);
+}
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) fail(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") std::fputs(usage, stdout), std::exit(0);
+    else if (a == "--skeleton") o.skeleton = next();
+    else if (a == "--weights") o.weights = next();
+    else if (a == "--rig") o.rig = next();
+    else if (a == "--prop") o.props.push_back(next());
+    else if (a == "--clip") o.clip = next();
+    else if (a == "--blend") o.blend_clip = next();
+    else if (a == "--blend-weight") {
+      const std::string text = next();
+      char* end = nullptr;
+      o.blend_weight = std::strtof(text.c_str(), &end);
+      if (text.empty() || *end || !(o.blend_weight >= 0.0f && o.blend_weight <= 1.0f))
+        fail("--blend-weight: '" + text + "' is not in [0, 1]");
+    } else if (a == "--inertia") {
+      const std::string text = next();
+      char* end = nullptr;
+      o.inertia = std::strtof(text.c_str(), &end);
+      if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f))
+        fail("--inertia: '" + text + "' is not in [0, 1]");
+    } else if (a == "--morph") {
+      const std::string list = next();
+      std::size_t at = 0;
+      while (at <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        const std::string item = list.substr(at, comma - at);
+        const std::size_t colon = item.rfind(':');
+        char* end = nullptr;
+        const float w = colon == std::string::npos ? 0.0f : std::strtof(item.c_str() + colon + 1, &end);
+        if (colon == std::string::npos || colon == 0 || end == item.c_str() + colon + 1 || *end || !std::isfinite(w))
+          fail("--morph: '" + item + "' is not NAME:WEIGHT");
+        o.morphs.emplace_back(item.substr(0, colon), w);
+        at = comma + 1;
+      }
+    } else if (a == "--weight-map") o.weight_map = next();
+    else if (a == "--screenshot") o.screenshot = next();
+    else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
+    else if (a == "--reach") o.reach = parse_vec3(next(), "--reach");
+    else if (a == "--pole") o.pole = parse_vec3(next(), "--pole");
+    else if (a == "--at") o.reach_at = parse_int(next(), "--at");
+    else if (a == "--release-at") o.release_at = parse_int(next(), "--release-at");
+    else if (a == "--bare") o.bare = true;
+    else if (a == "--gpu") o.gpu = true;
+    else if (a == "--dqs") o.dqs = true;
+    else if (a == "--skinning") {
+      const std::string method = next();
+      if (method != "lbs" && method != "dqs" && method != "ddm")
+        fail("--skinning: '" + method + "' is not lbs, dqs or ddm");
+      o.dqs = method == "dqs";
+      o.ddm = method == "ddm";
+    } else if (a == "--mush") {
+      o.mush = parse_int(next(), "--mush");
+      if (o.mush > 10000) fail("--mush: more than 10000 iterations");
+    } else if (a == "--limits") {
+      const std::string limits = next();
+      if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
+      o.swing_twist = limits == "swing-twist";
+    } else if (a == "--up") {
+      const std::string up = next();
+      if (up != "y" && up != "z") fail("--up: '" + up + "' is not y or z");
+      o.up = up[0];
+    } else if (a == "--lattices") {
+      const std::string shown = next();
+      if (shown != "none" && shown != "active" && shown != "all")
+        fail("--lattices: '" + shown + "' is not none, active or all");
+      o.lattices = shown == "none" ? 'n' : shown == "all" ? 'e' : 'a';
+    } else if (a == "--width") o.width = std::max(64, parse_int(next(), "--width"));
+    else if (a == "--height") o.height = std::max(64, parse_int(next(), "--height"));
+    else if (a.rfind("--", 0) == 0) fail("unknown option " + a + "\n" + usage);
+    else if (o.model.empty()) o.model = a;
+    else fail("more than one model given");
+  }
+  return o;
+}
+
+}  // namespace viewer

@@ -1,0 +1,37 @@
+#pragma once
+// The viewer's command line (options.cpp): what it asks for, checked as it is read. A wrong option ends the viewer
+// with a message naming it (fail), before any window opens.
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace viewer {
+
+struct Options {
+  std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
+  std::vector<std::string> props;
+  std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
+  int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
+  float inertia = 1.0f;       // while a clip plays, the scale of each lattice's tuned inertia (scaled_inertia)
+  float blend_weight = 0.5f;  // the second clip's weight
+  bool bare = false;          // the character alone: no floor, props, overlays or panel (for pixel tests)
+  bool gpu = false;           // start with the deformation (skinning and lattices) on the GPU
+  bool dqs = false;           // start with dual quaternion skinning
+  bool ddm = false;           // start with Direct Delta Mush skinning (--skinning ddm)
+  int mush = 0;               // Delta Mush iterations after the lattices (--mush; 0: off)
+  bool swing_twist = false;   // reach with swing-twist joint limits
+  char up = 0;                // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
+  char lattices = 'a';        // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
+  std::optional<glm::vec3> reach, pole;
+};
+
+// Prints "deform_viewer: MESSAGE" on stderr and exits with status 2.
+[[noreturn]] void fail(const std::string& message);
+
+// The options of the command line; --help prints the usage and exits 0, a wrong option fails.
+Options parse_options(int argc, char** argv);
+
+}  // namespace viewer
