@@ -89,5 +89,6 @@ void bind_jobs(py::module_& m);
 void bind_lattices(py::module_& m);
 void bind_character(py::module_& m);
 void bind_weight_tools(py::module_& m);
+void bind_decomposition(py::module_& m);
 
 }  // namespace deform_python

@@ -540,4 +540,5 @@ PYBIND11_MODULE(deform, m) {
   bind_lattices(m);
   bind_character(m);
   bind_weight_tools(m);
+  bind_decomposition(m);
 }
