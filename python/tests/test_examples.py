@@ -33,3 +33,23 @@ def test_skinning_figures_script_writes_its_png_and_volumes(tmp_path):
     assert all(97.0 < v < 101.0 for v in kept.values()), kept
     bent = {m: v for (p, m), v in kept.items() if p.startswith("elbow")}
     assert bent["DQS"] == max(bent.values()), bent
+
+
+def test_bake_figures_script_writes_its_png_and_holds_the_bones_bake_to_its_targets(tmp_path):
+    run = subprocess.run([sys.executable, str(ROOT / "python" / "examples" / "bake_figures.py"), "--out",
+                          str(tmp_path)], capture_output=True, text=True, timeout=180)
+    assert run.returncode == 0, run.stderr
+    data = (tmp_path / "bake-error.png").read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    rows = {}
+    for line in run.stdout.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 6 and cells[2].endswith("%"):
+            rows[(cells[0], cells[1])] = [float(c[:-1]) for c in cells[2:]]
+    assert len(rows) == 4, run.stdout
+    for (motion, bake), (largest_on, largest_between, rms_on, rms_between) in rows.items():
+        if bake == "bones":  # issue 35's targets, on the frames the bake saw
+            assert largest_on <= 2.0 and rms_on <= 0.5, (motion, rows)
+        else:  # the morph targets are the frames themselves, to the writer's tolerance
+            assert largest_on < 1e-3, (motion, rows)
+        assert largest_between < 5.0, (motion, rows)
