@@ -70,7 +70,8 @@ TEST_CASE("non-negative least squares reaches the best support's optimum on 3000
     if (trial % 5 == 0 && n > 1) a.col(n - 1) = a.col(0);  // two candidates that move alike
     const Eigen::MatrixXd gram = a.transpose() * a + 1e-9 * Eigen::MatrixXd::Identity(n, n);
     const Eigen::VectorXd rhs = a.transpose() * b;
-    std::vector<double> g(std::size_t(n) * std::size_t(n)), h(static_cast<std::size_t>(n)), x(static_cast<std::size_t>(n));
+    std::vector<double> g(std::size_t(n) * std::size_t(n)), h(static_cast<std::size_t>(n)),
+        x(static_cast<std::size_t>(n));
     for (int r = 0; r < n; ++r) {
       h[std::size_t(r)] = rhs(r);
       for (int c = 0; c < n; ++c) g[std::size_t(r * n + c)] = gram(r, c);

@@ -41,23 +41,23 @@ struct Problem {
   const DecompositionFrames* frames = nullptr;
   std::size_t points = 0, frame_count = 0, body = 0;
   float diagonal = 0.0f;
-  std::vector<Pose> body_pose;             // per frame: the body's rigid local transforms, as the file will hold them
-  std::vector<glm::mat4> body_world;       // [t * body + b], from body_pose by forward kinematics
-  std::vector<glm::mat4> body_palette;     // [t * body + b]: body_world · inverse bind
-  std::vector<std::uint32_t> moved;        // points to fit, ascending
-  std::vector<double> unmoved_sse;         // per frame: squared error of the points that keep the artist's weights
-  std::vector<float> unmoved_max;          // per frame: their largest error
+  std::vector<Pose> body_pose;          // per frame: the body's rigid local transforms, as the file will hold them
+  std::vector<glm::mat4> body_world;    // [t * body + b], from body_pose by forward kinematics
+  std::vector<glm::mat4> body_palette;  // [t * body + b]: body_world · inverse bind
+  std::vector<std::uint32_t> moved;     // points to fit, ascending
+  std::vector<double> unmoved_sse;      // per frame: squared error of the points that keep the artist's weights
+  std::vector<float> unmoved_max;       // per frame: their largest error
   // The extra bones.
   std::size_t extras = 0;
-  std::vector<std::uint32_t> parent;       // body bone of each
-  std::vector<glm::vec3> centre;           // rest-space centre (bind translation) of each
-  std::vector<glm::mat4> extra_palette;    // [t * extras + e]: rest space to frame t, rigid
+  std::vector<std::uint32_t> parent;     // body bone of each
+  std::vector<glm::vec3> centre;         // rest-space centre (bind translation) of each
+  std::vector<glm::mat4> extra_palette;  // [t * extras + e]: rest space to frame t, rigid
   // Per moved point (index m into `moved`): its own bones and its current influences.
   std::vector<std::array<std::uint32_t, max_own_bones>> own;
   std::vector<std::uint8_t> own_count;
   std::vector<std::array<Influence, 8>> fit;
   std::vector<std::uint8_t> fit_count;
-  std::vector<glm::vec3> reconstruction;   // [t * moved + m]: the current skinning of moved point m
+  std::vector<glm::vec3> reconstruction;  // [t * moved + m]: the current skinning of moved point m
 };
 
 const glm::mat4& bone_palette(const Problem& pb, std::size_t t, std::uint32_t bone) {
@@ -68,7 +68,8 @@ glm::vec3 target(const Problem& pb, std::size_t t, std::uint32_t point) { return
 
 void require_valid(const Model& model, const DecompositionFrames& frames, const DecompositionOptions& options) {
   if (options.max_bones > 1000) throw Error::invalid_argument("max_bones", "must be in [0, 1000]");
-  if (options.influences < 1 || options.influences > 8) throw Error::invalid_argument("influences", "must be in [1, 8]");
+  if (options.influences < 1 || options.influences > 8)
+    throw Error::invalid_argument("influences", "must be in [1, 8]");
   if (options.iterations < 1 || options.iterations > 1000)
     throw Error::invalid_argument("iterations", "must be in [1, 1000]");
   if (!(options.moved_tolerance >= 0.0f && options.moved_tolerance <= 1.0f))
@@ -83,7 +84,8 @@ void require_valid(const Model& model, const DecompositionFrames& frames, const 
     throw Error::invalid_argument("model", "the weights do not have one entry per mesh point");
   for (std::size_t t = 0; t < n; ++t) {
     const std::string frame = "frame " + std::to_string(t);
-    if (!std::isfinite(frames.times[t]) || frames.times[t] < 0.0f || (t > 0 && !(frames.times[t] > frames.times[t - 1])))
+    if (!std::isfinite(frames.times[t]) || frames.times[t] < 0.0f ||
+        (t > 0 && !(frames.times[t] > frames.times[t - 1])))
       throw Error::invalid_argument(frame, "times must be finite, >= 0 and strictly increasing");
     if (frames.bone_world[t].size() != model.skeleton.bone_count())
       throw Error::invalid_argument(frame, "bone_world must have one matrix per bone");
@@ -270,7 +272,8 @@ std::vector<std::uint32_t> cluster_moved_points(Problem& pb, const Decomposition
   };
   if (!options.seeds.empty()) {
     std::vector<std::size_t> gathered(options.seeds.size(), 0);
-    for (std::size_t m = 0; m < n; ++m) ++gathered[cluster[m] = std::uint32_t(nearest(options.seeds, rest[pb.moved[m]]))];
+    for (std::size_t m = 0; m < n; ++m)
+      ++gathered[cluster[m] = std::uint32_t(nearest(options.seeds, rest[pb.moved[m]]))];
     // Seeds with too few points give them to the nearest kept seed.
     std::vector<glm::vec3> kept;
     for (std::size_t s = 0; s < options.seeds.size() && kept.size() < budget; ++s)
@@ -297,7 +300,8 @@ std::vector<std::uint32_t> cluster_moved_points(Problem& pb, const Decomposition
   }
   pb.extras = centres.size() / dim;
   pb.centre.resize(pb.extras);
-  for (std::size_t e = 0; e < pb.extras; ++e) pb.centre[e] = {centres[e * dim], centres[e * dim + 1], centres[e * dim + 2]};
+  for (std::size_t e = 0; e < pb.extras; ++e)
+    pb.centre[e] = {centres[e * dim], centres[e * dim + 1], centres[e * dim + 2]};
   return cluster;
 }
 
@@ -417,7 +421,8 @@ void solve_subset(const Small& gram, const SmallVector& rhs, std::span<const int
     for (int b = 0; b < n; ++b) g[std::size_t(a * n + b)] = gram(use[std::size_t(a)], use[std::size_t(b)]);
   }
   nonnegative_least_squares(std::span<const double>(g.data(), std::size_t(n * n)),
-                            std::span<const double>(h.data(), std::size_t(n)), std::span<double>(sub.data(), std::size_t(n)));
+                            std::span<const double>(h.data(), std::size_t(n)),
+                            std::span<double>(sub.data(), std::size_t(n)));
   x.setZero();
   for (int a = 0; a < n; ++a) x(use[std::size_t(a)]) = sub[std::size_t(a)];
 }
@@ -456,9 +461,8 @@ void fit_point_weights(Problem& pb, std::size_t m, int influences) {
   for (std::size_t c = 0; c < n; ++c) nonzero += x(Eigen::Index(c)) > 0.0 ? 1 : 0;
   if (nonzero > std::size_t(influences)) {
     // The strongest `influences` (the lower candidate on a tie), solved again without the others.
-    std::sort(use.begin(), use.begin() + std::ptrdiff_t(n), [&](int a, int b) {
-      return x(a) != x(b) ? x(a) > x(b) : a < b;
-    });
+    std::sort(use.begin(), use.begin() + std::ptrdiff_t(n),
+              [&](int a, int b) { return x(a) != x(b) ? x(a) > x(b) : a < b; });
     std::sort(use.begin(), use.begin() + influences);
     solve_subset(gram, rhs, std::span<const int>(use.data(), std::size_t(influences)), x);
   }
@@ -571,7 +575,8 @@ void restart_unused_bones(Problem& pb, const std::vector<std::vector<Member>>& m
     pb.parent[e] = std::uint32_t(std::max_element(weight_on.begin(), weight_on.end()) - weight_on.begin());
     for (std::size_t t = 0; t < pb.frame_count; ++t) {
       pairs.clear();
-      for (const auto& [distance, m] : by_distance) pairs.push_back({rest[pb.moved[m]], target(pb, t, pb.moved[m]), 1.0f});
+      for (const auto& [distance, m] : by_distance)
+        pairs.push_back({rest[pb.moved[m]], target(pb, t, pb.moved[m]), 1.0f});
       fit_rigid(pairs, pb.extra_palette[t * pb.extras + e]);
     }
   }
@@ -602,9 +607,8 @@ void write_channel(Animation& clip, std::int32_t bone, std::span<const float> ti
   channel.bone = bone;
   write_track(channel.rotation, times, std::move(rotations), rest_rotation,
               [](glm::quat a, glm::quat b) { return std::abs(glm::dot(a, b)) >= 1.0f - 1e-7f; });
-  write_track(channel.translation, times, std::move(translations), rest_translation, [](glm::vec3 a, glm::vec3 b) {
-    return glm::length(a - b) <= 1e-7f * std::max(1.0f, glm::length(b));
-  });
+  write_track(channel.translation, times, std::move(translations), rest_translation,
+              [](glm::vec3 a, glm::vec3 b) { return glm::length(a - b) <= 1e-7f * std::max(1.0f, glm::length(b)); });
   if (!channel.rotation.empty() || !channel.translation.empty()) clip.channels.push_back(std::move(channel));
 }
 
