@@ -71,7 +71,7 @@ def errors(name, motion, seconds):
     bones, morphs = [], []
     for k, goal in enumerate(truth):
         pose = fit.skeleton.bind_pose()
-        fit.clip.sample(k / HZ, pose)
+        fit.clips[0].sample(k / HZ, pose)
         _, palette = deform.forward_kinematics(fit.skeleton, pose)
         played = deform.skin(model.positions, model.bone_indices, model.bone_weights, palette)
         blended = truth[k] if k % 2 == 0 else 0.5 * (truth[k - 1] + truth[k + 1]) if k + 1 < len(truth) else truth[k]

@@ -27,7 +27,13 @@ void bind_decomposition(py::module_& m) {
   py::class_<deform::DecompositionFrames>(m, "DecompositionFrames",
                                           "A Character's motion, frame by frame, for decompose_skinning: each "
                                           "frame's bone matrices (after IK and spring chains) and deformed points.")
-      .def(py::init<>())
+      .def(py::init([](const std::string& name) {
+             deform::DecompositionFrames frames;
+             frames.name = name;
+             return frames;
+           }),
+           py::arg("name") = "bake")
+      .def_readwrite("name", &deform::DecompositionFrames::name, "the clip's name in the result")
       .def(
           "add",
           [](deform::DecompositionFrames& frames, float time, const deform::Character& character) {
@@ -50,7 +56,7 @@ void bind_decomposition(py::module_& m) {
                                return py::cast(&self.cast<deform::SkinningDecomposition&>().skeleton,
                                                py::return_value_policy::reference_internal, self);
                              })
-      .def_readonly("clip", &deform::SkinningDecomposition::clip)
+      .def_readonly("clips", &deform::SkinningDecomposition::clips, "one Animation per clip given, in order")
       .def_readonly("extra_bones", &deform::SkinningDecomposition::extra_bones)
       .def_readonly("iterations", &deform::SkinningDecomposition::iterations)
       .def_readonly("rms_error", &deform::SkinningDecomposition::rms_error,
@@ -70,13 +76,18 @@ void bind_decomposition(py::module_& m) {
             out->weights = d.weights;
             return out;
           },
-          py::arg("rest"), "A copy of `rest` (the model the frames were recorded from) with this skeleton and weights.");
+          py::arg("rest"),
+          "A copy of `rest` (the model the frames were recorded from) with this skeleton and weights.");
 
   m.def(
       "decompose_skinning",
-      [](const deform::Model& model, const deform::DecompositionFrames& frames, std::size_t max_bones, int influences,
-         int iterations, float moved_tolerance, const std::optional<FloatArray>& seeds, unsigned threads,
-         const std::string& clip_name) {
+      [](const deform::Model& model, const py::object& frames, std::size_t max_bones, int influences, int iterations,
+         float moved_tolerance, const std::optional<FloatArray>& seeds, unsigned threads) {
+        // One clip's frames, or a list of clips decomposed together (one set of bones and weights).
+        std::vector<deform::DecompositionFrames> clips;
+        if (py::isinstance<deform::DecompositionFrames>(frames))
+          clips.push_back(frames.cast<deform::DecompositionFrames>());
+        else clips = frames.cast<std::vector<deform::DecompositionFrames>>();
         deform::DecompositionOptions options;
         options.max_bones = max_bones;
         options.influences = influences;
@@ -88,12 +99,13 @@ void bind_decomposition(py::module_& m) {
           options.seeds.assign(s.begin(), s.end());
         }
         py::gil_scoped_release release;
-        return deform::decompose_skinning(model, frames, options, clip_name);
+        return deform::decompose_skinning(model, clips, options);
       },
       py::arg("model"), py::arg("frames"), py::arg("max_bones") = 24, py::arg("influences") = 4,
       py::arg("iterations") = 30, py::arg("moved_tolerance") = 1e-5f, py::arg("seeds") = py::none(),
-      py::arg("threads") = 0, py::arg("clip_name") = "bake",
-      "Fits extra bones and sparse weights so that linear blend skinning gives the recorded frames back "
+      py::arg("threads") = 0,
+      "Fits extra bones and sparse weights so that linear blend skinning gives the recorded frames (a "
+      "DecompositionFrames, or a list of them: one set of bones for every clip) back "
       "(docs/gltf-export.md, \"Baking bones\"). Points the artist's weights already explain keep them. Raises "
       "deform.Error for options out of range or inconsistent frames.");
   m.def(

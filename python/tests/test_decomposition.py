@@ -34,12 +34,21 @@ def test_a_reach_bakes_into_a_few_bones_within_the_targets(tmp_path):
     # Without extra bones the stretch is what is left: the bones take most of it away.
     body = deform.decompose_skinning(hero.model, frames, max_bones=0)
     assert body.extra_bones == 0 and body.max_error > 5 * fit.max_error
-    written = deform.write_gltf(str(tmp_path / "reach.glb"), fit.model(hero.model), [fit.clip])
+    assert [clip.name for clip in fit.clips] == ["bake"]
+    written = deform.write_gltf(str(tmp_path / "reach.glb"), fit.model(hero.model), fit.clips)
     assert written["bytes"] == (tmp_path / "reach.glb").stat().st_size and written["bin"] is None
     if deform.has_import:
         back = deform.import_model(str(tmp_path / "reach.glb"))
         assert back["model"].skeleton.bone_count == fit.skeleton.bone_count
         assert [clip.name for clip in back["clips"]] == ["bake"]
+
+
+def test_two_clips_share_one_set_of_bones():
+    first, second = record_reach(deform.Character.builtin(), seconds=1.0), record_reach(deform.Character.builtin())
+    first.name, second.name = "short", "long"
+    fit = deform.decompose_skinning(deform.Character.builtin().model, [first, second], max_bones=8)
+    assert [clip.name for clip in fit.clips] == ["short", "long"]
+    assert len(fit.frame_max_error) == len(first) + len(second) and fit.max_error <= 0.02
 
 
 def test_bad_options_raise():
@@ -49,3 +58,5 @@ def test_bad_options_raise():
         deform.decompose_skinning(hero.model, frames, influences=9)
     with pytest.raises(deform.Error, match="frames"):
         deform.decompose_skinning(hero.model, deform.DecompositionFrames())
+    with pytest.raises(deform.Error, match="clips"):
+        deform.decompose_skinning(hero.model, [])

@@ -48,16 +48,18 @@ def validate(path):
           f"validator on {os.path.basename(path)}: {report['messages'][:3] if report else p.stderr.strip()}")
 
 
-def three(path, times=None):
-    """The corners three.js puts the file's meshes at: at rest (no times), or at each time of its first clip."""
+def three(path, times=None, animation=0, names=False):
+    """The corners three.js puts the file's meshes at: at rest (no times), or at each time of clip `animation`
+    (with the file's animation names when `names`)."""
     args = ["node", os.path.join(node_dir, "three_skin.mjs"), path]
     if times:
-        args += ["0", ",".join(map(repr, times))]
+        args += [str(animation), ",".join(map(repr, times))]
     p = subprocess.run(args, capture_output=True, text=True, timeout=600)
     if p.returncode != 0:
         check(False, f"three.js on {os.path.basename(path)}: {p.stderr.strip()[-300:]}")
         return None
-    return json.loads(p.stdout)["frames" if times else "corners"]
+    result = json.loads(p.stdout)
+    return (result["frames"], result["animations"]) if names else result["frames" if times else "corners"]
 
 
 def diagonal(points):
@@ -71,14 +73,20 @@ def bake_both(label, model_args, motion, extra=()):
     and three.js. Returns the bones bake's report."""
     bones = bake(*model_args, *motion, "--as", "bones", *extra, "--out", f"{label}-bones.glb")
     morphs = bake(*model_args, *motion, "--out", f"{label}-morphs.glb")
+    return compare(label, bones, morphs)
+
+
+def compare(label, bones, morphs, animation=0):
+    """Checks a bones bake against the morph bake of the same motion (its animation `animation`)."""
     if bones is None or morphs is None:
         return None
     validate(os.path.join(work, f"{label}-bones.glb"))
     check(bones["bytes"] < morphs["bytes"],
           f"{label}: the bones file ({bones['bytes']} bytes) is not smaller than the morphs' ({morphs['bytes']})")
-    check(bones["frames"] == morphs["frames"], f"{label}: {bones['frames']} frames against {morphs['frames']}")
-    times = [k / bones["fps"] for k in range(bones["frames"])]
-    played = three(os.path.join(work, f"{label}-bones.glb"), times)
+    check(animation > 0 or bones["frames"] == morphs["frames"],
+          f"{label}: {bones['frames']} frames against {morphs['frames']}")
+    times = [k / morphs["fps"] for k in range(morphs["frames"])]
+    played = three(os.path.join(work, f"{label}-bones.glb"), times, animation)
     reference = three(os.path.join(work, f"{label}-morphs.glb"), times)
     rest = three(os.path.join(work, f"{label}-morphs.glb"))
     if played and reference and rest:
@@ -115,6 +123,20 @@ if eight:
     validate(os.path.join(work, "reach-8.glb"))
 # The targets at the default 30 frames a second, the frame rate the issue's numbers are for.
 hold_to_targets("reach at 30 fps", bake("--builtin", *reach[:-2], "--as", "bones", "--out", "reach-30.glb"))
+
+# --- two clips in one file: one skin, one set of extra bones, an animation each; the second played by three.js ---
+walk_run = bake("--builtin", "--clip", "walk", "--clip", "run", "--inertia", "1", "--as", "bones", "--out",
+                "walkrun-bones.glb")
+hold_to_targets("walk + run", walk_run)
+run_morphs = bake("--builtin", "--clip", "run", "--inertia", "1", "--out", "walkrun-morphs.glb")
+if walk_run and run_morphs:
+    validate(os.path.join(work, "walkrun-bones.glb"))
+    _, animations = three(os.path.join(work, "walkrun-bones.glb"), [0.0, 0.1], 0, names=True) or (None, None)
+    check(animations == ["walk", "run"], f"walk + run: the file's animations are {animations}")
+    check(walk_run["frames"] == 31 + run_morphs["frames"], f"walk + run: {walk_run['frames']} frames")
+    compare("walkrun", walk_run, run_morphs, animation=1)
+bake("--builtin", "--clip", "walk", "--clip", "run", "--out", "bad.glb", expect=2)  # morphs: one motion a file
+bake("--builtin", "--clip", "walk", "--clip", "walk", "--as", "bones", "--out", "bad.glb", expect=2)
 
 # --- imported characters, their default rigs jiggling ---
 wuson = os.path.join(models, "X", "Testwuson.X")

@@ -166,13 +166,13 @@ float diagonal(std::span<const glm::vec3> p) {
 // blend skinning over every influence (the four slots and the extras). Returns the largest distance from the
 // frames at each frame.
 std::vector<float> played_error(const deform::Model& model, const deform::DecompositionFrames& frames,
-                                const deform::SkinningDecomposition& fit) {
+                                const deform::SkinningDecomposition& fit, std::size_t clip = 0) {
   std::vector<float> error;
   const std::size_t bones = fit.skeleton.bone_count();
   for (std::size_t t = 0; t < frames.times.size(); ++t) {
     deform::Pose pose = fit.skeleton.bind_pose();
     deform::SamplingJob sampling;
-    sampling.animation = &fit.clip;
+    sampling.animation = &fit.clips[clip];
     sampling.time = frames.times[t];
     sampling.rotations = pose.rotations;
     sampling.translations = pose.translations;
@@ -207,7 +207,9 @@ TEST_CASE("decomposition finds hidden rigid bones again, and plays back within t
   const Scene scene = make_scene();
   deform::DecompositionOptions options;
   options.max_bones = 6;
-  const deform::SkinningDecomposition fit = deform::decompose_skinning(scene.model, scene.frames, options, "wobble");
+  deform::DecompositionFrames frames = scene.frames;
+  frames.name = "wobble";
+  const deform::SkinningDecomposition fit = deform::decompose_skinning(scene.model, frames, options);
   // Exactly the points the hidden bones move are fitted; every other row is the artist's, bit for bit.
   std::vector<std::uint32_t> touched;
   for (std::size_t i = 0; i < scene.touched.size(); ++i)
@@ -230,8 +232,9 @@ TEST_CASE("decomposition finds hidden rigid bones again, and plays back within t
   CHECK(fit.extra_bones <= 6);
   CHECK(fit.skeleton.bone_count() == 2 + fit.extra_bones);
   for (std::size_t e = 2; e < fit.skeleton.bone_count(); ++e) CHECK(fit.skeleton.bones()[e].parent < 2);
-  CHECK(fit.clip.name == "wobble");
-  CHECK_NOTHROW(fit.clip.require_valid(fit.skeleton.bone_count()));
+  REQUIRE(fit.clips.size() == 1);
+  CHECK(fit.clips[0].name == "wobble");
+  CHECK_NOTHROW(fit.clips[0].require_valid(fit.skeleton.bone_count()));
   // Rigid hidden bones are found again almost exactly: far below what the body's bones alone leave.
   options.max_bones = 0;
   const deform::SkinningDecomposition body_only = deform::decompose_skinning(scene.model, scene.frames, options);
@@ -265,10 +268,10 @@ TEST_CASE("decomposition with eight influences, seeds and any thread count gives
   CHECK(one.weights == two.weights);
   CHECK(one.skeleton.bones().size() == two.skeleton.bones().size());
   CHECK(std::equal(one.skeleton.bones().begin(), one.skeleton.bones().end(), two.skeleton.bones().begin()));
-  REQUIRE(one.clip.channels.size() == two.clip.channels.size());
-  for (std::size_t c = 0; c < one.clip.channels.size(); ++c) {
-    CHECK(one.clip.channels[c].rotation.values == two.clip.channels[c].rotation.values);
-    CHECK(one.clip.channels[c].translation.values == two.clip.channels[c].translation.values);
+  REQUIRE(one.clips[0].channels.size() == two.clips[0].channels.size());
+  for (std::size_t c = 0; c < one.clips[0].channels.size(); ++c) {
+    CHECK(one.clips[0].channels[c].rotation.values == two.clips[0].channels[c].rotation.values);
+    CHECK(one.clips[0].channels[c].translation.values == two.clips[0].channels[c].translation.values);
   }
   CHECK(one.rms_error == two.rms_error);
   // The far seed gathers no point and is dropped; the error is still small.
@@ -285,9 +288,42 @@ TEST_CASE("decomposition of the body's own skinning moves no point and adds no b
   CHECK(fit.weights == scene.model.weights);
   CHECK(fit.max_error < 1e-6f);
   // Both body bones move, so both have channels; the played clip gives the frames back.
-  CHECK(fit.clip.channels.size() == 2);
+  CHECK(fit.clips[0].channels.size() == 2);
   const std::vector<float> played = played_error(scene.model, scene.frames, fit);
   CHECK(*std::max_element(played.begin(), played.end()) < 1e-5f);
+}
+
+TEST_CASE("decomposition of two clips shares one set of bones and weights, and each clip plays back") {
+  const Scene scene = make_scene();
+  std::vector<deform::DecompositionFrames> clips(2);
+  for (std::size_t t = 0; t < scene.frames.times.size(); ++t) {
+    deform::DecompositionFrames& clip = clips[t < 25 ? 0 : 1];
+    clip.times.push_back(t < 25 ? scene.frames.times[t] : scene.frames.times[t] - scene.frames.times[25]);
+    clip.bone_world.push_back(scene.frames.bone_world[t]);
+    clip.positions.push_back(scene.frames.positions[t]);
+  }
+  clips[0].name = "first";
+  clips[1].name = "second";
+  deform::DecompositionOptions options;
+  options.max_bones = 6;
+  const deform::SkinningDecomposition fit = deform::decompose_skinning(scene.model, clips, options);
+  REQUIRE(fit.clips.size() == 2);
+  CHECK(fit.clips[0].name == "first");
+  CHECK(fit.clips[1].name == "second");
+  CHECK(fit.clips[1].duration == doctest::Approx(clips[1].times.back()));
+  CHECK(fit.frame_max_error.size() == 40);
+  CHECK(fit.max_error < 1e-2f);
+  for (std::size_t c = 0; c < 2; ++c) {
+    const std::vector<float> played = played_error(scene.model, clips[c], fit, c);
+    for (std::size_t t = 0; t < played.size(); ++t) {
+      CAPTURE(c);
+      CAPTURE(t);
+      CHECK(played[t] <= fit.frame_max_error[(c == 0 ? 0 : 25) + t] + 1e-5f);
+    }
+  }
+  // No clip at all is refused.
+  CHECK_THROWS_AS(deform::decompose_skinning(scene.model, std::span<const deform::DecompositionFrames>{}, options),
+                  deform::Error);
 }
 
 TEST_CASE("decomposition refuses hostile input with the field named") {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -60,7 +61,8 @@ constexpr const char* usage =
     "  --target X,Y,Z       world-space target of the rig's reach effector\n"
     "  --clip NAME          play this clip of the model (the built-in character's idle, walk, run, wave; an\n"
     "                       import's own), the rig's lattices and spring chains jiggling with it; the animation\n"
-    "                       is named after the clip\n"
+    "                       is named after the clip. With --as bones it repeats: each clip is played from the\n"
+    "                       bind pose and the file holds one skin and an animation per clip\n"
     "  MESH.obj --lattice L.json   the FFD of `deform ffd`, its displacements scaled from 0 (frame 0) to 1 (the\n"
     "                       last frame, which is `deform ffd`'s output)\n"
     "  --seconds S          length (default: the clip's duration for --clip alone, 3 for a reach, 1 for an FFD);\n"
@@ -174,17 +176,18 @@ int write_morphs(const std::string& out, const deform::Model& model, const defor
   return exit_ok;
 }
 
-// The frames as bones: the decomposition's skeleton, weights and clip on the rest mesh.
-int write_bones(const std::string& out, deform::Model model, const deform::DecompositionFrames& frames,
-                const BonesRequest& request, const std::string& name, const Timing& timing,
-                const deform::GltfExportOptions& base, Clock::time_point start) {
-  deform::SkinningDecomposition fitted = deform::decompose_skinning(model, frames, request.options, name);
+// The frames as bones: the decomposition's skeleton, weights and clips on the rest mesh.
+int write_bones(const std::string& out, deform::Model model, const std::vector<deform::DecompositionFrames>& clips,
+                const BonesRequest& request, const Timing& timing, const deform::GltfExportOptions& base,
+                Clock::time_point start) {
+  deform::SkinningDecomposition fitted = deform::decompose_skinning(model, clips, request.options);
   model.skeleton = std::move(fitted.skeleton);
   model.weights = std::move(fitted.weights);
   deform::GltfExportOptions options = base;
-  options.clips = std::span<const deform::Animation>(&fitted.clip, 1);
+  options.clips = fitted.clips;
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   Json json = written_json(written, timing);
+  json["frames"] = fitted.frame_max_error.size();  // over every clip
   json["extra_bones"] = fitted.extra_bones;
   json["moved_points"] = fitted.moved_points.size();
   json["iterations"] = fitted.iterations;
@@ -195,104 +198,138 @@ int write_bones(const std::string& out, deform::Model model, const deform::Decom
   return exit_ok;
 }
 
-int bake_animated(const Args& args) {
-  const Clock::time_point start = Clock::now();
-  const std::string out = checked_out(args);
-  BonesRequest request = parse_bones_request(args);
-  const auto target_text = args.value("--target");
-  const auto clip_name = args.value("--clip");
-  if (!target_text && !clip_name) throw UsageError("give --target, --clip or both (or MESH.obj --lattice L.json)");
-  const glm::vec3 target = target_text ? parse_vec3(*target_text, "--target") : glm::vec3(0.0f);
-  const double release_at =
-      args.value("--release-at") ? parse_number(*args.value("--release-at"), "--release-at") : 1.5;
-  const double dt = args.value("--dt") ? parse_number(*args.value("--dt"), "--dt") : 1.0 / 60.0;
-  if (!(dt > 0.0) || dt > 10.0) throw UsageError("--dt must be in (0, 10] seconds");
+// One motion to bake: a clip or none, a reach or none, and how the simulation steps.
+struct Motion {
+  const deform::Animation* clip = nullptr;
+  std::optional<glm::vec3> target;
+  std::int32_t effector = -1;
+  double release_at = 1.5;
+  double dt = 1.0 / 60.0;
+  Timing timing;
+};
 
-  RiggedModel rigged = load_rigged_model(args);
-  embed_builtin_texture(rigged.loaded);
-  deform::Model model = std::move(rigged.loaded.model);
-  deform::Rig rig = std::move(rigged.rig);
-  apply_inertia_option(args, rig);
-  const std::vector<deform::Animation> clips = std::move(rigged.loaded.clips);
-  const deform::Animation* clip = clip_name ? &find_clip_or_fail(clips, *clip_name) : nullptr;
-  // A clip alone lasts its own length (once round a loop); a reach, 3 s.
-  const Timing timing = parse_timing(args, clip != nullptr && !target_text ? double(clip->duration) : 3.0);
-  if (timing.seconds / dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
-  const std::int32_t effector = rig.reach_effector;
-  if (target_text && effector <= 0) throw UsageError("the rig has no reach effector");
-
-  deform::Model rest = model;  // the glTF's rest shape: bind positions, the normals the character computes there
-  deform::Character character(std::move(model), rig);
-  if (!character.update(0.0f)) throw std::runtime_error("internal error: the bind pose did not deform");
-  const std::span<const glm::vec3> bind_normals = character.normals();
-  rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
-  // The extra bones start from the lattices' slices, where the rubber moves the points.
-  if (request.bones) request.options.seeds = deform::decomposition_seeds(character.deformers(), character.skeleton());
-
-  // The pose at time t: the clip's, moving as it does (ClipPlayer), then the reach on top.
+// Runs `character`, fresh at its bind pose, through the motion as `deform simulate` does, calling keep(k) with the
+// character at frame k: t = 0 is just after the reach, and the release happens at its time whatever the steps (a
+// step that crosses it is split there). The pose at time t is the clip's, moving as it does (ClipPlayer), then the
+// reach on top.
+void play_motion(deform::Character& character, const Motion& motion, const std::function<void(std::size_t)>& keep) {
   std::optional<ClipPlayer> player;
-  if (clip != nullptr) player.emplace(character, *clip);
-  bool reaching = target_text.has_value();
+  if (motion.clip != nullptr) player.emplace(character, *motion.clip);
+  bool reaching = motion.target.has_value();
   const auto pose_at = [&](double t) {
     if (player) player->set(t);
-    if (reaching && !character.reach(effector, target).status)
-      throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(effector) + "'");
+    if (reaching && !character.reach(motion.effector, *motion.target).status)
+      throw UsageError("cannot reach for that target with bone '" + character.skeleton().key(motion.effector) + "'");
   };
-
-  deform::BakedFrames baked;
-  deform::DecompositionFrames frames;  // --as bones: the bones' matrices and the points, frame by frame
-  baked.name = clip != nullptr ? clip->name : "reach";
-  baked.position_tolerance = 1e-6f * diagonal(rest.mesh.positions);
-  baked.normal_tolerance = 1e-5f;
   const auto advance = [&](double step, double t) {
-    if (clip != nullptr) pose_at(t);
+    if (motion.clip != nullptr) pose_at(t);
     if (const deform::Status status = character.update(float(step)); !status)
       throw UsageError(std::string("a simulation step was refused: ") + status.reason());
   };
-  const auto keep = [&](std::size_t k) {
-    if (request.bones) {
-      const std::span<const glm::mat4> palette = character.palette(), bind = character.skeleton().bind_world();
-      std::vector<glm::mat4>& world = frames.bone_world.emplace_back(palette.size());
-      for (std::size_t b = 0; b < palette.size(); ++b) world[b] = palette[b] * bind[b];
-      frames.times.push_back(float(timing.time(k)));
-      frames.positions.emplace_back(character.positions().begin(), character.positions().end());
-      return;
-    }
-    baked.times.push_back(float(timing.time(k)));
-    baked.positions.emplace_back(character.positions().begin(), character.positions().end());
-    const std::span<const glm::vec3> normals = character.normals();
-    baked.normals.emplace_back(normals.begin(), normals.end());
-  };
-  // As `deform simulate`: t = 0 is just after the reach; the release happens at T whatever the steps (a step that
-  // crosses it is split there).
   bool released = !reaching;
   const auto let_go = [&] {
     character.release();
     reaching = false;
     released = true;
   };
-  const double snap = 1e-9 * dt;
+  const double snap = 1e-9 * motion.dt;
   pose_at(0.0);
-  if (!released && release_at <= snap) let_go();
+  if (!released && motion.release_at <= snap) let_go();
   if (const deform::Status status = character.update(0.0f); !status)
     throw UsageError(std::string("the first pose was refused: ") + status.reason());
   keep(0);
   double now = 0.0;
-  for (std::size_t k = 1; k < timing.frames; ++k) {
-    const double t = timing.time(k);
+  for (std::size_t k = 1; k < motion.timing.frames; ++k) {
+    const double t = motion.timing.time(k);
     while (now < t - snap) {
-      double next = std::min(t, now + dt);
-      if (!released && release_at > now + snap && release_at < next - snap) next = release_at;
+      double next = std::min(t, now + motion.dt);
+      if (!released && motion.release_at > now + snap && motion.release_at < next - snap) next = motion.release_at;
       advance(next - now, next);
       now = next;
-      if (!released && release_at <= now + snap) let_go();
+      if (!released && motion.release_at <= now + snap) let_go();
     }
     now = t;
     keep(k);
   }
+}
+
+int bake_animated(const Args& args) {
+  const Clock::time_point start = Clock::now();
+  const std::string out = checked_out(args);
+  BonesRequest request = parse_bones_request(args);
+  const auto target_text = args.value("--target");
+  const std::vector<std::string> clip_names = args.values("--clip");
+  if (!target_text && clip_names.empty())
+    throw UsageError("give --target, --clip or both (or MESH.obj --lattice L.json)");
+  if (clip_names.size() > 1 && !request.bones)
+    throw UsageError("several --clip bake together only --as bones (one skin, an animation per clip)");
+  for (std::size_t i = 0; i < clip_names.size(); ++i)
+    if (std::count(clip_names.begin(), clip_names.end(), clip_names[i]) > 1)
+      throw UsageError("--clip " + clip_names[i] + " is given twice");
+  Motion motion;
+  if (target_text) motion.target = parse_vec3(*target_text, "--target");
+  if (args.value("--release-at")) motion.release_at = parse_number(*args.value("--release-at"), "--release-at");
+  if (args.value("--dt")) motion.dt = parse_number(*args.value("--dt"), "--dt");
+  if (!(motion.dt > 0.0) || motion.dt > 10.0) throw UsageError("--dt must be in (0, 10] seconds");
+
+  RiggedModel rigged = load_rigged_model(args);
+  embed_builtin_texture(rigged.loaded);
+  const deform::Model model = std::move(rigged.loaded.model);
+  deform::Rig rig = std::move(rigged.rig);
+  apply_inertia_option(args, rig);
+  const std::vector<deform::Animation> clips = std::move(rigged.loaded.clips);
+  motion.effector = rig.reach_effector;
+  if (target_text && motion.effector <= 0) throw UsageError("the rig has no reach effector");
+  // Each motion: a clip alone lasts its own length (once round a loop); a reach, 3 s.
+  std::vector<Motion> motions;
+  for (const std::string& name : clip_names) {
+    motions.push_back(motion);
+    motions.back().clip = &find_clip_or_fail(clips, name);
+  }
+  if (motions.empty()) motions.push_back(motion);
+  for (Motion& m : motions) {
+    m.timing = parse_timing(args, m.clip != nullptr && !target_text ? double(m.clip->duration) : 3.0);
+    if (m.timing.seconds / m.dt > 1e6) throw UsageError("--seconds / --dt gives more than 1000000 steps");
+  }
+
+  deform::Model rest = model;  // the glTF's rest shape: bind positions, the normals the character computes there
+  deform::Character character(model, rig);
+  if (!character.update(0.0f)) throw std::runtime_error("internal error: the bind pose did not deform");
+  const std::span<const glm::vec3> bind_normals = character.normals();
+  rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
   const deform::GltfExportOptions options = export_options(rigged.texture_root, reference_policy(args));
-  if (request.bones) return write_bones(out, std::move(rest), frames, request, baked.name, timing, options, start);
-  return write_morphs(out, rest, baked, timing, options, start);
+  const auto name_of = [](const Motion& m) { return m.clip != nullptr ? m.clip->name : std::string("reach"); };
+
+  if (request.bones) {
+    // The extra bones start from the lattices' slices, where the rubber moves the points. Each motion starts from
+    // a fresh character, as the file's clips each start from the bind pose.
+    request.options.seeds = deform::decomposition_seeds(character.deformers(), character.skeleton());
+    std::vector<deform::DecompositionFrames> recorded(motions.size());
+    for (std::size_t i = 0; i < motions.size(); ++i) {
+      deform::Character actor = i == 0 ? std::move(character) : deform::Character(model, rig);
+      deform::DecompositionFrames& frames = recorded[i];
+      frames.name = name_of(motions[i]);
+      play_motion(actor, motions[i], [&](std::size_t k) {
+        const std::span<const glm::mat4> palette = actor.palette(), bind = actor.skeleton().bind_world();
+        std::vector<glm::mat4>& world = frames.bone_world.emplace_back(palette.size());
+        for (std::size_t b = 0; b < palette.size(); ++b) world[b] = palette[b] * bind[b];
+        frames.times.push_back(float(motions[i].timing.time(k)));
+        frames.positions.emplace_back(actor.positions().begin(), actor.positions().end());
+      });
+    }
+    return write_bones(out, std::move(rest), recorded, request, motions[0].timing, options, start);
+  }
+  deform::BakedFrames baked;
+  baked.name = name_of(motions[0]);
+  baked.position_tolerance = 1e-6f * diagonal(rest.mesh.positions);
+  baked.normal_tolerance = 1e-5f;
+  play_motion(character, motions[0], [&](std::size_t k) {
+    baked.times.push_back(float(motions[0].timing.time(k)));
+    baked.positions.emplace_back(character.positions().begin(), character.positions().end());
+    const std::span<const glm::vec3> normals = character.normals();
+    baked.normals.emplace_back(normals.begin(), normals.end());
+  });
+  return write_morphs(out, rest, baked, motions[0].timing, options, start);
 }
 
 int bake_ffd(const Args& args) {

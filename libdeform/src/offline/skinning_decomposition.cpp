@@ -36,9 +36,17 @@ struct Influence {
 };
 
 // Everything the steps share. Frame-major arrays: [t * count + k].
+// A clip's frames within the problem's: [begin, end).
+struct ClipRange {
+  const DecompositionFrames* frames = nullptr;
+  std::size_t begin = 0, end = 0;
+};
+
 struct Problem {
   const Model* model = nullptr;
-  const DecompositionFrames* frames = nullptr;
+  std::vector<ClipRange> clips;
+  std::vector<const glm::vec3*> goals;     // per frame (the clips' one after the other): its positions
+  std::vector<const glm::mat4*> world_in;  // per frame: its bones' matrices
   std::size_t points = 0, frame_count = 0, body = 0;
   float diagonal = 0.0f;
   std::vector<Pose> body_pose;          // per frame: the body's rigid local transforms, as the file will hold them
@@ -64,26 +72,16 @@ const glm::mat4& bone_palette(const Problem& pb, std::size_t t, std::uint32_t bo
   return bone < pb.body ? pb.body_palette[t * pb.body + bone] : pb.extra_palette[t * pb.extras + (bone - pb.body)];
 }
 
-glm::vec3 target(const Problem& pb, std::size_t t, std::uint32_t point) { return pb.frames->positions[t][point]; }
+glm::vec3 target(const Problem& pb, std::size_t t, std::uint32_t point) { return pb.goals[t][point]; }
 
-void require_valid(const Model& model, const DecompositionFrames& frames, const DecompositionOptions& options) {
-  if (options.max_bones > 1000) throw Error::invalid_argument("max_bones", "must be in [0, 1000]");
-  if (options.influences < 1 || options.influences > 8)
-    throw Error::invalid_argument("influences", "must be in [1, 8]");
-  if (options.iterations < 1 || options.iterations > 1000)
-    throw Error::invalid_argument("iterations", "must be in [1, 1000]");
-  if (!(options.moved_tolerance >= 0.0f && options.moved_tolerance <= 1.0f))
-    throw Error::invalid_argument("moved_tolerance", "must be in [0, 1]");
-  for (const glm::vec3& s : options.seeds)
-    if (!finite(s)) throw Error::invalid_argument("seeds", "a seed is not finite");
+void require_valid(const Model& model, const DecompositionFrames& frames) {
   const std::size_t n = frames.times.size(), points = model.mesh.point_count();
-  if (n == 0) throw Error::invalid_argument("frames", "there are no frames");
+  const std::string clip = "clip '" + frames.name + "'";
+  if (n == 0) throw Error::invalid_argument(clip, "there are no frames");
   if (frames.bone_world.size() != n || frames.positions.size() != n)
-    throw Error::invalid_argument("frames", "times, bone_world and positions must have one entry per frame");
-  if (model.weights.size() != points)
-    throw Error::invalid_argument("model", "the weights do not have one entry per mesh point");
+    throw Error::invalid_argument(clip, "times, bone_world and positions must have one entry per frame");
   for (std::size_t t = 0; t < n; ++t) {
-    const std::string frame = "frame " + std::to_string(t);
+    const std::string frame = clip + " frame " + std::to_string(t);
     if (!std::isfinite(frames.times[t]) || frames.times[t] < 0.0f ||
         (t > 0 && !(frames.times[t] > frames.times[t - 1])))
       throw Error::invalid_argument(frame, "times must be finite, >= 0 and strictly increasing");
@@ -96,6 +94,23 @@ void require_valid(const Model& model, const DecompositionFrames& frames, const 
     for (const glm::vec3& p : frames.positions[t])
       if (!finite(p)) throw Error::invalid_argument(frame, "a position is not finite");
   }
+}
+
+void require_valid(const Model& model, std::span<const DecompositionFrames> clips,
+                   const DecompositionOptions& options) {
+  if (options.max_bones > 1000) throw Error::invalid_argument("max_bones", "must be in [0, 1000]");
+  if (options.influences < 1 || options.influences > 8)
+    throw Error::invalid_argument("influences", "must be in [1, 8]");
+  if (options.iterations < 1 || options.iterations > 1000)
+    throw Error::invalid_argument("iterations", "must be in [1, 1000]");
+  if (!(options.moved_tolerance >= 0.0f && options.moved_tolerance <= 1.0f))
+    throw Error::invalid_argument("moved_tolerance", "must be in [0, 1]");
+  for (const glm::vec3& s : options.seeds)
+    if (!finite(s)) throw Error::invalid_argument("seeds", "a seed is not finite");
+  if (model.weights.size() != model.mesh.point_count())
+    throw Error::invalid_argument("model", "the weights do not have one entry per mesh point");
+  if (clips.empty()) throw Error::invalid_argument("clips", "there are no clips");
+  for (const DecompositionFrames& frames : clips) require_valid(model, frames);
 }
 
 // The rotation of a matrix whose columns may carry a scale: the columns normalised, then the nearest quaternion.
@@ -118,7 +133,7 @@ void prepare_body(Problem& pb) {
   pb.body_world.resize(pb.frame_count * pb.body);
   pb.body_palette.resize(pb.frame_count * pb.body);
   for (std::size_t t = 0; t < pb.frame_count; ++t) {
-    const std::vector<glm::mat4>& world = pb.frames->bone_world[t];
+    const glm::mat4* world = pb.world_in[t];
     Pose& pose = pb.body_pose[t];
     pose.rotations.resize(pb.body);
     pose.translations.resize(pb.body);
@@ -666,19 +681,20 @@ SkinWeights extended_weights(const Problem& pb) {
 
 // Every bone's local motion at the frames' times: the body's rigid locals, and each extra bone's rest-to-frame
 // motion expressed under its parent: L = W_parent⁻¹ · M · B, B its bind (parent orientation, at its centre).
-Animation extended_clip(const Problem& pb, const Skeleton& skeleton, const std::string& name) {
+Animation extended_clip(const Problem& pb, const Skeleton& skeleton, const ClipRange& range) {
   Animation clip;
-  clip.name = name;
+  clip.name = range.frames->name;
   clip.loop = false;
-  clip.duration = pb.frames->times.back();
-  const std::span<const float> times = pb.frames->times;
+  clip.duration = range.frames->times.back();
+  const std::span<const float> times = range.frames->times;
+  const std::size_t count = range.end - range.begin;
   const Pose rest = skeleton.bind_pose();
   for (std::size_t b = 0; b < pb.body; ++b) {
-    std::vector<glm::quat> rotations(pb.frame_count);
-    std::vector<glm::vec3> translations(pb.frame_count);
-    for (std::size_t t = 0; t < pb.frame_count; ++t) {
-      rotations[t] = pb.body_pose[t].rotations[b];
-      translations[t] = pb.body_pose[t].translations[b];
+    std::vector<glm::quat> rotations(count);
+    std::vector<glm::vec3> translations(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      rotations[k] = pb.body_pose[range.begin + k].rotations[b];
+      translations[k] = pb.body_pose[range.begin + k].translations[b];
     }
     write_channel(clip, std::int32_t(b), times, std::move(rotations), std::move(translations), rest.rotations[b],
                   rest.translations[b]);
@@ -686,13 +702,14 @@ Animation extended_clip(const Problem& pb, const Skeleton& skeleton, const std::
   for (std::size_t e = 0; e < pb.extras; ++e) {
     const std::size_t bone = pb.body + e, parent = pb.parent[e];
     const glm::mat4 bind = skeleton.bind_world()[bone];
-    std::vector<glm::quat> rotations(pb.frame_count);
-    std::vector<glm::vec3> translations(pb.frame_count);
-    for (std::size_t t = 0; t < pb.frame_count; ++t) {
+    std::vector<glm::quat> rotations(count);
+    std::vector<glm::vec3> translations(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t t = range.begin + k;
       const glm::mat4 local =
           glm::inverse(pb.body_world[t * pb.body + parent]) * pb.extra_palette[t * pb.extras + e] * bind;
-      rotations[t] = rotation_of(local);
-      translations[t] = glm::vec3(local[3]);
+      rotations[k] = rotation_of(local);
+      translations[k] = glm::vec3(local[3]);
     }
     write_channel(clip, std::int32_t(bone), times, std::move(rotations), std::move(translations), rest.rotations[bone],
                   rest.translations[bone]);
@@ -704,13 +721,24 @@ Animation extended_clip(const Problem& pb, const Skeleton& skeleton, const std::
 }  // namespace
 
 SkinningDecomposition decompose_skinning(const Model& model, const DecompositionFrames& frames,
-                                         const DecompositionOptions& options, const std::string& clip_name) {
-  require_valid(model, frames, options);
+                                         const DecompositionOptions& options) {
+  return decompose_skinning(model, std::span<const DecompositionFrames>(&frames, 1), options);
+}
+
+SkinningDecomposition decompose_skinning(const Model& model, std::span<const DecompositionFrames> clips,
+                                         const DecompositionOptions& options) {
+  require_valid(model, clips, options);
   Problem pb;
   pb.model = &model;
-  pb.frames = &frames;
+  for (const DecompositionFrames& frames : clips) {
+    pb.clips.push_back({&frames, pb.goals.size(), pb.goals.size() + frames.times.size()});
+    for (std::size_t t = 0; t < frames.times.size(); ++t) {
+      pb.goals.push_back(frames.positions[t].data());
+      pb.world_in.push_back(frames.bone_world[t].data());
+    }
+  }
   pb.points = model.mesh.point_count();
-  pb.frame_count = frames.times.size();
+  pb.frame_count = pb.goals.size();
   pb.body = model.skeleton.bone_count();
   const Bounds bounds = compute_bounds(model.mesh.positions);
   pb.diagonal = std::max(glm::length(bounds.max - bounds.min), std::numeric_limits<float>::min());
@@ -753,7 +781,7 @@ SkinningDecomposition decompose_skinning(const Model& model, const Decomposition
   }
   out.skeleton = extended_skeleton(pb);
   out.weights = extended_weights(pb);
-  out.clip = extended_clip(pb, out.skeleton, clip_name);
+  for (const ClipRange& range : pb.clips) out.clips.push_back(extended_clip(pb, out.skeleton, range));
   out.extra_bones = pb.extras;
   out.moved_points = pb.moved;
   const Errors errors = measure(pb);

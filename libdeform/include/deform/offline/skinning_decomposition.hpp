@@ -26,9 +26,10 @@
 
 namespace deform {
 
-// The animation to approximate, frame by frame: where the body's bones are, and where every mesh point is.
+// One clip to approximate, frame by frame: where the body's bones are, and where every mesh point is.
 struct DecompositionFrames {
-  std::vector<float> times;  // seconds, finite, >= 0, strictly increasing; one per frame
+  std::string name = "bake";  // the clip's name in the result
+  std::vector<float> times;   // seconds, finite, >= 0, strictly increasing; one per frame
   // Per frame: each body bone's model-space matrix (Character::palette() times the bone's bind matrix). Only its
   // rotation and translation are kept (a Pose has no scale); what a scale did shows up as points to fit.
   std::vector<std::vector<glm::mat4>> bone_world;
@@ -54,13 +55,15 @@ struct SkinningDecomposition {
   // at the centroid of the points it started with, with its parent's orientation.
   Skeleton skeleton;
   SkinWeights weights;  // the artist's rows for unmoved points, bit for bit; new ones for the moved points
-  // Every animated bone's local translation and rotation at the frames' times, linear. A bone that does not move
-  // has no channel; one that holds another pose throughout has one key.
-  Animation clip;
+  // Per clip given, in order: every animated bone's local translation and rotation at the frames' times, linear,
+  // named as the frames are. A bone that does not move in a clip has no channel there; one that holds another pose
+  // throughout has one key.
+  std::vector<Animation> clips;
   std::size_t extra_bones = 0;
   std::vector<std::uint32_t> moved_points;  // ascending
   // Distance from the frames' positions to the decomposition's skinning, as fractions of the bind mesh's bounding-box
-  // diagonal: root mean square over every point of every frame, the largest, and both per frame.
+  // diagonal: root mean square over every point of every frame, the largest, and both per frame (the clips' frames
+  // one after the other).
   float rms_error = 0.0f;
   float max_error = 0.0f;
   std::vector<float> frame_rms_error;
@@ -68,14 +71,18 @@ struct SkinningDecomposition {
   int iterations = 0;  // alternations run
 };
 
-// Decomposes `frames` of `model` (its mesh's bind positions, skeleton and weights). The clip is named `clip_name`.
-// Throws deform::Error (kind argument) naming the field when the options are out of range, the frames are empty or
-// inconsistent (a bone_world or positions entry of the wrong size, times not increasing) or hold a non-finite number.
+// Decomposes the clips of `model` (its mesh's bind positions, skeleton and weights) together: one set of extra
+// bones and weights for all of them, so that one file plays every clip. Throws deform::Error (kind argument) naming
+// the field when the options are out of range, there are no clips or a clip has no frames or inconsistent ones (a
+// bone_world or positions entry of the wrong size, times not increasing) or holds a non-finite number.
 // Deterministic: the same input gives the same bits for any thread count. Cost per iteration: O(frames · moved
 // points · candidates²), candidates = a moved point's own bones plus its eight nearest extra bones.
+DEFORM_OFFLINE_API SkinningDecomposition decompose_skinning(const Model& model,
+                                                            std::span<const DecompositionFrames> clips,
+                                                            const DecompositionOptions& options = {});
+// One clip.
 DEFORM_OFFLINE_API SkinningDecomposition decompose_skinning(const Model& model, const DecompositionFrames& frames,
-                                                            const DecompositionOptions& options = {},
-                                                            const std::string& clip_name = "bake");
+                                                            const DecompositionOptions& options = {});
 
 // Starting centres from a hierarchy's lattices: for each lattice, the centroid of each slice of its rest control
 // points across the bone (degree.x + 1 per lattice), in the model's bind space.
