@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,17 +24,17 @@ std::int32_t find_bone(const deform::Skeleton& skeleton, const std::string& name
   return id;
 }
 
-int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = {"--effector",       "--target",    "--root",   "--solver",
-                                          "--max-iterations", "--tolerance", "--limits", "--pole",
-                                          "--soften",         "--stretch",   "--swivel"};
-  value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
-  const Args args(argv, value_flags, {"--builtin"});
-  // A skeleton alone (S.sk) names its bones; any model, or a rig, also brings a rig whose reach chain is the default.
-  const bool skeleton_only =
-      args.positionals().size() == 1 && std::filesystem::path(args.positionals()[0]).extension() == ".sk";
+// What deform ik solves for: a skeleton alone (S.sk) names its bones; any model, or a rig, also brings a rig whose
+// reach chain is the default.
+struct IkSubject {
   deform::Skeleton skeleton;
   deform::Rig rig;
+};
+
+IkSubject load_ik_subject(const Args& args) {
+  const bool skeleton_only =
+      args.positionals().size() == 1 && std::filesystem::path(args.positionals()[0]).extension() == ".sk";
+  IkSubject subject;
   if (skeleton_only) {
     const std::string& path = args.positionals()[0];
     if (args.has("--builtin")) throw UsageError("--builtin takes no skeleton file (got '" + path + "')");
@@ -42,33 +43,48 @@ int run(const std::vector<std::string>& argv) {
       throw deform::Error::in_file(path, "", "expected a skeleton (.sk), got " + kind);
     if (args.has("--rig")) throw UsageError("--rig needs the model it rigs, not a skeleton alone");
     if (!args.has("--effector")) throw UsageError("--effector is required with a skeleton alone (S.sk)");
-    skeleton = deform::read_sk(path);
+    subject.skeleton = deform::read_sk(path);
   } else {
     RiggedModel rigged = load_rigged_model(args, !args.has("--effector"));
-    skeleton = std::move(rigged.loaded.model.skeleton);
-    rig = std::move(rigged.rig);
+    subject.skeleton = std::move(rigged.loaded.model.skeleton);
+    subject.rig = std::move(rigged.rig);
   }
+  return subject;
+}
 
-  // Without --effector: the rig's reach chain (effector, and root unless --root says).
+// deform ik's options, checked in the order the usage errors are reported.
+struct IkOptions {
   std::int32_t effector = -1, root = 0;
+  glm::vec3 target{0.0f};
+  std::string solver;  // ccd, fabrik or two-bone
+  std::optional<glm::vec3> pole;
+  float soften = 0.0f, max_stretch = 1.0f, swivel = 0.0f;  // the two-bone solver's
+  deform::IkSettings settings;                             // its tolerance set with the chain (ik_chain)
+  bool swing_twist = false;
+  bool stretch_given = false;  // --stretch: the report says the stretch
+};
+
+IkOptions ik_options(const Args& args, const IkSubject& subject) {
+  const deform::Skeleton& skeleton = subject.skeleton;
+  IkOptions o;
+  // Without --effector: the rig's reach chain (effector, and root unless --root says).
   if (const auto name = args.value("--effector")) {
-    effector = find_bone(skeleton, *name, "--effector");
+    o.effector = find_bone(skeleton, *name, "--effector");
   } else {
-    effector = rig.reach_effector;
-    if (effector < 0) throw UsageError("the rig has no reach effector: give --effector NAME");
-    if (rig.reach_root >= 0) root = rig.reach_root;
+    o.effector = subject.rig.reach_effector;
+    if (o.effector < 0) throw UsageError("the rig has no reach effector: give --effector NAME");
+    if (subject.rig.reach_root >= 0) o.root = subject.rig.reach_root;
   }
-  if (const auto name = args.value("--root")) root = find_bone(skeleton, *name, "--root");
-  const glm::vec3 target = parse_vec3(args.required("--target"), "--target");
-  const std::string solver = args.value("--solver").value_or("ccd");
-  if (solver != "ccd" && solver != "fabrik" && solver != "two-bone")
-    throw UsageError("--solver: '" + solver + "' is not ccd, fabrik or two-bone");
+  if (const auto name = args.value("--root")) o.root = find_bone(skeleton, *name, "--root");
+  o.target = parse_vec3(args.required("--target"), "--target");
+  o.solver = args.value("--solver").value_or("ccd");
+  if (o.solver != "ccd" && o.solver != "fabrik" && o.solver != "two-bone")
+    throw UsageError("--solver: '" + o.solver + "' is not ccd, fabrik or two-bone");
   // The two-bone solver's rig settings (TwoBoneIkJob); of them the chain solvers take only the pole (IkJob::pole).
   for (const char* flag : {"--soften", "--stretch", "--swivel"})
-    if (args.value(flag) && solver != "two-bone")
+    if (args.value(flag) && o.solver != "two-bone")
       throw UsageError(std::string(flag) + ": applies to --solver two-bone only");
-  const std::optional<glm::vec3> pole =
-      args.value("--pole") ? std::optional(parse_vec3(*args.value("--pole"), "--pole")) : std::nullopt;
+  if (args.value("--pole")) o.pole = parse_vec3(*args.value("--pole"), "--pole");
   auto number_in = [&](const char* flag, double low, double high, const char* range, double fallback) {
     const auto text = args.value(flag);
     if (!text) return static_cast<float>(fallback);
@@ -76,109 +92,140 @@ int run(const std::vector<std::string>& argv) {
     if (!(value >= low && value <= high)) throw UsageError(std::string(flag) + ": '" + *text + "' is not " + range);
     return static_cast<float>(value);
   };
-  const float soften = number_in("--soften", 0.0, 1.0, "within [0, 1]", 0.0);
-  const float max_stretch = number_in("--stretch", 1.0, 1e6, "within [1, 1e6]", 1.0);
-  const float swivel = number_in("--swivel", -360.0, 360.0, "within [-360, 360] degrees", 0.0);
-  deform::IkSettings settings;
-  settings.max_iterations = 100;
+  o.soften = number_in("--soften", 0.0, 1.0, "within [0, 1]", 0.0);
+  o.max_stretch = number_in("--stretch", 1.0, 1e6, "within [1, 1e6]", 1.0);
+  o.swivel = number_in("--swivel", -360.0, 360.0, "within [-360, 360] degrees", 0.0);
+  o.stretch_given = args.value("--stretch").has_value();
+  o.settings.max_iterations = 100;
   if (auto n = args.value("--max-iterations"))
-    settings.max_iterations = static_cast<int>(parse_integer(*n, "--max-iterations", 1, 1000000));
-
+    o.settings.max_iterations = static_cast<int>(parse_integer(*n, "--max-iterations", 1, 1000000));
   const std::string limits = args.value("--limits").value_or("euler");
   if (limits != "euler" && limits != "swing-twist")
     throw UsageError("--limits: '" + limits + "' is not euler or swing-twist");
-  const bool swing_twist = limits == "swing-twist";
-  if (swing_twist && solver == "two-bone")
+  o.swing_twist = limits == "swing-twist";
+  if (o.swing_twist && o.solver == "two-bone")
     throw UsageError("--limits swing-twist: the two-bone solver has Euler limits only");
+  return o;
+}
 
-  deform::Pose pose = skeleton.bind_pose();
-  deform::IkChain chain = deform::make_chain(skeleton, root, effector);  // names the bones if not a chain
-  // Swing-twist limits from the .sk Euler ones: about each joint's bone axis (its child's bind translation), the
-  // twist range of the nearest coordinate axis and a cone of the other two axes' larger bounds
-  // (deform::swing_twist_from_euler).
-  if (swing_twist)
+// The chain from the root to the effector (deform::make_chain names the bones if it is not one), with swing-twist
+// limits when asked: from the .sk Euler ones, about each joint's bone axis (its child's bind translation), the twist
+// range of the nearest coordinate axis and a cone of the other two axes' larger bounds
+// (deform::swing_twist_from_euler). Sets the tolerance: --tolerance, else 1e-4 of the chain's length.
+deform::IkChain ik_chain(const Args& args, const deform::Skeleton& skeleton, const deform::Pose& pose, IkOptions& o) {
+  deform::IkChain chain = deform::make_chain(skeleton, o.root, o.effector);
+  if (o.swing_twist)
     for (std::size_t k = 0; k < chain.joint_count(); ++k)
       deform::set_swing_twist(chain, k,
                               deform::swing_twist_from_euler(skeleton.bone(chain.bones[k]).limits,
                                                              skeleton.bone(chain.bones[k + 1]).bind_translation));
-  settings.tolerance = 1e-4f * deform::chain_length(chain, pose.translations);
+  o.settings.tolerance = 1e-4f * deform::chain_length(chain, pose.translations);
   if (auto t = args.value("--tolerance")) {
     const double tolerance = parse_number(*t, "--tolerance");
     if (tolerance < 0.0) throw UsageError("--tolerance: must not be negative");
-    settings.tolerance = static_cast<float>(tolerance);
+    o.settings.tolerance = static_cast<float>(tolerance);
   }
-  if (solver == "two-bone" && chain.joint_count() != 2)
-    throw deform::Error::invalid_argument("bone " + std::to_string(effector),
+  if (o.solver == "two-bone" && chain.joint_count() != 2)
+    throw deform::Error::invalid_argument("bone " + std::to_string(o.effector),
                                           "the two-bone solver needs a chain of exactly two joints, '" +
-                                              skeleton.key(root) + "' has " + std::to_string(chain.joint_count()) +
-                                              " above '" + skeleton.key(effector) + "'");
+                                              skeleton.key(o.root) + "' has " + std::to_string(chain.joint_count()) +
+                                              " above '" + skeleton.key(o.effector) + "'");
+  return chain;
+}
 
-  deform::RigidTransform base;
-  deform::IkResult result;
-  deform::Status solved = deform::chain_base(chain, pose.rotations, pose.translations, base);
-  float stretch = 1.0f;
-  if (solved && solver == "two-bone") {  // without --pole the limb keeps its bind-pose bend plane
-    std::vector<glm::vec3> stretched = pose.translations;
-    deform::TwoBoneIkJob job;
-    job.chain = &chain;
-    job.base = base;
-    job.rotations = pose.rotations;
-    job.translations = pose.translations;
-    job.target = target;
-    if (pole) {
-      job.pole = *pole;
-      job.pole_kind = deform::PoleKind::point;
-    }
-    job.swivel_degrees = swivel;
-    job.soften = soften;
-    job.max_stretch = max_stretch;
-    job.tolerance = settings.tolerance;
-    job.stretched_translations = stretched;
-    job.result = &result;
-    job.stretch = &stretch;
-    if (const deform::Status valid = job.validate(); !valid)
-      throw deform::Error::invalid_argument("bone " + std::to_string(effector),
-                                            std::string("two-bone solve: ") + valid.reason());
-    solved = job.run();
-    pose.translations = stretched;  // the printed bones carry the stretch, so FK of them reaches the target
-  } else if (solved) {
-    std::vector<std::byte> scratch(deform::IkJob::scratch_size(chain.joint_count()));
-    deform::IkJob job;
-    job.method = solver == "fabrik" ? deform::IkMethod::fabrik : deform::IkMethod::ccd;
-    job.chain = &chain;
-    job.base = base;
-    job.rotations = pose.rotations;
-    job.translations = pose.translations;
-    job.target = target;
-    job.settings = settings;
-    job.scratch = scratch;
-    job.result = &result;
-    if (pole) job.pole = *pole, job.use_pole = true;
-    solved = job.run();
+// The two-bone solve of `pose` (TwoBoneIkJob); without --pole the limb keeps its bind-pose bend plane. The pose's
+// bones then carry the stretch, so that FK of them reaches the target.
+deform::Status solve_two_bone(const deform::IkChain& chain, const deform::RigidTransform& base, const IkOptions& o,
+                              deform::Pose& pose, deform::IkResult& result, float& stretch) {
+  std::vector<glm::vec3> stretched = pose.translations;
+  deform::TwoBoneIkJob job;
+  job.chain = &chain;
+  job.base = base;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = o.target;
+  if (o.pole) {
+    job.pole = *o.pole;
+    job.pole_kind = deform::PoleKind::point;
   }
-  if (!solved) throw UsageError("the target or a setting is not valid");
+  job.swivel_degrees = o.swivel;
+  job.soften = o.soften;
+  job.max_stretch = o.max_stretch;
+  job.tolerance = o.settings.tolerance;
+  job.stretched_translations = stretched;
+  job.result = &result;
+  job.stretch = &stretch;
+  if (const deform::Status valid = job.validate(); !valid)
+    throw deform::Error::invalid_argument("bone " + std::to_string(o.effector),
+                                          std::string("two-bone solve: ") + valid.reason());
+  const deform::Status solved = job.run();
+  pose.translations = stretched;
+  return solved;
+}
 
-  // Report what the printed angles give: read them back as `deform skin --pose` will, and measure that pose.
-  // Swing-twist joints may leave the .sk's Euler box (a cone is another shape): printed exactly, read back unclamped
-  // (`deform skin --pose P --no-limits`).
-  const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones, !swing_twist);
-  const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton, !swing_twist);
+// The CCD or FABRIK solve of `pose` (IkJob).
+deform::Status solve_chain(const deform::IkChain& chain, const deform::RigidTransform& base, const IkOptions& o,
+                           deform::Pose& pose, deform::IkResult& result) {
+  std::vector<std::byte> scratch(deform::IkJob::scratch_size(chain.joint_count()));
+  deform::IkJob job;
+  job.method = o.solver == "fabrik" ? deform::IkMethod::fabrik : deform::IkMethod::ccd;
+  job.chain = &chain;
+  job.base = base;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.target = o.target;
+  job.settings = o.settings;
+  job.scratch = scratch;
+  job.result = &result;
+  if (o.pole) job.pole = *o.pole, job.use_pole = true;
+  return job.run();
+}
+
+// Reports what the printed angles give: read back as `deform skin --pose` will, and that pose measured. Swing-twist
+// joints may leave the .sk's Euler box (a cone is another shape): printed exactly, read back unclamped
+// (`deform skin --pose P --no-limits`).
+void print_ik_report(const deform::Skeleton& skeleton, const deform::IkChain& chain, const deform::Pose& pose,
+                     const IkOptions& o, const deform::IkResult& result, float stretch) {
+  const std::string bones = deform::format_pose_bones_json(skeleton, pose, chain.bones, !o.swing_twist);
+  const deform::Pose printed = deform::parse_pose_json("{\"bones\": " + bones + "}", skeleton, !o.swing_twist);
   glm::vec3 reached_point(0.0f);
   if (const deform::Status status =
           deform::effector_position(chain, printed.rotations, printed.translations, reached_point);
       !status)
     throw deform::Error::invalid_argument("the printed pose", status.reason());
-  const float distance = glm::length(reached_point - target);
+  const float distance = glm::length(reached_point - o.target);
 
   nlohmann::ordered_json out;
-  out["solver"] = solver;
-  out["reached"] = distance <= settings.tolerance;
+  out["solver"] = o.solver;
+  out["reached"] = distance <= o.settings.tolerance;
   out["distance"] = distance;
   out["iterations"] = result.iterations;
-  if (args.value("--stretch")) out["stretch"] = stretch;
+  if (o.stretch_given) out["stretch"] = stretch;
   out["effector"] = to_json(reached_point);
   out["bones"] = nlohmann::ordered_json::parse(bones);
   print_json_in_order(out);
+}
+
+int run(const std::vector<std::string>& argv) {
+  std::vector<std::string> value_flags = {"--effector",       "--target",    "--root",   "--solver",
+                                          "--max-iterations", "--tolerance", "--limits", "--pole",
+                                          "--soften",         "--stretch",   "--swivel"};
+  value_flags.insert(value_flags.end(), rig_value_flags.begin(), rig_value_flags.end());
+  const Args args(argv, value_flags, {"--builtin"});
+  const IkSubject subject = load_ik_subject(args);
+  const deform::Skeleton& skeleton = subject.skeleton;
+  IkOptions o = ik_options(args, subject);
+
+  deform::Pose pose = skeleton.bind_pose();
+  const deform::IkChain chain = ik_chain(args, skeleton, pose, o);
+  deform::RigidTransform base;
+  deform::IkResult result;
+  deform::Status solved = deform::chain_base(chain, pose.rotations, pose.translations, base);
+  float stretch = 1.0f;
+  if (solved && o.solver == "two-bone") solved = solve_two_bone(chain, base, o, pose, result, stretch);
+  else if (solved) solved = solve_chain(chain, base, o, pose, result);
+  if (!solved) throw UsageError("the target or a setting is not valid");
+  print_ik_report(skeleton, chain, pose, o, result, stretch);
   return exit_ok;
 }
 

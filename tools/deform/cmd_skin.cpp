@@ -229,152 +229,191 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, co
   return weights;
 }
 
-int run(const std::vector<std::string>& argv) {
-  std::vector<std::string> value_flags = model_value_flags;
-  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph",
-                                         "--mush", "--mush-step"});
-  std::vector<std::string> switch_flags = model_switch_flags;
-  switch_flags.push_back("--no-limits");
-  const Args args(argv, value_flags, switch_flags);
+// deform skin's options, checked before the model loads so that a bad one fails fast.
+struct SkinOptions {
+  std::string method_name;  // lbs, dqs or ddm
+  bool direct_mush = false;
+  bool animated = false;  // --clip or --blend
+  std::string pose_path;  // --pose, when not animated
+  std::vector<BlendItem> blend;
+  std::string out_path;
+  bool limits = true;
+  int mush_iterations = 0;  // Delta Mush after skinning: 0 for none
+  double mush_step = 0.5;
+};
 
-  const std::string method_name = args.value("--method").value_or("lbs");
-  if (method_name != "lbs" && method_name != "dqs" && method_name != "ddm")
-    throw UsageError("--method: '" + method_name + "' is not lbs, dqs or ddm");
-  const bool direct_mush = method_name == "ddm";
-  const bool animated = args.has("--clip") || args.has("--blend");
-  const std::string pose_path = animated ? std::string() : args.required("--pose");
-  // Parsed before the model loads, so a malformed item fails fast.
-  const std::vector<BlendItem> blend =
-      args.has("--blend") ? parse_blend(*args.value("--blend")) : std::vector<BlendItem>{};
-  if (!animated && args.has("--time")) throw UsageError("--time needs --clip or --blend");
-  const std::string out_path = args.required("--out");
-  const bool limits = !args.has("--no-limits");
-  // Delta Mush after skinning: iterations and step, checked before the model loads.
-  const auto mush_iterations = static_cast<int>(
+SkinOptions skin_options(const Args& args) {
+  SkinOptions o;
+  o.method_name = args.value("--method").value_or("lbs");
+  if (o.method_name != "lbs" && o.method_name != "dqs" && o.method_name != "ddm")
+    throw UsageError("--method: '" + o.method_name + "' is not lbs, dqs or ddm");
+  o.direct_mush = o.method_name == "ddm";
+  o.animated = args.has("--clip") || args.has("--blend");
+  o.pose_path = o.animated ? std::string() : args.required("--pose");
+  if (args.has("--blend")) o.blend = parse_blend(*args.value("--blend"));
+  if (!o.animated && args.has("--time")) throw UsageError("--time needs --clip or --blend");
+  o.out_path = args.required("--out");
+  o.limits = !args.has("--no-limits");
+  o.mush_iterations = static_cast<int>(
       args.has("--mush") ? parse_integer(*args.value("--mush"), "--mush", 0, deform::max_delta_mush_iterations) : 0);
-  const double mush_step = args.has("--mush-step") ? parse_number(*args.value("--mush-step"), "--mush-step") : 0.5;
-  if (!(mush_step > 0.0 && mush_step <= 1.0)) throw UsageError("--mush-step: must be within (0, 1]");
+  o.mush_step = args.has("--mush-step") ? parse_number(*args.value("--mush-step"), "--mush-step") : 0.5;
+  if (!(o.mush_step > 0.0 && o.mush_step <= 1.0)) throw UsageError("--mush-step: must be within (0, 1]");
   if (args.has("--mush-step") && !args.has("--mush")) throw UsageError("--mush-step needs --mush");
+  return o;
+}
 
-  const LoadedModel loaded = load_model(args);
-  const deform::Model& model = loaded.model;
-  const deform::Skeleton& skeleton = model.skeleton;
-  const deform::Pose pose = args.has("--blend")  ? blend_pose(args, loaded, blend)
-                            : args.has("--clip") ? clip_pose(args, loaded)
-                                                 : deform::read_pose_json(pose_path, skeleton, limits);
+// The pose's skinning matrices, and for DQS its dual quaternions (and scales, when the pose scales).
+struct BonePalette {
+  std::vector<glm::mat4> world, palette;
+  std::vector<deform::DualQuat> dual_quats;
+  std::vector<glm::mat3> scales;
+  bool has_scale = false;
+};
 
+BonePalette bone_palette(const deform::Skeleton& skeleton, const deform::Pose& pose, bool dqs,
+                         const std::string& pose_path) {
   const std::size_t bone_count = skeleton.bone_count();
-  std::vector<glm::mat4> world(bone_count), palette(bone_count);
+  BonePalette bones;
+  bones.world.resize(bone_count);
+  bones.palette.resize(bone_count);
   deform::LocalToWorldJob fk;
   fk.skeleton = &skeleton;
   fk.rotations = pose.rotations;
   fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
+  fk.world = bones.world;
+  fk.palette = bones.palette;
   if (!fk.run()) throw deform::Error::in_file(pose_path, "", "the pose does not fit the skeleton");
+  bones.dual_quats.resize(bone_count);
+  bones.scales.resize(bone_count);
+  if (dqs && !deform::compute_dual_quat_palette(bones.palette, bones.dual_quats, bones.scales, bones.has_scale))
+    throw deform::Error::in_file(pose_path, "", "the pose gives a singular bone transform");
+  return bones;
+}
 
-  deform::SkinningJob job;
-  job.method = method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
-  job.matrices = palette;
-  std::vector<deform::DualQuat> dual_quats(bone_count);
-  std::vector<glm::mat3> scales(bone_count);
-  if (job.method == deform::SkinningMethod::dqs) {
-    bool has_scale = false;
-    if (!deform::compute_dual_quat_palette(palette, dual_quats, scales, has_scale))
-      throw deform::Error::in_file(pose_path, "", "the pose gives a singular bone transform");
-    job.dual_quats = dual_quats;
-    if (has_scale) job.scales = scales;
-  }
+// The bind points with the morph targets applied at `weights` (in bind space, as glTF and three.js do), and each
+// point's normal delta (0 without targets). Refuses weights that move a point beyond float range.
+struct MorphedRest {
+  std::vector<glm::vec3> positions, normal_deltas;
+};
 
-  // Points (the OBJ's `v`, in order) carry the weights; render vertices carry the normals, so they are skinned with
-  // their point's weights.
-  const deform::Mesh& mesh = model.mesh;
-  // Morph targets first (in bind space, as glTF and three.js do), then skinning of the morphed points.
-  const std::vector<float> weights = morph_weights(args, loaded, blend);
-  std::vector<glm::vec3> rest = mesh.positions, normal_deltas(mesh.point_count(), glm::vec3(0.0f));
-  if (!model.morph_targets.empty()) {
-    const std::vector<glm::vec3> zeros(mesh.point_count(), glm::vec3(0.0f));
-    deform::MorphJob morph;
-    morph.targets = model.morph_targets;
-    morph.weights = weights;
-    morph.rest_positions = mesh.positions;
-    morph.out_positions = rest;
-    morph.rest_normals = zeros;  // the normal deltas alone, added to each render vertex's normal below
-    morph.out_normals = normal_deltas;
-    if (const deform::Status status = morph.validate(); !status)
-      throw deform::Error::in_file(loaded.source, "morph targets", status.reason());
-    morph.run();
-    for (std::size_t p = 0; p < rest.size(); ++p)
-      if (!std::isfinite(rest[p].x) || !std::isfinite(rest[p].y) || !std::isfinite(rest[p].z) ||
-          !std::isfinite(normal_deltas[p].x) || !std::isfinite(normal_deltas[p].y) ||
-          !std::isfinite(normal_deltas[p].z))
-        throw deform::Error::in_file(loaded.source, "morph targets",
-                                     "the weights move point " + std::to_string(p) + " beyond float range");
+MorphedRest morphed_rest(const LoadedModel& loaded, const std::vector<float>& weights) {
+  const deform::Mesh& mesh = loaded.model.mesh;
+  MorphedRest rest{mesh.positions, std::vector<glm::vec3>(mesh.point_count(), glm::vec3(0.0f))};
+  if (loaded.model.morph_targets.empty()) return rest;
+  const std::vector<glm::vec3> zeros(mesh.point_count(), glm::vec3(0.0f));
+  deform::MorphJob morph;
+  morph.targets = loaded.model.morph_targets;
+  morph.weights = weights;
+  morph.rest_positions = mesh.positions;
+  morph.out_positions = rest.positions;
+  morph.rest_normals = zeros;  // the normal deltas alone, added to each render vertex's normal by the caller
+  morph.out_normals = rest.normal_deltas;
+  if (const deform::Status status = morph.validate(); !status)
+    throw deform::Error::in_file(loaded.source, "morph targets", status.reason());
+  morph.run();
+  for (std::size_t p = 0; p < rest.positions.size(); ++p) {
+    const glm::vec3 q = rest.positions[p], n = rest.normal_deltas[p];
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) || !std::isfinite(n.x) ||
+        !std::isfinite(n.y) || !std::isfinite(n.z))
+      throw deform::Error::in_file(loaded.source, "morph targets",
+                                   "the weights move point " + std::to_string(p) + " beyond float range");
   }
-  std::vector<glm::vec3> positions(mesh.point_count());
+  return rest;
+}
+
+// The deformed points, and the render vertices' normals (none when the mesh has no normal per render vertex).
+struct SkinnedMesh {
+  std::vector<glm::vec3> positions;  // one per point
+  std::vector<glm::vec3> normals;    // one per render vertex
+};
+
+// Direct Delta Mush of the morphed points (each morph offset turned with its point), bound on the rest points; each
+// render vertex's normal turns with its point's rotation.
+void direct_delta_mush(const LoadedModel& loaded, const BonePalette& bones, const std::vector<glm::vec3>& rest,
+                       const std::vector<glm::vec3>& vertex_normals, SkinnedMesh& out) {
+  const deform::Mesh& mesh = loaded.model.mesh;
+  const deform::DirectDeltaMushBinding binding = deform::bind_direct_delta_mush(mesh, loaded.model.weights);
+  std::vector<glm::quat> rotations(mesh.point_count());
+  deform::DirectDeltaMushJob ddm;
+  ddm.binding = &binding;
+  ddm.matrices = bones.palette;
+  ddm.in_positions = rest;
+  ddm.out_positions = out.positions;
+  ddm.out_rotations = rotations;
+  if (const deform::Status status = ddm.validate(); !status)
+    throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
+  ddm.run();
+  for (std::size_t r = 0; r < out.normals.size(); ++r) {
+    const glm::vec3 n = rotations[mesh.vertex_point[r]] * vertex_normals[r];
+    const float length = glm::length(n);
+    out.normals[r] = length > 0.0f ? n / length : glm::vec3(0.0f);
+  }
+}
+
+// Points (the OBJ's `v`, in order) carry the weights; render vertices carry the normals, so they are skinned with
+// their point's weights.
+SkinnedMesh skin_mesh(const LoadedModel& loaded, const SkinOptions& o, const BonePalette& bones,
+                      const MorphedRest& rest) {
+  const deform::Mesh& mesh = loaded.model.mesh;
   const std::size_t render_vertices = mesh.vertex_normals.size() == mesh.vertex_count() ? mesh.vertex_count() : 0;
-  std::vector<glm::vec3> vertex_positions(render_vertices), vertex_normals(render_vertices), normals(render_vertices),
-      scratch(render_vertices);
+  SkinnedMesh out{std::vector<glm::vec3>(mesh.point_count()), std::vector<glm::vec3>(render_vertices)};
+  std::vector<glm::vec3> vertex_positions(render_vertices), vertex_normals(render_vertices), scratch(render_vertices);
   for (std::size_t r = 0; r < render_vertices; ++r) {
     const std::uint32_t point = mesh.vertex_point[r];
-    vertex_positions[r] = rest[point];
-    vertex_normals[r] = mesh.vertex_normals[r] + normal_deltas[point];
+    vertex_positions[r] = rest.positions[point];
+    vertex_normals[r] = mesh.vertex_normals[r] + rest.normal_deltas[point];
   }
-  if (direct_mush) {
-    // Direct Delta Mush of the morphed points (each morph offset turned with its point), bound on the rest points;
-    // each render vertex's normal turns with its point's rotation.
-    const deform::DirectDeltaMushBinding binding = deform::bind_direct_delta_mush(mesh, model.weights);
-    std::vector<glm::quat> rotations(mesh.point_count());
-    deform::DirectDeltaMushJob ddm;
-    ddm.binding = &binding;
-    ddm.matrices = palette;
-    ddm.in_positions = rest;
-    ddm.out_positions = positions;
-    ddm.out_rotations = rotations;
-    if (const deform::Status status = ddm.validate(); !status)
-      throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
-    ddm.run();
-    for (std::size_t r = 0; r < render_vertices; ++r) {
-      const glm::vec3 n = rotations[mesh.vertex_point[r]] * vertex_normals[r];
-      const float length = glm::length(n);
-      normals[r] = length > 0.0f ? n / length : glm::vec3(0.0f);
-    }
-  } else {
-    skin(job, model.weights, rest, positions, {}, {}, loaded.source);
-    const deform::SkinWeights vertex_weights =
-        vertex_weights_of(model.weights, std::span(mesh.vertex_point).first(render_vertices));
-    if (render_vertices > 0)
-      skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, normals, loaded.source);
+  if (o.direct_mush) {
+    direct_delta_mush(loaded, bones, rest.positions, vertex_normals, out);
+    return out;
   }
-  if (mush_iterations > 0) {
-    // Delta Mush of the skinned points, bound on the rest points; the normals then come from the mushed surface.
-    const deform::DeltaMushBinding binding =
-        deform::bind_delta_mush(mesh, {mush_iterations, static_cast<float>(mush_step), {}});
-    std::vector<glm::vec4> mush_scratch(deform::DeltaMushJob::scratch_size(binding));
-    deform::DeltaMushJob mush;
-    mush.binding = &binding;
-    mush.in_positions = positions;
-    mush.out_positions = positions;
-    mush.scratch = mush_scratch;
-    if (const deform::Status status = mush.validate(); !status)
-      throw deform::Error::in_file(loaded.source, "--mush", status.reason());
-    mush.run();
-    if (render_vertices > 0) {
-      const deform::VertexNormalsBinding normals_binding = deform::bind_vertex_normals(mesh);
-      std::vector<glm::vec4> normals_scratch(normals_binding.scratch_size());
-      deform::VertexNormalsJob recompute;
-      recompute.binding = &normals_binding;
-      recompute.positions = positions;
-      recompute.normals = normals;
-      recompute.scratch = normals_scratch;
-      if (const deform::Status status = recompute.run(); !status)
-        throw deform::Error::in_file(loaded.source, "--mush", status.reason());
-    }
+  deform::SkinningJob job;
+  job.method = o.method_name == "dqs" ? deform::SkinningMethod::dqs : deform::SkinningMethod::lbs;
+  job.matrices = bones.palette;
+  if (job.method == deform::SkinningMethod::dqs) {
+    job.dual_quats = bones.dual_quats;
+    if (bones.has_scale) job.scales = bones.scales;
   }
+  skin(job, loaded.model.weights, rest.positions, out.positions, {}, {}, loaded.source);
+  const deform::SkinWeights vertex_weights =
+      vertex_weights_of(loaded.model.weights, std::span(mesh.vertex_point).first(render_vertices));
+  if (render_vertices > 0)
+    skin(job, vertex_weights, vertex_positions, scratch, vertex_normals, out.normals, loaded.source);
+  return out;
+}
 
-  // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
-  deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
+// Delta Mush of the skinned points, bound on the rest points; the normals then come from the mushed surface.
+void delta_mush(const LoadedModel& loaded, const SkinOptions& o, SkinnedMesh& skinned) {
+  const deform::Mesh& mesh = loaded.model.mesh;
+  const deform::DeltaMushBinding binding =
+      deform::bind_delta_mush(mesh, {o.mush_iterations, static_cast<float>(o.mush_step), {}});
+  std::vector<glm::vec4> mush_scratch(deform::DeltaMushJob::scratch_size(binding));
+  deform::DeltaMushJob mush;
+  mush.binding = &binding;
+  mush.in_positions = skinned.positions;
+  mush.out_positions = skinned.positions;
+  mush.scratch = mush_scratch;
+  if (const deform::Status status = mush.validate(); !status)
+    throw deform::Error::in_file(loaded.source, "--mush", status.reason());
+  mush.run();
+  if (skinned.normals.empty()) return;
+  const deform::VertexNormalsBinding normals_binding = deform::bind_vertex_normals(mesh);
+  std::vector<glm::vec4> normals_scratch(normals_binding.scratch_size());
+  deform::VertexNormalsJob recompute;
+  recompute.binding = &normals_binding;
+  recompute.positions = skinned.positions;
+  recompute.normals = skinned.normals;
+  recompute.scratch = normals_scratch;
+  if (const deform::Status status = recompute.run(); !status)
+    throw deform::Error::in_file(loaded.source, "--mush", status.reason());
+}
 
+// stdout: what was skinned, how far it moved, and where it went (docs/cli.md).
+void print_skin_report(const LoadedModel& loaded, const SkinOptions& o, const deform::Pose& pose,
+                       const SkinnedMesh& skinned) {
+  const deform::Skeleton& skeleton = loaded.model.skeleton;
+  const deform::Mesh& mesh = loaded.model.mesh;
+  const std::size_t bone_count = skeleton.bone_count();
   const deform::Pose bind = skeleton.bind_pose();
   int posed = 0;
   for (std::size_t b = 0; b < bone_count; ++b)
@@ -382,31 +421,57 @@ int run(const std::vector<std::string>& argv) {
         pose.translations[b] != bind.translations[b])
       ++posed;
   float max_displacement = 0.0f;
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    max_displacement = std::max(max_displacement, glm::length(positions[i] - mesh.positions[i]));
-  const deform::Bounds bounds = deform::compute_bounds(positions);
+  for (std::size_t i = 0; i < skinned.positions.size(); ++i)
+    max_displacement = std::max(max_displacement, glm::length(skinned.positions[i] - mesh.positions[i]));
+  const deform::Bounds bounds = deform::compute_bounds(skinned.positions);
 
   nlohmann::ordered_json out;
-  out["method"] = method_name;
+  out["method"] = o.method_name;
   out["model"] = loaded.source;
   out["vertices"] = mesh.point_count();
-  out["normals"] = render_vertices;
+  out["normals"] = skinned.normals.size();
   out["bones"] = bone_count;
   out["bones_posed"] = posed;
-  out["limits"] = limits;
+  out["limits"] = o.limits;
   out["max_displacement"] = max_displacement;
   out["bounds"] = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
   out["kernel"] = deform::isa_name(deform::isa_best());
-  if (mush_iterations > 0)
-    out["mush"] = {{"iterations", mush_iterations}, {"step", deform::shortest_double(static_cast<float>(mush_step))}};
-  out["out"] = out_path;
-  if (!blend.empty()) {
+  if (o.mush_iterations > 0)
+    out["mush"] = {{"iterations", o.mush_iterations},
+                   {"step", deform::shortest_double(static_cast<float>(o.mush_step))}};
+  out["out"] = o.out_path;
+  if (!o.blend.empty()) {
     nlohmann::ordered_json items = nlohmann::ordered_json::array();
-    for (const BlendItem& item : blend)
+    for (const BlendItem& item : o.blend)
       items.push_back({{"clip", item.clip}, {"weight", deform::shortest_double(item.weight)}});
     out["blend"] = std::move(items);
   }
   print_json_in_order(out);
+}
+
+int run(const std::vector<std::string>& argv) {
+  std::vector<std::string> value_flags = model_value_flags;
+  value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph",
+                                         "--mush", "--mush-step"});
+  std::vector<std::string> switch_flags = model_switch_flags;
+  switch_flags.push_back("--no-limits");
+  const Args args(argv, value_flags, switch_flags);
+  const SkinOptions o = skin_options(args);
+
+  const LoadedModel loaded = load_model(args);
+  const deform::Model& model = loaded.model;
+  const deform::Pose pose = args.has("--blend")  ? blend_pose(args, loaded, o.blend)
+                            : args.has("--clip") ? clip_pose(args, loaded)
+                                                 : deform::read_pose_json(o.pose_path, model.skeleton, o.limits);
+  const BonePalette bones = bone_palette(model.skeleton, pose, o.method_name == "dqs", o.pose_path);
+  const MorphedRest rest = morphed_rest(loaded, morph_weights(args, loaded, o.blend));
+  SkinnedMesh skinned = skin_mesh(loaded, o, bones, rest);
+  if (o.mush_iterations > 0) delta_mush(loaded, o, skinned);
+
+  // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
+  deform::write_obj(o.out_path, model.mesh, skinned.positions, skinned.normals,
+                    {.mtllib = deform::material_libraries_for(model.mesh, o.out_path)});
+  print_skin_report(loaded, o, pose, skinned);
   return exit_ok;
 }
 

@@ -271,72 +271,86 @@ void Character::reset_morph_weights() noexcept {
   for (std::size_t k = 0; k < targets.size(); ++k) morph_weights_[k] = targets[k].default_weight;
 }
 
-ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
-  ReachResult result;
+// One reach's solve over work_: the CCD or FABRIK job, or the two-bone job (settings.reach_solver), and what they
+// write. Its jobs point into it: set up in place by start_reach_solve, never moved.
+struct Character::ReachSolve {
+  bool two_bone = false;
+  IkResult result;
+  std::uint32_t random_state = ik_random_seed;  // one generator over every solve of this reach
+  IkJob chain;
+  TwoBoneIkJob limb;
+  Status run() const noexcept { return two_bone ? limb.run() : chain.run(); }
+  float tolerance() const noexcept { return chain.settings.tolerance; }
+};
+
+Status Character::refuse_reach(std::int32_t effector, glm::vec3 target) const noexcept {
+  if (effector <= 0 || std::size_t(effector) >= skeleton().bone_count())
+    return Status::failure("effector out of range or the root");
+  if (!finite(target)) return Status::failure("target is not finite");
+  if (glm::any(glm::greaterThan(glm::abs(target), glm::vec3(max_reach_coordinate))))
+    return Status::failure("target is too far: beyond 1e18, distances to it overflow");
+  return {};
+}
+
+// The root of the chain for a solver other than the two-bone one: the rig's root (reach_root, or the effector's
+// entry in reach_chains), else the parent of the topmost lattice bone above the effector — that bone itself when its
+// parent is the skeleton's root, which places the whole body (a leg's chain starts at the thigh, not the hips:
+// turning the hips would spin the character to point the leg) — else two bones up.
+std::int32_t Character::reach_chain_root(std::int32_t effector) const noexcept {
   const Skeleton& skel = skeleton();
-  if (effector <= 0 || std::size_t(effector) >= skel.bone_count()) {
-    result.status = Status::failure("effector out of range or the root");
-    return result;
+  std::int32_t root = effector == rig_.reach_effector ? rig_.reach_root : -1;
+  for (const Rig::ReachChain& chain : rig_.reach_chains)  // (a few entries: a rig's limbs)
+    if (chain.effector == effector && effector != rig_.reach_effector) root = chain.root;
+  if (root >= 0 && skel.is_ancestor(root, effector) && root != effector) return root;
+  root = -1;
+  for (std::int32_t b = skel.bone(effector).parent; b >= 0; b = skel.bone(b).parent) {
+    for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
+      if (hierarchy_.spec(l).bone == b) root = b;
+    }
   }
-  if (!finite(target)) {
-    result.status = Status::failure("target is not finite");
-    return result;
+  if (root > 0 && skel.bone(root).parent > 0) root = skel.bone(root).parent;
+  if (root < 0) {
+    root = skel.bone(effector).parent;
+    if (skel.bone(root).parent >= 0) root = skel.bone(root).parent;
   }
-  if (glm::any(glm::greaterThan(glm::abs(target), glm::vec3(max_reach_coordinate)))) {
-    result.status = Status::failure("target is too far: beyond 1e18, distances to it overflow");
-    return result;
-  }
+  return root;
+}
 
-  // The chain, rebuilt only for another effector or setting (its root depends on the effector alone): two bones up
-  // for the two-bone solver; else the rig's root (reach_root, or the effector's entry in reach_chains), else the
-  // parent of the topmost lattice bone above the effector —
-  // that bone itself when its parent is the skeleton's root, which places the whole body (a leg's chain starts at the
-  // thigh, not the hips: turning the hips would spin the character to point the leg) — else two bones up.
-  const bool two_bone = settings.reach_solver == ReachSolver::two_bone;
-  if (effector != chain_effector_ || settings.reach_limits != chain_limits_ || settings.reach_solver != chain_solver_) {
-    std::int32_t root = effector == rig_.reach_effector && !two_bone ? rig_.reach_root : -1;
-    for (const Rig::ReachChain& chain : rig_.reach_chains)  // (a few entries: a rig's limbs)
-      if (chain.effector == effector && effector != rig_.reach_effector && !two_bone) root = chain.root;
-    if (two_bone) {
-      root = skel.bone(effector).parent >= 0 ? skel.bone(skel.bone(effector).parent).parent : -1;
-      if (root < 0) {
-        result.status = Status::failure("the two-bone solver needs an effector two bones below another");
-        return result;
-      }
-    } else if (root < 0 || !skel.is_ancestor(root, effector) || root == effector) {
-      root = -1;
-      for (std::int32_t b = skel.bone(effector).parent; b >= 0; b = skel.bone(b).parent) {
-        for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
-          if (hierarchy_.spec(l).bone == b) root = b;
-        }
-      }
-      if (root > 0 && skel.bone(root).parent > 0) root = skel.bone(root).parent;
-      if (root < 0) {
-        root = skel.bone(effector).parent;
-        if (skel.bone(root).parent >= 0) root = skel.bone(root).parent;
-      }
-    }
-    chain_effector_ = -1;
-    if (const Status status = assign_chain(chain_, skel, root, effector); !status) {
-      result.status = status;  // a chain longer than a solve takes
-      return result;
-    }
-    chain_.swing_twist.clear();
-    if (settings.reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
-      chain_.swing_twist.resize(chain_.joint_count());
-      for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
-        chain_.swing_twist[k] =
-            swing_twist_from_euler(skel.bone(chain_.bones[k]).limits, skel.bone(chain_.bones[k + 1]).bind_translation);
-        chain_.limits[k] = EulerLimits{};
-      }
-    }
-    chain_limits_ = settings.reach_limits;
-    chain_solver_ = settings.reach_solver;
-    chain_effector_ = effector;
+// chain_ for `effector` and the settings, rebuilt only for another effector or setting (its root depends on the
+// effector alone): two bones up for the two-bone solver, else reach_chain_root.
+Status Character::prepare_reach_chain(std::int32_t effector) {
+  if (effector == chain_effector_ && settings.reach_limits == chain_limits_ && settings.reach_solver == chain_solver_)
+    return {};
+  const Skeleton& skel = skeleton();
+  std::int32_t root = -1;
+  if (settings.reach_solver == ReachSolver::two_bone) {
+    root = skel.bone(effector).parent >= 0 ? skel.bone(skel.bone(effector).parent).parent : -1;
+    if (root < 0) return Status::failure("the two-bone solver needs an effector two bones below another");
+  } else {
+    root = reach_chain_root(effector);
   }
+  chain_effector_ = -1;
+  if (const Status status = assign_chain(chain_, skel, root, effector); !status)
+    return status;  // a chain longer than a solve takes
+  chain_.swing_twist.clear();
+  if (settings.reach_limits == JointLimits::swing_twist) {  // (capacity reserved at construction)
+    chain_.swing_twist.resize(chain_.joint_count());
+    for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
+      chain_.swing_twist[k] =
+          swing_twist_from_euler(skel.bone(chain_.bones[k]).limits, skel.bone(chain_.bones[k + 1]).bind_translation);
+      chain_.limits[k] = EulerLimits{};
+    }
+  }
+  chain_limits_ = settings.reach_limits;
+  chain_solver_ = settings.reach_solver;
+  chain_effector_ = effector;
+  return {};
+}
+
+// The lattices that stretch: on the chain above the effector, carrying it (their far face is behind it).
+void Character::find_chain_lattices(std::int32_t effector) {
+  const Skeleton& skel = skeleton();
   const std::int32_t root = chain_.bones.front();
-
-  // The lattices that stretch: on the chain above the effector, carrying it (their far face is behind it).
   chain_lattices_.clear();
   const glm::vec3 effector_bind = glm::vec3(skel.bind_world()[std::size_t(effector)][3]);
   for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) {
@@ -352,82 +366,75 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     while (skel.bone(child).parent != spec.bone) child = skel.bone(child).parent;
     chain_lattices_.push_back({l, child, rest.frame().u_axis / hierarchy_.length(l)});
   }
+}
 
-  std::copy(pose_.rotations.begin(), pose_.rotations.end(), work_.rotations.begin());
-  std::copy(pose_.translations.begin(), pose_.translations.end(), work_.translations.begin());
-  const float reach_length = chain_length(chain_, work_.translations);
-  IkResult ik_result;
-  std::uint32_t random_state = ik_random_seed;  // one generator over every solve of this reach
-  IkJob solve;
-  solve.chain = &chain_;
-  solve.rotations = work_.rotations;
-  solve.translations = work_.translations;
-  solve.target = target;
-  solve.settings = settings.ik;
-  solve.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
-  // A reach held frame after frame (the same effector, not released, the target within a tenth of the chain's length
-  // of the last one) is solved without the random restarts of the stall escape, so that the solution moves with its
-  // target instead of flipping between solutions.
-  const bool continuing =
-      reaching_ && effector == effector_ && glm::length(target - reach_target_) <= 0.1f * reach_length;
-  reach_target_ = target;
-  if (continuing) solve.settings.escape_stalls = false;
-  solve.scratch = ik_scratch_;
-  solve.random_state = &random_state;
-  solve.result = &ik_result;
-  solve.pole = settings.reach_pole;
-  solve.use_pole = settings.use_reach_pole;
-  if (const Status status = chain_base(chain_, work_.rotations, work_.translations, solve.base); !status) {
-    result.status = status;
-    return result;
-  }
-  TwoBoneIkJob limb;
+// Sets up `solve` over work_ for `target`; `continuing`: a reach held frame after frame, solved without the random
+// restarts of the stall escape, so that the solution moves with its target instead of flipping between solutions.
+Status Character::start_reach_solve(ReachSolve& solve, glm::vec3 target, float reach_length, bool continuing) {
+  solve.two_bone = settings.reach_solver == ReachSolver::two_bone;
+  IkJob& chain = solve.chain;
+  chain.chain = &chain_;
+  chain.rotations = work_.rotations;
+  chain.translations = work_.translations;
+  chain.target = target;
+  chain.settings = settings.ik;
+  chain.settings.tolerance = std::max(1e-5f * reach_length, 1e-7f);
+  if (continuing) chain.settings.escape_stalls = false;
+  chain.scratch = ik_scratch_;
+  chain.random_state = &solve.random_state;
+  chain.result = &solve.result;
+  chain.pole = settings.reach_pole;
+  chain.use_pole = settings.use_reach_pole;
+  if (const Status status = chain_base(chain_, work_.rotations, work_.translations, chain.base); !status) return status;
+  TwoBoneIkJob& limb = solve.limb;
   limb.chain = &chain_;
-  limb.base = solve.base;
+  limb.base = chain.base;
   limb.rotations = work_.rotations;
   limb.translations = work_.translations;
   limb.target = target;
-  limb.tolerance = solve.settings.tolerance;
+  limb.tolerance = chain.settings.tolerance;
   limb.soften = settings.reach_soften;
   if (settings.use_reach_pole)
     limb.pole = settings.reach_pole, limb.pole_kind = PoleKind::point;  // else the pose's bend plane
-  limb.result = &ik_result;
-  const auto run_ik = [&] { return two_bone ? limb.run() : solve.run(); };
-  if (const Status status = run_ik(); !status) {
-    result.status = status;
-    return result;
-  }
-  result.residual = ik_result.distance;
-  result.iterations = 1;
+  limb.result = &solve.result;
+  return {};
+}
 
-  // Stretch λ·length_L on every chain lattice, λ fitted to the remaining gap, then IK again with the longer chain.
-  // The stretch moves only chain bones below the root, so the base stays.
+// The effector's motion per unit λ of stretch: each chain lattice's axis carried by its bone's model-space matrix,
+// the product of the local matrices down the chain (as LocalToWorldJob multiplies them), in chain_world_.
+glm::vec3 Character::stretch_growth() noexcept {
+  glm::mat4 model(1.0f);
+  bool first = true;
+  auto descend = [&](std::int32_t bone) {
+    const glm::mat4 local = local_matrix(work_.rotations[std::size_t(bone)], work_.translations[std::size_t(bone)]);
+    model = first ? local : model * local;
+    first = false;
+  };
+  for (const std::int32_t bone : chain_.ancestors) descend(bone);
+  for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
+    descend(chain_.bones[k]);
+    chain_world_[k] = model;
+  }
+  glm::vec3 growth(0.0f);
+  for (const Stretched& s : chain_lattices_) {
+    const std::int32_t bone = hierarchy_.spec(s.lattice).bone;
+    std::size_t k = 0;
+    while (chain_.bones[k] != bone) ++k;  // a joint: the root is an ancestor of the bone, the bone of the effector
+    growth += glm::mat3(chain_world_[k]) * (s.axis * hierarchy_.length(s.lattice));
+  }
+  return growth;
+}
+
+// Stretch λ·length_L on every chain lattice, λ fitted to the remaining gap, then IK again with the longer chain; at
+// most 16 rounds. The stretch moves only chain bones below the root, so the base stays. Returns λ; sets
+// result.distance and counts result.iterations.
+float Character::stretch_to_target(ReachSolve& solve, glm::vec3 target, ReachResult& result) {
   float lambda = 0.0f;
-  float distance = ik_result.distance;
-  for (int round = 0; round < 16 && !chain_lattices_.empty() && distance > 1e-3f * result.residual &&
-                      distance > solve.settings.tolerance;
+  float distance = solve.result.distance;
+  for (int round = 0;
+       round < 16 && !chain_lattices_.empty() && distance > 1e-3f * result.residual && distance > solve.tolerance();
        ++round) {
-    // Effector motion per unit λ: each lattice's axis carried by its bone's model-space matrix, the product of the
-    // local matrices down the chain (as LocalToWorldJob multiplies them).
-    glm::mat4 model(1.0f);
-    bool first = true;
-    auto descend = [&](std::int32_t bone) {
-      const glm::mat4 local = local_matrix(work_.rotations[std::size_t(bone)], work_.translations[std::size_t(bone)]);
-      model = first ? local : model * local;
-      first = false;
-    };
-    for (const std::int32_t bone : chain_.ancestors) descend(bone);
-    for (std::size_t k = 0; k < chain_.joint_count(); ++k) {
-      descend(chain_.bones[k]);
-      chain_world_[k] = model;
-    }
-    glm::vec3 growth(0.0f);
-    for (const Stretched& s : chain_lattices_) {
-      const std::int32_t bone = hierarchy_.spec(s.lattice).bone;
-      std::size_t k = 0;
-      while (chain_.bones[k] != bone) ++k;  // a joint: the root is an ancestor of the bone, the bone of the effector
-      growth += glm::mat3(chain_world_[k]) * (s.axis * hierarchy_.length(s.lattice));
-    }
+    const glm::vec3 growth = stretch_growth();
     const float growth2 = glm::dot(growth, growth);
     if (!(growth2 > 0.0f)) break;
     glm::vec3 reached(0.0f);
@@ -442,13 +449,16 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
     for (const Stretched& s : chain_lattices_) {  // (two lattices on one bone both push its child)
       work_.translations[std::size_t(s.child)] += s.axis * (lambda * hierarchy_.length(s.lattice));
     }
-    if (!run_ik()) break;
-    distance = ik_result.distance;
+    if (!solve.run()) break;
+    distance = solve.result.distance;
     ++result.iterations;
   }
   result.distance = distance;
+  return lambda;
+}
 
-  // The pose keeps the IK rotations; the lattices, not the bones, carry the stretch.
+// The solved pose becomes the pose, keeping the IK rotations; the lattices, not the bones, carry the stretch λ.
+void Character::hold_reach(std::int32_t effector, float lambda, bool continuing, ReachResult& result) {
   for (const Stretched& s : chain_lattices_) {
     work_.translations[std::size_t(s.child)] = pose_.translations[std::size_t(s.child)];
   }
@@ -465,6 +475,40 @@ ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
   effector_ = effector;
   if (!continuing) jumped_root_ = chain_.bones.front();  // the limb snaps to the reach: a jump, not a motion
   reaching_ = true;
+}
+
+ReachResult Character::reach(std::int32_t effector, glm::vec3 target) {
+  ReachResult result;
+  if (const Status refused = refuse_reach(effector, target); !refused) {
+    result.status = refused;
+    return result;
+  }
+  if (const Status status = prepare_reach_chain(effector); !status) {
+    result.status = status;
+    return result;
+  }
+  find_chain_lattices(effector);
+  std::copy(pose_.rotations.begin(), pose_.rotations.end(), work_.rotations.begin());
+  std::copy(pose_.translations.begin(), pose_.translations.end(), work_.translations.begin());
+  const float reach_length = chain_length(chain_, work_.translations);
+  // A reach held frame after frame: the same effector, not released, the target within a tenth of the chain's
+  // length of the last one.
+  const bool continuing =
+      reaching_ && effector == effector_ && glm::length(target - reach_target_) <= 0.1f * reach_length;
+  reach_target_ = target;
+  ReachSolve solve;
+  if (const Status status = start_reach_solve(solve, target, reach_length, continuing); !status) {
+    result.status = status;
+    return result;
+  }
+  if (const Status status = solve.run(); !status) {
+    result.status = status;
+    return result;
+  }
+  result.residual = solve.result.distance;
+  result.iterations = 1;
+  const float lambda = stretch_to_target(solve, target, result);
+  hold_reach(effector, lambda, continuing, result);
   return result;
 }
 

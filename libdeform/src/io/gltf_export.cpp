@@ -257,52 +257,115 @@ void check_baked(const BakedFrames& baked, const Model& model) {
   }
 }
 
-}  // namespace
-
-GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options) {
+// The checks write_gltf makes before it builds anything. Returns whether the file is binary (.glb).
+bool check_export(const std::string& path, const Model& model, const GltfExportOptions& options) {
   const std::string ext = lower_extension(path);
   const bool binary = ext == ".glb";
   if (!binary && ext != ".gltf") throw Error::invalid_argument(path, "a glTF file name ends in .gltf or .glb");
   const Mesh& mesh = model.mesh;
-  const Skeleton& skeleton = model.skeleton;
   if (mesh.triangle_count() == 0) throw Error::invalid_argument(path, "the mesh has no triangles");
   if (mesh.vertex_count() > std::numeric_limits<std::uint32_t>::max())
     throw Error::invalid_argument(path, "more than 2^32 - 1 render vertices");
   const bool skinned = options.baked == nullptr;
   if (!skinned && !options.clips.empty())
     throw Error::invalid_argument("clips", "a baked file holds no skeleton: give clips or baked frames, not both");
-  if (skinned && (model.weights.size() != mesh.point_count() || skeleton.bone_count() == 0))
+  if (skinned && (model.weights.size() != mesh.point_count() || model.skeleton.bone_count() == 0))
     throw Error::invalid_argument(path, "the model's weights do not match its points, or it has no skeleton");
   if (!skinned) check_baked(*options.baked, model);
+  return binary;
+}
 
-  GltfWritten written;
-  written.gltf = path;
-  Builder b;
-  Json doc;
-  doc["asset"] = {{"version", "2.0"}, {"generator", options.generator}};
+// One glTF export, built in steps: the per-vertex data, the materials and images, one primitive per submesh (with the
+// baked frames as morph targets), the nodes, skin and animations, then the file. The buffer's bytes and the
+// accessors' indices follow the order of the steps, which write_gltf keeps.
+class GltfExport {
+ public:
+  GltfExport(const std::string& path, const Model& model, const GltfExportOptions& options)
+      : path_(path),
+        model_(model),
+        mesh_(model.mesh),
+        skeleton_(model.skeleton),
+        options_(options),
+        skinned_(options.baked == nullptr),
+        vertices_(model.mesh.vertex_count()) {
+    written_.gltf = path;
+  }
+
+  GltfWritten write(bool binary) {
+    doc_["asset"] = {{"version", "2.0"}, {"generator", options_.generator}};
+    gather_vertices();
+    if (skinned_) gather_influences();
+    if (!model_.morph_targets.empty())
+      written_.warnings.push_back(std::to_string(model_.morph_targets.size()) +
+                                  " morph targets of the model are not written (only baked frames become targets)");
+    Json materials = Json::array();
+    Json images = Json::array(), textures = Json::array();
+    add_materials(materials, images, textures);
+    Json gltf_mesh = mesh_json();
+
+    Json nodes = Json::array();
+    Json animations = Json::array();
+    if (skinned_) {
+      add_skin(nodes);
+      for (const Animation& clip : options_.clips) add_clip(clip, animations);
+    } else {
+      add_baked_animation(nodes, animations);
+    }
+    doc_["scene"] = 0;
+    doc_["nodes"] = std::move(nodes);
+    doc_["meshes"] = Json::array({std::move(gltf_mesh)});
+    if (!materials.empty()) doc_["materials"] = std::move(materials);
+    if (!images.empty()) doc_["images"] = std::move(images), doc_["textures"] = std::move(textures);
+    if (!animations.empty()) doc_["animations"] = std::move(animations);
+    while (b_.bin.size() % 4) b_.bin.push_back(0);
+    doc_["accessors"] = std::move(b_.accessors);
+    doc_["bufferViews"] = std::move(b_.buffer_views);
+    if (binary) write_glb();
+    else write_gltf_and_bin();
+    return std::move(written_);
+  }
+
+ private:
+  const std::string& path_;
+  const Model& model_;
+  const Mesh& mesh_;
+  const Skeleton& skeleton_;
+  const GltfExportOptions& options_;
+  const bool skinned_;          // clips over a skeleton; otherwise baked frames as morph targets
+  const std::size_t vertices_;  // render vertices
+  GltfWritten written_;
+  Builder b_;
+  Json doc_;
+  SparseData sparse_;
+  std::size_t frame_count_ = 0;            // morph targets per primitive
+  std::vector<glm::vec3> base_positions_;  // per render vertex
+  std::vector<glm::vec3> base_normals_;    // per render vertex, unit
+  // Influence set s of render vertex r is vertex_joints_[s][r] / vertex_weights_[s][r]: set 0 the point's four
+  // slots, sets 1, 2, ... its extra influences four at a time (JOINTS_1 / WEIGHTS_1, ...), all normalised to sum 1
+  // together. None for baked frames.
+  std::vector<std::vector<glm::u16vec4>> vertex_joints_;
+  std::vector<std::vector<glm::vec4>> vertex_weights_;
 
   // --- per-vertex data over all render vertices; each primitive takes the vertices its triangles use ---
-  const std::size_t vertices = mesh.vertex_count();
-  std::vector<glm::vec3> base_positions(vertices);
-  for (std::size_t r = 0; r < vertices; ++r) base_positions[r] = mesh.positions.at(mesh.vertex_point[r]);
-  std::vector<glm::vec3> base_normals(vertices, glm::vec3(0.0f, 0.0f, 1.0f));
-  for (std::size_t r = 0; r < vertices && r < mesh.vertex_normals.size(); ++r)
-    base_normals[r] = unit_or_z(mesh.vertex_normals[r]);
-  // Influence set s of render vertex r is vertex_joints[s][r] / vertex_weights[s][r]: set 0 the point's four slots,
-  // sets 1, 2, ... its extra influences four at a time (JOINTS_1 / WEIGHTS_1, ...), all normalised to sum 1 together.
-  std::vector<std::vector<glm::u16vec4>> vertex_joints;
-  std::vector<std::vector<glm::vec4>> vertex_weights;
-  if (skinned) {
-    const SkinWeights& sw = model.weights;
+  void gather_vertices() {
+    base_positions_.resize(vertices_);
+    for (std::size_t r = 0; r < vertices_; ++r) base_positions_[r] = mesh_.positions.at(mesh_.vertex_point[r]);
+    base_normals_.assign(vertices_, glm::vec3(0.0f, 0.0f, 1.0f));
+    for (std::size_t r = 0; r < vertices_ && r < mesh_.vertex_normals.size(); ++r)
+      base_normals_[r] = unit_or_z(mesh_.vertex_normals[r]);
+  }
+
+  void gather_influences() {
+    const SkinWeights& sw = model_.weights;
     std::size_t most_extras = 0;
     for (std::size_t j = 0; j + 1 < sw.extra_offsets.size(); ++j)
       most_extras = std::max<std::size_t>(most_extras, sw.extra_offsets[j + 1] - sw.extra_offsets[j]);
     const std::size_t sets = 1 + (most_extras + 3) / 4;
-    vertex_joints.assign(sets, std::vector<glm::u16vec4>(vertices, glm::u16vec4(0)));
-    vertex_weights.assign(sets, std::vector<glm::vec4>(vertices, glm::vec4(0.0f)));
+    vertex_joints_.assign(sets, std::vector<glm::u16vec4>(vertices_, glm::u16vec4(0)));
+    vertex_weights_.assign(sets, std::vector<glm::vec4>(vertices_, glm::vec4(0.0f)));
     std::vector<std::pair<std::uint16_t, float>> list;
-    for (std::size_t r = 0; r < vertices; ++r) {
-      const std::uint32_t p = mesh.vertex_point[r];
+    for (std::size_t r = 0; r < vertices_; ++r) {
+      const std::uint32_t p = mesh_.vertex_point[r];
       list.clear();
       for (int i = 0; i < 4; ++i) list.emplace_back(sw.bones[p][i], sw.weights[p][i]);
       const auto it = std::lower_bound(sw.extra_points.begin(), sw.extra_points.end(), p);
@@ -313,100 +376,122 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
       }
       float sum = 0.0f;
       for (auto& [bone, w] : list) {
-        if (!(w > 0.0f) || bone >= skeleton.bone_count()) w = 0.0f, bone = 0;  // glTF: unused = (0, 0)
+        if (!(w > 0.0f) || bone >= skeleton_.bone_count()) w = 0.0f, bone = 0;  // glTF: unused = (0, 0)
         sum += w;
       }
       if (!(sum > 0.0f)) list.assign(1, {0, 1.0f}), sum = 1.0f;
       for (std::size_t k = 0; k < list.size(); ++k) {
-        vertex_joints[k / 4][r][int(k % 4)] = list[k].first;
-        vertex_weights[k / 4][r][int(k % 4)] = list[k].second / sum;
+        vertex_joints_[k / 4][r][int(k % 4)] = list[k].first;
+        vertex_weights_[k / 4][r][int(k % 4)] = list[k].second / sum;
       }
     }
   }
-  if (!model.morph_targets.empty())
-    written.warnings.push_back(std::to_string(model.morph_targets.size()) +
-                               " morph targets of the model are not written (only baked frames become targets)");
-  // Per frame, the displacement of every render vertex from the rest shape.
-  const auto displacements = [&](std::size_t k, const std::vector<std::uint32_t>& used, bool normals) {
-    const BakedFrames& baked = *options.baked;
-    std::vector<glm::vec3> d(used.size());
-    for (std::size_t i = 0; i < used.size(); ++i) {
-      const std::uint32_t r = used[i];
-      d[i] = normals ? unit_or_z(baked.normals[k][r]) - base_normals[r]
-                     : baked.positions[k][mesh.vertex_point[r]] - base_positions[r];
-    }
-    return d;
-  };
 
-  // --- primitives: one per non-empty submesh, each with its own vertices (the render vertices its triangles use, in
-  // order), so that no reader has to split shared vertex buffers ---
-  Json primitives = Json::array();
-  Json materials = Json::array();
-  Json images = Json::array(), textures = Json::array();
-  {
+  // --- materials, and the images they show: one glTF material per model material ---
+  void add_materials(Json& materials, Json& images, Json& textures) {
     std::vector<std::pair<std::string, int>> embedded;                   // texture path -> texture index
     std::vector<std::pair<const std::vector<std::uint8_t>*, int>> kept;  // embedded image -> texture index
     std::map<std::string, std::string> refused;  // texture path -> why: each is checked, and read, once
-    for (const Material& m : mesh.materials) {
+    const auto add_image = [&](const std::vector<std::uint8_t>& bytes, const std::string& mime) {
+      images.push_back({{"bufferView", b_.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
+      textures.push_back({{"source", images.size() - 1}});
+      return static_cast<int>(textures.size() - 1);
+    };
+    for (const Material& m : mesh_.materials) {
       int texture = -1;
-      if (m.diffuse_image && mesh.vertex_uvs.size() == vertices) {  // the model's own embedded image: kept as is
+      if (m.diffuse_image && mesh_.vertex_uvs.size() == vertices_) {  // the model's own embedded image: kept as is
         for (const auto& [image, index] : kept)
           if (image == m.diffuse_image.get()) texture = index;
         const std::vector<std::uint8_t>& bytes = *m.diffuse_image;
         const std::string mime = image_type(bytes);
         if (texture < 0 && mime.empty()) {
-          written.warnings.push_back("material '" + m.name + "': embedded texture not kept (not a PNG or JPEG image)");
+          written_.warnings.push_back("material '" + m.name + "': embedded texture not kept (not a PNG or JPEG image)");
         } else if (texture < 0) {
-          images.push_back({{"bufferView", b.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
-          textures.push_back({{"source", images.size() - 1}});
-          texture = static_cast<int>(textures.size() - 1);
+          texture = add_image(bytes, mime);
           kept.emplace_back(m.diffuse_image.get(), texture);
         }
-      } else if (!m.diffuse_map.empty() && !options.texture_root.empty() && mesh.vertex_uvs.size() == vertices) {
+      } else if (!m.diffuse_map.empty() && !options_.texture_root.empty() && mesh_.vertex_uvs.size() == vertices_) {
         for (const auto& [file, index] : embedded)
           if (file == m.diffuse_map) texture = index;
         if (texture < 0) {
           std::string why, mime;
           std::vector<std::uint8_t> bytes;
           if (const auto known = refused.find(m.diffuse_map); known != refused.end()) why = known->second;
-          else bytes = texture_bytes(m.diffuse_map, options.texture_root, options.references, why, mime);
+          else bytes = texture_bytes(m.diffuse_map, options_.texture_root, options_.references, why, mime);
           if (bytes.empty()) {
             refused.emplace(m.diffuse_map, why);
-            written.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
-                                       why + ")");
+            written_.warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not embedded (" +
+                                        why + ")");
           } else {
-            images.push_back({{"bufferView", b.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}});
-            textures.push_back({{"source", images.size() - 1}});
-            texture = static_cast<int>(textures.size() - 1);
+            texture = add_image(bytes, mime);
             embedded.emplace_back(m.diffuse_map, texture);
           }
         }
       }
       materials.push_back(material_json(m, texture));
     }
-    written.textures = images.size();
+    written_.textures = images.size();
   }
-  std::vector<Submesh> submeshes = mesh.submeshes;
-  if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh.triangle_count()), -1, {}, {}});
-  std::vector<std::uint32_t> local(vertices, 0);
-  SparseData sparse;
-  std::size_t frame_count = 0;
-  for (const Submesh& s : submeshes) {
-    if (s.triangle_count == 0) continue;
+
+  // --- the mesh: one primitive per non-empty submesh, each with its own vertices (the render vertices its triangles
+  // use, in order), so that no reader has to split shared vertex buffers ---
+  Json mesh_json() {
+    std::vector<Submesh> submeshes = mesh_.submeshes;
+    if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh_.triangle_count()), -1, {}, {}});
+    std::vector<std::uint32_t> local(vertices_, 0);
+    Json primitives = Json::array();
+    for (const Submesh& s : submeshes)
+      if (s.triangle_count > 0) primitives.push_back(primitive(s, local));
+    written_.morph_targets = frame_count_;
+    if (!sparse_.patch.empty()) {
+      const int index_view = b_.view(sparse_.indices.data(), sparse_.indices.size() * sizeof(std::uint32_t), 0);
+      const int value_view = b_.view(sparse_.values.data(), sparse_.values.size() * sizeof(float), 0);
+      for (const std::size_t a : sparse_.patch) {
+        b_.accessors[a]["sparse"]["indices"]["bufferView"] = index_view;
+        b_.accessors[a]["sparse"]["values"]["bufferView"] = value_view;
+      }
+    }
+    Json gltf_mesh = {{"primitives", std::move(primitives)}};
+    if (!model_.name.empty()) gltf_mesh["name"] = model_.name;
+    if (frame_count_ > 0) gltf_mesh["weights"] = std::vector<float>(frame_count_, 0.0f);
+    return gltf_mesh;
+  }
+
+  // One submesh's primitive; `local` (per render vertex, its index in the primitive) is scratch shared by all.
+  Json primitive(const Submesh& s, std::vector<std::uint32_t>& local) {
     const std::size_t first = std::size_t(s.first_triangle) * 3, count = std::size_t(s.triangle_count) * 3;
-    if (first + count > mesh.triangles.size()) throw Error::invalid_argument(path, "a submesh runs past the triangles");
-    std::vector<std::uint8_t> is_used(vertices, 0);
+    if (first + count > mesh_.triangles.size())
+      throw Error::invalid_argument(path_, "a submesh runs past the triangles");
+    std::vector<std::uint8_t> is_used(vertices_, 0);
     for (std::size_t i = first; i < first + count; ++i) {
-      if (mesh.triangles[i] >= vertices) throw Error::invalid_argument(path, "a triangle names no render vertex");
-      is_used[mesh.triangles[i]] = 1;
+      if (mesh_.triangles[i] >= vertices_) throw Error::invalid_argument(path_, "a triangle names no render vertex");
+      is_used[mesh_.triangles[i]] = 1;
     }
     std::vector<std::uint32_t> used;
-    for (std::size_t r = 0; r < vertices; ++r)
+    for (std::size_t r = 0; r < vertices_; ++r)
       if (is_used[r]) local[r] = static_cast<std::uint32_t>(used.size()), used.push_back(static_cast<std::uint32_t>(r));
-    written.vertices += used.size();
+    written_.vertices += used.size();
     std::vector<std::uint32_t> indices(count);
-    for (std::size_t i = 0; i < count; ++i) indices[i] = local[mesh.triangles[first + i]];
+    for (std::size_t i = 0; i < count; ++i) indices[i] = local[mesh_.triangles[first + i]];
 
+    Json attributes = vertex_attributes(used);
+    const int iv = b_.view(indices.data(), indices.size() * sizeof(std::uint32_t), element_array_buffer);
+    Json primitive = {
+        {"attributes", std::move(attributes)},
+        {"indices",
+         b_.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
+        {"mode", 4}};
+    if (s.material >= 0 && std::size_t(s.material) < mesh_.materials.size()) primitive["material"] = s.material;
+    if (!skinned_) {  // baked frames: one morph target per frame
+      Json targets = frame_targets(used);
+      frame_count_ = targets.size();
+      primitive["targets"] = std::move(targets);
+    }
+    return primitive;
+  }
+
+  // The attributes of the render vertices `used`: POSITION, NORMAL, TEXCOORD_0 and the influence sets.
+  Json vertex_attributes(const std::vector<std::uint32_t>& used) {
     const auto gather = [&used](const std::vector<glm::vec3>& all) {
       std::vector<float> out;
       out.reserve(used.size() * 3);
@@ -414,75 +499,68 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
       return out;
     };
     Json attributes;
-    attributes["POSITION"] = b.floats(gather(base_positions), 3, "VEC3", array_buffer, true);
-    attributes["NORMAL"] = b.floats(gather(base_normals), 3, "VEC3", array_buffer, false);
-    if (mesh.vertex_uvs.size() == vertices) {
+    attributes["POSITION"] = b_.floats(gather(base_positions_), 3, "VEC3", array_buffer, true);
+    attributes["NORMAL"] = b_.floats(gather(base_normals_), 3, "VEC3", array_buffer, false);
+    if (mesh_.vertex_uvs.size() == vertices_) {
       std::vector<float> uvs;
       uvs.reserve(used.size() * 2);
       for (const std::uint32_t r : used)
-        uvs.insert(uvs.end(), {mesh.vertex_uvs[r].x, 1.0f - mesh.vertex_uvs[r].y});  // glTF's v runs down
-      attributes["TEXCOORD_0"] = b.floats(uvs, 2, "VEC2", array_buffer, false);
+        uvs.insert(uvs.end(), {mesh_.vertex_uvs[r].x, 1.0f - mesh_.vertex_uvs[r].y});  // glTF's v runs down
+      attributes["TEXCOORD_0"] = b_.floats(uvs, 2, "VEC2", array_buffer, false);
     }
-    for (std::size_t set = 0; set < vertex_joints.size(); ++set) {
+    for (std::size_t set = 0; set < vertex_joints_.size(); ++set) {
       std::vector<std::uint16_t> joint_data;
       std::vector<float> weight_data;
       joint_data.reserve(used.size() * 4);
       weight_data.reserve(used.size() * 4);
       for (const std::uint32_t r : used) {
-        const glm::u16vec4 j = vertex_joints[set][r];
-        const glm::vec4 w = vertex_weights[set][r];
+        const glm::u16vec4 j = vertex_joints_[set][r];
+        const glm::vec4 w = vertex_weights_[set][r];
         joint_data.insert(joint_data.end(), {j[0], j[1], j[2], j[3]});
         weight_data.insert(weight_data.end(), {w[0], w[1], w[2], w[3]});
       }
-      const int jv = b.view(joint_data.data(), joint_data.size() * sizeof(std::uint16_t), array_buffer);
-      attributes["JOINTS_" + std::to_string(set)] = b.push(
+      const int jv = b_.view(joint_data.data(), joint_data.size() * sizeof(std::uint16_t), array_buffer);
+      attributes["JOINTS_" + std::to_string(set)] = b_.push(
           {{"bufferView", jv}, {"componentType", unsigned_short_type}, {"count", used.size()}, {"type", "VEC4"}});
-      attributes["WEIGHTS_" + std::to_string(set)] = b.floats(weight_data, 4, "VEC4", array_buffer, false);
+      attributes["WEIGHTS_" + std::to_string(set)] = b_.floats(weight_data, 4, "VEC4", array_buffer, false);
     }
-    const int iv = b.view(indices.data(), indices.size() * sizeof(std::uint32_t), element_array_buffer);
-    Json primitive = {
-        {"attributes", std::move(attributes)},
-        {"indices",
-         b.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
-        {"mode", 4}};
-    if (s.material >= 0 && std::size_t(s.material) < mesh.materials.size()) primitive["material"] = s.material;
-    if (!skinned) {  // baked frames: one morph target per frame
-      const BakedFrames& baked = *options.baked;
-      Json targets = Json::array();
-      for (std::size_t k = 0; k < baked.times.size(); ++k) {
-        Json target = {{"POSITION", sparse_vec3(b, sparse, displacements(k, used, false), baked.position_tolerance,
-                                                true, written.sparse_values)}};
-        if (!baked.normals.empty())
-          target["NORMAL"] = sparse_vec3(b, sparse, displacements(k, used, true), baked.normal_tolerance, false,
-                                         written.sparse_values);
-        targets.push_back(std::move(target));
-      }
-      frame_count = targets.size();
-      primitive["targets"] = std::move(targets);
-    }
-    primitives.push_back(std::move(primitive));
+    return attributes;
   }
-  written.morph_targets = frame_count;
-  if (!sparse.patch.empty()) {
-    const int index_view = b.view(sparse.indices.data(), sparse.indices.size() * sizeof(std::uint32_t), 0);
-    const int value_view = b.view(sparse.values.data(), sparse.values.size() * sizeof(float), 0);
-    for (const std::size_t a : sparse.patch) {
-      b.accessors[a]["sparse"]["indices"]["bufferView"] = index_view;
-      b.accessors[a]["sparse"]["values"]["bufferView"] = value_view;
-    }
-  }
-  Json gltf_mesh = {{"primitives", std::move(primitives)}};
-  if (!model.name.empty()) gltf_mesh["name"] = model.name;
-  if (frame_count > 0) gltf_mesh["weights"] = std::vector<float>(frame_count, 0.0f);
 
-  // --- nodes: the bones (node i = bone i) then the mesh; the skin; the animations ---
-  Json nodes = Json::array();
-  Json animations = Json::array();
-  const std::string mesh_name = model.name.empty() ? "mesh" : model.name;
-  if (skinned) {
-    for (std::size_t i = 0; i < skeleton.bone_count(); ++i) {
-      const Bone& bone = skeleton.bone(static_cast<std::int32_t>(i));
-      Json node = {{"name", skeleton.key(static_cast<std::int32_t>(i))}};
+  // Per frame, the displacement of each render vertex of `used` from the rest shape: of its position, or its normal.
+  std::vector<glm::vec3> displacements(std::size_t k, const std::vector<std::uint32_t>& used, bool normals) const {
+    const BakedFrames& baked = *options_.baked;
+    std::vector<glm::vec3> d(used.size());
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      const std::uint32_t r = used[i];
+      d[i] = normals ? unit_or_z(baked.normals[k][r]) - base_normals_[r]
+                     : baked.positions[k][mesh_.vertex_point[r]] - base_positions_[r];
+    }
+    return d;
+  }
+
+  // The baked frames as the morph targets of the render vertices `used`, held sparsely (sparse_vec3).
+  Json frame_targets(const std::vector<std::uint32_t>& used) {
+    const BakedFrames& baked = *options_.baked;
+    Json targets = Json::array();
+    for (std::size_t k = 0; k < baked.times.size(); ++k) {
+      Json target = {{"POSITION", sparse_vec3(b_, sparse_, displacements(k, used, false), baked.position_tolerance,
+                                              true, written_.sparse_values)}};
+      if (!baked.normals.empty())
+        target["NORMAL"] = sparse_vec3(b_, sparse_, displacements(k, used, true), baked.normal_tolerance, false,
+                                       written_.sparse_values);
+      targets.push_back(std::move(target));
+    }
+    return targets;
+  }
+
+  std::string mesh_name() const { return model_.name.empty() ? "mesh" : model_.name; }
+
+  // --- nodes: the bones (node i = bone i) then the mesh; the skin ---
+  void add_skin(Json& nodes) {
+    for (std::size_t i = 0; i < skeleton_.bone_count(); ++i) {
+      const Bone& bone = skeleton_.bone(static_cast<std::int32_t>(i));
+      Json node = {{"name", skeleton_.key(static_cast<std::int32_t>(i))}};
       if (bone.bind_translation != glm::vec3(0.0f))
         node["translation"] = {bone.bind_translation.x, bone.bind_translation.y, bone.bind_translation.z};
       if (bone.bind_rotation != glm::vec3(0.0f)) {
@@ -493,84 +571,81 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
       nodes.push_back(std::move(node));
     }
     std::vector<float> inverse_binds;
-    inverse_binds.reserve(skeleton.bone_count() * 16);
-    for (glm::mat4 m : skeleton.inverse_bind_world()) {
+    inverse_binds.reserve(skeleton_.bone_count() * 16);
+    for (glm::mat4 m : skeleton_.inverse_bind_world()) {
       m[0][3] = m[1][3] = m[2][3] = 0.0f, m[3][3] = 1.0f;  // affine: glTF requires the last row (0, 0, 0, 1) exactly
       for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r) inverse_binds.push_back(m[c][r]);
     }
-    std::vector<int> joints(skeleton.bone_count());
+    std::vector<int> joints(skeleton_.bone_count());
     for (std::size_t i = 0; i < joints.size(); ++i) joints[i] = static_cast<int>(i);
-    doc["skins"] = Json::array({{{"joints", joints},
-                                 {"skeleton", 0},
-                                 {"inverseBindMatrices", b.floats(inverse_binds, 16, "MAT4", 0, false)}}});
-    nodes.push_back({{"name", mesh_name}, {"mesh", 0}, {"skin", 0}});
-    doc["scenes"] = Json::array({{{"nodes", {0, static_cast<int>(skeleton.bone_count())}}}});
+    doc_["skins"] = Json::array({{{"joints", joints},
+                                  {"skeleton", 0},
+                                  {"inverseBindMatrices", b_.floats(inverse_binds, 16, "MAT4", 0, false)}}});
+    nodes.push_back({{"name", mesh_name()}, {"mesh", 0}, {"skin", 0}});
+    doc_["scenes"] = Json::array({{{"nodes", {0, static_cast<int>(skeleton_.bone_count())}}}});
+  }
 
-    for (const Animation& clip : options.clips) {
-      clip.require_valid(skeleton.bone_count(), "clip '" + clip.name + "'");
-      Json samplers = Json::array(), channels = Json::array();
-      const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components,
-                           const char* type) {
-        if (track.empty()) return;
-        if (track.times.front() < 0.0f) {
-          written.warnings.push_back("clip '" + clip.name + "': the " + property + " track of bone '" +
-                                     skeleton.key(bone) + "' has keys before t = 0, which glTF cannot hold: left out");
-          return;
-        }
-        const int input = b.floats(track.times, 1, "SCALAR", 0, true);
-        const int output = b.floats(track_output(track), components, type, 0, false);
-        samplers.push_back(
-            {{"input", input}, {"output", output}, {"interpolation", interpolation_name(track.interpolation)}});
-        channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", bone}, {"path", property}}}});
-      };
-      for (const Channel& channel : clip.channels) {
-        add(channel.translation, channel.bone, "translation", 3, "VEC3");
-        add(channel.rotation, channel.bone, "rotation", 4, "VEC4");
+  // --- animations: a clip's translation and rotation tracks; left out, with a warning, when it has none ---
+  void add_clip(const Animation& clip, Json& animations) {
+    clip.require_valid(skeleton_.bone_count(), "clip '" + clip.name + "'");
+    Json samplers = Json::array(), channels = Json::array();
+    const auto add = [&](const auto& track, std::int32_t bone, const char* property, int components, const char* type) {
+      if (track.empty()) return;
+      if (track.times.front() < 0.0f) {
+        written_.warnings.push_back("clip '" + clip.name + "': the " + property + " track of bone '" +
+                                    skeleton_.key(bone) + "' has keys before t = 0, which glTF cannot hold: left out");
+        return;
       }
-      if (channels.empty()) {
-        written.warnings.push_back("clip '" + clip.name + "' animates no translation or rotation: left out");
-        continue;
-      }
-      Json animation = {{"channels", std::move(channels)}, {"samplers", std::move(samplers)}};
-      if (!clip.name.empty()) animation["name"] = clip.name;
-      animations.push_back(std::move(animation));
+      const int input = b_.floats(track.times, 1, "SCALAR", 0, true);
+      const int output = b_.floats(track_output(track), components, type, 0, false);
+      samplers.push_back(
+          {{"input", input}, {"output", output}, {"interpolation", interpolation_name(track.interpolation)}});
+      channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", bone}, {"path", property}}}});
+    };
+    for (const Channel& channel : clip.channels) {
+      add(channel.translation, channel.bone, "translation", 3, "VEC3");
+      add(channel.rotation, channel.bone, "rotation", 4, "VEC4");
     }
-  } else {
-    nodes.push_back({{"name", mesh_name}, {"mesh", 0}});
-    doc["scenes"] = Json::array({{{"nodes", {0}}}});
+    if (channels.empty()) {
+      written_.warnings.push_back("clip '" + clip.name + "' animates no translation or rotation: left out");
+      return;
+    }
+    Json animation = {{"channels", std::move(channels)}, {"samplers", std::move(samplers)}};
+    if (!clip.name.empty()) animation["name"] = clip.name;
+    animations.push_back(std::move(animation));
+  }
+
+  // --- baked frames: the mesh's node alone, and one animation of its morph weights ---
+  void add_baked_animation(Json& nodes, Json& animations) {
+    nodes.push_back({{"name", mesh_name()}, {"mesh", 0}});
+    doc_["scenes"] = Json::array({{{"nodes", {0}}}});
     // Weights: frame k's key is target k at 1, the others 0; LINEAR between keys blends frames k and k + 1.
-    const BakedFrames& baked = *options.baked;
+    const BakedFrames& baked = *options_.baked;
     const std::size_t frames = baked.times.size();
     std::vector<float> weights(frames * frames, 0.0f);
     for (std::size_t k = 0; k < frames; ++k) weights[k * frames + k] = 1.0f;
-    const int input = b.floats(baked.times, 1, "SCALAR", 0, true);
-    const int output = b.floats(weights, 1, "SCALAR", 0, false);
+    const int input = b_.floats(baked.times, 1, "SCALAR", 0, true);
+    const int output = b_.floats(weights, 1, "SCALAR", 0, false);
     Json animation = {{"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}},
                       {"samplers", {{{"input", input}, {"output", output}, {"interpolation", "LINEAR"}}}}};
     if (!baked.name.empty()) animation["name"] = baked.name;
     animations.push_back(std::move(animation));
   }
-  doc["scene"] = 0;
-  doc["nodes"] = std::move(nodes);
-  doc["meshes"] = Json::array({std::move(gltf_mesh)});
-  if (!materials.empty()) doc["materials"] = std::move(materials);
-  if (!images.empty()) doc["images"] = std::move(images), doc["textures"] = std::move(textures);
-  if (!animations.empty()) doc["animations"] = std::move(animations);
-  while (b.bin.size() % 4) b.bin.push_back(0);
-  doc["accessors"] = std::move(b.accessors);
-  doc["bufferViews"] = std::move(b.buffer_views);
-  Json buffer = {{"byteLength", b.bin.size()}};
+
+  // --- the files ---
 
   // Invalid UTF-8 in a name (from a model file) becomes U+FFFD: glTF JSON must be UTF-8.
-  const auto dump = [](const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); };
-  if (binary) {
-    doc["buffers"] = Json::array({std::move(buffer)});
-    std::string json = dump(doc);
+  static std::string dump(const Json& j) { return j.dump(-1, ' ', false, Json::error_handler_t::replace); }
+
+  // One .glb: the header, the JSON chunk, the BIN chunk; written atomically.
+  void write_glb() {
+    doc_["buffers"] = Json::array({{{"byteLength", b_.bin.size()}}});
+    std::string json = dump(doc_);
     while (json.size() % 4) json += ' ';
-    const std::uint64_t total = 12 + 8 + json.size() + 8 + b.bin.size();
+    const std::uint64_t total = 12 + 8 + json.size() + 8 + b_.bin.size();
     if (total > std::numeric_limits<std::uint32_t>::max())
-      throw Error::invalid_argument(path, "the file would exceed 4 GiB");
+      throw Error::invalid_argument(path_, "the file would exceed 4 GiB");
     std::vector<std::uint8_t> glb;
     glb.reserve(total);
     const auto u32 = [&glb](std::uint32_t v) {
@@ -579,26 +654,33 @@ GltfWritten write_gltf(const std::string& path, const Model& model, const GltfEx
     u32(0x46546C67u), u32(2), u32(static_cast<std::uint32_t>(total));  // "glTF", version 2, length
     u32(static_cast<std::uint32_t>(json.size())), u32(0x4E4F534Au);    // "JSON"
     glb.insert(glb.end(), json.begin(), json.end());
-    u32(static_cast<std::uint32_t>(b.bin.size())), u32(0x004E4942u);  // "BIN\0"
-    glb.insert(glb.end(), b.bin.begin(), b.bin.end());
-    write_file_atomic(path, glb);
-    written.bytes = glb.size();
-  } else {
-    const std::filesystem::path gltf_path = utf8_path::from_utf8(path);
-    const std::string bin_name = uri_safe(utf8_path::to_utf8(gltf_path.stem())) + ".bin";
-    written.bin = utf8_path::to_utf8(gltf_path.parent_path() / bin_name);  // bin_name is ASCII
-    buffer["uri"] = bin_name;
-    doc["buffers"] = Json::array({std::move(buffer)});
-    const std::string json = dump(doc);
-    // Both files or neither: a .gltf that cannot be written (a folder by that name, a full disk) leaves the previous
-    // .bin as it was.
-    FileTransaction files;
-    files.stage(written.bin, b.bin);
-    files.stage(path, json);
-    files.commit();
-    written.bytes = b.bin.size() + json.size();
+    u32(static_cast<std::uint32_t>(b_.bin.size())), u32(0x004E4942u);  // "BIN\0"
+    glb.insert(glb.end(), b_.bin.begin(), b_.bin.end());
+    write_file_atomic(path_, glb);
+    written_.bytes = glb.size();
   }
-  return written;
+
+  // A .gltf and its .bin beside it (the stem, URI-safe): both files or neither, so that a .gltf that cannot be
+  // written (a folder by that name, a full disk) leaves the previous .bin as it was.
+  void write_gltf_and_bin() {
+    const std::filesystem::path gltf_path = utf8_path::from_utf8(path_);
+    const std::string bin_name = uri_safe(utf8_path::to_utf8(gltf_path.stem())) + ".bin";
+    written_.bin = utf8_path::to_utf8(gltf_path.parent_path() / bin_name);  // bin_name is ASCII
+    doc_["buffers"] = Json::array({{{"byteLength", b_.bin.size()}, {"uri", bin_name}}});
+    const std::string json = dump(doc_);
+    FileTransaction files;
+    files.stage(written_.bin, b_.bin);
+    files.stage(path_, json);
+    files.commit();
+    written_.bytes = b_.bin.size() + json.size();
+  }
+};
+
+}  // namespace
+
+GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options) {
+  const bool binary = check_export(path, model, options);
+  return GltfExport(path, model, options).write(binary);
 }
 
 }  // namespace deform

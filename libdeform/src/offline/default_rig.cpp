@@ -300,79 +300,69 @@ int side_of(const Body& body, const std::vector<std::int32_t>& path) {
   return 0;
 }
 
-}  // namespace
-
-const char* limb_kind_name(LimbKind kind) noexcept {
-  switch (kind) {
-    case LimbKind::arm: return "arm";
-    case LimbKind::leg: return "leg";
-    case LimbKind::front_leg: return "front_leg";
-    case LimbKind::hind_leg: return "hind_leg";
-    case LimbKind::neck: return "neck";
-    case LimbKind::tail: return "tail";
-    case LimbKind::limb: break;
-  }
-  return "limb";
+int depth(const Skeleton& sk, std::int32_t b) {
+  int d = 0;
+  while ((b = sk.bone(b).parent) >= 0) ++d;
+  return d;
 }
 
-RigSurvey survey_rig(const Model& model) {
-  RigSurvey survey;
-  const Body body = make_body(model, survey);
-  const Skeleton& sk = model.skeleton;
-  if (!body.surveyed) return survey;
-  const auto depth = [&](std::int32_t b) {
-    int d = 0;
-    while ((b = sk.bone(b).parent) >= 0) ++d;
-    return d;
-  };
+// Two branches from one bone that mirror each other; `extent` the larger one's.
+struct Pair {
+  Branch a, b;
+  float extent = 0.0f;
+};
 
-  // Mirrored pairs of branches: at each bone, two children with the same bone count (within a quarter) and extent
-  // (within 20%) whose tips lie apart, taken most alike first.
-  struct Pair {
-    Branch a, b;
-    float extent = 0.0f;
+bool has_role(const Body& body, const Pair& p, Role role) {
+  for (const Branch* branch : {&p.a, &p.b})
+    for (const std::int32_t b : branch->path)
+      if (body.hints[std::size_t(b)].role == role) return true;
+  return false;
+}
+
+// Mirrored pairs among `bone`'s children: two with the same bone count (within a quarter) and extent (within 20%)
+// whose tips lie apart and whose paths mirror each other, taken most alike first; appended to `pairs`.
+void pair_children(const Body& body, std::int32_t bone, std::vector<Pair>& pairs) {
+  const auto& kids = body.children[std::size_t(bone)];
+  if (kids.size() > 32) return;  // a body branches into a few limbs, a hand into a few fingers
+  std::vector<bool> used(kids.size(), false);
+  struct Candidate {
+    float mismatch;
+    std::size_t i, j;
   };
-  std::vector<Pair> pairs;
-  for (std::int32_t bone = 0; bone < body.bones; ++bone) {
-    const auto& kids = body.children[std::size_t(bone)];
-    if (kids.size() > 32) continue;  // a body branches into a few limbs, a hand into a few fingers
-    std::vector<bool> used(kids.size(), false);
-    struct Candidate {
-      float mismatch;
-      std::size_t i, j;
-    };
-    std::vector<Candidate> candidates;
-    for (std::size_t i = 0; i < kids.size(); ++i)
-      for (std::size_t j = i + 1; j < kids.size(); ++j) {
-        const float ei = body.extent(kids[i]), ej = body.extent(kids[j]);
-        const std::size_t ci = body.count(kids[i]), cj = body.count(kids[j]);
-        if (!(std::min(ei, ej) > 0.8f * std::max(ei, ej)) || 4 * std::min(ci, cj) < 3 * std::max(ci, cj)) continue;
-        const auto pi = body.main_path(kids[i]), pj = body.main_path(kids[j]);
-        const glm::vec3 apart = body.at(pi.back()) - body.at(pj.back());
-        if (pi.size() != pj.size() || !(glm::length(apart) > 0.05f * std::max(ei, ej))) continue;
-        // Mirror images: the plane halfway between the tips, through `bone`, maps one path onto the other.
-        const glm::vec3 normal = glm::normalize(apart), middle = 0.5f * (body.at(pi.back()) + body.at(pj.back()));
-        const auto mirror = [&](glm::vec3 p) { return p - 2.0f * glm::dot(p - middle, normal) * normal; };
-        bool mirrored = std::abs(glm::dot(body.at(bone) - middle, normal)) < 0.15f * std::max(ei, ej);
-        for (std::size_t k = 0; k < pi.size() && mirrored; ++k)
-          mirrored = glm::length(mirror(body.at(pi[k])) - body.at(pj[k])) < 0.15f * std::max(ei, ej);
-        if (!mirrored) continue;
-        candidates.push_back({std::abs(ei - ej) / std::max(ei, ej) + float(ci > cj ? ci - cj : cj - ci), i, j});
-      }
-    std::sort(candidates.begin(), candidates.end(),
-              [](const Candidate& x, const Candidate& y) { return x.mismatch < y.mismatch; });
-    for (const Candidate& c : candidates) {
-      if (used[c.i] || used[c.j]) continue;
-      used[c.i] = used[c.j] = true;
-      Pair pair;
-      pair.a = {bone, body.main_path(kids[c.i]), 0, body.extent(kids[c.i])};
-      pair.b = {bone, body.main_path(kids[c.j]), 0, body.extent(kids[c.j])};
-      pair.extent = std::max(pair.a.extent, pair.b.extent);
-      pairs.push_back(std::move(pair));
+  std::vector<Candidate> candidates;
+  for (std::size_t i = 0; i < kids.size(); ++i)
+    for (std::size_t j = i + 1; j < kids.size(); ++j) {
+      const float ei = body.extent(kids[i]), ej = body.extent(kids[j]);
+      const std::size_t ci = body.count(kids[i]), cj = body.count(kids[j]);
+      if (!(std::min(ei, ej) > 0.8f * std::max(ei, ej)) || 4 * std::min(ci, cj) < 3 * std::max(ci, cj)) continue;
+      const auto pi = body.main_path(kids[i]), pj = body.main_path(kids[j]);
+      const glm::vec3 apart = body.at(pi.back()) - body.at(pj.back());
+      if (pi.size() != pj.size() || !(glm::length(apart) > 0.05f * std::max(ei, ej))) continue;
+      // Mirror images: the plane halfway between the tips, through `bone`, maps one path onto the other.
+      const glm::vec3 normal = glm::normalize(apart), middle = 0.5f * (body.at(pi.back()) + body.at(pj.back()));
+      const auto mirror = [&](glm::vec3 p) { return p - 2.0f * glm::dot(p - middle, normal) * normal; };
+      bool mirrored = std::abs(glm::dot(body.at(bone) - middle, normal)) < 0.15f * std::max(ei, ej);
+      for (std::size_t k = 0; k < pi.size() && mirrored; ++k)
+        mirrored = glm::length(mirror(body.at(pi[k])) - body.at(pj[k])) < 0.15f * std::max(ei, ej);
+      if (!mirrored) continue;
+      candidates.push_back({std::abs(ei - ej) / std::max(ei, ej) + float(ci > cj ? ci - cj : cj - ci), i, j});
     }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& x, const Candidate& y) { return x.mismatch < y.mismatch; });
+  for (const Candidate& c : candidates) {
+    if (used[c.i] || used[c.j]) continue;
+    used[c.i] = used[c.j] = true;
+    Pair pair;
+    pair.a = {bone, body.main_path(kids[c.i]), 0, body.extent(kids[c.i])};
+    pair.b = {bone, body.main_path(kids[c.j]), 0, body.extent(kids[c.j])};
+    pair.extent = std::max(pair.a.extent, pair.b.extent);
+    pairs.push_back(std::move(pair));
   }
-  // A pair whose branch runs through a helper's name (mrfixit's ArmIK.L and HandGoal.L, which carry the hand's skin
-  // but hang from the spine) is an IK set-up, not a limb.
+}
+
+// A pair whose branch runs through a helper's name (mrfixit's ArmIK.L and HandGoal.L, which carry the hand's skin
+// but hang from the spine) is an IK set-up, not a limb: dropped, and said so in `survey.skipped`.
+void drop_ik_setups(const Body& body, std::vector<Pair>& pairs, RigSurvey& survey) {
   std::erase_if(pairs, [&](const Pair& p) {
     const auto helper = [&](const Branch& branch) {
       for (const std::int32_t b : branch.path)
@@ -383,10 +373,16 @@ RigSurvey survey_rig(const Model& model) {
     for (const Branch* side : {&p.a, &p.b})
       if (const std::int32_t b = helper(*side); b >= 0)
         survey.skipped.emplace_back(side->path.front(), "not a limb: an IK set-up (its branch runs through '" +
-                                                            sk.bone(b).name + "', a helper's name)");
+                                                            body.skeleton.bone(b).name + "', a helper's name)");
     return true;
   });
-  // Limbs are the large pairs, not inside another pair (fingers, toes) and at least half the largest one's extent.
+}
+
+// The pairs that are limbs: the large ones, not inside another pair (fingers, toes) and at least half the largest
+// one's extent; at most eight, the largest (a spider's legs fit; more is no body). Each with its sides set (names,
+// else +X is the character's left), left first.
+std::vector<Pair> limb_pairs(const Body& body, const std::vector<Pair>& pairs) {
+  const Skeleton& sk = body.skeleton;
   float largest = 0.0f;
   for (const Pair& p : pairs) largest = std::max(largest, p.extent);
   std::vector<Pair> limbs;
@@ -400,10 +396,8 @@ RigSurvey survey_rig(const Model& model) {
       }
     if (!inside) limbs.push_back(p);
   }
-  // At most eight pairs, the largest (a spider's legs fit; more is no body).
   std::stable_sort(limbs.begin(), limbs.end(), [](const Pair& x, const Pair& y) { return x.extent > y.extent; });
   if (limbs.size() > 8) limbs.resize(8);
-  // Sides: names, else +X is the character's left.
   for (Pair& p : limbs) {
     p.a.side = side_of(body, p.a.path);
     p.b.side = side_of(body, p.b.path);
@@ -414,34 +408,40 @@ RigSurvey survey_rig(const Model& model) {
     }
     if (p.a.side < 0) std::swap(p.a, p.b);  // left first
   }
-  const auto has_role = [&](const Pair& p, Role role) {
-    for (const Branch* branch : {&p.a, &p.b})
-      for (const std::int32_t b : branch->path)
-        if (body.hints[std::size_t(b)].role == role) return true;
-    return false;
+  return limbs;
+}
+
+// Which of the limb pairs are the legs and which the arms (null: none). Legs: the named pair (feet, thighs), else
+// the pair nearer the root (then the lower one). Arms: the named one (hands), else the other of two. Sorts `limbs`,
+// legs first; the pointers are into it.
+std::pair<const Pair*, const Pair*> legs_and_arms(const Body& body, std::vector<Pair>& limbs) {
+  const auto leglike = [&](const Pair& p) {
+    return has_role(body, p, Role::foot) || has_role(body, p, Role::thigh) || has_role(body, p, Role::shin);
   };
-  // Legs: the named pair (feet, thighs), else the pair nearer the root (then the lower one). Arms: the named one
-  // (hands), else the other of two.
   std::sort(limbs.begin(), limbs.end(), [&](const Pair& x, const Pair& y) {
-    const bool xl = has_role(x, Role::foot) || has_role(x, Role::thigh) || has_role(x, Role::shin);
-    const bool yl = has_role(y, Role::foot) || has_role(y, Role::thigh) || has_role(y, Role::shin);
+    const bool xl = leglike(x), yl = leglike(y);
     if (xl != yl) return xl;
-    return depth(x.a.from) < depth(y.a.from);
+    return depth(body.skeleton, x.a.from) < depth(body.skeleton, y.a.from);
   });
   const Pair* legs = limbs.empty() ? nullptr : &limbs.front();
   const auto armlike = [&](const Pair& p) {
-    return has_role(p, Role::hand) || has_role(p, Role::upper_arm) || has_role(p, Role::forearm) ||
-           has_role(p, Role::clavicle);
+    return has_role(body, p, Role::hand) || has_role(body, p, Role::upper_arm) || has_role(body, p, Role::forearm) ||
+           has_role(body, p, Role::clavicle);
   };
   const Pair* arms = nullptr;
   for (const Pair& p : limbs)
     if (&p != legs && (arms == nullptr || armlike(p))) arms = &p;
-  if (legs != nullptr && arms == nullptr && armlike(*legs) && !has_role(*legs, Role::foot) &&
-      !has_role(*legs, Role::thigh))
+  if (legs != nullptr && arms == nullptr && armlike(*legs) && !has_role(body, *legs, Role::foot) &&
+      !has_role(body, *legs, Role::thigh))
     std::swap(legs, arms);  // one pair, and it is the arms
+  return {legs, arms};
+}
 
+// The body's frame from its limbs: the pelvis and up from the legs (from the hip joint to the foot; a model axis
+// when within 30 degrees of one), the chest from the arms, and four legs when the hands hang below 30% of the hips'
+// height.
+void orient_body(const Body& body, const Pair* legs, const Pair* arms, RigSurvey& survey) {
   if (legs != nullptr) {
-    // Up: against the legs, from the hip joint to the foot; a model axis when within 30 degrees of one.
     survey.pelvis = legs->a.from;
     glm::vec3 down(0.0f);
     for (const Branch* b : {&legs->a, &legs->b}) {
@@ -465,16 +465,25 @@ RigSurvey survey_rig(const Model& model) {
     const float hands = std::max(height(end(arms->a)), height(end(arms->b))) - floor;
     survey.four_legged = hips > 0.0f && hands < 0.3f * hips;
   }
+}
+
+// The naming convention at least three bones follow (the first of mixamo, vrm, unreal, rigify, generic), or none.
+Naming body_naming(const Body& body) {
   std::vector<Naming> namings;
   for (const NameHint& hint : body.hints)
     if (hint.naming != Naming::none) namings.push_back(hint.naming);
   Naming naming = Naming::none;
   for (const Naming candidate : {Naming::mixamo, Naming::vrm, Naming::unreal, Naming::rigify, Naming::generic})
     if (std::count(namings.begin(), namings.end(), candidate) >= 3 && naming == Naming::none) naming = candidate;
-  survey.naming = naming_name(naming);
+  return naming;
+}
 
+// The limbs of the pairs: arms (or front legs), legs (or hind legs), then any other large pair (a spider's legs) as
+// legs too.
+void add_paired_limbs(const Body& body, const std::vector<Pair>& limbs, const Pair* legs, const Pair* arms,
+                      RigSurvey& survey) {
   const auto why_pair = [&](const Pair& p, const char* what) {
-    return std::string(what) + " (a mirrored pair branching from '" + sk.bone(p.a.from).name + "')";
+    return std::string(what) + " (a mirrored pair branching from '" + body.skeleton.bone(p.a.from).name + "')";
   };
   if (arms != nullptr) {
     const LimbKind kind = survey.four_legged ? LimbKind::front_leg : LimbKind::arm;
@@ -486,13 +495,15 @@ RigSurvey survey_rig(const Model& model) {
     for (const Branch* b : {&legs->a, &legs->b})
       survey.limbs.push_back(make_limb(body, *b, kind, why_pair(*legs, survey.four_legged ? "hind legs" : "legs")));
   }
-  // Any other large pair (a spider's legs): legs too.
   for (const Pair& p : limbs)
     if (&p != legs && &p != arms)
       for (const Branch* b : {&p.a, &p.b})
         survey.limbs.push_back(make_limb(body, *b, LimbKind::leg, why_pair(p, "legs")));
+}
 
-  // A named hand or foot no pair holds (an asymmetric rig): its limb runs up to the nearest branch (four at most).
+// A named hand or foot no limb holds (an asymmetric rig): its limb runs up to the nearest branch (four at most).
+void add_unpaired_limbs(const Body& body, RigSurvey& survey) {
+  const Skeleton& sk = body.skeleton;
   for (std::int32_t bone = 0, added = 0; bone < body.bones && added < 4; ++bone) {
     const NameHint& hint = body.hints[std::size_t(bone)];
     if (!body.relevant[std::size_t(bone)] || (hint.role != Role::hand && hint.role != Role::foot)) continue;
@@ -517,53 +528,89 @@ RigSurvey survey_rig(const Model& model) {
         make_limb(body, branch, arm ? LimbKind::arm : LimbKind::leg,
                   std::string(arm ? "an arm" : "a leg") + " ending at a bone named '" + sk.bone(bone).name + "'"));
   }
+}
 
-  // A four-legged creature's neck (the chest's branch that is not a front leg) and tail (the pelvis' branch that
-  // leads neither to a leg nor to the chest), each at least two bones and a sixth of a leg's extent.
-  if (survey.four_legged) {
-    // The branch that names `role` on its way down, else the one reaching farthest.
-    const auto other_branch = [&](std::int32_t from, const Pair& skip, std::int32_t avoid, Role role) {
-      std::int32_t best = -1;
-      float far = 0.0f;
-      bool named = false;
-      for (const std::int32_t c : body.children[std::size_t(from)]) {
-        if (c == skip.a.path.front() || c == skip.b.path.front() || (avoid >= 0 && sk.is_ancestor(c, avoid))) continue;
-        bool names = false;
-        for (const std::int32_t b : body.main_path(c)) names = names || body.hints[std::size_t(b)].role == role;
-        const float e = body.extent(c);
-        if (e >= legs->a.extent / 6.0f && ((names && !named) || (names == named && e > far)))
-          far = e, best = c, named = names;
-      }
-      return best;
-    };
-    if (const std::int32_t neck = other_branch(arms->a.from, *arms, -1, Role::head); neck >= 0) {
-      Branch branch{arms->a.from, body.main_path(neck), 0, 0.0f};
-      // The head: by name, else the path's last bone with skin weight of its own (past it only tips: ears, nose).
-      std::size_t end = branch.path.size() - 1;
-      for (std::size_t i = 0; i < branch.path.size(); ++i)
-        if (body.hints[std::size_t(branch.path[i])].role == Role::head) end = i;
-      branch.path.resize(end + 1);
-      if (branch.path.size() >= 2) {
-        Limb limb;
-        limb.kind = LimbKind::neck;
-        limb.chain = branch.path;
-        for (std::size_t i = branch.path.size() >= 3 ? branch.path.size() - 3 : 0; i < branch.path.size(); ++i)
-          if (body.own[std::size_t(branch.path[i])] > 0.0) limb.lattices.push_back(branch.path[i]);
-        limb.why = "the neck and head: the branch from '" + sk.bone(arms->a.from).name +
-                   "' that is not a front leg; the reach starts at its first bone";
-        survey.limbs.push_back(std::move(limb));
-      }
-    }
-    const std::int32_t pelvis = legs->a.from;
-    if (const std::int32_t tail = other_branch(pelvis, *legs, arms->a.from, Role::tail); tail >= 0) {
+// Of `from`'s children other than `skip`'s branches and those leading to `avoid` (-1: none), at least a sixth of
+// the legs' extent: the one that names `role` on its way down, else the one reaching farthest. -1 for none.
+std::int32_t other_branch(const Body& body, std::int32_t from, const Pair& skip, std::int32_t avoid, Role role,
+                          const Pair& legs) {
+  std::int32_t best = -1;
+  float far = 0.0f;
+  bool named = false;
+  for (const std::int32_t c : body.children[std::size_t(from)]) {
+    if (c == skip.a.path.front() || c == skip.b.path.front() || (avoid >= 0 && body.skeleton.is_ancestor(c, avoid)))
+      continue;
+    bool names = false;
+    for (const std::int32_t b : body.main_path(c)) names = names || body.hints[std::size_t(b)].role == role;
+    const float e = body.extent(c);
+    if (e >= legs.a.extent / 6.0f && ((names && !named) || (names == named && e > far)))
+      far = e, best = c, named = names;
+  }
+  return best;
+}
+
+// A four-legged creature's neck (the chest's branch that is not a front leg) and tail (the pelvis' branch that leads
+// neither to a leg nor to the chest), each at least two bones and a sixth of a leg's extent.
+void add_neck_and_tail(const Body& body, const Pair& legs, const Pair& arms, RigSurvey& survey) {
+  const Skeleton& sk = body.skeleton;
+  if (const std::int32_t neck = other_branch(body, arms.a.from, arms, -1, Role::head, legs); neck >= 0) {
+    Branch branch{arms.a.from, body.main_path(neck), 0, 0.0f};
+    // The head: by name, else the path's last bone with skin weight of its own (past it only tips: ears, nose).
+    std::size_t end = branch.path.size() - 1;
+    for (std::size_t i = 0; i < branch.path.size(); ++i)
+      if (body.hints[std::size_t(branch.path[i])].role == Role::head) end = i;
+    branch.path.resize(end + 1);
+    if (branch.path.size() >= 2) {
       Limb limb;
-      limb.kind = LimbKind::tail;
-      limb.chain = body.main_path(tail);
-      limb.why = "the tail: the branch from '" + sk.bone(pelvis).name +
-                 "' that leads neither to a leg nor to the chest; a spring chain";
-      if (limb.chain.size() >= 2) survey.limbs.push_back(std::move(limb));
+      limb.kind = LimbKind::neck;
+      limb.chain = branch.path;
+      for (std::size_t i = branch.path.size() >= 3 ? branch.path.size() - 3 : 0; i < branch.path.size(); ++i)
+        if (body.own[std::size_t(branch.path[i])] > 0.0) limb.lattices.push_back(branch.path[i]);
+      limb.why = "the neck and head: the branch from '" + sk.bone(arms.a.from).name +
+                 "' that is not a front leg; the reach starts at its first bone";
+      survey.limbs.push_back(std::move(limb));
     }
   }
+  const std::int32_t pelvis = legs.a.from;
+  if (const std::int32_t tail = other_branch(body, pelvis, legs, arms.a.from, Role::tail, legs); tail >= 0) {
+    Limb limb;
+    limb.kind = LimbKind::tail;
+    limb.chain = body.main_path(tail);
+    limb.why = "the tail: the branch from '" + sk.bone(pelvis).name +
+               "' that leads neither to a leg nor to the chest; a spring chain";
+    if (limb.chain.size() >= 2) survey.limbs.push_back(std::move(limb));
+  }
+}
+
+}  // namespace
+
+const char* limb_kind_name(LimbKind kind) noexcept {
+  switch (kind) {
+    case LimbKind::arm: return "arm";
+    case LimbKind::leg: return "leg";
+    case LimbKind::front_leg: return "front_leg";
+    case LimbKind::hind_leg: return "hind_leg";
+    case LimbKind::neck: return "neck";
+    case LimbKind::tail: return "tail";
+    case LimbKind::limb: break;
+  }
+  return "limb";
+}
+
+RigSurvey survey_rig(const Model& model) {
+  RigSurvey survey;
+  const Body body = make_body(model, survey);
+  if (!body.surveyed) return survey;
+  std::vector<Pair> pairs;
+  for (std::int32_t bone = 0; bone < body.bones; ++bone) pair_children(body, bone, pairs);
+  drop_ik_setups(body, pairs, survey);
+  std::vector<Pair> limbs = limb_pairs(body, pairs);
+  const auto [legs, arms] = legs_and_arms(body, limbs);
+  orient_body(body, legs, arms, survey);
+  survey.naming = naming_name(body_naming(body));
+  add_paired_limbs(body, limbs, legs, arms, survey);
+  add_unpaired_limbs(body, survey);
+  if (survey.four_legged) add_neck_and_tail(body, *legs, *arms, survey);
   return survey;
 }
 

@@ -16,8 +16,8 @@
 #include "deform/offline/topology.hpp"
 #include "deform/offline/voxel_weights.hpp"
 #include "deform/runtime/error.hpp"
-#include "bone_shapes.hpp"
 #include "finite.hpp"
+#include "volumetric_weights.hpp"
 namespace deform {
 namespace {
 
@@ -29,18 +29,13 @@ struct Influence {
   float weight;
 };
 
-void check_options(const VoxelWeightsOptions& o, std::size_t bone_count) {
+void check_options(const VoxelWeightsOptions& o) {
   auto fail = [](const char* what, const char* rule) { throw Error::invalid_argument(what, rule); };
   if (o.resolution < 8 || o.resolution > 1024) fail("resolution", "must be 8 to 1024");
   if (!std::isfinite(o.falloff_power) || o.falloff_power <= 0.0f) fail("falloff_power", "must be finite and > 0");
-  if (!std::isfinite(o.leaf_length) || o.leaf_length < 0.0f) fail("leaf_length", "must be finite and >= 0");
-  if (o.max_influences < 1 || o.max_influences > max_influences) fail("max_influences", "must be 1 to 4");
+  detail::check_leaf_length(o.leaf_length);
+  detail::check_max_influences(o.max_influences, max_influences);
   if (o.smoothing_iterations < 0) fail("smoothing_iterations", "must be >= 0");
-  if (!o.deforming.empty()) {
-    if (o.deforming.size() != bone_count) fail("deforming", "must be empty or hold one entry per bone");
-    if (std::none_of(o.deforming.begin(), o.deforming.end(), [](std::uint8_t d) { return d != 0; }))
-      fail("deforming", "no bone deforms");
-  }
 }
 
 // Keeps the `keep` strongest (ties: lower bone), drops those under min_weight of the total, normalises, strongest
@@ -93,29 +88,14 @@ int sample_steps(float length, float voxel) {
   return steps >= 1.0f ? (steps < 4194304.0f ? static_cast<int>(steps) : 4194304) : 1;
 }
 
-}  // namespace
-
-WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, const VoxelWeightsOptions& options) {
-  const std::size_t bone_count = skeleton.bone_count();
-  check_options(options, bone_count);
-  auto deforms = [&](std::size_t b) { return options.deforming.empty() || options.deforming[b] != 0; };
-  const std::size_t point_count = mesh.point_count();
-  const std::vector<std::uint32_t> corners = detail::checked_corners(mesh);
-  WeightsResult result;
-  result.weights.bones.assign(point_count, glm::u16vec4(0));
-  result.weights.weights.assign(point_count, glm::vec4(0.0f));
-  if (point_count == 0) {
-    result.warnings = bones_without_vertices(result.weights, skeleton, options.deforming);
-    return result;
-  }
-
-  // --- the grid: the points' box, two voxels of margin all round ---
+// --- the grid: the points' box, two voxels of margin all round ---
+// A box the grid cannot divide is refused rather than voxelised: coordinates so large that the box's size or a
+// squared distance overflows (±3e38), or points that all coincide (a box of no size, cells of no size: a bone would
+// take 2^31 steps), or nearly so (a box within the coordinates' float resolution, or cells below float's range).
+Grid voxel_grid(const Mesh& mesh, int resolution) {
   const Bounds bounds = compute_bounds(mesh.positions);
   const glm::vec3 extent = bounds.max - bounds.min;
   const float longest = std::max({extent.x, extent.y, extent.z});
-  // A box the grid cannot divide is refused rather than voxelised: coordinates so large that the box's size or a
-  // squared distance overflows (±3e38), or points that all coincide (a box of no size, cells of no size: a bone would
-  // take 2^31 steps), or nearly so (a box within the coordinates' float resolution, or cells below float's range).
   const float largest = std::max({glm::abs(bounds.min.x), glm::abs(bounds.min.y), glm::abs(bounds.min.z),
                                   glm::abs(bounds.max.x), glm::abs(bounds.max.y), glm::abs(bounds.max.z)});
   if (!std::isfinite(longest) || !(largest <= 1e18f)) {  // beyond, squared distances overflow a float
@@ -126,18 +106,28 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
                                               text + ", more than 1e18");
   }
   if (!(longest > 1e-7f * largest) || !(longest > 1e-30f))
-    throw Error::invalid_argument("mesh", "the points' bounding box has no size (all " + std::to_string(point_count) +
+    throw Error::invalid_argument("mesh", "the points' bounding box has no size (all " +
+                                              std::to_string(mesh.point_count()) +
                                               " points at one place): nothing to voxelise");
   Grid grid;
-  grid.size = longest / static_cast<float>(options.resolution);
+  grid.size = longest / static_cast<float>(resolution);
   grid.origin = bounds.min - 2.0f * grid.size;
   grid.dims = glm::ivec3(glm::ceil(extent / grid.size)) + 5;
-  const std::size_t voxels = grid.count();
+  return grid;
+}
 
-  // --- surface: every voxel a triangle passes through (sampled at under half a voxel) ---
-  enum : std::uint8_t { outside = 0, surface = 1, inside = 2 };
-  std::vector<std::uint8_t> state(voxels, inside);
-  std::vector<std::uint8_t> is_surface(voxels, 0);
+// --- the volume: the voxels of the surface and those inside it ---
+
+// The mesh's volume in the grid: the voxels a triangle or point is in, and those the outside cannot reach.
+struct Volume {
+  std::vector<std::int32_t> id;  // per voxel: its volume id, -1 outside
+  std::vector<glm::ivec3> cell;  // per volume id: its voxel
+};
+
+// 1 for every voxel a triangle passes through (sampled at under half a voxel) or a point lies in.
+std::vector<std::uint8_t> surface_voxels(const Mesh& mesh, const std::vector<std::uint32_t>& corners,
+                                         const Grid& grid) {
+  std::vector<std::uint8_t> is_surface(grid.count(), 0);
   for (std::size_t t = 0; t + 2 < corners.size(); t += 3) {
     const glm::vec3 a = mesh.positions[corners[t]], b = mesh.positions[corners[t + 1]],
                     c = mesh.positions[corners[t + 2]];
@@ -150,131 +140,159 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
         is_surface[grid.index(grid.cell(a + u * (b - a) + v * (c - a)))] = 1;
       }
   }
-  for (std::size_t i = 0; i < point_count; ++i) is_surface[grid.index(grid.cell(mesh.positions[i]))] = 1;
-  // --- outside: flooded from the grid's corner through voxels that are not surface (6 neighbours) ---
-  {
-    std::vector<std::size_t> stack{0};
-    state[0] = outside;
-    const std::array<glm::ivec3, 6> steps{glm::ivec3(1, 0, 0),  glm::ivec3(-1, 0, 0), glm::ivec3(0, 1, 0),
-                                          glm::ivec3(0, -1, 0), glm::ivec3(0, 0, 1),  glm::ivec3(0, 0, -1)};
-    while (!stack.empty()) {
-      const std::size_t at = stack.back();
-      stack.pop_back();
-      const glm::ivec3 c(static_cast<int>(at % std::size_t(grid.dims.x)),
-                         static_cast<int>(at / std::size_t(grid.dims.x) % std::size_t(grid.dims.y)),
-                         static_cast<int>(at / (std::size_t(grid.dims.x) * std::size_t(grid.dims.y))));
-      for (const glm::ivec3& s : steps) {
-        const glm::ivec3 n = c + s;
-        if (glm::any(glm::lessThan(n, glm::ivec3(0))) || glm::any(glm::greaterThanEqual(n, grid.dims))) continue;
-        const std::size_t ni = grid.index(n);
-        if (state[ni] != inside || is_surface[ni]) continue;
-        state[ni] = outside;
-        stack.push_back(ni);
-      }
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) is_surface[grid.index(grid.cell(mesh.positions[i]))] = 1;
+  return is_surface;
+}
+
+// Per voxel, 1 outside: flooded from the grid's corner through voxels that are not surface (6 neighbours).
+std::vector<std::uint8_t> outside_voxels(const std::vector<std::uint8_t>& is_surface, const Grid& grid) {
+  std::vector<std::uint8_t> outside(grid.count(), 0);
+  std::vector<std::size_t> stack{0};
+  outside[0] = 1;
+  const std::array<glm::ivec3, 6> steps{glm::ivec3(1, 0, 0),  glm::ivec3(-1, 0, 0), glm::ivec3(0, 1, 0),
+                                        glm::ivec3(0, -1, 0), glm::ivec3(0, 0, 1),  glm::ivec3(0, 0, -1)};
+  while (!stack.empty()) {
+    const std::size_t at = stack.back();
+    stack.pop_back();
+    const glm::ivec3 c(static_cast<int>(at % std::size_t(grid.dims.x)),
+                       static_cast<int>(at / std::size_t(grid.dims.x) % std::size_t(grid.dims.y)),
+                       static_cast<int>(at / (std::size_t(grid.dims.x) * std::size_t(grid.dims.y))));
+    for (const glm::ivec3& s : steps) {
+      const glm::ivec3 n = c + s;
+      if (glm::any(glm::lessThan(n, glm::ivec3(0))) || glm::any(glm::greaterThanEqual(n, grid.dims))) continue;
+      const std::size_t ni = grid.index(n);
+      if (outside[ni] || is_surface[ni]) continue;
+      outside[ni] = 1;
+      stack.push_back(ni);
     }
   }
-  // Volume voxels (surface or inside) get compact ids.
-  std::vector<std::int32_t> volume_id(voxels, -1);
-  std::vector<glm::ivec3> volume_cell;
+  return outside;
+}
+
+Volume voxelise(const Mesh& mesh, const std::vector<std::uint32_t>& corners, const Grid& grid) {
+  const std::vector<std::uint8_t> outside = outside_voxels(surface_voxels(mesh, corners, grid), grid);
+  Volume volume;
+  volume.id.assign(grid.count(), -1);
   for (int z = 0; z < grid.dims.z; ++z)
     for (int y = 0; y < grid.dims.y; ++y)
       for (int x = 0; x < grid.dims.x; ++x) {
         const std::size_t i = grid.index({x, y, z});
-        if (state[i] == outside) continue;
-        volume_id[i] = static_cast<std::int32_t>(volume_cell.size());
-        volume_cell.emplace_back(x, y, z);
+        if (outside[i]) continue;
+        volume.id[i] = static_cast<std::int32_t>(volume.cell.size());
+        volume.cell.emplace_back(x, y, z);
       }
+  return volume;
+}
 
-  // --- bones and their seeds ---
-  std::vector<detail::BoneShape> shapes = detail::bone_shapes(skeleton, options.leaf_length);
-  {
-    TriangleBvh bvh;
-    std::vector<std::uint32_t> flat;
-    for (std::size_t t = 0; t + 2 < corners.size(); t += 3)
-      if (corners[t] != corners[t + 1] && corners[t + 1] != corners[t + 2] && corners[t] != corners[t + 2])
-        flat.insert(flat.end(), {corners[t], corners[t + 1], corners[t + 2]});
-    if (!flat.empty()) {
-      bvh.build(mesh.positions, flat);
-      detail::clip_guessed_segments(shapes, bvh);
-    }
+// --- bones and their seeds ---
+
+// The bones' shapes, their guessed segments clipped where they leave the mesh.
+std::vector<detail::BoneShape> clipped_bone_shapes(const Mesh& mesh, const std::vector<std::uint32_t>& corners,
+                                                   const Skeleton& skeleton, float leaf_length) {
+  std::vector<detail::BoneShape> shapes = detail::bone_shapes(skeleton, leaf_length);
+  TriangleBvh bvh;
+  std::vector<std::uint32_t> flat;
+  for (std::size_t t = 0; t + 2 < corners.size(); t += 3)
+    if (corners[t] != corners[t + 1] && corners[t + 1] != corners[t + 2] && corners[t] != corners[t + 2])
+      flat.insert(flat.end(), {corners[t], corners[t + 1], corners[t + 2]});
+  if (!flat.empty()) {
+    bvh.build(mesh.positions, flat);
+    detail::clip_guessed_segments(shapes, bvh);
   }
-  auto seeds_of = [&](const detail::BoneShape& shape) {
-    std::vector<std::int32_t> seeds, near;
-    bool within_grid = false;
-    for (const auto& [a, b] : shape.segments) {
-      const int steps = sample_steps(glm::length(b - a), grid.size);
-      for (int k = 0; k <= steps; ++k) {
-        const glm::vec3 p = a + (b - a) * (static_cast<float>(k) / static_cast<float>(steps));
-        const glm::ivec3 c = grid.cell(p);
-        const glm::vec3 local = (p - grid.origin) / grid.size;
-        if (glm::any(glm::lessThan(local, glm::vec3(0.0f))) || glm::any(glm::greaterThan(local, glm::vec3(grid.dims))))
-          continue;  // outside the grid: seeds nothing
-        within_grid = true;
-        const std::int32_t id = volume_id[grid.index(c)];
-        if (id >= 0) {
-          seeds.push_back(id);
-          continue;
-        }
-        for (int dz = -1; dz <= 1; ++dz)  // a bone outside the volume seeds the volume voxels beside it
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const glm::ivec3 n = glm::clamp(c + glm::ivec3(dx, dy, dz), glm::ivec3(0), grid.dims - 1);
-              const std::int32_t nid = volume_id[grid.index(n)];
-              if (nid >= 0) near.push_back(nid);
-            }
-      }
-    }
-    if (seeds.empty()) seeds = std::move(near);
-    if (seeds.empty() && within_grid) {  // inside a leaking (open) mesh's shell: the volume voxels nearest to it
-      std::vector<float> gap(volume_cell.size(), unreached);
-      float best = unreached;
-      for (std::size_t v = 0; v < volume_cell.size(); ++v) {
-        const glm::vec3 centre = grid.origin + (glm::vec3(volume_cell[v]) + 0.5f) * grid.size;
-        for (const auto& [a, b] : shape.segments) {
-          const glm::vec3 axis = b - a;
-          const float length2 = glm::dot(axis, axis);
-          const float t = length2 > 0.0f ? std::clamp(glm::dot(centre - a, axis) / length2, 0.0f, 1.0f) : 0.0f;
-          gap[v] = std::min(gap[v], glm::length(centre - (a + t * axis)));
-        }
-        best = std::min(best, gap[v]);
-      }
-      for (std::size_t v = 0; v < volume_cell.size(); ++v)
-        if (gap[v] <= best + grid.size) seeds.push_back(static_cast<std::int32_t>(v));
-    }
-    std::sort(seeds.begin(), seeds.end());
-    seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
-    return seeds;
-  };
+  return shapes;
+}
 
-  // --- one Dijkstra per deforming bone; each point's distance read at its voxel ---
-  std::vector<std::int32_t> point_voxel(point_count);
-  for (std::size_t i = 0; i < point_count; ++i) point_voxel[i] = volume_id[grid.index(grid.cell(mesh.positions[i]))];
-  std::vector<float> distance(point_count * bone_count, unreached);
-  std::vector<float> field(volume_cell.size());
-  std::vector<std::array<std::int32_t, 26>> neighbours(volume_cell.size());
-  std::array<float, 26> step_length{};
-  {
-    int k = 0;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (dx == 0 && dy == 0 && dz == 0) continue;
-          step_length[static_cast<std::size_t>(k)] =
-              grid.size * std::sqrt(static_cast<float>(dx * dx + dy * dy + dz * dz));
-          for (std::size_t v = 0; v < volume_cell.size(); ++v) {
-            const glm::ivec3 n = volume_cell[v] + glm::ivec3(dx, dy, dz);
-            const bool in = glm::all(glm::greaterThanEqual(n, glm::ivec3(0))) && glm::all(glm::lessThan(n, grid.dims));
-            neighbours[v][static_cast<std::size_t>(k)] = in ? volume_id[grid.index(n)] : -1;
+// The volume ids a bone starts its Dijkstra from (ascending, unique): the volume voxels its segments pass through;
+// else those beside it (a bone outside the volume); else, for a bone inside a leaking (open) mesh's shell, the volume
+// voxels nearest to it. None for a bone wholly outside the grid.
+std::vector<std::int32_t> seeds_of(const detail::BoneShape& shape, const Grid& grid, const Volume& volume) {
+  std::vector<std::int32_t> seeds, near;
+  bool within_grid = false;
+  for (const auto& [a, b] : shape.segments) {
+    const int steps = sample_steps(glm::length(b - a), grid.size);
+    for (int k = 0; k <= steps; ++k) {
+      const glm::vec3 p = a + (b - a) * (static_cast<float>(k) / static_cast<float>(steps));
+      const glm::ivec3 c = grid.cell(p);
+      const glm::vec3 local = (p - grid.origin) / grid.size;
+      if (glm::any(glm::lessThan(local, glm::vec3(0.0f))) || glm::any(glm::greaterThan(local, glm::vec3(grid.dims))))
+        continue;  // outside the grid: seeds nothing
+      within_grid = true;
+      const std::int32_t id = volume.id[grid.index(c)];
+      if (id >= 0) {
+        seeds.push_back(id);
+        continue;
+      }
+      for (int dz = -1; dz <= 1; ++dz)  // a bone outside the volume seeds the volume voxels beside it
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const glm::ivec3 n = glm::clamp(c + glm::ivec3(dx, dy, dz), glm::ivec3(0), grid.dims - 1);
+            const std::int32_t nid = volume.id[grid.index(n)];
+            if (nid >= 0) near.push_back(nid);
           }
-          ++k;
-        }
+    }
   }
+  if (seeds.empty()) seeds = std::move(near);
+  if (seeds.empty() && within_grid) {  // inside a leaking (open) mesh's shell: the volume voxels nearest to it
+    std::vector<float> gap(volume.cell.size(), unreached);
+    float best = unreached;
+    for (std::size_t v = 0; v < volume.cell.size(); ++v) {
+      const glm::vec3 centre = grid.origin + (glm::vec3(volume.cell[v]) + 0.5f) * grid.size;
+      for (const auto& [a, b] : shape.segments)
+        gap[v] = std::min(gap[v], glm::length(centre - detail::nearest_on_segment(centre, a, b)));
+      best = std::min(best, gap[v]);
+    }
+    for (std::size_t v = 0; v < volume.cell.size(); ++v)
+      if (gap[v] <= best + grid.size) seeds.push_back(static_cast<std::int32_t>(v));
+  }
+  std::sort(seeds.begin(), seeds.end());
+  seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
+  return seeds;
+}
+
+// --- geodesic distances: one Dijkstra per deforming bone through the volume ---
+
+// Each volume voxel's 26 neighbours (volume ids, -1 outside the volume) and the length of each step.
+struct VolumeSteps {
+  std::vector<std::array<std::int32_t, 26>> neighbours;
+  std::array<float, 26> length{};
+};
+
+VolumeSteps volume_steps(const Grid& grid, const Volume& volume) {
+  VolumeSteps steps;
+  steps.neighbours.resize(volume.cell.size());
+  int k = 0;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        steps.length[static_cast<std::size_t>(k)] =
+            grid.size * std::sqrt(static_cast<float>(dx * dx + dy * dy + dz * dz));
+        for (std::size_t v = 0; v < volume.cell.size(); ++v) {
+          const glm::ivec3 n = volume.cell[v] + glm::ivec3(dx, dy, dz);
+          const bool in = glm::all(glm::greaterThanEqual(n, glm::ivec3(0))) && glm::all(glm::lessThan(n, grid.dims));
+          steps.neighbours[v][static_cast<std::size_t>(k)] = in ? volume.id[grid.index(n)] : -1;
+        }
+        ++k;
+      }
+  return steps;
+}
+
+// Per point and bone (point · bone_count + bone): the distance from the bone to the point's voxel through the
+// volume; `unreached` for a bone that does not deform, a point outside the volume or one the bone does not reach.
+std::vector<float> geodesic_distances(const Mesh& mesh, const Grid& grid, const Volume& volume,
+                                      const std::vector<detail::BoneShape>& shapes,
+                                      const detail::VolumetricInput& input) {
+  const std::size_t point_count = input.point_count, bone_count = input.bone_count;
+  std::vector<std::int32_t> point_voxel(point_count);
+  for (std::size_t i = 0; i < point_count; ++i) point_voxel[i] = volume.id[grid.index(grid.cell(mesh.positions[i]))];
+  std::vector<float> distance(point_count * bone_count, unreached);
+  std::vector<float> field(volume.cell.size());
+  const VolumeSteps steps = volume_steps(grid, volume);
   using Entry = std::pair<float, std::int32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  for (std::size_t b = 0; b < bone_count; ++b) {
-    if (!deforms(b)) continue;
+  for (std::uint32_t b : input.deforming) {
     std::fill(field.begin(), field.end(), unreached);
-    for (std::int32_t s : seeds_of(shapes[b])) {
+    for (std::int32_t s : seeds_of(shapes[b], grid, volume)) {
       field[static_cast<std::size_t>(s)] = 0.0f;
       queue.push({0.0f, s});
     }
@@ -283,9 +301,9 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
       queue.pop();
       if (d > field[static_cast<std::size_t>(v)]) continue;
       for (std::size_t k = 0; k < 26; ++k) {
-        const std::int32_t n = neighbours[static_cast<std::size_t>(v)][k];
+        const std::int32_t n = steps.neighbours[static_cast<std::size_t>(v)][k];
         if (n < 0) continue;
-        const float nd = d + step_length[k];
+        const float nd = d + steps.length[k];
         if (nd < field[static_cast<std::size_t>(n)]) {
           field[static_cast<std::size_t>(n)] = nd;
           queue.push({nd, n});
@@ -295,9 +313,18 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
     for (std::size_t i = 0; i < point_count; ++i)
       if (point_voxel[i] >= 0) distance[i * bone_count + b] = field[static_cast<std::size_t>(point_voxel[i])];
   }
+  return distance;
+}
 
-  // --- weights: geodesic nearest, its parent, its children; inverse-distance falloff ---
-  const float half = 0.5f * grid.size;
+// --- weights: geodesic nearest, its parent, its children; inverse-distance falloff ---
+
+// Each point's weights from its geodesic distances; a point no bone reaches is bound rigidly to the bone nearest in a
+// straight line, and counted in one warning.
+void falloff_weights(const Mesh& mesh, const Skeleton& skeleton, const detail::VolumetricInput& input,
+                     const std::vector<detail::BoneShape>& shapes, const std::vector<float>& distance, float half,
+                     const VoxelWeightsOptions& options, WeightsResult& result) {
+  const std::size_t point_count = input.point_count, bone_count = input.bone_count;
+  auto deforms = [&](std::size_t b) { return input.deforms[b] != 0; };
   const float power = options.falloff_power;
   std::vector<Influence> list;
   std::size_t unreached_points = 0, first_unreached = 0;
@@ -313,11 +340,7 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
       for (std::size_t b = 0; b < bone_count; ++b) {
         if (!deforms(b)) continue;
         for (const auto& [a, e] : shapes[b].segments) {
-          const glm::vec3 axis = e - a;
-          const float length2 = glm::dot(axis, axis);
-          const float t =
-              length2 > 0.0f ? std::clamp(glm::dot(mesh.positions[i] - a, axis) / length2, 0.0f, 1.0f) : 0.0f;
-          const float dd = glm::length(mesh.positions[i] - (a + t * axis));
+          const float dd = glm::length(mesh.positions[i] - detail::nearest_on_segment(mesh.positions[i], a, e));
           if (dd < best) {
             best = dd;
             nearest = b;
@@ -342,42 +365,65 @@ WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, 
     }
     store_strongest(list, options.max_influences, result.weights.bones[i], result.weights.weights[i]);
   }
-  distance = {};
-
-  // --- one-ring smoothing ---
-  if (options.smoothing_iterations > 0) {
-    const PointTopology topology = build_point_topology(mesh);
-    SkinWeights next = result.weights;
-    for (int pass = 0; pass < options.smoothing_iterations; ++pass) {
-      for (std::uint32_t i = 0; i < point_count; ++i) {
-        const auto ring = topology.point_neighbours(i);
-        if (ring.empty()) continue;
-        list.clear();
-        auto accumulate = [&](std::size_t point, float scale) {
-          for (int k = 0; k < max_influences; ++k) {
-            const float w = result.weights.weights[point][k];
-            if (w <= 0.0f) continue;
-            const std::uint32_t bone = result.weights.bones[point][k];
-            auto it = std::find_if(list.begin(), list.end(), [&](const Influence& x) { return x.bone == bone; });
-            if (it == list.end()) list.push_back({bone, scale * w});
-            else it->weight += scale * w;
-          }
-        };
-        accumulate(i, 0.5f);
-        const float share = 0.5f / static_cast<float>(ring.size());
-        for (std::uint32_t n : ring) accumulate(n, share);
-        store_strongest(list, options.max_influences, next.bones[i], next.weights[i]);
-      }
-      std::swap(result.weights, next);
-    }
-  }
-
   if (unreached_points > 0)
     result.warnings.push_back(std::to_string(unreached_points) + " point" + (unreached_points == 1 ? "" : "s") +
                               " (the first: point " + std::to_string(first_unreached) +
                               ") reached by no bone through the volume: bound rigidly to the nearest bone");
-  for (std::string& w : bones_without_vertices(result.weights, skeleton, options.deforming))
-    result.warnings.push_back(std::move(w));
+}
+
+// --- one-ring smoothing: each pass, half a point's own weights and half its neighbours' mean ---
+void smooth_one_ring(const Mesh& mesh, const VoxelWeightsOptions& options, SkinWeights& weights) {
+  const PointTopology topology = build_point_topology(mesh);
+  SkinWeights next = weights;
+  std::vector<Influence> list;
+  for (int pass = 0; pass < options.smoothing_iterations; ++pass) {
+    for (std::uint32_t i = 0; i < mesh.point_count(); ++i) {
+      const auto ring = topology.point_neighbours(i);
+      if (ring.empty()) continue;
+      list.clear();
+      auto accumulate = [&](std::size_t point, float scale) {
+        for (int k = 0; k < max_influences; ++k) {
+          const float w = weights.weights[point][k];
+          if (w <= 0.0f) continue;
+          const std::uint32_t bone = weights.bones[point][k];
+          auto it = std::find_if(list.begin(), list.end(), [&](const Influence& x) { return x.bone == bone; });
+          if (it == list.end()) list.push_back({bone, scale * w});
+          else it->weight += scale * w;
+        }
+      };
+      accumulate(i, 0.5f);
+      const float share = 0.5f / static_cast<float>(ring.size());
+      for (std::uint32_t n : ring) accumulate(n, share);
+      store_strongest(list, options.max_influences, next.bones[i], next.weights[i]);
+    }
+    std::swap(weights, next);
+  }
+}
+
+}  // namespace
+
+WeightsResult compute_voxel_weights(const Mesh& mesh, const Skeleton& skeleton, const VoxelWeightsOptions& options) {
+  check_options(options);
+  const detail::VolumetricInput input = detail::volumetric_input(mesh, skeleton, options.deforming);
+  WeightsResult result;
+  if (input.point_count == 0) {
+    detail::warn_of_unused_bones(result, skeleton, options.deforming);
+    return result;
+  }
+  result.weights.bones.assign(input.point_count, glm::u16vec4(0));
+  result.weights.weights.assign(input.point_count, glm::vec4(0.0f));
+  const Grid grid = voxel_grid(mesh, options.resolution);
+  std::vector<float> distance;
+  std::vector<detail::BoneShape> shapes;
+  {
+    const Volume volume = voxelise(mesh, input.corners, grid);
+    shapes = clipped_bone_shapes(mesh, input.corners, skeleton, options.leaf_length);
+    distance = geodesic_distances(mesh, grid, volume, shapes, input);
+  }
+  falloff_weights(mesh, skeleton, input, shapes, distance, 0.5f * grid.size, options, result);
+  distance = {};
+  if (options.smoothing_iterations > 0) smooth_one_ring(mesh, options, result.weights);
+  detail::warn_of_unused_bones(result, skeleton, options.deforming);
   return result;
 }
 

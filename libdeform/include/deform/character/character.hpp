@@ -327,6 +327,17 @@ class DEFORM_CHARACTER_API Character {
               bool transport) noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
   std::span<glm::vec3> point_normals() noexcept;
+  // reach()'s steps (character.cpp): refuse a bad effector or target, the chain, its lattices, the first solve, the
+  // stretch rounds, the reached pose held.
+  struct ReachSolve;
+  Status refuse_reach(std::int32_t effector, glm::vec3 target) const noexcept;
+  std::int32_t reach_chain_root(std::int32_t effector) const noexcept;
+  Status prepare_reach_chain(std::int32_t effector);
+  void find_chain_lattices(std::int32_t effector);
+  Status start_reach_solve(ReachSolve& solve, glm::vec3 target, float reach_length, bool continuing);
+  glm::vec3 stretch_growth() noexcept;
+  float stretch_to_target(ReachSolve& solve, glm::vec3 target, ReachResult& result);
+  void hold_reach(std::int32_t effector, float lambda, bool continuing, ReachResult& result);
 
   std::shared_ptr<const BindData> bind_;
   Rig rig_;  // the rig without its lattices and spring chains, which hierarchy_ and springs_ hold (rig())

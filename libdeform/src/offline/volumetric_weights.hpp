@@ -1,6 +1,8 @@
 #pragma once
-// Private to deform::offline: what the volumetric weights (heat_weights.cpp, voxel_weights.cpp) share: the input
-// checks and bones as bind-pose segments. O(points + triangles) and O(bones).
+// Private to deform::offline: what the volumetric weights (heat_weights.cpp, voxel_weights.cpp) share: the checks of
+// their common options, the start (the input checked, the deforming bones listed), the end (a warning per bone left
+// without a point) and bones as bind-pose segments. O(points + triangles) and O(bones).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -10,6 +12,7 @@
 
 #include <glm/glm.hpp>
 
+#include "deform/offline/heat_weights.hpp"
 #include "deform/offline/picking.hpp"
 #include "deform/offline/weights.hpp"
 #include "deform/runtime/error.hpp"
@@ -35,6 +38,63 @@ inline std::vector<std::uint32_t> checked_corners(const Mesh& mesh) {
     corners[c] = mesh.vertex_point[v];
   }
   return corners;
+}
+
+// The options both methods take, checked the same way; each method calls these among its own checks, in its order.
+inline void check_max_influences(int value, int most) {
+  if (value < 1 || value > most)
+    throw Error::invalid_argument("max_influences", "must be 1 to " + std::to_string(most));
+}
+inline void check_leaf_length(float value) {
+  if (!std::isfinite(value) || value < 0.0f) throw Error::invalid_argument("leaf_length", "must be finite and >= 0");
+}
+
+// What both methods start from once their own options are checked: the deforming-bone mask checked (empty, or one
+// entry per bone with at least one bone deforming), every point finite and every corner in range
+// (checked_corners). Throws deform::Error of kind argument naming the option, vertex or triangle.
+struct VolumetricInput {
+  std::size_t bone_count = 0;
+  std::size_t point_count = 0;
+  std::vector<std::uint32_t> corners;    // each triangle corner's point, three per triangle
+  std::vector<std::uint8_t> deforms;     // per bone: 1 where the bone may take points
+  std::vector<std::uint32_t> deforming;  // the ids of those bones, ascending
+};
+
+inline VolumetricInput volumetric_input(const Mesh& mesh, const Skeleton& skeleton,
+                                        const std::vector<std::uint8_t>& deforming) {
+  VolumetricInput in;
+  in.bone_count = skeleton.bone_count();
+  in.point_count = mesh.point_count();
+  if (!deforming.empty()) {
+    if (deforming.size() != in.bone_count)
+      throw Error::invalid_argument("deforming", "must be empty or hold one entry per bone");
+    if (std::none_of(deforming.begin(), deforming.end(), [](std::uint8_t d) { return d != 0; }))
+      throw Error::invalid_argument("deforming", "no bone deforms");
+  }
+  in.corners = checked_corners(mesh);
+  in.deforms.assign(in.bone_count, 1);
+  for (std::size_t b = 0; b < in.bone_count; ++b) {
+    if (!deforming.empty() && deforming[b] == 0) in.deforms[b] = 0;
+    if (in.deforms[b]) in.deforming.push_back(static_cast<std::uint32_t>(b));
+  }
+  return in;
+}
+
+// What both methods end with: a warning per deforming bone that no point took (bones_without_vertices), after the
+// method's own warnings. A mesh without points ends here with no weights.
+inline void warn_of_unused_bones(WeightsResult& result, const Skeleton& skeleton,
+                                 const std::vector<std::uint8_t>& deforming) {
+  for (std::string& w : bones_without_vertices(result.weights, skeleton, deforming))
+    result.warnings.push_back(std::move(w));
+}
+
+// The nearest point of segment [a, b] to p (a when the segment has no length).
+inline glm::vec3 nearest_on_segment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
+  const glm::vec3 axis = b - a;
+  const float length2 = glm::dot(axis, axis);
+  if (length2 <= 0.0f) return a;
+  const float t = std::clamp(glm::dot(p - a, axis) / length2, 0.0f, 1.0f);
+  return a + t * axis;
 }
 
 // A bone as segments in the bind pose: head -> each child's head; a leaf continues its parent's direction
