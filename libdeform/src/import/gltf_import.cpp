@@ -681,29 +681,27 @@ void GltfImport::choose_bones() {
         for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
              n = nodes_[static_cast<std::size_t>(n)].parent)
           in_skeleton[static_cast<std::size_t>(n)] = true;
-    std::size_t tops = 0;
-    for (std::int32_t r : roots_) tops += in_skeleton[static_cast<std::size_t>(r)] ? 1 : 0;
-    if (tops > 1) {
-      Bone root;
-      root.name = "root";
-      bones_.push_back(root);
-      node_of_bone_.push_back(-1);
-    }
+    std::vector<std::string> names;
+    std::vector<std::int32_t> parents;
+    std::vector<std::int32_t> index_of_node(node_count, -1);
     for (std::int32_t n : order_) {
       if (!in_skeleton[static_cast<std::size_t>(n)]) continue;
-      Bone bone;
       const std::string& raw = gltf_.nodes[static_cast<std::size_t>(n)].name;
-      bone.name = fit_name(raw.empty() ? "node" + std::to_string(n) : raw, shortened);
       const std::int32_t parent = nodes_[static_cast<std::size_t>(n)].parent;
-      bone.parent = parent >= 0 ? bone_of_node_[static_cast<std::size_t>(parent)] : (tops > 1 ? 0 : -1);
-      bone_of_node_[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(bones_.size());
+      index_of_node[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(names.size());
+      names.push_back(raw.empty() ? "node" + std::to_string(n) : raw);
+      parents.push_back(parent >= 0 ? index_of_node[static_cast<std::size_t>(parent)] : -1);
+    }
+    ForestBones forest = bones_of_forest(names, parents, shortened);
+    bones_ = std::move(forest.bones);
+    if (forest.first == 1) node_of_bone_.push_back(-1);
+    for (std::int32_t n : order_) {
+      if (!in_skeleton[static_cast<std::size_t>(n)]) continue;
+      bone_of_node_[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(node_of_bone_.size());
       node_of_bone_.push_back(n);
-      bones_.push_back(std::move(bone));
     }
   } else {
-    Bone bone;  // static scene: one bone at the origin holds every point
-    bone.name = "root";
-    bones_.push_back(bone);
+    bones_ = bones_of_forest({}, {}, shortened).bones;  // static scene: one bone at the origin holds every point
     node_of_bone_.push_back(-1);
   }
   require_bone_count(bones_.size(), path_);

@@ -376,20 +376,20 @@ void AssimpImport::make_bones() {
         for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
              n = n == root_ ? -1 : nodes_[static_cast<std::size_t>(n)].parent)
           in_skeleton[static_cast<std::size_t>(n)] = true;
+    // One top node (the root), so node i is bone i of the forest.
+    std::vector<std::string> names;
+    std::vector<std::int32_t> parents;
     for (std::size_t i = 0; i < nodes_.size(); ++i) {
       if (!in_skeleton[i]) continue;
-      Bone bone;
-      bone.name = fit_name(nodes_[i].node->mName.C_Str(), shortened);
-      bone.parent =
-          static_cast<std::int32_t>(i) == root_ ? -1 : bone_of_node_[static_cast<std::size_t>(nodes_[i].parent)];
-      bone_of_node_[i] = static_cast<std::int32_t>(bones_.size());
+      names.emplace_back(nodes_[i].node->mName.C_Str());
+      parents.push_back(
+          static_cast<std::int32_t>(i) == root_ ? -1 : bone_of_node_[static_cast<std::size_t>(nodes_[i].parent)]);
+      bone_of_node_[i] = static_cast<std::int32_t>(node_of_bone_.size());
       node_of_bone_.push_back(static_cast<std::int32_t>(i));
-      bones_.push_back(std::move(bone));
     }
+    bones_ = bones_of_forest(names, parents, shortened).bones;
   } else {
-    Bone bone;  // static scene: one bone at the origin holds every point
-    bone.name = "root";
-    bones_.push_back(bone);
+    bones_ = bones_of_forest({}, {}, shortened).bones;  // static scene: one bone at the origin holds every point
     node_of_bone_.push_back(-1);
   }
   bind_world_.assign(bones_.size(), glm::mat4(1.0f));

@@ -333,7 +333,6 @@ void IqmImport::read_joints() {
   joint_local_.resize(h_.num_joints);
   joint_parent_.assign(h_.num_joints, -1);
   joint_name_.resize(h_.num_joints);
-  std::size_t roots = 0;
   for (std::uint32_t j = 0; j < h_.num_joints; ++j) {
     const std::uint64_t record = h_.ofs_joints + std::uint64_t{48} * j;
     const std::string element = "joints[" + std::to_string(j) + "]";
@@ -341,10 +340,7 @@ void IqmImport::read_joints() {
     joint_parent_[j] = file_.i32(record + 4, element);
     if (joint_parent_[j] >= static_cast<std::int32_t>(j))
       file_.fail(record + 4, element, "parent " + std::to_string(joint_parent_[j]) + " does not precede the joint");
-    if (joint_parent_[j] < 0) {
-      joint_parent_[j] = -1;
-      ++roots;
-    }
+    if (joint_parent_[j] < 0) joint_parent_[j] = -1;
     Trs& t = joint_local_[j];
     for (int c = 0; c < 3; ++c) t.translation[c] = file_.f32(record + 8 + 4 * static_cast<std::uint64_t>(c), element);
     t.rotation = glm::dquat(file_.f32(record + 32, element), file_.f32(record + 20, element),
@@ -356,29 +352,21 @@ void IqmImport::read_joints() {
   }
   rigged_ = h_.num_joints > 0;
   result_.rigged = rigged_;
-  first_ = roots > 1 ? 1 : 0;
 }
 
-// The bones (several roots are held by an added bone `root`), their bind world transforms and the skeleton of
-// their rigid parts.
+// The bones (several roots are held by an added bone `root`: bones_of_forest), their bind world transforms and the
+// skeleton of their rigid parts.
 void IqmImport::bind_joints() {
-  std::vector<Bone> bones;
-  std::vector<glm::dmat4> bind_world;
   std::size_t shortened = 0;
-  if (!rigged_ || first_ == 1) {
-    Bone root;
-    root.name = "root";
-    bones.push_back(root);
-    bind_world.emplace_back(1.0);
-  }
+  ForestBones forest = bones_of_forest(joint_name_, joint_parent_, shortened);
+  first_ = static_cast<std::uint32_t>(forest.first);
+  std::vector<Bone> bones = std::move(forest.bones);
+  std::vector<glm::dmat4> bind_world;
+  if (!rigged_ || first_ == 1) bind_world.emplace_back(1.0);
   for (std::uint32_t j = 0; j < h_.num_joints; ++j) {
-    Bone bone;
-    bone.name = fit_name(joint_name_[j], shortened);
-    bone.parent = joint_parent_[j] < 0 ? (first_ == 1 ? 0 : -1) : static_cast<std::int32_t>(first_) + joint_parent_[j];
     const glm::dmat4 parent =
         joint_parent_[j] < 0 ? glm::dmat4(1.0) : bind_world[static_cast<std::size_t>(first_) + joint_parent_[j]];
     bind_world.push_back(parent * joint_local_[j].matrix());
-    bones.push_back(std::move(bone));
   }
   warn_shortened_names(shortened, warnings_);
   bind_split_.resize(bones.size());

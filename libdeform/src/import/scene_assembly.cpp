@@ -11,6 +11,25 @@ namespace deform::import_detail {
 
 namespace fs = std::filesystem;
 
+ForestBones bones_of_forest(const std::vector<std::string>& names, const std::vector<std::int32_t>& parents,
+                            std::size_t& shortened) {
+  ForestBones out;
+  const auto tops = static_cast<std::size_t>(std::count(parents.begin(), parents.end(), -1));
+  if (names.empty() || tops > 1) {
+    Bone root;
+    root.name = "root";
+    out.bones.push_back(root);
+    out.first = names.empty() ? 0 : 1;
+  }
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    Bone bone;
+    bone.name = fit_name(names[i], shortened);
+    bone.parent = parents[i] < 0 ? (out.first == 1 ? 0 : -1) : out.first + parents[i];
+    out.bones.push_back(std::move(bone));
+  }
+  return out;
+}
+
 void warn_shortened_names(std::size_t shortened, std::vector<std::string>& warnings) {
   if (shortened > 0)
     warnings.push_back(std::to_string(shortened) + " bone names longer than 79 bytes shortened to fit .sk");

@@ -1,8 +1,9 @@
 #pragma once
 // The stages every importer (gltf_import.cpp, iqm_import.cpp, import_assimp.cpp) runs once it has read its format:
-// naming bones, materials and clips, confining a texture, merging render vertices into points by (exact position,
-// influences), closing the mesh's faces, holding rest transforms in clips and reporting a clip. Each reader keeps
-// what its format decides (which nodes become bones, the bind, the key conversion); the rules shared live here once.
+// the bones of the node forest, naming materials and clips, confining a texture, merging render vertices into points
+// by (exact position, influences), closing the mesh's faces, holding rest transforms in clips and reporting a clip.
+// Each reader keeps what its format decides (which nodes become bones, the bind, the key conversion); the rules
+// shared live here once.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -16,6 +17,17 @@
 #include "deform/io/referenced_file.hpp"
 #include "import_common.hpp"
 namespace deform::import_detail {
+
+// The bones of a forest of nodes listed parents first: node i is named `names[i]` (fitted to .sk, counted in
+// `shortened` when cut) and has parent `parents[i]` (an index into the list, below i; -1 for a top node). Several top
+// nodes hang under an added bone "root" at the origin; an empty forest (a static scene) is that bone alone. Node i is
+// bone `first + i`, `first` 1 when "root" was added to a non-empty forest, else 0.
+struct ForestBones {
+  std::vector<Bone> bones;
+  std::int32_t first = 0;
+};
+ForestBones bones_of_forest(const std::vector<std::string>& names, const std::vector<std::int32_t>& parents,
+                            std::size_t& shortened);
 
 // "N bone names longer than 79 bytes shortened to fit .sk", when `shortened` > 0.
 void warn_shortened_names(std::size_t shortened, std::vector<std::string>& warnings);
