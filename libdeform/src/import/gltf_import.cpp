@@ -675,12 +675,9 @@ void GltfImport::choose_bones() {
       if (i.skin < 0) needed[static_cast<std::size_t>(i.node)] = true;
     for (std::size_t s = 0; s < skins_.size(); ++s)
       for (std::int32_t j : skins_[s].joints) needed[static_cast<std::size_t>(j)] = true;
-    std::vector<bool> in_skeleton(node_count, false);
-    for (std::size_t i = 0; i < node_count; ++i)
-      if (needed[i])
-        for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
-             n = nodes_[static_cast<std::size_t>(n)].parent)
-          in_skeleton[static_cast<std::size_t>(n)] = true;
+    std::vector<std::int32_t> node_parents(node_count);
+    for (std::size_t i = 0; i < node_count; ++i) node_parents[i] = nodes_[i].parent;
+    const std::vector<bool> in_skeleton = skeleton_nodes(node_parents, needed);
     std::vector<std::string> names;
     std::vector<std::int32_t> parents;
     std::vector<std::int32_t> index_of_node(node_count, -1);

@@ -370,12 +370,9 @@ void AssimpImport::make_bones() {
   bone_of_node_.assign(nodes_.size(), -1);
   std::size_t shortened = 0;
   if (root_ >= 0) {
-    std::vector<bool> in_skeleton(nodes_.size(), false);
-    for (std::size_t i = 0; i < nodes_.size(); ++i)
-      if (needed_[i])
-        for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
-             n = n == root_ ? -1 : nodes_[static_cast<std::size_t>(n)].parent)
-          in_skeleton[static_cast<std::size_t>(n)] = true;
+    std::vector<std::int32_t> node_parents(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) node_parents[i] = nodes_[i].parent;
+    const std::vector<bool> in_skeleton = skeleton_nodes(node_parents, needed_, root_);
     // One top node (the root), so node i is bone i of the forest.
     std::vector<std::string> names;
     std::vector<std::int32_t> parents;

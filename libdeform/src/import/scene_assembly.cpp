@@ -11,6 +11,17 @@ namespace deform::import_detail {
 
 namespace fs = std::filesystem;
 
+std::vector<bool> skeleton_nodes(const std::vector<std::int32_t>& parents, const std::vector<bool>& needed,
+                                 std::int32_t stop) {
+  std::vector<bool> in_skeleton(parents.size(), false);
+  for (std::size_t i = 0; i < parents.size(); ++i)
+    if (needed[i])
+      for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
+           n = n == stop ? -1 : parents[static_cast<std::size_t>(n)])
+        in_skeleton[static_cast<std::size_t>(n)] = true;
+  return in_skeleton;
+}
+
 ForestBones bones_of_forest(const std::vector<std::string>& names, const std::vector<std::int32_t>& parents,
                             std::size_t& shortened) {
   ForestBones out;

@@ -18,6 +18,11 @@
 #include "import_common.hpp"
 namespace deform::import_detail {
 
+// Which nodes of a forest (`parents[i]`: node i's parent, -1 for a top node) the skeleton holds: every `needed` node
+// and its ancestors, up to `stop` (included; -1: up to the top).
+std::vector<bool> skeleton_nodes(const std::vector<std::int32_t>& parents, const std::vector<bool>& needed,
+                                 std::int32_t stop = -1);
+
 // The bones of a forest of nodes listed parents first: node i is named `names[i]` (fitted to .sk, counted in
 // `shortened` when cut) and has parent `parents[i]` (an index into the list, below i; -1 for a top node). Several top
 // nodes hang under an added bone "root" at the origin; an empty forest (a static scene) is that bone alone. Node i is
