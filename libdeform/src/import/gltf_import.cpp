@@ -47,6 +47,7 @@ namespace tinygltf = deform_gltf_import::tinygltf;
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/error.hpp"
 #include "import_common.hpp"
+#include "scene_assembly.hpp"
 #include "utf8_path.hpp"
 #include "finite.hpp"
 namespace deform::import_detail {
@@ -338,97 +339,203 @@ glm::dmat4 trs(glm::dvec3 t, glm::dquat r, glm::dvec3 s) {
   return glm::translate(glm::dmat4(1.0), t) * glm::mat4_cast(r) * glm::scale(glm::dmat4(1.0), s);
 }
 
-}  // namespace
+// A mesh placed by a node: the node, its mesh and its skin (-1: rigid on its node).
+struct Instance {
+  std::int32_t node;
+  std::int32_t mesh;
+  std::int32_t skin;
+};
 
-bool is_gltf_path(const std::string& path) {
-  std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension == ".gltf" || extension == ".glb";
+// Skins: joints by node index; bind world = inverse(inverseBindMatrices[j]) (identity when none are given).
+struct SkinInfo {
+  std::vector<std::int32_t> joints;
+  std::vector<glm::dmat4> bind;
+};
+
+// One primitive's vertex attributes as the file holds them, every accessor checked against POSITION's count.
+struct PrimitiveData {
+  std::vector<double> positions, normals, uvs;
+  std::size_t count = 0;
+  std::vector<std::vector<double>> joint_sets, weight_sets;  // every JOINTS_n / WEIGHTS_n pair
+  // Each target's POSITION and NORMAL displacements (sparse accessors applied by read), empty when absent.
+  std::vector<std::vector<double>> target_positions, target_normals;
+};
+
+// The transforms a mesh instance's vertices and target deltas go through into the bind space.
+struct InstanceFrame {
+  glm::dmat4 to_world;
+  glm::dmat3 normal_matrix;
+  glm::dmat3 delta_matrix;
+  std::uint16_t rigid_bone;
+  std::size_t first_target;
+};
+
+// One clip as its channels are read.
+struct ClipState {
+  Animation clip;
+  std::vector<std::int32_t> channel_of_bone;
+  std::size_t dropped = 0, scaled_bones = 0;
+  float duration = 0.0f;
+};
+
+// The glTF reader: each step reads one part of the file into the ImportedModel, in the order below (run()).
+class GltfImport {
+ public:
+  GltfImport(const std::string& path, const ImportOptions& options) : path_(path), options_(options) {}
+  ImportedModel run();
+
+ private:
+  void load();
+  void confine_images();
+  void read_nodes();
+  void order_scene();
+  void find_instances();
+  void read_skins();
+  void choose_bones();
+  void bind_bones();
+  void read_materials();
+  void diffuse_texture(Material& material, int texture,
+                       std::map<int, std::shared_ptr<const std::vector<std::uint8_t>>>& embedded_shared);
+  void read_meshes();
+  void add_morph_targets(const Instance& instance, InstanceFrame& frame);
+  PrimitiveData read_attributes(const Instance& instance, const tinygltf::Primitive& primitive,
+                                const std::string& element, std::size_t target_count) const;
+  void add_vertices(const Instance& instance, const tinygltf::Primitive& primitive, const std::string& element,
+                    const PrimitiveData& data, const InstanceFrame& frame);
+  void add_triangles(const Instance& instance, const tinygltf::Primitive& primitive, const std::string& element,
+                     int mode, std::size_t first_vertex, std::size_t count);
+  void read_clips();
+  void read_clip(std::size_t a, const RestLocals& rest, const std::vector<glm::dvec3>& translation_scale,
+                 std::vector<std::string>& clip_names);
+  void read_weights_channel(ClipState& state, const tinygltf::AnimationChannel& channel,
+                            const tinygltf::AnimationSampler& sampler, const std::string& sampler_element,
+                            Interpolation interpolation, const std::vector<double>& times);
+  void read_bone_channel(ClipState& state, const tinygltf::AnimationChannel& channel,
+                         const tinygltf::AnimationSampler& sampler, const std::string& sampler_element,
+                         Interpolation interpolation, const std::vector<double>& times,
+                         const std::vector<glm::dvec3>& translation_scale);
+
+  const std::string& path_;
+  const ImportOptions& options_;
+  tinygltf::Model gltf_;
+  const Reader reader_{gltf_, path_};
+  EmbeddedImages embedded_images_;
+  std::string base_;
+  std::vector<std::string> image_paths_;  // canonical path of each image the file names by URI
+  ImportedModel result_;
+  std::vector<std::string>& warnings_ = result_.warnings;
+  std::vector<NodeInfo> nodes_;
+  std::vector<std::int32_t> roots_, order_;
+  std::vector<Instance> instances_;
+  bool rigged_ = false;
+  std::vector<SkinInfo> skins_;
+  std::vector<std::int32_t> bone_of_node_, node_of_bone_;
+  std::vector<Bone> bones_;
+  std::vector<glm::dmat4> bind_world_;
+  // Per node holding a morphed mesh: its first target in model.morph_targets and its target count.
+  std::vector<std::pair<std::size_t, std::size_t>> targets_of_node_;
+  PointMerger points_{result_.model.mesh.positions, result_.model.weights};
+  std::size_t unweighted_ = 0, skipped_primitives_ = 0;
+  bool any_uvs_ = false;
+};
+
+ImportedModel GltfImport::run() {
+  load();
+  confine_images();
+  result_.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path_).stem());
+  for (const std::string& required : gltf_.extensionsRequired) {
+    const bool harmless = required == "KHR_mesh_quantization" || required == "KHR_texture_transform" ||
+                          required.rfind("KHR_materials_", 0) == 0 || required == "KHR_texture_basisu" ||
+                          required == "KHR_lights_punctual";
+    if (!harmless) reader_.fail("extensionsRequired", required + " is not supported");
+  }
+  read_nodes();
+  order_scene();
+  find_instances();
+  read_skins();
+  choose_bones();
+  bind_bones();
+  read_materials();
+  read_meshes();
+  if (rigged_) read_clips();
+  return std::move(result_);
 }
 
-ImportedModel import_gltf(const std::string& path, const ImportOptions& options) {
-  // --- parse ---
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+// --- parse ---
+void GltfImport::load() {
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path_);
   tinygltf::TinyGLTF loader;
-  EmbeddedImages embedded_images;
-  loader.SetImageLoader(keep_image, &embedded_images);
+  loader.SetImageLoader(keep_image, &embedded_images_);
   ApprovedFiles approved;
   loader.SetFsCallbacks({file_exists, expand_path, read_whole_file, refuse_write, &approved});
-  tinygltf::Model gltf;
   std::string error, warning;
-  const std::string base = utf8_path::to_utf8(utf8_path::from_utf8(path).parent_path());
+  base_ = utf8_path::to_utf8(utf8_path::from_utf8(path_).parent_path());
   bool loaded = false;
   const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
   const auto text = [&](std::size_t from, std::size_t length) {
     return std::string_view(reinterpret_cast<const char*>(bytes.data()) + from, length);
   };
-  if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error::in_file(path, "", "larger than 4 GiB");
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error::in_file(path_, "", "larger than 4 GiB");
   if (binary) {
     // The GLB header's lengths are checked here: tinygltf adds them in 32 bits.
     std::uint32_t header[5] = {};
-    if (bytes.size() < 20) throw Error::in_file(path, "GLB header", "shorter than 20 bytes");
+    if (bytes.size() < 20) throw Error::in_file(path_, "GLB header", "shorter than 20 bytes");
     std::memcpy(header, bytes.data(), 20);
-    if (header[1] != 2) throw Error::in_file(path, "GLB header", "version " + std::to_string(header[1]) + ", not 2");
+    if (header[1] != 2) throw Error::in_file(path_, "GLB header", "version " + std::to_string(header[1]) + ", not 2");
     if (header[2] > bytes.size() || header[2] < 20)
       throw Error::in_file(
-          path, "GLB header",
+          path_, "GLB header",
           "length " + std::to_string(header[2]) + " is not the file's " + std::to_string(bytes.size()) + " bytes");
     if (header[4] != 0x4E4F534Au || std::uint64_t{header[3]} + 20 > header[2])
       throw Error::in_file(
-          path, "GLB header",
+          path_, "GLB header",
           "the first chunk is not JSON within the file (" + std::to_string(header[3]) + " bytes claimed)");
-    approved = approve_buffers(path, base, text(20, header[3]), options.references);
-    loaded = loader.LoadBinaryFromMemory(&gltf, &error, &warning, bytes.data(), static_cast<unsigned int>(bytes.size()),
-                                         base);
+    approved = approve_buffers(path_, base_, text(20, header[3]), options_.references);
+    loaded = loader.LoadBinaryFromMemory(&gltf_, &error, &warning, bytes.data(),
+                                         static_cast<unsigned int>(bytes.size()), base_);
   } else {
-    approved = approve_buffers(path, base, text(0, bytes.size()), options.references);
-    loaded = loader.LoadASCIIFromString(&gltf, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
-                                        static_cast<unsigned int>(bytes.size()), base);
+    approved = approve_buffers(path_, base_, text(0, bytes.size()), options_.references);
+    loaded = loader.LoadASCIIFromString(&gltf_, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
+                                        static_cast<unsigned int>(bytes.size()), base_);
   }
   if (!loaded) {
     while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
     std::replace(error.begin(), error.end(), '\n', ' ');
-    throw Error::in_file(path, "", "not a valid glTF 2.0 file: " + (error.empty() ? std::string("unreadable") : error));
+    throw Error::in_file(path_, "",
+                         "not a valid glTF 2.0 file: " + (error.empty() ? std::string("unreadable") : error));
   }
-  const Reader reader{gltf, path};
+}
 
-  // Every image the file names, used or not, is confined as its buffers are (tinygltf read none of them).
-  std::vector<std::string> image_paths(gltf.images.size());
-  for (std::size_t i = 0; i < gltf.images.size(); ++i) {
-    const std::string& uri = gltf.images[i].uri;
+// Every image the file names, used or not, is confined as its buffers are (tinygltf read none of them).
+void GltfImport::confine_images() {
+  image_paths_.resize(gltf_.images.size());
+  for (std::size_t i = 0; i < gltf_.images.size(); ++i) {
+    const std::string& uri = gltf_.images[i].uri;
     if (uri.empty() || tinygltf::IsDataURI(uri)) continue;
-    image_paths[i] = resolve_referenced_file(path, uri, "images[" + std::to_string(i) + "].uri", options.references,
-                                             ReferenceSyntax::uri);
+    image_paths_[i] = resolve_referenced_file(path_, uri, "images[" + std::to_string(i) + "].uri", options_.references,
+                                              ReferenceSyntax::uri);
   }
+}
 
-  ImportedModel result;
-  std::vector<std::string>& warnings = result.warnings;
-  result.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path).stem());
-  for (const std::string& required : gltf.extensionsRequired) {
-    const bool harmless = required == "KHR_mesh_quantization" || required == "KHR_texture_transform" ||
-                          required.rfind("KHR_materials_", 0) == 0 || required == "KHR_texture_basisu" ||
-                          required == "KHR_lights_punctual";
-    if (!harmless) reader.fail("extensionsRequired", required + " is not supported");
-  }
-
-  // --- nodes: a forest (one parent each, no cycles), local and world transforms in double precision ---
-  const std::size_t node_count = gltf.nodes.size();
-  std::vector<NodeInfo> nodes(node_count);
+// --- nodes: a forest (one parent each, no cycles), local and world transforms in double precision ---
+void GltfImport::read_nodes() {
+  const std::size_t node_count = gltf_.nodes.size();
+  nodes_.resize(node_count);
   for (std::size_t i = 0; i < node_count; ++i) {
-    const tinygltf::Node& n = gltf.nodes[i];
+    const tinygltf::Node& n = gltf_.nodes[i];
     const std::string element = "nodes[" + std::to_string(i) + "]";
     for (int child : n.children) {
       if (child < 0 || static_cast<std::size_t>(child) >= node_count)
-        reader.fail(element + ".children", "node " + std::to_string(child) + " does not exist");
-      NodeInfo& c = nodes[static_cast<std::size_t>(child)];
+        reader_.fail(element + ".children", "node " + std::to_string(child) + " does not exist");
+      NodeInfo& c = nodes_[static_cast<std::size_t>(child)];
       if (c.parent >= 0 || static_cast<std::size_t>(child) == i)
-        reader.fail(element + ".children", "node " + std::to_string(child) + " has more than one parent");
+        reader_.fail(element + ".children", "node " + std::to_string(child) + " has more than one parent");
       c.parent = static_cast<std::int32_t>(i);
     }
-    NodeInfo& info = nodes[i];
+    NodeInfo& info = nodes_[i];
     if (n.matrix.size() == 16) {
       info.local = to_dmat4(n.matrix);
-      const Split s = split(reader.narrow(info.local, element + ".matrix"));
+      const Split s = split(reader_.narrow(info.local, element + ".matrix"));
       info.translation = glm::dvec3(info.local[3]);
       info.rotation = glm::dquat(s.rotation);
       info.scale = glm::dvec3(s.axis_scale);
@@ -439,748 +546,703 @@ ImportedModel import_gltf(const std::string& path, const ImportOptions& options)
       if (n.scale.size() == 3) info.scale = {n.scale[0], n.scale[1], n.scale[2]};
       info.local = trs(info.translation, info.rotation, info.scale);
     }
-    if (!finite(reader.narrow(info.local, element))) reader.fail(element, "transform is not finite");
+    if (!finite(reader_.narrow(info.local, element))) reader_.fail(element, "transform is not finite");
   }
-  // Roots of the scene shown: the default scene, else the first, else every node without a parent.
-  std::vector<std::int32_t> roots;
-  if (!gltf.scenes.empty()) {
-    const int scene = gltf.defaultScene >= 0 ? gltf.defaultScene : 0;
-    if (static_cast<std::size_t>(scene) >= gltf.scenes.size())
-      reader.fail("scene", "scene " + std::to_string(scene) + " does not exist");
-    for (int n : gltf.scenes[static_cast<std::size_t>(scene)].nodes) {
+}
+
+// Roots of the scene shown (the default scene, else the first, else every node without a parent), then the scene in
+// pre-order (iterative: node chains may be deep) with world transforms; a node reached twice means a cycle.
+void GltfImport::order_scene() {
+  const std::size_t node_count = nodes_.size();
+  if (!gltf_.scenes.empty()) {
+    const int scene = gltf_.defaultScene >= 0 ? gltf_.defaultScene : 0;
+    if (static_cast<std::size_t>(scene) >= gltf_.scenes.size())
+      reader_.fail("scene", "scene " + std::to_string(scene) + " does not exist");
+    for (int n : gltf_.scenes[static_cast<std::size_t>(scene)].nodes) {
       if (n < 0 || static_cast<std::size_t>(n) >= node_count)
-        reader.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " does not exist");
-      if (nodes[static_cast<std::size_t>(n)].parent >= 0)
-        reader.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " is not a root");
-      roots.push_back(n);
+        reader_.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " does not exist");
+      if (nodes_[static_cast<std::size_t>(n)].parent >= 0)
+        reader_.fail("scenes[" + std::to_string(scene) + "].nodes", "node " + std::to_string(n) + " is not a root");
+      roots_.push_back(n);
     }
   } else {
     for (std::size_t i = 0; i < node_count; ++i)
-      if (nodes[i].parent < 0) roots.push_back(static_cast<std::int32_t>(i));
+      if (nodes_[i].parent < 0) roots_.push_back(static_cast<std::int32_t>(i));
   }
-  // Pre-order over the scene (iterative: node chains may be deep); a node reached twice means a cycle.
-  std::vector<std::int32_t> order;
-  {
-    std::vector<std::pair<std::int32_t, int>> stack;
-    for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.emplace_back(*r, 0);
-    while (!stack.empty()) {
-      const auto [n, depth] = stack.back();
-      stack.pop_back();
-      NodeInfo& info = nodes[static_cast<std::size_t>(n)];
-      if (info.in_scene) reader.fail("nodes[" + std::to_string(n) + "]", "is part of a cycle");
-      if (depth > max_node_depth)
-        reader.fail("nodes[" + std::to_string(n) + "]", "node tree deeper than " + std::to_string(max_node_depth));
-      info.in_scene = true;
-      info.global = info.parent < 0 ? info.local : nodes[static_cast<std::size_t>(info.parent)].global * info.local;
-      reader.narrow(info.global, "nodes[" + std::to_string(n) + "] (world transform)");
-      order.push_back(n);
-      const auto& children = gltf.nodes[static_cast<std::size_t>(n)].children;
-      for (auto c = children.rbegin(); c != children.rend(); ++c) stack.emplace_back(*c, depth + 1);
-    }
+  std::vector<std::pair<std::int32_t, int>> stack;
+  for (auto r = roots_.rbegin(); r != roots_.rend(); ++r) stack.emplace_back(*r, 0);
+  while (!stack.empty()) {
+    const auto [n, depth] = stack.back();
+    stack.pop_back();
+    NodeInfo& info = nodes_[static_cast<std::size_t>(n)];
+    if (info.in_scene) reader_.fail("nodes[" + std::to_string(n) + "]", "is part of a cycle");
+    if (depth > max_node_depth)
+      reader_.fail("nodes[" + std::to_string(n) + "]", "node tree deeper than " + std::to_string(max_node_depth));
+    info.in_scene = true;
+    info.global = info.parent < 0 ? info.local : nodes_[static_cast<std::size_t>(info.parent)].global * info.local;
+    reader_.narrow(info.global, "nodes[" + std::to_string(n) + "] (world transform)");
+    order_.push_back(n);
+    const auto& children = gltf_.nodes[static_cast<std::size_t>(n)].children;
+    for (auto c = children.rbegin(); c != children.rend(); ++c) stack.emplace_back(*c, depth + 1);
   }
+}
 
-  // --- mesh instances and skins ---
-  struct Instance {
-    std::int32_t node;
-    std::int32_t mesh;
-    std::int32_t skin;  // -1: rigid on its node
-  };
-  std::vector<Instance> instances;
-  for (std::int32_t n : order) {
-    const tinygltf::Node& node = gltf.nodes[static_cast<std::size_t>(n)];
+// --- mesh instances, whether the model is rigged, and the listing of the file's skins (ImportedModel::skins):
+// every skin, with the meshes instanced under it (an unnamed mesh by its JSON path) ---
+void GltfImport::find_instances() {
+  for (std::int32_t n : order_) {
+    const tinygltf::Node& node = gltf_.nodes[static_cast<std::size_t>(n)];
     if (node.mesh < 0) continue;
     const std::string element = "nodes[" + std::to_string(n) + "]";
-    if (static_cast<std::size_t>(node.mesh) >= gltf.meshes.size())
-      reader.fail(element + ".mesh", "mesh " + std::to_string(node.mesh) + " does not exist");
-    if (node.skin >= 0 && static_cast<std::size_t>(node.skin) >= gltf.skins.size())
-      reader.fail(element + ".skin", "skin " + std::to_string(node.skin) + " does not exist");
-    instances.push_back({n, node.mesh, node.skin});
+    if (static_cast<std::size_t>(node.mesh) >= gltf_.meshes.size())
+      reader_.fail(element + ".mesh", "mesh " + std::to_string(node.mesh) + " does not exist");
+    if (node.skin >= 0 && static_cast<std::size_t>(node.skin) >= gltf_.skins.size())
+      reader_.fail(element + ".skin", "skin " + std::to_string(node.skin) + " does not exist");
+    instances_.push_back({n, node.mesh, node.skin});
   }
-  if (instances.empty()) reader.fail("", "the scene has no mesh");
+  if (instances_.empty()) reader_.fail("", "the scene has no mesh");
   bool any_animation = false;
-  for (const tinygltf::Animation& animation : gltf.animations)
+  for (const tinygltf::Animation& animation : gltf_.animations)
     for (const tinygltf::AnimationChannel& channel : animation.channels)
       any_animation =
-          any_animation || (channel.target_node >= 0 && static_cast<std::size_t>(channel.target_node) < node_count &&
-                            nodes[static_cast<std::size_t>(channel.target_node)].in_scene);
-  const bool any_skin = std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.skin >= 0; });
-  const bool rigged = any_skin || any_animation;
-  result.rigged = rigged;
-  // The listing of the file's skins (ImportedModel::skins): every skin, with the meshes instanced under it (an
-  // unnamed mesh by its JSON path).
-  for (std::size_t s = 0; s < gltf.skins.size(); ++s) {
+          any_animation || (channel.target_node >= 0 && static_cast<std::size_t>(channel.target_node) < nodes_.size() &&
+                            nodes_[static_cast<std::size_t>(channel.target_node)].in_scene);
+  const bool any_skin =
+      std::any_of(instances_.begin(), instances_.end(), [](const Instance& i) { return i.skin >= 0; });
+  rigged_ = any_skin || any_animation;
+  result_.rigged = rigged_;
+  for (std::size_t s = 0; s < gltf_.skins.size(); ++s) {
     ImportedSkin listed;
-    listed.name = gltf.skins[s].name;
-    listed.joints = gltf.skins[s].joints.size();
-    for (const Instance& i : instances) {
+    listed.name = gltf_.skins[s].name;
+    listed.joints = gltf_.skins[s].joints.size();
+    for (const Instance& i : instances_) {
       if (i.skin != static_cast<std::int32_t>(s)) continue;
-      const std::string& name = gltf.meshes[static_cast<std::size_t>(i.mesh)].name;
+      const std::string& name = gltf_.meshes[static_cast<std::size_t>(i.mesh)].name;
       std::string mesh = name.empty() ? "meshes[" + std::to_string(i.mesh) + "]" : name;
       if (std::find(listed.meshes.begin(), listed.meshes.end(), mesh) == listed.meshes.end())
         listed.meshes.push_back(std::move(mesh));
     }
-    result.skins.push_back(std::move(listed));
+    result_.skins.push_back(std::move(listed));
   }
+}
 
-  // Skins: joints by node index; bind world = inverse(inverseBindMatrices[j]) (identity when none are given).
-  struct SkinInfo {
-    std::vector<std::int32_t> joints;
-    std::vector<glm::dmat4> bind;
-  };
-  std::vector<SkinInfo> skins(gltf.skins.size());
-  std::vector<bool> skin_used(gltf.skins.size(), false);
-  for (const Instance& i : instances)
+// The skins the instances use: their joints (nodes of the scene, each once) and bind world transforms.
+void GltfImport::read_skins() {
+  skins_.resize(gltf_.skins.size());
+  std::vector<bool> skin_used(gltf_.skins.size(), false);
+  for (const Instance& i : instances_)
     if (i.skin >= 0) skin_used[static_cast<std::size_t>(i.skin)] = true;
-  for (std::size_t s = 0; s < gltf.skins.size(); ++s) {
+  for (std::size_t s = 0; s < gltf_.skins.size(); ++s) {
     if (!skin_used[s]) continue;
-    const tinygltf::Skin& skin = gltf.skins[s];
+    const tinygltf::Skin& skin = gltf_.skins[s];
     const std::string element = "skins[" + std::to_string(s) + "]";
-    if (skin.joints.empty()) reader.fail(element + ".joints", "is empty");
+    if (skin.joints.empty()) reader_.fail(element + ".joints", "is empty");
     std::set<std::int32_t> seen;
     for (int j : skin.joints) {
-      if (j < 0 || static_cast<std::size_t>(j) >= node_count)
-        reader.fail(element + ".joints", "node " + std::to_string(j) + " does not exist");
-      if (!nodes[static_cast<std::size_t>(j)].in_scene)
-        reader.fail(element + ".joints", "node " + std::to_string(j) + " is not in the scene");
-      if (!seen.insert(j).second) reader.fail(element + ".joints", "node " + std::to_string(j) + " is listed twice");
-      skins[s].joints.push_back(j);
+      if (j < 0 || static_cast<std::size_t>(j) >= nodes_.size())
+        reader_.fail(element + ".joints", "node " + std::to_string(j) + " does not exist");
+      if (!nodes_[static_cast<std::size_t>(j)].in_scene)
+        reader_.fail(element + ".joints", "node " + std::to_string(j) + " is not in the scene");
+      if (!seen.insert(j).second) reader_.fail(element + ".joints", "node " + std::to_string(j) + " is listed twice");
+      skins_[s].joints.push_back(j);
     }
-    skins[s].bind.assign(skin.joints.size(), glm::dmat4(1.0));
+    skins_[s].bind.assign(skin.joints.size(), glm::dmat4(1.0));
     if (skin.inverseBindMatrices >= 0) {
-      const std::vector<double> m = reader.read(skin.inverseBindMatrices, {16}, element + ".inverseBindMatrices");
+      const std::vector<double> m = reader_.read(skin.inverseBindMatrices, {16}, element + ".inverseBindMatrices");
       if (m.size() < 16 * skin.joints.size())
-        reader.fail(element + ".inverseBindMatrices", "fewer matrices than joints");
+        reader_.fail(element + ".inverseBindMatrices", "fewer matrices than joints");
       for (std::size_t j = 0; j < skin.joints.size(); ++j) {
         glm::dmat4 ibm;
         for (int c = 0; c < 4; ++c)
           for (int r = 0; r < 4; ++r) ibm[c][r] = m[16 * j + static_cast<std::size_t>(c * 4 + r)];
-        skins[s].bind[j] = glm::inverse(ibm);
-        if (!fits_float(skins[s].bind[j]) || std::fabs(glm::determinant(ibm)) < 1e-30)
-          reader.fail(element + ".inverseBindMatrices", "matrix " + std::to_string(j) + " is singular or not finite");
+        skins_[s].bind[j] = glm::inverse(ibm);
+        if (!fits_float(skins_[s].bind[j]) || std::fabs(glm::determinant(ibm)) < 1e-30)
+          reader_.fail(element + ".inverseBindMatrices", "matrix " + std::to_string(j) + " is singular or not finite");
       }
     }
   }
+}
 
-  // --- bones: the nodes skinning needs (joints of the used skins, nodes of rigid meshes) and all their ancestors,
-  // in pre-order; several top-level nodes hang under an added bone "root" at the origin ---
-  std::vector<std::int32_t> bone_of_node(node_count, -1);
-  std::vector<std::int32_t> node_of_bone;
-  std::vector<Bone> bones;
-  std::vector<glm::dmat4> bind_world;
-  std::vector<bool> has_bind;
+// --- bones: the nodes skinning needs (joints of the used skins, nodes of rigid meshes) and all their ancestors,
+// in pre-order; several top-level nodes hang under an added bone "root" at the origin ---
+void GltfImport::choose_bones() {
+  const std::size_t node_count = nodes_.size();
+  bone_of_node_.assign(node_count, -1);
   std::size_t shortened = 0;
-  if (rigged) {
+  if (rigged_) {
     std::vector<bool> needed(node_count, false);
-    for (const Instance& i : instances)
+    for (const Instance& i : instances_)
       if (i.skin < 0) needed[static_cast<std::size_t>(i.node)] = true;
-    for (std::size_t s = 0; s < skins.size(); ++s)
-      for (std::int32_t j : skins[s].joints) needed[static_cast<std::size_t>(j)] = true;
-    std::vector<bool> in_skeleton(node_count, false);
-    for (std::size_t i = 0; i < node_count; ++i)
-      if (needed[i])
-        for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
-             n = nodes[static_cast<std::size_t>(n)].parent)
-          in_skeleton[static_cast<std::size_t>(n)] = true;
-    std::size_t tops = 0;
-    for (std::int32_t r : roots) tops += in_skeleton[static_cast<std::size_t>(r)] ? 1 : 0;
-    if (tops > 1) {
-      Bone root;
-      root.name = "root";
-      bones.push_back(root);
-      node_of_bone.push_back(-1);
-    }
-    for (std::int32_t n : order) {
+    for (std::size_t s = 0; s < skins_.size(); ++s)
+      for (std::int32_t j : skins_[s].joints) needed[static_cast<std::size_t>(j)] = true;
+    std::vector<std::int32_t> node_parents(node_count);
+    for (std::size_t i = 0; i < node_count; ++i) node_parents[i] = nodes_[i].parent;
+    const std::vector<bool> in_skeleton = skeleton_nodes(node_parents, needed);
+    std::vector<std::string> names;
+    std::vector<std::int32_t> parents;
+    std::vector<std::int32_t> index_of_node(node_count, -1);
+    for (std::int32_t n : order_) {
       if (!in_skeleton[static_cast<std::size_t>(n)]) continue;
-      Bone bone;
-      const std::string& raw = gltf.nodes[static_cast<std::size_t>(n)].name;
-      bone.name = fit_name(raw.empty() ? "node" + std::to_string(n) : raw, shortened);
-      const std::int32_t parent = nodes[static_cast<std::size_t>(n)].parent;
-      bone.parent = parent >= 0 ? bone_of_node[static_cast<std::size_t>(parent)] : (tops > 1 ? 0 : -1);
-      bone_of_node[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(bones.size());
-      node_of_bone.push_back(n);
-      bones.push_back(std::move(bone));
+      const std::string& raw = gltf_.nodes[static_cast<std::size_t>(n)].name;
+      const std::int32_t parent = nodes_[static_cast<std::size_t>(n)].parent;
+      index_of_node[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(names.size());
+      names.push_back(raw.empty() ? "node" + std::to_string(n) : raw);
+      parents.push_back(parent >= 0 ? index_of_node[static_cast<std::size_t>(parent)] : -1);
+    }
+    ForestBones forest = bones_of_forest(names, parents, shortened);
+    bones_ = std::move(forest.bones);
+    if (forest.first == 1) node_of_bone_.push_back(-1);
+    for (std::int32_t n : order_) {
+      if (!in_skeleton[static_cast<std::size_t>(n)]) continue;
+      bone_of_node_[static_cast<std::size_t>(n)] = static_cast<std::int32_t>(node_of_bone_.size());
+      node_of_bone_.push_back(n);
     }
   } else {
-    Bone bone;  // static scene: one bone at the origin holds every point
-    bone.name = "root";
-    bones.push_back(bone);
-    node_of_bone.push_back(-1);
+    bones_ = bones_of_forest({}, {}, shortened).bones;  // static scene: one bone at the origin holds every point
+    node_of_bone_.push_back(-1);
   }
-  if (bones.size() > 65535) reader.fail("", std::to_string(bones.size()) + " bones (at most 65535)");
-  if (shortened > 0)
-    warnings.push_back(std::to_string(shortened) + " bone names longer than 79 bytes shortened to fit .sk");
-  {
-    std::map<std::string, std::size_t> uses;
-    for (const Bone& b : bones) ++uses[b.name];
-    std::size_t repeated = 0;
-    for (const auto& [name, count] : uses) repeated += count > 1 ? count : 0;
-    if (repeated > 0)
-      warnings.push_back(std::to_string(repeated) +
-                         " bones share their name with another (skins bind by node, so this is harmless; "
-                         "look such bones up by '#id')");
-  }
+  require_bone_count(bones_.size(), path_);
+  warn_shortened_names(shortened, warnings_);
+  std::map<std::string, std::size_t> uses;
+  for (const Bone& b : bones_) ++uses[b.name];
+  std::size_t repeated = 0;
+  for (const auto& [name, count] : uses) repeated += count > 1 ? count : 0;
+  if (repeated > 0)
+    warnings_.push_back(std::to_string(repeated) +
+                        " bones share their name with another (skins bind by node, so this is harmless; "
+                        "look such bones up by '#id')");
+}
 
-  // Bind world transforms: a joint's from its skin, every other bone's from the node tree.
-  bind_world.assign(bones.size(), glm::dmat4(1.0));
-  has_bind.assign(bones.size(), false);
+// Bind world transforms (a joint's from its skin, every other bone's from the node tree), then the skeleton of
+// their rigid parts. A bone's local translation in the skeleton is its node translation scaled by the parent's
+// world axis scales (exact while the parent's scale is not animated and has no shear); its rotation is the node's.
+void GltfImport::bind_bones() {
+  bind_world_.assign(bones_.size(), glm::dmat4(1.0));
+  std::vector<bool> has_bind(bones_.size(), false);
   std::size_t conflicting_binds = 0;
-  for (std::size_t s = 0; s < skins.size(); ++s)
-    for (std::size_t j = 0; j < skins[s].joints.size(); ++j) {
-      const auto b = static_cast<std::size_t>(bone_of_node[static_cast<std::size_t>(skins[s].joints[j])]);
+  for (std::size_t s = 0; s < skins_.size(); ++s)
+    for (std::size_t j = 0; j < skins_[s].joints.size(); ++j) {
+      const auto b = static_cast<std::size_t>(bone_of_node_[static_cast<std::size_t>(skins_[s].joints[j])]);
       if (!has_bind[b]) {
-        bind_world[b] = skins[s].bind[j];
+        bind_world_[b] = skins_[s].bind[j];
         has_bind[b] = true;
       } else {
         double difference = 0.0;
         for (int c = 0; c < 4; ++c)
-          difference = std::max(difference, glm::length(skins[s].bind[j][c] - bind_world[b][c]));
-        if (difference > 1e-5 * std::max(1.0, glm::length(glm::dvec3(bind_world[b][3])))) ++conflicting_binds;
+          difference = std::max(difference, glm::length(skins_[s].bind[j][c] - bind_world_[b][c]));
+        if (difference > 1e-5 * std::max(1.0, glm::length(glm::dvec3(bind_world_[b][3])))) ++conflicting_binds;
       }
     }
-  for (std::size_t b = 0; b < bones.size(); ++b)
-    if (!has_bind[b] && node_of_bone[b] >= 0) bind_world[b] = nodes[static_cast<std::size_t>(node_of_bone[b])].global;
+  for (std::size_t b = 0; b < bones_.size(); ++b)
+    if (!has_bind[b] && node_of_bone_[b] >= 0)
+      bind_world_[b] = nodes_[static_cast<std::size_t>(node_of_bone_[b])].global;
   if (conflicting_binds > 0)
-    warnings.push_back(std::to_string(conflicting_binds) +
-                       " joints are bound differently by two skins: the first skin's bind is used, the other skin's "
-                       "vertices on them are off by the difference");
-
-  // Rigid bind locals. A bone's local translation in the skeleton is its node translation scaled by the parent's
-  // world axis scales (exact while the parent's scale is not animated and has no shear); its rotation is the node's.
-  std::vector<Split> bind_split(bones.size());
-  for (std::size_t b = 0; b < bones.size(); ++b) bind_split[b] = split(glm::mat4(bind_world[b]));
+    warnings_.push_back(std::to_string(conflicting_binds) +
+                        " joints are bound differently by two skins: the first skin's bind is used, the other skin's "
+                        "vertices on them are off by the difference");
+  std::vector<Split> bind_split(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) bind_split[b] = split(glm::mat4(bind_world_[b]));
   std::size_t approximate = 0;
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    if (node_of_bone[b] < 0) continue;
-    const std::int32_t n = node_of_bone[b];
-    const Split rest = split(glm::mat4(nodes[static_cast<std::size_t>(n)].global));
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    if (node_of_bone_[b] < 0) continue;
+    const std::int32_t n = node_of_bone_[b];
+    const Split rest = split(glm::mat4(nodes_[static_cast<std::size_t>(n)].global));
     bool exact = glm::length(rest.axis_scale - bind_split[b].axis_scale) <= 1e-4f * glm::length(rest.axis_scale);
     // A shear or mirror in this bone's world, or a non-uniform scale passed on to children, is not a rigid motion.
     const bool has_children = std::any_of(
-        bones.begin(), bones.end(), [&](const Bone& other) { return other.parent == static_cast<std::int32_t>(b); });
+        bones_.begin(), bones_.end(), [&](const Bone& other) { return other.parent == static_cast<std::int32_t>(b); });
     exact =
         exact && (rest.similarity || (!has_children && glm::determinant(glm::mat3(rest.rigid())) > 0.0f &&
-                                      glm::determinant(glm::mat3(nodes[static_cast<std::size_t>(n)].global)) > 0.0));
+                                      glm::determinant(glm::mat3(nodes_[static_cast<std::size_t>(n)].global)) > 0.0));
     if (!exact) ++approximate;
   }
   if (approximate > 0)
-    warnings.push_back(std::to_string(approximate) +
-                       " bones have a scale a Skeleton cannot hold (non-uniform scale passed to children, shear, a "
-                       "mirror, or a bind scale other than the node's): clips move them approximately, the bind pose "
-                       "stays exact; ImportedModel::file_bind_world holds the exact bind");
-  result.model.skeleton = skeleton_from_binds(bones, bind_split, path);
-  result.file_bind_world.reserve(bind_world.size());
-  for (const glm::dmat4& m : bind_world) result.file_bind_world.emplace_back(m);
+    warnings_.push_back(std::to_string(approximate) +
+                        " bones have a scale a Skeleton cannot hold (non-uniform scale passed to children, shear, a "
+                        "mirror, or a bind scale other than the node's): clips move them approximately, the bind pose "
+                        "stays exact; ImportedModel::file_bind_world holds the exact bind");
+  result_.model.skeleton = skeleton_from_binds(bones_, bind_split, path_);
+  result_.file_bind_world.reserve(bind_world_.size());
+  for (const glm::dmat4& m : bind_world_) result_.file_bind_world.emplace_back(m);
+}
 
-  // --- materials ---
-  Mesh& mesh = result.model.mesh;
-  {
-    std::vector<std::string> used;
-    std::map<int, std::shared_ptr<const std::vector<std::uint8_t>>> embedded_shared;  // image -> its bytes
-    for (std::size_t m = 0; m < gltf.materials.size(); ++m) {
-      const tinygltf::Material& source = gltf.materials[m];
-      Material material;
-      std::string name = source.name;
-      for (char& c : name)
-        if (std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20) c = '_';
-      if (name.empty() || std::find(used.begin(), used.end(), name) != used.end())
-        name = "material" + std::to_string(m);
-      used.push_back(name);
-      material.name = name;
-      const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
-      if (factor.size() == 4 && std::all_of(factor.begin(), factor.end(), [](double v) { return std::isfinite(v); })) {
-        material.diffuse = {std::clamp(factor[0], 0.0, 1.0), std::clamp(factor[1], 0.0, 1.0),
-                            std::clamp(factor[2], 0.0, 1.0)};
-        material.opacity = static_cast<float>(std::clamp(factor[3], 0.0, 1.0));
-      }
-      const int texture = source.pbrMetallicRoughness.baseColorTexture.index;
-      if (texture >= 0 && static_cast<std::size_t>(texture) < gltf.textures.size()) {
-        const int image = gltf.textures[static_cast<std::size_t>(texture)].source;
-        if (image >= 0 && static_cast<std::size_t>(image) < gltf.images.size()) {
-          const tinygltf::Image& img = gltf.images[static_cast<std::size_t>(image)];
-          if (img.uri.empty() || img.uri.rfind("data:", 0) == 0) {
-            auto found = embedded_images.find(image);
-            if (found != embedded_images.end() && is_png_or_jpeg(found->second)) {  // moved out after first use
-              embedded_shared[image] = std::make_shared<const std::vector<std::uint8_t>>(std::move(found->second));
-              embedded_images.erase(found);
-            }
-            if (embedded_shared.count(image) != 0) {  // one copy per image, however many materials use it
-              material.diffuse_image = embedded_shared[image];
-            } else {
-              warnings.push_back("material '" + name + "': embedded texture (image " + std::to_string(image) +
-                                 ") is not a PNG or JPEG image, left out");
-            }
-          } else {
-            // The path as the file names it (kept for messages and copies); image_paths holds its canonical form.
-            fs::path resolved = utf8_path::from_utf8(decode_uri_reference(img.uri));
-            if (resolved.is_relative()) resolved = utf8_path::from_utf8(base) / resolved;
-            material.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
-            std::error_code ignored;
-            if (!fs::is_regular_file(utf8_path::from_utf8(image_paths[static_cast<std::size_t>(image)]), ignored))
-              warnings.push_back("material '" + name + "': texture '" + material.diffuse_map + "' not found");
-          }
-        }
-      }
-      mesh.materials.push_back(std::move(material));
+// --- materials ---
+void GltfImport::read_materials() {
+  std::vector<std::string> used;
+  std::map<int, std::shared_ptr<const std::vector<std::uint8_t>>> embedded_shared;  // image -> its bytes
+  for (std::size_t m = 0; m < gltf_.materials.size(); ++m) {
+    const tinygltf::Material& source = gltf_.materials[m];
+    Material material;
+    material.name = unique_material_name(source.name, m, used);
+    const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
+    if (factor.size() == 4 && std::all_of(factor.begin(), factor.end(), [](double v) { return std::isfinite(v); })) {
+      material.diffuse = {std::clamp(factor[0], 0.0, 1.0), std::clamp(factor[1], 0.0, 1.0),
+                          std::clamp(factor[2], 0.0, 1.0)};
+      material.opacity = static_cast<float>(std::clamp(factor[3], 0.0, 1.0));
     }
+    diffuse_texture(material, source.pbrMetallicRoughness.baseColorTexture.index, embedded_shared);
+    result_.model.mesh.materials.push_back(std::move(material));
   }
+}
 
-  // --- mesh: one submesh per primitive instance; points merged by (exact bind position, influences) ---
-  std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
-  std::size_t unweighted = 0, over_four = 0, skipped_primitives = 0;
-  std::uint32_t apart_serial = 0;  // PointKey word 11 of vertices that must not merge (morph targets move them)
-  ExtraInfluenceIds extra_ids;     // ... and of vertices with more than four influences
-  // Per node holding a morphed mesh: its first target in model.morph_targets and its target count.
-  std::vector<std::pair<std::size_t, std::size_t>> targets_of_node(node_count, {0, 0});
-  std::vector<MorphTarget>& morph_targets = result.model.morph_targets;
-  bool any_uvs = false;
-  for (const Instance& instance : instances)
-    for (const tinygltf::Primitive& p : gltf.meshes[static_cast<std::size_t>(instance.mesh)].primitives)
-      any_uvs = any_uvs || p.attributes.count("TEXCOORD_0") > 0;
-  for (const Instance& instance : instances) {
-    const tinygltf::Mesh& source = gltf.meshes[static_cast<std::size_t>(instance.mesh)];
-    const NodeInfo& node = nodes[static_cast<std::size_t>(instance.node)];
-    const std::string mesh_element = "meshes[" + std::to_string(instance.mesh) + "]";
-    // A skinned mesh ignores its node's transform (glTF 2.0 §3.7.3.3): its vertices are in the skin's bind space.
-    const glm::dmat4 to_world = instance.skin >= 0 ? glm::dmat4(1.0) : node.global;
-    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(to_world)));
-    const std::uint16_t rigid_bone =
-        rigged && instance.skin < 0 ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(instance.node)])
-                                    : 0;
-    // Morph targets: every primitive of a mesh has the same number (glTF 2.0 §3.7.2.2); this instance's targets are
-    // appended to the model's, named by mesh.extras.targetNames, weighted by node.weights or else mesh.weights.
-    std::size_t target_count = 0;
-    for (const tinygltf::Primitive& primitive : source.primitives)
-      target_count = std::max(target_count, primitive.targets.size());
-    const std::size_t first_target = morph_targets.size();
-    if (target_count > 0) {
-      const tinygltf::Node& gnode = gltf.nodes[static_cast<std::size_t>(instance.node)];
-      const std::vector<double>& defaults = !gnode.weights.empty() ? gnode.weights : source.weights;
-      const tinygltf::Value names = source.extras.IsObject() ? source.extras.Get("targetNames") : tinygltf::Value();
-      for (std::size_t k = 0; k < target_count; ++k) {
-        MorphTarget target;
-        target.mesh = source.name;
-        if (names.IsArray() && k < names.ArrayLen() && names.Get(static_cast<int>(k)).IsString())
-          target.name = names.Get(static_cast<int>(k)).Get<std::string>();
-        else target.name = "target" + std::to_string(k);
-        if (k < defaults.size()) {
-          if (!std::isfinite(defaults[k]))
-            reader.fail(mesh_element + ".weights", "weight " + std::to_string(k) + " is not finite");
-          target.default_weight = static_cast<float>(defaults[k]);
-        }
-        morph_targets.push_back(std::move(target));
-      }
-      targets_of_node[static_cast<std::size_t>(instance.node)] = {first_target, target_count};
+// The base colour texture `texture` of `material`: an embedded PNG or JPEG image is shared by every material that
+// uses it; a file is referenced by the path the file names (image_paths_ holds its canonical form).
+void GltfImport::diffuse_texture(Material& material, int texture,
+                                 std::map<int, std::shared_ptr<const std::vector<std::uint8_t>>>& embedded_shared) {
+  if (texture < 0 || static_cast<std::size_t>(texture) >= gltf_.textures.size()) return;
+  const int image = gltf_.textures[static_cast<std::size_t>(texture)].source;
+  if (image < 0 || static_cast<std::size_t>(image) >= gltf_.images.size()) return;
+  const tinygltf::Image& img = gltf_.images[static_cast<std::size_t>(image)];
+  if (img.uri.empty() || img.uri.rfind("data:", 0) == 0) {
+    auto found = embedded_images_.find(image);
+    if (found != embedded_images_.end() && is_png_or_jpeg(found->second)) {  // moved out after first use
+      embedded_shared[image] = std::make_shared<const std::vector<std::uint8_t>>(std::move(found->second));
+      embedded_images_.erase(found);
     }
-    const glm::dmat3 delta_matrix(to_world);
+    if (embedded_shared.count(image) != 0) {  // one copy per image, however many materials use it
+      material.diffuse_image = embedded_shared[image];
+    } else {
+      warnings_.push_back("material '" + material.name + "': embedded texture (image " + std::to_string(image) +
+                          ") is not a PNG or JPEG image, left out");
+    }
+    return;
+  }
+  fs::path resolved = utf8_path::from_utf8(decode_uri_reference(img.uri));
+  if (resolved.is_relative()) resolved = utf8_path::from_utf8(base_) / resolved;
+  material.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
+  std::error_code ignored;
+  if (!fs::is_regular_file(utf8_path::from_utf8(image_paths_[static_cast<std::size_t>(image)]), ignored))
+    warnings_.push_back("material '" + material.name + "': texture '" + material.diffuse_map + "' not found");
+}
+
+// --- mesh: one submesh per primitive instance; points merged by (exact bind position, influences) ---
+void GltfImport::read_meshes() {
+  Mesh& mesh = result_.model.mesh;
+  targets_of_node_.assign(nodes_.size(), {0, 0});
+  for (const Instance& instance : instances_)
+    for (const tinygltf::Primitive& p : gltf_.meshes[static_cast<std::size_t>(instance.mesh)].primitives)
+      any_uvs_ = any_uvs_ || p.attributes.count("TEXCOORD_0") > 0;
+  for (const Instance& instance : instances_) {
+    const tinygltf::Mesh& source = gltf_.meshes[static_cast<std::size_t>(instance.mesh)];
+    const NodeInfo& node = nodes_[static_cast<std::size_t>(instance.node)];
+    InstanceFrame frame;
+    // A skinned mesh ignores its node's transform (glTF 2.0 §3.7.3.3): its vertices are in the skin's bind space.
+    frame.to_world = instance.skin >= 0 ? glm::dmat4(1.0) : node.global;
+    frame.normal_matrix = glm::transpose(glm::inverse(glm::dmat3(frame.to_world)));
+    frame.rigid_bone = rigged_ && instance.skin < 0
+                           ? static_cast<std::uint16_t>(bone_of_node_[static_cast<std::size_t>(instance.node)])
+                           : 0;
+    add_morph_targets(instance, frame);
+    frame.delta_matrix = glm::dmat3(frame.to_world);
+    const std::size_t target_count = targets_of_node_[static_cast<std::size_t>(instance.node)].second;
     for (std::size_t pi = 0; pi < source.primitives.size(); ++pi) {
       const tinygltf::Primitive& primitive = source.primitives[pi];
-      const std::string element = mesh_element + ".primitives[" + std::to_string(pi) + "]";
+      const std::string element =
+          "meshes[" + std::to_string(instance.mesh) + "].primitives[" + std::to_string(pi) + "]";
       const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
       if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
           mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-        ++skipped_primitives;
+        ++skipped_primitives_;
         continue;
       }
-      const auto position_attribute = primitive.attributes.find("POSITION");
-      if (position_attribute == primitive.attributes.end()) reader.fail(element + ".attributes", "has no POSITION");
-      const std::vector<double> positions = reader.read(position_attribute->second, {3}, element + " POSITION");
-      const std::size_t count = positions.size() / 3;
-      auto optional = [&](const char* name, std::size_t components) {
-        const auto found = primitive.attributes.find(name);
-        if (found == primitive.attributes.end()) return std::vector<double>();
-        std::vector<double> values = reader.read(found->second, {components}, element + " " + name);
-        if (values.size() != count * components)
-          reader.fail(element + ".attributes." + name, "has not as many elements as POSITION");
-        return values;
-      };
-      const std::vector<double> normals = optional("NORMAL", 3);
-      const std::vector<double> uvs = optional("TEXCOORD_0", 2);
-      // Every JOINTS_n / WEIGHTS_n pair, as (bone, weight) lists per vertex.
-      std::vector<std::vector<double>> joint_sets, weight_sets;
-      if (instance.skin >= 0) {
-        for (int set = 0;; ++set) {
-          const std::string joints_name = "JOINTS_" + std::to_string(set),
-                            weights_name = "WEIGHTS_" + std::to_string(set);
-          const bool has_joints = primitive.attributes.count(joints_name) > 0;
-          const bool has_weights = primitive.attributes.count(weights_name) > 0;
-          if (!has_joints && !has_weights) break;
-          if (has_joints != has_weights)
-            reader.fail(element + ".attributes", joints_name + " and " + weights_name + " must come together");
-          joint_sets.push_back(optional(joints_name.c_str(), 4));
-          weight_sets.push_back(optional(weights_name.c_str(), 4));
-        }
-      }
-      const SkinInfo* skin = instance.skin >= 0 ? &skins[static_cast<std::size_t>(instance.skin)] : nullptr;
-      if (!primitive.targets.empty() && primitive.targets.size() != target_count)
-        reader.fail(element + ".targets", "has " + std::to_string(primitive.targets.size()) +
-                                              " targets where another primitive of the mesh has " +
-                                              std::to_string(target_count));
-      // Each target's POSITION and NORMAL displacements (sparse accessors applied by read), empty when absent.
-      std::vector<std::vector<double>> target_positions(primitive.targets.size()),
-          target_normals(primitive.targets.size());
-      for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
-        const std::string target_element = element + ".targets[" + std::to_string(k) + "]";
-        for (const auto& [name, accessor] : primitive.targets[k]) {
-          if (name != "POSITION" && name != "NORMAL") continue;  // TANGENT and others do not move points
-          std::vector<double> values = reader.read(accessor, {3}, target_element + " " + name);
-          if (values.size() != count * 3)
-            reader.fail(target_element + "." + name, "has not as many elements as POSITION");
-          for (const double d : values)
-            if (!std::isfinite(d)) reader.fail(target_element + "." + name, "a displacement is not finite");
-          (name == "POSITION" ? target_positions[k] : target_normals[k]) = std::move(values);
-        }
-      }
-
+      const PrimitiveData data = read_attributes(instance, primitive, element, target_count);
       const std::size_t first_vertex = mesh.vertex_point.size();
-      if (first_vertex + count > 0xFFFFFFFFull) reader.fail(element, "too many vertices");
-      std::vector<std::pair<std::uint16_t, double>> influences_of;
-      std::vector<std::uint16_t> extra_bones;
-      std::vector<float> extra_weights;
-      for (std::size_t v = 0; v < count; ++v) {
-        Influences influences;
-        influences_of.clear();
-        for (std::size_t set = 0; set < joint_sets.size(); ++set)
-          for (std::size_t k = 0; k < 4; ++k) {
-            const double w = weight_sets[set][4 * v + k];
-            if (!(w > 0.0)) continue;
-            const double joint = joint_sets[set][4 * v + k];
-            if (joint < 0.0 || joint >= static_cast<double>(skin->joints.size()))
-              reader.fail(element + ".attributes.JOINTS_" + std::to_string(set),
-                          "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " of " +
-                              std::to_string(skin->joints.size()));
-            const auto bone = static_cast<std::uint16_t>(
-                bone_of_node[static_cast<std::size_t>(skin->joints[static_cast<std::size_t>(joint)])]);
-            auto same = std::find_if(influences_of.begin(), influences_of.end(),
-                                     [&](const auto& i) { return i.first == bone; });
-            if (same != influences_of.end()) same->second += w;
-            else influences_of.emplace_back(bone, w);
-          }
-        std::sort(influences_of.begin(), influences_of.end(), [](const auto& a, const auto& b) {
-          return a.second != b.second ? a.second > b.second : a.first < b.first;
-        });
-        if (influences_of.empty()) {
-          if (skin != nullptr) ++unweighted;
-          // glTF leaves such a vertex undefined; three.js and others leave it where the skin's space puts it.
-          influences.bones[0] =
-              skin != nullptr ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(skin->joints[0])])
-                              : rigid_bone;
-          influences.weights[0] = 1.0f;
-        } else {
-          // Every influence is kept: the four strongest in the slots, the rest as extras (SkinWeights).
-          double total = 0.0;
-          for (const auto& i : influences_of) total += i.second;
-          if (influences_of.size() > 4) ++over_four;
-          for (std::size_t k = 0; k < influences_of.size() && k < 4; ++k) {
-            influences.bones[k] = influences_of[k].first;
-            influences.weights[k] = static_cast<float>(influences_of[k].second / total);
-          }
-        }
-        const glm::dvec3 raw{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
-        const glm::vec3 position = reader.narrow(glm::dvec3(to_world * glm::dvec4(raw, 1.0)),
-                                                 element + " POSITION: vertex " + std::to_string(v));
-        // Vertices moved by morph targets keep points of their own (their key would need every target's delta);
-        // vertices with extras merge with those of the same position and the same influences, extras too.
-        std::uint32_t apart = 0;
-        if (!primitive.targets.empty()) {
-          apart = ++apart_serial;
-        } else if (influences_of.size() > 4) {
-          double total = 0.0;
-          for (const auto& i : influences_of) total += i.second;
-          for (std::size_t k = 4; k < influences_of.size(); ++k)
-            extra_ids.add(influences_of[k].first, static_cast<float>(influences_of[k].second / total));
-          apart = extra_ids.take();
-        }
-        const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, apart),
-                                                            static_cast<std::uint32_t>(mesh.positions.size()));
-        if (inserted) {
-          const auto point = static_cast<std::uint32_t>(mesh.positions.size());
-          mesh.positions.push_back(position);
-          SkinWeights& sw = result.model.weights;
-          sw.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2], influences.bones[3]);
-          sw.weights.emplace_back(influences.weights[0], influences.weights[1], influences.weights[2],
-                                  influences.weights[3]);
-          if (influences_of.size() > 4) {
-            if (sw.extra_offsets.empty()) sw.extra_offsets.push_back(0);
-            sw.extra_points.push_back(point);
-            double total = 0.0;
-            for (const auto& i : influences_of) total += i.second;
-            for (std::size_t k = 4; k < influences_of.size(); ++k) {
-              sw.extra_bones.push_back(influences_of[k].first);
-              sw.extra_weights.push_back(static_cast<float>(influences_of[k].second / total));
-            }
-            sw.extra_offsets.push_back(static_cast<std::uint32_t>(sw.extra_bones.size()));
-          }
-          for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
-            MorphTarget& target = morph_targets[first_target + k];
-            glm::dvec3 dp(0.0), dn(0.0);
-            if (!target_positions[k].empty())
-              dp = delta_matrix * glm::dvec3(target_positions[k][3 * v], target_positions[k][3 * v + 1],
-                                             target_positions[k][3 * v + 2]);
-            if (!target_normals[k].empty())
-              dn = normal_matrix *
-                   glm::dvec3(target_normals[k][3 * v], target_normals[k][3 * v + 1], target_normals[k][3 * v + 2]);
-            if (dp == glm::dvec3(0.0) && dn == glm::dvec3(0.0)) continue;  // sparse: only the points it moves
-            target.points.push_back(point);
-            target.position_deltas.push_back(reader.narrow(dp, element + " target " + std::to_string(k)));
-            target.normal_deltas.push_back(reader.narrow(dn, element + " target " + std::to_string(k)));
-          }
-        }
-        mesh.vertex_point.push_back(found->second);
-        glm::dvec3 normal = normals.empty()
-                                ? glm::dvec3(0.0)
-                                : normal_matrix * glm::dvec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
-        const double length = glm::length(normal);
-        normal = std::isfinite(length) && length > 0.0 ? normal / length : glm::dvec3(0.0, 0.0, 1.0);
-        mesh.vertex_normals.emplace_back(normal);
-        if (any_uvs)
-          mesh.vertex_uvs.emplace_back(uvs.empty() ? 0.0f : static_cast<float>(uvs[2 * v]),  // glTF's v runs down,
-                                       uvs.empty() ? 0.0f : 1.0f - static_cast<float>(uvs[2 * v + 1]));  // OBJ's up
-      }
-
-      // Triangles (strips and fans unrolled; degenerate ones kept as the file has them).
-      std::vector<std::uint32_t> indices;
-      if (primitive.indices >= 0) {
-        const std::vector<double> raw = reader.read(primitive.indices, {1}, element + " indices");
-        indices.reserve(raw.size());
-        for (std::size_t i = 0; i < raw.size(); ++i) {
-          if (raw[i] >= static_cast<double>(count))
-            reader.fail(element + ".indices", "index " + std::to_string(i) + " (" + std::to_string(raw[i]) +
-                                                  ") is not below the vertex count " + std::to_string(count));
-          indices.push_back(static_cast<std::uint32_t>(raw[i]));
-        }
-      } else {
-        indices.resize(count);
-        for (std::size_t i = 0; i < count; ++i) indices[i] = static_cast<std::uint32_t>(i);
-      }
-      Submesh submesh;
-      submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
-      submesh.material = primitive.material >= 0 && static_cast<std::size_t>(primitive.material) < mesh.materials.size()
-                             ? primitive.material
-                             : -1;
-      submesh.object = gltf.nodes[static_cast<std::size_t>(instance.node)].name;
-      submesh.group = source.name;
-      auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-        for (std::uint32_t corner : {a, b, c})
-          mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
-      };
-      if (mode == TINYGLTF_MODE_TRIANGLES) {
-        for (std::size_t i = 0; i + 2 < indices.size(); i += 3) triangle(indices[i], indices[i + 1], indices[i + 2]);
-      } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-        for (std::size_t i = 0; i + 2 < indices.size(); ++i)
-          if (i % 2 == 0) triangle(indices[i], indices[i + 1], indices[i + 2]);
-          else triangle(indices[i + 2], indices[i + 1], indices[i]);  // odd triangles reversed to keep the winding
-      } else {
-        for (std::size_t i = 1; i + 1 < indices.size(); ++i) triangle(indices[0], indices[i], indices[i + 1]);
-      }
-      submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
-      mesh.submeshes.push_back(std::move(submesh));
+      if (first_vertex + data.count > 0xFFFFFFFFull) reader_.fail(element, "too many vertices");
+      add_vertices(instance, primitive, element, data, frame);
+      add_triangles(instance, primitive, element, mode, first_vertex, data.count);
     }
   }
   // A target without normal deltas anywhere keeps none (MorphJob then leaves normals to the rest).
-  for (MorphTarget& target : morph_targets)
+  for (MorphTarget& target : result_.model.morph_targets)
     if (std::all_of(target.normal_deltas.begin(), target.normal_deltas.end(),
                     [](glm::vec3 d) { return d == glm::vec3(0.0f); }))
       target.normal_deltas.clear();
-  if (mesh.triangles.empty()) reader.fail("", "the scene has no triangles");
-  mesh.face_sizes.assign(mesh.triangle_count(), 3);
-  mesh.face_corners = mesh.triangles;
-  if (unweighted > 0)
-    warnings.push_back(std::to_string(unweighted) +
-                       " skinned vertices have no weight: bound rigidly to their skin's first joint");
-  (void)over_four;  // every influence is kept (SkinWeights extras); nothing to warn about
-  if (skipped_primitives > 0)
-    warnings.push_back(std::to_string(skipped_primitives) + " primitives of points or lines skipped");
-  if (!rigged) return result;
+  close_triangle_faces(mesh, path_);
+  if (unweighted_ > 0)
+    warnings_.push_back(std::to_string(unweighted_) +
+                        " skinned vertices have no weight: bound rigidly to their skin's first joint");
+  if (skipped_primitives_ > 0)
+    warnings_.push_back(std::to_string(skipped_primitives_) + " primitives of points or lines skipped");
+}
 
-  // --- clips ---
-  const Skeleton& skeleton = result.model.skeleton;
-  const Pose bind = skeleton.bind_pose();
-  const float model_size = [&] {
-    const Bounds b = compute_bounds(mesh.positions);
-    return std::max(glm::length(b.max - b.min), 1e-6f);
-  }();
-  // Skeleton space: T(axis_scale(parent rest world) · t) · R(q); a root bone's parent is the origin.
-  std::vector<glm::dvec3> translation_scale(bones.size(), glm::dvec3(1.0));
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    if (node_of_bone[b] < 0) continue;
-    const std::int32_t parent = nodes[static_cast<std::size_t>(node_of_bone[b])].parent;
+// Morph targets: every primitive of a mesh has the same number (glTF 2.0 §3.7.2.2); this instance's targets are
+// appended to the model's, named by mesh.extras.targetNames, weighted by node.weights or else mesh.weights.
+void GltfImport::add_morph_targets(const Instance& instance, InstanceFrame& frame) {
+  const tinygltf::Mesh& source = gltf_.meshes[static_cast<std::size_t>(instance.mesh)];
+  std::vector<MorphTarget>& morph_targets = result_.model.morph_targets;
+  std::size_t target_count = 0;
+  for (const tinygltf::Primitive& primitive : source.primitives)
+    target_count = std::max(target_count, primitive.targets.size());
+  frame.first_target = morph_targets.size();
+  if (target_count == 0) return;
+  const tinygltf::Node& gnode = gltf_.nodes[static_cast<std::size_t>(instance.node)];
+  const std::vector<double>& defaults = !gnode.weights.empty() ? gnode.weights : source.weights;
+  const tinygltf::Value names = source.extras.IsObject() ? source.extras.Get("targetNames") : tinygltf::Value();
+  for (std::size_t k = 0; k < target_count; ++k) {
+    MorphTarget target;
+    target.mesh = source.name;
+    if (names.IsArray() && k < names.ArrayLen() && names.Get(static_cast<int>(k)).IsString())
+      target.name = names.Get(static_cast<int>(k)).Get<std::string>();
+    else target.name = "target" + std::to_string(k);
+    if (k < defaults.size()) {
+      if (!std::isfinite(defaults[k]))
+        reader_.fail("meshes[" + std::to_string(instance.mesh) + "].weights",
+                     "weight " + std::to_string(k) + " is not finite");
+      target.default_weight = static_cast<float>(defaults[k]);
+    }
+    morph_targets.push_back(std::move(target));
+  }
+  targets_of_node_[static_cast<std::size_t>(instance.node)] = {frame.first_target, target_count};
+}
+
+PrimitiveData GltfImport::read_attributes(const Instance& instance, const tinygltf::Primitive& primitive,
+                                          const std::string& element, std::size_t target_count) const {
+  PrimitiveData data;
+  const auto position_attribute = primitive.attributes.find("POSITION");
+  if (position_attribute == primitive.attributes.end()) reader_.fail(element + ".attributes", "has no POSITION");
+  data.positions = reader_.read(position_attribute->second, {3}, element + " POSITION");
+  const std::size_t count = data.count = data.positions.size() / 3;
+  auto optional = [&](const char* name, std::size_t components) {
+    const auto found = primitive.attributes.find(name);
+    if (found == primitive.attributes.end()) return std::vector<double>();
+    std::vector<double> values = reader_.read(found->second, {components}, element + " " + name);
+    if (values.size() != count * components)
+      reader_.fail(element + ".attributes." + name, "has not as many elements as POSITION");
+    return values;
+  };
+  data.normals = optional("NORMAL", 3);
+  data.uvs = optional("TEXCOORD_0", 2);
+  if (instance.skin >= 0) {
+    for (int set = 0;; ++set) {
+      const std::string joints_name = "JOINTS_" + std::to_string(set), weights_name = "WEIGHTS_" + std::to_string(set);
+      const bool has_joints = primitive.attributes.count(joints_name) > 0;
+      const bool has_weights = primitive.attributes.count(weights_name) > 0;
+      if (!has_joints && !has_weights) break;
+      if (has_joints != has_weights)
+        reader_.fail(element + ".attributes", joints_name + " and " + weights_name + " must come together");
+      data.joint_sets.push_back(optional(joints_name.c_str(), 4));
+      data.weight_sets.push_back(optional(weights_name.c_str(), 4));
+    }
+  }
+  if (!primitive.targets.empty() && primitive.targets.size() != target_count)
+    reader_.fail(element + ".targets", "has " + std::to_string(primitive.targets.size()) +
+                                           " targets where another primitive of the mesh has " +
+                                           std::to_string(target_count));
+  data.target_positions.resize(primitive.targets.size());
+  data.target_normals.resize(primitive.targets.size());
+  for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
+    const std::string target_element = element + ".targets[" + std::to_string(k) + "]";
+    for (const auto& [name, accessor] : primitive.targets[k]) {
+      if (name != "POSITION" && name != "NORMAL") continue;  // TANGENT and others do not move points
+      std::vector<double> values = reader_.read(accessor, {3}, target_element + " " + name);
+      if (values.size() != count * 3) reader_.fail(target_element + "." + name, "has not as many elements as POSITION");
+      for (const double d : values)
+        if (!std::isfinite(d)) reader_.fail(target_element + "." + name, "a displacement is not finite");
+      (name == "POSITION" ? data.target_positions[k] : data.target_normals[k]) = std::move(values);
+    }
+  }
+  return data;
+}
+
+// The primitive's render vertices: each with its point (merged by position and influences, every influence kept),
+// the point's morph deltas when the point is new, and the vertex's normal and UV.
+void GltfImport::add_vertices(const Instance& instance, const tinygltf::Primitive& primitive,
+                              const std::string& element, const PrimitiveData& data, const InstanceFrame& frame) {
+  Mesh& mesh = result_.model.mesh;
+  const SkinInfo* skin = instance.skin >= 0 ? &skins_[static_cast<std::size_t>(instance.skin)] : nullptr;
+  std::vector<std::pair<std::uint16_t, double>> influences_of;
+  std::vector<Influence> influences;
+  for (std::size_t v = 0; v < data.count; ++v) {
+    influences_of.clear();
+    for (std::size_t set = 0; set < data.joint_sets.size(); ++set)
+      for (std::size_t k = 0; k < 4; ++k) {
+        const double w = data.weight_sets[set][4 * v + k];
+        if (!(w > 0.0)) continue;
+        const double joint = data.joint_sets[set][4 * v + k];
+        if (joint < 0.0 || joint >= static_cast<double>(skin->joints.size()))
+          reader_.fail(element + ".attributes.JOINTS_" + std::to_string(set),
+                       "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " of " +
+                           std::to_string(skin->joints.size()));
+        const auto bone = static_cast<std::uint16_t>(
+            bone_of_node_[static_cast<std::size_t>(skin->joints[static_cast<std::size_t>(joint)])]);
+        auto same =
+            std::find_if(influences_of.begin(), influences_of.end(), [&](const auto& i) { return i.first == bone; });
+        if (same != influences_of.end()) same->second += w;
+        else influences_of.emplace_back(bone, w);
+      }
+    std::sort(influences_of.begin(), influences_of.end(), [](const auto& a, const auto& b) {
+      return a.second != b.second ? a.second > b.second : a.first < b.first;
+    });
+    influences.clear();
+    if (influences_of.empty()) {
+      if (skin != nullptr) ++unweighted_;
+      // glTF leaves such a vertex undefined; three.js and others leave it where the skin's space puts it.
+      influences.push_back({skin != nullptr
+                                ? static_cast<std::uint16_t>(bone_of_node_[static_cast<std::size_t>(skin->joints[0])])
+                                : frame.rigid_bone,
+                            1.0f});
+    } else {
+      double total = 0.0;
+      for (const auto& i : influences_of) total += i.second;
+      for (const auto& [bone, w] : influences_of) influences.push_back({bone, static_cast<float>(w / total)});
+    }
+    const glm::dvec3 raw{data.positions[3 * v], data.positions[3 * v + 1], data.positions[3 * v + 2]};
+    const glm::vec3 position = reader_.narrow(glm::dvec3(frame.to_world * glm::dvec4(raw, 1.0)),
+                                              element + " POSITION: vertex " + std::to_string(v));
+    const auto [point, inserted] = points_.add(position, influences, !primitive.targets.empty());
+    for (std::size_t k = 0; inserted && k < primitive.targets.size(); ++k) {
+      MorphTarget& target = result_.model.morph_targets[frame.first_target + k];
+      const auto& tp = data.target_positions[k];
+      const auto& tn = data.target_normals[k];
+      glm::dvec3 dp(0.0), dn(0.0);
+      if (!tp.empty()) dp = frame.delta_matrix * glm::dvec3(tp[3 * v], tp[3 * v + 1], tp[3 * v + 2]);
+      if (!tn.empty()) dn = frame.normal_matrix * glm::dvec3(tn[3 * v], tn[3 * v + 1], tn[3 * v + 2]);
+      if (dp == glm::dvec3(0.0) && dn == glm::dvec3(0.0)) continue;  // sparse: only the points it moves
+      target.points.push_back(point);
+      target.position_deltas.push_back(reader_.narrow(dp, element + " target " + std::to_string(k)));
+      target.normal_deltas.push_back(reader_.narrow(dn, element + " target " + std::to_string(k)));
+    }
+    mesh.vertex_point.push_back(point);
+    const auto& normals = data.normals;
+    glm::dvec3 normal = normals.empty()
+                            ? glm::dvec3(0.0)
+                            : frame.normal_matrix * glm::dvec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+    const double length = glm::length(normal);
+    normal = std::isfinite(length) && length > 0.0 ? normal / length : glm::dvec3(0.0, 0.0, 1.0);
+    mesh.vertex_normals.emplace_back(normal);
+    if (any_uvs_)
+      mesh.vertex_uvs.emplace_back(data.uvs.empty() ? 0.0f : static_cast<float>(data.uvs[2 * v]),  // glTF's v runs
+                                   data.uvs.empty() ? 0.0f : 1.0f - static_cast<float>(data.uvs[2 * v + 1]));  // down
+  }
+}
+
+// The primitive's triangles (strips and fans unrolled; degenerate ones kept as the file has them) as one submesh.
+void GltfImport::add_triangles(const Instance& instance, const tinygltf::Primitive& primitive,
+                               const std::string& element, int mode, std::size_t first_vertex, std::size_t count) {
+  Mesh& mesh = result_.model.mesh;
+  std::vector<std::uint32_t> indices;
+  if (primitive.indices >= 0) {
+    const std::vector<double> raw = reader_.read(primitive.indices, {1}, element + " indices");
+    indices.reserve(raw.size());
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      if (raw[i] >= static_cast<double>(count))
+        reader_.fail(element + ".indices", "index " + std::to_string(i) + " (" + std::to_string(raw[i]) +
+                                               ") is not below the vertex count " + std::to_string(count));
+      indices.push_back(static_cast<std::uint32_t>(raw[i]));
+    }
+  } else {
+    indices.resize(count);
+    for (std::size_t i = 0; i < count; ++i) indices[i] = static_cast<std::uint32_t>(i);
+  }
+  Submesh submesh;
+  submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
+  submesh.material = primitive.material >= 0 && static_cast<std::size_t>(primitive.material) < mesh.materials.size()
+                         ? primitive.material
+                         : -1;
+  submesh.object = gltf_.nodes[static_cast<std::size_t>(instance.node)].name;
+  submesh.group = gltf_.meshes[static_cast<std::size_t>(instance.mesh)].name;
+  auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    for (std::uint32_t corner : {a, b, c}) mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
+  };
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
+    for (std::size_t i = 0; i + 2 < indices.size(); i += 3) triangle(indices[i], indices[i + 1], indices[i + 2]);
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+    for (std::size_t i = 0; i + 2 < indices.size(); ++i)
+      if (i % 2 == 0) triangle(indices[i], indices[i + 1], indices[i + 2]);
+      else triangle(indices[i + 2], indices[i + 1], indices[i]);  // odd triangles reversed to keep the winding
+  } else {
+    for (std::size_t i = 1; i + 1 < indices.size(); ++i) triangle(indices[0], indices[i], indices[i + 1]);
+  }
+  submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
+  mesh.submeshes.push_back(std::move(submesh));
+}
+
+// --- clips. Skeleton space: T(axis_scale(parent rest world) · t) · R(q); a root bone's parent is the origin ---
+void GltfImport::read_clips() {
+  std::vector<glm::dvec3> translation_scale(bones_.size(), glm::dvec3(1.0));
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    if (node_of_bone_[b] < 0) continue;
+    const std::int32_t parent = nodes_[static_cast<std::size_t>(node_of_bone_[b])].parent;
     if (parent >= 0)
-      translation_scale[b] = glm::dvec3(split(glm::mat4(nodes[static_cast<std::size_t>(parent)].global)).axis_scale);
+      translation_scale[b] = glm::dvec3(split(glm::mat4(nodes_[static_cast<std::size_t>(parent)].global)).axis_scale);
   }
-  std::vector<std::pair<glm::vec3, glm::quat>> rest(bones.size());
-  std::vector<bool> differs(bones.size(), false);
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    if (node_of_bone[b] < 0) continue;
-    const NodeInfo& n = nodes[static_cast<std::size_t>(node_of_bone[b])];
-    rest[b] = {reader.narrow(translation_scale[b] * n.translation, "nodes[" + std::to_string(node_of_bone[b]) + "]"),
-               glm::quat(glm::normalize(n.rotation))};
-    const glm::quat r = bind.rotations[b];
-    differs[b] = glm::length(rest[b].first - bind.translations[b]) > 1e-6f * model_size ||
-                 std::min(glm::length(rest[b].second - r), glm::length(rest[b].second + r)) > 1e-6f;
+  std::vector<std::pair<glm::vec3, glm::quat>> local(bones_.size());
+  std::vector<bool> has_rest(bones_.size(), false);
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    if (node_of_bone_[b] < 0) continue;
+    const NodeInfo& n = nodes_[static_cast<std::size_t>(node_of_bone_[b])];
+    local[b] = {reader_.narrow(translation_scale[b] * n.translation, "nodes[" + std::to_string(node_of_bone_[b]) + "]"),
+                glm::quat(glm::normalize(n.rotation))};
+    has_rest[b] = true;
   }
-
+  const RestLocals rest = rest_locals(result_.model.skeleton, result_.model.mesh.positions, std::move(local), has_rest);
   std::vector<std::string> clip_names;
-  for (std::size_t a = 0; a < gltf.animations.size(); ++a) {
-    const tinygltf::Animation& source = gltf.animations[a];
-    const std::string animation_element = "animations[" + std::to_string(a) + "]";
-    Animation clip;
-    clip.name = source.name;
-    if (clip.name.empty() || std::find(clip_names.begin(), clip_names.end(), clip.name) != clip_names.end())
-      clip.name = "clip" + std::to_string(a);
-    clip_names.push_back(clip.name);
-    clip.loop = options.loop_clips;
-    std::vector<std::int32_t> channel_of_bone(bones.size(), -1);
-    std::size_t dropped = 0, scaled_bones = 0;
-    float duration = 0.0f;
-    for (std::size_t c = 0; c < source.channels.size(); ++c) {
-      const tinygltf::AnimationChannel& channel = source.channels[c];
-      const std::string element = animation_element + ".channels[" + std::to_string(c) + "]";
-      if (channel.target_node < 0 || static_cast<std::size_t>(channel.target_node) >= node_count)
-        reader.fail(element + ".target.node", "node " + std::to_string(channel.target_node) + " does not exist");
-      if (channel.sampler < 0 || static_cast<std::size_t>(channel.sampler) >= source.samplers.size())
-        reader.fail(element + ".sampler", "sampler " + std::to_string(channel.sampler) + " does not exist");
-      const tinygltf::AnimationSampler& sampler = source.samplers[static_cast<std::size_t>(channel.sampler)];
-      const std::string sampler_element = animation_element + ".samplers[" + std::to_string(channel.sampler) + "]";
-      const std::string& target = channel.target_path;
-      if (target != "translation" && target != "rotation" && target != "scale" && target != "weights")
-        reader.fail(element + ".target.path", "'" + target + "' is not a glTF target");
-      const std::int32_t bone = bone_of_node[static_cast<std::size_t>(channel.target_node)];
-      Interpolation interpolation = Interpolation::linear;
-      if (sampler.interpolation == "STEP") interpolation = Interpolation::step;
-      else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::cubic_spline;
-      else if (sampler.interpolation != "LINEAR")
-        reader.fail(sampler_element + ".interpolation", "'" + sampler.interpolation + "' is not a glTF interpolation");
-      const std::vector<double> times = reader.read(sampler.input, {1}, sampler_element + ".input");
-      if (!times.empty()) duration = std::max(duration, static_cast<float>(times.back()));
-      if (target == "weights") {
-        // One float per target per key; a cubic spline has, per key, the in-tangents of every target, then the
-        // values, then the out-tangents (glTF 2.0 appendix C).
-        // (Plain variables, not a structured binding: Clang 14 cannot capture one in the lambda below.)
-        const std::size_t first = targets_of_node[static_cast<std::size_t>(channel.target_node)].first;
-        const std::size_t n = targets_of_node[static_cast<std::size_t>(channel.target_node)].second;
-        if (n == 0) continue;  // the node has no morphed mesh in the scene
-        const std::vector<double> values = reader.read(sampler.output, {1}, sampler_element + ".output");
-        const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
-        if (values.size() != times.size() * n * per_key)
-          reader.fail(sampler_element + ".output", std::to_string(values.size()) + " weights for " +
-                                                       std::to_string(times.size()) + " key times of " +
-                                                       std::to_string(n) + " morph targets");
-        for (const double w : values)
-          if (!std::isfinite(w)) reader.fail(sampler_element + ".output", "a weight is not finite");
-        for (std::size_t t = 0; t < n; ++t) {
-          const auto global = static_cast<std::int32_t>(first + t);
-          auto existing = std::find_if(clip.morph_channels.begin(), clip.morph_channels.end(),
-                                       [&](const MorphChannel& m) { return m.target == global; });
-          if (existing != clip.morph_channels.end()) continue;  // a second channel for the node: the first wins
-          MorphChannel out;
-          out.target = global;
-          out.weight.interpolation = interpolation;
-          double last = -std::numeric_limits<double>::infinity();
-          for (std::size_t k = 0; k < times.size(); ++k) {
-            if (!(times[k] > last)) {
-              ++dropped;
-              continue;
-            }
-            last = times[k];
-            out.weight.times.push_back(static_cast<float>(times[k]));
-            auto at = [&](std::size_t part) { return static_cast<float>(values[(k * per_key + part) * n + t]); };
-            if (per_key == 3) {
-              out.weight.in_tangents.push_back(at(0));
-              out.weight.values.push_back(at(1));
-              out.weight.out_tangents.push_back(at(2));
-            } else {
-              out.weight.values.push_back(at(0));
-            }
-          }
-          clip.morph_channels.push_back(std::move(out));
-        }
+  for (std::size_t a = 0; a < gltf_.animations.size(); ++a) read_clip(a, rest, translation_scale, clip_names);
+}
+
+void GltfImport::read_clip(std::size_t a, const RestLocals& rest, const std::vector<glm::dvec3>& translation_scale,
+                           std::vector<std::string>& clip_names) {
+  const tinygltf::Animation& source = gltf_.animations[a];
+  const std::string animation_element = "animations[" + std::to_string(a) + "]";
+  ClipState state;
+  Animation& clip = state.clip;
+  clip.name = unique_clip_name(source.name, a, clip_names);
+  clip.loop = options_.loop_clips;
+  state.channel_of_bone.assign(bones_.size(), -1);
+  for (std::size_t c = 0; c < source.channels.size(); ++c) {
+    const tinygltf::AnimationChannel& channel = source.channels[c];
+    const std::string element = animation_element + ".channels[" + std::to_string(c) + "]";
+    if (channel.target_node < 0 || static_cast<std::size_t>(channel.target_node) >= nodes_.size())
+      reader_.fail(element + ".target.node", "node " + std::to_string(channel.target_node) + " does not exist");
+    if (channel.sampler < 0 || static_cast<std::size_t>(channel.sampler) >= source.samplers.size())
+      reader_.fail(element + ".sampler", "sampler " + std::to_string(channel.sampler) + " does not exist");
+    const tinygltf::AnimationSampler& sampler = source.samplers[static_cast<std::size_t>(channel.sampler)];
+    const std::string sampler_element = animation_element + ".samplers[" + std::to_string(channel.sampler) + "]";
+    const std::string& target = channel.target_path;
+    if (target != "translation" && target != "rotation" && target != "scale" && target != "weights")
+      reader_.fail(element + ".target.path", "'" + target + "' is not a glTF target");
+    Interpolation interpolation = Interpolation::linear;
+    if (sampler.interpolation == "STEP") interpolation = Interpolation::step;
+    else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::cubic_spline;
+    else if (sampler.interpolation != "LINEAR")
+      reader_.fail(sampler_element + ".interpolation", "'" + sampler.interpolation + "' is not a glTF interpolation");
+    const std::vector<double> times = reader_.read(sampler.input, {1}, sampler_element + ".input");
+    if (!times.empty()) state.duration = std::max(state.duration, static_cast<float>(times.back()));
+    if (target == "weights") read_weights_channel(state, channel, sampler, sampler_element, interpolation, times);
+    else read_bone_channel(state, channel, sampler, sampler_element, interpolation, times, translation_scale);
+  }
+  std::vector<bool> has_channel(bones_.size());
+  for (std::size_t b = 0; b < bones_.size(); ++b) has_channel[b] = state.channel_of_bone[b] >= 0;
+  hold_rest(clip, rest, has_channel);
+  clip.duration = state.duration;
+  if (!std::isfinite(clip.duration) || clip.duration < 0.0f)
+    reader_.fail(animation_element, "key times are not finite or negative");
+  add_clip(std::move(clip), state.dropped, state.scaled_bones, bones_.size(), path_, result_.clips, warnings_);
+}
+
+// A `weights` channel: one float per target per key; a cubic spline has, per key, the in-tangents of every target,
+// then the values, then the out-tangents (glTF 2.0 appendix C). A second channel for a node: the first wins.
+void GltfImport::read_weights_channel(ClipState& state, const tinygltf::AnimationChannel& channel,
+                                      const tinygltf::AnimationSampler& sampler, const std::string& sampler_element,
+                                      Interpolation interpolation, const std::vector<double>& times) {
+  // (Plain variables, not a structured binding: Clang 14 cannot capture one in the lambda below.)
+  const std::size_t first = targets_of_node_[static_cast<std::size_t>(channel.target_node)].first;
+  const std::size_t n = targets_of_node_[static_cast<std::size_t>(channel.target_node)].second;
+  if (n == 0) return;  // the node has no morphed mesh in the scene
+  const std::vector<double> values = reader_.read(sampler.output, {1}, sampler_element + ".output");
+  const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
+  if (values.size() != times.size() * n * per_key)
+    reader_.fail(sampler_element + ".output", std::to_string(values.size()) + " weights for " +
+                                                  std::to_string(times.size()) + " key times of " + std::to_string(n) +
+                                                  " morph targets");
+  for (const double w : values)
+    if (!std::isfinite(w)) reader_.fail(sampler_element + ".output", "a weight is not finite");
+  std::vector<MorphChannel>& morph_channels = state.clip.morph_channels;
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto global = static_cast<std::int32_t>(first + t);
+    auto existing = std::find_if(morph_channels.begin(), morph_channels.end(),
+                                 [&](const MorphChannel& m) { return m.target == global; });
+    if (existing != morph_channels.end()) continue;
+    MorphChannel out;
+    out.target = global;
+    out.weight.interpolation = interpolation;
+    double last = -std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      if (!(times[k] > last)) {
+        ++state.dropped;
         continue;
       }
-      if (bone < 0) continue;  // the node moves nothing the skeleton holds
-      const auto b = static_cast<std::size_t>(bone);
-      const std::size_t width = target == "rotation" ? 4 : 3;
-      std::size_t components = 0;
-      const std::vector<double> values = reader.read(sampler.output, {width}, sampler_element + ".output", &components);
-      const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
-      if (values.size() != times.size() * width * per_key)
-        reader.fail(sampler_element + ".output", std::to_string(values.size() / width) + " elements for " +
-                                                     std::to_string(times.size()) + " key times");
-      if (channel_of_bone[b] < 0) {
-        channel_of_bone[b] = static_cast<std::int32_t>(clip.channels.size());
-        Channel fresh;
-        fresh.bone = bone;
-        clip.channels.push_back(std::move(fresh));
-      }
-      Channel& out = clip.channels[static_cast<std::size_t>(channel_of_bone[b])];
-      const NodeInfo& node = nodes[static_cast<std::size_t>(channel.target_node)];
-      // Element k of key i: in-tangent, value, out-tangent for a cubic spline, else the value.
-      auto element_at = [&](std::size_t key, std::size_t part) { return &values[(key * per_key + part) * width]; };
-      auto fill = [&](auto& track, auto convert) {
-        track.interpolation = interpolation;
-        double last = -std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < times.size(); ++k) {
-          if (!(times[k] > last)) {
-            ++dropped;
-            continue;
-          }
-          last = times[k];
-          track.times.push_back(static_cast<float>(times[k]));
-          if (per_key == 3) {
-            track.in_tangents.push_back(convert(element_at(k, 0), false));
-            track.values.push_back(convert(element_at(k, 1), true));
-            track.out_tangents.push_back(convert(element_at(k, 2), false));
-          } else {
-            track.values.push_back(convert(element_at(k, 0), true));
-          }
-        }
-      };
-      if (target == "translation") {
-        fill(out.translation, [&](const double* v, bool) {
-          return reader.narrow(translation_scale[b] * glm::dvec3(v[0], v[1], v[2]), sampler_element + ".output");
-        });
-      } else if (target == "rotation") {
-        fill(out.rotation, [&](const double* v, bool value) {
-          const glm::dquat q(v[3], v[0], v[1], v[2]);
-          return glm::quat(value && glm::length(q) > 0.0 ? glm::normalize(q) : q);
-        });
+      last = times[k];
+      out.weight.times.push_back(static_cast<float>(times[k]));
+      auto at = [&](std::size_t part) { return static_cast<float>(values[(k * per_key + part) * n + t]); };
+      if (per_key == 3) {
+        out.weight.in_tangents.push_back(at(0));
+        out.weight.values.push_back(at(1));
+        out.weight.out_tangents.push_back(at(2));
       } else {
-        fill(out.scale, [&](const double* v, bool) {
-          return reader.narrow(glm::dvec3(v[0], v[1], v[2]) / node.scale, sampler_element + ".output");
-        });
-        const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(),
-                                              [](glm::vec3 s) { return glm::length(s - glm::vec3(1.0f)) <= 1e-4f; });
-        if (!constant_one) ++scaled_bones;
+        out.weight.values.push_back(at(0));
       }
     }
-    // Bones a clip moves hold their rest value in the properties it leaves; other bones whose rest differs from
-    // their bind hold their rest (players leave unanimated nodes at their node transform).
-    for (Channel& channel : clip.channels) {
-      const auto b = static_cast<std::size_t>(channel.bone);
-      if (channel.translation.empty()) channel.translation = {Interpolation::linear, {0.0f}, {rest[b].first}, {}, {}};
-      if (channel.rotation.empty()) channel.rotation = {Interpolation::linear, {0.0f}, {rest[b].second}, {}, {}};
-    }
-    for (std::size_t b = 0; b < bones.size(); ++b) {
-      if (channel_of_bone[b] >= 0 || !differs[b]) continue;
-      Channel hold;
-      hold.bone = static_cast<std::int32_t>(b);
-      hold.translation = {Interpolation::linear, {0.0f}, {rest[b].first}, {}, {}};
-      hold.rotation = {Interpolation::linear, {0.0f}, {rest[b].second}, {}, {}};
-      clip.channels.push_back(std::move(hold));
-    }
-    clip.duration = duration;
-    if (!std::isfinite(clip.duration) || clip.duration < 0.0f)
-      reader.fail(animation_element, "key times are not finite or negative");
-    const std::string element = "clip '" + clip.name + "'";
-    if (dropped > 0)
-      warnings.push_back(element + ": " + std::to_string(dropped) +
-                         " keys at or before their predecessor's time dropped");
-    if (scaled_bones > 0)
-      warnings.push_back(element + ": " + std::to_string(scaled_bones) +
-                         " bones animate scale, which a Pose cannot hold (ignored)");
-    clip.require_valid(bones.size(), path);
-    result.clips.push_back(std::move(clip));
+    morph_channels.push_back(std::move(out));
   }
-  return result;
+}
+
+// A translation, rotation or scale channel of a node the skeleton holds, into the bone's channel (several glTF
+// channels of one node share it); keys at or before their predecessor's time are dropped.
+void GltfImport::read_bone_channel(ClipState& state, const tinygltf::AnimationChannel& channel,
+                                   const tinygltf::AnimationSampler& sampler, const std::string& sampler_element,
+                                   Interpolation interpolation, const std::vector<double>& times,
+                                   const std::vector<glm::dvec3>& translation_scale) {
+  const std::int32_t bone = bone_of_node_[static_cast<std::size_t>(channel.target_node)];
+  if (bone < 0) return;  // the node moves nothing the skeleton holds
+  const auto b = static_cast<std::size_t>(bone);
+  const std::string& target = channel.target_path;
+  const std::size_t width = target == "rotation" ? 4 : 3;
+  std::size_t components = 0;
+  const std::vector<double> values = reader_.read(sampler.output, {width}, sampler_element + ".output", &components);
+  const std::size_t per_key = interpolation == Interpolation::cubic_spline ? 3 : 1;
+  if (values.size() != times.size() * width * per_key)
+    reader_.fail(sampler_element + ".output", std::to_string(values.size() / width) + " elements for " +
+                                                  std::to_string(times.size()) + " key times");
+  Animation& clip = state.clip;
+  if (state.channel_of_bone[b] < 0) {
+    state.channel_of_bone[b] = static_cast<std::int32_t>(clip.channels.size());
+    Channel fresh;
+    fresh.bone = bone;
+    clip.channels.push_back(std::move(fresh));
+  }
+  Channel& out = clip.channels[static_cast<std::size_t>(state.channel_of_bone[b])];
+  const NodeInfo& node = nodes_[static_cast<std::size_t>(channel.target_node)];
+  // Element k of key i: in-tangent, value, out-tangent for a cubic spline, else the value.
+  auto element_at = [&](std::size_t key, std::size_t part) { return &values[(key * per_key + part) * width]; };
+  auto fill = [&](auto& track, auto convert) {
+    track.interpolation = interpolation;
+    double last = -std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      if (!(times[k] > last)) {
+        ++state.dropped;
+        continue;
+      }
+      last = times[k];
+      track.times.push_back(static_cast<float>(times[k]));
+      if (per_key == 3) {
+        track.in_tangents.push_back(convert(element_at(k, 0), false));
+        track.values.push_back(convert(element_at(k, 1), true));
+        track.out_tangents.push_back(convert(element_at(k, 2), false));
+      } else {
+        track.values.push_back(convert(element_at(k, 0), true));
+      }
+    }
+  };
+  if (target == "translation") {
+    fill(out.translation, [&](const double* v, bool) {
+      return reader_.narrow(translation_scale[b] * glm::dvec3(v[0], v[1], v[2]), sampler_element + ".output");
+    });
+  } else if (target == "rotation") {
+    fill(out.rotation, [&](const double* v, bool value) {
+      const glm::dquat q(v[3], v[0], v[1], v[2]);
+      return glm::quat(value && glm::length(q) > 0.0 ? glm::normalize(q) : q);
+    });
+  } else {
+    fill(out.scale, [&](const double* v, bool) {
+      return reader_.narrow(glm::dvec3(v[0], v[1], v[2]) / node.scale, sampler_element + ".output");
+    });
+    const bool constant_one = std::all_of(out.scale.values.begin(), out.scale.values.end(),
+                                          [](glm::vec3 s) { return glm::length(s - glm::vec3(1.0f)) <= 1e-4f; });
+    if (!constant_one) ++state.scaled_bones;
+  }
+}
+
+}  // namespace
+
+bool is_gltf_path(const std::string& path) {
+  std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".gltf" || extension == ".glb";
+}
+
+ImportedModel import_gltf(const std::string& path, const ImportOptions& options) {
+  return GltfImport(path, options).run();
 }
 
 }  // namespace deform::import_detail

@@ -22,6 +22,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/import/import.hpp"
 #include "import_common.hpp"
+#include "scene_assembly.hpp"
 #include "utf8_path.hpp"
 #include "finite.hpp"
 namespace deform {
@@ -93,22 +94,13 @@ void flatten(const aiNode* node, std::int32_t parent, std::vector<Node>& out, st
   for (unsigned i = 0; i < node->mNumChildren; ++i) flatten(node->mChildren[i], self, out, depth + 1);
 }
 
-std::string material_name(const aiMaterial& material, std::size_t index, std::vector<std::string>& used) {
-  aiString raw;
-  std::string name = material.Get(AI_MATKEY_NAME, raw) == AI_SUCCESS ? std::string(raw.C_Str()) : std::string();
-  for (char& c : name)
-    if (std::isspace(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) < 0x20) c = '_';
-  if (name.empty() || std::find(used.begin(), used.end(), name) != used.end())
-    name = "material" + std::to_string(index);
-  used.push_back(name);
-  return name;
-}
-
 Material convert_material(const aiScene& scene, const aiMaterial& source, std::size_t index, const std::string& file,
                           const ReferencePolicy& policy, std::vector<std::string>& used,
                           std::vector<std::string>& warnings) {
   Material m;
-  m.name = material_name(source, index, used);
+  aiString raw;
+  m.name =
+      unique_material_name(source.Get(AI_MATKEY_NAME, raw) == AI_SUCCESS ? std::string(raw.C_Str()) : "", index, used);
   aiColor3D c;
   if (source.Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) m.diffuse = {c.r, c.g, c.b};
   if (source.Get(AI_MATKEY_COLOR_AMBIENT, c) == AI_SUCCESS) m.ambient = {c.r, c.g, c.b};
@@ -119,22 +111,12 @@ Material convert_material(const aiScene& scene, const aiMaterial& source, std::s
   if (source.Get(AI_MATKEY_SHININESS, value) == AI_SUCCESS && std::isfinite(value)) m.shininess = std::max(value, 0.0f);
   aiString texture;
   if (source.GetTexture(aiTextureType_DIFFUSE, 0, &texture) == AI_SUCCESS && texture.length > 0) {
-    std::string path = texture.C_Str();
-    if (path[0] == '*' || scene.GetEmbeddedTexture(texture.C_Str()) != nullptr) {
+    const std::string path = texture.C_Str();
+    if (path[0] == '*' || scene.GetEmbeddedTexture(texture.C_Str()) != nullptr)
       warnings.push_back("material '" + m.name + "': embedded texture '" + path + "' is not extracted");
-    } else {
-      std::replace(path.begin(), path.end(), '\\', '/');
-      // Confined to the model's folder like every file a model names (resolve_referenced_file); first, as it
-      // refuses a name that is no path (not UTF-8, on Windows).
-      const std::string real =
-          resolve_referenced_file(file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy);
-      fs::path resolved = utf8_path::from_utf8(path);
-      if (resolved.is_relative()) resolved = utf8_path::from_utf8(file).parent_path() / resolved;
-      m.diffuse_map = utf8_path::to_utf8(resolved.lexically_normal());
-      std::error_code error;
-      if (!fs::is_regular_file(utf8_path::from_utf8(real), error))
-        warnings.push_back("material '" + m.name + "': texture '" + m.diffuse_map + "' not found");
-    }
+    else
+      m.diffuse_map = referenced_texture(file, path, "materials[" + std::to_string(index) + "] diffuse texture", policy,
+                                         m.name, warnings);
   }
   return m;
 }
@@ -161,232 +143,285 @@ Track<T> convert_track(const Key* keys, unsigned count, double ticks_per_second,
   return track;
 }
 
-}  // namespace
+// A mesh placed by a node.
+struct Instance {
+  std::int32_t node;
+  const aiMesh* mesh;
+};
 
-bool is_importable(const std::string& path) {
-  const std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
-  if (extension.size() < 2) return false;
-  Assimp::Importer importer;
-  return importer.IsExtensionSupported(extension.c_str());
-}
+// One weight of a mesh's vertex, as its aiBones list them.
+struct Weight {
+  std::uint32_t vertex;
+  std::uint16_t bone;
+  float weight;
+};
 
-namespace {
-ImportedModel import_any(const std::string& path, const ImportOptions& options);
-}  // namespace
+// The Assimp reader: each step reads one part of the scene into the ImportedModel, in the order below (run()).
+class AssimpImport {
+ public:
+  AssimpImport(const std::string& path, const ImportOptions& options) : path_(path), options_(options) {}
+  ImportedModel run();
 
-// Warnings quote names and paths from the file: each is escaped as errors are (one printable line each).
-ImportedModel import_model(const std::string& path, const ImportOptions& options) {
-  ImportedModel result = import_any(path, options);
-  for (std::string& warning : result.warnings) warning = escape_control_characters(warning);
-  return result;
-}
-
-namespace {
-ImportedModel import_any(const std::string& path, const ImportOptions& options) {
-  std::error_code error;
-  if (!fs::is_regular_file(path, error)) throw Error::in_file(path, "", "no such file");
-  const auto size = fs::file_size(path, error);
-  if (error || size > max_file_bytes) throw Error::in_file(path, "", "cannot be read or larger than 1 GiB");
-  if (is_gltf_path(path)) return import_gltf(path, options);
-  if (is_iqm_path(path)) return import_iqm(path, options);
-
-  Assimp::Importer importer;
-  importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // no $AssimpFbx$ helper nodes
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
-                         aiProcess_GenSmoothNormals | aiProcess_ValidateDataStructure;
-  auto* io = new ConfinedIOSystem(path, options.references);  // the importer owns it
-  importer.SetIOHandler(io);
-  const aiScene* scene = importer.ReadFile(path, flags);
-  if (io->refusal()) throw Error(*io->refusal());
-  if (scene == nullptr || scene->mRootNode == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
-    const char* message = importer.GetErrorString();
-    throw Error::in_file(
-        path, "", std::string("Assimp cannot import it: ") + (message && *message ? message : "incomplete scene"));
+ private:
+  void load();
+  void read_nodes();
+  void find_instances();
+  void choose_needed();
+  void find_root();
+  void make_bones();
+  void find_mesh_frames();
+  std::int32_t bone_id_of(const aiBone* bone) const {
+    const auto found = node_by_name_.find(bone->mName.C_Str());
+    return found != node_by_name_.end() ? bone_of_node_[static_cast<std::size_t>(found->second)]
+                                        : orphan_bone_.at(bone->mName.C_Str());
+  }
+  void bind_bones();
+  void read_meshes();
+  void sorted_weights(const aiMesh& source, const std::string& element);
+  void add_vertices(std::size_t i, const std::string& element);
+  void add_faces(std::size_t i, const std::string& element);
+  void read_clips();
+  void read_clip(unsigned a, const RestLocals& rest, std::vector<std::string>& clip_names);
+  float parent_scale(std::size_t bone) const {
+    return split(nodes_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(node_of_bone_[bone])].parent)].global)
+        .scale;
+  }
+  glm::vec3 to_skeleton_translation(std::size_t bone, glm::vec3 t) const {
+    return bone == 0 ? glm::vec3(root_parent_world_ * glm::vec4(t, 1.0f)) : parent_scale(bone) * t;
+  }
+  glm::quat to_skeleton_rotation(std::size_t bone, glm::quat q) const {
+    return bone == 0 ? glm::normalize(root_parent_.rotation * q) : glm::normalize(q);
   }
 
-  ImportedModel result;
-  std::vector<std::string>& warnings = result.warnings;
-  result.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path).stem());
+  const std::string& path_;
+  const ImportOptions& options_;
+  Assimp::Importer importer_;
+  const aiScene* scene_ = nullptr;
+  ImportedModel result_;
+  std::vector<std::string>& warnings_ = result_.warnings;
+  std::vector<Node> nodes_;
+  std::map<std::string, std::int32_t> node_by_name_;  // first node of each name, as Assimp looks bones up
+  std::vector<Instance> instances_;
+  bool rigged_ = false;
+  std::vector<bool> needed_, animated_;
+  std::vector<std::string> orphans_;
+  std::int32_t root_ = -1;
+  std::vector<std::int32_t> bone_of_node_, node_of_bone_;
+  std::vector<Bone> bones_;
+  std::vector<glm::mat4> bind_world_;  // with scale (file_bind_world)
+  std::vector<bool> has_offset_;
+  std::map<std::string, std::int32_t> orphan_bone_;
+  std::vector<glm::mat4> mesh_frame_;
+  PointMerger points_{result_.model.mesh.positions, result_.model.weights};
+  std::vector<Weight> vertex_weights_;
+  std::size_t unweighted_ = 0, skipped_faces_ = 0;
+  bool any_uvs_ = false;
+  glm::mat4 root_parent_world_{1.0f};  // the world transform above the root bone (clips' skeleton space)
+  Split root_parent_;
+};
+
+ImportedModel AssimpImport::run() {
+  load();
+  result_.model.name = utf8_path::to_utf8(utf8_path::from_utf8(path_).stem());
   // The up axis the file declares, where Assimp reads one (its FBX reader; glTF is +Y by definition).
   int up_axis = 1, up_sign = 1;
-  if (scene->mMetaData != nullptr && scene->mMetaData->Get("UpAxis", up_axis) && up_axis >= 0 && up_axis <= 2) {
-    scene->mMetaData->Get("UpAxisSign", up_sign);
-    result.up = glm::vec3(0.0f);
-    result.up[up_axis] = up_sign < 0 ? -1.0f : 1.0f;
+  if (scene_->mMetaData != nullptr && scene_->mMetaData->Get("UpAxis", up_axis) && up_axis >= 0 && up_axis <= 2) {
+    scene_->mMetaData->Get("UpAxisSign", up_sign);
+    result_.up = glm::vec3(0.0f);
+    result_.up[up_axis] = up_sign < 0 ? -1.0f : 1.0f;
   }
+  read_nodes();
+  find_instances();
+  choose_needed();
+  find_root();
+  make_bones();
+  find_mesh_frames();
+  bind_bones();
+  read_meshes();
+  if (rigged_) read_clips();
+  return std::move(result_);
+}
 
-  std::vector<Node> nodes;
+void AssimpImport::load() {
+  importer_.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // no $AssimpFbx$ helper nodes
+  importer_.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
+                         aiProcess_GenSmoothNormals | aiProcess_ValidateDataStructure;
+  auto* io = new ConfinedIOSystem(path_, options_.references);  // the importer owns it
+  importer_.SetIOHandler(io);
+  scene_ = importer_.ReadFile(path_, flags);
+  if (io->refusal()) throw Error(*io->refusal());
+  if (scene_ == nullptr || scene_->mRootNode == nullptr || (scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
+    const char* message = importer_.GetErrorString();
+    throw Error::in_file(
+        path_, "", std::string("Assimp cannot import it: ") + (message && *message ? message : "incomplete scene"));
+  }
+}
+
+void AssimpImport::read_nodes() {
   try {
-    flatten(scene->mRootNode, -1, nodes);
+    flatten(scene_->mRootNode, -1, nodes_);
   } catch (const Error& e) {
-    throw Error::in_file(path, e.element(), e.message());
+    throw Error::in_file(path_, e.element(), e.message());
   }
-  std::map<std::string, std::int32_t> node_by_name;  // first node of each name, as Assimp looks bones up
-  for (std::size_t i = 0; i < nodes.size(); ++i)
-    node_by_name.emplace(nodes[i].node->mName.C_Str(), static_cast<std::int32_t>(i));
-  for (const Node& n : nodes)
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    node_by_name_.emplace(nodes_[i].node->mName.C_Str(), static_cast<std::int32_t>(i));
+  for (const Node& n : nodes_)
     if (!finite(n.global))
-      throw Error::in_file(path, "node '" + std::string(n.node->mName.C_Str()) + "'", "transform is not finite");
+      throw Error::in_file(path_, "node '" + std::string(n.node->mName.C_Str()) + "'", "transform is not finite");
+}
 
-  // Mesh instances: (node, mesh), in node pre-order.
-  struct Instance {
-    std::int32_t node;
-    const aiMesh* mesh;
-  };
-  std::vector<Instance> instances;
-  bool rigged = false;
-  for (std::size_t i = 0; i < nodes.size(); ++i)
-    for (unsigned k = 0; k < nodes[i].node->mNumMeshes; ++k) {
-      const unsigned index = nodes[i].node->mMeshes[k];
-      if (index >= scene->mNumMeshes) throw Error::in_file(path, "mesh " + std::to_string(index), "out of range");
-      const aiMesh* mesh = scene->mMeshes[index];
+// Mesh instances: (node, mesh), in node pre-order; whether any is skinned, and the skin listing.
+void AssimpImport::find_instances() {
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    for (unsigned k = 0; k < nodes_[i].node->mNumMeshes; ++k) {
+      const unsigned index = nodes_[i].node->mMeshes[k];
+      if (index >= scene_->mNumMeshes) throw Error::in_file(path_, "mesh " + std::to_string(index), "out of range");
+      const aiMesh* mesh = scene_->mMeshes[index];
       if ((mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
-      instances.push_back({static_cast<std::int32_t>(i), mesh});
-      rigged = rigged || mesh->mNumBones > 0;
+      instances_.push_back({static_cast<std::int32_t>(i), mesh});
+      rigged_ = rigged_ || mesh->mNumBones > 0;
     }
-  if (instances.empty()) throw Error::in_file(path, "", "the scene has no triangles");
-  result.rigged = rigged;
-  if (rigged) {
-    // One skin for the listing (ImportedModel::skins): the distinct bones the meshes name, the meshes with bones.
-    ImportedSkin listed;
-    std::vector<std::string> joints;
-    for (const Instance& instance : instances) {
-      if (instance.mesh->mNumBones == 0) continue;
-      for (unsigned b = 0; b < instance.mesh->mNumBones; ++b)
-        if (instance.mesh->mBones[b] != nullptr) joints.emplace_back(instance.mesh->mBones[b]->mName.C_Str());
-      std::string name = instance.mesh->mName.C_Str();
-      if (std::find(listed.meshes.begin(), listed.meshes.end(), name) == listed.meshes.end())
-        listed.meshes.push_back(std::move(name));
-    }
-    std::sort(joints.begin(), joints.end());
-    listed.joints = static_cast<std::size_t>(std::unique(joints.begin(), joints.end()) - joints.begin());
-    result.skins.push_back(std::move(listed));
+  if (instances_.empty()) throw Error::in_file(path_, "", "the scene has no triangles");
+  result_.rigged = rigged_;
+  if (!rigged_) return;
+  // One skin for the listing (ImportedModel::skins): the distinct bones the meshes name, the meshes with bones.
+  ImportedSkin listed;
+  std::vector<std::string> joints;
+  for (const Instance& instance : instances_) {
+    if (instance.mesh->mNumBones == 0) continue;
+    for (unsigned b = 0; b < instance.mesh->mNumBones; ++b)
+      if (instance.mesh->mBones[b] != nullptr) joints.emplace_back(instance.mesh->mBones[b]->mName.C_Str());
+    std::string name = instance.mesh->mName.C_Str();
+    if (std::find(listed.meshes.begin(), listed.meshes.end(), name) == listed.meshes.end())
+      listed.meshes.push_back(std::move(name));
   }
+  std::sort(joints.begin(), joints.end());
+  listed.joints = static_cast<std::size_t>(std::unique(joints.begin(), joints.end()) - joints.begin());
+  result_.skins.push_back(std::move(listed));
+}
 
-  // --- which nodes become bones ---
-  // Skinning needs the bones' nodes and, for vertices with no weight, their mesh's node. Orphan aiBones (no node of
-  // that name) become static bones under their mesh's node.
-  std::vector<bool> needed(nodes.size(), false);
-  std::vector<std::string> orphans;
-  if (rigged) {
-    for (const Instance& instance : instances) {
+// --- which nodes become bones ---
+// Skinning needs the bones' nodes and, for vertices with no weight, their mesh's node. Orphan aiBones (no node of
+// that name) become static bones under their mesh's node.
+void AssimpImport::choose_needed() {
+  needed_.assign(nodes_.size(), false);
+  if (rigged_) {
+    for (const Instance& instance : instances_) {
       std::vector<bool> weighted(instance.mesh->mNumVertices, false);
       for (unsigned b = 0; b < instance.mesh->mNumBones; ++b) {
         const aiBone* bone = instance.mesh->mBones[b];
-        const auto found = node_by_name.find(bone->mName.C_Str());
-        if (found != node_by_name.end()) {
-          needed[static_cast<std::size_t>(found->second)] = true;
+        const auto found = node_by_name_.find(bone->mName.C_Str());
+        if (found != node_by_name_.end()) {
+          needed_[static_cast<std::size_t>(found->second)] = true;
         } else {
-          needed[static_cast<std::size_t>(instance.node)] = true;
-          if (std::find(orphans.begin(), orphans.end(), bone->mName.C_Str()) == orphans.end())
-            orphans.emplace_back(bone->mName.C_Str());
+          needed_[static_cast<std::size_t>(instance.node)] = true;
+          if (std::find(orphans_.begin(), orphans_.end(), bone->mName.C_Str()) == orphans_.end())
+            orphans_.emplace_back(bone->mName.C_Str());
         }
         for (unsigned w = 0; w < bone->mNumWeights; ++w)
           if (bone->mWeights[w].mVertexId < weighted.size() && bone->mWeights[w].mWeight > 0.0f)
             weighted[bone->mWeights[w].mVertexId] = true;
       }
       if (std::find(weighted.begin(), weighted.end(), false) != weighted.end())
-        needed[static_cast<std::size_t>(instance.node)] = true;
+        needed_[static_cast<std::size_t>(instance.node)] = true;
     }
   }
-  std::vector<bool> animated(nodes.size(), false);
-  for (unsigned a = 0; a < scene->mNumAnimations; ++a)
-    for (unsigned c = 0; c < scene->mAnimations[a]->mNumChannels; ++c) {
-      const auto found = node_by_name.find(scene->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
-      if (found != node_by_name.end()) animated[static_cast<std::size_t>(found->second)] = true;
+  animated_.assign(nodes_.size(), false);
+  for (unsigned a = 0; a < scene_->mNumAnimations; ++a)
+    for (unsigned c = 0; c < scene_->mAnimations[a]->mNumChannels; ++c) {
+      const auto found = node_by_name_.find(scene_->mAnimations[a]->mChannels[c]->mNodeName.C_Str());
+      if (found != node_by_name_.end()) animated_[static_cast<std::size_t>(found->second)] = true;
     }
+}
 
-  // Root: the lowest common ancestor of the needed nodes, raised to its topmost animated ancestor so that no motion
-  // above the skeleton is lost.
-  std::int32_t root = -1;
+// Root: the lowest common ancestor of the needed nodes, raised to its topmost animated ancestor so that no motion
+// above the skeleton is lost.
+void AssimpImport::find_root() {
+  const auto parent = [&](std::int32_t n) { return nodes_[static_cast<std::size_t>(n)].parent; };
   auto depth = [&](std::int32_t n) {
     int d = 0;
-    for (; nodes[static_cast<std::size_t>(n)].parent >= 0; n = nodes[static_cast<std::size_t>(n)].parent) ++d;
+    for (; parent(n) >= 0; n = parent(n)) ++d;
     return d;
   };
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (!needed[i]) continue;
+  std::int32_t& root = root_;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    if (!needed_[i]) continue;
     auto n = static_cast<std::int32_t>(i);
     if (root < 0) {
       root = n;
       continue;
     }
     int dn = depth(n), dr = depth(root);
-    for (; dn > dr; --dn) n = nodes[static_cast<std::size_t>(n)].parent;
-    for (; dr > dn; --dr) root = nodes[static_cast<std::size_t>(root)].parent;
+    for (; dn > dr; --dn) n = parent(n);
+    for (; dr > dn; --dr) root = parent(root);
     while (n != root) {
-      n = nodes[static_cast<std::size_t>(n)].parent;
-      root = nodes[static_cast<std::size_t>(root)].parent;
+      n = parent(n);
+      root = parent(root);
     }
   }
   if (root >= 0)
-    for (std::int32_t n = nodes[static_cast<std::size_t>(root)].parent; n >= 0;
-         n = nodes[static_cast<std::size_t>(n)].parent)
-      if (animated[static_cast<std::size_t>(n)]) root = n;
+    for (std::int32_t n = parent(root); n >= 0; n = parent(n))
+      if (animated_[static_cast<std::size_t>(n)]) root = n;
+}
 
-  // --- bones: every node on a path from the root to a needed node, in pre-order, then the orphans ---
-  std::vector<std::int32_t> bone_of_node(nodes.size(), -1);
-  std::vector<std::int32_t> node_of_bone;
-  std::vector<Bone> bones;
-  std::vector<glm::mat4> bind_world;  // with scale (file_bind_world)
-  std::vector<bool> has_offset;
+// --- bones: every node on a path from the root to a needed node, in pre-order, then the orphans ---
+void AssimpImport::make_bones() {
+  bone_of_node_.assign(nodes_.size(), -1);
   std::size_t shortened = 0;
-  if (root >= 0) {
-    std::vector<bool> in_skeleton(nodes.size(), false);
-    for (std::size_t i = 0; i < nodes.size(); ++i)
-      if (needed[i])
-        for (auto n = static_cast<std::int32_t>(i); n >= 0 && !in_skeleton[static_cast<std::size_t>(n)];
-             n = n == root ? -1 : nodes[static_cast<std::size_t>(n)].parent)
-          in_skeleton[static_cast<std::size_t>(n)] = true;
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
+  if (root_ >= 0) {
+    std::vector<std::int32_t> node_parents(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) node_parents[i] = nodes_[i].parent;
+    const std::vector<bool> in_skeleton = skeleton_nodes(node_parents, needed_, root_);
+    // One top node (the root), so node i is bone i of the forest.
+    std::vector<std::string> names;
+    std::vector<std::int32_t> parents;
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
       if (!in_skeleton[i]) continue;
-      Bone bone;
-      bone.name = fit_name(nodes[i].node->mName.C_Str(), shortened);
-      bone.parent = static_cast<std::int32_t>(i) == root ? -1 : bone_of_node[static_cast<std::size_t>(nodes[i].parent)];
-      bone_of_node[i] = static_cast<std::int32_t>(bones.size());
-      node_of_bone.push_back(static_cast<std::int32_t>(i));
-      bones.push_back(std::move(bone));
+      names.emplace_back(nodes_[i].node->mName.C_Str());
+      parents.push_back(
+          static_cast<std::int32_t>(i) == root_ ? -1 : bone_of_node_[static_cast<std::size_t>(nodes_[i].parent)]);
+      bone_of_node_[i] = static_cast<std::int32_t>(node_of_bone_.size());
+      node_of_bone_.push_back(static_cast<std::int32_t>(i));
     }
+    bones_ = bones_of_forest(names, parents, shortened).bones;
   } else {
-    Bone bone;  // static scene: one bone at the origin holds every point
-    bone.name = "root";
-    bones.push_back(bone);
-    node_of_bone.push_back(-1);
+    bones_ = bones_of_forest({}, {}, shortened).bones;  // static scene: one bone at the origin holds every point
+    node_of_bone_.push_back(-1);
   }
-  bind_world.assign(bones.size(), glm::mat4(1.0f));
-  has_offset.assign(bones.size(), false);
-  std::map<std::string, std::int32_t> orphan_bone;
-  for (const std::string& name : orphans) {
-    orphan_bone[name] = static_cast<std::int32_t>(bones.size());
+  bind_world_.assign(bones_.size(), glm::mat4(1.0f));
+  has_offset_.assign(bones_.size(), false);
+  for (const std::string& name : orphans_) {
+    orphan_bone_[name] = static_cast<std::int32_t>(bones_.size());
     Bone bone;
     bone.name = fit_name(name, shortened);
-    bones.push_back(std::move(bone));  // parent set from its mesh's node below
-    node_of_bone.push_back(-1);
-    bind_world.emplace_back(1.0f);
-    has_offset.push_back(false);
+    bones_.push_back(std::move(bone));  // parent set from its mesh's node below
+    node_of_bone_.push_back(-1);
+    bind_world_.emplace_back(1.0f);
+    has_offset_.push_back(false);
   }
-  if (bones.size() > 65535) throw Error::in_file(path, "", std::to_string(bones.size()) + " bones (at most 65535)");
-  if (shortened > 0)
-    warnings.push_back(std::to_string(shortened) + " bone names longer than 79 bytes shortened to fit .sk");
+  require_bone_count(bones_.size(), path_);
+  warn_shortened_names(shortened, warnings_);
+}
 
-  // The frame each mesh instance's vertices are bound in. Assimp draws a skinned vertex at Σ w · G_bone · offset · v,
-  // whatever its mesh node holds; when every bone of a fully weighted mesh agrees on G_bone · offset at rest (the
-  // node tree at rest is the pose the mesh was bound in) that common matrix is where the file shows the mesh. It
-  // can differ from the mesh node's transform: DirectX .x files keep a frame transform on the mesh that D3DX skinning
-  // ignores (BCN_Epileptic.X has its torso, head and legs under three differently turned frames, which drawn with
-  // the frame transform fall apart). Otherwise (no consensus: the node tree is posed away from the bind, or some
-  // vertices are carried by the node itself) the mesh node's transform is the bind frame.
+// The frame each mesh instance's vertices are bound in. Assimp draws a skinned vertex at Σ w · G_bone · offset · v,
+// whatever its mesh node holds; when every bone of a fully weighted mesh agrees on G_bone · offset at rest (the
+// node tree at rest is the pose the mesh was bound in) that common matrix is where the file shows the mesh. It
+// can differ from the mesh node's transform: DirectX .x files keep a frame transform on the mesh that D3DX skinning
+// ignores (BCN_Epileptic.X has its torso, head and legs under three differently turned frames, which drawn with
+// the frame transform fall apart). Otherwise (no consensus: the node tree is posed away from the bind, or some
+// vertices are carried by the node itself) the mesh node's transform is the bind frame.
+void AssimpImport::find_mesh_frames() {
   auto close = [](const glm::mat4& a, const glm::mat4& b) {
     float difference = 0.0f;
     for (int c = 0; c < 4; ++c) difference = std::max(difference, glm::length(a[c] - b[c]));
     return difference <= 1e-4f * std::max(1.0f, std::max(glm::length(glm::vec3(a[3])), glm::length(glm::vec3(b[3]))));
   };
-  std::vector<glm::mat4> mesh_frame(instances.size());
-  for (std::size_t i = 0; i < instances.size(); ++i) {
-    const aiMesh& source = *instances[i].mesh;
-    const glm::mat4& node_world = nodes[static_cast<std::size_t>(instances[i].node)].global;
-    mesh_frame[i] = node_world;
+  mesh_frame_.resize(instances_.size());
+  for (std::size_t i = 0; i < instances_.size(); ++i) {
+    const aiMesh& source = *instances_[i].mesh;
+    const glm::mat4& node_world = nodes_[static_cast<std::size_t>(instances_[i].node)].global;
+    mesh_frame_[i] = node_world;
     if (source.mNumBones == 0) continue;
     std::vector<bool> weighted(source.mNumVertices, false);
     bool consensus = true, first = true;
@@ -396,12 +431,12 @@ ImportedModel import_any(const std::string& path, const ImportOptions& options) 
       for (unsigned w = 0; w < bone->mNumWeights; ++w)
         if (bone->mWeights[w].mVertexId < weighted.size() && bone->mWeights[w].mWeight > 0.0f)
           weighted[bone->mWeights[w].mVertexId] = true;
-      const auto found = node_by_name.find(bone->mName.C_Str());
-      if (found == node_by_name.end()) {
+      const auto found = node_by_name_.find(bone->mName.C_Str());
+      if (found == node_by_name_.end()) {
         consensus = false;  // an orphan bone has no node-tree transform to agree with
         continue;
       }
-      const glm::mat4 drawn = nodes[static_cast<std::size_t>(found->second)].global * to_glm(bone->mOffsetMatrix);
+      const glm::mat4 drawn = nodes_[static_cast<std::size_t>(found->second)].global * to_glm(bone->mOffsetMatrix);
       if (first) {
         common = drawn;
         first = false;
@@ -412,314 +447,263 @@ ImportedModel import_any(const std::string& path, const ImportOptions& options) 
     consensus = consensus && !first && std::find(weighted.begin(), weighted.end(), false) == weighted.end();
     if (consensus && finite(common) && std::fabs(glm::determinant(glm::mat3(common))) > 0.0f &&
         !close(common, node_world)) {
-      mesh_frame[i] = common;
+      mesh_frame_[i] = common;
     }
   }
+}
 
-  // Bind world transforms: mesh frame · offset⁻¹ for bones with an offset (the pose the mesh was bound in).
+// Bind world transforms: mesh frame · offset⁻¹ for bones with an offset (the pose the mesh was bound in); a bone
+// without one binds at its node-tree transform, where Assimp draws what hangs rigidly on it. Then the skeleton of
+// their rigid parts; scale that cannot be folded into translations is reported.
+void AssimpImport::bind_bones() {
   std::size_t inconsistent_binds = 0;
-  auto bone_id_of = [&](const aiBone* bone) {
-    const auto found = node_by_name.find(bone->mName.C_Str());
-    return found != node_by_name.end() ? bone_of_node[static_cast<std::size_t>(found->second)]
-                                       : orphan_bone.at(bone->mName.C_Str());
-  };
-  if (rigged) {
-    for (std::size_t i = 0; i < instances.size(); ++i) {
-      const Instance& instance = instances[i];
-      for (unsigned b = 0; b < instance.mesh->mNumBones; ++b) {
-        const aiBone* bone = instance.mesh->mBones[b];
-        const auto id = static_cast<std::size_t>(bone_id_of(bone));
-        const glm::mat4 offset = to_glm(bone->mOffsetMatrix);
-        const glm::mat4 world = mesh_frame[i] * glm::inverse(offset);
-        if (!finite(world))
-          throw Error::in_file(path, "bone '" + std::string(bone->mName.C_Str()) + "'",
-                               "offset matrix is singular or not finite");
-        if (!has_offset[id]) {
-          bind_world[id] = world;
-          has_offset[id] = true;
-          if (node_of_bone[id] < 0) bones[id].parent = bone_of_node[static_cast<std::size_t>(instance.node)];
-        } else {
-          float difference = 0.0f;
-          for (int c = 0; c < 4; ++c) difference = std::max(difference, glm::length(world[c] - bind_world[id][c]));
-          if (difference > 1e-4f * std::max(1.0f, glm::length(glm::vec3(world[3])))) ++inconsistent_binds;
-        }
+  for (std::size_t i = 0; rigged_ && i < instances_.size(); ++i) {
+    const Instance& instance = instances_[i];
+    for (unsigned b = 0; b < instance.mesh->mNumBones; ++b) {
+      const aiBone* bone = instance.mesh->mBones[b];
+      const auto id = static_cast<std::size_t>(bone_id_of(bone));
+      const glm::mat4 offset = to_glm(bone->mOffsetMatrix);
+      const glm::mat4 world = mesh_frame_[i] * glm::inverse(offset);
+      if (!finite(world))
+        throw Error::in_file(path_, "bone '" + std::string(bone->mName.C_Str()) + "'",
+                             "offset matrix is singular or not finite");
+      if (!has_offset_[id]) {
+        bind_world_[id] = world;
+        has_offset_[id] = true;
+        if (node_of_bone_[id] < 0) bones_[id].parent = bone_of_node_[static_cast<std::size_t>(instance.node)];
+      } else {
+        float difference = 0.0f;
+        for (int c = 0; c < 4; ++c) difference = std::max(difference, glm::length(world[c] - bind_world_[id][c]));
+        if (difference > 1e-4f * std::max(1.0f, glm::length(glm::vec3(world[3])))) ++inconsistent_binds;
       }
     }
   }
-  // A bone without an offset binds at its node-tree transform: that is where Assimp draws what hangs rigidly on it.
-  for (std::size_t b = 0; b < bones.size(); ++b)
-    if (!has_offset[b] && node_of_bone[b] >= 0) bind_world[b] = nodes[static_cast<std::size_t>(node_of_bone[b])].global;
+  for (std::size_t b = 0; b < bones_.size(); ++b)
+    if (!has_offset_[b] && node_of_bone_[b] >= 0)
+      bind_world_[b] = nodes_[static_cast<std::size_t>(node_of_bone_[b])].global;
   if (inconsistent_binds > 0)
-    warnings.push_back(std::to_string(inconsistent_binds) +
-                       " bone offsets disagree between meshes: the first mesh's bind is used");
-
-  // Rigid bind locals; scale that cannot be folded into translations is reported.
-  std::vector<Split> bind_split(bones.size());
+    warnings_.push_back(std::to_string(inconsistent_binds) +
+                        " bone offsets disagree between meshes: the first mesh's bind is used");
+  std::vector<Split> bind_split(bones_.size());
   std::size_t scaled = 0;
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    bind_split[b] = split(bind_world[b]);
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    bind_split[b] = split(bind_world_[b]);
     bool exact = bind_split[b].similarity;
-    if (node_of_bone[b] >= 0) {
-      const Split rest = split(nodes[static_cast<std::size_t>(node_of_bone[b])].global);
+    if (node_of_bone_[b] >= 0) {
+      const Split rest = split(nodes_[static_cast<std::size_t>(node_of_bone_[b])].global);
       exact = exact && rest.similarity && std::fabs(rest.scale - bind_split[b].scale) <= 1e-3f * rest.scale;
     }
     if (!exact) ++scaled;
   }
   if (scaled > 0)
-    warnings.push_back(std::to_string(scaled) +
-                       " bones have non-uniform, mirrored or bind-vs-node-tree differing scale: a Skeleton holds no "
-                       "scale, so clips move them approximately (the bind pose stays exact)");
-  result.model.skeleton = skeleton_from_binds(bones, bind_split, path);
-  result.file_bind_world = bind_world;
-  const Skeleton& skeleton = result.model.skeleton;
+    warnings_.push_back(std::to_string(scaled) +
+                        " bones have non-uniform, mirrored or bind-vs-node-tree differing scale: a Skeleton holds no "
+                        "scale, so clips move them approximately (the bind pose stays exact)");
+  result_.model.skeleton = skeleton_from_binds(bones_, bind_split, path_);
+  result_.file_bind_world = bind_world_;
+}
 
-  // --- mesh, materials and weights ---
-  Mesh& mesh = result.model.mesh;
+// --- mesh, materials and weights ---
+void AssimpImport::read_meshes() {
+  Mesh& mesh = result_.model.mesh;
   std::vector<std::string> used_names;
-  for (unsigned m = 0; m < scene->mNumMaterials; ++m)
+  for (unsigned m = 0; m < scene_->mNumMaterials; ++m)
     mesh.materials.push_back(
-        convert_material(*scene, *scene->mMaterials[m], m, path, options.references, used_names, warnings));
-  const bool any_uvs =
-      std::any_of(instances.begin(), instances.end(), [](const Instance& i) { return i.mesh->HasTextureCoords(0); });
-  std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key;
-  std::size_t unweighted = 0, skipped_faces = 0;
-  ExtraInfluenceIds extra_ids;  // the point key's word for vertices with more than four influences
-  struct Weight {
-    std::uint32_t vertex;
-    std::uint16_t bone;
-    float weight;
-  };
-  std::vector<Weight> vertex_weights;
-  for (std::size_t i = 0; i < instances.size(); ++i) {
-    const Instance& instance = instances[i];
-    const aiMesh& source = *instance.mesh;
-    const Node& node = nodes[static_cast<std::size_t>(instance.node)];
-    const glm::mat4& frame = mesh_frame[i];
+        convert_material(*scene_, *scene_->mMaterials[m], m, path_, options_.references, used_names, warnings_));
+  any_uvs_ =
+      std::any_of(instances_.begin(), instances_.end(), [](const Instance& i) { return i.mesh->HasTextureCoords(0); });
+  for (std::size_t i = 0; i < instances_.size(); ++i) {
+    const aiMesh& source = *instances_[i].mesh;
     const std::string element = "mesh '" + std::string(source.mName.C_Str()) + "'";
-    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(frame)));
-    const std::uint16_t rigid_bone =
-        rigged ? static_cast<std::uint16_t>(bone_of_node[static_cast<std::size_t>(instance.node)] < 0
-                                                ? 0
-                                                : bone_of_node[static_cast<std::size_t>(instance.node)])
-               : 0;
-
-    vertex_weights.clear();
-    for (unsigned b = 0; b < source.mNumBones; ++b) {
-      const aiBone* bone = source.mBones[b];
-      const auto id = static_cast<std::uint16_t>(bone_id_of(bone));
-      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
-        const aiVertexWeight& vw = bone->mWeights[w];
-        if (vw.mVertexId >= source.mNumVertices || !std::isfinite(vw.mWeight) || vw.mWeight < 0.0f)
-          throw Error::in_file(path, element + ": bone '" + bone->mName.C_Str() + "'",
-                               "weight " + std::to_string(w) + " is negative, not finite or names no vertex");
-        if (vw.mWeight > 0.0f) vertex_weights.push_back({vw.mVertexId, id, vw.mWeight});
-      }
-    }
-    std::sort(vertex_weights.begin(), vertex_weights.end(), [](const Weight& a, const Weight& b) {
-      return a.vertex != b.vertex ? a.vertex < b.vertex : a.weight != b.weight ? a.weight > b.weight : a.bone < b.bone;
-    });
-
-    const auto first_vertex = mesh.vertex_point.size();
-    if (first_vertex + source.mNumVertices > 0xFFFFFFFFull) throw Error::in_file(path, element, "too many vertices");
-    std::size_t cursor = 0;
-    for (unsigned v = 0; v < source.mNumVertices; ++v) {
-      Influences influences;
-      float total = 0.0f;
-      const std::size_t begin = cursor;
-      for (; cursor < vertex_weights.size() && vertex_weights[cursor].vertex == v; ++cursor)
-        total += vertex_weights[cursor].weight;
-      const std::size_t count = cursor - begin;  // strongest first (sorted above)
-      if (count == 0) {
-        if (rigged) ++unweighted;
-        influences.bones[0] = rigid_bone;
-        influences.weights[0] = 1.0f;
-      } else {
-        // Every influence is kept: the four strongest in the slots, the rest as extras (SkinWeights).
-        for (std::size_t k = 0; k < count && k < 4; ++k) {
-          influences.bones[k] = vertex_weights[begin + k].bone;
-          influences.weights[k] = vertex_weights[begin + k].weight / total;
-        }
-      }
-      const glm::vec3 position = glm::vec3(frame * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
-      if (!finite(position))
-        throw Error::in_file(path, element + ": vertex " + std::to_string(v), "position is not finite");
-      // A vertex with extras merges with the vertices of the same position and the same influences, extras too.
-      std::uint32_t extras = 0;
-      if (count > 4) {
-        for (std::size_t k = 4; k < count; ++k)
-          extra_ids.add(vertex_weights[begin + k].bone, vertex_weights[begin + k].weight / total);
-        extras = extra_ids.take();
-      }
-      const auto [found, inserted] = point_of_key.emplace(point_key(position, influences, extras),
-                                                          static_cast<std::uint32_t>(mesh.positions.size()));
-      if (inserted) {
-        const auto point = static_cast<std::uint32_t>(mesh.positions.size());
-        mesh.positions.push_back(position);
-        SkinWeights& sw = result.model.weights;
-        sw.bones.emplace_back(influences.bones[0], influences.bones[1], influences.bones[2], influences.bones[3]);
-        sw.weights.emplace_back(influences.weights[0], influences.weights[1], influences.weights[2],
-                                influences.weights[3]);
-        if (count > 4) {
-          if (sw.extra_offsets.empty()) sw.extra_offsets.push_back(0);
-          sw.extra_points.push_back(point);
-          for (std::size_t k = 4; k < count; ++k) {
-            sw.extra_bones.push_back(vertex_weights[begin + k].bone);
-            sw.extra_weights.push_back(vertex_weights[begin + k].weight / total);
-          }
-          sw.extra_offsets.push_back(static_cast<std::uint32_t>(sw.extra_bones.size()));
-        }
-      }
-      mesh.vertex_point.push_back(found->second);
-      glm::vec3 normal = source.HasNormals() ? normal_matrix * to_glm(source.mNormals[v]) : glm::vec3(0.0f);
-      const float length = glm::length(normal);
-      normal = std::isfinite(length) && length > 0.0f ? normal / length : glm::vec3(0.0f, 0.0f, 1.0f);
-      mesh.vertex_normals.push_back(normal);
-      if (any_uvs) {
-        const glm::vec3 uv = source.HasTextureCoords(0) ? to_glm(source.mTextureCoords[0][v]) : glm::vec3(0.0f);
-        mesh.vertex_uvs.emplace_back(std::isfinite(uv.x) ? uv.x : 0.0f, std::isfinite(uv.y) ? uv.y : 0.0f);
-      }
-    }
-
-    Submesh submesh;
-    submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
-    submesh.material =
-        source.mMaterialIndex < mesh.materials.size() ? static_cast<std::int32_t>(source.mMaterialIndex) : -1;
-    submesh.object = node.node->mName.C_Str();
-    submesh.group = source.mName.C_Str();
-    for (unsigned f = 0; f < source.mNumFaces; ++f) {
-      const aiFace& face = source.mFaces[f];
-      if (face.mNumIndices != 3) {
-        ++skipped_faces;
-        continue;
-      }
-      for (unsigned c = 0; c < 3; ++c) {
-        if (face.mIndices[c] >= source.mNumVertices)
-          throw Error::in_file(path, element + ": face " + std::to_string(f), "index out of range");
-        mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + face.mIndices[c]));
-      }
-    }
-    submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
-    mesh.submeshes.push_back(std::move(submesh));
+    sorted_weights(source, element);
+    if (mesh.vertex_point.size() + source.mNumVertices > 0xFFFFFFFFull)
+      throw Error::in_file(path_, element, "too many vertices");
+    add_vertices(i, element);
+    add_faces(i, element);
   }
-  if (mesh.triangles.empty()) throw Error::in_file(path, "", "the scene has no triangles");
-  mesh.face_sizes.assign(mesh.triangle_count(), 3);
-  mesh.face_corners = mesh.triangles;
-  if (unweighted > 0)
-    warnings.push_back(std::to_string(unweighted) +
-                       " vertices have no bone weight: bound rigidly to their mesh's node");
-  if (skipped_faces > 0) warnings.push_back(std::to_string(skipped_faces) + " faces that are not triangles skipped");
-  if (!orphans.empty())
-    warnings.push_back(std::to_string(orphans.size()) + " bones have no node in the hierarchy (first: '" + orphans[0] +
-                       "'): kept static under their mesh's node");
-  if (!rigged) return result;
+  close_triangle_faces(mesh, path_);
+  if (unweighted_ > 0)
+    warnings_.push_back(std::to_string(unweighted_) +
+                        " vertices have no bone weight: bound rigidly to their mesh's node");
+  if (skipped_faces_ > 0) warnings_.push_back(std::to_string(skipped_faces_) + " faces that are not triangles skipped");
+  if (!orphans_.empty())
+    warnings_.push_back(std::to_string(orphans_.size()) + " bones have no node in the hierarchy (first: '" +
+                        orphans_[0] + "'): kept static under their mesh's node");
+}
 
-  // --- clips ---
-  // Skeleton space: a bone's local transform is T(s_p · t) · R(q), s_p the parent node's uniform world scale
-  // (uniform scale commutes with rotation, so it folds into child translations); the root takes its parent's
-  // whole world transform A: T(A · t) · R(rot(A) · q).
-  const glm::vec3 extent = [&] {
-    const Bounds b = compute_bounds(mesh.positions);
-    return b.max - b.min;
-  }();
-  const float model_size = std::max(glm::length(extent), 1e-6f);
-  const std::int32_t above_root = nodes[static_cast<std::size_t>(node_of_bone[0])].parent;
-  const glm::mat4 root_parent_world =
-      above_root < 0 ? glm::mat4(1.0f) : nodes[static_cast<std::size_t>(above_root)].global;
-  const Split root_parent = split(root_parent_world);
-  auto parent_scale = [&](std::size_t bone) {
-    return split(nodes[static_cast<std::size_t>(nodes[static_cast<std::size_t>(node_of_bone[bone])].parent)].global)
-        .scale;
-  };
-  auto to_skeleton_translation = [&](std::size_t bone, glm::vec3 t) {
-    return bone == 0 ? glm::vec3(root_parent_world * glm::vec4(t, 1.0f)) : parent_scale(bone) * t;
-  };
-  auto to_skeleton_rotation = [&](std::size_t bone, glm::quat q) {
-    return bone == 0 ? glm::normalize(root_parent.rotation * q) : glm::normalize(q);
-  };
+// The mesh's positive weights by vertex, strongest first (ties: lower bone first), into vertex_weights_.
+void AssimpImport::sorted_weights(const aiMesh& source, const std::string& element) {
+  vertex_weights_.clear();
+  for (unsigned b = 0; b < source.mNumBones; ++b) {
+    const aiBone* bone = source.mBones[b];
+    const auto id = static_cast<std::uint16_t>(bone_id_of(bone));
+    for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+      const aiVertexWeight& vw = bone->mWeights[w];
+      if (vw.mVertexId >= source.mNumVertices || !std::isfinite(vw.mWeight) || vw.mWeight < 0.0f)
+        throw Error::in_file(path_, element + ": bone '" + bone->mName.C_Str() + "'",
+                             "weight " + std::to_string(w) + " is negative, not finite or names no vertex");
+      if (vw.mWeight > 0.0f) vertex_weights_.push_back({vw.mVertexId, id, vw.mWeight});
+    }
+  }
+  std::sort(vertex_weights_.begin(), vertex_weights_.end(), [](const Weight& a, const Weight& b) {
+    return a.vertex != b.vertex ? a.vertex < b.vertex : a.weight != b.weight ? a.weight > b.weight : a.bone < b.bone;
+  });
+}
+
+// Instance `i`'s vertices in its mesh frame, each with its point (every influence kept), normal and UV.
+void AssimpImport::add_vertices(std::size_t i, const std::string& element) {
+  Mesh& mesh = result_.model.mesh;
+  const Instance& instance = instances_[i];
+  const aiMesh& source = *instance.mesh;
+  const glm::mat4& frame = mesh_frame_[i];
+  const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(frame)));
+  const std::int32_t node_bone = bone_of_node_[static_cast<std::size_t>(instance.node)];
+  const std::uint16_t rigid_bone = rigged_ ? static_cast<std::uint16_t>(node_bone < 0 ? 0 : node_bone) : 0;
+  std::vector<Influence> influences;
+  std::size_t cursor = 0;
+  for (unsigned v = 0; v < source.mNumVertices; ++v) {
+    float total = 0.0f;
+    const std::size_t begin = cursor;
+    for (; cursor < vertex_weights_.size() && vertex_weights_[cursor].vertex == v; ++cursor)
+      total += vertex_weights_[cursor].weight;
+    influences.clear();
+    for (std::size_t k = begin; k < cursor; ++k)  // strongest first (sorted_weights)
+      influences.push_back({vertex_weights_[k].bone, vertex_weights_[k].weight / total});
+    if (influences.empty()) {
+      if (rigged_) ++unweighted_;
+      influences.push_back({rigid_bone, 1.0f});
+    }
+    const glm::vec3 position = glm::vec3(frame * glm::vec4(to_glm(source.mVertices[v]), 1.0f));
+    if (!finite(position))
+      throw Error::in_file(path_, element + ": vertex " + std::to_string(v), "position is not finite");
+    mesh.vertex_point.push_back(points_.add(position, influences).first);
+    glm::vec3 normal = source.HasNormals() ? normal_matrix * to_glm(source.mNormals[v]) : glm::vec3(0.0f);
+    const float length = glm::length(normal);
+    normal = std::isfinite(length) && length > 0.0f ? normal / length : glm::vec3(0.0f, 0.0f, 1.0f);
+    mesh.vertex_normals.push_back(normal);
+    if (any_uvs_) {
+      const glm::vec3 uv = source.HasTextureCoords(0) ? to_glm(source.mTextureCoords[0][v]) : glm::vec3(0.0f);
+      mesh.vertex_uvs.emplace_back(std::isfinite(uv.x) ? uv.x : 0.0f, std::isfinite(uv.y) ? uv.y : 0.0f);
+    }
+  }
+}
+
+// Instance `i`'s triangles as one submesh; faces that are not triangles are skipped (counted).
+void AssimpImport::add_faces(std::size_t i, const std::string& element) {
+  Mesh& mesh = result_.model.mesh;
+  const aiMesh& source = *instances_[i].mesh;
+  const auto first_vertex = mesh.vertex_point.size() - source.mNumVertices;
+  Submesh submesh;
+  submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
+  submesh.material =
+      source.mMaterialIndex < mesh.materials.size() ? static_cast<std::int32_t>(source.mMaterialIndex) : -1;
+  submesh.object = nodes_[static_cast<std::size_t>(instances_[i].node)].node->mName.C_Str();
+  submesh.group = source.mName.C_Str();
+  for (unsigned f = 0; f < source.mNumFaces; ++f) {
+    const aiFace& face = source.mFaces[f];
+    if (face.mNumIndices != 3) {
+      ++skipped_faces_;
+      continue;
+    }
+    for (unsigned c = 0; c < 3; ++c) {
+      if (face.mIndices[c] >= source.mNumVertices)
+        throw Error::in_file(path_, element + ": face " + std::to_string(f), "index out of range");
+      mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + face.mIndices[c]));
+    }
+  }
+  submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
+  mesh.submeshes.push_back(std::move(submesh));
+}
+
+// --- clips ---
+// Skeleton space: a bone's local transform is T(s_p · t) · R(q), s_p the parent node's uniform world scale
+// (uniform scale commutes with rotation, so it folds into child translations); the root takes its parent's
+// whole world transform A: T(A · t) · R(rot(A) · q).
+void AssimpImport::read_clips() {
+  const std::int32_t above_root = nodes_[static_cast<std::size_t>(node_of_bone_[0])].parent;
+  root_parent_world_ = above_root < 0 ? glm::mat4(1.0f) : nodes_[static_cast<std::size_t>(above_root)].global;
+  root_parent_ = split(root_parent_world_);
   // Rest locals (the node tree) of bones whose rest differs from their bind: clips hold them with a constant
   // channel, as Assimp leaves unanimated nodes at their node-tree transform.
-  const Pose bind = skeleton.bind_pose();
-  std::vector<std::pair<glm::vec3, glm::quat>> rest_differs(bones.size());
-  std::vector<bool> differs(bones.size(), false);
-  for (std::size_t b = 0; b < bones.size(); ++b) {
-    if (node_of_bone[b] < 0) continue;
-    const Split local = split(nodes[static_cast<std::size_t>(node_of_bone[b])].local);
-    const glm::vec3 t = to_skeleton_translation(b, local.translation);
-    const glm::quat q = to_skeleton_rotation(b, local.rotation);
-    rest_differs[b] = {t, q};
-    const glm::quat r = bind.rotations[b];
-    differs[b] = glm::length(t - bind.translations[b]) > 1e-6f * model_size ||
-                 std::min(glm::length(q - r), glm::length(q + r)) > 1e-6f;
+  std::vector<std::pair<glm::vec3, glm::quat>> local(bones_.size());
+  std::vector<bool> has_rest(bones_.size(), false);
+  for (std::size_t b = 0; b < bones_.size(); ++b) {
+    if (node_of_bone_[b] < 0) continue;
+    const Split split_local = split(nodes_[static_cast<std::size_t>(node_of_bone_[b])].local);
+    local[b] = {to_skeleton_translation(b, split_local.translation), to_skeleton_rotation(b, split_local.rotation)};
+    has_rest[b] = true;
   }
-
+  const RestLocals rest = rest_locals(result_.model.skeleton, result_.model.mesh.positions, std::move(local), has_rest);
   std::vector<std::string> clip_names;
-  for (unsigned a = 0; a < scene->mNumAnimations; ++a) {
-    const aiAnimation& source = *scene->mAnimations[a];
-    Animation clip;
-    clip.name = source.mName.C_Str();
-    if (clip.name.empty() || std::find(clip_names.begin(), clip_names.end(), clip.name) != clip_names.end())
-      clip.name = "clip" + std::to_string(a);
-    clip_names.push_back(clip.name);
-    const std::string element = "clip '" + clip.name + "'";
-    double ticks = source.mTicksPerSecond;
-    if (!(ticks > 0.0) || !std::isfinite(ticks)) {
-      ticks = options.default_ticks_per_second;
-      warnings.push_back(element + ": no time base in the file, " + std::to_string(ticks) +
-                         " ticks per second assumed");
-    }
-    clip.duration = static_cast<float>(source.mDuration / ticks);
-    if (!std::isfinite(clip.duration) || clip.duration < 0.0f)
-      throw Error::in_file(path, element, "duration is not finite");
-    clip.loop = options.loop_clips;
-    std::vector<bool> has_channel(bones.size(), false);
-    std::size_t dropped = 0, scaled_bones = 0;
-    for (unsigned c = 0; c < source.mNumChannels; ++c) {
-      const aiNodeAnim& channel = *source.mChannels[c];
-      const auto found = node_by_name.find(channel.mNodeName.C_Str());
-      if (found == node_by_name.end()) continue;
-      const std::int32_t bone = bone_of_node[static_cast<std::size_t>(found->second)];
-      if (bone < 0 || has_channel[static_cast<std::size_t>(bone)]) continue;  // not in the skeleton, or repeated
-      const auto b = static_cast<std::size_t>(bone);
-      has_channel[b] = true;
-      const std::string channel_element = element + ": bone '" + bones[b].name + "'";
-      Channel out;
-      out.bone = bone;
-      out.translation = convert_track<glm::vec3>(
-          channel.mPositionKeys, channel.mNumPositionKeys, ticks,
-          [&](const aiVector3D& v) { return to_skeleton_translation(b, to_glm(v)); }, dropped, path, channel_element);
-      out.rotation = convert_track<glm::quat>(
-          channel.mRotationKeys, channel.mNumRotationKeys, ticks,
-          [&](const aiQuaternion& q) { return to_skeleton_rotation(b, to_glm(q)); }, dropped, path, channel_element);
-      const glm::vec3 rest_scale = split(nodes[static_cast<std::size_t>(found->second)].local).axis_scale;
-      out.scale = convert_track<glm::vec3>(
-          channel.mScalingKeys, channel.mNumScalingKeys, ticks,
-          [&](const aiVector3D& v) { return to_glm(v) / rest_scale; }, dropped, path, channel_element);
-      if (std::any_of(out.scale.values.begin(), out.scale.values.end(),
-                      [](glm::vec3 s) { return glm::length(s - glm::vec3(1.0f)) > 1e-3f; }))
-        ++scaled_bones;
-      if (out.translation.empty()) out.translation = {Interpolation::linear, {0.0f}, {rest_differs[b].first}, {}, {}};
-      if (out.rotation.empty()) out.rotation = {Interpolation::linear, {0.0f}, {rest_differs[b].second}, {}, {}};
-      clip.channels.push_back(std::move(out));
-    }
-    for (std::size_t b = 0; b < bones.size(); ++b) {
-      if (has_channel[b] || !differs[b]) continue;
-      Channel hold;
-      hold.bone = static_cast<std::int32_t>(b);
-      hold.translation = {Interpolation::linear, {0.0f}, {rest_differs[b].first}, {}, {}};
-      hold.rotation = {Interpolation::linear, {0.0f}, {rest_differs[b].second}, {}, {}};
-      clip.channels.push_back(std::move(hold));
-    }
-    if (dropped > 0)
-      warnings.push_back(element + ": " + std::to_string(dropped) +
-                         " keys at or before their predecessor's time dropped");
-    if (scaled_bones > 0)
-      warnings.push_back(element + ": " + std::to_string(scaled_bones) +
-                         " bones animate scale, which a Pose cannot hold (ignored)");
-    clip.require_valid(bones.size(), path);
-    result.clips.push_back(std::move(clip));
+  for (unsigned a = 0; a < scene_->mNumAnimations; ++a) read_clip(a, rest, clip_names);
+}
+
+void AssimpImport::read_clip(unsigned a, const RestLocals& rest, std::vector<std::string>& clip_names) {
+  const aiAnimation& source = *scene_->mAnimations[a];
+  Animation clip;
+  clip.name = unique_clip_name(source.mName.C_Str(), a, clip_names);
+  const std::string element = "clip '" + clip.name + "'";
+  double ticks = source.mTicksPerSecond;
+  if (!(ticks > 0.0) || !std::isfinite(ticks)) {
+    ticks = options_.default_ticks_per_second;
+    warnings_.push_back(element + ": no time base in the file, " + std::to_string(ticks) + " ticks per second assumed");
   }
+  clip.duration = static_cast<float>(source.mDuration / ticks);
+  if (!std::isfinite(clip.duration) || clip.duration < 0.0f)
+    throw Error::in_file(path_, element, "duration is not finite");
+  clip.loop = options_.loop_clips;
+  std::vector<bool> has_channel(bones_.size(), false);
+  std::size_t dropped = 0, scaled_bones = 0;
+  for (unsigned c = 0; c < source.mNumChannels; ++c) {
+    const aiNodeAnim& channel = *source.mChannels[c];
+    const auto found = node_by_name_.find(channel.mNodeName.C_Str());
+    if (found == node_by_name_.end()) continue;
+    const std::int32_t bone = bone_of_node_[static_cast<std::size_t>(found->second)];
+    if (bone < 0 || has_channel[static_cast<std::size_t>(bone)]) continue;  // not in the skeleton, or repeated
+    const auto b = static_cast<std::size_t>(bone);
+    has_channel[b] = true;
+    const std::string channel_element = element + ": bone '" + bones_[b].name + "'";
+    Channel out;
+    out.bone = bone;
+    out.translation = convert_track<glm::vec3>(
+        channel.mPositionKeys, channel.mNumPositionKeys, ticks,
+        [&](const aiVector3D& v) { return to_skeleton_translation(b, to_glm(v)); }, dropped, path_, channel_element);
+    out.rotation = convert_track<glm::quat>(
+        channel.mRotationKeys, channel.mNumRotationKeys, ticks,
+        [&](const aiQuaternion& q) { return to_skeleton_rotation(b, to_glm(q)); }, dropped, path_, channel_element);
+    const glm::vec3 rest_scale = split(nodes_[static_cast<std::size_t>(found->second)].local).axis_scale;
+    out.scale = convert_track<glm::vec3>(
+        channel.mScalingKeys, channel.mNumScalingKeys, ticks,
+        [&](const aiVector3D& v) { return to_glm(v) / rest_scale; }, dropped, path_, channel_element);
+    if (std::any_of(out.scale.values.begin(), out.scale.values.end(),
+                    [](glm::vec3 s) { return glm::length(s - glm::vec3(1.0f)) > 1e-3f; }))
+      ++scaled_bones;
+    clip.channels.push_back(std::move(out));
+  }
+  hold_rest(clip, rest, has_channel);
+  add_clip(std::move(clip), dropped, scaled_bones, bones_.size(), path_, result_.clips, warnings_);
+}
+
+}  // namespace
+
+bool is_importable(const std::string& path) {
+  const std::string extension = utf8_path::to_utf8(utf8_path::from_utf8(path).extension());
+  if (extension.size() < 2) return false;
+  Assimp::Importer importer;
+  return importer.IsExtensionSupported(extension.c_str());
+}
+
+// Warnings quote names and paths from the file: each is escaped as errors are (one printable line each).
+ImportedModel import_model(const std::string& path, const ImportOptions& options) {
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) throw Error::in_file(path, "", "no such file");
+  const auto size = fs::file_size(path, error);
+  if (error || size > max_file_bytes) throw Error::in_file(path, "", "cannot be read or larger than 1 GiB");
+  ImportedModel result = is_gltf_path(path)  ? import_gltf(path, options)
+                         : is_iqm_path(path) ? import_iqm(path, options)
+                                             : AssimpImport(path, options).run();
+  for (std::string& warning : result.warnings) warning = escape_control_characters(warning);
   return result;
 }
-}  // namespace
 
 }  // namespace deform

@@ -1,6 +1,7 @@
 #pragma once
-// Helpers the importers share (import_assimp.cpp, gltf_import.cpp): the split of a transform into what a Skeleton
-// holds and the skeleton of those parts, bone names that fit .sk, and the key a point is merged by.
+// Helpers the importers share (import_assimp.cpp, gltf_import.cpp, iqm_import.cpp, scene_assembly.cpp): the split of
+// a transform into what a Skeleton holds and the skeleton of those parts, bone names that fit .sk, and the key a
+// point is merged by.
 #include <array>
 #include <cmath>
 #include <cstdint>
