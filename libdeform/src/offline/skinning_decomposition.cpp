@@ -23,6 +23,7 @@ constexpr int extra_candidates = 8;  // and its nearest extra bones
 constexpr int max_candidates = max_own_bones + extra_candidates;
 constexpr std::size_t min_points_per_bone = 4;
 constexpr int kmeans_rounds = 10;
+constexpr int kmeans_refills = 4;
 
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 32, 32>;
 using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 32, 1>;
@@ -298,20 +299,27 @@ std::vector<std::uint32_t> cluster_moved_points(Problem& pb, const Decomposition
       recentre(kept.size());
     }
   }
-  std::vector<float> distance(n, std::numeric_limits<float>::infinity());
   if (centres.empty()) centres.assign(paths.of(0).begin(), paths.of(0).end());
-  for (std::size_t from = 0; centres.size() / dim <= budget; from = centres.size() / dim - 1) {
-    for (std::size_t m = 0; m < n; ++m)
-      for (std::size_t c = from; c < centres.size() / dim; ++c)
-        distance[m] = std::min(distance[m], path_distance(std::span(centres).subspan(c * dim, dim), paths.of(m)));
+  // Up to the budget by farthest paths, then Lloyd's rounds; a cluster they empty is dropped, and its bone given
+  // again to the farthest path, a few times over.
+  for (int refill = 0; refill < kmeans_refills; ++refill) {
+    std::vector<float> distance(n, std::numeric_limits<float>::infinity());
+    const std::size_t before = centres.size() / dim;
+    for (std::size_t from = 0; centres.size() / dim <= budget; from = centres.size() / dim - 1) {
+      for (std::size_t m = 0; m < n; ++m)
+        for (std::size_t c = from; c < centres.size() / dim; ++c)
+          distance[m] = std::min(distance[m], path_distance(std::span(centres).subspan(c * dim, dim), paths.of(m)));
+      if (centres.size() / dim == budget) break;
+      const std::size_t far = std::size_t(std::max_element(distance.begin(), distance.end()) - distance.begin());
+      if (!(distance[far] > 0.0f)) break;
+      centres.insert(centres.end(), paths.of(far).begin(), paths.of(far).end());
+    }
+    if (refill > 0 && centres.size() / dim == before) break;  // nothing was added: the previous rounds stand
+    for (int round = 0; round < kmeans_rounds; ++round) {
+      for (std::size_t m = 0; m < n; ++m) cluster[m] = std::uint32_t(nearest_path(centres, dim, paths.of(m)));
+      recentre(centres.size() / dim);
+    }
     if (centres.size() / dim == budget) break;
-    const std::size_t far = std::size_t(std::max_element(distance.begin(), distance.end()) - distance.begin());
-    if (!(distance[far] > 0.0f)) break;
-    centres.insert(centres.end(), paths.of(far).begin(), paths.of(far).end());
-  }
-  for (int round = 0; round < kmeans_rounds; ++round) {
-    for (std::size_t m = 0; m < n; ++m) cluster[m] = std::uint32_t(nearest_path(centres, dim, paths.of(m)));
-    recentre(centres.size() / dim);
   }
   pb.extras = centres.size() / dim;
   pb.centre.resize(pb.extras);
@@ -406,10 +414,16 @@ void reconstruct(Problem& pb, ThreadPool& pool) {
   });
 }
 
-// The candidates of moved point m: its own bones (the artist's, strongest first) and its nearest extra bones.
+// The candidates of moved point m: its own bones (the artist's, strongest first), the extra bones it uses now (so
+// that its current weights stay within reach and the weight step never does worse), then its nearest extra bones.
 std::size_t candidates_of(const Problem& pb, std::size_t m, std::array<std::uint32_t, max_candidates>& out) {
   std::size_t n = 0;
   for (int k = 0; k < pb.own_count[m]; ++k) out[n++] = pb.own[m][k];
+  const auto listed = [&](std::uint32_t bone) {
+    return std::find(out.begin(), out.begin() + n, bone) != out.begin() + n;
+  };
+  for (int k = 0; k < pb.fit_count[m]; ++k)
+    if (!listed(pb.fit[m][k].bone)) out[n++] = pb.fit[m][k].bone;
   const glm::vec3 p = pb.model->mesh.positions[pb.moved[m]];
   // The nearest few, kept sorted by insertion (distance, then the lower bone).
   std::array<std::pair<float, std::uint32_t>, extra_candidates> best;
@@ -422,7 +436,8 @@ std::size_t candidates_of(const Problem& pb, std::size_t m, std::array<std::uint
     for (; at > 0 && entry < best[at - 1]; --at) best[at] = best[at - 1];
     best[at] = entry;
   }
-  for (std::size_t k = 0; k < kept; ++k) out[n++] = std::uint32_t(pb.body + best[k].second);
+  for (std::size_t k = 0; k < kept && n < max_candidates; ++k)
+    if (const std::uint32_t bone = std::uint32_t(pb.body + best[k].second); !listed(bone)) out[n++] = bone;
   return n;
 }
 
@@ -458,6 +473,7 @@ void fit_point_weights(Problem& pb, std::size_t m, int influences) {
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a; b < n; ++b) gram(Eigen::Index(a), Eigen::Index(b)) += glm::dot(d[a], d[b]);
   }
+  const Small plain = gram.selfadjointView<Eigen::Upper>();  // Σ_t |Σ w_c d_c|² = wᵀ plain w when Σ w = 1
   const double scale = gram.trace() / double(n) + 1e-30;
   const double penalty = 1e6 * scale;
   for (std::size_t a = 0; a < n; ++a) {
@@ -483,16 +499,18 @@ void fit_point_weights(Problem& pb, std::size_t m, int influences) {
   }
   double total = 0.0;
   for (std::size_t c = 0; c < n; ++c) total += x(Eigen::Index(c));
+  if (!(total > 0.0) || !std::isfinite(total)) return;  // a degenerate system: the point keeps its weights
+  SmallVector now = SmallVector::Zero(Eigen::Index(n)), before = SmallVector::Zero(Eigen::Index(n));
+  for (std::size_t c = 0; c < n; ++c) now(Eigen::Index(c)) = double(float(x(Eigen::Index(c)) / total));
+  for (int k = 0; k < pb.fit_count[m]; ++k)
+    before(Eigen::Index(std::find(candidates.begin(), candidates.begin() + n, pb.fit[m][k].bone) -
+                        candidates.begin())) = pb.fit[m][k].weight;
+  // The truncation to `influences` and the penalty can lose a little: the weights change only when they gain.
+  if (!(now.dot(plain * now) < before.dot(plain * before))) return;
   std::uint8_t count = 0;
-  if (total > 0.0 && std::isfinite(total)) {
-    for (std::size_t c = 0; c < n; ++c)
-      if (x(Eigen::Index(c)) > 0.0 && count < influences)
-        pb.fit[m][count++] = {candidates[c], float(x(Eigen::Index(c)) / total)};
-  }
-  if (count == 0) {
-    // Nothing fitted (a degenerate system): the point keeps its strongest own bone.
-    pb.fit[m][count++] = {candidates[0], 1.0f};
-  }
+  for (std::size_t c = 0; c < n; ++c)
+    if (now(Eigen::Index(c)) > 0.0 && count < influences)
+      pb.fit[m][count++] = {candidates[c], float(now(Eigen::Index(c)))};
   pb.fit_count[m] = count;
 }
 
@@ -773,8 +791,9 @@ SkinningDecomposition decompose_skinning(const Model& model, std::span<const Dec
       restart_unused_bones(pb, members, measure(pb));
       fit_extra_bones(pb, members, pool);
       const double now = measure(pb).total;
-      // Converged: an alternation that gains less than a thousandth (each step can only lower the error).
-      if (!(now < previous * (1.0 - 1e-3))) break;
+      // Converged: an alternation that gains less than a thousandth. Neither step can raise the error: the weight
+      // step keeps a point's weights unless the new ones fit better, the bone step solves each bone exactly.
+      if (!(now < previous * (1.0 - 1e-5))) break;
       previous = now;
     }
     out.iterations = std::min(out.iterations, options.iterations);
