@@ -1,0 +1,123 @@
+// bind_pose_driver (offline/pose_driver.hpp): the sample poses' distances, the kernel matrix, its solve.
+#include "deform/offline/pose_driver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "deform/runtime/error.hpp"
+#include "finite.hpp"
+
+namespace deform {
+namespace {
+
+void require_valid(const Skeleton& skeleton, std::span<const std::int32_t> bones, std::span<const Pose> samples,
+                   std::span<const float> targets, std::size_t shape_count, const PoseDriverSettings& settings) {
+  if (bones.empty()) throw Error::invalid_argument("bones", "a pose driver needs at least one driver bone");
+  for (std::size_t j = 0; j < bones.size(); ++j) {
+    if (bones[j] < 0 || std::size_t(bones[j]) >= skeleton.bone_count())
+      throw Error::invalid_argument("bones", "bone " + std::to_string(bones[j]) + " is not in the skeleton");
+    if (std::count(bones.begin(), bones.end(), bones[j]) > 1)
+      throw Error::invalid_argument("bones", "bone '" + skeleton.key(bones[j]) + "' is listed twice");
+  }
+  if (samples.empty()) throw Error::invalid_argument("samples", "a pose driver needs at least one sample pose");
+  if (shape_count == 0) throw Error::invalid_argument("shape_count", "a pose driver drives at least one shape");
+  if (targets.size() != samples.size() * shape_count)
+    throw Error::invalid_argument("targets", "expected one weight per sample pose and shape");
+  for (const float t : targets)
+    if (!std::isfinite(t)) throw Error::invalid_argument("targets", "a target weight is not finite");
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    if (samples[k].rotations.size() != skeleton.bone_count())
+      throw Error::invalid_argument("sample " + std::to_string(k), "the pose does not have one rotation per bone");
+    for (const std::int32_t bone : bones)
+      if (!finite(samples[k].rotations[std::size_t(bone)]) || glm::length(samples[k].rotations[std::size_t(bone)]) < 0.5f)
+        throw Error::invalid_argument("sample " + std::to_string(k),
+                                      "bone '" + skeleton.key(bone) + "' has no finite unit rotation");
+  }
+  if (!(settings.radius >= 0.0f) || !std::isfinite(settings.radius))
+    throw Error::invalid_argument("radius", "must be finite and >= 0 (0 picks it)");
+  if (!(settings.twist_weight >= 0.0f) || !std::isfinite(settings.twist_weight))
+    throw Error::invalid_argument("twist_weight", "must be finite and >= 0");
+  if (!(settings.regularization >= 0.0f) || !std::isfinite(settings.regularization))
+    throw Error::invalid_argument("regularization", "must be finite and >= 0");
+}
+
+glm::vec3 twist_axis(const Skeleton& skeleton, std::int32_t bone) {
+  for (const std::int32_t child : skeleton.bone(bone).children) {
+    const glm::vec3 head = skeleton.bone(child).bind_translation;
+    if (glm::length(head) > 0.0f) return glm::normalize(head);
+  }
+  return {0.0f, 1.0f, 0.0f};
+}
+
+}  // namespace
+
+PoseDriverBinding bind_pose_driver(const Skeleton& skeleton, std::span<const std::int32_t> bones,
+                                   std::span<const Pose> samples, std::span<const float> targets,
+                                   std::size_t shape_count, const PoseDriverSettings& settings) {
+  require_valid(skeleton, bones, samples, targets, shape_count, settings);
+  PoseDriverBinding out;
+  out.bones.assign(bones.begin(), bones.end());
+  for (const std::int32_t bone : bones) out.twist_axes.push_back(twist_axis(skeleton, bone));
+  for (const Pose& pose : samples)
+    for (const std::int32_t bone : bones) out.sample_poses.push_back(glm::normalize(pose.rotations[std::size_t(bone)]));
+  out.shape_count = shape_count;
+  out.kernel = settings.kernel;
+  out.twist_weight = settings.twist_weight;
+  out.clamp = settings.clamp;
+  // The squared distances between the samples, as the job measures them (float, the same function).
+  const std::size_t n = samples.size(), b = bones.size();
+  const auto size = static_cast<Eigen::Index>(n);
+  Eigen::MatrixXd d2(size, size);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t l = 0; l < n; ++l) {
+      float sum = 0.0f;
+      for (std::size_t j = 0; j < b; ++j)
+        sum += swing_twist_distance_squared(out.sample_poses[l * b + j], out.sample_poses[k * b + j], out.twist_axes[j],
+                                            out.twist_weight);
+      d2(Eigen::Index(k), Eigen::Index(l)) = sum;
+    }
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t l = k + 1; l < n; ++l)
+      if (!(d2(Eigen::Index(k), Eigen::Index(l)) > 1e-10))
+        throw Error::invalid_argument("samples", "samples " + std::to_string(k) + " and " + std::to_string(l) +
+                                                     " are the same pose for the driver bones");
+  if (settings.radius > 0.0f) {
+    out.radius = settings.radius;
+  } else if (n == 1) {
+    out.radius = 1.0f;
+  } else {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t l = 0; l < n; ++l)
+        if (l != k) nearest = std::min(nearest, d2(Eigen::Index(k), Eigen::Index(l)));
+      sum += std::sqrt(nearest);
+    }
+    out.radius = float(sum / double(n));
+  }
+  Eigen::MatrixXd phi(size, size);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t l = 0; l < n; ++l)
+      phi(Eigen::Index(k), Eigen::Index(l)) =
+          rbf_kernel(out.kernel, float(d2(Eigen::Index(k), Eigen::Index(l))), out.radius) +
+          (k == l ? settings.regularization : 0.0f);
+  Eigen::MatrixXd t(size, static_cast<Eigen::Index>(shape_count));
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t s = 0; s < shape_count; ++s) t(Eigen::Index(k), Eigen::Index(s)) = targets[k * shape_count + s];
+  const Eigen::MatrixXd c = phi.fullPivLu().solve(t);
+  out.coefficients.resize(n * shape_count);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t s = 0; s < shape_count; ++s) {
+      const double value = c(Eigen::Index(k), Eigen::Index(s));
+      if (!std::isfinite(value)) throw Error::invalid_argument("samples", "the kernel matrix cannot be solved");
+      out.coefficients[k * shape_count + s] = float(value);
+    }
+  return out;
+}
+
+}  // namespace deform
