@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "allocation_counter.hpp"  // counts every allocation of this executable
+#include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/pose_driver.hpp"
 #include "deform/runtime/error.hpp"
@@ -49,9 +50,11 @@ TEST_CASE("swing-twist distance: the chords of the swing and twist angles, on 3,
     const float weight = trial % 3 == 0 ? 0.0f : trial % 3 == 1 ? 1.0f : 0.5f;
     double swing = 0.0, twist = 0.0;
     swing_twist_angles(a, b, axis, swing, twist);
-    const double expected = 4.0 * std::pow(std::sin(swing / 2), 2) + weight * weight * 4.0 * std::pow(std::sin(twist / 2), 2);
+    const double expected =
+        4.0 * std::pow(std::sin(swing / 2), 2) + weight * weight * 4.0 * std::pow(std::sin(twist / 2), 2);
     CAPTURE(trial);
-    CHECK(deform::swing_twist_distance_squared(a, b, axis, weight) == doctest::Approx(expected).epsilon(1e-4).scale(1.0));
+    CHECK(deform::swing_twist_distance_squared(a, b, axis, weight) ==
+          doctest::Approx(expected).epsilon(1e-4).scale(1.0));
     // Symmetric.
     CHECK(deform::swing_twist_distance_squared(b, a, axis, weight) ==
           doctest::Approx(deform::swing_twist_distance_squared(a, b, axis, weight)).epsilon(1e-4).scale(1.0));
@@ -112,7 +115,8 @@ std::vector<double> plain_drive(const deform::PoseDriverBinding& b, const deform
       double swing = 0.0, twist = 0.0;
       swing_twist_angles(b.sample_poses[k * n + j], pose.rotations[std::size_t(b.bones[j])], b.twist_axes[j], swing,
                          twist);
-      d2 += 4.0 * std::pow(std::sin(swing / 2), 2) + b.twist_weight * b.twist_weight * 4.0 * std::pow(std::sin(twist / 2), 2);
+      d2 += 4.0 * std::pow(std::sin(swing / 2), 2) +
+            b.twist_weight * b.twist_weight * 4.0 * std::pow(std::sin(twist / 2), 2);
     }
     const double x = d2 / (double(b.radius) * b.radius);
     const double phi = b.kernel == deform::RbfKernel::gaussian ? std::exp(-x) : 1.0 / std::sqrt(1.0 + x);
@@ -136,7 +140,8 @@ TEST_CASE("pose driver: exact at its samples, equal to a plain evaluation betwee
       CAPTURE(seed);
       for (std::size_t k = 0; k < Driver::shapes; ++k) {
         const std::vector<float> w = drive(binding, d.samples[k]);
-        for (std::size_t s = 0; s < Driver::shapes; ++s) CHECK(w[s] == doctest::Approx(s == k ? 1.0 : 0.0).scale(1).epsilon(2e-3));
+        for (std::size_t s = 0; s < Driver::shapes; ++s)
+          CHECK(w[s] == doctest::Approx(s == k ? 1.0 : 0.0).scale(1).epsilon(2e-3));
       }
       std::mt19937 rng(seed + 100);
       for (int trial = 0; trial < 50; ++trial) {
@@ -144,7 +149,8 @@ TEST_CASE("pose driver: exact at its samples, equal to a plain evaluation betwee
         for (const std::int32_t bone : d.bones) pose.rotations[std::size_t(bone)] = random_rotation(rng, 120.0f);
         const std::vector<float> w = drive(binding, pose);
         const std::vector<double> reference = plain_drive(binding, pose);
-        for (std::size_t s = 0; s < Driver::shapes; ++s) CHECK(w[s] == doctest::Approx(reference[s]).scale(1).epsilon(1e-3));
+        for (std::size_t s = 0; s < Driver::shapes; ++s)
+          CHECK(w[s] == doctest::Approx(reference[s]).scale(1).epsilon(1e-3));
       }
     }
   }
@@ -171,7 +177,8 @@ TEST_CASE("pose driver: clamped weights, no twist on request, far poses fade und
     q = q * glm::angleAxis(1.0f, swing_only.twist_axes[j]);
   }
   const std::vector<float> straight = drive(swing_only, pose), turned = drive(swing_only, twisted);
-  for (std::size_t s = 0; s < Driver::shapes; ++s) CHECK(turned[s] == doctest::Approx(straight[s]).scale(1).epsilon(1e-4));
+  for (std::size_t s = 0; s < Driver::shapes; ++s)
+    CHECK(turned[s] == doctest::Approx(straight[s]).scale(1).epsilon(1e-4));
   // With twist counted, the same turn moves the weights.
   const std::vector<float> counted = drive(clamped, twisted);
   CHECK(counted[3] < 0.9f);
@@ -226,6 +233,69 @@ TEST_CASE("pose driver: hostile input refused, nothing written, no allocation pe
   const long before = allocations.load();
   for (int frame = 0; frame < 100; ++frame) REQUIRE(job.run());
   CHECK(allocations.load() == before);
+}
+
+TEST_CASE("a corrective sculpted at a bent elbow comes back exactly there, and fades to the rest at the bind pose") {
+  deform::Model model = deform::builtin_character();
+  const deform::Skeleton& skeleton = model.skeleton;
+  const std::int32_t forearm = skeleton.find("forearm_l"), upperarm = skeleton.find("upperarm_l");
+  deform::Pose bent = skeleton.bind_pose();
+  skeleton.set_euler(bent, forearm, {120.0f, 0.0f, 0.0f});
+  // The skinning at the bent pose, and a sculpt that pads the elbow's inside: every point within 8 cm of the elbow
+  // pushed 1 cm along +y.
+  deform::Rig no_lattices;
+  deform::Character plain(model, no_lattices);
+  REQUIRE(plain.set_pose(bent));
+  REQUIRE(plain.update(0.0f));
+  bent = plain.pose();  // as the character holds it: within the elbow's limits
+  const std::vector<glm::mat4> palette(plain.palette().begin(), plain.palette().end());
+  const glm::vec3 elbow = plain.bone_position(forearm);
+  std::vector<glm::vec3> sculpt(plain.positions().begin(), plain.positions().end());
+  std::size_t padded = 0;
+  for (glm::vec3& p : sculpt)
+    if (glm::length(p - elbow) < 0.08f) p.y += 0.01f, ++padded;
+  REQUIRE(padded > 10);
+  const deform::MorphTarget corrective = deform::corrective_from_sculpt(model, palette, sculpt, 1e-6f, "elbow_pad");
+  CHECK(corrective.points.size() == padded);
+  // The driver: the bind pose (weight 0) and the bent one (weight 1) on the upper arm and forearm.
+  const std::vector<std::int32_t> bones = {upperarm, forearm};
+  const std::vector<deform::Pose> samples = {skeleton.bind_pose(), bent};
+  const std::vector<float> targets = {0.0f, 1.0f};
+  const deform::PoseDriverBinding driver = deform::bind_pose_driver(skeleton, bones, samples, targets, 1);
+  model.morph_targets.push_back(corrective);
+  deform::Character c(model, no_lattices);
+  const std::uint32_t shape[] = {0};
+  REQUIRE(c.set_pose_driver(driver, shape));
+  const std::uint32_t beyond[] = {1};
+  CHECK_FALSE(c.set_pose_driver(driver, beyond));
+  REQUIRE(c.set_pose(bent));
+  REQUIRE(c.update(0.0f));
+  CHECK(c.morph_weights()[0] == doctest::Approx(1.0f).epsilon(1e-4));
+  float worst = 0.0f;
+  for (std::size_t i = 0; i < sculpt.size(); ++i) worst = std::max(worst, glm::length(c.positions()[i] - sculpt[i]));
+  CHECK(worst < 1e-4f);  // the sculpt given back (the weight is 1 to 1e-4 of the 1 cm pad)
+  // At the bind pose the shape is off and the character is its bind mesh.
+  REQUIRE(c.set_pose(skeleton.bind_pose()));
+  REQUIRE(c.update(0.0f));
+  CHECK(c.morph_weights()[0] == doctest::Approx(0.0f).scale(1).epsilon(1e-4));
+  worst = 0.0f;
+  for (std::size_t i = 0; i < sculpt.size(); ++i)
+    worst = std::max(worst, glm::length(c.positions()[i] - model.mesh.positions[i]));
+  CHECK(worst < 1e-5f);
+  // Halfway the pad is partly on.
+  deform::Pose half = skeleton.bind_pose();
+  skeleton.set_euler(half, forearm, {60.0f, 0.0f, 0.0f});
+  REQUIRE(c.set_pose(half));
+  REQUIRE(c.update(0.0f));
+  CHECK(c.morph_weights()[0] > 0.05f);
+  CHECK(c.morph_weights()[0] < 0.95f);
+  // An instance drives the same shape.
+  deform::Character copy = c.instance();
+  REQUIRE(copy.set_pose(bent));
+  REQUIRE(copy.update(0.0f));
+  CHECK(copy.morph_weights()[0] == doctest::Approx(1.0f).epsilon(1e-4));
+  // A sculpt of the wrong size is refused.
+  CHECK_THROWS_AS(deform::corrective_from_sculpt(model, palette, std::span(sculpt).first(10)), deform::Error);
 }
 
 }  // namespace

@@ -182,6 +182,9 @@ Character Character::instance() const {
   copy.settings = settings;
   copy.set_normals_mode(normals_mode_);
   copy.direct_mush_ = direct_mush_;  // Direct Delta Mush: the binding shared (its job has no scratch)
+  copy.driver_ = driver_;            // pose-space correctives: the driver shared, the weights' room this copy's own
+  copy.driven_targets_ = driven_targets_;
+  copy.driven_weights_ = driven_weights_;
   copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
@@ -616,6 +619,16 @@ Status Character::update(float dt) {
   }
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
   if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
+  // Pose-space correctives: the driver's weights become its shapes' morph weights (validated at set_pose_driver),
+  // before the early return below, so that a caller deforming elsewhere morphs with them too.
+  if (driver_) {
+    PoseDriverJob drive;
+    drive.binding = driver_.get();
+    drive.rotations = pose_.rotations;
+    drive.weights = driven_weights_;
+    if (const Status status = drive.run(); !status) return status;
+    for (std::size_t s = 0; s < driven_targets_.size(); ++s) morph_weights_[driven_targets_[s]] = driven_weights_[s];
+  }
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
   if (!settings.deform_on_cpu) return hierarchy_.update(world_);
   const bool transport = normals_mode_ == NormalsMode::transported;
@@ -701,6 +714,28 @@ void Character::set_direct_delta_mush(const DirectDeltaMushSettings& ddm) {
 }
 
 void Character::clear_direct_delta_mush() noexcept { direct_mush_.reset(); }
+
+Status Character::set_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets) {
+  std::vector<float> weights(driver.shape_count);
+  PoseDriverJob job;
+  job.binding = &driver;
+  job.rotations = pose_.rotations;
+  job.weights = weights;
+  if (const Status status = job.validate(); !status) return status;
+  if (targets.size() != driver.shape_count) return Status::failure("targets are not one per shape");
+  for (const std::uint32_t t : targets)
+    if (t >= morph_weights_.size()) return Status::failure("morph target out of range");
+  driver_ = std::make_shared<const PoseDriverBinding>(driver);
+  driven_targets_.assign(targets.begin(), targets.end());
+  driven_weights_ = std::move(weights);
+  return Status();
+}
+
+void Character::clear_pose_driver() noexcept {
+  driver_.reset();
+  driven_targets_.clear();
+  driven_weights_.clear();
+}
 
 void Character::clear_delta_mush() noexcept {
   mush_.reset();

@@ -34,7 +34,8 @@ void require_valid(const Skeleton& skeleton, std::span<const std::int32_t> bones
     if (samples[k].rotations.size() != skeleton.bone_count())
       throw Error::invalid_argument("sample " + std::to_string(k), "the pose does not have one rotation per bone");
     for (const std::int32_t bone : bones)
-      if (!finite(samples[k].rotations[std::size_t(bone)]) || glm::length(samples[k].rotations[std::size_t(bone)]) < 0.5f)
+      if (!finite(samples[k].rotations[std::size_t(bone)]) ||
+          glm::length(samples[k].rotations[std::size_t(bone)]) < 0.5f)
         throw Error::invalid_argument("sample " + std::to_string(k),
                                       "bone '" + skeleton.key(bone) + "' has no finite unit rotation");
   }
@@ -118,6 +119,51 @@ PoseDriverBinding bind_pose_driver(const Skeleton& skeleton, std::span<const std
       out.coefficients[k * shape_count + s] = float(value);
     }
   return out;
+}
+
+MorphTarget corrective_from_sculpt(const Model& model, std::span<const glm::mat4> palette,
+                                   std::span<const glm::vec3> sculpted, float tolerance, const std::string& name) {
+  const std::size_t points = model.mesh.point_count();
+  if (sculpted.size() != points) throw Error::invalid_argument("sculpted", "expected one position per mesh point");
+  if (model.weights.size() != points) throw Error::invalid_argument("model", "the weights are not one per point");
+  if (!(tolerance >= 0.0f) || !std::isfinite(tolerance))
+    throw Error::invalid_argument("tolerance", "must be finite and >= 0");
+  for (const glm::mat4& m : palette)
+    if (!finite(m)) throw Error::invalid_argument("palette", "a matrix is not finite");
+  const SkinWeights& w = model.weights;
+  MorphTarget target;
+  target.name = name;
+  for (std::size_t p = 0; p < points; ++p) {
+    if (!finite(sculpted[p]))
+      throw Error::invalid_argument("sculpted", "point " + std::to_string(p) + " is not finite");
+    // The point's blended matrix over every influence (the four slots and the extras), in double.
+    glm::dmat4 blended(0.0);
+    const auto add = [&](std::uint16_t bone, float weight) {
+      if (weight == 0.0f) return;
+      if (bone >= palette.size())
+        throw Error::invalid_argument(
+            "palette", "point " + std::to_string(p) + "'s bone " + std::to_string(bone) + " is beyond the palette");
+      blended += double(weight) * glm::dmat4(palette[bone]);
+    };
+    for (int k = 0; k < 4; ++k) add(w.bones[p][k], w.weights[p][k]);
+    const auto it = std::lower_bound(w.extra_points.begin(), w.extra_points.end(), std::uint32_t(p));
+    if (it != w.extra_points.end() && *it == p) {
+      const std::size_t j = std::size_t(it - w.extra_points.begin());
+      for (std::uint32_t e = w.extra_offsets[j]; e < w.extra_offsets[j + 1]; ++e)
+        add(w.extra_bones[e], w.extra_weights[e]);
+    }
+    const glm::dvec3 rest(model.mesh.positions[p]);
+    const glm::dvec3 skinned = glm::dvec3(blended * glm::dvec4(rest, 1.0));
+    const glm::dmat3 a(blended);
+    const double det = glm::determinant(a);
+    if (!(std::abs(det) > 1e-12))
+      throw Error::invalid_argument("point " + std::to_string(p), "its blended skinning matrix cannot be inverted");
+    const glm::vec3 delta(glm::inverse(a) * (glm::dvec3(sculpted[p]) - skinned));
+    if (glm::length(delta) <= tolerance) continue;
+    target.points.push_back(std::uint32_t(p));
+    target.position_deltas.push_back(delta);
+  }
+  return target;
 }
 
 }  // namespace deform

@@ -59,6 +59,7 @@
 #include "deform/runtime/ik.hpp"
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/morph.hpp"
+#include "deform/runtime/pose_driver.hpp"
 #include "deform/runtime/normals.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "deform/runtime/spring_chain.hpp"
@@ -175,6 +176,15 @@ class DEFORM_CHARACTER_API Character {
   void clear_direct_delta_mush() noexcept;
   // The binding in use, or null when Direct Delta Mush is off.
   const DirectDeltaMushBinding* direct_delta_mush() const noexcept { return direct_mush_.get(); }
+
+  // Pose-space correctives (runtime/pose_driver.hpp): `driver`'s shapes are morph targets of the model, shape s the
+  // target `targets[s]`; each update() then sets those targets' weights from the pose (PoseDriverJob on pose()'s
+  // rotations) before the morph step, overriding what the setters above gave them. Refuses, changing nothing, a
+  // driver PoseDriverJob::validate refuses for this skeleton or targets not one per shape and in range. Instances
+  // share the driver. No allocation per frame.
+  Status set_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets);
+  void clear_pose_driver() noexcept;
+  const PoseDriverBinding* pose_driver() const noexcept { return driver_.get(); }
 
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
@@ -385,6 +395,10 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec4> mush_scratch_;
   // Direct Delta Mush: the binding (shared by instances; null when off). Its job needs no scratch.
   std::shared_ptr<const DirectDeltaMushBinding> direct_mush_;
+  // Pose-space correctives: the driver (shared; null when off), the morph target of each shape, its weights' room.
+  std::shared_ptr<const PoseDriverBinding> driver_;
+  std::vector<std::uint32_t> driven_targets_;
+  std::vector<float> driven_weights_;
 };
 
 // The limbs reach() stretches, for a caller that reaches with "the nearest limb" (a click beside the character):

@@ -6,7 +6,11 @@
 #include <cstdint>
 #include <span>
 
+#include <string>
+
 #include "deform/offline/export.hpp"
+#include "deform/runtime/model.hpp"
+#include "deform/runtime/morph.hpp"
 #include "deform/runtime/pose_driver.hpp"
 #include "deform/runtime/skeleton.hpp"
 
@@ -30,7 +34,17 @@ struct PoseDriverSettings {
 // samples when two are the same pose for the driver bones (Φ singular). O(samples² · bones + samples³).
 DEFORM_OFFLINE_API PoseDriverBinding bind_pose_driver(const Skeleton& skeleton, std::span<const std::int32_t> bones,
                                                       std::span<const Pose> samples, std::span<const float> targets,
-                                                      std::size_t shape_count,
-                                                      const PoseDriverSettings& settings = {});
+                                                      std::size_t shape_count, const PoseDriverSettings& settings = {});
+
+// A corrective shape from a sculpt: the bind-space morph target that, applied before linear blend skinning by
+// `palette` (the skinning matrices of the pose the artist sculpted at, e.g. Character::palette()), puts every point of
+// `model` where `sculpted` has it (one position per point). For point i skinned by A_i p + t_i (A_i = Σ w_ij M_j's
+// 3×3 part), the delta is A_i⁻¹ (sculpted_i − skinned_i): exact under LBS, to float rounding. Points whose delta is
+// within `tolerance` (model units) of zero are left out, so the target is sparse. No normal deltas: the morphed
+// normals are the rest ones. Throws deform::Error (kind argument) for sizes that do not match, a non-finite input, or
+// a point whose blended matrix cannot be inverted (its bones' weights cancel), naming the point.
+DEFORM_OFFLINE_API MorphTarget corrective_from_sculpt(const Model& model, std::span<const glm::mat4> palette,
+                                                      std::span<const glm::vec3> sculpted, float tolerance = 0.0f,
+                                                      const std::string& name = "corrective");
 
 }  // namespace deform

@@ -33,10 +33,10 @@ enum class RbfKernel : std::uint8_t { gaussian, inverse_multiquadric };
 
 // What bind_pose_driver builds: read-only data for PoseDriverJob.
 struct PoseDriverBinding {
-  std::vector<std::int32_t> bones;       // the driver bones (skeleton ids)
-  std::vector<glm::vec3> twist_axes;     // per driver bone: its axis in its own local frame, unit
-  std::vector<glm::quat> sample_poses;   // [k · bones + b]: sample pose k's local rotation of driver bone b, unit
-  std::vector<float> coefficients;       // [k · shapes + s]: C, solved at bind time
+  std::vector<std::int32_t> bones;      // the driver bones (skeleton ids)
+  std::vector<glm::vec3> twist_axes;    // per driver bone: its axis in its own local frame, unit
+  std::vector<glm::quat> sample_poses;  // [k · bones + b]: sample pose k's local rotation of driver bone b, unit
+  std::vector<float> coefficients;      // [k · shapes + s]: C, solved at bind time
   std::size_t shape_count = 0;
   RbfKernel kernel = RbfKernel::gaussian;
   float radius = 1.0f;        // of the kernel, in the distance's units (chord length, 2 at a half turn); > 0
