@@ -13,7 +13,6 @@
 
 namespace deform_python {
 
-std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
 std::string method_name(deform::SkinningMethod method);
 deform::SkinningMethod parse_method(const std::string& name);
 

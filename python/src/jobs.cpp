@@ -13,9 +13,6 @@
 #include "deform/runtime/skinning.hpp"
 
 namespace deform_python {
-
-std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
-
 namespace {
 
 // glm matrices from (B, 4, 4) row-major float32 (a copy: glm stores columns).
