@@ -13,7 +13,6 @@
 
 namespace deform_python {
 
-std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
 std::string method_name(deform::SkinningMethod method);
 deform::SkinningMethod parse_method(const std::string& name);
 
@@ -33,9 +32,9 @@ std::size_t morph_index(const deform::Character& c, const py::object& target) {
   return static_cast<std::size_t>(k);
 }
 
-}  // namespace
+using CharacterClass = py::class_<deform::Character>;
 
-void bind_character(py::module_& m) {
+void bind_reach_result(py::module_& m) {
   py::class_<deform::ReachResult>(m, "ReachResult")
       .def_property_readonly("ok", [](const deform::ReachResult& r) { return r.status.ok(); })
       .def_readonly("residual", &deform::ReachResult::residual, "|target - effector| after IK alone (model units)")
@@ -46,12 +45,11 @@ void bind_character(py::module_& m) {
         return "ReachResult(residual=" + std::to_string(r.residual) + ", stretch=" + std::to_string(r.stretch) +
                ", distance=" + std::to_string(r.distance) + ")";
       });
+}
 
-  py::class_<deform::Character>(
-      m, "Character",
-      "A rigged model with its skin and elastic lattices: reach(), release(), update(dt), positions.\n"
-      "positions and normals() are read-only views of the character's storage (no copy): they change with each "
-      "update() and stay valid while the character lives (the view keeps it alive).")
+// The constructors, the model and skeleton it holds, the held pose.
+void bind_character_construction(CharacterClass& character) {
+  character
       .def(py::init([](const deform::Model& model, const deform::Rig* rig) {
              return rig ? std::make_unique<deform::Character>(model, *rig) : std::make_unique<deform::Character>(model);
            }),
@@ -85,7 +83,12 @@ void bind_character(py::module_& m) {
           py::arg("pose"), py::arg("later") = py::none(), py::arg("lead") = 1e-3f,
           "Holds `pose`; with `later`, the same motion `lead` seconds later (a clip sampled a millisecond ahead), from "
           "which update() takes the bones' velocities for the lattices' inertia and the spring chains: the same "
-          "motion at any frame rate. Raises deform.Error when refused.")
+          "motion at any frame rate. Raises deform.Error when refused.");
+}
+
+// Secondary motion: the lattices' inertia and gravity, the spring chains.
+void bind_character_motion(CharacterClass& character) {
+  character
       .def(
           "set_lattice_motion",
           [](deform::Character& c, float inertia, const std::optional<FloatArray>& gravity, float units_per_metre,
@@ -121,7 +124,12 @@ void bind_character(py::module_& m) {
               throw deform::Error::invalid_argument("chain " + std::to_string(chain), "spring chain out of range");
             return vec3_view(c.springs().points(chain), self, false);
           },
-          py::arg("chain"), "(B + 1, 3) read-only view of a spring chain's first head and tails, as of update().")
+          py::arg("chain"), "(B + 1, 3) read-only view of a spring chain's first head and tails, as of update().");
+}
+
+// Settings: the skinning method, the reach solver and its limits, pole and softening, IK iterations.
+void bind_character_settings(CharacterClass& character) {
+  character
       .def_property(
           "skinning", [](const deform::Character& c) { return method_name(c.settings.skinning); },
           [](deform::Character& c, const std::string& name) { c.settings.skinning = parse_method(name); },
@@ -172,7 +180,12 @@ void bind_character(py::module_& m) {
           })
       .def_property(
           "lattice_fields", [](const deform::Character& c) { return c.settings.lattice_fields; },
-          [](deform::Character& c, bool on) { c.settings.lattice_fields = on; })
+          [](deform::Character& c, bool on) { c.settings.lattice_fields = on; });
+}
+
+// Delta Mush after the lattices, Direct Delta Mush as the skinning.
+void bind_character_mush(CharacterClass& character) {
+  character
       .def(
           "set_delta_mush",
           [](deform::Character& c, int iterations, float step, std::optional<FloatArray> mask) {
@@ -209,7 +222,12 @@ void bind_character(py::module_& m) {
            "Back to `skinning` (LBS or DQS), the default.")
       .def_property_readonly(
           "direct_delta_mush_bound", [](const deform::Character& c) { return c.direct_delta_mush() != nullptr; },
-          "Whether Direct Delta Mush skins the character.")
+          "Whether Direct Delta Mush skins the character.");
+}
+
+// Reach, release and update, and the views of what the character shows.
+void bind_character_reach(CharacterClass& character) {
+  character
       .def(
           "set_max_stretch", [](deform::Character& c, float s) { check(c.set_max_stretch(s)); }, py::arg("max_stretch"),
           "The largest stretch reach() asks of a lattice, in multiples of its length, [0, 1000].")
@@ -250,9 +268,12 @@ void bind_character(py::module_& m) {
             const glm::vec3 p = c.bone_position(resolve_bone(c.skeleton(), bone));
             return py::make_tuple(p.x, p.y, p.z);
           },
-          py::arg("bone"), "World head of a bone, lattices included.")
-      // --- morph targets (Model.morph_targets: an import's blend shapes), one weight per target ---
-      .def_property_readonly("morph_target_count", &deform::Character::morph_target_count)
+          py::arg("bone"), "World head of a bone, lattices included.");
+}
+
+// Morph targets (Model.morph_targets: an import's blend shapes), one weight per target.
+void bind_character_morphs(CharacterClass& character) {
+  character.def_property_readonly("morph_target_count", &deform::Character::morph_target_count)
       .def_property_readonly(
           "morph_target_names",
           [](const deform::Character& c) {
@@ -302,7 +323,25 @@ void bind_character(py::module_& m) {
           },
           py::arg("clip"), py::arg("time"),
           "The clip's animated morph weights at `time` seconds (the targets it does not animate keep theirs).")
-      .def("reset_morph_weights", &deform::Character::reset_morph_weights, "Every weight back to its default.")
+      .def("reset_morph_weights", &deform::Character::reset_morph_weights, "Every weight back to its default.");
+}
+
+}  // namespace
+
+void bind_character(py::module_& m) {
+  bind_reach_result(m);
+  CharacterClass character(
+      m, "Character",
+      "A rigged model with its skin and elastic lattices: reach(), release(), update(dt), positions.\n"
+      "positions and normals() are read-only views of the character's storage (no copy): they change with each "
+      "update() and stay valid while the character lives (the view keeps it alive).");
+  bind_character_construction(character);
+  bind_character_motion(character);
+  bind_character_settings(character);
+  bind_character_mush(character);
+  bind_character_reach(character);
+  bind_character_morphs(character);
+  character
       .def_property_readonly("stretch", &deform::Character::stretch, "The stretch the lattices have now (model units).")
       .def_property_readonly("effector", &deform::Character::effector);
 }

@@ -16,6 +16,7 @@
 #include <pybind11/stl.h>
 
 #include "deform/runtime/error.hpp"
+#include "deform/runtime/skeleton.hpp"
 
 namespace deform_python {
 
@@ -84,7 +85,17 @@ inline py::array matrices_out(std::span<const glm::mat4> m) {
   return out;
 }
 
+// A bone given by id or name; deform::Error (argument) naming it when `skeleton` has no such bone.
+std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
+
+// Each part of the module, in the order PYBIND11_MODULE (module.cpp) registers them.
+void bind_skeleton(py::module_& m);
 void bind_model(py::module_& m);
+void bind_rig(py::module_& m);
+void bind_automatic_weights(py::module_& m);
+void bind_import_export(py::module_& m);
+void bind_animation(py::module_& m);
+void bind_blending(py::module_& m);
 void bind_jobs(py::module_& m);
 void bind_lattices(py::module_& m);
 void bind_character(py::module_& m);

@@ -13,9 +13,6 @@
 #include "deform/runtime/skinning.hpp"
 
 namespace deform_python {
-
-std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
-
 namespace {
 
 // glm matrices from (B, 4, 4) row-major float32 (a copy: glm stores columns).
@@ -38,12 +35,8 @@ deform::SkinningMethod method_of(const std::string& name) {
 
 using IndexArray = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>;
 
-}  // namespace
-
-std::string method_name(deform::SkinningMethod method) { return method == deform::SkinningMethod::lbs ? "lbs" : "dqs"; }
-deform::SkinningMethod parse_method(const std::string& name) { return method_of(name); }
-
-void bind_jobs(py::module_& m) {
+// Forward kinematics and skinning (LBS, DQS) by a palette.
+void bind_skinning(py::module_& m) {
   m.def(
       "forward_kinematics",
       [](const deform::Skeleton& skeleton, const deform::Pose& pose) {
@@ -116,7 +109,9 @@ void bind_jobs(py::module_& m) {
       "(N, 4) uint16 bone indices and (N, 4) float32 weights; method 'lbs' or 'dqs'. Returns a new (N, 3) array, or "
       "writes into `out` (a C-contiguous float32 (N, 3) array) and returns it. C-contiguous float32/uint16 inputs "
       "are read in place; the palette is copied (transposed to glm's layout), and converted per call for DQS.");
+}
 
+void bind_direct_delta_mush(py::module_& m) {
   py::class_<deform::DirectDeltaMushBinding, std::shared_ptr<deform::DirectDeltaMushBinding>>(
       m, "DirectDeltaMush",
       "Direct Delta Mush bound to a model (docs/skinning.md): bind_direct_delta_mush at construction (a sparse "
@@ -163,7 +158,10 @@ void bind_jobs(py::module_& m) {
           py::arg("matrices"), py::arg("normals") = py::none(),
           "Skins the bound rest points by a palette of (B, 4, 4) row-major matrices (forward_kinematics' palette). "
           "Returns a new (N, 3) array, or (positions, normals) when `normals` (N, 3), one per point, is given.");
+}
 
+// IK (CCD, FABRIK, two-bone) on a pose, and the effector's position.
+void bind_ik(py::module_& m) {
   py::class_<deform::IkResult>(m, "IkResult")
       .def_readonly("reached", &deform::IkResult::reached)
       .def_readonly("distance", &deform::IkResult::distance)
@@ -259,7 +257,9 @@ void bind_jobs(py::module_& m) {
       },
       py::arg("skeleton"), py::arg("pose"), py::arg("root"), py::arg("effector"),
       "Model-space head of `effector` in `pose` (through the chain from `root`).");
+}
 
+void bind_elastic(py::module_& m) {
   py::class_<deform::ElasticLattice>(m, "ElasticLattice",
                                      "Points springing toward moving rest positions (a damped oscillator per point, "
                                      "optionally with neighbour springs on a grid).")
@@ -292,6 +292,18 @@ void bind_jobs(py::module_& m) {
           "velocities",
           [](py::object self) { return vec3_view(self.cast<deform::ElasticLattice&>().velocities(), self, false); },
           "(N, 3) read-only view of the velocities.");
+}
+
+}  // namespace
+
+std::string method_name(deform::SkinningMethod method) { return method == deform::SkinningMethod::lbs ? "lbs" : "dqs"; }
+deform::SkinningMethod parse_method(const std::string& name) { return method_of(name); }
+
+void bind_jobs(py::module_& m) {
+  bind_skinning(m);
+  bind_direct_delta_mush(m);
+  bind_ik(m);
+  bind_elastic(m);
 }
 
 }  // namespace deform_python
