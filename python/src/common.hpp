@@ -87,6 +87,8 @@ inline py::array matrices_out(std::span<const glm::mat4> m) {
 
 // A bone given by id or name; deform::Error (argument) naming it when `skeleton` has no such bone.
 std::int32_t resolve_bone(const deform::Skeleton& skeleton, const py::object& bone);
+// glm matrices from (B, 4, 4) row-major float32 (a copy: glm stores columns).
+std::vector<glm::mat4> matrices_in(const FloatArray& a);
 
 // Each part of the module, in the order PYBIND11_MODULE (module.cpp) registers them.
 void bind_skeleton(py::module_& m);
@@ -101,5 +103,6 @@ void bind_lattices(py::module_& m);
 void bind_character(py::module_& m);
 void bind_weight_tools(py::module_& m);
 void bind_decomposition(py::module_& m);
+void bind_correctives(py::module_& m);
 
 }  // namespace deform_python

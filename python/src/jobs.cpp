@@ -13,7 +13,6 @@
 #include "deform/runtime/skinning.hpp"
 
 namespace deform_python {
-namespace {
 
 // glm matrices from (B, 4, 4) row-major float32 (a copy: glm stores columns).
 std::vector<glm::mat4> matrices_in(const FloatArray& a) {
@@ -26,6 +25,8 @@ std::vector<glm::mat4> matrices_in(const FloatArray& a) {
       for (int c = 0; c < 4; ++c) out[b][c][r] = src[16 * b + static_cast<std::size_t>(4 * r + c)];
   return out;
 }
+
+namespace {
 
 deform::SkinningMethod method_of(const std::string& name) {
   if (name == "lbs") return deform::SkinningMethod::lbs;
