@@ -325,14 +325,15 @@ void bind_character_morphs(CharacterClass& character) {
           "The clip's animated morph weights at `time` seconds (the targets it does not animate keep theirs).")
       .def("reset_morph_weights", &deform::Character::reset_morph_weights, "Every weight back to its default.")
       .def(
-          "set_pose_driver",
+          "add_pose_driver",
           [](deform::Character& c, const deform::PoseDriverBinding& driver, const std::vector<std::uint32_t>& targets) {
-            check(c.set_pose_driver(driver, targets));
+            check(c.add_pose_driver(driver, targets));
           },
           py::arg("driver"), py::arg("targets"),
           "Pose-space correctives: each update() sets morph target targets[s] to the driver's shape s weight at the "
           "pose (docs/skinning.md). Raises deform.Error for a driver or targets that do not fit.")
-      .def("clear_pose_driver", &deform::Character::clear_pose_driver, "No pose driver any more.")
+      .def("clear_pose_drivers", &deform::Character::clear_pose_drivers,
+           "No pose drivers any more (the rig's corrective groups included).")
       .def_property_readonly(
           "palette", [](const deform::Character& c) { return matrices_out(c.palette()); },
           "(B, 4, 4) float32 row-major skinning matrices of the last update (a new array): what add_corrective takes.");

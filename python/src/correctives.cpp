@@ -46,7 +46,8 @@ void bind_correctives(py::module_& m) {
          const FloatArray& targets, const std::string& kernel, float radius, float twist_weight, float regularization,
          bool clamp) {
         std::vector<std::int32_t> ids;
-        for (const py::handle bone : bones) ids.push_back(resolve_bone(skeleton, py::reinterpret_borrow<py::object>(bone)));
+        for (const py::handle bone : bones)
+          ids.push_back(resolve_bone(skeleton, py::reinterpret_borrow<py::object>(bone)));
         if (targets.ndim() != 2 || static_cast<std::size_t>(targets.shape(0)) != samples.size())
           throw deform::Error::invalid_argument("targets", "expected an array of shape (samples, shapes)");
         deform::PoseDriverSettings settings;
@@ -55,9 +56,9 @@ void bind_correctives(py::module_& m) {
         settings.twist_weight = twist_weight;
         settings.regularization = regularization;
         settings.clamp = clamp;
-        return deform::bind_pose_driver(skeleton, ids, samples,
-                                        std::span<const float>(targets.data(), static_cast<std::size_t>(targets.size())),
-                                        static_cast<std::size_t>(targets.shape(1)), settings);
+        return deform::bind_pose_driver(
+            skeleton, ids, samples, std::span<const float>(targets.data(), static_cast<std::size_t>(targets.size())),
+            static_cast<std::size_t>(targets.shape(1)), settings);
       },
       py::arg("skeleton"), py::arg("bones"), py::arg("samples"), py::arg("targets"), py::arg("kernel") = "gaussian",
       py::arg("radius") = 0.0f, py::arg("twist_weight") = 1.0f, py::arg("regularization") = 0.0f,

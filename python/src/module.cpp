@@ -74,7 +74,7 @@ PYBIND11_MODULE(deform, m) {
   bind_blending(m);
   bind_jobs(m);
   bind_lattices(m);
-  bind_correctives(m);  // before the Character, whose set_pose_driver takes a PoseDriver
+  bind_correctives(m);  // before the Character, whose add_pose_driver takes a PoseDriver
   bind_character(m);
   bind_weight_tools(m);
   bind_decomposition(m);

@@ -24,7 +24,7 @@ def test_a_sculpt_comes_back_at_its_pose_and_fades_at_rest():
     assert driver.shape_count == 1 and driver.pose_count == 2 and driver.radius > 0
     assert driver.weights(plain.pose)[0] == pytest.approx(1.0, abs=1e-4)
     hero = deform.Character(model)
-    hero.set_pose_driver(driver, [0])
+    hero.add_pose_driver(driver, [0])
     hero.pose = plain.pose
     hero.update(0.0)
     assert np.abs(np.asarray(hero.positions) - sculpt).max() < 1e-4
@@ -32,6 +32,6 @@ def test_a_sculpt_comes_back_at_its_pose_and_fades_at_rest():
     hero.update(0.0)
     assert hero.morph_weight(0) == pytest.approx(0.0, abs=1e-4)
     with pytest.raises(deform.Error):
-        hero.set_pose_driver(driver, [3])
+        hero.add_pose_driver(driver, [3])
     with pytest.raises(deform.Error, match="kernel"):
         deform.bind_pose_driver(skeleton, ["forearm_l"], [bent], np.ones((1, 1), np.float32), kernel="cubic")

@@ -15,6 +15,8 @@
 #include "allocation_counter.hpp"  // counts every allocation of this executable
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/io/rig_json.hpp"
+#include "deform/offline/rig.hpp"
 #include "deform/offline/pose_driver.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/pose_driver.hpp"
@@ -265,9 +267,9 @@ TEST_CASE("a corrective sculpted at a bent elbow comes back exactly there, and f
   model.morph_targets.push_back(corrective);
   deform::Character c(model, no_lattices);
   const std::uint32_t shape[] = {0};
-  REQUIRE(c.set_pose_driver(driver, shape));
+  REQUIRE(c.add_pose_driver(driver, shape));
   const std::uint32_t beyond[] = {1};
-  CHECK_FALSE(c.set_pose_driver(driver, beyond));
+  CHECK_FALSE(c.add_pose_driver(driver, beyond));
   REQUIRE(c.set_pose(bent));
   REQUIRE(c.update(0.0f));
   CHECK(c.morph_weights()[0] == doctest::Approx(1.0f).epsilon(1e-4));
@@ -296,6 +298,67 @@ TEST_CASE("a corrective sculpted at a bent elbow comes back exactly there, and f
   CHECK(copy.morph_weights()[0] == doctest::Approx(1.0f).epsilon(1e-4));
   // A sculpt of the wrong size is refused.
   CHECK_THROWS_AS(deform::corrective_from_sculpt(model, palette, std::span(sculpt).first(10)), deform::Error);
+}
+
+TEST_CASE("a rig's corrective group: written and read back, and the Character built from it gives the sculpt back") {
+  const deform::Model model = deform::builtin_character();
+  const deform::Skeleton& skeleton = model.skeleton;
+  const std::int32_t forearm = skeleton.find("forearm_l"), upperarm = skeleton.find("upperarm_l");
+  deform::Pose bent = skeleton.bind_pose();
+  skeleton.set_euler(bent, forearm, {110.0f, 20.0f, 0.0f});
+  deform::Character plain(model);
+  REQUIRE(plain.set_pose(bent));
+  REQUIRE(plain.update(0.0f));
+  bent = plain.pose();
+  std::vector<glm::vec3> sculpt(plain.positions().begin(), plain.positions().end());
+  const glm::vec3 elbow = plain.bone_position(forearm);
+  for (glm::vec3& p : sculpt)
+    if (glm::length(p - elbow) < 0.08f) p.z -= 0.01f;
+  const deform::MorphTarget shape = deform::corrective_from_sculpt(
+      model, std::vector<glm::mat4>(plain.palette().begin(), plain.palette().end()), sculpt, 1e-6f, "elbow_in");
+  deform::Rig rig;
+  deform::CorrectiveSpec group;
+  group.name = "elbow_l";
+  group.bones = {upperarm, forearm};
+  group.shapes.push_back({"elbow_in",
+                          {deform::euler_from_quat(bent.rotations[std::size_t(upperarm)]),
+                           deform::euler_from_quat(bent.rotations[std::size_t(forearm)])},
+                          shape.points,
+                          shape.position_deltas});
+  rig.correctives.push_back(group);
+  const std::string text = deform::format_rig_json(rig, skeleton);
+  const deform::Rig back = deform::parse_rig_json(text, skeleton, model.mesh.point_count(), "elbow.rig.json");
+  CHECK(back.correctives == rig.correctives);
+  CHECK(deform::format_rig_json(back, skeleton) == text);
+  deform::Character c(model, back);
+  REQUIRE(c.pose_driver_count() == 1);
+  REQUIRE(c.morph_target_count() == 1);
+  CHECK(c.model().morph_targets[0].name == "elbow_in");
+  CHECK(c.rig().correctives == rig.correctives);
+  REQUIRE(c.set_pose(bent));
+  REQUIRE(c.update(0.0f));
+  float worst = 0.0f;
+  for (std::size_t i = 0; i < sculpt.size(); ++i) worst = std::max(worst, glm::length(c.positions()[i] - sculpt[i]));
+  CHECK(worst < 1e-4f);
+  REQUIRE(c.set_pose(skeleton.bind_pose()));
+  REQUIRE(c.update(0.0f));
+  CHECK(c.morph_weights()[0] == doctest::Approx(0.0f).scale(1).epsilon(1e-4));
+  // Hostile group entries name their place.
+  const auto refuses = [&](const std::string& from, const std::string& to, const char* expected) {
+    std::string bad = text;
+    const std::size_t at = bad.find(from);
+    REQUIRE(at != std::string::npos);
+    bad.replace(at, from.size(), to);
+    try {
+      (void)deform::parse_rig_json(bad, skeleton, model.mesh.point_count(), "bad.rig.json");
+      FAIL("accepted: " << expected);
+    } catch (const deform::Error& e) {
+      CHECK(std::string(e.what()).find(expected) != std::string::npos);
+    }
+  };
+  refuses("\"gaussian\"", "\"cubic\"", "kernel");
+  refuses("\"name\": \"elbow_in\"", "\"name\": \"elbow_in\", \"extra\": 1", "extra");
+  refuses("\"bones\": [", "\"bones\": [\"no_such_bone\", ", "no_such_bone");
 }
 
 }  // namespace

@@ -59,6 +59,10 @@ Character::Character(Model model, const Rig& rig)
     : bind_([&] {
         auto bind = std::make_shared<BindData>();
         bind->model = std::move(model);
+        // The rig's corrective shapes join the model's morph targets (require_valid_morph_targets checks them below).
+        for (const CorrectiveSpec& group : rig.correctives)
+          for (const CorrectiveShape& shape : group.shapes)
+            bind->model.morph_targets.push_back({shape.name, "", 0.0f, shape.points, shape.deltas, {}});
         bind->vertex_normals = bind_vertex_normals(bind->model.mesh);
         // The bind pose's angle-weighted normals, one per point (every render vertex of a point gets the same).
         const Mesh& mesh = bind->model.mesh;
@@ -108,6 +112,15 @@ Character::Character(Model model, const Rig& rig)
   }
   forget_held_specs();
   allocate_frame_state();
+  // Each corrective group's driver, over the morph targets its shapes became (the last ones, in the rig's order).
+  std::size_t next_target = bound.morph_targets.size();
+  for (const CorrectiveSpec& group : rig_.correctives) next_target -= group.shapes.size();
+  for (const CorrectiveSpec& group : rig_.correctives) {
+    std::vector<std::uint32_t> targets(group.shapes.size());
+    for (std::uint32_t& t : targets) t = std::uint32_t(next_target++);
+    if (const Status status = add_pose_driver(bind_corrective(group, bound.skeleton), targets); !status)
+      throw Error::in_file(bound.name, "corrective group '" + group.name + "'", status.reason());
+  }
   const SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, true);
   if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
   if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
@@ -182,9 +195,7 @@ Character Character::instance() const {
   copy.settings = settings;
   copy.set_normals_mode(normals_mode_);
   copy.direct_mush_ = direct_mush_;  // Direct Delta Mush: the binding shared (its job has no scratch)
-  copy.driver_ = driver_;            // pose-space correctives: the driver shared, the weights' room this copy's own
-  copy.driven_targets_ = driven_targets_;
-  copy.driven_weights_ = driven_weights_;
+  copy.drivers_ = drivers_;          // pose-space correctives: each driver shared, the weights' room this copy's own
   copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
@@ -619,15 +630,15 @@ Status Character::update(float dt) {
   }
   if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
   if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
-  // Pose-space correctives: the driver's weights become its shapes' morph weights (validated at set_pose_driver),
+  // Pose-space correctives: each driver's weights become its shapes' morph weights (validated when it was added),
   // before the early return below, so that a caller deforming elsewhere morphs with them too.
-  if (driver_) {
+  for (Driven& driven : drivers_) {
     PoseDriverJob drive;
-    drive.binding = driver_.get();
+    drive.binding = driven.binding.get();
     drive.rotations = pose_.rotations;
-    drive.weights = driven_weights_;
+    drive.weights = driven.weights;
     if (const Status status = drive.run(); !status) return status;
-    for (std::size_t s = 0; s < driven_targets_.size(); ++s) morph_weights_[driven_targets_[s]] = driven_weights_[s];
+    for (std::size_t s = 0; s < driven.targets.size(); ++s) morph_weights_[driven.targets[s]] = driven.weights[s];
   }
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
   if (!settings.deform_on_cpu) return hierarchy_.update(world_);
@@ -715,7 +726,7 @@ void Character::set_direct_delta_mush(const DirectDeltaMushSettings& ddm) {
 
 void Character::clear_direct_delta_mush() noexcept { direct_mush_.reset(); }
 
-Status Character::set_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets) {
+Status Character::add_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets) {
   std::vector<float> weights(driver.shape_count);
   PoseDriverJob job;
   job.binding = &driver;
@@ -725,17 +736,12 @@ Status Character::set_pose_driver(const PoseDriverBinding& driver, std::span<con
   if (targets.size() != driver.shape_count) return Status::failure("targets are not one per shape");
   for (const std::uint32_t t : targets)
     if (t >= morph_weights_.size()) return Status::failure("morph target out of range");
-  driver_ = std::make_shared<const PoseDriverBinding>(driver);
-  driven_targets_.assign(targets.begin(), targets.end());
-  driven_weights_ = std::move(weights);
+  drivers_.push_back(
+      {std::make_shared<const PoseDriverBinding>(driver), {targets.begin(), targets.end()}, std::move(weights)});
   return Status();
 }
 
-void Character::clear_pose_driver() noexcept {
-  driver_.reset();
-  driven_targets_.clear();
-  driven_weights_.clear();
-}
+void Character::clear_pose_drivers() noexcept { drivers_.clear(); }
 
 void Character::clear_delta_mush() noexcept {
   mush_.reset();

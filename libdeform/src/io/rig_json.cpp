@@ -149,6 +149,57 @@ void read_springs(const JsonReader& r, const Skeleton& skeleton, Rig& rig) {
   }
 }
 
+void read_correctives(const JsonReader& list, const Skeleton& skeleton, std::size_t point_count, Rig& rig) {
+  for (std::size_t i = 0; i < list.array_size(); ++i) {
+    const JsonReader c = list.at(i);
+    c.expect_object({"name", "bones", "kernel", "radius", "twist_weight", "rest", "shapes"});
+    CorrectiveSpec group;
+    group.name = c.at("name").text();
+    if (group.name.empty()) c.at("name").fail("must not be empty");
+    for (const CorrectiveSpec& other : rig.correctives)
+      if (other.name == group.name) c.at("name").fail("group name '" + group.name + "' is used twice");
+    const JsonReader bones = c.at("bones");
+    if (bones.array_size() == 0) bones.fail("must name at least one bone");
+    for (std::size_t b = 0; b < bones.array_size(); ++b) {
+      group.bones.push_back(read_bone(bones.at(b), skeleton));
+      if (std::count(group.bones.begin(), group.bones.end(), group.bones.back()) > 1)
+        bones.at(b).fail("is listed twice");
+    }
+    if (c.has("kernel")) {
+      const std::string kernel = c.at("kernel").text();
+      if (kernel == "gaussian") group.kernel = RbfKernel::gaussian;
+      else if (kernel == "inverse_multiquadric") group.kernel = RbfKernel::inverse_multiquadric;
+      else c.at("kernel").fail("must be \"gaussian\" or \"inverse_multiquadric\"");
+    }
+    if (c.has("radius")) group.radius = c.at("radius").number(0.0f, 1e6f);
+    if (c.has("twist_weight")) group.twist_weight = c.at("twist_weight").number(0.0f, 1e6f);
+    if (c.has("rest")) group.rest = c.at("rest").boolean();
+    const JsonReader shapes = c.at("shapes");
+    if (shapes.array_size() == 0) shapes.fail("must hold at least one shape");
+    for (std::size_t k = 0; k < shapes.array_size(); ++k) {
+      const JsonReader r = shapes.at(k);
+      r.expect_object({"name", "pose", "points", "deltas"});
+      CorrectiveShape shape;
+      shape.name = r.at("name").text();
+      const JsonReader pose = r.at("pose");
+      if (pose.array_size() != group.bones.size()) pose.fail("must give one rotation per driver bone");
+      for (std::size_t b = 0; b < group.bones.size(); ++b) shape.pose.push_back(pose.at(b).vec3());
+      const JsonReader points = r.at("points"), deltas = r.at("deltas");
+      if (points.array_size() > point_count) points.fail("lists more points than the mesh has");
+      if (deltas.array_size() != points.array_size()) deltas.fail("must give one delta per point");
+      for (std::size_t v = 0; v < points.array_size(); ++v) {
+        const auto index = std::uint32_t(points.at(v).integer(0, std::int64_t(point_count) - 1));
+        if (!shape.points.empty() && index <= shape.points.back())
+          points.at(v).fail("points must be strictly ascending");
+        shape.points.push_back(index);
+        shape.deltas.push_back(deltas.at(v).vec3());
+      }
+      group.shapes.push_back(std::move(shape));
+    }
+    rig.correctives.push_back(std::move(group));
+  }
+}
+
 ojson vec3_json(glm::vec3 v) {
   return ojson::array({shortest_double(v.x), shortest_double(v.y), shortest_double(v.z)});
 }
@@ -188,7 +239,7 @@ RigModel parse_rig_model(std::string_view text, const std::string& name) {
 Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t point_count, const std::string& name) {
   const json document = detail::parse_json(text, name);
   const JsonReader root(name, document, "");
-  root.expect_object({"rig", "model", "reach", "lattices", "springs"});
+  root.expect_object({"rig", "model", "reach", "lattices", "springs", "correctives"});
   if (root.at("rig").integer(1, 1) != rig_format_version) root.at("rig").fail("unsupported version");
   Rig rig;
   rig.model = read_model(root);
@@ -286,6 +337,7 @@ Rig parse_rig_json(std::string_view text, const Skeleton& skeleton, std::size_t 
     }
   }
   if (root.has("springs")) read_springs(root.at("springs"), skeleton, rig);
+  if (root.has("correctives")) read_correctives(root.at("correctives"), skeleton, point_count, rig);
   return rig;
 }
 
@@ -382,6 +434,27 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
     }
     document["springs"] = {
         {"substep", shortest_double(rig.spring_substep)}, {"colliders", colliders}, {"chains", chains}};
+  }
+  if (!rig.correctives.empty()) {  // written only when there are some: rigs without keep their old text
+    ojson groups = ojson::array();
+    for (const CorrectiveSpec& group : rig.correctives) {
+      ojson bones = ojson::array(), shapes = ojson::array();
+      for (const std::int32_t b : group.bones) bones.push_back(skeleton.key(b));
+      for (const CorrectiveShape& shape : group.shapes) {
+        ojson pose = ojson::array(), deltas = ojson::array();
+        for (const glm::vec3& angles : shape.pose) pose.push_back(vec3_json(angles));
+        for (const glm::vec3& delta : shape.deltas) deltas.push_back(vec3_json(delta));
+        shapes.push_back({{"name", shape.name}, {"pose", pose}, {"points", shape.points}, {"deltas", deltas}});
+      }
+      groups.push_back({{"name", group.name},
+                        {"bones", bones},
+                        {"kernel", group.kernel == RbfKernel::gaussian ? "gaussian" : "inverse_multiquadric"},
+                        {"radius", shortest_double(group.radius)},
+                        {"twist_weight", shortest_double(group.twist_weight)},
+                        {"rest", group.rest},
+                        {"shapes", shapes}});
+    }
+    document["correctives"] = std::move(groups);
   }
   return document.dump(2) + "\n";
 }

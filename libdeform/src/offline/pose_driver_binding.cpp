@@ -1,5 +1,6 @@
 // bind_pose_driver (offline/pose_driver.hpp): the sample poses' distances, the kernel matrix, its solve.
 #include "deform/offline/pose_driver.hpp"
+#include "deform/offline/rig.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -164,6 +165,37 @@ MorphTarget corrective_from_sculpt(const Model& model, std::span<const glm::mat4
     target.position_deltas.push_back(delta);
   }
   return target;
+}
+
+PoseDriverBinding bind_corrective(const CorrectiveSpec& spec, const Skeleton& skeleton) {
+  const std::string group = "corrective group '" + spec.name + "'";
+  if (spec.shapes.empty()) throw Error::invalid_argument(group, "has no shape");
+  std::vector<Pose> samples;
+  if (spec.rest) samples.push_back(skeleton.bind_pose());
+  for (const CorrectiveShape& shape : spec.shapes) {
+    if (shape.pose.size() != spec.bones.size())
+      throw Error::invalid_argument(group, "shape '" + shape.name + "' does not give one rotation per driver bone");
+    Pose pose = skeleton.bind_pose();
+    for (std::size_t j = 0; j < spec.bones.size(); ++j) {
+      if (spec.bones[j] < 0 || std::size_t(spec.bones[j]) >= skeleton.bone_count())
+        throw Error::invalid_argument(group, "a driver bone is not in the skeleton");
+      if (!finite(shape.pose[j])) throw Error::invalid_argument(group, "shape '" + shape.name + "' has a bad angle");
+      pose.rotations[std::size_t(spec.bones[j])] = quat_from_euler(shape.pose[j]);
+    }
+    samples.push_back(std::move(pose));
+  }
+  const std::size_t shapes = spec.shapes.size();
+  std::vector<float> targets(samples.size() * shapes, 0.0f);
+  for (std::size_t s = 0; s < shapes; ++s) targets[(spec.rest ? s + 1 : s) * shapes + s] = 1.0f;
+  PoseDriverSettings settings;
+  settings.kernel = spec.kernel;
+  settings.radius = spec.radius;
+  settings.twist_weight = spec.twist_weight;
+  try {
+    return bind_pose_driver(skeleton, spec.bones, samples, targets, shapes, settings);
+  } catch (const Error& e) {
+    throw Error::invalid_argument(group, e.what());
+  }
 }
 
 }  // namespace deform

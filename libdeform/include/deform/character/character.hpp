@@ -177,14 +177,16 @@ class DEFORM_CHARACTER_API Character {
   // The binding in use, or null when Direct Delta Mush is off.
   const DirectDeltaMushBinding* direct_delta_mush() const noexcept { return direct_mush_.get(); }
 
-  // Pose-space correctives (runtime/pose_driver.hpp): `driver`'s shapes are morph targets of the model, shape s the
+  // Pose-space correctives (runtime/pose_driver.hpp): a driver's shapes are morph targets of the model, shape s the
   // target `targets[s]`; each update() then sets those targets' weights from the pose (PoseDriverJob on pose()'s
-  // rotations) before the morph step, overriding what the setters above gave them. Refuses, changing nothing, a
-  // driver PoseDriverJob::validate refuses for this skeleton or targets not one per shape and in range. Instances
-  // share the driver. No allocation per frame.
-  Status set_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets);
-  void clear_pose_driver() noexcept;
-  const PoseDriverBinding* pose_driver() const noexcept { return driver_.get(); }
+  // rotations) before the morph step, overriding what the setters above gave them. The rig's corrective groups
+  // (Rig::correctives) come as drivers already, their shapes appended to the model's morph targets. add_pose_driver
+  // adds one; it refuses, changing nothing, a driver PoseDriverJob::validate refuses for this skeleton or targets
+  // not one per shape and in range. Instances share the drivers. No allocation per frame.
+  Status add_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets);
+  void clear_pose_drivers() noexcept;
+  std::size_t pose_driver_count() const noexcept { return drivers_.size(); }
+  const PoseDriverBinding& pose_driver(std::size_t i) const noexcept { return *drivers_[i].binding; }
 
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
@@ -395,10 +397,13 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec4> mush_scratch_;
   // Direct Delta Mush: the binding (shared by instances; null when off). Its job needs no scratch.
   std::shared_ptr<const DirectDeltaMushBinding> direct_mush_;
-  // Pose-space correctives: the driver (shared; null when off), the morph target of each shape, its weights' room.
-  std::shared_ptr<const PoseDriverBinding> driver_;
-  std::vector<std::uint32_t> driven_targets_;
-  std::vector<float> driven_weights_;
+  // Pose-space correctives: each driver (shared), the morph target of each of its shapes, its weights' room.
+  struct Driven {
+    std::shared_ptr<const PoseDriverBinding> binding;
+    std::vector<std::uint32_t> targets;
+    std::vector<float> weights;
+  };
+  std::vector<Driven> drivers_;
 };
 
 // The limbs reach() stretches, for a caller that reaches with "the nearest limb" (a click beside the character):

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "deform/offline/export.hpp"
+#include "deform/offline/pose_driver.hpp"
 #include "deform/runtime/hierarchy.hpp"
 #include "deform/runtime/model.hpp"
 #include "deform/runtime/spring_chain.hpp"
@@ -28,6 +29,29 @@ struct RigModel {
   std::string file;  // an imported model (deform::import), e.g. "CesiumMan.glb"
   bool operator==(const RigModel&) const = default;
 };
+
+// Pose-space correctives (docs/skinning.md): shapes sculpted at poses of a few driver bones, each turned on near its
+// pose by one pose driver over the group. Each shape becomes a morph target of the character's model, named as here.
+struct CorrectiveShape {
+  std::string name;                   // the morph target's name
+  std::vector<glm::vec3> pose;        // per driver bone: its local rotation at the sculpted pose, Euler X·Y·Z degrees
+  std::vector<std::uint32_t> points;  // strictly ascending
+  std::vector<glm::vec3> deltas;      // bind space, one per point
+  bool operator==(const CorrectiveShape&) const = default;
+};
+struct CorrectiveSpec {
+  std::string name;                 // unique among the rig's groups
+  std::vector<std::int32_t> bones;  // the driver bones, distinct
+  RbfKernel kernel = RbfKernel::gaussian;
+  float radius = 0.0f;  // 0 picks it (PoseDriverSettings::radius)
+  float twist_weight = 1.0f;
+  bool rest = true;  // the bind pose is a sample too, where every shape of the group is off
+  std::vector<CorrectiveShape> shapes;
+  bool operator==(const CorrectiveSpec&) const = default;
+};
+// The group's driver: sample poses the bind pose (when `rest`) and each shape's pose, shape s at weight 1 at its own
+// pose and 0 at the others. Throws deform::Error naming the group as bind_pose_driver does.
+DEFORM_OFFLINE_API PoseDriverBinding bind_corrective(const CorrectiveSpec& spec, const Skeleton& skeleton);
 
 struct Rig {
   RigModel model;
@@ -49,6 +73,7 @@ struct Rig {
   std::vector<SpringChainSpec> spring_chains;
   std::vector<SpringCollider> colliders;
   float spring_substep = SpringChains::default_substep;
+  std::vector<CorrectiveSpec> correctives;  // pose-space corrective groups
   bool operator==(const Rig&) const = default;
 };
 // What default_rig() finds in a skeleton, and why (`deform info MODEL --rig` prints it; docs/ik.md, "Default rigs").
