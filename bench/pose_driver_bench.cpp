@@ -25,7 +25,8 @@ void pose_driver(benchmark::State& state) {
   std::vector<float> targets;
   for (std::size_t k = 0; k < poses; ++k) {
     deform::Pose pose = skeleton.bind_pose();
-    for (const std::int32_t b : bones) pose.rotations[std::size_t(b)] = deform::quat_from_euler({angle(rng), angle(rng), angle(rng)});
+    for (const std::int32_t b : bones)
+      pose.rotations[std::size_t(b)] = deform::quat_from_euler({angle(rng), angle(rng), angle(rng)});
     samples.push_back(pose);
     for (std::size_t s = 0; s < poses; ++s) targets.push_back(s == k ? 1.0f : 0.0f);
   }
@@ -34,7 +35,8 @@ void pose_driver(benchmark::State& state) {
   std::vector<deform::Pose> frames;
   for (int f = 0; f < 64; ++f) {
     deform::Pose pose = skeleton.bind_pose();
-    for (const std::int32_t b : bones) pose.rotations[std::size_t(b)] = deform::quat_from_euler({angle(rng), angle(rng), angle(rng)});
+    for (const std::int32_t b : bones)
+      pose.rotations[std::size_t(b)] = deform::quat_from_euler({angle(rng), angle(rng), angle(rng)});
     frames.push_back(pose);
   }
   std::vector<float> weights(poses);
