@@ -76,7 +76,8 @@ struct SkinningDecomposition {
 // the field when the options are out of range, there are no clips or a clip has no frames or inconsistent ones (a
 // bone_world or positions entry of the wrong size, times not increasing) or holds a non-finite number.
 // Deterministic: the same input gives the same bits for any thread count. Cost per iteration: O(frames · moved
-// points · candidates²), candidates = a moved point's own bones plus its eight nearest extra bones.
+// points · candidates²), candidates = a moved point's own bones, the extra bones it uses and its nearest extra bones
+// (16 at most).
 DEFORM_OFFLINE_API SkinningDecomposition decompose_skinning(const Model& model,
                                                             std::span<const DecompositionFrames> clips,
                                                             const DecompositionOptions& options = {});
