@@ -73,6 +73,7 @@ extern const Command info_command;
 extern const Command skin_command;
 extern const Command weights_command;
 extern const Command weights_edit_command;
+extern const Command corrective_command;
 extern const Command ik_command;
 extern const Command ffd_command;
 extern const Command simulate_command;
