@@ -1055,6 +1055,8 @@ void GltfImport::add_triangles(const Instance& instance, const tinygltf::Primiti
   }
   submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
   mesh.submeshes.push_back(std::move(submesh));
+  result_.submesh_names.push_back({gltf_.nodes[static_cast<std::size_t>(instance.node)].name,
+                                   gltf_.meshes[static_cast<std::size_t>(instance.mesh)].name});
 }
 
 // --- clips. Skeleton space: T(axis_scale(parent rest world) · t) · R(q); a root bone's parent is the origin ---

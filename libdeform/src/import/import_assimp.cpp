@@ -613,6 +613,8 @@ void AssimpImport::add_faces(std::size_t i, const std::string& element) {
   }
   submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
   mesh.submeshes.push_back(std::move(submesh));
+  result_.submesh_names.push_back(
+      {nodes_[static_cast<std::size_t>(instances_[i].node)].node->mName.C_Str(), source.mName.C_Str()});
 }
 
 // --- clips ---

@@ -549,6 +549,7 @@ void IqmImport::add_triangles() {
     }
     submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
     mesh.submeshes.push_back(std::move(submesh));
+    result_.submesh_names.push_back({part.name, part.name});
   }
   close_triangle_faces(mesh, path_);
 }
