@@ -480,8 +480,7 @@ void build_body(Mesh& mesh) {
         mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
       else mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[3], v[1], v[2], v[3]});
     }
-    mesh.submeshes.push_back({first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0, "builtin",
-                              std::string(body_part_names[static_cast<std::size_t>(part)])});
+    mesh.submeshes.push_back({first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0});
   }
   order_points_by_part(mesh);
 }

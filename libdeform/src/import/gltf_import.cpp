@@ -1039,8 +1039,6 @@ void GltfImport::add_triangles(const Instance& instance, const tinygltf::Primiti
   submesh.material = primitive.material >= 0 && static_cast<std::size_t>(primitive.material) < mesh.materials.size()
                          ? primitive.material
                          : -1;
-  submesh.object = gltf_.nodes[static_cast<std::size_t>(instance.node)].name;
-  submesh.group = gltf_.meshes[static_cast<std::size_t>(instance.mesh)].name;
   auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     for (std::uint32_t corner : {a, b, c}) mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
   };

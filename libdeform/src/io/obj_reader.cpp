@@ -203,8 +203,6 @@ class ObjParser {
                           std::to_string(max_name_bytes_) + " bytes of names)");
     Submesh& submesh = mesh_.submeshes.emplace_back();
     submesh.first_triangle = static_cast<std::uint32_t>(mesh_.triangle_count());
-    submesh.object = state_.object;
-    submesh.group = state_.group;
     submesh_states_.push_back(state_);
     if (names_) names_->submeshes.push_back({state_.object, state_.group});
   }
@@ -245,7 +243,6 @@ class ObjParser {
     // Each MTL file is read once, however often the OBJ names it (a hostile file names one 20,000 times).
     if (std::find(read_libraries_.begin(), read_libraries_.end(), real) != read_libraries_.end()) return;
     read_libraries_.push_back(real);
-    mesh_.material_libraries.push_back(path);
     if (names_) names_->material_libraries.push_back(path);
     const std::string folder = utf8_path::generic_utf8(utf8_path::from_utf8(path).parent_path());
     for (Material& material : obj_text::parse_mtl_confined(read_file_text(real), path, folder.empty() ? "." : folder,
