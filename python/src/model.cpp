@@ -106,7 +106,8 @@ void bind_model(py::module_& m) {
             deform::write_skw(skw, md.weights);
           },
           py::arg("obj"), py::arg("sk"), py::arg("skw"),
-          "Writes the native files: the mesh as OBJ (without materials), the skeleton as .sk, the weights as .skw.");
+          "Writes the native files: the mesh as OBJ (without materials or `o`/`g` names: a Model holds geometry), the "
+          "skeleton as .sk, the weights as .skw.");
 
   m.def(
       "load_model",

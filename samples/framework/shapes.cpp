@@ -30,7 +30,6 @@ deform::Mesh make_floor(float size, int cells) {
     deform::Submesh s;
     s.first_triangle = static_cast<std::uint32_t>(m.triangle_count());
     s.material = parity;
-    s.object = "floor";
     for (int z = 0; z < cells; ++z)
       for (int x = 0; x < cells; ++x) {
         if ((x + z) % 2 != parity) continue;
@@ -69,7 +68,7 @@ deform::Mesh make_sphere(float radius, int rings, int segments, glm::vec3 colour
                  b = a + static_cast<std::uint32_t>(segments + 1);
       m.triangles.insert(m.triangles.end(), {a, b, a + 1, a + 1, b, b + 1});
     }
-  m.submeshes.push_back({0, static_cast<std::uint32_t>(m.triangle_count()), 0, "ball", ""});
+  m.submeshes.push_back({0, static_cast<std::uint32_t>(m.triangle_count()), 0});
   return m;
 }
 

@@ -192,7 +192,8 @@ TEST_CASE("the body: one closed surface wound outward, 1.8 m tall, UVs in [0, 1]
   REQUIRE(mesh.submeshes.size() == 14);
   const char* names[] = {"torso",   "neck",    "head",  "arm_l", "arm_r",  "hand_l", "hand_r",
                          "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
-  for (std::size_t i = 0; i < 14; ++i) CHECK(mesh.submeshes[i].group == names[i]);
+  REQUIRE(deform::builtin_part_names().size() == 14);
+  for (std::size_t i = 0; i < 14; ++i) CHECK(deform::builtin_part_names()[i] == names[i]);
   // Every edge of the body is used exactly twice, once in each direction: closed and consistently oriented; the
   // enclosed volume is positive (outward) and the surface is one connected piece.
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
@@ -247,8 +248,8 @@ TEST_CASE("weights: normalised, at most 4, and bound to plausible bones") {
   std::size_t checked_hand = 0, checked_foot = 0, checked_head = 0, checked_hair = 0;
   // The ponytail's points (the "hair" part's, borders included) belong to the ponytail, and the skull's to the head.
   std::vector<bool> hair(m.mesh.point_count(), false);
-  for (const deform::Submesh& sub : m.mesh.submeshes)
-    if (sub.group == "hair")
+  for (std::size_t part = 0; part < m.mesh.submeshes.size(); ++part)
+    if (const deform::Submesh& sub = m.mesh.submeshes[part]; deform::builtin_part_names()[part] == "hair")
       for (std::uint32_t c = 3 * sub.first_triangle; c < 3 * (sub.first_triangle + sub.triangle_count); ++c)
         hair[m.mesh.vertex_point[m.mesh.triangles[c]]] = true;
   for (std::size_t i = 0; i < m.mesh.point_count(); ++i) {
@@ -366,7 +367,8 @@ TEST_CASE("the texture: painted skin, clothes and a face, without grid lines") {
 TEST_CASE("samples/data/builtin.* hold exactly the character the library builds") {
   const Model& m = character();
   deform::Warnings warnings;
-  const deform::Mesh obj = deform::read_obj(data_path("builtin.obj"), &warnings);
+  deform::ObjNames names;
+  const deform::Mesh obj = deform::read_obj(data_path("builtin.obj"), &warnings, {}, &names);
   CHECK(warnings.messages.empty());
   // Tolerances of a few float ulps: the files are exact here, but another math library may round sin/exp/pow
   // differently than the one that wrote them.
@@ -382,7 +384,11 @@ TEST_CASE("samples/data/builtin.* hold exactly the character the library builds"
     REQUIRE(near(obj.vertex_normals[r], m.mesh.vertex_normals[e], 1e-5f));
   }
   REQUIRE(obj.submeshes.size() == m.mesh.submeshes.size());
-  for (std::size_t i = 0; i < obj.submeshes.size(); ++i) CHECK(obj.submeshes[i].group == m.mesh.submeshes[i].group);
+  REQUIRE(names.submeshes.size() == deform::builtin_part_names().size());
+  for (std::size_t i = 0; i < obj.submeshes.size(); ++i) {
+    CHECK(names.submeshes[i].object == "builtin");
+    CHECK(names.submeshes[i].group == deform::builtin_part_names()[i]);
+  }
   REQUIRE(obj.materials.size() == 1);
   CHECK(obj.materials[0].name == "skin");
   CHECK(obj.materials[0].diffuse == m.mesh.materials[0].diffuse);

@@ -66,6 +66,9 @@ TEST_CASE("an isolated import gives what an import in this process gives") {
     CHECK(isolated.warnings == here.warnings);
     CHECK(isolated.rigged == here.rigged);
     CHECK(isolated.file_bind_world == here.file_bind_world);
+    // The names of the submeshes travel beside the mesh (ImportedModel::submesh_names), one per submesh.
+    REQUIRE(here.submesh_names.size() == here.model.mesh.submeshes.size());
+    CHECK(isolated.submesh_names == here.submesh_names);
   }
 }
 

@@ -426,9 +426,31 @@ TEST_CASE("export writes OBJ + MTL + .sk + .skw that reload to the same skinned 
     fs::remove_all(folder);
     deform::ExportOptions options;
     options.texture_root = fs::path(path).parent_path().string();
+    const std::vector<deform::ObjSubmeshNames> too_many(imported.submesh_names.size() + 1);
+    options.submesh_names = too_many;  // names for another mesh: refused before anything is written
+    CHECK_THROWS_WITH_AS(deform::export_native(imported.model, folder.string(), options),
+                         doctest::Contains("submesh_names"), deform::Error);
+    CHECK_FALSE(fs::exists(folder));
+    options.submesh_names = imported.submesh_names;
     const deform::ExportedFiles files = deform::export_native(imported.model, folder.string(), options);
     for (const std::string& file : {files.obj, files.mtl, files.sk, files.skw}) CHECK(fs::is_regular_file(file));
-    const deform::Model reloaded = deform::load_model(files.obj, files.sk, files.skw);
+    deform::ObjNames names;
+    const deform::Model reloaded =
+        deform::load_model(files.obj, files.sk, files.skw, nullptr, deform::max_influences, {}, &names);
+    // The OBJ's `o`/`g` are the import's node and mesh names, triangle for triangle.
+    REQUIRE(names.submeshes.size() == reloaded.mesh.submeshes.size());
+    REQUIRE(imported.submesh_names.size() == imported.model.mesh.submeshes.size());
+    for (std::size_t s = 0; s < reloaded.mesh.submeshes.size(); ++s) {
+      const std::uint32_t triangle = reloaded.mesh.submeshes[s].first_triangle;
+      for (std::size_t i = 0; i < imported.model.mesh.submeshes.size(); ++i) {
+        const deform::Submesh& source = imported.model.mesh.submeshes[i];
+        if (triangle < source.first_triangle || triangle >= source.first_triangle + source.triangle_count) continue;
+        CHECK(names.submeshes[s].object == deform::obj_safe_name(imported.submesh_names[i].object));
+        CHECK(names.submeshes[s].group == deform::obj_safe_name(imported.submesh_names[i].group));
+      }
+    }
+    if (relative == std::string_view("X/Testwuson.X"))
+      CHECK(names.submeshes == std::vector<deform::ObjSubmeshNames>{{"Wuson", "Wuson"}});
     REQUIRE(reloaded.mesh.point_count() == imported.model.mesh.point_count());
     REQUIRE(reloaded.skeleton.bone_count() == imported.model.skeleton.bone_count());
     // Same triangles over the same points (read_obj numbers render vertices its own way).

@@ -53,7 +53,7 @@ deform::Model quad() {
   model.mesh.vertex_point = {0, 1, 2, 3};
   model.mesh.vertex_normals = std::vector<glm::vec3>(4, glm::vec3(0, 0, 2));  // written normalised
   model.mesh.triangles = {0, 1, 2, 0, 2, 3};
-  model.mesh.submeshes = {{0, 2, -1, {}, {}}};
+  model.mesh.submeshes = {{0, 2, -1}};
   deform::Bone root;
   root.name = "root";
   root.children = {1};

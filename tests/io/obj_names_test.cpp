@@ -50,18 +50,22 @@ TEST_CASE("any byte string as an object, group or material name reads back to th
     deform::Mesh mesh = base;
     mesh.materials.resize(1 + random() % 4);
     for (deform::Material& material : mesh.materials) material.name = random_name(random);
-    for (deform::Submesh& submesh : mesh.submeshes) {
+    std::vector<deform::ObjSubmeshNames> submesh_names(mesh.submeshes.size());
+    for (std::size_t s = 0; s < mesh.submeshes.size(); ++s) {
       // Names repeat now and then, as real files' do: a repeated name must read back the same.
-      submesh.object = random() % 3 == 0 ? std::string("same") : random_name(random);
-      submesh.group = random_name(random);
-      submesh.material = static_cast<std::int32_t>(random() % (mesh.materials.size() + 1)) - 1;  // -1: none
+      submesh_names[s].object = random() % 3 == 0 ? std::string("same") : random_name(random);
+      submesh_names[s].group = random_name(random);
+      mesh.submeshes[s].material = static_cast<std::int32_t>(random() % (mesh.materials.size() + 1)) - 1;  // none
     }
     deform::ObjWriteOptions options;
     options.mtllib = "m.mtl";
+    options.submesh_names = submesh_names;
     const std::string obj = deform::format_obj(mesh, mesh.positions, {}, options);
     std::ofstream(dir / "m.mtl", std::ios::binary) << deform::format_mtl(mesh.materials);
     deform::Warnings warnings;  // "material 'default' is not defined" for faces without one
-    const deform::Mesh read = deform::parse_obj(obj, "names.obj", dir.string(), &warnings);
+    deform::ObjNames read_names;
+    const deform::Mesh read = deform::parse_obj(obj, "names.obj", dir.string(), &warnings, {}, &read_names);
+    REQUIRE(read_names.submeshes.size() == read.submeshes.size());
 
     // The faces, point for point.
     REQUIRE(read.triangle_count() == mesh.triangle_count());
@@ -76,19 +80,20 @@ TEST_CASE("any byte string as an object, group or material name reads back to th
       renamed += names[m] != mesh.materials[m].name;
     }
     // Each triangle: the same material, its object and group as obj_safe_name writes them.
-    const auto submesh_of = [](const deform::Mesh& m, std::size_t triangle) -> const deform::Submesh& {
-      for (const deform::Submesh& s : m.submeshes)
-        if (triangle >= s.first_triangle && triangle < s.first_triangle + s.triangle_count) return s;
+    const auto submesh_of = [](const deform::Mesh& m, std::size_t triangle) -> std::size_t {
+      for (std::size_t s = 0; s < m.submeshes.size(); ++s)
+        if (triangle >= m.submeshes[s].first_triangle &&
+            triangle < m.submeshes[s].first_triangle + m.submeshes[s].triangle_count)
+          return s;
       FAIL("triangle " << triangle << " is in no submesh");
-      return m.submeshes.front();
+      return 0;
     };
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
       CAPTURE(t);
-      const deform::Submesh& written = submesh_of(mesh, t);
-      const deform::Submesh& back = submesh_of(read, t);
-      CHECK(back.material == written.material);
-      CHECK(back.object == deform::obj_safe_name(written.object));
-      CHECK(back.group == deform::obj_safe_name(written.group));
+      const std::size_t written = submesh_of(mesh, t), back = submesh_of(read, t);
+      CHECK(read.submeshes[back].material == mesh.submeshes[written].material);
+      CHECK(read_names.submeshes[back].object == deform::obj_safe_name(submesh_names[written].object));
+      CHECK(read_names.submeshes[back].group == deform::obj_safe_name(submesh_names[written].group));
     }
   }
   CHECK(renamed > 700);  // the names were hostile enough to need it
@@ -102,7 +107,10 @@ TEST_CASE("any byte string as an object, group or material name reads back to th
 
 TEST_CASE("a line whose backslash is followed by blanks continues, without the backslash") {
   // Other writers leave blanks after a continuation's backslash; the joined statement must not keep the backslash.
-  const deform::Mesh mesh = deform::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\ng left \\  \n right\nf 1 2 3\n");
+  deform::ObjNames names;
+  const deform::Mesh mesh =
+      deform::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\ng left \\  \n right\nf 1 2 3\n", "t.obj", ".", nullptr, {}, &names);
   REQUIRE(mesh.submeshes.size() == 1);
-  CHECK(mesh.submeshes[0].group == "left   right");
+  REQUIRE(names.submeshes.size() == 1);
+  CHECK(names.submeshes[0].group == "left   right");
 }

@@ -15,8 +15,8 @@ namespace {
 
 using deform::Mesh;
 
-Mesh parse(std::string_view text, deform::Warnings* warnings = nullptr) {
-  return deform::parse_obj(text, "t.obj", DEFORM_TEST_DATA "/mesh", warnings);
+Mesh parse(std::string_view text, deform::Warnings* warnings = nullptr, deform::ObjNames* names = nullptr) {
+  return deform::parse_obj(text, "t.obj", DEFORM_TEST_DATA "/mesh", warnings, {}, names);
 }
 
 // The OBJ `v` index (0-based) of every face corner, in file order.
@@ -154,25 +154,26 @@ TEST_CASE("obj: faces may mix forms across faces, not within one") {
 
 TEST_CASE("obj: o, g and usemtl start submeshes; s is ignored") {
   deform::Warnings warnings;
-  const Mesh mesh = parse(std::string(square) +
-                              "o first\ns 1\nf 1 2 3\nf 1 3 4\n"
-                              "g part\nf 1 2 3\n"
-                              "usemtl nowhere\ns off\nf 1 2 3\nusemtl nowhere\nf 1 3 4\n"
-                              "o second\ng\nusemtl a\nusemtl nowhere\nf 1 2 4\n",
-                          &warnings);
+  deform::ObjNames names;
+  const std::string text = std::string(square) +
+                           "o first\ns 1\nf 1 2 3\nf 1 3 4\n"
+                           "g part\nf 1 2 3\n"
+                           "usemtl nowhere\ns off\nf 1 2 3\nusemtl nowhere\nf 1 3 4\n"
+                           "o second\ng\nusemtl a\nusemtl nowhere\nf 1 2 4\n";
+  const Mesh mesh = parse(text, &warnings, &names);
   REQUIRE(mesh.submeshes.size() == 4);
   CHECK(mesh.submeshes[0].first_triangle == 0);
   CHECK(mesh.submeshes[0].triangle_count == 2);
-  CHECK(mesh.submeshes[0].object == "first");
-  CHECK(mesh.submeshes[0].group == "");
   CHECK(mesh.submeshes[1].first_triangle == 2);
-  CHECK(mesh.submeshes[1].group == "part");
   CHECK(mesh.submeshes[2].first_triangle == 3);
   CHECK(mesh.submeshes[2].triangle_count == 2);  // the repeated usemtl does not split
   CHECK(mesh.submeshes[2].material == -1);
-  CHECK(mesh.submeshes[3].object == "second");
-  CHECK(mesh.submeshes[3].group == "");
   CHECK(mesh.submeshes[3].triangle_count == 1);
+  // The names in effect, one entry per submesh (ObjNames); the mesh alone splits the same way without them.
+  const std::vector<deform::ObjSubmeshNames> expected = {
+      {"first", ""}, {"first", "part"}, {"first", "part"}, {"second", ""}};
+  CHECK(names.submeshes == expected);
+  CHECK(parse(text).submeshes.size() == 4);
   // One warning per unknown material name, at its first usemtl.
   REQUIRE(warnings.messages.size() == 1);
   CHECK(warnings.messages[0] == "t.obj: line 11: material 'nowhere' is not defined: default material used");
@@ -180,7 +181,8 @@ TEST_CASE("obj: o, g and usemtl start submeshes; s is ignored") {
 
 TEST_CASE("obj: cube fixture with MTL, materials and a texture resolved relative to the MTL") {
   deform::Warnings warnings;
-  const Mesh mesh = deform::read_obj(DEFORM_TEST_DATA "/mesh/cube.obj", &warnings);
+  deform::ObjNames names;
+  const Mesh mesh = deform::read_obj(DEFORM_TEST_DATA "/mesh/cube.obj", &warnings, {}, &names);
   CHECK(warnings.messages.empty());
   CHECK(mesh.point_count() == 8);
   CHECK(mesh.triangle_count() == 12);
@@ -196,7 +198,8 @@ TEST_CASE("obj: cube fixture with MTL, materials and a texture resolved relative
   CHECK(mesh.submeshes[0].triangle_count == 6);
   CHECK(mesh.submeshes[1].material == 1);
   CHECK(mesh.submeshes[1].first_triangle == 6);
-  CHECK(mesh.submeshes[1].object == "cube");
+  REQUIRE(names.submeshes.size() == 2);
+  CHECK(names.submeshes[1].object == "cube");
 }
 
 TEST_CASE("obj: a missing MTL is a warning naming file and line; the mesh still loads") {
@@ -211,9 +214,10 @@ TEST_CASE("obj: a missing MTL is a warning naming file and line; the mesh still 
 
 TEST_CASE("obj: a material defined twice keeps the first definition, with a warning; an MTL named twice is read once") {
   deform::Warnings warnings;
-  const Mesh once = parse("mtllib cube.mtl\nmtllib cube.mtl cube.mtl\n", &warnings);
+  deform::ObjNames names;
+  const Mesh once = parse("mtllib cube.mtl\nmtllib cube.mtl cube.mtl\n", &warnings, &names);
   CHECK(once.materials.size() == 2);
-  CHECK(once.material_libraries.size() == 1);
+  CHECK(names.material_libraries.size() == 1);
   CHECK(warnings.messages.empty());
 
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "deform_obj_two_mtl";

@@ -216,14 +216,15 @@ TEST_CASE("referenced files: UTF-8 names outside ASCII, read, confined, named an
 
   // Read: the OBJ, its MTL and the texture it names, found inside the folder (no "not found" warning).
   deform::Warnings warnings;
-  const deform::Model model =
-      deform::load_model(obj, utf8(folder / u8"ßkeleton.sk"), utf8(folder / u8"pöids.skw"), &warnings);
+  deform::ObjNames names;
+  const deform::Model model = deform::load_model(obj, utf8(folder / u8"ßkeleton.sk"), utf8(folder / u8"pöids.skw"),
+                                                 &warnings, deform::max_influences, {}, &names);
   for (const std::string& w : warnings.messages) FAIL_CHECK(w);
   CHECK(model.name == str(u8"mödel_日本"));
   REQUIRE(model.mesh.materials.size() == 1);
   CHECK(model.mesh.materials[0].diffuse_map == texture);
-  REQUIRE(model.mesh.material_libraries.size() == 1);
-  CHECK(model.mesh.material_libraries[0] == str((folder / u8"mätériaux_Ω.mtl").lexically_normal().generic_u8string()));
+  REQUIRE(names.material_libraries.size() == 1);
+  CHECK(names.material_libraries[0] == str((folder / u8"mätériaux_Ω.mtl").lexically_normal().generic_u8string()));
 
   // Confined: the texture inside resolves to its canonical UTF-8 path; one outside is refused, or allowed on purpose.
   CHECK(resolve_referenced_file(obj, str(u8"tëxture_日本.png"), "map_Kd") ==
@@ -242,7 +243,7 @@ TEST_CASE("referenced files: UTF-8 names outside ASCII, read, confined, named an
   // Written: an OBJ naming the MTL relative to it, read back with its texture.
   const std::string obj_out = utf8(folder / u8"sortie_Ω.obj");
   deform::ObjWriteOptions obj_options;
-  obj_options.mtllib = deform::material_libraries_for(model.mesh, obj_out);
+  obj_options.mtllib = deform::material_libraries_for(names, obj_out);
   CHECK(obj_options.mtllib == str(u8"mätériaux_Ω.mtl"));
   deform::write_obj(obj_out, model.mesh, model.mesh.positions, {}, obj_options);
   const deform::Mesh back = deform::read_obj(obj_out);

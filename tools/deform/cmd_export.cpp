@@ -63,6 +63,7 @@ int run_native(const Args& args, const std::string& out) {
   deform::ExportOptions options;
   options.texture_root = texture_root(args);
   options.references = reference_policy(args);
+  options.submesh_names = loaded.names.submeshes;
   const deform::ExportedFiles files = deform::export_native(model, out, options);
   for (const std::string& w : files.warnings) note(w);
   print_json(Json{{"obj", files.obj},

@@ -39,6 +39,7 @@ int run(const std::vector<std::string>& argv) {
   const std::string out_path = args.required("--out");
 
   deform::Mesh mesh;
+  deform::ObjNames names;                      // the input's `o`/`g` names and MTL files, written again as it had them
   if (model_loading::importable(mesh_path)) {  // an import's mesh in its bind pose
     model_loading::ModelRequest request;
     request.path = mesh_path;
@@ -46,9 +47,10 @@ int run(const std::vector<std::string>& argv) {
     model_loading::LoadedModel loaded = model_loading::load_model(request);
     for (const std::string& w : loaded.warnings) note(w);
     mesh = std::move(loaded.model.mesh);
+    names = std::move(loaded.names);
   } else {
     deform::Warnings warnings;
-    mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args));
+    mesh = deform::read_obj(mesh_path, &warnings, reference_policy(args), &names);
     for (const std::string& w : warnings.messages) note(w);
   }
   const deform::LatticeDocument doc = deform::read_lattice_json(lattice_path, mesh.point_count());
@@ -70,7 +72,8 @@ int run(const std::vector<std::string>& argv) {
     if (p != deform::LatticeBinding::no_vertex) deformed[p] = true;
   const std::vector<glm::vec3> normals = ffd_normals(mesh, lattice, deformed);
   // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
-  deform::write_obj(out_path, mesh, positions, normals, {.mtllib = deform::material_libraries_for(mesh, out_path)});
+  deform::write_obj(out_path, mesh, positions, normals,
+                    {.mtllib = deform::material_libraries_for(names, out_path), .submesh_names = names.submeshes});
 
   const deform::LatticeFrame& frame = lattice.frame();
   const glm::vec3 size(frame.u_axis.x, frame.v_axis.y, frame.w_axis.z);

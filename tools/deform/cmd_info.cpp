@@ -3,6 +3,7 @@
 #include <cctype>
 #include <filesystem>
 #include <iostream>
+#include <span>
 
 #include "cli.hpp"
 #include "model_loader.hpp"
@@ -46,16 +47,19 @@ Json bone_list(const deform::Skeleton& skeleton) {
 
 Json skeleton_info(const deform::Skeleton& skeleton) { return {{"kind", "skeleton"}, {"bones", bone_list(skeleton)}}; }
 
-Json mesh_info(const deform::Mesh& mesh) {
+// `names`: per submesh, its `o`/`g` names (an OBJ's, or an import's node and mesh: ImportedModel::submesh_names).
+Json mesh_info(const deform::Mesh& mesh, std::span<const deform::ObjSubmeshNames> names) {
   Json materials = Json::array();
   for (const deform::Material& m : mesh.materials) materials.push_back(m.name);
   Json submeshes = Json::array();
-  for (const deform::Submesh& s : mesh.submeshes) {
+  for (std::size_t i = 0; i < mesh.submeshes.size(); ++i) {
+    const deform::Submesh& s = mesh.submeshes[i];
+    const deform::ObjSubmeshNames named = i < names.size() ? names[i] : deform::ObjSubmeshNames{};
     const bool has_material = s.material >= 0 && static_cast<std::size_t>(s.material) < mesh.materials.size();
     submeshes.push_back(
         {{"material", has_material ? Json(mesh.materials[static_cast<std::size_t>(s.material)].name) : Json(nullptr)},
-         {"object", s.object},
-         {"group", s.group},
+         {"object", named.object},
+         {"group", named.group},
          {"first_triangle", s.first_triangle},
          {"triangles", s.triangle_count}});
   }
@@ -131,7 +135,9 @@ int run(const std::vector<std::string>& argv) {
     info = skeleton_info(deform::read_sk(path));
   } else if (ext == ".obj") {
     deform::Warnings warnings;
-    info = mesh_info(deform::read_obj(path, &warnings, policy));
+    deform::ObjNames names;
+    const deform::Mesh mesh = deform::read_obj(path, &warnings, policy, &names);
+    info = mesh_info(mesh, names.submeshes);
     for (const std::string& w : warnings.messages) note(w);
 #ifdef DEFORM_HAVE_IMPORT  // imported models: bones and clips
   } else if (deform::is_importable(path)) {
@@ -139,7 +145,7 @@ int run(const std::vector<std::string>& argv) {
     options.references = policy;
     const deform::ImportedModel imported = deform::import_model_isolated(path, options);
     for (const std::string& w : imported.warnings) note(path + ": " + w);
-    info = mesh_info(imported.model.mesh);  // "vertices": the distinct points (docs/import.md)
+    info = mesh_info(imported.model.mesh, imported.submesh_names);  // "vertices": the distinct points (docs/import.md)
     if (imported.rigged) {
       info["bones"] = imported.model.skeleton.bone_count();
       Json clips = Json::array();

@@ -469,8 +469,9 @@ int run(const std::vector<std::string>& argv) {
   if (o.mush_iterations > 0) delta_mush(loaded, o, skinned);
 
   // The output names the input's MTL files (relative to its own folder), so it opens with its materials.
-  deform::write_obj(o.out_path, model.mesh, skinned.positions, skinned.normals,
-                    {.mtllib = deform::material_libraries_for(model.mesh, o.out_path)});
+  deform::write_obj(
+      o.out_path, model.mesh, skinned.positions, skinned.normals,
+      {.mtllib = deform::material_libraries_for(loaded.names, o.out_path), .submesh_names = loaded.names.submeshes});
   print_skin_report(loaded, o, pose, skinned);
   return exit_ok;
 }

@@ -34,8 +34,11 @@ int main(int argc, char** argv) {
   try {
     const std::string dir = std::string(argv[1]) + "/";
     const deform::Model model = deform::builtin_character();
+    std::vector<deform::ObjSubmeshNames> parts;  // one `g` per body part, all in `o builtin`
+    for (const std::string_view part : deform::builtin_part_names()) parts.push_back({"builtin", std::string(part)});
     deform::ObjWriteOptions obj;
     obj.mtllib = "builtin.mtl";
+    obj.submesh_names = parts;
     deform::write_obj(dir + "builtin.obj", model.mesh, model.mesh.positions, {}, obj);
     deform::write_file_atomic(dir + "builtin.mtl", deform::format_mtl(model.mesh.materials));
     deform::write_sk(dir + "builtin.sk", model.skeleton);

@@ -37,7 +37,7 @@ LoadedModel load_native(const ModelRequest& request) {
   if (!request.weights.empty()) {
     deform::Warnings warnings;
     loaded.model = deform::load_model(request.path, request.skeleton, request.weights, &warnings, request.influences,
-                                      request.references);
+                                      request.references, &loaded.names);
     loaded.warnings = std::move(warnings.messages);
     return loaded;
   }
@@ -45,7 +45,7 @@ LoadedModel load_native(const ModelRequest& request) {
     throw deform::Error::invalid_argument(request.path, "the native files need weights (.skw)");
   deform::Warnings warnings;
   loaded.model.name = std::filesystem::path(request.path).stem().string();
-  loaded.model.mesh = deform::read_obj(request.path, &warnings, request.references);
+  loaded.model.mesh = deform::read_obj(request.path, &warnings, request.references, &loaded.names);
   loaded.model.skeleton = deform::read_sk(request.skeleton);
   deform::WeightsResult automatic = deform::compute_heat_weights(loaded.model.mesh, loaded.model.skeleton);
   loaded.model.weights = std::move(automatic.weights);
@@ -71,6 +71,8 @@ LoadedModel load_model(const ModelRequest& request) {
     loaded.model = deform::builtin_character();
     loaded.source = "builtin";
     loaded.builtin = true;
+    for (const std::string_view part : deform::builtin_part_names())
+      loaded.names.submeshes.push_back({"builtin", std::string(part)});
     return loaded;
   }
   if (!request.skeleton.empty() || !request.weights.empty()) return load_native(request);
@@ -86,6 +88,7 @@ LoadedModel load_model(const ModelRequest& request) {
     loaded.rigged = imported.rigged;
     loaded.clips = std::move(imported.clips);
     loaded.up = imported.up;
+    loaded.names.submeshes = std::move(imported.submesh_names);
     for (const std::string& message : imported.warnings) loaded.warnings.push_back(request.path + ": " + message);
     return loaded;
   }

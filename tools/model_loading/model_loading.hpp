@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "deform/io/obj.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
@@ -43,6 +44,10 @@ struct LoadedModel {
   std::vector<deform::Animation> clips;  // an import's animation clips; empty otherwise
   glm::vec3 up{0.0f, 1.0f, 0.0f};        // the up axis an imported file declares; +Y otherwise
   std::vector<std::string> warnings;     // non-fatal findings, one line each, naming their file
+  // What an OBJ written of this model names, as its source had it: an OBJ's `o`/`g` names and MTL files, an
+  // import's node and mesh names (ImportedModel::submesh_names), the built-in character's object "builtin" and
+  // body parts (builtin_part_names).
+  deform::ObjNames names;
 };
 
 // Whether `path` would be imported (this build has deform::import, Assimp reads the extension, and it is not an

@@ -5,7 +5,9 @@
 #include <map>
 #include <utility>
 #include <numbers>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "deform/extras/builtin.hpp"
@@ -118,9 +120,9 @@ enum BodyPart : int {
   hair_part
 };
 constexpr int body_part_count = 14;
-const char* const body_part_names[body_part_count] = {"torso",  "neck",   "head",    "arm_l",   "arm_r",
-                                                      "hand_l", "hand_r", "thumb_l", "thumb_r", "leg_l",
-                                                      "leg_r",  "foot_l", "foot_r",  "hair"};
+constexpr std::array<std::string_view, body_part_count> body_part_names = {
+    "torso",   "neck",    "head",  "arm_l", "arm_r",  "hand_l", "hand_r",
+    "thumb_l", "thumb_r", "leg_l", "leg_r", "foot_l", "foot_r", "hair"};
 
 struct Cage {
   std::vector<glm::vec3> points;
@@ -478,13 +480,14 @@ void build_body(Mesh& mesh) {
         mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[2], v[0], v[2], v[3]});
       else mesh.triangles.insert(mesh.triangles.end(), {v[0], v[1], v[3], v[1], v[2], v[3]});
     }
-    mesh.submeshes.push_back(
-        {first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0, "builtin", body_part_names[part]});
+    mesh.submeshes.push_back({first, static_cast<std::uint32_t>(mesh.triangle_count()) - first, 0});
   }
   order_points_by_part(mesh);
 }
 
 }  // namespace
+
+std::span<const std::string_view> builtin_part_names() noexcept { return body_part_names; }
 
 Model builtin_character() {
   Model model;

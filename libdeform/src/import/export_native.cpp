@@ -64,6 +64,9 @@ struct Staging {
 }  // namespace
 
 ExportedFiles export_native(const Model& model, const std::string& folder, const ExportOptions& options) {
+  if (!options.submesh_names.empty() && options.submesh_names.size() != model.mesh.submeshes.size())
+    throw Error::invalid_argument("submesh_names", std::to_string(options.submesh_names.size()) + " names for " +
+                                                       std::to_string(model.mesh.submeshes.size()) + " submeshes");
   std::string stem = model.name.empty() ? std::string("model") : model.name;
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
@@ -163,6 +166,7 @@ ExportedFiles export_native(const Model& model, const std::string& folder, const
   write_sk(path_in(staging.path, names[2]), model.skeleton);
   ObjWriteOptions obj_options;
   obj_options.mtllib = names[1];
+  obj_options.submesh_names = options.submesh_names;
   Mesh mesh_with_copies = model.mesh;
   mesh_with_copies.materials = std::move(materials);
   write_obj(path_in(staging.path, names[0]), mesh_with_copies, model.mesh.positions, {}, obj_options);

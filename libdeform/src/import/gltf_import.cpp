@@ -1039,8 +1039,6 @@ void GltfImport::add_triangles(const Instance& instance, const tinygltf::Primiti
   submesh.material = primitive.material >= 0 && static_cast<std::size_t>(primitive.material) < mesh.materials.size()
                          ? primitive.material
                          : -1;
-  submesh.object = gltf_.nodes[static_cast<std::size_t>(instance.node)].name;
-  submesh.group = gltf_.meshes[static_cast<std::size_t>(instance.mesh)].name;
   auto triangle = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
     for (std::uint32_t corner : {a, b, c}) mesh.triangles.push_back(static_cast<std::uint32_t>(first_vertex + corner));
   };
@@ -1055,6 +1053,8 @@ void GltfImport::add_triangles(const Instance& instance, const tinygltf::Primiti
   }
   submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
   mesh.submeshes.push_back(std::move(submesh));
+  result_.submesh_names.push_back({gltf_.nodes[static_cast<std::size_t>(instance.node)].name,
+                                   gltf_.meshes[static_cast<std::size_t>(instance.mesh)].name});
 }
 
 // --- clips. Skeleton space: T(axis_scale(parent rest world) · t) · R(q); a root bone's parent is the origin ---

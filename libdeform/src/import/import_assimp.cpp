@@ -597,8 +597,6 @@ void AssimpImport::add_faces(std::size_t i, const std::string& element) {
   submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
   submesh.material =
       source.mMaterialIndex < mesh.materials.size() ? static_cast<std::int32_t>(source.mMaterialIndex) : -1;
-  submesh.object = nodes_[static_cast<std::size_t>(instances_[i].node)].node->mName.C_Str();
-  submesh.group = source.mName.C_Str();
   for (unsigned f = 0; f < source.mNumFaces; ++f) {
     const aiFace& face = source.mFaces[f];
     if (face.mNumIndices != 3) {
@@ -613,6 +611,8 @@ void AssimpImport::add_faces(std::size_t i, const std::string& element) {
   }
   submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
   mesh.submeshes.push_back(std::move(submesh));
+  result_.submesh_names.push_back(
+      {nodes_[static_cast<std::size_t>(instances_[i].node)].node->mName.C_Str(), source.mName.C_Str()});
 }
 
 // --- clips ---

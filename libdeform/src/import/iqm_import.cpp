@@ -524,8 +524,6 @@ void IqmImport::add_triangles() {
     Submesh submesh;
     submesh.first_triangle = static_cast<std::uint32_t>(mesh.triangle_count());
     submesh.material = part.material;
-    submesh.object = part.name;
-    submesh.group = part.name;
     const auto first_vertex = static_cast<std::uint32_t>(mesh.vertex_point.size());
     for (std::uint32_t v = part.first_vertex; v < part.first_vertex + part.num_vertexes; ++v) {
       mesh.vertex_point.push_back(point_of_vertex_[v]);
@@ -549,6 +547,7 @@ void IqmImport::add_triangles() {
     }
     submesh.triangle_count = static_cast<std::uint32_t>(mesh.triangle_count()) - submesh.first_triangle;
     mesh.submeshes.push_back(std::move(submesh));
+    result_.submesh_names.push_back({part.name, part.name});
   }
   close_triangle_faces(mesh, path_);
 }

@@ -12,7 +12,9 @@ namespace deform::wire {
 namespace {
 
 constexpr char magic[8] = {'D', 'F', 'I', 'M', 'P', 'O', 'R', 'T'};
-constexpr std::uint32_t version = 4;  // 2: extra influences, morph targets and channels; 3: skins; 4: embedded images
+// 2: extra influences, morph targets and channels; 3: skins; 4: embedded images; 5: submesh names beside the mesh
+// (ImportedModel::submesh_names), no MTL file list
+constexpr std::uint32_t version = 5;
 
 class Writer {
  public:
@@ -121,7 +123,6 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
   w.count(mesh.submeshes.size());
   for (const Submesh& s : mesh.submeshes) {
     w.raw(s.first_triangle), w.raw(s.triangle_count), w.raw(s.material);
-    w.text(s.object), w.text(s.group);
   }
   w.count(mesh.materials.size());
   for (const Material& m : mesh.materials) {
@@ -130,8 +131,6 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
     w.text(m.diffuse_map);
     w.array(m.diffuse_image ? *m.diffuse_image : std::vector<std::uint8_t>{});
   }
-  w.count(mesh.material_libraries.size());
-  for (const std::string& library : mesh.material_libraries) w.text(library);
   w.array(mesh.face_sizes);
   w.array(mesh.face_corners);
   w.count(model.skeleton.bone_count());
@@ -183,6 +182,8 @@ std::vector<std::uint8_t> encode(const ImportedModel& imported) {
     w.count(skin.meshes.size());
     for (const std::string& name : skin.meshes) w.text(name);
   }
+  w.count(imported.submesh_names.size());
+  for (const ObjSubmeshNames& names : imported.submesh_names) w.text(names.object), w.text(names.group);
   return std::move(w.bytes);
 }
 
@@ -200,11 +201,10 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
   mesh.vertex_normals = r.array<glm::vec3>();
   mesh.vertex_uvs = r.array<glm::vec2>();
   mesh.triangles = r.array<std::uint32_t>();
-  mesh.submeshes.resize(r.count(3 * sizeof(std::uint32_t) + 16));
+  mesh.submeshes.resize(r.count(3 * sizeof(std::uint32_t)));
   for (Submesh& s : mesh.submeshes) {
     s.first_triangle = r.raw<std::uint32_t>(), s.triangle_count = r.raw<std::uint32_t>();
     s.material = r.raw<std::int32_t>();
-    s.object = r.text(), s.group = r.text();
   }
   mesh.materials.resize(r.count(8 + 3 * sizeof(glm::vec3)));
   for (Material& m : mesh.materials) {
@@ -215,8 +215,6 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     std::vector<std::uint8_t> image = r.array<std::uint8_t>();
     if (!image.empty()) m.diffuse_image = std::make_shared<const std::vector<std::uint8_t>>(std::move(image));
   }
-  mesh.material_libraries.resize(r.count(8));
-  for (std::string& library : mesh.material_libraries) library = r.text();
   mesh.face_sizes = r.array<std::uint32_t>();
   mesh.face_corners = r.array<std::uint32_t>();
   std::vector<Bone> bones(r.count(8 + sizeof(std::int32_t) + 8));
@@ -275,6 +273,8 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     skin.meshes.resize(r.count(8));
     for (std::string& name : skin.meshes) name = r.text();
   }
+  imported.submesh_names.resize(r.count(16));
+  for (ObjSubmeshNames& names : imported.submesh_names) names.object = r.text(), names.group = r.text();
   if (!r.done()) r.fail("trailing bytes");
 
   // What the rest of libdeform relies on: indices in range, one weight entry per point, finite numbers.
@@ -290,6 +290,8 @@ ImportedModel decode(const std::vector<std::uint8_t>& bytes, const std::string& 
     if (std::uint64_t(s.first_triangle) + s.triangle_count > mesh.triangle_count() || s.material < -1 ||
         s.material >= static_cast<std::int64_t>(mesh.materials.size()))
       r.fail("a submesh is out of range");
+  if (!imported.submesh_names.empty() && imported.submesh_names.size() != mesh.submeshes.size())
+    r.fail("the submesh names do not match the submeshes");
   if (model.weights.bones.size() != points || model.weights.weights.size() != points)
     r.fail("skin weights do not match the points");
   for (const glm::u16vec4& ids : model.weights.bones)

@@ -437,7 +437,7 @@ class GltfExport {
   // use, in order), so that no reader has to split shared vertex buffers ---
   Json mesh_json() {
     std::vector<Submesh> submeshes = mesh_.submeshes;
-    if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh_.triangle_count()), -1, {}, {}});
+    if (submeshes.empty()) submeshes.push_back({0, static_cast<std::uint32_t>(mesh_.triangle_count()), -1});
     std::vector<std::uint32_t> local(vertices_, 0);
     Json primitives = Json::array();
     for (const Submesh& s : submeshes)

@@ -10,10 +10,10 @@
 namespace deform {
 
 Model load_model(const std::string& obj_path, const std::string& sk_path, const std::string& skw_path,
-                 Warnings* warnings, int influences, const ReferencePolicy& policy) {
+                 Warnings* warnings, int influences, const ReferencePolicy& policy, ObjNames* names) {
   Model model;
   model.name = utf8_path::to_utf8(utf8_path::from_utf8(obj_path).stem());
-  model.mesh = read_obj(obj_path, warnings, policy);
+  model.mesh = read_obj(obj_path, warnings, policy, names);
   model.skeleton = read_sk(sk_path);
   // read_skw rejects a vertex count other than the mesh's and bone ids outside the skeleton, naming the line; the
   // checks below hold the Model invariant whatever the reader does.

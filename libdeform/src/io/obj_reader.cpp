@@ -46,8 +46,9 @@ struct SubmeshState {
 
 class ObjParser {
  public:
-  ObjParser(const std::string& name, const std::string& base_folder, Warnings* warnings, const ReferencePolicy& policy)
-      : name_(name), base_folder_(base_folder), warnings_(warnings), policy_(policy) {}
+  ObjParser(const std::string& name, const std::string& base_folder, Warnings* warnings, const ReferencePolicy& policy,
+            ObjNames* names)
+      : name_(name), base_folder_(base_folder), warnings_(warnings), policy_(policy), names_(names) {}
 
   Mesh parse(std::string_view text) {
     max_name_bytes_ = (std::size_t{64} << 20) + 4 * text.size();
@@ -202,9 +203,8 @@ class ObjParser {
                           std::to_string(max_name_bytes_) + " bytes of names)");
     Submesh& submesh = mesh_.submeshes.emplace_back();
     submesh.first_triangle = static_cast<std::uint32_t>(mesh_.triangle_count());
-    submesh.object = state_.object;
-    submesh.group = state_.group;
     submesh_states_.push_back(state_);
+    if (names_) names_->submeshes.push_back({state_.object, state_.group});
   }
 
   // `mtllib a.mtl b.mtl`; a single name with blanks is taken whole when such a file exists inside the model's folder
@@ -243,7 +243,7 @@ class ObjParser {
     // Each MTL file is read once, however often the OBJ names it (a hostile file names one 20,000 times).
     if (std::find(read_libraries_.begin(), read_libraries_.end(), real) != read_libraries_.end()) return;
     read_libraries_.push_back(real);
-    mesh_.material_libraries.push_back(path);
+    if (names_) names_->material_libraries.push_back(path);
     const std::string folder = utf8_path::generic_utf8(utf8_path::from_utf8(path).parent_path());
     for (Material& material : obj_text::parse_mtl_confined(read_file_text(real), path, folder.empty() ? "." : folder,
                                                            base_folder_, warnings_, policy_)) {
@@ -295,6 +295,7 @@ class ObjParser {
   const std::string& base_folder_;
   Warnings* warnings_;
   const ReferencePolicy& policy_;
+  ObjNames* names_;                          // null: the caller keeps no names
   std::vector<std::string> read_libraries_;  // canonical paths of the MTL files read
   Mesh mesh_;
 
@@ -329,14 +330,15 @@ class ObjParser {
 }  // namespace
 
 Mesh parse_obj(std::string_view text, const std::string& name, const std::string& base_folder, Warnings* warnings,
-               const ReferencePolicy& policy) {
-  return ObjParser(name, base_folder, warnings, policy).parse(text);
+               const ReferencePolicy& policy, ObjNames* names) {
+  if (names) *names = {};
+  return ObjParser(name, base_folder, warnings, policy, names).parse(text);
 }
 
-Mesh read_obj(const std::string& path, Warnings* warnings, const ReferencePolicy& policy) {
+Mesh read_obj(const std::string& path, Warnings* warnings, const ReferencePolicy& policy, ObjNames* names) {
   const std::string text = read_file_text(path);
   const std::string folder = utf8_path::generic_utf8(utf8_path::from_utf8(path).parent_path());
-  return parse_obj(text, path, folder.empty() ? "." : folder, warnings, policy);
+  return parse_obj(text, path, folder.empty() ? "." : folder, warnings, policy, names);
 }
 
 }  // namespace deform

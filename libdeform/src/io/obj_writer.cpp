@@ -102,6 +102,9 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
         throw Error::invalid_argument("render vertex " + std::to_string(r), "normal is not finite (not written)");
   if (write_uvs && mesh.vertex_uvs.size() != mesh.vertex_count())
     throw Error::invalid_argument("mesh", "vertex_uvs does not have one entry per render vertex");
+  if (!options.submesh_names.empty() && options.submesh_names.size() != mesh.submeshes.size())
+    throw Error::invalid_argument("submesh_names", std::to_string(options.submesh_names.size()) + " names for " +
+                                                       std::to_string(mesh.submeshes.size()) + " submeshes");
 
   std::string out;
   if (!options.mtllib.empty()) append_statement(out, "mtllib", options.mtllib);
@@ -114,19 +117,24 @@ std::string format_obj(const Mesh& mesh, std::span<const glm::vec3> positions, s
 
   std::size_t corner = 0, triangle = 0, next_submesh = 0;
   const Submesh* current = nullptr;
+  const ObjSubmeshNames no_names;  // where options.submesh_names is empty: no `o` or `g` is written
+  const ObjSubmeshNames* current_names = nullptr;
   for (const std::uint32_t size : mesh.face_sizes) {
     while (next_submesh < mesh.submeshes.size() && mesh.submeshes[next_submesh].first_triangle <= triangle) {
-      const Submesh& submesh = mesh.submeshes[next_submesh++];
+      const std::size_t s = next_submesh++;
+      const Submesh& submesh = mesh.submeshes[s];
       if (submesh.triangle_count == 0) continue;
-      if (current ? submesh.object != current->object : !submesh.object.empty())
-        append_statement(out, "o", submesh.object);
-      if (current ? submesh.group != current->group : !submesh.group.empty()) append_statement(out, "g", submesh.group);
+      const ObjSubmeshNames& names = options.submesh_names.empty() ? no_names : options.submesh_names[s];
+      if (current ? names.object != current_names->object : !names.object.empty())
+        append_statement(out, "o", names.object);
+      if (current ? names.group != current_names->group : !names.group.empty()) append_statement(out, "g", names.group);
       if (!options.mtllib.empty() && (current ? submesh.material != current->material : submesh.material >= 0)) {
         const bool named = submesh.material >= 0 && std::size_t(submesh.material) < mesh.materials.size();
         append_statement(out, "usemtl",
                          named ? std::string_view(material_names[std::size_t(submesh.material)]) : "default");
       }
       current = &submesh;
+      current_names = &names;
     }
     if (corner + size > mesh.face_corners.size())
       throw Error::invalid_argument("mesh", "face_sizes needs more corners than face_corners holds");
@@ -156,12 +164,12 @@ void write_obj(const std::string& path, const Mesh& mesh, std::span<const glm::v
   write_file_atomic(path, format_obj(mesh, positions, normals, options));
 }
 
-std::string material_libraries_for(const Mesh& mesh, const std::string& obj_path) {
+std::string material_libraries_for(const ObjNames& names, const std::string& obj_path) {
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::path folder = fs::absolute(utf8_path::from_utf8(obj_path), error).lexically_normal().parent_path();
   std::string out;
-  for (const std::string& library : mesh.material_libraries) {
+  for (const std::string& library : names.material_libraries) {
     const fs::path absolute = fs::absolute(utf8_path::from_utf8(library), error).lexically_normal();
     fs::path relative = absolute.lexically_relative(folder);
     if (relative.empty()) relative = absolute;  // another root: no relative path exists

@@ -8,6 +8,7 @@
 // pushes). The root (hips) has its local +Y pointing forward (+Z), so that both the spine and the legs hang off it
 // with bind rotations of ±90° rather than 180° and every joint's DOF range is a plain [min, max] around its bind angle.
 #include <cstdint>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -25,6 +26,9 @@ namespace deform {
 // weights compute_automatic_weights() gives with default options. Deterministic: every call gives the same values
 // (across platforms, to within the rounding of their sin/exp/pow). Cost: about 4 ms; allocates the model.
 DEFORM_EXTRAS_API Model builtin_character();
+// The names of the character's 14 body parts, one per submesh of builtin_character()'s mesh, in order ("torso",
+// "neck", "head", ... "hair"): the OBJ groups of samples/data/builtin.obj (all in object "builtin").
+DEFORM_EXTRAS_API std::span<const std::string_view> builtin_part_names() noexcept;
 
 // The texture the material names: `size` × `size` RGB pixels (row 0 = top, i.e. v = 1), 8 bits per channel, painted
 // by code per body-part atlas cell: skin tones and a face, hair, a shirt with short sleeves, trousers and shoes, soft

@@ -20,10 +20,12 @@
 //    is not animated); non-uniform or animated scale is approximated and reported in `warnings`.
 //  - weights: the strongest 4 per vertex, renormalised; a vertex with no weight is bound rigidly to its mesh's node.
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "deform/import/export.hpp"
+#include "deform/io/obj.hpp"
 #include "deform/io/referenced_file.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/model.hpp"
@@ -69,6 +71,9 @@ struct ImportedModel {
   // The file's skins: glTF's every skin, used or not, in file order; for other formats one entry when rigged (their
   // meshes' bones taken as one skin), none when not.
   std::vector<ImportedSkin> skins;
+  // Per submesh of model.mesh (same order), the names export_native writes as its `o` and `g`: the mesh instance's
+  // node (glTF, Assimp) or mesh (IQM) as `object`, its mesh as `group`.
+  std::vector<ObjSubmeshNames> submesh_names;
 };
 
 // Imports the model at `path` in this process. Throws deform::Error naming the file for a file Assimp cannot read
@@ -115,6 +120,9 @@ struct ExportOptions {
   std::string texture_root;
   // Folders besides texture_root textures may be copied from, on purpose (ImportOptions::references).
   ReferencePolicy references;
+  // The OBJ's `o`/`g` names, one per submesh of the model's mesh (ImportedModel::submesh_names, ObjNames::submeshes
+  // of a native model); empty: the OBJ has none. Throws deform::Error (kind argument) for another count.
+  std::span<const ObjSubmeshNames> submesh_names;
 };
 
 // Writes `model` into `folder` as STEM.obj + STEM.mtl + STEM.sk + STEM.skw, STEM = model.name with anything outside

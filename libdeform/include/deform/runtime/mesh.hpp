@@ -1,6 +1,7 @@
 #pragma once
-// Mesh: flat arrays of points, render vertices and triangles, with materials. io/obj.hpp reads and writes them as
-// Wavefront OBJ/MTL; runtime/normals.hpp recomputes their normals per frame.
+// Mesh: flat arrays of points, render vertices and triangles, with materials: geometry only, what a frame needs.
+// io/obj.hpp reads and writes them as Wavefront OBJ/MTL (a file's `o`/`g` names and MTL files are its ObjNames,
+// kept beside the Mesh); runtime/normals.hpp recomputes their normals per frame.
 //
 // Two levels of vertex, because OBJ has two:
 //  - a *point* is one `v` line of the OBJ, in file order. Skin weights (.skw), lattice bindings and the CLI's output
@@ -41,8 +42,6 @@ struct Submesh {
   std::uint32_t first_triangle = 0;
   std::uint32_t triangle_count = 0;
   std::int32_t material = -1;  // index into Mesh::materials, -1 = default material
-  std::string object;          // last `o` name in effect ("" if none)
-  std::string group;           // last `g` name in effect ("" if none)
 };
 
 struct Mesh {
@@ -60,9 +59,6 @@ struct Mesh {
   std::vector<std::uint32_t> triangles;
   std::vector<Submesh> submeshes;
   std::vector<Material> materials;
-  // The MTL files the OBJ's `mtllib` lines named and read_obj read, as it opened them (resolved against the OBJ's
-  // folder), in file order. write_obj does not use them by itself: see material_libraries_for.
-  std::vector<std::string> material_libraries;
 
   // --- the file's polygons, kept so that write_obj reproduces faces as they were (quads stay quads) ---
   std::vector<std::uint32_t> face_sizes;    // corners per face, in file order
