@@ -169,77 +169,101 @@ namespace deform::detail {
 void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
   const DirectDeltaMushBinding& bd = *args.binding;
   const glm::mat4* palette = args.palette;
+  const DirectDeltaMushMoments* moments = bd.moments.data();
   for (std::size_t block_begin = args.begin; block_begin < args.end; block_begin += lanes) {
     const int count = int(std::min<std::size_t>(lanes, args.end - block_begin));
     Block b;
     L rest[3];
+    // Per lane: its first influence and how many; lanes past the range have none.
+    std::uint32_t first[lanes], influences[lanes];
+    std::uint32_t most = 0;
     for (int l = 0; l < lanes; ++l) {
-      DEFORM_UNROLL
-      for (int k = 0; k < 9; ++k) b.c[k][l] = k % 4 == 0 ? 1.0f : 0.0f, b.a[k][l] = k % 4 == 0 ? 1.0f : 0.0f;
-      DEFORM_UNROLL
-      for (int k = 0; k < 3; ++k) {
-        b.anchor[k][l] = 0.0f, b.sum[k][l] = 0.0f, b.centroid[k][l] = 0.0f, b.offset[k][l] = 0.0f;
-        b.normal[k][l] = 0.0f, rest[k][l] = 0.0f;
-      }
-      b.inverse[l] = 0.0f, b.turned[l] = 0.0f;
-    }
-    for (int l = 0; l < count; ++l) {
-      const std::size_t i = block_begin + std::size_t(l);
+      const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
+      first[l] = bd.offsets[i];
+      influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
+      most = std::max(most, influences[l]);
       const glm::vec3 u = bd.rest[i];
       rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
-      if (args.in_positions != nullptr) {
-        const glm::vec3 d = args.in_positions[i] - u;
-        b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
-      }
-      if (args.in_normals != nullptr) {
-        const glm::vec3 n = args.in_normals[i];
-        b.normal[0][l] = n.x, b.normal[1][l] = n.y, b.normal[2][l] = n.z;
-      }
-      const std::uint32_t first = bd.offsets[i], last = bd.offsets[i + 1];
-      if (first >= last) continue;
-      const float* m0 = &palette[bd.bones[first]][0][0];  // column-major: m[4 · column + row]
-      const float ax = m0[0] * u.x + m0[4] * u.y + m0[8] * u.z + m0[12];
-      const float ay = m0[1] * u.x + m0[5] * u.y + m0[9] * u.z + m0[13];
-      const float az = m0[2] * u.x + m0[6] * u.y + m0[10] * u.z + m0[14];
-      // C = Σ A P + d pᵀ, q = Σ A p + d ψ (d = M u − anchor), in scalars the compiler keeps in registers.
-      float c00 = 0.0f, c01 = 0.0f, c02 = 0.0f, c10 = 0.0f, c11 = 0.0f, c12 = 0.0f, c20 = 0.0f, c21 = 0.0f, c22 = 0.0f;
-      float qx = 0.0f, qy = 0.0f, qz = 0.0f, sx = 0.0f, sy = 0.0f, sz = 0.0f, psi = 0.0f;
-      for (std::uint32_t e = first; e < last; ++e) {
-        const float* m = &palette[bd.bones[e]][0][0];
-        const float a00 = m[0], a10 = m[1], a20 = m[2], a01 = m[4], a11 = m[5], a21 = m[6], a02 = m[8], a12 = m[9],
-                    a22 = m[10];
-        const float dx = a00 * u.x + a01 * u.y + a02 * u.z + m[12] - ax;
-        const float dy = a10 * u.x + a11 * u.y + a12 * u.z + m[13] - ay;
-        const float dz = a20 * u.x + a21 * u.y + a22 * u.z + m[14] - az;
-        const DirectDeltaMushMoments& o = bd.moments[e];
-        c00 += a00 * o.xx + a01 * o.xy + a02 * o.xz + dx * o.x;
-        c01 += a00 * o.xy + a01 * o.yy + a02 * o.yz + dx * o.y;
-        c02 += a00 * o.xz + a01 * o.yz + a02 * o.zz + dx * o.z;
-        c10 += a10 * o.xx + a11 * o.xy + a12 * o.xz + dy * o.x;
-        c11 += a10 * o.xy + a11 * o.yy + a12 * o.yz + dy * o.y;
-        c12 += a10 * o.xz + a11 * o.yz + a12 * o.zz + dy * o.z;
-        c20 += a20 * o.xx + a21 * o.xy + a22 * o.xz + dz * o.x;
-        c21 += a20 * o.xy + a21 * o.yy + a22 * o.yz + dz * o.y;
-        c22 += a20 * o.xz + a21 * o.yz + a22 * o.zz + dz * o.z;
-        qx += a00 * o.x + a01 * o.y + a02 * o.z + dx * o.w;
-        qy += a10 * o.x + a11 * o.y + a12 * o.z + dy * o.w;
-        qz += a20 * o.x + a21 * o.y + a22 * o.z + dz * o.w;
-        sx += o.x, sy += o.y, sz += o.z, psi += o.w;
-      }
-      if (!(psi > 0.0f)) continue;
-      // C −= q (Σ p / ψ)ᵀ.
-      const float inverse = 1.0f / psi;
-      const float px = sx * inverse, py = sy * inverse, pz = sz * inverse;
-      b.c[0][l] = c00 - qx * px, b.c[1][l] = c10 - qy * px, b.c[2][l] = c20 - qz * px;
-      b.c[3][l] = c01 - qx * py, b.c[4][l] = c11 - qy * py, b.c[5][l] = c21 - qz * py;
-      b.c[6][l] = c02 - qx * pz, b.c[7][l] = c12 - qy * pz, b.c[8][l] = c22 - qz * pz;
+      const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
+      b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
+      const glm::vec3 n = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
+      b.normal[0][l] = n.x, b.normal[1][l] = n.y, b.normal[2][l] = n.z;
+    }
+    // The palette and the moments read as flat float arrays: a matrix is 16 floats, column-major (m[4 · column + row]);
+    // a moments record 10 floats in declaration order.
+    static_assert(sizeof(glm::mat4) == 16 * sizeof(float) && sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
+    const float* matrix_floats = &palette[0][0][0];
+    const float* moment_floats = &moments[0].xx;
+    // The anchor, and the start rotation's matrix, from each lane's strongest bone (its first; the identity where it
+    // has none).
+    for (int l = 0; l < lanes; ++l) {
+      const float* m = matrix_floats + (influences[l] > 0 ? 16 * std::size_t(bd.bones[first[l]]) : 0);
+      const bool has = influences[l] > 0;
+      const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
       DEFORM_UNROLL
-      for (int col = 0; col < 3; ++col)
-        b.a[3 * col][l] = m0[4 * col], b.a[3 * col + 1][l] = m0[4 * col + 1], b.a[3 * col + 2][l] = m0[4 * col + 2];
-      b.anchor[0][l] = ax, b.anchor[1][l] = ay, b.anchor[2][l] = az;
-      b.sum[0][l] = qx, b.sum[1][l] = qy, b.sum[2][l] = qz;
-      b.centroid[0][l] = sx, b.centroid[1][l] = sy, b.centroid[2][l] = sz;
-      b.inverse[l] = inverse, b.turned[l] = 1.0f;
+      for (int k = 0; k < 9; ++k) b.a[k][l] = has ? m[4 * (k / 3) + k % 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+      DEFORM_UNROLL
+      for (int r = 0; r < 3; ++r)
+        b.anchor[r][l] = has ? mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) : 0.0f;
+    }
+    // C = Σ A P + d pᵀ, q = Σ A p + d ψ (d = M u − anchor), Σ p, Σ ψ: the lanes' e-th influences together, a lane past
+    // its last adding exact zeros (its moments taken as 0), so that its sums do not depend on its block.
+    L acc[16];  // C column-major (9), q (3), Σ p (3), Σ ψ
+    for (int k = 0; k < 16; ++k) acc[k] = L::filled(0.0f);
+    for (std::uint32_t e = 0; e < most; ++e) {
+      // The lanes' e-th matrices (3×4) and moments copied into lanes (the vectoriser does not gather them).
+      L mat[12], mom[10];
+      for (int l = 0; l < lanes; ++l) {
+        const bool has = e < influences[l];
+        const std::uint32_t at = has ? first[l] + e : first[l];
+        const float f = has ? 1.0f : 0.0f;
+        const float* m = matrix_floats + 16 * std::size_t(bd.bones[at]);
+        const float* o = moment_floats + 10 * std::size_t(at);
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) mat[k][l] = m[k + k / 3];
+        DEFORM_UNROLL
+        for (int k = 0; k < 10; ++k) mom[k][l] = o[k] * f;
+      }
+      for (int l = 0; l < lanes; ++l) {
+        float m[16];
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) m[k + k / 3] = mat[k][l];
+        const float xx = mom[0][l], xy = mom[1][l], xz = mom[2][l], yy = mom[3][l], yz = mom[4][l], zz = mom[5][l];
+        const float px = mom[6][l], py = mom[7][l], pz = mom[8][l], psi = mom[9][l];
+        const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+        float d[3];
+        DEFORM_UNROLL
+        for (int r = 0; r < 3; ++r)
+          d[r] = mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) - b.anchor[r][l];
+        DEFORM_UNROLL
+        for (int r = 0; r < 3; ++r) {
+          const float a0 = m[r], a1 = m[4 + r], a2 = m[8 + r];
+          acc[r][l] += mul_add(a0, xx, mul_add(a1, xy, mul_add(a2, xz, d[r] * px)));
+          acc[3 + r][l] += mul_add(a0, xy, mul_add(a1, yy, mul_add(a2, yz, d[r] * py)));
+          acc[6 + r][l] += mul_add(a0, xz, mul_add(a1, yz, mul_add(a2, zz, d[r] * pz)));
+          acc[9 + r][l] += mul_add(a0, px, mul_add(a1, py, mul_add(a2, pz, d[r] * psi)));
+        }
+        acc[12][l] += px, acc[13][l] += py, acc[14][l] += pz, acc[15][l] += psi;
+      }
+    }
+    // C −= q (Σ p / ψ)ᵀ where Σ ψ > 0; else C = I, the start the identity, and the point stays put.
+    for (int l = 0; l < lanes; ++l) {
+      const float psi = acc[15][l];
+      const bool turned = psi > 0.0f;
+      const float inverse = 1.0f / (turned ? psi : 1.0f);
+      const float p[3] = {acc[12][l] * inverse, acc[13][l] * inverse, acc[14][l] * inverse};
+      DEFORM_UNROLL
+      for (int k = 0; k < 9; ++k) {
+        b.c[k][l] = turned ? acc[k][l] - acc[9 + k % 3][l] * p[k / 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+        b.a[k][l] = turned ? b.a[k][l] : (k % 4 == 0 ? 1.0f : 0.0f);
+      }
+      DEFORM_UNROLL
+      for (int r = 0; r < 3; ++r) {
+        b.sum[r][l] = acc[9 + r][l], b.centroid[r][l] = acc[12 + r][l];
+        b.anchor[r][l] = turned ? b.anchor[r][l] : 0.0f;
+      }
+      b.inverse[l] = turned ? inverse : 0.0f;
+      b.turned[l] = turned ? 1.0f : 0.0f;
     }
     start_rotations(b);
     int all[lanes];
