@@ -1,7 +1,7 @@
 // DirectDeltaMushJob: per point, the bones' matrices applied to the point's smoothed moments, the rotation nearest the
 // cross-covariance that gives, and the point carried by it (Le and Lewis 2019). Sums are taken relative to where the
 // point's strongest bone carries its rest point, so that no float sum cancels the model's distance from the origin.
-// run() hands its range to the lane kernel (simd/ddm_kernel.inl), in the copy for the widest instruction set here;
+// run() hands its range to the lane kernel (simd/ddm_kernel.inl), in the copy its Isa picks (the widest by default);
 // nearest_rotation below is the same step for one point, for callers and the tests.
 #include "deform/runtime/direct_delta_mush.hpp"
 
@@ -31,14 +31,15 @@ Status shape_ok(const DirectDeltaMushJob& job) noexcept {
     return Status::failure("normals are not one per point");
   if (!job.out_rotations.empty() && job.out_rotations.size() != n)
     return Status::failure("rotations are not one per point");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   return {};
 }
 
 using KernelEntry = void (*)(const detail::DdmKernelArgs&) noexcept;
 
-// The widest copy of the kernel this CPU runs (isa.hpp): the job has no Isa field, so it always takes isa_best().
-KernelEntry kernel() noexcept {
-  const Isa isa = isa_best();
+// The copy for `isa`, which isa_available() has accepted.
+KernelEntry kernel_for(Isa isa) noexcept {
+  if (isa == Isa::automatic) isa = isa_best();
 #if defined(DEFORM_X86_KERNELS)
   if (isa == Isa::avx512) return detail::direct_delta_mush_avx512;
   if (isa == Isa::avx2) return detail::direct_delta_mush_avx2;
@@ -49,7 +50,6 @@ KernelEntry kernel() noexcept {
 #if defined(DEFORM_SIMD128_KERNELS)
   if (isa == Isa::simd128) return detail::direct_delta_mush_simd128;
 #endif
-  static_cast<void>(isa);
   return detail::direct_delta_mush_portable;
 }
 
@@ -122,10 +122,10 @@ Status DirectDeltaMushJob::run(std::size_t begin, std::size_t end) const noexcep
   if (const Status status = shape_ok(*this); !status) return status;
   if (begin > end || end > count()) return Status::failure("range outside the job");
   if (begin == end) return {};
-  kernel()({binding, matrices.data(), in_positions.empty() ? nullptr : in_positions.data(),
-            in_normals.empty() ? nullptr : in_normals.data(), out_positions.data(),
-            out_normals.empty() ? nullptr : out_normals.data(), out_rotations.empty() ? nullptr : out_rotations.data(),
-            begin, end});
+  kernel_for(isa)({binding, matrices.data(), in_positions.empty() ? nullptr : in_positions.data(),
+                   in_normals.empty() ? nullptr : in_normals.data(), out_positions.data(),
+                   out_normals.empty() ? nullptr : out_normals.data(),
+                   out_rotations.empty() ? nullptr : out_rotations.data(), begin, end});
   return {};
 }
 
