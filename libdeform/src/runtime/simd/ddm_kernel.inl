@@ -192,8 +192,9 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
     // The palette and the moments read as flat float arrays: a matrix is 16 floats, column-major (m[4 · column + row]);
     // a moments record 10 floats in declaration order.
     static_assert(sizeof(glm::mat4) == 16 * sizeof(float) && sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
-    const float* matrix_floats = &palette[0][0][0];
-    const float* moment_floats = &moments[0].xx;
+    // (Casts, not &palette[0][0][0]: an empty palette or binding is a null pointer, not an element to bind.)
+    const float* matrix_floats = reinterpret_cast<const float*>(palette);
+    const float* moment_floats = reinterpret_cast<const float*>(moments);
     // The anchor, and the start rotation's matrix, from each lane's strongest bone (its first; the identity where it
     // has none).
     for (int l = 0; l < lanes; ++l) {
