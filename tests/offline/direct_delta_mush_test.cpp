@@ -416,6 +416,17 @@ TEST_CASE("Direct Delta Mush: isolated points, zero weights and non-manifold mes
       chain_palette({glm::dquat(1, 0, 0, 0), glm::angleAxis(1.0, glm::dvec3(0, 0, 1))}, 4.0f, {});
   const Output out = run(b, palette, {});
   CHECK(glm::length(out.positions[n] - glm::vec3(palette[1] * glm::vec4(mesh.positions[n], 1.0f))) < 1e-5f);
+  // A point without influences last in the binding, in a block with points that have them: it stays at its rest
+  // point, and the kernel reads no influence past the last (ASan sees one: the arrays are shrunk to fit).
+  DirectDeltaMushBinding last = b;
+  last.rest.push_back({7.0f, 0.0f, 0.0f});
+  last.offsets.push_back(last.offsets.back());
+  last.bones.shrink_to_fit();
+  last.moments.shrink_to_fit();
+  REQUIRE(last.point_count() % 16 != 1);  // not alone in its block of 16 (the kernel's)
+  const Output with_last = run(last, palette, {});
+  CHECK(with_last.positions.back() == glm::vec3(7.0f, 0.0f, 0.0f));
+  CHECK(std::memcmp(with_last.positions.data(), out.positions.data(), out.positions.size() * sizeof(glm::vec3)) == 0);
 
   const auto refused = [&](const deform::Mesh& m, const deform::SkinWeights& w, const DirectDeltaMushSettings& s,
                            const char* part) {

@@ -216,7 +216,9 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
       L mat[12], mom[10];
       for (int l = 0; l < lanes; ++l) {
         const bool has = e < influences[l];
-        const std::uint32_t at = has ? first[l] + e : first[l];
+        // A lane without an e-th influence reads the binding's first (there is one: some lane has an e-th), not its
+        // own row's start, which for a point without influences at the end of the binding is one past the last.
+        const std::uint32_t at = has ? first[l] + e : 0;
         const float f = has ? 1.0f : 0.0f;
         const float* m = matrix_floats + 16 * std::size_t(bd.bones[at]);
         const float* o = moment_floats + 10 * std::size_t(at);
