@@ -416,6 +416,17 @@ TEST_CASE("Direct Delta Mush: isolated points, zero weights and non-manifold mes
       chain_palette({glm::dquat(1, 0, 0, 0), glm::angleAxis(1.0, glm::dvec3(0, 0, 1))}, 4.0f, {});
   const Output out = run(b, palette, {});
   CHECK(glm::length(out.positions[n] - glm::vec3(palette[1] * glm::vec4(mesh.positions[n], 1.0f))) < 1e-5f);
+  // A point without influences last in the binding, in a block with points that have them: it stays at its rest
+  // point, and the kernel reads no influence past the last (ASan sees one: the arrays are shrunk to fit).
+  DirectDeltaMushBinding last = b;
+  last.rest.push_back({7.0f, 0.0f, 0.0f});
+  last.offsets.push_back(last.offsets.back());
+  last.bones.shrink_to_fit();
+  last.moments.shrink_to_fit();
+  REQUIRE(last.point_count() % 16 != 1);  // not alone in its block of 16 (the kernel's)
+  const Output with_last = run(last, palette, {});
+  CHECK(with_last.positions.back() == glm::vec3(7.0f, 0.0f, 0.0f));
+  CHECK(std::memcmp(with_last.positions.data(), out.positions.data(), out.positions.size() * sizeof(glm::vec3)) == 0);
 
   const auto refused = [&](const deform::Mesh& m, const deform::SkinWeights& w, const DirectDeltaMushSettings& s,
                            const char* part) {
@@ -560,6 +571,54 @@ TEST_CASE("Direct Delta Mush: ranges and threads give the same bits; no allocati
   REQUIRE(job.run());
   CHECK(glm::length(shifted[10] - (whole.positions[10] + rotations[10] * glm::vec3(0.0f, 0.01f, 0.0f))) < 1e-6f);
   CHECK(shifted[11] == whole.positions[11]);
+}
+
+TEST_CASE("Direct Delta Mush: every instruction set's copy of the kernel agrees with the default; others refuse") {
+  deform::Character c(deform::builtin_character());
+  const deform::Mesh& mesh = c.model().mesh;
+  const DirectDeltaMushBinding b = deform::bind_direct_delta_mush(mesh, c.model().weights);
+  const deform::Skeleton& sk = c.skeleton();
+  deform::Pose pose = sk.bind_pose();
+  sk.set_euler(pose, sk.find("forearm_l"), {120.0f, 0.0f, 0.0f});
+  sk.set_euler(pose, sk.find("upperarm_l"), {0.0f, 30.0f, 40.0f});
+  REQUIRE(c.set_pose(pose));
+  REQUIRE(c.update(0.0f));
+  const std::vector<glm::mat4> palette(c.palette().begin(), c.palette().end());
+  const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
+  const Output best = run(b, palette, normals);  // Isa::automatic, checked against the reference above
+  const double size = diagonal(mesh.positions);
+  int ran = 0;
+  for (const deform::Isa isa :
+       {deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
+    CAPTURE(deform::isa_name(isa));
+    std::vector<glm::vec3> out(mesh.point_count()), out_normals(mesh.point_count()), pieces(mesh.point_count());
+    DirectDeltaMushJob job;
+    job.binding = &b;
+    job.matrices = palette;
+    job.out_positions = out;
+    job.in_normals = normals;
+    job.out_normals = out_normals;
+    job.isa = isa;
+    if (!deform::isa_available(isa)) {
+      CHECK(std::string(job.validate().reason()) == "instruction set not available");
+      CHECK(std::string(job.run().reason()) == "instruction set not available");
+      continue;
+    }
+    ++ran;
+    REQUIRE(job.validate());
+    REQUIRE(job.run());
+    CHECK(max_distance(out, best.positions) <= 2e-6 * size);
+    double worst_normal = 0.0;
+    for (std::size_t i = 0; i < out.size(); ++i)
+      worst_normal = std::max(worst_normal, double(glm::length(out_normals[i] - best.normals[i])));
+    CHECK(worst_normal <= 1e-5);
+    // Within one copy, a point's bits do not depend on the range (ranges of 37 cut its blocks of 16 elsewhere).
+    job.out_positions = pieces;
+    for (std::size_t begin = 0; begin < job.count(); begin += 37)
+      REQUIRE(job.run(begin, std::min(job.count(), begin + 37)));
+    CHECK(std::memcmp(pieces.data(), out.data(), out.size() * sizeof(glm::vec3)) == 0);
+  }
+  CHECK(ran >= 1);  // portable at least
 }
 
 TEST_CASE("nearest_rotation: the rotation of the SVD, reflections made proper, from a start within 90 degrees") {

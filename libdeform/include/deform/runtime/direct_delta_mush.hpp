@@ -28,6 +28,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 
 namespace deform {
 
@@ -70,6 +71,7 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
   // Optional: each point's rotation Rᵢ (unit quaternion), for render-vertex normals or tangents of a mesh whose
   // vertices split its points (seams): one per point, or empty.
   std::span<glm::quat> out_rotations;
+  Isa isa = Isa::automatic;  // the kernel copy (isa.hpp); the copies differ in rounding only (fused multiply-adds)
 
   static constexpr std::size_t split_multiple = 16;
   // A point costs about as much as a few dozen LBS vertices, so smaller chunks than SkinningJob's pay a thread.
@@ -78,7 +80,8 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
   // Ok when the call is well formed, else why not: a binding ("no binding"), its arrays consistent ("binding is
   // malformed: ..."), its moments and rest points finite ("binding is not finite"), a palette of at least bone_count
   // matrices ("palette is too small"), every matrix finite ("palette matrix is not finite"), the spans one per point
-  // ("positions are not one per point", "normals are not one per point", "rotations are not one per point").
+  // ("positions are not one per point", "normals are not one per point", "rotations are not one per point"), and the
+  // instruction set available ("instruction set not available").
   // O(points + influences + bones): call it when binding, not every frame.
   Status validate() const noexcept;
 

@@ -1,0 +1,45 @@
+#pragma once
+// Internal: the per-instruction-set entry points of the DirectDeltaMushJob kernel (ddm_kernel.inl; see
+// direct_delta_mush.hpp).
+#include <cstddef>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "deform/runtime/direct_delta_mush.hpp"
+
+namespace deform::detail {
+
+// A DirectDeltaMushJob that passed its checks, over points [begin, end). The optional spans are null when empty.
+struct DdmKernelArgs {
+  const DirectDeltaMushBinding* binding;
+  const glm::mat4* palette;
+  const glm::vec3* in_positions;  // or null: the rest points
+  const glm::vec3* in_normals;    // null exactly when out_normals is
+  glm::vec3* out_positions;
+  glm::vec3* out_normals;
+  glm::quat* out_rotations;  // or null
+  std::size_t begin;
+  std::size_t end;
+};
+
+// Newton steps every point takes (ddm_kernel.inl): measured worst case over the tests' models and poses
+// (docs/performance.md, 2026-11-28). A point still turning by more than 1e-4 rad after them takes more, up to 16, on
+// its own (the others in its block keep theirs), so its result never depends on its block.
+inline constexpr int ddm_fixed_steps = 3;
+
+// One copy per instruction set (isa.hpp), each compiled with its own flags: ddm_portable.cpp, and ddm_avx2.cpp,
+// ddm_avx512.cpp (x86-64), ddm_neon.cpp (aarch64), ddm_simd128.cpp (WebAssembly with SIMD128).
+void direct_delta_mush_portable(const DdmKernelArgs& args) noexcept;
+#if defined(DEFORM_X86_KERNELS)
+void direct_delta_mush_avx2(const DdmKernelArgs& args) noexcept;
+void direct_delta_mush_avx512(const DdmKernelArgs& args) noexcept;
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+void direct_delta_mush_neon(const DdmKernelArgs& args) noexcept;
+#endif
+#if defined(DEFORM_SIMD128_KERNELS)
+void direct_delta_mush_simd128(const DdmKernelArgs& args) noexcept;
+#endif
+
+}  // namespace deform::detail

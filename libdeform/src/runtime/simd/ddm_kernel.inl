@@ -1,0 +1,295 @@
+// The DirectDeltaMushJob kernel, included once per instruction set (ddm_portable.cpp, _avx2.cpp, _avx512.cpp,
+// _neon.cpp, _simd128.cpp, each compiled with its own flags). Everything here has internal linkage but the one entry
+// point the includer names with DEFORM_DDM_ENTRY, so the copies never meet at link time.
+//
+// Points are taken 16 at a time. Per point (scalar, its influences one after another): the bones' matrices applied to
+// its smoothed moments give C (3×3) and the sums for its position, relative to where its strongest bone carries its
+// rest point (the anchor), so that no float sum cancels the model's distance from the origin; they go into
+// structure-of-arrays lanes. Then, as loops over the lanes around scalar code that the compiler vectorises (lanes.hpp):
+// the start rotation from the strongest bone's matrix (its columns normalised, quat_cast written with selects), a fixed
+// number of Newton steps towards the rotation nearest C (nearest_rotation's step, selects for its branches), further
+// steps only for the lanes that still turn, and the outputs. Each lane computes alone, so a point's result does not
+// depend on its block or range. The lanes past the range, and points without a rotation to find, hold C = I and the
+// identity, which never steps.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "ddm_kernel.hpp"
+#include "lanes.hpp"
+
+namespace {
+
+constexpr int lanes = 16;
+using L = Lanes<lanes>;
+
+struct Block {
+  L c[9];             // C column-major: c[3 · column + row]
+  L a[9];             // the strongest bone's 3×3, column-major: the start rotation's source
+  L q[4];             // the rotation (w, x, y, z)
+  L anchor[3];        // where the strongest bone carries the rest point
+  L sum[3];           // Σ A p + d ψ
+  L centroid[3];      // Σ p
+  L inverse;          // 1 / Σ ψ
+  L offset[3];        // in_positions − rest (0 without in_positions)
+  L normal[3];        // in_normals (0 without them)
+  L turned;           // 1 where a rotation is found, else 0 (the point stays put)
+  int moving[lanes];  // per lane: its last step turned by at least 1e-4 rad
+};
+
+// The start rotation: the strongest bone's columns normalised, the quaternion glm::quat_cast would give (the largest
+// of 4w², 4x², 4y², 4z² chosen by selects; scaled by 4·that component, which the normalisation removes, so no square
+// root for it), normalised; the identity where a column is zero or anything is not finite.
+inline void start_rotations(Block& b) noexcept {
+  constexpr float largest = std::numeric_limits<float>::max();
+  for (int l = 0; l < lanes; ++l) {
+    float m[9];
+    DEFORM_UNROLL
+    for (int k = 0; k < 9; ++k) m[k] = b.a[k][l];
+    bool ok = true;
+    DEFORM_UNROLL
+    for (int col = 0; col < 3; ++col) {
+      const float x = m[3 * col], y = m[3 * col + 1], z = m[3 * col + 2];
+      const float length = std::sqrt(x * x + y * y + z * z);
+      ok = ok & (length > 0.0f);
+      const float inverse = 1.0f / (length > 0.0f ? length : 1.0f);
+      m[3 * col] = x * inverse, m[3 * col + 1] = y * inverse, m[3 * col + 2] = z * inverse;
+    }
+    // m[3 · column + row]; glm's m[column][row].
+    const float m00 = m[0], m01 = m[1], m02 = m[2], m10 = m[3], m11 = m[4], m12 = m[5], m20 = m[6], m21 = m[7],
+                m22 = m[8];
+    const float fw = m00 + m11 + m22, fx = m00 - m11 - m22, fy = m11 - m00 - m22, fz = m22 - m00 - m11;
+    const float dx = m12 - m21, dy = m20 - m02, dz = m01 - m10;
+    const float sxy = m01 + m10, sxz = m20 + m02, syz = m12 + m21;
+    // glm's order of comparisons: w, then x, y, z each if strictly larger.
+    float big = fw, w = fw + 1.0f, x = dx, y = dy, z = dz;
+    const bool bx = fx > big;
+    big = bx ? fx : big;
+    w = bx ? dx : w, x = bx ? fx + 1.0f : x, y = bx ? sxy : y, z = bx ? sxz : z;
+    const bool by = fy > big;
+    big = by ? fy : big;
+    w = by ? dy : w, x = by ? sxy : x, y = by ? fy + 1.0f : y, z = by ? syz : z;
+    const bool bz = fz > big;
+    w = bz ? dz : w, x = bz ? sxz : x, y = bz ? syz : y, z = bz ? fz + 1.0f : z;
+    const float n2 = w * w + x * x + y * y + z * z;
+    const bool good = ok & (n2 > 0.0f) & (n2 <= largest);
+    const float inverse = 1.0f / std::sqrt(good ? n2 : 1.0f);
+    b.q[0][l] = good ? w * inverse : 1.0f, b.q[1][l] = good ? x * inverse : 0.0f;
+    b.q[2][l] = good ? y * inverse : 0.0f, b.q[3][l] = good ? z * inverse : 0.0f;
+  }
+}
+
+// One of nearest_rotation's steps (direct_delta_mush.cpp says what it is) in every lane whose `active` is set, written
+// with selects: the Newton step where H is positive definite, else the gradient step; none where neither can be taken.
+// Sets b.moving to whether the lane stepped by at least 1e-4 rad.
+inline void newton_step(Block& b, const int* active) noexcept {
+  constexpr float largest = std::numeric_limits<float>::max();
+  for (int l = 0; l < lanes; ++l) {
+    const float w = b.q[0][l], x = b.q[1][l], y = b.q[2][l], z = b.q[3][l];
+    // R = mat3_cast(q), r[column][row].
+    const float r00 = 1.0f - 2.0f * (y * y + z * z), r01 = 2.0f * (x * y + w * z), r02 = 2.0f * (x * z - w * y);
+    const float r10 = 2.0f * (x * y - w * z), r11 = 1.0f - 2.0f * (x * x + z * z), r12 = 2.0f * (y * z + w * x);
+    const float r20 = 2.0f * (x * z + w * y), r21 = 2.0f * (y * z - w * x), r22 = 1.0f - 2.0f * (x * x + y * y);
+    // S = Rᵀ C: s[i][j] (column i, row j) = R's column j · C's column i.
+    float sm[3][3];
+    DEFORM_UNROLL
+    for (int i = 0; i < 3; ++i) {
+      const float c0 = b.c[3 * i][l], c1 = b.c[3 * i + 1][l], c2 = b.c[3 * i + 2][l];
+      sm[i][0] = r00 * c0 + r01 * c1 + r02 * c2;
+      sm[i][1] = r10 * c0 + r11 * c1 + r12 * c2;
+      sm[i][2] = r20 * c0 + r21 * c1 + r22 * c2;
+    }
+    const float gx = sm[1][2] - sm[2][1], gy = sm[2][0] - sm[0][2], gz = sm[0][1] - sm[1][0];
+    const float trace = sm[0][0] + sm[1][1] + sm[2][2];
+    const float h00 = trace - sm[0][0], h11 = trace - sm[1][1], h22 = trace - sm[2][2];
+    const float h01 = -0.5f * (sm[0][1] + sm[1][0]), h02 = -0.5f * (sm[0][2] + sm[2][0]);
+    const float h12 = -0.5f * (sm[1][2] + sm[2][1]);
+    const float k00 = h11 * h22 - h12 * h12, k01 = h02 * h12 - h01 * h22, k02 = h01 * h12 - h02 * h11;
+    const float k11 = h00 * h22 - h02 * h02, k12 = h01 * h02 - h00 * h12, k22 = h00 * h11 - h01 * h01;
+    const float det = h00 * k00 + h01 * k01 + h02 * k02;
+    const bool newton = (h00 > 0.0f) & (k22 > 0.0f) & (det > 0.0f);
+    const float scale = trace < 0.0f ? -trace : trace;
+    const bool can = newton | (scale > 0.0f);
+    // Both steps computed, one kept; one reciprocal.
+    const float kx = k00 * gx + k01 * gy + k02 * gz, ky = k01 * gx + k11 * gy + k12 * gz;
+    const float kz = k02 * gx + k12 * gy + k22 * gz;
+    const float gradient_divisor = can ? scale : 1.0f;
+    const float inverse = 1.0f / (newton ? det : gradient_divisor);
+    const float ox = (newton ? kx : gx) * inverse, oy = (newton ? ky : gy) * inverse, oz = (newton ? kz : gz) * inverse;
+    const float angle2 = ox * ox + oy * oy + oz * oz;
+    const bool step = (active[l] != 0) & can & (angle2 > 0.0f) & (angle2 <= largest);
+    const float limit = 1.0f / std::sqrt(angle2 > 1.0f ? angle2 : 1.0f);  // at most a radian a step
+    const float hx = 0.5f * limit * ox, hy = 0.5f * limit * oy, hz = 0.5f * limit * oz;
+    // q · (1, h), normalised.
+    const float nw = w - x * hx - y * hy - z * hz, nx = x + w * hx + y * hz - z * hy;
+    const float ny = y + w * hy + z * hx - x * hz, nz = z + w * hz + x * hy - y * hx;
+    const float norm = 1.0f / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
+    b.q[0][l] = step ? nw * norm : w, b.q[1][l] = step ? nx * norm : x;
+    b.q[2][l] = step ? ny * norm : y, b.q[3][l] = step ? nz * norm : z;
+    b.moving[l] = int(step & !(angle2 < 1e-8f));
+  }
+}
+
+// Each lane's outputs: position = anchor + (Σ A p + d ψ − R Σ p) / Σ ψ + R (in − rest), or the rest point (plus the
+// offset) where no rotation is found; normal = R in, normalised (zero stays zero).
+struct Outputs {
+  L position[3];
+  L normal[3];
+};
+inline void outputs(const Block& b, const L* rest, Outputs& o) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    const float w = b.q[0][l], x = b.q[1][l], y = b.q[2][l], z = b.q[3][l];
+    const float r00 = 1.0f - 2.0f * (y * y + z * z), r01 = 2.0f * (x * y + w * z), r02 = 2.0f * (x * z - w * y);
+    const float r10 = 2.0f * (x * y - w * z), r11 = 1.0f - 2.0f * (x * x + z * z), r12 = 2.0f * (y * z + w * x);
+    const float r20 = 2.0f * (x * z + w * y), r21 = 2.0f * (y * z - w * x), r22 = 1.0f - 2.0f * (x * x + y * y);
+    const float cx = b.centroid[0][l], cy = b.centroid[1][l], cz = b.centroid[2][l];
+    const float inverse = b.inverse[l];
+    const bool turned = b.turned[l] != 0.0f;
+    const float tx = b.anchor[0][l] + (b.sum[0][l] - (r00 * cx + r10 * cy + r20 * cz)) * inverse;
+    const float ty = b.anchor[1][l] + (b.sum[1][l] - (r01 * cx + r11 * cy + r21 * cz)) * inverse;
+    const float tz = b.anchor[2][l] + (b.sum[2][l] - (r02 * cx + r12 * cy + r22 * cz)) * inverse;
+    const float ux = b.offset[0][l], uy = b.offset[1][l], uz = b.offset[2][l];
+    o.position[0][l] = (turned ? tx : rest[0][l]) + (r00 * ux + r10 * uy + r20 * uz);
+    o.position[1][l] = (turned ? ty : rest[1][l]) + (r01 * ux + r11 * uy + r21 * uz);
+    o.position[2][l] = (turned ? tz : rest[2][l]) + (r02 * ux + r12 * uy + r22 * uz);
+    const float ix = b.normal[0][l], iy = b.normal[1][l], iz = b.normal[2][l];
+    const float nx = r00 * ix + r10 * iy + r20 * iz, ny = r01 * ix + r11 * iy + r21 * iz;
+    const float nz = r02 * ix + r12 * iy + r22 * iz;
+    const float length2 = nx * nx + ny * ny + nz * nz;
+    const float scale = length2 > 0.0f ? 1.0f / std::sqrt(length2 > 0.0f ? length2 : 1.0f) : 0.0f;
+    o.normal[0][l] = nx * scale, o.normal[1][l] = ny * scale, o.normal[2][l] = nz * scale;
+  }
+}
+
+}  // namespace
+
+namespace deform::detail {
+
+void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
+  const DirectDeltaMushBinding& bd = *args.binding;
+  const glm::mat4* palette = args.palette;
+  const DirectDeltaMushMoments* moments = bd.moments.data();
+  for (std::size_t block_begin = args.begin; block_begin < args.end; block_begin += lanes) {
+    const int count = int(std::min<std::size_t>(lanes, args.end - block_begin));
+    Block b;
+    L rest[3];
+    // Per lane: its first influence and how many; lanes past the range have none.
+    std::uint32_t first[lanes], influences[lanes];
+    std::uint32_t most = 0;
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
+      first[l] = bd.offsets[i];
+      influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
+      most = std::max(most, influences[l]);
+      const glm::vec3 u = bd.rest[i];
+      rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
+      const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
+      b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
+      const glm::vec3 n = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
+      b.normal[0][l] = n.x, b.normal[1][l] = n.y, b.normal[2][l] = n.z;
+    }
+    // The palette and the moments read as flat float arrays: a matrix is 16 floats, column-major (m[4 · column + row]);
+    // a moments record 10 floats in declaration order.
+    static_assert(sizeof(glm::mat4) == 16 * sizeof(float) && sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
+    // (Casts, not &palette[0][0][0]: an empty palette or binding is a null pointer, not an element to bind.)
+    const float* matrix_floats = reinterpret_cast<const float*>(palette);
+    const float* moment_floats = reinterpret_cast<const float*>(moments);
+    // The anchor, and the start rotation's matrix, from each lane's strongest bone (its first; the identity where it
+    // has none).
+    for (int l = 0; l < lanes; ++l) {
+      const float* m = matrix_floats + (influences[l] > 0 ? 16 * std::size_t(bd.bones[first[l]]) : 0);
+      const bool has = influences[l] > 0;
+      const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+      DEFORM_UNROLL
+      for (int k = 0; k < 9; ++k) b.a[k][l] = has ? m[4 * (k / 3) + k % 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+      DEFORM_UNROLL
+      for (int r = 0; r < 3; ++r)
+        b.anchor[r][l] = has ? mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) : 0.0f;
+    }
+    // C = Σ A P + d pᵀ, q = Σ A p + d ψ (d = M u − anchor), Σ p, Σ ψ: the lanes' e-th influences together, a lane past
+    // its last adding exact zeros (its moments taken as 0), so that its sums do not depend on its block.
+    L acc[16];  // C column-major (9), q (3), Σ p (3), Σ ψ
+    for (int k = 0; k < 16; ++k) acc[k] = L::filled(0.0f);
+    for (std::uint32_t e = 0; e < most; ++e) {
+      // The lanes' e-th matrices (3×4) and moments copied into lanes (the vectoriser does not gather them).
+      L mat[12], mom[10];
+      for (int l = 0; l < lanes; ++l) {
+        const bool has = e < influences[l];
+        // A lane without an e-th influence reads the binding's first (there is one: some lane has an e-th), not its
+        // own row's start, which for a point without influences at the end of the binding is one past the last.
+        const std::uint32_t at = has ? first[l] + e : 0;
+        const float f = has ? 1.0f : 0.0f;
+        const float* m = matrix_floats + 16 * std::size_t(bd.bones[at]);
+        const float* o = moment_floats + 10 * std::size_t(at);
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) mat[k][l] = m[k + k / 3];
+        DEFORM_UNROLL
+        for (int k = 0; k < 10; ++k) mom[k][l] = o[k] * f;
+      }
+      for (int l = 0; l < lanes; ++l) {
+        float m[16];
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) m[k + k / 3] = mat[k][l];
+        const float xx = mom[0][l], xy = mom[1][l], xz = mom[2][l], yy = mom[3][l], yz = mom[4][l], zz = mom[5][l];
+        const float px = mom[6][l], py = mom[7][l], pz = mom[8][l], psi = mom[9][l];
+        const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+        float d[3];
+        DEFORM_UNROLL
+        for (int r = 0; r < 3; ++r)
+          d[r] = mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) - b.anchor[r][l];
+        DEFORM_UNROLL
+        for (int r = 0; r < 3; ++r) {
+          const float a0 = m[r], a1 = m[4 + r], a2 = m[8 + r];
+          acc[r][l] += mul_add(a0, xx, mul_add(a1, xy, mul_add(a2, xz, d[r] * px)));
+          acc[3 + r][l] += mul_add(a0, xy, mul_add(a1, yy, mul_add(a2, yz, d[r] * py)));
+          acc[6 + r][l] += mul_add(a0, xz, mul_add(a1, yz, mul_add(a2, zz, d[r] * pz)));
+          acc[9 + r][l] += mul_add(a0, px, mul_add(a1, py, mul_add(a2, pz, d[r] * psi)));
+        }
+        acc[12][l] += px, acc[13][l] += py, acc[14][l] += pz, acc[15][l] += psi;
+      }
+    }
+    // C −= q (Σ p / ψ)ᵀ where Σ ψ > 0; else C = I, the start the identity, and the point stays put.
+    for (int l = 0; l < lanes; ++l) {
+      const float psi = acc[15][l];
+      const bool turned = psi > 0.0f;
+      const float inverse = 1.0f / (turned ? psi : 1.0f);
+      const float p[3] = {acc[12][l] * inverse, acc[13][l] * inverse, acc[14][l] * inverse};
+      DEFORM_UNROLL
+      for (int k = 0; k < 9; ++k) {
+        b.c[k][l] = turned ? acc[k][l] - acc[9 + k % 3][l] * p[k / 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+        b.a[k][l] = turned ? b.a[k][l] : (k % 4 == 0 ? 1.0f : 0.0f);
+      }
+      DEFORM_UNROLL
+      for (int r = 0; r < 3; ++r) {
+        b.sum[r][l] = acc[9 + r][l], b.centroid[r][l] = acc[12 + r][l];
+        b.anchor[r][l] = turned ? b.anchor[r][l] : 0.0f;
+      }
+      b.inverse[l] = turned ? inverse : 0.0f;
+      b.turned[l] = turned ? 1.0f : 0.0f;
+    }
+    start_rotations(b);
+    int all[lanes];
+    for (int l = 0; l < lanes; ++l) all[l] = 1;
+    for (int step = 0; step < ddm_fixed_steps; ++step) newton_step(b, all);
+    // Lanes still turning go on by themselves, as nearest_rotation would, up to its 16 steps.
+    for (int step = ddm_fixed_steps; step < 16; ++step) {
+      int any = 0;
+      for (int l = 0; l < lanes; ++l) any |= b.moving[l];
+      if (any == 0) break;
+      int active[lanes];
+      for (int l = 0; l < lanes; ++l) active[l] = b.moving[l];
+      newton_step(b, active);
+    }
+    Outputs o;
+    outputs(b, rest, o);
+    for (int l = 0; l < count; ++l) {
+      const std::size_t i = block_begin + std::size_t(l);
+      args.out_positions[i] = glm::vec3(o.position[0][l], o.position[1][l], o.position[2][l]);
+      if (args.out_normals != nullptr) args.out_normals[i] = glm::vec3(o.normal[0][l], o.normal[1][l], o.normal[2][l]);
+      if (args.out_rotations != nullptr) args.out_rotations[i] = glm::quat(b.q[0][l], b.q[1][l], b.q[2][l], b.q[3][l]);
+    }
+  }
+}
+
+}  // namespace deform::detail
