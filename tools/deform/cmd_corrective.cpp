@@ -116,8 +116,8 @@ int run(const std::vector<std::string>& argv) {
       if (s.name == name) throw UsageError("the rig has a corrective shape named '" + name + "' already (--name)");
   deform::CorrectiveShape added{name, {}, shape.points, shape.position_deltas};
   for (const std::int32_t bone : bones)
-    added.pose.push_back(deform::euler_within_limits(posed.pose().rotations[std::size_t(bone)],
-                                                     skeleton.bone(bone).limits));
+    added.pose.push_back(
+        deform::euler_within_limits(posed.pose().rotations[std::size_t(bone)], skeleton.bone(bone).limits));
   group->shapes.push_back(std::move(added));
 
   // The written rig, checked: a character built with it gives the sculpt back at the pose.

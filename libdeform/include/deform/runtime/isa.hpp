@@ -1,11 +1,10 @@
 #pragma once
-// Instruction sets of the per-frame kernels (skinning, lattice evaluation, vertex normals, Direct Delta Mush), one scheme for all of
-// them. Each kernel exists as a portable copy (standard C++, every compiler and CPU) and, in builds for x86-64 with
-// GCC or Clang, as copies compiled for AVX2 + FMA and for AVX-512, in builds for aarch64 with GCC or Clang as a NEON
-// copy, in WebAssembly builds with DEFORM_WASM_SIMD128 as a SIMD128 copy (docs/platforms.md); the job's `isa` field
-// picks one. `automatic` runs
-// the widest copy this CPU supports; the others force a copy (tests compare them, benchmarks measure them), and a job
-// refuses to run a forced copy the CPU or the build lacks.
+// Instruction sets of the per-frame kernels (skinning, lattice evaluation, vertex normals, Direct Delta Mush), one
+// scheme for all of them. Each kernel exists as a portable copy (standard C++, every compiler and CPU) and, in builds
+// for x86-64 with GCC or Clang, as copies compiled for AVX2 + FMA and for AVX-512, in builds for aarch64 with GCC or
+// Clang as a NEON copy, in WebAssembly builds with DEFORM_WASM_SIMD128 as a SIMD128 copy (docs/platforms.md); the job's
+// `isa` field picks one. `automatic` runs the widest copy this CPU supports; the others force a copy (tests compare
+// them, benchmarks measure them), and a job refuses to run a forced copy the CPU or the build lacks.
 #include <cstdint>
 
 #include "deform/runtime/export.hpp"
