@@ -118,6 +118,13 @@ int run(const std::vector<std::string>& argv) {
   for (const std::int32_t bone : bones)
     added.pose.push_back(
         deform::euler_within_limits(posed.pose().rotations[std::size_t(bone)], skeleton.bone(bone).limits));
+  for (const deform::CorrectiveShape& other : group->shapes) {
+    bool same = true;
+    for (std::size_t j = 0; j < bones.size(); ++j) same = same && glm::length(other.pose[j] - added.pose[j]) < 1e-3f;
+    if (same)
+      throw UsageError("shape '" + other.name + "' of group " + group_name +
+                       " is at this pose already: a group holds one shape per pose (give another --group)");
+  }
   group->shapes.push_back(std::move(added));
 
   // The written rig, checked: a character built with it gives the sculpt back at the pose.
