@@ -235,6 +235,16 @@ TEST_CASE("pose driver: hostile input refused, nothing written, no allocation pe
   const long before = allocations.load();
   for (int frame = 0; frame < 100; ++frame) REQUIRE(job.run());
   CHECK(allocations.load() == before);
+  // Ranges of shapes give the same bits as the whole.
+  std::vector<float> whole = weights, parts(Driver::shapes, -1.0f);
+  job.weights = parts;
+  CHECK(job.count() == Driver::shapes);
+  REQUIRE(job.run(0, 3));
+  CHECK(parts[3] == -1.0f);
+  REQUIRE(job.run(3, Driver::shapes));
+  CHECK(parts == whole);
+  CHECK_FALSE(job.run(4, 2));
+  CHECK_FALSE(job.run(0, Driver::shapes + 1));
 }
 
 TEST_CASE("a corrective sculpted at a bent elbow comes back exactly there, and fades to the rest at the bind pose") {

@@ -59,13 +59,16 @@ Status PoseDriverJob::validate() const noexcept {
   return Status();
 }
 
-Status PoseDriverJob::run() const noexcept {
+Status PoseDriverJob::run() const noexcept { return run(0, count()); }
+
+Status PoseDriverJob::run(std::size_t begin, std::size_t end) const noexcept {
   if (const Status sizes = check_sizes(*this); !sizes) return sizes;
   const PoseDriverBinding& b = *binding;
+  if (begin > end || end > b.shape_count) return Status::failure("range out of bounds");
   const std::size_t bone_count = b.bones.size(), shapes = b.shape_count;
   for (const std::int32_t bone : b.bones)
     if (bone < 0 || std::size_t(bone) >= rotations.size()) return Status::failure("driver bone out of range");
-  std::fill(weights.begin(), weights.end(), 0.0f);
+  std::fill(weights.begin() + std::ptrdiff_t(begin), weights.begin() + std::ptrdiff_t(end), 0.0f);
   for (std::size_t k = 0; k < b.pose_count(); ++k) {
     float d2 = 0.0f;
     for (std::size_t j = 0; j < bone_count; ++j)
@@ -73,10 +76,10 @@ Status PoseDriverJob::run() const noexcept {
                                          b.twist_axes[j], b.twist_weight);
     const float phi = rbf_kernel(b.kernel, d2, b.radius);
     const float* row = b.coefficients.data() + k * shapes;
-    for (std::size_t s = 0; s < shapes; ++s) weights[s] += phi * row[s];
+    for (std::size_t s = begin; s < end; ++s) weights[s] += phi * row[s];
   }
   if (b.clamp)
-    for (float& w : weights) w = std::clamp(w, 0.0f, 1.0f);
+    for (std::size_t s = begin; s < end; ++s) weights[s] = std::clamp(weights[s], 0.0f, 1.0f);
   return Status();
 }
 

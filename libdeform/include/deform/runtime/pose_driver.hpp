@@ -66,6 +66,12 @@ struct DEFORM_RUNTIME_API PoseDriverJob {
   Status validate() const noexcept;
   // The O(1) size checks, then the weights; on failure writes nothing. O(samples · (bones + shapes)), no allocation.
   Status run() const noexcept;
+  // The elements are the shapes: run(begin, end) writes weights [begin, end) only, each as run() gives it (every
+  // range measures the distances again: at a microsecond for a whole driver, splitting it pays only for hundreds of
+  // shapes).
+  Status run(std::size_t begin, std::size_t end) const noexcept;
+  // The shape count, 0 without a binding.
+  std::size_t count() const noexcept { return binding == nullptr ? 0 : binding->shape_count; }
 };
 
 }  // namespace deform
