@@ -23,12 +23,22 @@ inline std::string_view text(const std::uint8_t* data, std::size_t size) {
   std::abort();
 }
 
-// Runs `parse`; deform::Error is the expected refusal, anything else escapes to libFuzzer as a finding.
+// Runs `parse`; deform::Error is the expected refusal, anything else escapes to libFuzzer as a finding. With
+// DEFORM_FUZZ_SEEDS_PARSE=1 (the `fuzz_NAME_seeds` tests, run on the seed files alone) a refusal is a finding too:
+// seeds the reader refuses, such as answers of an older wire version, would start the fuzzer from nothing.
 template <class Parse>
 void refuse_or_check(Parse&& parse) {
   try {
     parse();
-  } catch (const deform::Error&) {
+  } catch (const deform::Error& e) {
+    static const bool seeds_must_parse = [] {
+      const char* v = std::getenv("DEFORM_FUZZ_SEEDS_PARSE");
+      return v != nullptr && std::string_view(v) == "1";
+    }();
+    if (seeds_must_parse) {
+      std::fprintf(stderr, "a seed is refused: %s\n", e.what());
+      std::abort();
+    }
   }
 }
 
