@@ -276,6 +276,42 @@ const float* deform_character_positions(const deform_character* character) {
   return &character->character.positions().data()->x;
 }
 
+size_t deform_character_morph_target_count(const deform_character* character) {
+  return character != nullptr ? character->character.morph_target_count() : 0;
+}
+
+const char* deform_character_morph_target_name(const deform_character* character, size_t target) {
+  if (character == nullptr || target >= character->character.model().morph_targets.size()) return nullptr;
+  return character->character.model().morph_targets[target].name.c_str();
+}
+
+deform_status deform_character_morph_weights(const deform_character* character, float* out, size_t capacity) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_morph_weights: NULL argument");
+  const std::span<const float> weights = character->character.morph_weights();
+  if (capacity < weights.size())
+    return fail_argument("deform_character_morph_weights: capacity is less than morph_target_count");
+  std::copy(weights.begin(), weights.end(), out);
+  return DEFORM_OK;
+}
+
+deform_status deform_character_set_morph_weight(deform_character* character, size_t target, float weight) {
+  if (character == nullptr) return fail_argument("deform_character_set_morph_weight: the handle is NULL");
+  if (const deform::Status set = character->character.set_morph_weight(target, weight); !set) return refused(set);
+  return DEFORM_OK;
+}
+
+deform_status deform_character_set_morph_weight_named(deform_character* character, const char* name, float weight) {
+  if (character == nullptr || name == nullptr)
+    return fail_argument("deform_character_set_morph_weight_named: NULL argument");
+  if (const deform::Status set = character->character.set_morph_weight(std::string_view(name), weight); !set)
+    return refused(set);
+  return DEFORM_OK;
+}
+
+size_t deform_character_pose_driver_count(const deform_character* character) {
+  return character != nullptr ? character->character.pose_driver_count() : 0;
+}
+
 deform_status deform_character_copy_positions(const deform_character* character, float* out, size_t capacity) {
   if (character == nullptr || out == nullptr) return fail_argument("deform_character_copy_positions: NULL argument");
   const std::span<const glm::vec3> positions = character->character.positions();

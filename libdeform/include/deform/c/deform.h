@@ -117,6 +117,25 @@ DEFORM_C_API deform_status deform_character_set_delta_mush(deform_character* cha
 DEFORM_C_API deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations,
                                                                   float step);
 
+/* Morph targets (blend shapes: the model's, and the shapes of the rig's pose-space corrective groups, appended after
+ * them) and their weights, as the next update() applies them (Character::morph_weights). A weight set here holds
+ * until changed, except on the targets a pose driver owns: update() sets those from the pose (docs/skinning.md
+ * "Pose-space correctives"), so reading them after an update gives the driven weights. `_name` is the target's name
+ * ("" when unnamed), a view valid as long as the handle, or NULL for a target out of range. `_morph_weights` copies
+ * morph_target_count weights into `out` (`capacity` at least that: DEFORM_ERROR_ARGUMENT otherwise).
+ * `_set_morph_weight` refuses (DEFORM_ERROR_REFUSED, changing nothing) a target out of range or a weight that is not
+ * finite; `_set_morph_weight_named` sets every target of that name, and refuses a name no target has. No
+ * allocation. */
+DEFORM_C_API size_t deform_character_morph_target_count(const deform_character* character);
+DEFORM_C_API const char* deform_character_morph_target_name(const deform_character* character, size_t target);
+DEFORM_C_API deform_status deform_character_morph_weights(const deform_character* character, float* out,
+                                                          size_t capacity);
+DEFORM_C_API deform_status deform_character_set_morph_weight(deform_character* character, size_t target, float weight);
+DEFORM_C_API deform_status deform_character_set_morph_weight_named(deform_character* character, const char* name,
+                                                                   float weight);
+/* The pose drivers the character runs each update(): one per corrective group of its rig. */
+DEFORM_C_API size_t deform_character_pose_driver_count(const deform_character* character);
+
 typedef struct deform_reach_result {
   float residual; /* |target - effector| after IK alone (model units) */
   float stretch;  /* stretch asked of the chain's lattices (model units) */
