@@ -168,6 +168,68 @@ TEST_CASE(
   CHECK(floats(doc, bin, sampler["output"].get<int>()) == std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1});
 }
 
+TEST_CASE("write_gltf: a skinned model's morph targets, named, and each clip's morph channels as one weights channel") {
+  const Folder folder("deform_gltf_morph_test");
+  deform::Model model = quad();
+  model.morph_targets.push_back({"lift", "", 0.25f, {2}, {{0.0f, 0.0f, 0.5f}}, {}});
+  model.morph_targets.push_back({"widen", "", 0.0f, {1, 2}, {{0.5f, 0.0f, 0.0f}, {0.5f, 0.0f, 0.0f}}, {}});
+  deform::Animation clip;
+  clip.name = "lift";
+  clip.duration = 1.0f;
+  deform::MorphChannel lift;
+  lift.target = 0;
+  lift.weight.times = {0.0f, 1.0f};
+  lift.weight.values = {0.0f, 1.0f};
+  clip.morph_channels.push_back(lift);
+  deform::Animation mixed = clip;  // a second, step channel: the union of keys, linear, with a warning
+  mixed.name = "mixed";
+  deform::MorphChannel widen;
+  widen.target = 1;
+  widen.weight.interpolation = deform::Interpolation::step;
+  widen.weight.times = {0.5f};
+  widen.weight.values = {1.0f};
+  mixed.morph_channels.push_back(widen);
+  const std::vector<deform::Animation> clips = {clip, mixed};
+  deform::GltfExportOptions options;
+  options.clips = clips;
+  const std::string path = (folder.path / "morphs.gltf").string();
+  const deform::GltfWritten written = deform::write_gltf(path, model, options);
+  CHECK(written.morph_targets == 2);
+  CHECK(written.sparse_values == 3);  // lift: point 2; widen: points 1 and 2
+  REQUIRE(written.warnings.size() == 1);
+  CHECK(written.warnings[0].find("'mixed'") != std::string::npos);
+  const Json doc = Json::parse(deform::read_file_text(path));
+  const std::vector<std::uint8_t> bin = deform::read_file_bytes((folder.path / "morphs.bin").string());
+  const Json& mesh = doc["meshes"][0];
+  CHECK(mesh["weights"] == Json::array({0.25, 0.0}));
+  CHECK(mesh["extras"]["targetNames"] == Json::array({"lift", "widen"}));
+  REQUIRE(mesh["primitives"][0]["targets"].size() == 2);
+  CHECK(!mesh["primitives"][0]["targets"][0].contains("NORMAL"));  // no target moves normals
+  const Json& lifted = doc["accessors"][mesh["primitives"][0]["targets"][0]["POSITION"].get<int>()];
+  CHECK(lifted["sparse"]["count"] == 1);
+  CHECK(lifted["max"] == Json::array({0.0, 0.0, 0.5}));
+  REQUIRE(doc["animations"].size() == 2);
+  for (int a = 0; a < 2; ++a) {
+    const Json& animation = doc["animations"][a];
+    REQUIRE(animation["channels"].size() == 1);
+    CHECK(animation["channels"][0]["target"] == Json{{"node", 2}, {"path", "weights"}});  // the mesh node
+    CHECK(animation["samplers"][0]["interpolation"] == "LINEAR");
+  }
+  const Json& one = doc["animations"][0]["samplers"][0];
+  CHECK(floats(doc, bin, one["input"].get<int>()) == std::vector<float>{0, 1});
+  CHECK(floats(doc, bin, one["output"].get<int>()) == std::vector<float>{0, 0, 1, 0});  // widen at its default
+  const Json& two = doc["animations"][1]["samplers"][0];
+  CHECK(floats(doc, bin, two["input"].get<int>()) == std::vector<float>{0, 0.5f, 1});
+  CHECK(floats(doc, bin, two["output"].get<int>()) == std::vector<float>{0, 1, 0.5f, 1, 1, 1});
+  // A channel naming a target the model lacks is refused, writing nothing.
+  deform::Animation beyond = clip;
+  beyond.morph_channels[0].target = 2;
+  const std::vector<deform::Animation> bad = {beyond};
+  options.clips = bad;
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "bad.glb").string(), model, options), deform::Error);
+  CHECK(!fs::exists(folder.path / "bad.glb"));
+}
+
 TEST_CASE("write_gltf: refuses what it cannot write, writing nothing") {
   const Folder folder("deform_gltf_refusal_test");
   const deform::Model model = quad();
@@ -258,7 +320,7 @@ TEST_CASE("write_gltf: a texture is checked from its first bytes, once; allowed 
   CHECK(deform::write_gltf((folder.path / "c.glb").string(), textured, options).textures == 1);
 }
 
-TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; model morph targets are warned") {
+TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1, beside the model's morph targets") {
   const Folder folder("deform_gltf_extra_test");
   deform::Model model = quad();
   std::vector<deform::Bone> bones(6);
@@ -281,8 +343,8 @@ TEST_CASE("write_gltf: influences past the fourth go to JOINTS_1 / WEIGHTS_1; mo
   model.morph_targets.push_back({"smile", "quad", 0.0f, {1}, {glm::vec3(0, 0, 1)}, {}});
   const std::string path = (folder.path / "extra.gltf").string();
   const deform::GltfWritten written = deform::write_gltf(path, model);
-  REQUIRE(written.warnings.size() == 1);
-  CHECK(written.warnings[0].find("1 morph targets of the model are not written") != std::string::npos);
+  CHECK(written.warnings.empty());
+  CHECK(written.morph_targets == 1);
   const Json doc = Json::parse(deform::read_file_text(path));
   const std::vector<std::uint8_t> bin = deform::read_file_bytes((folder.path / "extra.bin").string());
   const Json& attributes = doc["meshes"][0]["primitives"][0]["attributes"];

@@ -272,6 +272,16 @@ bool check_export(const std::string& path, const Model& model, const GltfExportO
   if (skinned && (model.weights.size() != mesh.point_count() || model.skeleton.bone_count() == 0))
     throw Error::invalid_argument(path, "the model's weights do not match its points, or it has no skeleton");
   if (!skinned) check_baked(*options.baked, model);
+  if (skinned) {
+    require_valid_morph_targets(model.morph_targets, mesh.point_count(), path);
+    for (const Animation& clip : options.clips)
+      for (const MorphChannel& channel : clip.morph_channels)
+        if (channel.target < 0 || std::size_t(channel.target) >= model.morph_targets.size())
+          throw Error::invalid_argument("clip '" + clip.name + "'",
+                                        "a morph channel's target is not one of the "
+                                        "model's " +
+                                            std::to_string(model.morph_targets.size()) + " morph targets");
+  }
   return binary;
 }
 
@@ -295,7 +305,7 @@ class GltfExport {
     doc_["asset"] = {{"version", "2.0"}, {"generator", options_.generator}};
     gather_vertices();
     if (skinned_) gather_influences();
-    if (!model_.morph_targets.empty())
+    if (!skinned_ && !model_.morph_targets.empty())
       written_.warnings.push_back(std::to_string(model_.morph_targets.size()) +
                                   " morph targets of the model are not written (only baked frames become targets)");
     Json materials = Json::array();
@@ -337,7 +347,7 @@ class GltfExport {
   Builder b_;
   Json doc_;
   SparseData sparse_;
-  std::size_t frame_count_ = 0;            // morph targets per primitive
+  std::size_t frame_count_ = 0;            // morph targets per primitive: baked frames, or the model's targets
   std::vector<glm::vec3> base_positions_;  // per render vertex
   std::vector<glm::vec3> base_normals_;    // per render vertex, unit
   // Influence set s of render vertex r is vertex_joints_[s][r] / vertex_weights_[s][r]: set 0 the point's four
@@ -453,7 +463,14 @@ class GltfExport {
     }
     Json gltf_mesh = {{"primitives", std::move(primitives)}};
     if (!model_.name.empty()) gltf_mesh["name"] = model_.name;
-    if (frame_count_ > 0) gltf_mesh["weights"] = std::vector<float>(frame_count_, 0.0f);
+    if (frame_count_ > 0 && !skinned_) gltf_mesh["weights"] = std::vector<float>(frame_count_, 0.0f);
+    if (frame_count_ > 0 && skinned_) {  // the model's targets: their default weights, and their names where
+      std::vector<float> defaults;       // three.js, Blender and libdeform's importer look for them
+      Json names = Json::array();
+      for (const MorphTarget& t : model_.morph_targets) defaults.push_back(t.default_weight), names.push_back(t.name);
+      gltf_mesh["weights"] = std::move(defaults);
+      gltf_mesh["extras"] = {{"targetNames", std::move(names)}};
+    }
     return gltf_mesh;
   }
 
@@ -482,8 +499,8 @@ class GltfExport {
          b_.push({{"bufferView", iv}, {"componentType", unsigned_int_type}, {"count", count}, {"type", "SCALAR"}})},
         {"mode", 4}};
     if (s.material >= 0 && std::size_t(s.material) < mesh_.materials.size()) primitive["material"] = s.material;
-    if (!skinned_) {  // baked frames: one morph target per frame
-      Json targets = frame_targets(used);
+    if (!skinned_ || !model_.morph_targets.empty()) {  // baked frames (one target per frame), or the model's targets
+      Json targets = skinned_ ? model_targets(used) : frame_targets(used);
       frame_count_ = targets.size();
       primitive["targets"] = std::move(targets);
     }
@@ -554,6 +571,29 @@ class GltfExport {
     return targets;
   }
 
+  // The model's morph targets as the morph targets of the render vertices `used`: each point's bind-space deltas,
+  // held sparsely (the points a target leaves alone are not stored). NORMAL targets when any target moves normals.
+  Json model_targets(const std::vector<std::uint32_t>& used) {
+    const bool normals = std::any_of(model_.morph_targets.begin(), model_.morph_targets.end(),
+                                     [](const MorphTarget& t) { return !t.normal_deltas.empty(); });
+    std::vector<glm::vec3> per_point(mesh_.point_count()), displacement(used.size());
+    Json targets = Json::array();
+    for (const MorphTarget& t : model_.morph_targets) {
+      Json target;
+      for (const bool normal : {false, true}) {
+        if (normal && !normals) break;
+        const std::vector<glm::vec3>& deltas = normal ? t.normal_deltas : t.position_deltas;
+        std::fill(per_point.begin(), per_point.end(), glm::vec3(0.0f));
+        for (std::size_t k = 0; k < deltas.size(); ++k) per_point[t.points[k]] = deltas[k];
+        for (std::size_t i = 0; i < used.size(); ++i) displacement[i] = per_point[mesh_.vertex_point[used[i]]];
+        target[normal ? "NORMAL" : "POSITION"] =
+            sparse_vec3(b_, sparse_, displacement, 0.0f, !normal, written_.sparse_values);
+      }
+      targets.push_back(std::move(target));
+    }
+    return targets;
+  }
+
   std::string mesh_name() const { return model_.name.empty() ? "mesh" : model_.name; }
 
   // --- nodes: the bones (node i = bone i) then the mesh; the skin ---
@@ -607,13 +647,56 @@ class GltfExport {
       add(channel.translation, channel.bone, "translation", 3, "VEC3");
       add(channel.rotation, channel.bone, "rotation", 4, "VEC4");
     }
+    add_weights_channel(clip, samplers, channels);
     if (channels.empty()) {
-      written_.warnings.push_back("clip '" + clip.name + "' animates no translation or rotation: left out");
+      written_.warnings.push_back("clip '" + clip.name +
+                                  "' animates no translation, rotation or morph weight: left out");
       return;
     }
     Json animation = {{"channels", std::move(channels)}, {"samplers", std::move(samplers)}};
     if (!clip.name.empty()) animation["name"] = clip.name;
     animations.push_back(std::move(animation));
+  }
+
+  // A clip's morph channels as the mesh node's one `weights` channel, which glTF requires to hold every target's
+  // weight at each key: the keys are the union of the channels' keys, a target without a channel holds its default.
+  // Linear (or step) tracks are exact on that union; a cubic spline, or a mix of kinds, is written as its values at
+  // the union's keys, linearly in between, with a warning.
+  void add_weights_channel(const Animation& clip, Json& samplers, Json& channels) {
+    if (clip.morph_channels.empty()) return;
+    std::vector<float> times;
+    bool all_step = true, all_linear = true;
+    for (const MorphChannel& c : clip.morph_channels) {
+      times.insert(times.end(), c.weight.times.begin(), c.weight.times.end());
+      all_step = all_step && c.weight.interpolation == Interpolation::step;
+      all_linear = all_linear && c.weight.interpolation == Interpolation::linear;
+    }
+    std::sort(times.begin(), times.end());
+    times.erase(std::unique(times.begin(), times.end()), times.end());
+    if (times.empty()) return;
+    if (times.front() < 0.0f) {
+      written_.warnings.push_back("clip '" + clip.name +
+                                  "': its morph weights have keys before t = 0, which glTF "
+                                  "cannot hold: left out");
+      return;
+    }
+    if (!all_step && !all_linear)
+      written_.warnings.push_back("clip '" + clip.name +
+                                  "': its morph weights are written as their values at every "
+                                  "key, linear in between (glTF holds one interpolation for all targets)");
+    const std::size_t targets = model_.morph_targets.size();
+    std::vector<float> weights(times.size() * targets);
+    for (std::size_t k = 0; k < times.size(); ++k)
+      for (std::size_t t = 0; t < targets; ++t) weights[k * targets + t] = model_.morph_targets[t].default_weight;
+    for (const MorphChannel& c : clip.morph_channels)
+      for (std::size_t k = 0; k < times.size(); ++k)
+        weights[k * targets + std::size_t(c.target)] =
+            sample_track(c.weight, times[k], model_.morph_targets[std::size_t(c.target)].default_weight);
+    const int input = b_.floats(times, 1, "SCALAR", 0, true);
+    const int output = b_.floats(weights, 1, "SCALAR", 0, false);
+    samplers.push_back({{"input", input}, {"output", output}, {"interpolation", all_step ? "STEP" : "LINEAR"}});
+    channels.push_back({{"sampler", samplers.size() - 1},
+                        {"target", {{"node", static_cast<int>(skeleton_.bone_count())}, {"path", "weights"}}}});
   }
 
   // --- baked frames: the mesh's node alone, and one animation of its morph weights ---

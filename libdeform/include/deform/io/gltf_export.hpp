@@ -62,7 +62,7 @@ struct GltfWritten {
   std::string bin;                    // the .bin beside a .gltf; empty for .glb
   std::uint64_t bytes = 0;            // of every file written, together
   std::size_t vertices = 0;           // glTF vertices, over the primitives (a render vertex per submesh using it)
-  std::size_t morph_targets = 0;      // baked frames written
+  std::size_t morph_targets = 0;      // targets written: the baked frames, or the model's morph targets
   std::size_t sparse_values = 0;      // displacements stored, over every target (POSITION and NORMAL each count)
   std::size_t textures = 0;           // images embedded
   std::vector<std::string> warnings;  // textures, clips or tracks left out (e.g. keys before t = 0), one line each
@@ -73,7 +73,9 @@ struct GltfWritten {
 // when the mesh has UVs), with its material's diffuse colour and opacity as the base colour, or its diffuse texture
 // (see `texture_root`) times its opacity. Without `baked`: a skin whose joints are the bones (node i = bone i, named
 // Skeleton::key(i), its bind translation and rotation as the node's TRS; inverseBindMatrices from
-// Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from `model.weights`, and the clips. Throws deform::Error of
+// Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from `model.weights`, the model's morph targets (sparse
+// POSITION, and NORMAL when any target has normal deltas; names in mesh.extras.targetNames) and the clips, each
+// clip's morph channels as one `weights` channel on the mesh node. Throws deform::Error of
 // kind argument for another extension, a model whose weights do not match its points, a mesh without triangles, or
 // inconsistent `baked` frames; deform::Error naming the file when a file cannot be written. Cost: O(vertices · (1 +
 // frames) + frames² + keys) time and the file's size in memory.
