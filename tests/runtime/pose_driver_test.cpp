@@ -371,4 +371,73 @@ TEST_CASE("a rig's corrective group: written and read back, and the Character bu
   refuses("\"bones\": [", "\"bones\": [\"no_such_bone\", ", "no_such_bone");
 }
 
+TEST_CASE("with_driven_weights: a clip's driven morph weights keyed at a rate, as update() gives them at each key") {
+  deform::Model model = deform::builtin_character();
+  const deform::Skeleton& skeleton = model.skeleton;
+  const std::int32_t forearm = skeleton.find("forearm_l");
+  deform::Rig rig;
+  deform::CorrectiveSpec group;
+  group.name = "elbow";
+  group.bones = {forearm};
+  group.shapes.push_back({"pad", {{100.0f, 0.0f, 0.0f}}, {1, 5}, {{0.0f, 0.0f, 0.01f}, {0.0f, 0.01f, 0.0f}}});
+  rig.correctives.push_back(group);
+  model.morph_targets.push_back({"blink", "", 0.0f, {7}, {{0.0f, 0.001f, 0.0f}}, {}});  // the model's own target
+  const deform::Character c(model, rig);
+  REQUIRE(c.pose_driver_count() == 1);
+  REQUIRE(c.pose_driver_targets(0).size() == 1);
+  CHECK(c.pose_driver_targets(0)[0] == 1);  // after the model's own target
+  // A clip bending the elbow from 0 to 140 degrees over 1.05 s, with a channel of its own for each target.
+  deform::Animation clip;
+  clip.name = "bend";
+  clip.duration = 1.05f;
+  deform::Channel bend;
+  bend.bone = forearm;
+  for (float t : {0.0f, 0.5f, 1.05f}) {
+    bend.rotation.times.push_back(t);
+    bend.rotation.values.push_back(deform::quat_from_euler(glm::vec3(140.0f * t / 1.05f, 0.0f, 0.0f)));
+  }
+  clip.channels.push_back(bend);
+  for (std::int32_t target : {0, 1}) {
+    deform::MorphChannel own;
+    own.target = target;
+    own.weight.times = {0.0f};
+    own.weight.values = {0.5f};
+    clip.morph_channels.push_back(own);
+  }
+  const deform::Animation baked = deform::with_driven_weights(c, clip, 10.0f);
+  CHECK(baked.channels.size() == 1);
+  REQUIRE(baked.morph_channels.size() == 2);
+  CHECK(baked.morph_channels[0].target == 0);  // the model's own target keeps the clip's channel
+  CHECK(baked.morph_channels[0].weight.values == std::vector<float>{0.5f});
+  const deform::MorphChannel& driven = baked.morph_channels[1];  // the driven one replaced
+  CHECK(driven.target == 1);
+  CHECK(driven.weight.interpolation == deform::Interpolation::linear);
+  REQUIRE(driven.weight.times.size() == 12);  // 0, 0.1, ..., 1.0, and the duration
+  CHECK(driven.weight.times[10] == doctest::Approx(1.0f));
+  CHECK(driven.weight.times[11] == 1.05f);
+  // Each key is what a character holding the clip's pose there drives, to the bit.
+  deform::Character check = c.instance();
+  float highest = 0.0f;
+  for (std::size_t k = 0; k < driven.weight.times.size(); ++k) {
+    deform::Pose pose = skeleton.bind_pose();
+    deform::SamplingJob sample{&clip, driven.weight.times[k], pose.rotations, pose.translations};
+    if (k + 1 < driven.weight.times.size()) REQUIRE(sample.run());  // the looping clip wraps its end to 0
+    else pose.rotations[std::size_t(forearm)] = bend.rotation.values.back();
+    REQUIRE(check.set_pose(pose));
+    REQUIRE(check.update(0.0f));
+    CHECK(driven.weight.values[k] == check.morph_weights()[1]);
+    highest = std::max(highest, driven.weight.values[k]);
+  }
+  CHECK(driven.weight.values.front() == doctest::Approx(0.0f).scale(1).epsilon(1e-4));
+  CHECK(highest > 0.9f);
+  // No driver: the clip as it was. Bad rates and clips are refused.
+  const deform::Character plain(model);
+  CHECK(deform::with_driven_weights(plain, clip, 10.0f).morph_channels.size() == 2);
+  CHECK_THROWS_AS(deform::with_driven_weights(c, clip, 0.0f), deform::Error);
+  CHECK_THROWS_AS(deform::with_driven_weights(c, clip, std::numeric_limits<float>::infinity()), deform::Error);
+  deform::Animation broken = clip;
+  broken.channels[0].bone = 999;
+  CHECK_THROWS_AS(deform::with_driven_weights(c, broken, 10.0f), deform::Error);
+}
+
 }  // namespace

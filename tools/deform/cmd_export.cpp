@@ -1,10 +1,13 @@
 // deform export MODEL --out DIR: a model as the native OBJ + MTL + .sk + .skw, textures copied; with --format gltf,
 // as one glTF 2.0 file (.gltf + .bin or .glb) with its skin and clips (docs/cli.md, docs/gltf-export.md).
 #include <filesystem>
+#include <optional>
+#include <vector>
 
 #include "cli.hpp"
 #include "model_loader.hpp"
 #include "shared_steps.hpp"
+#include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/io/gltf_export.hpp"
 #include "deform/runtime/animation.hpp"
@@ -27,29 +30,48 @@ std::string texture_root(const Args& args) {
   return root.empty() ? "." : root;
 }
 
+// With --rig, the rig's pose-space corrective shapes join the model's morph targets and each clip gets the weights
+// its pose drivers give, keyed --fps times a second (deform::with_driven_weights), so that the file's correctives
+// play in any glTF viewer; the rig's lattices and spring chains need a bake.
 int run_gltf(const Args& args, const std::string& out) {
-  LoadedModel loaded = load_model(args);
-  const deform::Model& model = loaded.model;
-  if (loaded.builtin) loaded.clips = deform::builtin_clips(model);  // idle, walk, run, wave
+  std::optional<RiggedModel> rigged;
+  if (args.has("--rig")) rigged = load_rigged_model(args);
+  LoadedModel loaded = rigged ? std::move(rigged->loaded) : load_model(args);
+  if (loaded.builtin) loaded.clips = deform::builtin_clips(loaded.model);  // idle, walk, run, wave
   embed_builtin_texture(loaded);
+  std::vector<deform::Animation> clips = loaded.clips;
+  std::optional<deform::Character> character;
+  if (rigged) {
+    const double fps = parse_number(args.value("--fps").value_or("30"), "--fps");
+    if (!(fps > 0.0 && fps <= 1000.0)) throw UsageError("--fps must be in (0, 1000]");
+    character.emplace(loaded.model, rigged->rig);
+    for (deform::Animation& clip : clips) clip = deform::with_driven_weights(*character, clip, float(fps));
+    if (!rigged->rig.lattices.empty() || !rigged->rig.spring_chains.empty())
+      note("the rig's lattices and spring chains are not in a skinned file: `deform bake` records them");
+  } else if (args.has("--fps")) {
+    throw UsageError("--fps keys the weights of a rig's correctives: give --rig");
+  }
+  const deform::Model& model = character ? character->model() : loaded.model;
   deform::GltfExportOptions options;
-  options.clips = loaded.clips;
+  options.clips = clips;
   options.generator = "libdeform " DEFORM_VERSION_STRING;
-  options.texture_root = texture_root(args);
+  options.texture_root = rigged ? rigged->texture_root : texture_root(args);
   options.references = reference_policy(args);
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
-  Json clips = Json::array();
-  for (const deform::Animation& clip : loaded.clips) clips.push_back(clip.name);
-  print_json(Json{{"gltf", written.gltf},
-                  {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
-                  {"bytes", written.bytes},
-                  {"textures", written.textures},
-                  {"vertices", model.mesh.point_count()},
-                  {"render_vertices", written.vertices},
-                  {"triangles", model.mesh.triangle_count()},
-                  {"bones", loaded.rigged ? model.skeleton.bone_count() : 0},
-                  {"clips", std::move(clips)}});
+  Json names = Json::array();
+  for (const deform::Animation& clip : clips) names.push_back(clip.name);
+  Json result{{"gltf", written.gltf},
+              {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
+              {"bytes", written.bytes},
+              {"textures", written.textures},
+              {"vertices", model.mesh.point_count()},
+              {"render_vertices", written.vertices},
+              {"triangles", model.mesh.triangle_count()},
+              {"bones", loaded.rigged ? model.skeleton.bone_count() : 0},
+              {"clips", std::move(names)}};
+  if (!model.morph_targets.empty()) result["morph_targets"] = model.morph_targets.size();
+  print_json(result);
   return exit_ok;
 }
 
@@ -90,6 +112,8 @@ int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
   value_flags.push_back("--out");
   value_flags.push_back("--format");
+  value_flags.push_back("--rig");
+  value_flags.push_back("--fps");
   const Args args(argv, value_flags, model_switch_flags);
   const std::string out = args.required("--out");
   const std::string format = args.value("--format").value_or("native");
@@ -100,6 +124,7 @@ int run(const std::vector<std::string>& argv) {
     return run_gltf(args, out);
   }
   if (format != "native") throw UsageError("--format must be native or gltf");
+  if (args.has("--rig") || args.has("--fps")) throw UsageError("--rig and --fps go with --format gltf");
   return run_native(args, out);
 }
 
@@ -111,6 +136,7 @@ const Command export_command = {
     "       deform export MESH.obj --skeleton S.sk --weights W.skw --out DIR\n"
     "       deform export --builtin --out DIR\n"
     "       deform export (MODEL | MESH.obj --skeleton S.sk --weights W.skw | --builtin) --format gltf --out FILE\n"
+    "                     [--rig RIG.json [--fps N]]\n"
     "\n"
     "Writes DIR/NAME.obj, NAME.mtl, NAME.sk and NAME.skw (NAME: the model file's stem) and copies each material's\n"
     "diffuse texture into DIR; every file is written atomically. The OBJ holds the mesh in the bind pose the .sk\n"
@@ -128,6 +154,9 @@ const Command export_command = {
     "embedded, and the built-in character's own. Prints {\"gltf\": FILE, \"bin\": path or\n"
     "null, \"bytes\", \"textures\": images embedded, \"vertices\", \"render_vertices\", \"triangles\", \"bones\",\n"
     "\"clips\": [names]}. Needs no importer for --builtin or native files.\n"
+    "--rig RIG.json: the rig's pose-space correctives (docs/skinning.md) become morph targets, and each clip a\n"
+    "weights track of what their drivers give, keyed --fps N times a second (default 30); prints \"morph_targets\"\n"
+    "too. The rig's lattices and spring chains are not written (deform bake records them).\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a file that cannot be read (the message names it); 1 any other failure.\n",
     run};

@@ -187,6 +187,8 @@ class DEFORM_CHARACTER_API Character {
   void clear_pose_drivers() noexcept;
   std::size_t pose_driver_count() const noexcept { return drivers_.size(); }
   const PoseDriverBinding& pose_driver(std::size_t i) const noexcept { return *drivers_[i].binding; }
+  // The morph target each of driver i's shapes sets (i < pose_driver_count()).
+  std::span<const std::uint32_t> pose_driver_targets(std::size_t i) const noexcept { return drivers_[i].targets; }
 
   // The spring chains of the rig (Rig::spring_chains): tune them, draw their points, reset them after a teleport.
   SpringChains& springs() noexcept { return springs_; }
@@ -415,5 +417,15 @@ DEFORM_CHARACTER_API std::vector<std::int32_t> reach_effectors(const Character& 
 // Of reach_effectors(), the one whose head (bone_position: as deformed now) is nearest `target`; ties go to the lower
 // id. -1 when there is none or the target is not finite. No allocation; O(lattices² · depth + depth).
 DEFORM_CHARACTER_API std::int32_t nearest_reach_effector(const Character& character, glm::vec3 target);
+
+// `clip` with the character's pose drivers baked in, for a file that plays without libdeform (a skinned glTF export,
+// docs/gltf-export.md "Pose-space correctives"): each morph target a driver sets gets a linear weight track with a key
+// every 1 / frames_per_second seconds from 0 and one at the duration: the weight update() sets when the character
+// holds the clip's pose at that time (sampled from the bind pose, joint limits applied as set_pose applies them). A
+// channel the clip had for such a target is replaced; the rest of the clip is unchanged. Between keys the weights are
+// linear, where the driver is not: more keys follow it more closely. Throws deform::Error (argument) for a rate not
+// finite or outside (0, 1000], or a clip the skeleton refuses. Allocates: offline.
+DEFORM_CHARACTER_API Animation with_driven_weights(const Character& character, const Animation& clip,
+                                                   float frames_per_second);
 
 }  // namespace deform
