@@ -27,9 +27,13 @@
 // model loads), so a clip that stands a character elsewhere than its bind pose keeps it in frame; C fits it again.
 // The lattice overlay draws the active limb's lattices (reaching, or under the mouse), all of them on request (L).
 //
+// Weights (--weight-map BONE, the panel's "Weights"): one bone's weights painted on the surface; the weight tools
+// (--weights-tool, the panel's buttons) change the weights offline and bind the character again with them.
+//
 // The parts (samples/README.md): options.cpp reads the command line, model.cpp loads the model and drives the
 // Character, view.cpp builds the scene and draws it, input.cpp turns the mouse and keys into reaches and toggles,
-// panel.cpp is the ImGui panel; they share one ViewerState (state.hpp). This file runs the frames.
+// panel.cpp is the ImGui panel, weights.cpp runs the weight tools on the character's weights; they share one
+// ViewerState (state.hpp). This file runs the frames.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -99,10 +103,12 @@ int run_headless(ViewerState& state) {
   std::printf(
       "{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
       "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
-      "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f}\n",
+      "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f, \"weight_tools_run\": %d, "
+      "\"weight_tools_refused\": %d}\n",
       options.screenshot.c_str(), options.frames, window.renderer_name().c_str(), state.gpu ? "true" : "false",
       double(up.x), double(up.y), double(up.z), e.x, e.y, e.z, double(floor_y(state)), double(lowest_y(state)),
-      morph_weights_text(state).c_str(), lattices_shown(state), double(floor_row(state)));
+      morph_weights_text(state).c_str(), lattices_shown(state), double(floor_row(state)), state.weight_tools_run,
+      state.weight_tools_refused);
   return 0;
 }
 
