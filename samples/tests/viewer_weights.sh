@@ -3,7 +3,7 @@
 # --save-weights, has the property the tool promises (sums 1, at most N influences, none below the threshold), the
 # weight map painted on the surface shows it (limit:1 leaves no mid weight, so no green; smoothing widens the
 # transition, so less red and more green), revert gives the model's own weights back, and a tool that refuses (mirror
-# on a mesh made asymmetric) says why and keeps the weights.
+# on a mesh made asymmetric) says why and keeps the weights; the character bound again keeps its clip and skinning.
 # usage: viewer_weights.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
 viewer=$1 check=$2 work=$3
@@ -21,6 +21,15 @@ run "${map[@]}" --screenshot "$work/heat.png" --weights-tool heat:4 --save-weigh
 run "${map[@]}" --screenshot "$work/reverted.png" --weights-tool limit:1 --weights-tool revert \
   --save-weights "$work/reverted.skw" >/dev/null
 cmp "$work/own.skw" "$work/reverted.skw"
+# With the GPU deformation the map reads the points and their normals back from the vertex buffer: the same picture
+# as the CPU's (skipped without OpenGL 4.3 compute shaders).
+gpu=$(run "${map[@]}" --gpu --weights-tool smooth:10 --screenshot "$work/smooth_gpu.png")
+if grep -q '"gpu_lattices": true' <<<"$gpu"; then "$check" --same-picture "$work/smooth.png" "$work/smooth_gpu.png"; fi
+# Bound again, the character keeps its clip at its time and the skinning method (DQS here, which draws this walk
+# differently from LBS): normalize, which leaves these weights as they are within rounding, draws the same picture.
+run --bare --frames 30 --clip walk --dqs --screenshot "$work/walk_dqs.png" >/dev/null
+run --bare --frames 30 --clip walk --dqs --weights-tool normalize --screenshot "$work/walk_dqs_tool.png" >/dev/null
+"$check" --same-picture "$work/walk_dqs.png" "$work/walk_dqs_tool.png"
 # The panel's Weights section, open with its message, over the walk.
 run --screenshot "$work/full.png" --clip walk --weight-map forearm_l --weights-tool smooth:2 >/dev/null
 test -s "$work/full.png"

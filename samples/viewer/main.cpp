@@ -51,6 +51,7 @@
 #include "panel.hpp"
 #include "state.hpp"
 #include "view.hpp"
+#include "weights.hpp"
 
 namespace viewer {
 namespace {
@@ -152,6 +153,7 @@ int main(int argc, char** argv) {
     viewer::load_character(state);
     viewer::build_scene(state);
     viewer::start_deformation(state);
+    viewer::run_option_weight_tools(state);  // last, as a click in the panel would: every setting is in place
     if (headless) return viewer::run_headless(state);
     viewer::run_interactive(state);
   } catch (const deform::Error& e) {

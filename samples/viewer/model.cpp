@@ -13,7 +13,6 @@
 #include "deform/runtime/error.hpp"
 #include "model_loading.hpp"
 #include "view.hpp"
-#include "weights.hpp"
 
 namespace viewer {
 namespace {
@@ -123,7 +122,6 @@ void load_character(ViewerState& state) {
     if (!found) fail(loaded.source + ": --morph: no morph target '" + name + "'");
   }
   state.up = loaded.up;
-  run_option_weight_tools(state);  // --weights-tool, in order, and --save-weights
 }
 
 void start_deformation(ViewerState& state) {

@@ -58,6 +58,7 @@ struct ViewerState {
   deform::GpuLatticeFields gpu_fields;
   std::vector<glm::vec3> gpu_bind_normals;  // the character's bind normals per render vertex (set_gpu)
   std::vector<glm::vec3> gpu_points;        // drawn_points()' read back
+  std::vector<glm::vec3> gpu_normals;       // ... and the render vertices' normals (the weight map's shading)
   std::vector<std::uint32_t> triangle_points;
   std::vector<glm::vec3> render_positions;
   deform::TriangleBvh bvh;

@@ -186,11 +186,12 @@ glm::vec3 weight_colour(float w) {
 // The weight map: the character's surface painted with weight_bone's weight at each point (all its influences, the
 // extras past the fourth included), interpolated across the triangles, and shaded by a light near the eye
 // (two-sided: a model wound inwards reads the same), in place of its textured surface. `normals`: the render vertices'
-// (empty with the GPU deformation: each triangle's own then, flat). Per frame O(points × influences + triangles), into
-// storage kept from frame to frame.
+// (with the GPU deformation, those read back from its vertex buffer with the points; each triangle's own, flat, when
+// they are missing). Per frame O(points × influences + triangles), into storage kept from frame to frame.
 void draw_weight_map(ViewerState& state, const glm::mat4& to_world, const glm::mat4& view, glm::vec3 eye,
                      std::span<const glm::vec3> normals) {
   const auto points = drawn_points(state);
+  if (state.gpu) normals = state.gpu_normals;  // read back with the points
   const deform::SkinWeights& w = state.character->model().weights;
   const deform::Mesh& mesh = state.character->model().mesh;
   const auto bone = std::uint16_t(state.weight_bone);
@@ -431,9 +432,12 @@ std::span<const glm::vec3> drawn_points(ViewerState& state) {
   glGetBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   state.gpu_points.resize(mesh.point_count());
+  state.gpu_normals.resize(mesh.vertex_count());
   for (std::size_t r = 0; r < mesh.vertex_count(); ++r) {
     const float* p = data.data() + r * std::size_t(layout.floats_per_vertex) + layout.position_offset;
     state.gpu_points[mesh.vertex_point[r]] = glm::vec3(p[0], p[1], p[2]);
+    const float* n = data.data() + r * std::size_t(layout.floats_per_vertex) + layout.normal_offset;
+    state.gpu_normals[r] = glm::vec3(n[0], n[1], n[2]);
   }
   return state.gpu_points;
 }

@@ -17,7 +17,8 @@ std::string describe(const WeightTool& tool);
 // are then unchanged. Either way state.weights_message says what happened or why, for the panel.
 bool run_weight_tool(ViewerState& state, const WeightTool& tool);
 
-// The options' tools in order (a refusal is reported on stderr and the next tool runs), then --save-weights.
+// The options' tools in order (a refusal is reported on stderr and the next tool runs), then --save-weights; run
+// once the character, the scene and the options' deformation settings are in place, as a click would find them.
 // Exits (fail) when the weights cannot be written.
 void run_option_weight_tools(ViewerState& state);
 
