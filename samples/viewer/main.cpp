@@ -5,7 +5,8 @@
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
 //                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
 //                 [--skinning lbs|dqs|ddm] [--mush N]
-//                 [--up y|z] [--lattices none|active|all]
+//                 [--up y|z] [--lattices none|active|all] [--weight-map BONE] [--weights-tool TOOL]...
+//                 [--save-weights OUT.skw]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples

@@ -72,8 +72,7 @@ std::optional<double> number_in(const std::string& s, double lo, double hi) {
   return v;
 }
 
-}  // namespace
-
+// The tool a --weights-tool SPEC names (the usage text lists them), or nullopt with `error` set.
 std::optional<WeightTool> parse_weight_tool(const std::string& spec, std::string& error) {
   const std::size_t colon = spec.find(':');
   const std::string name = spec.substr(0, colon);
@@ -124,6 +123,8 @@ std::optional<WeightTool> parse_weight_tool(const std::string& spec, std::string
   }
   return tool;
 }
+
+}  // namespace
 
 [[noreturn]] void fail(const std::string& message) {
   std::fprintf(stderr, "deform_viewer: %s\n", message.c_str());

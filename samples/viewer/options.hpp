@@ -20,9 +20,6 @@ struct WeightTool {
   int mirror = 0;      // 0 flip, 1 positive-to-negative, 2 negative-to-positive
 };
 
-// The tool a --weights-tool SPEC names (the usage text lists them), or nullopt with `error` set.
-std::optional<WeightTool> parse_weight_tool(const std::string& spec, std::string& error);
-
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
   std::vector<WeightTool> weight_tools;  // --weights-tool, run in order once the model is loaded
