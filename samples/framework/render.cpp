@@ -305,6 +305,11 @@ void OverlayRenderer::line(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
   lines_.insert(lines_.end(), {a.x, a.y, a.z, c.x, c.y, c.z, 1.0f, b.x, b.y, b.z, c.x, c.y, c.z, 1.0f});
 }
 
+void OverlayRenderer::triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 ca, glm::vec3 cb, glm::vec3 cc) {
+  triangles_.insert(triangles_.end(), {a.x,  a.y,  a.z,  ca.x, ca.y, ca.z, 1.0f, b.x,  b.y,  b.z, cb.x,
+                                       cb.y, cb.z, 1.0f, c.x,  c.y,  c.z,  cc.x, cc.y, cc.z, 1.0f});
+}
+
 void OverlayRenderer::point(glm::vec3 p, glm::vec3 c, float size) {
   points_.insert(points_.end(), {p.x, p.y, p.z, c.x, c.y, c.z, size});
 }
@@ -318,7 +323,8 @@ void OverlayRenderer::flush(const glm::mat4& view_projection, bool on_top) {
   if (on_top) glDisable(GL_DEPTH_TEST);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  for (auto [data, mode] : {std::pair{&lines_, GLenum(GL_LINES)}, std::pair{&points_, GLenum(GL_POINTS)}}) {
+  for (auto [data, mode] : {std::pair{&triangles_, GLenum(GL_TRIANGLES)}, std::pair{&lines_, GLenum(GL_LINES)},
+                            std::pair{&points_, GLenum(GL_POINTS)}}) {
     if (data->empty()) continue;
     glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data->size() * sizeof(float)), data->data(), GL_STREAM_DRAW);
     glDrawArrays(mode, 0, GLsizei(data->size() / 7));

@@ -81,12 +81,16 @@ class OverlayRenderer {
   void create();
   void line(glm::vec3 a, glm::vec3 b, glm::vec3 colour);
   void point(glm::vec3 p, glm::vec3 colour, float size = 8.0f);
-  // Draws and clears what was added; `on_top` ignores depth (skeleton and handles show through the skin).
+  // A triangle with a colour per corner, interpolated across it, unlit (a colour map painted on a surface: the
+  // viewer's weight map shades its colours itself).
+  void triangle(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 colour_a, glm::vec3 colour_b, glm::vec3 colour_c);
+  // Draws and clears what was added (triangles, then lines, then points); `on_top` ignores depth (skeleton and
+  // handles show through the skin).
   void flush(const glm::mat4& view_projection, bool on_top);
 
  private:
   GLuint vao_ = 0, vbo_ = 0, program_ = 0;
-  std::vector<float> lines_, points_;
+  std::vector<float> triangles_, lines_, points_;
 };
 
 // Compiles and links a program from sources; aborts with the GL log on failure (samples only).

@@ -11,6 +11,9 @@
 //     outside --width's (default: not checked; a figure lying down fills the width, not the height), or, with ROW (the
 //     viewer's "floor_row": the floor's row under the character's lowest point), its lowest row is more than 3% of
 //     the image's height away from it (the character floats above the floor or sinks into it).
+//   png_check --colours IMAGE: of the pixels that differ from the top-left corner's colour (the background of a bare
+//     frame), the shares whose red, green or blue channel exceeds both others by more than 24, as a JSON line
+//     {"pixels": N, "red": R, "green": G, "blue": B} (the viewer's weight map: blue 0, green 0.5, red 1).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -68,7 +71,25 @@ int same_picture(const char* path_a, const char* path_b) {
 
 const char* usage =
     "usage: png_check BEFORE.png AFTER.png | png_check --same-picture A.png B.png\n"
-    "       png_check --bbox IMAGE.png [--height MIN,MAX] [--width MIN,MAX] [--floor-row ROW]\n";
+    "       png_check --bbox IMAGE.png [--height MIN,MAX] [--width MIN,MAX] [--floor-row ROW]\n"
+    "       png_check --colours IMAGE.png\n";
+
+int colours(const char* path) {
+  const Image im = load(path);
+  long pixels = 0, dominant[3] = {0, 0, 0};
+  for (long i = 0; i < long(im.w) * im.h; ++i) {
+    const unsigned char* p = im.rgb + 3 * i;
+    if (!differs(p, im.rgb)) continue;
+    ++pixels;
+    for (int c = 0; c < 3; ++c)
+      if (p[c] > p[(c + 1) % 3] + 24 && p[c] > p[(c + 2) % 3] + 24) ++dominant[c];
+  }
+  stbi_image_free(im.rgb);
+  const double n = double(std::max(1L, pixels));
+  std::printf("{\"pixels\": %ld, \"red\": %.6f, \"green\": %.6f, \"blue\": %.6f}\n", pixels, double(dominant[0]) / n,
+              double(dominant[1]) / n, double(dominant[2]) / n);
+  return pixels > 0 ? 0 : 1;
+}
 
 int bbox(const std::vector<std::string>& args) {
   double min_height = 0.35, max_height = 0.95, min_width = 0.0, max_width = 1.0, floor_row = -1.0;
@@ -114,6 +135,7 @@ int bbox(const std::vector<std::string>& args) {
 
 int main(int argc, char** argv) {
   if (argc == 4 && std::string(argv[1]) == "--same-picture") return same_picture(argv[2], argv[3]);
+  if (argc == 3 && std::string(argv[1]) == "--colours") return colours(argv[2]);
   if (argc >= 3 && std::string(argv[1]) == "--bbox") return bbox(std::vector<std::string>(argv + 2, argv + argc));
   if (argc != 3) {
     std::fprintf(stderr, "%s", usage);

@@ -5,7 +5,8 @@
 //   deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]
 //                 [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,...]] [--prop P.obj]... [--gpu] [--dqs]
 //                 [--skinning lbs|dqs|ddm] [--mush N]
-//                 [--up y|z] [--lattices none|active|all]
+//                 [--up y|z] [--lattices none|active|all] [--weight-map BONE] [--weights-tool TOOL]...
+//                 [--save-weights OUT.skw]
 //   deform_viewer --screenshot out.png --frames N [--reach X,Y,Z --at F] [--release-at F] [--pole X,Y,Z]
 //
 // Clips (the built-in character's walk, an imported file's clips) play with secondary motion: each frame samples
@@ -27,9 +28,13 @@
 // model loads), so a clip that stands a character elsewhere than its bind pose keeps it in frame; C fits it again.
 // The lattice overlay draws the active limb's lattices (reaching, or under the mouse), all of them on request (L).
 //
+// Weights (--weight-map BONE, the panel's "Weights"): one bone's weights painted on the surface; the weight tools
+// (--weights-tool, the panel's buttons) change the weights offline and bind the character again with them.
+//
 // The parts (samples/README.md): options.cpp reads the command line, model.cpp loads the model and drives the
 // Character, view.cpp builds the scene and draws it, input.cpp turns the mouse and keys into reaches and toggles,
-// panel.cpp is the ImGui panel; they share one ViewerState (state.hpp). This file runs the frames.
+// panel.cpp is the ImGui panel, weights.cpp runs the weight tools on the character's weights; they share one
+// ViewerState (state.hpp). This file runs the frames.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -47,6 +52,7 @@
 #include "panel.hpp"
 #include "state.hpp"
 #include "view.hpp"
+#include "weights.hpp"
 
 namespace viewer {
 namespace {
@@ -99,10 +105,12 @@ int run_headless(ViewerState& state) {
   std::printf(
       "{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
       "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
-      "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f}\n",
+      "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f, \"weight_tools_run\": %d, "
+      "\"weight_tools_refused\": %d}\n",
       options.screenshot.c_str(), options.frames, window.renderer_name().c_str(), state.gpu ? "true" : "false",
       double(up.x), double(up.y), double(up.z), e.x, e.y, e.z, double(floor_y(state)), double(lowest_y(state)),
-      morph_weights_text(state).c_str(), lattices_shown(state), double(floor_row(state)));
+      morph_weights_text(state).c_str(), lattices_shown(state), double(floor_row(state)), state.weight_tools_run,
+      state.weight_tools_refused);
   return 0;
 }
 
@@ -146,6 +154,7 @@ int main(int argc, char** argv) {
     viewer::load_character(state);
     viewer::build_scene(state);
     viewer::start_deformation(state);
+    viewer::run_option_weight_tools(state);  // last, as a click in the panel would: every setting is in place
     if (headless) return viewer::run_headless(state);
     viewer::run_interactive(state);
   } catch (const deform::Error& e) {

@@ -86,6 +86,7 @@ void load_character(ViewerState& state) {
     state.clip_names.push_back(c.name.empty() ? "(unnamed)" : c.name.c_str());
   state.inertia = options.inertia;
   state.base_model = loaded.model;
+  state.own_weights = state.base_model.weights;  // what the weight tools' "revert" gives back
   // The built-in character stretches whichever limb is nearest the click: its rig with lattices on every limb.
   state.rig = !options.rig.empty()
                   ? deform::read_rig_json(options.rig, state.base_model.skeleton, state.base_model.mesh.point_count())
@@ -176,7 +177,11 @@ void set_gpu(ViewerState& state, bool on) {
   state.character->settings.deform_on_cpu = !state.gpu;
 }
 
-void rebuild_character(ViewerState& state) {
+namespace {
+
+// The rig as the panel tunes it: each lattice with the panel's degree and elastic settings (the rig's own, taken at
+// the first build).
+deform::Rig tuned_rig(ViewerState& state) {
   deform::Rig rig = state.rig;
   for (auto& spec : rig.lattices) {
     if (state.degree == 0) state.degree = spec.degree.x;
@@ -186,15 +191,12 @@ void rebuild_character(ViewerState& state) {
   }
   if (state.degree == 0) state.degree = 3;
   if (state.elastic.oscillator.stiffness <= 0.0f) state.elastic = deform::ElasticSettings{};
-  try {
-    state.character = std::make_unique<deform::Character>(state.base_model, rig);
-  } catch (const deform::Error& e) {
-    // A rig made by default_rig() for an unusual model may not bind: the character still reaches, without stretch.
-    if (!state.options.rig.empty()) throw;
-    std::fprintf(stderr, "warning: %s; reaching without elastic lattices\n", e.what());
-    state.rig = deform::Rig{};
-    state.character = std::make_unique<deform::Character>(state.base_model, state.rig);
-  }
+  return rig;
+}
+
+// Everything a new state.character needs around it: the picking triangles and BVH, the renderer, the per-lattice
+// and per-target state, the poses, and the panel's settings passed to it.
+void adopt_character(ViewerState& state) {
   const deform::Mesh& mesh = state.character->model().mesh;
   state.triangle_points.resize(mesh.triangles.size());
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
@@ -218,6 +220,32 @@ void rebuild_character(ViewerState& state) {
   apply_reach_settings(state);
   apply_mush(state);
   set_gpu(state, state.gpu);
+}
+
+}  // namespace
+
+void rebuild_character(ViewerState& state) {
+  const deform::Rig rig = tuned_rig(state);
+  try {
+    state.character = std::make_unique<deform::Character>(state.base_model, rig);
+  } catch (const deform::Error& e) {
+    // A rig made by default_rig() for an unusual model may not bind: the character still reaches, without stretch.
+    if (!state.options.rig.empty()) throw;
+    std::fprintf(stderr, "warning: %s; reaching without elastic lattices\n", e.what());
+    state.rig = deform::Rig{};
+    state.character = std::make_unique<deform::Character>(state.base_model, state.rig);
+  }
+  adopt_character(state);
+}
+
+void rebind_weights(ViewerState& state, deform::SkinWeights weights) {
+  deform::Model model = state.base_model;
+  model.weights = std::move(weights);
+  auto character = std::make_unique<deform::Character>(model, tuned_rig(state));  // throws: nothing changed yet
+  character->settings = state.character->settings;  // LBS or DQS, the IK's settings, as the panel holds them
+  state.base_model = std::move(model);
+  state.character = std::move(character);
+  adopt_character(state);
 }
 
 // The Character's mush stages as the panel holds them: Direct Delta Mush as the skinning (state.ddm) and Delta Mush

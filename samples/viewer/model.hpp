@@ -17,6 +17,11 @@ void start_deformation(ViewerState& state);
 
 // A new Character from the model and the rig as the panel tunes it (degree, elastic settings), at rest.
 void rebuild_character(ViewerState& state);
+// The character bound again with `weights` (one entry per point) in place of its model's: the same rig (lattices
+// and spring chains as the panel tunes them), the panel's settings (skinning method, IK, mush, GPU), the clip and its
+// time and the morph holds kept; a reach in progress ends. Throws deform::Error, changing nothing, when the rig does
+// not bind with them.
+void rebind_weights(ViewerState& state, deform::SkinWeights weights);
 // Plays clip `clip` (-1: none, the bind pose) from its start.
 void select_clip(ViewerState& state, int clip);
 // This frame's pose of the playing clip (none: nothing), `dt` seconds on, and the held reach solved again on it.

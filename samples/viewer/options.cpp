@@ -13,7 +13,8 @@ const char* usage =
     "usage: deform_viewer [MODEL [--skeleton S.sk] [--weights W.skw] [--rig R.json]] [--clip NAME|#N [--inertia F]]\n"
     "                     [--blend NAME|#N [--blend-weight W]] [--morph NAME:W[,NAME:W...]] [--prop P.obj]...\n"
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
-    "                     [--limits euler|swing-twist] [--weight-map BONE]\n"
+    "                     [--limits euler|swing-twist] [--weight-map BONE] [--weights-tool TOOL]...\n"
+    "                     [--save-weights OUT.skw]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
     "                     [--skinning lbs|dqs|ddm] [--mush N]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
@@ -28,7 +29,14 @@ const char* usage =
     "(the panel's morph sliders; `deform info MODEL` lists the targets).\n"
     "--pole X,Y,Z: the reach's pole (the elbow's hint), in the model's space. --limits swing-twist: the reach chain's\n"
     "joints limited by swing cones and twist ranges instead of Euler boxes.\n"
-    "--weight-map BONE: show BONE's skin weights at the points, blue (low) to red (1); also in the panel.\n"
+    "--weight-map BONE: paint the character's surface with BONE's skin weights, blue (0) to red (1); also in the\n"
+    "panel.\n"
+    "--weights-tool TOOL: run a weight tool on the character's weights once it is loaded and rebind it (repeatable,\n"
+    "run in order; the panel's \"Weights\" buttons; `deform weights-edit`'s tools): heat[:C] (automatic bone heat\n"
+    "weights again, heat constant C, default 1), normalize, prune:T (0 to 1), limit:N (1 to 16), smooth:N[:F]\n"
+    "(N passes, 1 to 100, factor F in (0, 1], default 0.5), mirror:flip|positive-to-negative|negative-to-positive,\n"
+    "revert (the model's own weights). A tool that refuses (mirror on an asymmetric mesh) says why on stderr and\n"
+    "keeps the weights. --save-weights OUT.skw: write the weights after the tools (atomically).\n"
     "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
     "skinning. --skinning ddm: Direct Delta Mush (CPU only; --dqs is --skinning dqs). --mush N: Delta Mush with N\n"
     "iterations after the lattices (CPU only; 0, the default: off). --up z: the model's up axis is +Z (default: +Y, or "
@@ -54,6 +62,66 @@ glm::vec3 parse_vec3(const std::string& s, const char* what) {
   if (std::sscanf(s.c_str(), "%f,%f,%f%c", &v.x, &v.y, &v.z, &tail) != 3 || !std::isfinite(v.x + v.y + v.z))
     fail(std::string(what) + ": '" + s + "' is not X,Y,Z");
   return v;
+}
+
+// A number in [lo, hi] (finite), or nullopt.
+std::optional<double> number_in(const std::string& s, double lo, double hi) {
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end || !std::isfinite(v) || v < lo || v > hi) return std::nullopt;
+  return v;
+}
+
+// The tool a --weights-tool SPEC names (the usage text lists them), or nullopt with `error` set.
+std::optional<WeightTool> parse_weight_tool(const std::string& spec, std::string& error) {
+  const std::size_t colon = spec.find(':');
+  const std::string name = spec.substr(0, colon);
+  const std::string rest = colon == std::string::npos ? std::string() : spec.substr(colon + 1);
+  const bool has_rest = colon != std::string::npos;
+  WeightTool tool;
+  auto refuse = [&](const std::string& why) {
+    error = "'" + spec + "': " + why;
+    return std::nullopt;
+  };
+  if (name == "normalize" || name == "revert") {
+    if (has_rest) return refuse(name + " takes no value");
+    tool.kind = name == "normalize" ? WeightTool::Kind::normalize : WeightTool::Kind::revert;
+  } else if (name == "heat") {
+    tool.kind = WeightTool::Kind::heat;
+    tool.value = 1.0f;
+    if (has_rest) {
+      const auto c = number_in(rest, 1e-6, 1e6);
+      if (!c || *c <= 0.0) return refuse("the heat constant is not a number > 0 (heat:C)");
+      tool.value = float(*c);
+    }
+  } else if (name == "prune") {
+    const auto t = number_in(rest, 0.0, 1.0);
+    if (!t) return refuse("the threshold is not in [0, 1] (prune:T)");
+    tool.kind = WeightTool::Kind::prune, tool.value = float(*t);
+  } else if (name == "limit") {
+    const auto n = number_in(rest, 1.0, 16.0);
+    if (!n || *n != std::floor(*n)) return refuse("the count is not 1 to 16 (limit:N)");
+    tool.kind = WeightTool::Kind::limit, tool.count = int(*n);
+  } else if (name == "smooth") {
+    const std::size_t second = rest.find(':');
+    const auto n = number_in(rest.substr(0, second), 1.0, 100.0);
+    if (!n || *n != std::floor(*n)) return refuse("the passes are not 1 to 100 (smooth:N[:F])");
+    tool.kind = WeightTool::Kind::smooth, tool.count = int(*n), tool.value = 0.5f;
+    if (second != std::string::npos) {
+      const auto f = number_in(rest.substr(second + 1), 0.0, 1.0);
+      if (!f || *f <= 0.0) return refuse("the factor is not in (0, 1] (smooth:N:F)");
+      tool.value = float(*f);
+    }
+  } else if (name == "mirror") {
+    tool.kind = WeightTool::Kind::mirror;
+    if (rest == "flip") tool.mirror = 0;
+    else if (rest == "positive-to-negative") tool.mirror = 1;
+    else if (rest == "negative-to-positive") tool.mirror = 2;
+    else return refuse("the mode is not flip, positive-to-negative or negative-to-positive (mirror:MODE)");
+  } else {
+    return refuse("not a weight tool (heat, normalize, prune, limit, smooth, mirror, revert)");
+  }
+  return tool;
 }
 
 }  // namespace
@@ -105,6 +173,12 @@ Options parse_options(int argc, char** argv) {
         at = comma + 1;
       }
     } else if (a == "--weight-map") o.weight_map = next();
+    else if (a == "--weights-tool") {
+      std::string error;
+      const std::optional<WeightTool> tool = parse_weight_tool(next(), error);
+      if (!tool) fail("--weights-tool: " + error);
+      o.weight_tools.push_back(*tool);
+    } else if (a == "--save-weights") o.save_weights = next();
     else if (a == "--screenshot") o.screenshot = next();
     else if (a == "--frames") o.frames = std::max(1, parse_int(next(), "--frames"));
     else if (a == "--reach") o.reach = parse_vec3(next(), "--reach");

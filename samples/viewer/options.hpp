@@ -10,8 +10,20 @@
 
 namespace viewer {
 
+// One weight tool run on the character's weights (weights.cpp): --weights-tool on the command line, or the panel's
+// "Weights" buttons. The names are `deform weights-edit`'s.
+struct WeightTool {
+  enum class Kind { heat, normalize, prune, limit, smooth, mirror, revert };
+  Kind kind = Kind::normalize;
+  float value = 0.0f;  // heat: the heat constant (> 0); prune: the threshold [0, 1]; smooth: the factor (0, 1]
+  int count = 0;       // limit: the influences kept (1 .. 16); smooth: the passes (1 .. 100)
+  int mirror = 0;      // 0 flip, 1 positive-to-negative, 2 negative-to-positive
+};
+
 struct Options {
   std::string model, skeleton, weights, rig, screenshot, clip, blend_clip, weight_map;
+  std::vector<WeightTool> weight_tools;  // --weights-tool, run in order once the model is loaded
+  std::string save_weights;              // --save-weights: the weights written there (.skw) after the tools
   std::vector<std::string> props;
   std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;

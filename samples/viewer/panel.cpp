@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@
 
 #include "model.hpp"
 #include "view.hpp"
+#include "weights.hpp"
 
 namespace viewer {
 namespace {
@@ -34,7 +36,7 @@ void status_lines(ViewerState& state, float frame_ms) {
     ImGui::Text("stretch %.3f, residual %.3f", state.character->stretch(), state.last_reach.residual);
 }
 
-// Display: the skeleton, the lattices (the active limb's or all), the weight map.
+// Display: the skeleton, the lattices (the active limb's or all).
 void display_section(ViewerState& state) {
   if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Checkbox("skeleton", &state.show_skeleton);
@@ -50,14 +52,71 @@ void display_section(ViewerState& state) {
       ImGui::SetTooltip("every lattice; else only the limb that reaches, or would reach from under the mouse (L)");
     if (display_changed)
       state.lattice_display = !shown ? LatticeDisplay::none : all ? LatticeDisplay::all : LatticeDisplay::active;
-    // The weight map: one bone's skin weight at every point, blue (low) to red (1); points without it undrawn.
-    const deform::Skeleton& sk = state.character->skeleton();
-    std::vector<std::string> keys{"(none)"};
-    for (std::size_t b = 0; b < sk.bone_count(); ++b) keys.push_back(sk.key(std::int32_t(b)));
-    std::vector<const char*> names;
-    for (const std::string& k : keys) names.push_back(k.c_str());
-    int selected = state.weight_bone + 1;
-    if (ImGui::Combo("weights of", &selected, names.data(), int(names.size()))) state.weight_bone = selected - 1;
+  }
+}
+
+// Weights: the weight map (one bone's weights painted on the surface) and the tools that change the weights, each
+// run at a click on the character's current weights, the character bound again with the result (weights.cpp); a
+// tool's refusal is shown in red and changes nothing. Open from the start when the command line asked for a map or a
+// tool.
+void weights_section(ViewerState& state) {
+  const bool asked = state.weight_bone >= 0 || !state.options.weight_tools.empty();
+  if (!ImGui::CollapsingHeader("Weights", asked ? ImGuiTreeNodeFlags_DefaultOpen : 0)) return;
+  const deform::Skeleton& sk = state.character->skeleton();
+  std::vector<std::string> keys{"(none)"};
+  for (std::size_t b = 0; b < sk.bone_count(); ++b) keys.push_back(sk.key(std::int32_t(b)));
+  std::vector<const char*> names;
+  for (const std::string& k : keys) names.push_back(k.c_str());
+  int selected = state.weight_bone + 1;
+  if (ImGui::Combo("weights of", &selected, names.data(), int(names.size()))) state.weight_bone = selected - 1;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("the bone's weight painted on the surface: blue 0, green 0.5, red 1");
+  std::optional<WeightTool> run;
+  constexpr float slider = 150.0f;
+  ImGui::SetNextItemWidth(slider);
+  ImGui::SliderFloat("##heat", &state.heat_tool.value, 0.1f, 10.0f, "heat %.2f",
+                     ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);
+  ImGui::SameLine();
+  if (ImGui::Button("automatic")) run = state.heat_tool;
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "bone heat weights again, with this heat constant (higher: sharper joints), on the bones\n"
+        "the model's own weights use");
+  ImGui::SetNextItemWidth(slider);
+  ImGui::SliderFloat("##prune", &state.prune_tool.value, 0.0f, 0.5f, "below %.3f", ImGuiSliderFlags_AlwaysClamp);
+  ImGui::SameLine();
+  if (ImGui::Button("prune")) run = state.prune_tool;
+  ImGui::SetNextItemWidth(slider);
+  ImGui::SliderInt("##limit", &state.limit_tool.count, 1, 16, "%d influences", ImGuiSliderFlags_AlwaysClamp);
+  ImGui::SameLine();
+  if (ImGui::Button("limit")) run = state.limit_tool;
+  ImGui::SetNextItemWidth(0.5f * slider - 4.0f);
+  ImGui::SliderInt("##passes", &state.smooth_tool.count, 1, 100, "%d passes", ImGuiSliderFlags_AlwaysClamp);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(0.5f * slider - 4.0f);
+  ImGui::SliderFloat("##factor", &state.smooth_tool.value, 0.05f, 1.0f, "x%.2f", ImGuiSliderFlags_AlwaysClamp);
+  ImGui::SameLine();
+  if (ImGui::Button("smooth")) run = state.smooth_tool;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("each pass: (1 - x) own weights + x the neighbours' mean");
+  ImGui::TextUnformatted("mirror");
+  static const char* const mirror_labels[] = {"flip", "+ to -", "- to +"};
+  static const char* const mirror_tips[] = {"each point takes its mirror point's weights, sides swapped",
+                                            "the positive side's weights, mirrored, onto the negative side",
+                                            "the negative side's weights, mirrored, onto the positive side"};
+  for (int m = 0; m < 3; ++m) {
+    ImGui::SameLine();
+    if (ImGui::Button(mirror_labels[m])) run = WeightTool{WeightTool::Kind::mirror, 0.0f, 0, m};
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (by bone names: .L/.R, _l/_r, Left/Right)", mirror_tips[m]);
+  }
+  if (ImGui::Button("normalize")) run = WeightTool{WeightTool::Kind::normalize, 0.0f, 0, 0};
+  ImGui::SameLine();
+  if (ImGui::Button("revert")) run = WeightTool{WeightTool::Kind::revert, 0.0f, 0, 0};
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("the model's own weights, as loaded");
+  if (run) run_weight_tool(state, *run);
+  if (!state.weights_message.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, state.weights_refused ? ImVec4(1.0f, 0.35f, 0.3f, 1.0f)
+                                                               : ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+    ImGui::TextWrapped("%s", state.weights_message.c_str());
+    ImGui::PopStyleColor();
   }
 }
 
@@ -263,6 +322,7 @@ void panel(ViewerState& state, float frame_ms) {
   ImGui::Begin("libdeform", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   status_lines(state, frame_ms);
   display_section(state);
+  weights_section(state);
   clip_section(state);
   lattices_section(state);
   skinning_section(state);

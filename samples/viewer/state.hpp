@@ -58,6 +58,7 @@ struct ViewerState {
   deform::GpuLatticeFields gpu_fields;
   std::vector<glm::vec3> gpu_bind_normals;  // the character's bind normals per render vertex (set_gpu)
   std::vector<glm::vec3> gpu_points;        // drawn_points()' read back
+  std::vector<glm::vec3> gpu_normals;       // ... and the render vertices' normals (the weight map's shading)
   std::vector<std::uint32_t> triangle_points;
   std::vector<glm::vec3> render_positions;
   deform::TriangleBvh bvh;
@@ -81,6 +82,17 @@ struct ViewerState {
   std::vector<char> lattice_shown;     // per lattice: drawn this frame (lattice_display; sized by rebuild_character)
   std::int32_t hovered_effector = -1;  // the limb a click at the mouse would move (-1: none)
   int weight_bone = -1;                // the bone whose weights the weight map shows; -1: none
+  std::vector<float> weight_values;    // per point, weight_bone's weight (draw_weight_map's scratch)
+  // The weight tools (weights.cpp): the model's own weights (what "revert" gives back), the panel's settings of
+  // each tool, and what the last tool did or why it refused (shown in the panel; refused: in red).
+  deform::SkinWeights own_weights;
+  WeightTool heat_tool{WeightTool::Kind::heat, 1.0f, 0, 0};
+  WeightTool prune_tool{WeightTool::Kind::prune, 0.02f, 0, 0};
+  WeightTool limit_tool{WeightTool::Kind::limit, 0.0f, 4, 0};
+  WeightTool smooth_tool{WeightTool::Kind::smooth, 0.5f, 2, 0};
+  std::string weights_message;
+  bool weights_refused = false;
+  int weight_tools_run = 0, weight_tools_refused = 0;  // the headless summary's counts
   bool playing = true;
   deform::StretchShape shape;        // the panel's rubber shape, for every lattice
   float max_stretch = -1.0f;         // the panel's stretch bound (-1: the rig's, taken at the first build)

@@ -174,14 +174,56 @@ void draw_lattices(ViewerState& state, const glm::mat4& to_world) {
   }
 }
 
-// The weight map: a point at every point weight_bone weighs, blue (low) to red (1).
-void draw_weight_map(ViewerState& state, const glm::mat4& to_world) {
+// The weight-paint ramp riggers know: 0 blue, 0.25 cyan, 0.5 green, 0.75 yellow, 1 red.
+glm::vec3 weight_colour(float w) {
+  static const glm::vec3 ramp[] = {
+      {0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 1.0f}, {0.0f, 1.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f}};
+  const float at = std::clamp(w, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(3, int(at));
+  return glm::mix(ramp[i], ramp[i + 1], at - float(i));
+}
+
+// The weight map: the character's surface painted with weight_bone's weight at each point (all its influences, the
+// extras past the fourth included), interpolated across the triangles, and shaded by a light near the eye
+// (two-sided: a model wound inwards reads the same), in place of its textured surface. `normals`: the render vertices'
+// (with the GPU deformation, those read back from its vertex buffer with the points; each triangle's own, flat, when
+// they are missing). Per frame O(points × influences + triangles), into storage kept from frame to frame.
+void draw_weight_map(ViewerState& state, const glm::mat4& to_world, const glm::mat4& view, glm::vec3 eye,
+                     std::span<const glm::vec3> normals) {
   const auto points = drawn_points(state);
+  if (state.gpu) normals = state.gpu_normals;  // read back with the points
   const deform::SkinWeights& w = state.character->model().weights;
+  const deform::Mesh& mesh = state.character->model().mesh;
+  const auto bone = std::uint16_t(state.weight_bone);
+  state.weight_values.assign(points.size(), 0.0f);
   for (std::size_t i = 0; i < points.size() && i < w.size(); ++i)
     for (int k = 0; k < deform::max_influences; ++k)
-      if (w.weights[i][k] > 0.0f && w.bones[i][k] == state.weight_bone)
-        state.overlay.point(transform_point(to_world, points[i]), heat(w.weights[i][k]), 5.0f);
+      if (w.bones[i][k] == bone) state.weight_values[i] += w.weights[i][k];
+  for (std::size_t e = 0; e < w.extra_points.size(); ++e)
+    for (std::uint32_t j = w.extra_offsets[e]; j < w.extra_offsets[e + 1]; ++j)
+      if (w.extra_bones[j] == bone && w.extra_points[e] < points.size())
+        state.weight_values[w.extra_points[e]] += w.extra_weights[j];
+  const glm::mat3 turn(to_world);
+  // A light above and to the right of the eye, so that the shape reads on a surface of flat colours.
+  const glm::mat4 camera = glm::inverse(view);
+  const glm::vec3 light_offset = 1.2f * glm::vec3(camera[1]) + 0.8f * glm::vec3(camera[0]);
+  const bool smooth = normals.size() == mesh.vertex_count();
+  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
+    glm::vec3 corner[3], colour[3];
+    for (int c = 0; c < 3; ++c) corner[c] = transform_point(to_world, points[mesh.vertex_point[mesh.triangles[t + c]]]);
+    const glm::vec3 face = glm::cross(corner[1] - corner[0], corner[2] - corner[0]);
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t r = mesh.triangles[t + c];
+      glm::vec3 n = smooth ? turn * normals[r] : face;
+      const glm::vec3 to_eye = glm::normalize(eye - corner[c]);
+      if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: the side the eye sees
+      const float length = glm::length(n);
+      const glm::vec3 light = glm::normalize(to_eye + light_offset);
+      const float lit = length > 0.0f ? std::max(0.0f, glm::dot(n, light)) / length : 1.0f;
+      colour[c] = weight_colour(state.weight_values[mesh.vertex_point[r]]) * (0.15f + 0.85f * lit);
+    }
+    state.overlay.triangle(corner[0], corner[1], corner[2], colour[0], colour[1], colour[2]);
+  }
 }
 
 // The skeleton's bones from each head to its parent's, the reaching bone's head in red.
@@ -390,9 +432,12 @@ std::span<const glm::vec3> drawn_points(ViewerState& state) {
   glGetBufferSubData(GL_ARRAY_BUFFER, 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   state.gpu_points.resize(mesh.point_count());
+  state.gpu_normals.resize(mesh.vertex_count());
   for (std::size_t r = 0; r < mesh.vertex_count(); ++r) {
     const float* p = data.data() + r * std::size_t(layout.floats_per_vertex) + layout.position_offset;
     state.gpu_points[mesh.vertex_point[r]] = glm::vec3(p[0], p[1], p[2]);
+    const float* n = data.data() + r * std::size_t(layout.floats_per_vertex) + layout.normal_offset;
+    state.gpu_normals[r] = glm::vec3(n[0], n[1], n[2]);
   }
   return state.gpu_points;
 }
@@ -409,7 +454,14 @@ void draw(ViewerState& state, std::span<const glm::vec3> normals) {
   }
 
   update_character_vertices(state, normals);
-  state.renderer->draw(character_world(state), view, projection, eye);
+  const bool weight_map =
+      state.weight_bone >= 0 && std::size_t(state.weight_bone) < state.character->skeleton().bone_count();
+  if (weight_map) {  // the surface painted with one bone's weights, instead of its texture (also when --bare)
+    draw_weight_map(state, character_world(state), view, eye, normals);
+    state.overlay.flush(projection * view, false);
+  } else {
+    state.renderer->draw(character_world(state), view, projection, eye);
+  }
   if (state.options.bare) return;
   if (state.reaching) state.ball_renderer.draw(state.scene.node(state.ball_node).world, view, projection, eye);
 
@@ -417,10 +469,6 @@ void draw(ViewerState& state, std::span<const glm::vec3> normals) {
   mark_shown_lattices(state);
   if (state.lattice_display != LatticeDisplay::none) {
     draw_lattices(state, to_world);
-    state.overlay.flush(projection * view, false);
-  }
-  if (state.weight_bone >= 0 && std::size_t(state.weight_bone) < state.character->skeleton().bone_count()) {
-    draw_weight_map(state, to_world);
     state.overlay.flush(projection * view, false);
   }
   if (state.show_skeleton) draw_skeleton(state, to_world);

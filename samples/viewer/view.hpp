@@ -29,10 +29,12 @@ void fit_camera(ViewerState& state);
 bool camera_fitted(const ViewerState& state);
 // The model's space in the world (the character node, then the upright turn).
 glm::mat4 character_world(const ViewerState& state);
-// The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer
-// (for picking and the weight map only: a GPU-to-CPU copy, not done for drawing).
+// The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer with
+// the render vertices' normals (state.gpu_normals) (for picking and the weight map only: a GPU-to-CPU copy, not done
+// for drawing).
 std::span<const glm::vec3> drawn_points(ViewerState& state);
-// The frame: the floor and props, the character deformed (on the CPU with `normals`, else on the GPU), the overlays.
+// The frame: the floor and props, the character deformed (on the CPU with `normals`, else on the GPU; painted with
+// one bone's weights instead of its texture while the weight map shows one, --bare included), the overlays.
 void draw(ViewerState& state, std::span<const glm::vec3> normals);
 
 // The headless summary: the floor's height, and the lowest height of the character as drawn now (both along the
