@@ -35,10 +35,11 @@ Animation with_driven_weights(const Character& character, const Animation& clip,
       pose.translations[b] = sample_track(channel.translation, times[k], pose.translations[b]);
     }
     if (const Status set = posed.set_pose(pose); !set)
-      throw Error::invalid_argument("clip '" + clip.name + "'", "at " + std::to_string(times[k]) + " s: " + set.reason());
+      throw Error::invalid_argument("clip '" + clip.name + "'",
+                                    "at " + std::to_string(times[k]) + " s: " + set.reason());
     if (const Status updated = posed.update(0.0f); !updated)
-      throw Error::invalid_argument("clip '" + clip.name + "'", "at " + std::to_string(times[k]) + " s: " +
-                                    updated.reason());
+      throw Error::invalid_argument("clip '" + clip.name + "'",
+                                    "at " + std::to_string(times[k]) + " s: " + updated.reason());
     weights[k].assign(posed.morph_weights().begin(), posed.morph_weights().end());
   }
   for (std::size_t d = 0; d < character.pose_driver_count(); ++d) {
