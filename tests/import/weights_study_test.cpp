@@ -4,6 +4,8 @@
 // largest distance. Fails when Debian's assimp-testmodels are not installed.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -70,4 +72,40 @@ TEST_CASE("heat weights stay near the artists' on FBX/huesitos.fbx") {
 }
 TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") {
   check_model({"IQM/mrfixit.iqm", 0.24, 1.13, 1.69});
+}
+
+// The random-pose mode (weights_study --random-poses): the same seed gives the same poses, another seed others; every
+// bone the artist weighted turns by at most the three ±20° axis turns (60° in all) from its bind local rotation,
+// some by more than one axis' 20°; the other bones keep their bind local transform.
+TEST_CASE("the study's random poses are seeded and turn only the weighted bones, within ±20° per axis") {
+  const std::filesystem::path path = "/usr/share/assimp/models/IQM/mrfixit.iqm";
+  REQUIRE_MESSAGE(std::filesystem::exists(path), path.string() << " is missing: install Debian's assimp-testmodels");
+  const deform::ImportedModel imported = deform::import_model(path.string());
+  const deform::Skeleton& skeleton = imported.model.skeleton;
+  const std::vector<std::uint8_t> posed = deform::weighted_bones(imported.model.weights, skeleton.bone_count());
+  const std::vector<deform::Pose> a = weights_study::random_poses(skeleton, posed, 16, 1);
+  const std::vector<deform::Pose> b = weights_study::random_poses(skeleton, posed, 16, 1);
+  const std::vector<deform::Pose> c = weights_study::random_poses(skeleton, posed, 16, 2);
+  REQUIRE(a.size() == 16);
+  const deform::Pose bind = skeleton.bind_pose();
+  double largest = 0.0;
+  bool other_seed_differs = false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    CHECK(a[k].rotations == b[k].rotations);
+    CHECK(a[k].translations == bind.translations);
+    other_seed_differs = other_seed_differs || a[k].rotations != c[k].rotations;
+    for (std::size_t bone = 0; bone < skeleton.bone_count(); ++bone) {
+      if (posed[bone] == 0) {
+        CHECK(a[k].rotations[bone] == bind.rotations[bone]);
+        continue;
+      }
+      const glm::dquat turn = glm::inverse(glm::dquat(bind.rotations[bone])) * glm::dquat(a[k].rotations[bone]);
+      const double degrees = glm::degrees(2.0 * std::acos(std::min(1.0, std::abs(turn.w))));
+      CHECK(degrees <= 60.01);
+      largest = std::max(largest, degrees);
+    }
+  }
+  CHECK(other_seed_differs);
+  CHECK(largest > 20.0);
+  CHECK(weights_study::random_palettes(skeleton, posed, 16, 1).size() == 16);
 }
