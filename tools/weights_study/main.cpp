@@ -51,12 +51,25 @@ std::string file_name(const std::string& path) {
 void print_worst(const deform::Model& model, const std::vector<std::vector<glm::mat4>>& palettes,
                  const deform::SkinWeights& automatic) {
   std::vector<float> worst(model.mesh.point_count(), 0.0f);
+  std::vector<double> by_bone(model.skeleton.bone_count(), 0.0);  // summed distances by the artist's strongest bone
+  double total = 0.0;
   for (const std::vector<glm::mat4>& palette : palettes)
     for (std::size_t i = 0; i < worst.size(); ++i) {
       const glm::vec3 p = model.mesh.positions[i];
-      worst[i] = std::max(worst[i], glm::length(weights_study::skin_point(palette, model.weights, i, p) -
-                                                weights_study::skin_point(palette, automatic, i, p)));
+      const float d = glm::length(weights_study::skin_point(palette, model.weights, i, p) -
+                                  weights_study::skin_point(palette, automatic, i, p));
+      worst[i] = std::max(worst[i], d);
+      by_bone[weights_study::strongest_bone(model.weights, i)] += d;
+      total += d;
     }
+  std::vector<std::size_t> bones(by_bone.size());
+  for (std::size_t b = 0; b < bones.size(); ++b) bones[b] = b;
+  std::sort(bones.begin(), bones.end(), [&](std::size_t a, std::size_t b) { return by_bone[a] > by_bone[b]; });
+  std::fprintf(stderr, "share of the summed distance by the artist's strongest bone:");
+  for (std::size_t k = 0; k < std::min<std::size_t>(8, bones.size()); ++k)
+    std::fprintf(stderr, " %s %.1f%%", model.skeleton.key(static_cast<std::int32_t>(bones[k])).c_str(),
+                 total > 0.0 ? 100.0 * by_bone[bones[k]] / total : 0.0);
+  std::fprintf(stderr, "\n");
   std::vector<std::size_t> order(worst.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return worst[a] > worst[b]; });
