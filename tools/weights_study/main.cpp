@@ -2,7 +2,7 @@
 // it, drop its weights, compute automatic ones by each method, pose it and compare the skinned points. Prints a
 // Markdown table.
 //
-//   weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail] [HEAT OPTIONS]
+//   weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail | --detail-bone B] [HEAT OPTIONS]
 //                 [--resolution N] [--blender-export DIR] [--blender-weights DIR] MODEL...
 //
 // Poses: by default every clip of the model at N (--samples, 8) evenly spaced times; with --random-poses N, N seeded
@@ -49,7 +49,7 @@ std::string file_name(const std::string& path) {
 
 // The 15 points that move farthest from the artist's skinning in any pose, with both weights (stderr).
 void print_worst(const deform::Model& model, const std::vector<std::vector<glm::mat4>>& palettes,
-                 const deform::SkinWeights& automatic) {
+                 const deform::SkinWeights& automatic, const std::string& only_bone) {
   std::vector<float> worst(model.mesh.point_count(), 0.0f);
   std::vector<double> by_bone(model.skeleton.bone_count(), 0.0);  // summed distances by the artist's strongest bone
   double total = 0.0;
@@ -66,12 +66,19 @@ void print_worst(const deform::Model& model, const std::vector<std::vector<glm::
   for (std::size_t b = 0; b < bones.size(); ++b) bones[b] = b;
   std::sort(bones.begin(), bones.end(), [&](std::size_t a, std::size_t b) { return by_bone[a] > by_bone[b]; });
   std::fprintf(stderr, "share of the summed distance by the artist's strongest bone:");
-  for (std::size_t k = 0; k < std::min<std::size_t>(8, bones.size()); ++k)
+  for (std::size_t k = 0; k < std::min<std::size_t>(24, bones.size()); ++k)
     std::fprintf(stderr, " %s %.1f%%", model.skeleton.key(static_cast<std::int32_t>(bones[k])).c_str(),
                  total > 0.0 ? 100.0 * by_bone[bones[k]] / total : 0.0);
   std::fprintf(stderr, "\n");
   std::vector<std::size_t> order(worst.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  if (!only_bone.empty())
+    order.erase(std::remove_if(order.begin(), order.end(),
+                               [&](std::size_t i) {
+                                 return model.skeleton.key(weights_study::strongest_bone(model.weights, i)) !=
+                                        only_bone;
+                               }),
+                order.end());
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return worst[a] > worst[b]; });
   auto text = [&](const deform::SkinWeights& w, std::size_t i) {
     std::string out;
@@ -226,6 +233,7 @@ int main(int argc, char** argv) {
   std::uint32_t seed = 1;
   bool all_bones = false;
   bool detail = false;
+  std::string detail_bone;
   int voxel_resolution = 128;
   std::string blender_export, blender_weights;
   deform::HeatWeightsOptions heat_options;
@@ -241,16 +249,19 @@ int main(int argc, char** argv) {
     else if (a == "--oblique" && i + 1 < argc) heat_options.oblique_penalty = std::strtof(argv[++i], nullptr);
     else if (a == "--max-influences" && i + 1 < argc) heat_options.max_influences = std::atoi(argv[++i]);
     else if (a == "--detail") detail = true;
+    else if (a == "--detail-bone" && i + 1 < argc) detail = true, detail_bone = argv[++i];
     else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
     else if (a == "--blender-export" && i + 1 < argc) blender_export = argv[++i];
     else if (a == "--blender-weights" && i + 1 < argc) blender_weights = argv[++i];
     else paths.push_back(a);
   }
   if (paths.empty() || samples < 1 || random_poses < 0) {
-    std::fprintf(stderr,
-                 "usage: weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail] [--heat C] "
-                 "[--oblique K] [--no-visibility] [--max-influences N] [--resolution N] [--blender-export DIR] "
-                 "[--blender-weights DIR] MODEL...\n");
+    std::fprintf(
+        stderr,
+        "usage: weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail | --detail-bone B] "
+        "[--heat C] "
+        "[--oblique K] [--no-visibility] [--max-influences N] [--resolution N] [--blender-export DIR] "
+        "[--blender-weights DIR] MODEL...\n");
     return 2;
   }
   if (random_poses > 0) std::printf("random poses: %d, seed %u\n\n", random_poses, seed);
@@ -323,7 +334,7 @@ int main(int argc, char** argv) {
         for (const Run& run : runs)
           if (run.method != "distance" && run.method != "voxel") {
             std::fprintf(stderr, "%s, %s:\n", name.c_str(), run.method.c_str());
-            print_worst(model, palettes, run.weights);
+            print_worst(model, palettes, run.weights, detail_bone);
           }
       for (const Run& run : runs) {
         const weights_study::Figures f = weights_study::compare_palettes(model, palettes, run.weights);
