@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -47,7 +48,9 @@ std::string file_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-// The 15 points that move farthest from the artist's skinning in any pose, with both weights (stderr).
+// The 15 points that move farthest from the artist's skinning in any pose, with both weights, among those whose
+// strongest artist bone is `only_bone` when it is given; before them, the summed distance shared by the artist's
+// strongest bone (stderr).
 void print_worst(const deform::Model& model, const std::vector<std::vector<glm::mat4>>& palettes,
                  const deform::SkinWeights& automatic, const std::string& only_bone) {
   std::vector<float> worst(model.mesh.point_count(), 0.0f);
@@ -192,10 +195,17 @@ deform::SkinWeights read_blender_weights(const std::filesystem::path& file, cons
                                          std::string& version) {
   std::ifstream in(file);
   if (!in) throw std::runtime_error(file.string() + ": cannot read");
-  const nlohmann::json j = nlohmann::json::parse(in);
-  seconds = j.at("seconds").get<double>();
-  version = j.at("blender").get<std::string>();
-  const nlohmann::json& per_vertex = j.at("weights");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+    seconds = j.at("seconds").get<double>();
+    version = j.at("blender").get<std::string>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(file.string() + ": " + e.what());
+  }
+  if (!j.contains("weights") || !j["weights"].is_array())
+    throw std::runtime_error(file.string() + ": \"weights\" is not an array");
+  const nlohmann::json& per_vertex = j["weights"];
   const Welded w = weld(model.mesh);
   if (per_vertex.size() != w.vertices.size())
     throw std::runtime_error(file.string() + ": " + std::to_string(per_vertex.size()) + " vertices, the model has " +
@@ -204,12 +214,18 @@ deform::SkinWeights read_blender_weights(const std::filesystem::path& file, cons
   for (std::uint32_t v : w.point_vertex) {
     std::vector<std::uint16_t> bones;
     std::vector<float> values;
-    for (const auto& [group, value] : per_vertex.at(v).items()) {
+    const nlohmann::json& groups = per_vertex.at(v);
+    if (!groups.is_object())
+      throw std::runtime_error(file.string() + ": vertex " + std::to_string(v) + ": not an object");
+    for (const auto& [group, value] : groups.items()) {
       const bool named = group.size() > 1 && group[0] == 'b' &&
                          group.find_first_not_of("0123456789", 1) == std::string::npos && group.size() < 8;
       const unsigned long bone = named ? std::stoul(group.substr(1)) : ~0ul;
       if (bone >= model.skeleton.bone_count())
         throw std::runtime_error(file.string() + ": vertex " + std::to_string(v) + ": unknown group " + group);
+      if (!value.is_number() || !std::isfinite(value.get<double>()))
+        throw std::runtime_error(file.string() + ": vertex " + std::to_string(v) + ": group " + group +
+                                 ": weight is not a finite number");
       if (value.get<float>() > 0.0f) {
         bones.push_back(static_cast<std::uint16_t>(bone));
         values.push_back(value.get<float>());
