@@ -265,8 +265,10 @@ int main(int argc, char** argv) {
     else if (a == "--oblique" && i + 1 < argc) heat_options.oblique_penalty = std::strtof(argv[++i], nullptr);
     else if (a == "--max-influences" && i + 1 < argc) heat_options.max_influences = std::atoi(argv[++i]);
     else if (a == "--detail") detail = true;
-    else if (a == "--detail-bone" && i + 1 < argc) detail = true, detail_bone = argv[++i];
-    else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
+    else if (a == "--detail-bone" && i + 1 < argc) {
+      detail = true;
+      detail_bone = argv[++i];
+    } else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
     else if (a == "--blender-export" && i + 1 < argc) blender_export = argv[++i];
     else if (a == "--blender-weights" && i + 1 < argc) blender_weights = argv[++i];
     else paths.push_back(a);
