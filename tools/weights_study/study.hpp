@@ -1,13 +1,17 @@
 #pragma once
 // The weights study (docs/weights.md): how far automatic weights move a character's points from where the weights
-// its artist painted put them, over the character's own clips. Header-only so that the tool and the regression test
-// (tests/import/weights_study_test.cpp) measure the same way.
+// its artist painted put them, over the character's own clips or over seeded random poses. Header-only so that the
+// tool and the regression test (tests/import/weights_study_test.cpp) measure the same way.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <random>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/mesh.hpp"
@@ -55,18 +59,13 @@ inline glm::vec3 skin_point(const std::vector<glm::mat4>& palette, const deform:
   return total > 0.0f ? glm::vec3(sum) / total : p;
 }
 
-// Plays every clip, `samples_per_clip` evenly spaced times each (t = duration · (k + 0.5) / samples), and compares
-// the points skinned with `automatic` and with `model.weights` (the artist's).
-inline Figures compare(const deform::Model& model, const std::vector<deform::Animation>& clips,
-                       const deform::SkinWeights& automatic, int samples_per_clip = 8) {
-  const deform::Skeleton& skeleton = model.skeleton;
-  const std::vector<glm::vec3>& points = model.mesh.positions;
-  const deform::Bounds bounds = deform::compute_bounds(points);
-  const double diagonal = std::max(static_cast<double>(glm::length(bounds.max - bounds.min)), 1e-30);
-  std::vector<float> distances;
+// The skinning palettes of every clip played `samples_per_clip` evenly spaced times each (t = duration · (k + 0.5) /
+// samples); a sample the jobs refuse is left out.
+inline std::vector<std::vector<glm::mat4>> clip_palettes(const deform::Skeleton& skeleton,
+                                                         const std::vector<deform::Animation>& clips,
+                                                         int samples_per_clip) {
+  std::vector<std::vector<glm::mat4>> palettes;
   std::vector<glm::mat4> world(skeleton.bone_count()), palette(skeleton.bone_count());
-  Figures f;
-  double total = 0;
   for (const deform::Animation& clip : clips) {
     for (int s = 0; s < samples_per_clip; ++s) {
       deform::Pose pose = skeleton.bind_pose();
@@ -83,14 +82,75 @@ inline Figures compare(const deform::Model& model, const std::vector<deform::Ani
       fk.world = world;
       fk.palette = palette;
       if (!fk.run()) continue;
-      ++f.poses;
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        const glm::vec3 a = skin_point(palette, model.weights, i, points[i]);
-        const glm::vec3 b = skin_point(palette, automatic, i, points[i]);
-        const float d = glm::length(a - b);
-        distances.push_back(d);
-        total += d;
-      }
+      palettes.push_back(palette);
+    }
+  }
+  return palettes;
+}
+
+// `count` seeded random poses: every bone marked in `posed` (the bones the artist weighted) turns by its bind local
+// rotation times X·Y·Z rotations of angles drawn uniformly in ±`degrees`; the other bones keep their bind local
+// transform and follow their parents. The draws come from std::mt19937 (a fixed algorithm) mapped to angles by hand,
+// so a seed gives the same poses with every standard library.
+inline std::vector<deform::Pose> random_poses(const deform::Skeleton& skeleton, const std::vector<std::uint8_t>& posed,
+                                              int count, std::uint32_t seed, float degrees = 20.0f) {
+  std::mt19937 random(seed);
+  auto angle = [&] {
+    const double u = static_cast<double>(random()) / 4294967296.0;  // [0, 1)
+    return glm::radians(static_cast<float>((2.0 * u - 1.0) * static_cast<double>(degrees)));
+  };
+  std::vector<deform::Pose> poses;
+  for (int k = 0; k < count; ++k) {
+    deform::Pose pose = skeleton.bind_pose();
+    for (std::size_t b = 0; b < skeleton.bone_count(); ++b) {
+      if (b >= posed.size() || posed[b] == 0) continue;
+      const float x = angle(), y = angle(), z = angle();
+      const glm::quat turn = glm::angleAxis(x, glm::vec3(1, 0, 0)) * glm::angleAxis(y, glm::vec3(0, 1, 0)) *
+                             glm::angleAxis(z, glm::vec3(0, 0, 1));
+      pose.rotations[b] = glm::normalize(pose.rotations[b] * turn);
+    }
+    poses.push_back(std::move(pose));
+  }
+  return poses;
+}
+
+// The skinning palettes of random_poses (a pose the forward kinematics refuses is left out).
+inline std::vector<std::vector<glm::mat4>> random_palettes(const deform::Skeleton& skeleton,
+                                                           const std::vector<std::uint8_t>& posed, int count,
+                                                           std::uint32_t seed, float degrees = 20.0f) {
+  std::vector<std::vector<glm::mat4>> palettes;
+  std::vector<glm::mat4> world(skeleton.bone_count()), palette(skeleton.bone_count());
+  for (const deform::Pose& pose : random_poses(skeleton, posed, count, seed, degrees)) {
+    deform::LocalToWorldJob fk;
+    fk.skeleton = &skeleton;
+    fk.rotations = pose.rotations;
+    fk.translations = pose.translations;
+    fk.world = world;
+    fk.palette = palette;
+    if (fk.run()) palettes.push_back(palette);
+  }
+  return palettes;
+}
+
+// Compares the points skinned with `automatic` and with `model.weights` (the artist's, every influence) in each of
+// the given poses (skinning palettes).
+inline Figures compare_palettes(const deform::Model& model, const std::vector<std::vector<glm::mat4>>& palettes,
+                                const deform::SkinWeights& automatic) {
+  const std::vector<glm::vec3>& points = model.mesh.positions;
+  const deform::Bounds bounds = deform::compute_bounds(points);
+  const double diagonal = std::max(static_cast<double>(glm::length(bounds.max - bounds.min)), 1e-30);
+  std::vector<float> distances;
+  distances.reserve(palettes.size() * points.size());
+  Figures f;
+  double total = 0;
+  for (const std::vector<glm::mat4>& palette : palettes) {
+    ++f.poses;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const glm::vec3 a = skin_point(palette, model.weights, i, points[i]);
+      const glm::vec3 b = skin_point(palette, automatic, i, points[i]);
+      const float d = glm::length(a - b);
+      distances.push_back(d);
+      total += d;
     }
   }
   if (!distances.empty()) {
@@ -105,6 +165,13 @@ inline Figures compare(const deform::Model& model, const std::vector<deform::Ani
     differs += strongest_bone(model.weights, i) != strongest_bone(automatic, i) ? 1 : 0;
   f.strongest_differs_percent = points.empty() ? 0.0 : 100.0 * double(differs) / double(points.size());
   return f;
+}
+
+// Plays every clip, `samples_per_clip` evenly spaced times each, and compares the points skinned with `automatic`
+// and with `model.weights` (the artist's).
+inline Figures compare(const deform::Model& model, const std::vector<deform::Animation>& clips,
+                       const deform::SkinWeights& automatic, int samples_per_clip = 8) {
+  return compare_palettes(model, clip_palettes(model.skeleton, clips, samples_per_clip), automatic);
 }
 
 }  // namespace weights_study
