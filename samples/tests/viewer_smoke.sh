@@ -126,6 +126,19 @@ PY
     if cmp -s "$work/$1" "$work/$2"; then echo "morph targets: $1 and $2 are the same picture"; exit 1; fi
   done
 fi
+# A rig's corrective (samples/data/elbow_pad.rig.json): its pose driver sets its weight every frame, live with the
+# clip (off at the bind pose, on as the run bends the elbow), and --morph cannot hold it against the driver.
+rig=$(cd "$(dirname "$0")/../data" && pwd)/elbow_pad.rig.json
+rest=$(run --rig "$rig" --bare --inertia 0 --frames 1 --screenshot "$work/pad_rest.png")
+early=$(run --rig "$rig" --bare --inertia 0 --clip run --frames 10 --screenshot "$work/pad_early.png")
+late=$(run --rig "$rig" --bare --inertia 0 --clip run --frames 20 --morph elbow_pad:0 --screenshot "$work/pad_late.png")
+python3 - "$rest" "$early" "$late" <<'PY'
+import json, sys
+rest, early, late = (json.loads(a.splitlines()[-1]) for a in sys.argv[1:4])
+assert len(rest["morph_weights"]) == 1 and abs(rest["morph_weights"][0]) < 1e-4, rest  # the bind pose: off
+assert early["morph_weights"][0] > 0.05 and late["morph_weights"][0] > 0.05, (early, late)  # driven by the run
+assert abs(early["morph_weights"][0] - late["morph_weights"][0]) > 1e-3, (early, late)     # live, frame by frame
+PY
 # Imported characters framed and on the floor: the camera fits the bind pose's box, or with a clip the box of the
 # clip's sampled poses (a character whose clip stands it elsewhere than its bind pose stays in frame). In a bare
 # 320x240 frame the silhouette spans 35-95% of the height, is cut at neither the top nor the bottom, and its lowest

@@ -114,11 +114,11 @@ void load_character(ViewerState& state) {
     state.blend_clip = find(options.blend_clip);
   }
   state.blend_weight = options.blend_weight;
-  for (const auto& [name, weight] : options.morphs) {
+  for (const auto& [name, weight] : options.morphs) {  // the model's targets and the rig's correctives
     bool found = false;
-    for (std::size_t k = 0; k < state.base_model.morph_targets.size(); ++k)
-      if (state.base_model.morph_targets[k].name == name)
-        state.morph_held[k] = 1, state.morph_hold[k] = weight, found = true;
+    const std::vector<deform::MorphTarget>& targets = state.character->model().morph_targets;
+    for (std::size_t k = 0; k < targets.size(); ++k)
+      if (targets[k].name == name) state.morph_held[k] = 1, state.morph_hold[k] = weight, found = true;
     if (!found) fail(loaded.source + ": --morph: no morph target '" + name + "'");
   }
   state.up = loaded.up;

@@ -252,8 +252,24 @@ void morph_section(ViewerState& state) {
       if (ImGui::SmallButton("follow the clip")) std::fill(state.morph_held.begin(), state.morph_held.end(), char(0));
       if (ImGui::IsItemHovered()) ImGui::SetTooltip("every weight from the playing clip again (else its default)");
       const std::vector<deform::MorphTarget>& targets = state.character->model().morph_targets;
+      // Targets a pose driver sets (a rig's correctives): each update() gives them their weight from the pose, so
+      // they are shown as that weight, live, and cannot be held.
+      std::vector<char> driven(targets.size(), 0);
+      for (std::size_t d = 0; d < state.character->pose_driver_count(); ++d)
+        for (const std::uint32_t t : state.character->pose_driver_targets(d)) driven[t] = 1;
       for (std::size_t k = 0; k < targets.size(); ++k) {
         ImGui::PushID(int(k));
+        if (driven[k]) {
+          const float weight = state.character->morph_weights()[k];
+          char value[32];
+          std::snprintf(value, sizeof value, "%.2f", double(weight));
+          ImGui::ProgressBar(weight, ImVec2(ImGui::CalcItemWidth() + ImGui::GetFrameHeight(), 0.0f), value);
+          ImGui::SameLine();
+          ImGui::TextUnformatted((targets[k].name.empty() ? "target " + std::to_string(k) : targets[k].name).c_str());
+          if (ImGui::IsItemHovered()) ImGui::SetTooltip("a corrective: its pose driver sets the weight from the pose");
+          ImGui::PopID();
+          continue;
+        }
         bool held = state.morph_held[k] != 0;
         float weight = state.character->morph_weights()[k];
         if (ImGui::Checkbox("##held", &held)) state.morph_held[k] = held, state.morph_hold[k] = weight;
