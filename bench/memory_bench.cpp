@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "widest_vectors.hpp"
+
 namespace {
 
 constexpr std::size_t floats = std::size_t{1} << 25;  // 128 MiB per array
@@ -18,15 +20,6 @@ std::vector<float>& array(int which) {
                                          std::vector<float>(floats, 0.0f)};
   return arrays[which];
 }
-
-// The loops are compiled for the widest vector unit the CPU has (GCC and Clang function clones, picked at load
-// time), as the skinning kernels are: built for the baseline alone, the add was bound by its own instructions on an
-// AVX-512 machine and reported less than the skinning kernel itself streams.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define DEFORM_WIDEST_VECTORS __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define DEFORM_WIDEST_VECTORS
-#endif
 
 DEFORM_WIDEST_VECTORS void add_arrays(const float* a, const float* b, float* out, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) out[i] = a[i] + b[i];

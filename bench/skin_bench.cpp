@@ -2,7 +2,8 @@
 // character's size), 100k and 1M vertices; one thread and all threads. Also the forced instruction-set paths and
 // a plain glm loop (skin/lbs_reference), so docs/performance.md can show what the SIMD kernels buy; skin/*_stream
 // with SkinningJob::stream_outputs. Bytes per second count the 72 bytes a vertex reads and writes, to set against
-// memory/add (memory_bench.cpp).
+// memory/add (memory_bench.cpp) and skin/same_bytes: a loop over the same arrays that reads the same 48 bytes and
+// writes the same 24 bytes per vertex with almost no arithmetic, the bound a skinning kernel can at best reach.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -15,6 +16,7 @@
 
 #include "deform/runtime/parallel.hpp"
 #include "deform/runtime/skinning.hpp"
+#include "widest_vectors.hpp"
 namespace {
 
 constexpr int bone_count = 28;
@@ -116,6 +118,35 @@ void skin_lbs_reference(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
 }
 
+// Every byte skinning reads (position, normal, four bone ids, four weights) and writes (position, normal), with
+// one multiply per output component: a scale from the weights and ids, so that nothing read can be left out.
+DEFORM_WIDEST_VECTORS void stream_skin_bytes(const float* positions, const float* normals, const std::uint16_t* bones,
+                                             const float* weights, float* out_positions, float* out_normals,
+                                             std::size_t vertices) {
+  for (std::size_t i = 0; i < vertices; ++i) {
+    const std::uint16_t* b = bones + 4 * i;
+    const float* w = weights + 4 * i;
+    const float scale = (w[0] + w[1]) + (w[2] + w[3]) + float((b[0] ^ b[1]) ^ (b[2] ^ b[3]));
+    for (int k = 0; k < 3; ++k) {
+      out_positions[3 * i + k] = positions[3 * i + k] * scale;
+      out_normals[3 * i + k] = normals[3 * i + k] * scale;
+    }
+  }
+}
+
+void skin_same_bytes(benchmark::State& state) {
+  const auto vertices = static_cast<std::size_t>(state.range(0));
+  SkinData& d = const_cast<SkinData&>(data(vertices));
+  for (auto _ : state) {
+    stream_skin_bytes(&d.positions[0].x, &d.normals[0].x, &d.bones[0].x, &d.weights[0].x, &d.out_positions[0].x,
+                      &d.out_normals[0].x, vertices);
+    benchmark::DoNotOptimize(d.out_positions.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0) * 72);
+}
+
 void sizes_and_threads(benchmark::internal::Benchmark* b) {
   b->ArgNames({"vertices", "threads"})->ArgsProduct({{2552, 100'000, 1'000'000}, {1, 0}});
 }
@@ -144,5 +175,6 @@ BENCHMARK_CAPTURE(run_skin, dqs_portable, SkinningMethod::dqs, Isa::portable)
     ->Name("skin/dqs_portable")
     ->Apply(sizes_one_thread);
 BENCHMARK(skin_lbs_reference)->Name("skin/lbs_reference")->Apply(sizes_one_thread);
+BENCHMARK(skin_same_bytes)->Name("skin/same_bytes")->Apply(sizes_one_thread);
 
 }  // namespace
