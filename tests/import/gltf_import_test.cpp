@@ -442,3 +442,40 @@ TEST_CASE("embedded PNG and JPEG textures are kept as their bytes: imported, exp
   CHECK(sorted_v(back.model.mesh.vertex_uvs) == sorted_v(imported.model.mesh.vertex_uvs));
   fs::remove(glb);
 }
+
+TEST_CASE("a point split along a seam stays one point when morph targets move it, and only with equal deltas") {
+  // A quad of four points whose render vertices split points 1 and 2 along a UV seam (six render vertices), skinned
+  // to one bone; target "lift" moves point 2, the same on both sides of the seam. Written as glTF (each seam copy a
+  // vertex of its own) and read back: four points, as without targets, and one sparse entry.
+  deform::Model model;
+  model.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  model.mesh.vertex_point = {0, 1, 2, 1, 2, 3};
+  model.mesh.vertex_uvs = {{0, 0}, {0.5f, 0}, {0.5f, 1}, {0.6f, 0}, {0.6f, 1}, {1, 1}};
+  model.mesh.vertex_normals = std::vector<glm::vec3>(6, glm::vec3(0, 0, 1));
+  model.mesh.triangles = {0, 1, 2, 3, 4, 5};
+  deform::Bone root;
+  root.name = "root";
+  model.skeleton = deform::Skeleton({root});
+  model.weights.bones = std::vector<glm::u16vec4>(4, glm::u16vec4(0));
+  model.weights.weights = std::vector<glm::vec4>(4, glm::vec4(1, 0, 0, 0));
+  model.morph_targets.push_back({"lift", "", 0.0f, {2}, {{0, 0, 0.5f}}, {}});
+  const std::string path = (fs::temp_directory_path() / "deform_gltf_test_seam_morph.glb").string();
+  (void)deform::write_gltf(path, model);
+  const deform::ImportedModel back = deform::import_model(path);
+  CHECK(back.model.mesh.positions.size() == 4);
+  CHECK(back.model.mesh.vertex_count() == 6);
+  REQUIRE(back.model.morph_targets.size() == 1);
+  REQUIRE(back.model.morph_targets[0].points.size() == 1);
+  CHECK(back.model.mesh.positions[back.model.morph_targets[0].points[0]] == glm::vec3(1, 1, 0));
+  // Moved differently on the two sides, the copies of point 2 cannot be one point: each keeps its own delta.
+  model.mesh.positions.push_back({1, 1, 0});  // point 4: point 2's seam copy, moved by its own delta
+  model.mesh.vertex_point = {0, 1, 2, 1, 4, 3};
+  model.weights.bones.push_back(glm::u16vec4(0));
+  model.weights.weights.push_back(glm::vec4(1, 0, 0, 0));
+  model.morph_targets[0] = {"lift", "", 0.0f, {2, 4}, {{0, 0, 0.5f}, {0, 0, 0.25f}}, {}};
+  (void)deform::write_gltf(path, model);
+  const deform::ImportedModel apart = deform::import_model(path);
+  CHECK(apart.model.mesh.positions.size() == 5);
+  REQUIRE(apart.model.morph_targets[0].points.size() == 2);
+  fs::remove(path);
+}

@@ -435,6 +435,7 @@ class GltfImport {
   // Per node holding a morphed mesh: its first target in model.morph_targets and its target count.
   std::vector<std::pair<std::size_t, std::size_t>> targets_of_node_;
   PointMerger points_{result_.model.mesh.positions, result_.model.weights};
+  std::vector<glm::vec3> position_deltas_, normal_deltas_;  // one vertex's, per target of its primitive
   std::size_t unweighted_ = 0, skipped_primitives_ = 0;
   bool any_uvs_ = false;
 };
@@ -989,18 +990,27 @@ void GltfImport::add_vertices(const Instance& instance, const tinygltf::Primitiv
     const glm::dvec3 raw{data.positions[3 * v], data.positions[3 * v + 1], data.positions[3 * v + 2]};
     const glm::vec3 position = reader_.narrow(glm::dvec3(frame.to_world * glm::dvec4(raw, 1.0)),
                                               element + " POSITION: vertex " + std::to_string(v));
-    const auto [point, inserted] = points_.add(position, influences, !primitive.targets.empty());
-    for (std::size_t k = 0; inserted && k < primitive.targets.size(); ++k) {
-      MorphTarget& target = result_.model.morph_targets[frame.first_target + k];
+    // Each target's displacement of this vertex: the points merge only where every target moves them alike.
+    position_deltas_.clear();
+    normal_deltas_.clear();
+    for (std::size_t k = 0; k < primitive.targets.size(); ++k) {
       const auto& tp = data.target_positions[k];
       const auto& tn = data.target_normals[k];
       glm::dvec3 dp(0.0), dn(0.0);
       if (!tp.empty()) dp = frame.delta_matrix * glm::dvec3(tp[3 * v], tp[3 * v + 1], tp[3 * v + 2]);
       if (!tn.empty()) dn = frame.normal_matrix * glm::dvec3(tn[3 * v], tn[3 * v + 1], tn[3 * v + 2]);
-      if (dp == glm::dvec3(0.0) && dn == glm::dvec3(0.0)) continue;  // sparse: only the points it moves
+      position_deltas_.push_back(reader_.narrow(dp, element + " target " + std::to_string(k)));
+      normal_deltas_.push_back(reader_.narrow(dn, element + " target " + std::to_string(k)));
+    }
+    const auto [point, inserted] =
+        points_.add(position, influences, position_deltas_, static_cast<std::uint32_t>(frame.first_target));
+    for (std::size_t k = 0; inserted && k < primitive.targets.size(); ++k) {
+      if (position_deltas_[k] == glm::vec3(0.0f) && normal_deltas_[k] == glm::vec3(0.0f))
+        continue;  // sparse: only the points it moves
+      MorphTarget& target = result_.model.morph_targets[frame.first_target + k];
       target.points.push_back(point);
-      target.position_deltas.push_back(reader_.narrow(dp, element + " target " + std::to_string(k)));
-      target.normal_deltas.push_back(reader_.narrow(dn, element + " target " + std::to_string(k)));
+      target.position_deltas.push_back(position_deltas_[k]);
+      target.normal_deltas.push_back(normal_deltas_[k]);
     }
     mesh.vertex_point.push_back(point);
     const auto& normals = data.normals;

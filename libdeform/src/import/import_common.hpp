@@ -108,8 +108,8 @@ struct Influences {
 };
 
 // Word 11 is 0 for a vertex that may merge with others of the same position and influences; for one with more than
-// four influences, the id of its extra influences (ExtraInfluenceIds: equal lists, equal ids, with the top bit set);
-// else a serial that keeps it apart (a vertex that morph targets move).
+// four influences or that morph targets move, the id of its extra influences and morph deltas (ExtraInfluenceIds:
+// equal lists, equal ids, with the top bit set).
 struct PointKey {
   std::array<std::uint32_t, 12> bits;
   bool operator==(const PointKey&) const = default;
@@ -133,6 +133,15 @@ class ExtraInfluenceIds {
     list_.push_back(bone);
     list_.push_back(bits);
   }
+  // A morph target's position delta, as its bits (-0 and 0 differ: a delta is only merged with its exact copy).
+  void add(glm::vec3 delta) {
+    std::uint32_t bits[3];
+    std::memcpy(bits, &delta, sizeof bits);
+    list_.insert(list_.end(), bits, bits + 3);
+  }
+  // Ends the extras' (bone, weight) pairs, before the deltas.
+  void separate() { list_.push_back(0xFFFFFFFFu); }
+  void add_word(std::uint32_t word) { list_.push_back(word); }
   // The id of the list added since the last call (then cleared), 0x80000000 and up.
   std::uint32_t take() {
     const auto [found, inserted] = ids_.emplace(list_, 0x80000000u | static_cast<std::uint32_t>(ids_.size()));

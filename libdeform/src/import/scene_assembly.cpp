@@ -78,17 +78,19 @@ std::string referenced_texture(const std::string& path, std::string texture, con
   return map;
 }
 
-std::pair<std::uint32_t, bool> PointMerger::add(glm::vec3 position, std::span<const Influence> influences, bool apart) {
+std::pair<std::uint32_t, bool> PointMerger::add(glm::vec3 position, std::span<const Influence> influences,
+                                                std::span<const glm::vec3> morph_deltas, std::uint32_t first_target) {
   Influences slots;
   for (std::size_t k = 0; k < influences.size() && k < 4; ++k) {
     slots.bones[k] = influences[k].bone;
     slots.weights[k] = influences[k].weight;
   }
   std::uint32_t word = 0;
-  if (apart) {
-    word = ++apart_serial_;
-  } else if (influences.size() > 4) {
+  if (influences.size() > 4 || !morph_deltas.empty()) {
     for (std::size_t k = 4; k < influences.size(); ++k) extra_ids_.add(influences[k].bone, influences[k].weight);
+    extra_ids_.separate();  // the extras' pairs end here: a list of extras and one of deltas never read alike
+    if (!morph_deltas.empty()) extra_ids_.add_word(first_target);
+    for (const glm::vec3& d : morph_deltas) extra_ids_.add(d);
     word = extra_ids_.take();
   }
   const auto [found, inserted] =

@@ -66,17 +66,19 @@ struct Influence {
 class PointMerger {
  public:
   PointMerger(std::vector<glm::vec3>& positions, SkinWeights& weights) : positions_(positions), weights_(weights) {}
-  // The point of one vertex and whether it is new. `influences`: strongest first, at least one. A vertex `apart`
-  // (one that morph targets move: its key would need every target's delta) gets a point of its own; one with more
-  // than four influences merges only with vertices of the same extras too.
-  std::pair<std::uint32_t, bool> add(glm::vec3 position, std::span<const Influence> influences, bool apart = false);
+  // The point of one vertex and whether it is new. `influences`: strongest first, at least one. One with more than
+  // four influences merges only with vertices of the same extras too; one that morph targets move only with
+  // vertices that the same targets move by the same position deltas (`morph_deltas`: the delta of targets
+  // `first_target`, `first_target` + 1, ... in order, compared bit for bit), so that the split copies of a point
+  // along a UV or normal seam stay one point, smooth, as they are without targets.
+  std::pair<std::uint32_t, bool> add(glm::vec3 position, std::span<const Influence> influences,
+                                     std::span<const glm::vec3> morph_deltas = {}, std::uint32_t first_target = 0);
 
  private:
   std::vector<glm::vec3>& positions_;
   SkinWeights& weights_;
   std::unordered_map<PointKey, std::uint32_t, PointKeyHash> point_of_key_;
-  std::uint32_t apart_serial_ = 0;  // PointKey word 11 of vertices that must not merge
-  ExtraInfluenceIds extra_ids_;     // ... and of vertices with more than four influences
+  ExtraInfluenceIds extra_ids_;  // PointKey word 11: the id of a vertex's extras and morph deltas
 };
 
 // Closes a mesh read as triangles: throws "the scene has no triangles" naming `path` when there are none, else sets
