@@ -2,10 +2,11 @@
 # libdeform's Delta Mush against Blender's Corrective Smooth on the built-in character, posed as docs/skinning.md's
 # pictures (docs/skinning.md, "Against Blender's Corrective Smooth").
 #
-#   tools/skinning_study/blender_study.sh [BUILD [DIR [--iterations 5,10,20,50] [--step 0.5]]]
+#   tools/skinning_study/blender_study.sh [BUILD [DIR [corrective_smooth.py options...]]]
 #
 # BUILD: the build folder whose python/ holds the deform module (default build); DIR: where the inputs and both
-# results go (default a fresh temporary folder). PYTHON: a python3 with NumPy (default Debian's /usr/bin/python3).
+# results go (default a fresh temporary folder); the options (--iterations, --step, --picture) go to both steps of
+# corrective_smooth.py. PYTHON: a python3 with NumPy (default Debian's /usr/bin/python3).
 # Installs Debian's blender with apt-get when it is missing. Not run by the test suite: the suite does not need
 # Blender.
 set -eu
@@ -20,4 +21,4 @@ fi
 PYTHONPATH="$build/python" "$python" "$here/corrective_smooth.py" export "$dir" "$@"
 blender --background --factory-startup --python "$here/blender_corrective_smooth.py" -- "$dir" 2>&1 |
   grep -E '^Blender [0-9]|Error' || true
-PYTHONPATH="$build/python" "$python" "$here/corrective_smooth.py" compare "$dir"
+PYTHONPATH="$build/python" "$python" "$here/corrective_smooth.py" compare "$dir" "$@"

@@ -39,8 +39,15 @@ def export(folder, iterations, step):
         pose = skeleton.bind_pose()
         skeleton.set_euler(pose, "forearm_l", euler, clamp=False)
         poses[name] = pose
-    lbs, mushed = {}, {}
+    lbs, mushed, views = {}, {}, {}
     for name, pose in poses.items():
+        # For the picture: the elbow, and a view across the plane of shoulder, elbow and wrist (or from the front).
+        world, _ = deform.forward_kinematics(skeleton, pose)
+        arm = ("upperarm_l", "forearm_l", "hand_l")
+        shoulder, elbow, wrist = (np.array(world[skeleton.find(b)])[:3, 3] for b in arm)
+        across = np.cross(elbow - shoulder, wrist - elbow)
+        across = across if np.linalg.norm(across) > 1e-6 else np.array([0.0, 0.15, 1.0])
+        views[name] = {"centre": elbow.tolist(), "look": (across / np.linalg.norm(across)).tolist()}
         character = deform.Character(model)
         character.skinning = "lbs"
         character.set_pose(pose)
@@ -57,7 +64,7 @@ def export(folder, iterations, step):
     write_json(folder / "input.json", {
         "points": np.asarray(model.positions, dtype=np.float32).tolist(),
         "triangles": np.asarray(model.triangles).tolist(),
-        "step": step, "iterations": iterations, "poses": lbs})
+        "step": step, "iterations": iterations, "poses": lbs, "views": views})
     write_json(folder / "libdeform.json", {"results": mushed})
     print(f"wrote {folder}/input.json and {folder}/libdeform.json")
 
@@ -163,7 +170,57 @@ def stats(a, b, diagonal):
     return d.mean(), np.percentile(d, 99), d.max()
 
 
-def compare(folder):
+def picture(path, data, ours, theirs, iterations):
+    """Per pose (rows): LBS, libdeform's Delta Mush, Blender's Corrective Smooth, and libdeform's coloured by its
+    distance from Blender's, on the left arm around the elbow."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    rest = np.asarray(data["points"], np.float64)
+    triangles = np.asarray(data["triangles"])
+    diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
+    fig = plt.figure(figsize=(12, 6.4), dpi=90)
+    for row, (name, lbs) in enumerate(data["poses"].items()):
+        key = f"{name}/{iterations}"
+        a, b = np.asarray(ours[key]), np.asarray(theirs[key])
+        centre, look = np.asarray(data["views"][name]["centre"]), np.asarray(data["views"][name]["look"])
+        near = np.linalg.norm(np.asarray(lbs)[triangles].mean(axis=1) - centre, axis=1) < 0.3
+        distance = (np.linalg.norm(a - b, axis=1) / diagonal * 100.0)[triangles[near]].max(axis=1)
+        panels = (("LBS", np.asarray(lbs), None), (f"libdeform Delta Mush, {iterations} it.", a, None),
+                  (f"Blender Corrective Smooth, {iterations} it.", b, None),
+                  ("distance (red: 0.1% of the diagonal or more)", a, np.clip(distance / 0.1, 0, 1)))
+        for col, (title, points, heat) in enumerate(panels):
+            faces = points[triangles[near]]
+            normals = np.cross(faces[:, 1] - faces[:, 0], faces[:, 2] - faces[:, 0])
+            normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+            light = look + np.array([0.0, 0.6, 0.0])
+            shade = 0.25 + 0.75 * np.abs(normals @ (light / np.linalg.norm(light)))
+            base = np.array([0.85, 0.72, 0.62]) if heat is None else None
+            colours = np.outer(shade, base) if heat is None else \
+                shade[:, None] * (np.outer(1 - heat, [0.8, 0.8, 0.8]) + np.outer(heat, [0.9, 0.1, 0.1]))
+            ax = fig.add_subplot(2, 4, row * 4 + col + 1, projection="3d")
+            axes = [0, 2, 1]  # +Y up: the model's y goes to the plot's z
+            ax.add_collection3d(Poly3DCollection(faces[:, :, axes], facecolors=np.clip(colours, 0, 1),
+                                                 edgecolors="none"))
+            c, v = centre[axes], look[axes]
+            for k, setter in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
+                setter(c[k] - 0.17, c[k] + 0.17)
+            ax.set_box_aspect((1, 1, 1))
+            ax.view_init(elev=np.degrees(np.arcsin(v[2])), azim=np.degrees(np.arctan2(v[1], v[0])))
+            ax.set_axis_off()
+            ax.set_title(f"{title}\n{name}", fontsize=9)
+    fig.tight_layout()
+    tmp = str(path) + ".tmp.png"
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, path)
+    print(f"wrote {path}")
+
+
+def compare(folder, picture_path=None, picture_iterations=10):
     data = json.loads((folder / "input.json").read_text())
     ours = json.loads((folder / "libdeform.json").read_text())["results"]
     theirs = json.loads((folder / "blender.json").read_text())
@@ -210,6 +267,8 @@ def compare(folder):
     for name, n, kept_by, s, bl, ld, both in checks:
         print(f"| {name} | {n} | {s:.1e} | {bl:.1e} | {ld:.1e} | {both:.3f} | "
               f"{100 * kept_by[0]:.1f}%, {100 * kept_by[1]:.1f}% |")
+    if picture_path is not None:
+        picture(picture_path, data, ours, theirs["results"], picture_iterations)
 
 
 def main():
@@ -218,11 +277,13 @@ def main():
     parser.add_argument("folder", type=pathlib.Path)
     parser.add_argument("--iterations", default="5,10,20,50", help="comma-separated iteration counts")
     parser.add_argument("--step", type=float, default=0.5, help="libdeform's step, Blender's factor")
+    parser.add_argument("--picture", type=pathlib.Path, help="compare: also draw both results (PNG) at --picture-at")
+    parser.add_argument("--picture-at", type=int, default=10, help="the iteration count drawn")
     args = parser.parse_args()
     if args.command == "export":
         export(args.folder, [int(n) for n in args.iterations.split(",")], args.step)
     else:
-        compare(args.folder)
+        compare(args.folder, args.picture, args.picture_at)
 
 
 if __name__ == "__main__":
