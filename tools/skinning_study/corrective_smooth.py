@@ -13,6 +13,10 @@ compare: per pose and iteration count, the distance per point between libdeform'
 max, in % of the bind bounding-box diagonal), and what explains it, from double-precision NumPy re-implementations
 of both algorithms as their sources describe them: the smoothing alone (Blender's use_only_smooth) against
 libdeform's smoothing rule; each implementation against its own re-implementation; and the points libdeform pins.
+--picture FILE also draws both results side by side (docs/images/skinning-corrective-smooth.png).
+
+record DIR --fixture FILE: Blender's result at --fixture-at iterations (default 10), the points it moves, for
+python/tests/test_delta_mush_blender.py, so that the suite compares with Blender without running it.
 """
 import argparse
 import json
@@ -271,19 +275,42 @@ def compare(folder, picture_path=None, picture_iterations=10):
         picture(picture_path, data, ours, theirs["results"], picture_iterations)
 
 
+def record(folder, target, iterations):
+    """A small fixture of Blender's results for python/tests/test_delta_mush_blender.py: per pose, at `iterations`,
+    the points that Blender moves by more than 1e-5 of the bind diagonal from the rest (index and position to the
+    micrometre); every other point Blender left at the rest within that."""
+    data = json.loads((folder / "input.json").read_text())
+    theirs = json.loads((folder / "blender.json").read_text())
+    rest = np.asarray(data["points"], np.float64)
+    diagonal = float(np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)))
+    poses = {}
+    for name in data["poses"]:
+        b = np.asarray(theirs["results"][f"{name}/{iterations}"], np.float64)
+        moved = np.flatnonzero(np.linalg.norm(b - rest, axis=1) > 1e-5 * diagonal)
+        poses[name] = {"points": moved.tolist(), "positions": np.round(b[moved], 6).tolist()}
+    write_json(target, {"blender": theirs["blender"], "modifier": "CORRECTIVE_SMOOTH", "smooth_type": "SIMPLE",
+                        "rest_source": "ORCO", "factor": data["step"], "iterations": iterations, "scale": 1.0,
+                        "input": "libdeform's LBS of the built-in character as a shape key", "poses": poses})
+    print(f"wrote {target}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("command", choices=("export", "compare"))
+    parser.add_argument("command", choices=("export", "compare", "record"))
     parser.add_argument("folder", type=pathlib.Path)
     parser.add_argument("--iterations", default="5,10,20,50", help="comma-separated iteration counts")
     parser.add_argument("--step", type=float, default=0.5, help="libdeform's step, Blender's factor")
     parser.add_argument("--picture", type=pathlib.Path, help="compare: also draw both results (PNG) at --picture-at")
     parser.add_argument("--picture-at", type=int, default=10, help="the iteration count drawn")
+    parser.add_argument("--fixture", type=pathlib.Path, help="record: the fixture file to write")
+    parser.add_argument("--fixture-at", type=int, default=10, help="record: the iteration count recorded")
     args = parser.parse_args()
     if args.command == "export":
         export(args.folder, [int(n) for n in args.iterations.split(",")], args.step)
-    else:
+    elif args.command == "compare":
         compare(args.folder, args.picture, args.picture_at)
+    else:
+        record(args.folder, args.fixture, args.fixture_at)
 
 
 if __name__ == "__main__":
