@@ -13,6 +13,14 @@ void bind_animation(py::module_& m) {
       .def_readonly("name", &deform::Animation::name)
       .def_readonly("duration", &deform::Animation::duration, "seconds")
       .def_readwrite("loop", &deform::Animation::loop, "sampling wraps time when True, clamps it otherwise")
+      .def_property_readonly(
+          "morph_channel_targets",
+          [](const deform::Animation& clip) {
+            std::vector<std::int32_t> targets;
+            for (const deform::MorphChannel& c : clip.morph_channels) targets.push_back(c.target);
+            return targets;
+          },
+          "The morph targets the clip animates, one per morph channel.")
       .def(
           "sample",
           [](const deform::Animation& clip, float time, deform::Pose& pose) {

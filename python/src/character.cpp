@@ -334,6 +334,15 @@ void bind_character_morphs(CharacterClass& character) {
           "pose (docs/skinning.md). Raises deform.Error for a driver or targets that do not fit.")
       .def("clear_pose_drivers", &deform::Character::clear_pose_drivers,
            "No pose drivers any more (the rig's corrective groups included).")
+      .def(
+          "with_driven_weights",
+          [](const deform::Character& c, const deform::Animation& clip, float frames_per_second) {
+            return deform::with_driven_weights(c, clip, frames_per_second);
+          },
+          py::arg("clip"), py::arg("frames_per_second") = 30.0f,
+          "The clip with the pose drivers' weights keyed frames_per_second times a second, as update() sets them, "
+          "so that write_gltf(path, character.model, [...]) plays the correctives in any glTF viewer "
+          "(docs/gltf-export.md). Raises deform.Error for a rate outside (0, 1000] or a clip the skeleton refuses.")
       .def_property_readonly(
           "palette", [](const deform::Character& c) { return matrices_out(c.palette()); },
           "(B, 4, 4) float32 row-major skinning matrices of the last update (a new array): what add_corrective takes.");

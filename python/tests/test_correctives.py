@@ -35,3 +35,28 @@ def test_a_sculpt_comes_back_at_its_pose_and_fades_at_rest():
         hero.add_pose_driver(driver, [3])
     with pytest.raises(deform.Error, match="kernel"):
         deform.bind_pose_driver(skeleton, ["forearm_l"], [bent], np.ones((1, 1), np.float32), kernel="cubic")
+
+
+def test_driven_weights_keyed_into_a_clip_and_written_as_gltf(tmp_path):
+    model = deform.builtin_character()
+    skeleton = model.skeleton
+    bent = skeleton.bind_pose()
+    skeleton.set_euler(bent, "forearm_l", [100.0, 0.0, 0.0])
+    plain = deform.Character(model)
+    plain.pose = bent
+    plain.update(0.0)
+    sculpt = np.array(plain.positions)
+    sculpt[np.linalg.norm(sculpt - np.array(plain.bone_position("forearm_l")), axis=1) < 0.08, 2] -= 0.01
+    deform.add_corrective(model, plain.palette, sculpt, tolerance=1e-6, name="elbow_pad")
+    driver = deform.bind_pose_driver(skeleton, ["forearm_l"], [skeleton.bind_pose(), plain.pose],
+                                     np.array([[0.0], [1.0]], np.float32))
+    hero = deform.Character(model)
+    hero.add_pose_driver(driver, [0])
+    run = [clip for clip in deform.builtin_clips(model) if clip.name == "run"][0]
+    assert run.morph_channel_targets == []
+    keyed = hero.with_driven_weights(run, 20.0)
+    assert keyed.morph_channel_targets == [0] and keyed.name == "run"
+    written = deform.write_gltf(str(tmp_path / "run.glb"), hero.model, [keyed])
+    assert written["warnings"] == []
+    with pytest.raises(deform.Error, match="frames_per_second"):
+        hero.with_driven_weights(run, 0.0)
