@@ -11,6 +11,8 @@
 //                    local to model, the skinning palette, skin positions and normals. Character c plays from
 //                    0.37 · c s on, every iteration one frame (1/60 s) later: forward playback, which ozz's sampling
 //                    contexts are made for (one per clip and character).
+//  ozz/skin_positions/auto, ozz/pose/<n>: where the time goes: skinning positions only, and the frame without the
+//                    skinning (sampling, blending, local to model and the palette).
 // Each benchmark times both libraries in every iteration, alternating which goes first, and reports the mean time of
 // each per iteration (libdeform_us, ozz_us) and their ratio (speedup = ozz / libdeform: > 1 when libdeform is faster).
 // Before timing, main() prints how far the two outputs are apart.
@@ -335,9 +337,13 @@ void paired(benchmark::State& state, Deform&& deform_side, Ozz&& ozz_side) {
   state.counters["speedup"] = ozz_seconds / deform_seconds;
 }
 
-void skin(benchmark::State& state, deform::Isa isa) {
+void skin(benchmark::State& state, deform::Isa isa, bool normals) {
   Scene& s = scene();
-  const deform::SkinningJob job = s.skinning(s.skin_palette, s.out_positions, s.out_normals, isa);
+  deform::SkinningJob job = s.skinning(s.skin_palette, s.out_positions, s.out_normals, isa);
+  if (!normals) {
+    job.in_normals = {};
+    job.out_normals = {};
+  }
   if (!job.validate()) {
     state.SkipWithError("libdeform's job is not valid here (instruction set not available?)");
     return;
@@ -349,24 +355,33 @@ void skin(benchmark::State& state, deform::Isa isa) {
         benchmark::DoNotOptimize(s.out_positions.data());
       },
       [&] {
-        s.ozz->skin(s.ozz_positions, s.ozz_normals);
+        if (normals) s.ozz->skin(s.ozz_positions, s.ozz_normals);
+        else s.ozz->skin_positions(s.ozz_positions);
         benchmark::DoNotOptimize(s.ozz_positions.data());
       });
   state.SetItemsProcessed(state.iterations() * std::int64_t(s.model.mesh.point_count()));
 }
 
-void frame(benchmark::State& state) {
+void frame(benchmark::State& state, bool skinning) {
   Scene& s = scene();
   const int characters = int(state.range(0));
   int deform_frame = 0, ozz_frame = 0;
   paired(
       state,
       [&] {
-        for (int c = 0; c < characters; ++c) s.frame(c, character_time(c, deform_frame));
+        for (int c = 0; c < characters; ++c) {
+          const float t = character_time(c, deform_frame);
+          if (skinning) s.frame(c, t);
+          else s.sample_pose(s.characters[std::size_t(c)], t, blend);
+        }
         ++deform_frame;
       },
       [&] {
-        for (int c = 0; c < characters; ++c) s.ozz->frame(c, character_time(c, ozz_frame));
+        for (int c = 0; c < characters; ++c) {
+          const float t = character_time(c, ozz_frame);
+          if (skinning) s.ozz->frame(c, t);
+          else s.ozz->pose(c, t);
+        }
         ++ozz_frame;
       });
   state.SetItemsProcessed(state.iterations() * characters);
@@ -391,9 +406,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
   }
-  benchmark::RegisterBenchmark("ozz/skin/auto", skin, deform::Isa::automatic);
-  benchmark::RegisterBenchmark("ozz/skin/avx2", skin, deform::Isa::avx2);
-  benchmark::RegisterBenchmark("ozz/frame", frame)->ArgName("characters")->Arg(1)->Arg(crowd);
+  benchmark::RegisterBenchmark("ozz/skin/auto", skin, deform::Isa::automatic, true);
+  benchmark::RegisterBenchmark("ozz/skin/avx2", skin, deform::Isa::avx2, true);
+  benchmark::RegisterBenchmark("ozz/frame", frame, true)->ArgName("characters")->Arg(1)->Arg(crowd);
+  // Where the time goes: skinning without normals, and the frame without the skinning.
+  benchmark::RegisterBenchmark("ozz/skin_positions/auto", skin, deform::Isa::automatic, false);
+  benchmark::RegisterBenchmark("ozz/pose", frame, false)->ArgName("characters")->Arg(1)->Arg(crowd);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

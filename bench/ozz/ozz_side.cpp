@@ -65,6 +65,7 @@ struct Runner::Impl {
   float blend = 0.5f;
   std::vector<Character> characters;
 
+  // out_normals null: positions only.
   bool skin(std::span<const ozz::math::Float4x4> matrices, float* out_positions, float* out_normals) const {
     ozz::geometry::SkinningJob job;
     const auto points = mesh.positions.size() / 3;
@@ -77,12 +78,14 @@ struct Runner::Impl {
     job.joint_weights_stride = 4 * sizeof(float);
     job.in_positions = {mesh.positions.data(), mesh.positions.size()};
     job.in_positions_stride = 3 * sizeof(float);
-    job.in_normals = {mesh.normals.data(), mesh.normals.size()};
-    job.in_normals_stride = 3 * sizeof(float);
     job.out_positions = {out_positions, points * 3};
     job.out_positions_stride = 3 * sizeof(float);
-    job.out_normals = {out_normals, points * 3};
-    job.out_normals_stride = 3 * sizeof(float);
+    if (out_normals != nullptr) {
+      job.in_normals = {mesh.normals.data(), mesh.normals.size()};
+      job.in_normals_stride = 3 * sizeof(float);
+      job.out_normals = {out_normals, points * 3};
+      job.out_normals_stride = 3 * sizeof(float);
+    }
     return job.Run();
   }
 };
@@ -162,7 +165,19 @@ bool Runner::skin(std::span<float> out_positions, std::span<float> out_normals) 
   return impl_->skin(impl_->palette, out_positions.data(), out_normals.data());
 }
 
+bool Runner::skin_positions(std::span<float> out_positions) const {
+  if (out_positions.size() < impl_->mesh.positions.size()) return false;
+  return impl_->skin(impl_->palette, out_positions.data(), nullptr);
+}
+
 bool Runner::frame(int index, float seconds) {
+  if (!pose(index, seconds)) return false;
+  Impl& s = *impl_;
+  Character& c = s.characters[std::size_t(index)];
+  return s.skin({c.palette.data(), c.palette.size()}, c.positions.data(), c.normals.data());
+}
+
+bool Runner::pose(int index, float seconds) {
   Impl& s = *impl_;
   Character& c = s.characters[std::size_t(index)];
   ozz::animation::BlendingJob::Layer layers[2];
@@ -191,7 +206,7 @@ bool Runner::frame(int index, float seconds) {
   if (!ltm.Run()) return false;
   for (std::size_t b = 0; b < c.palette.size(); ++b)
     c.palette[b] = c.models[std::size_t(s.ozz_joint[b])] * s.inverse_bind[b];
-  return s.skin({c.palette.data(), c.palette.size()}, c.positions.data(), c.normals.data());
+  return true;
 }
 
 std::span<const float> Runner::positions(int c) const { return impl_->characters[std::size_t(c)].positions; }

@@ -55,9 +55,13 @@ class Runner {
   // False when ozz's job refuses.
   void set_palette(std::span<const std::array<float, 16>> palette);
   bool skin(std::span<float> out_positions, std::span<float> out_normals) const;
+  // The same without normals (positions only).
+  bool skin_positions(std::span<float> out_positions) const;
   // The whole frame of character `c` at `seconds`: sample both clips, blend, local to model, the skinning palette
   // (model × inverse bind), skin into the character's own outputs. False when a job refuses.
   bool frame(int c, float seconds);
+  // frame() without the skinning: the pose and the palette only.
+  bool pose(int c, float seconds);
   std::span<const float> positions(int c) const;
   std::span<const float> normals(int c) const;
   // Character c's model-space matrix of libdeform bone b after frame().
