@@ -26,7 +26,9 @@ static_assert(sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
 bool lanes_shape_ok(const DirectDeltaMushBinding& b) noexcept {
   const DirectDeltaMushLanes& l = b.lanes;
   const std::size_t blocks = (b.point_count() + width - 1) / width;
-  if (l.point_count != b.point_count() || l.rounds.size() != blocks + 1 || l.shared.size() != blocks) return false;
+  if (l.point_count != b.point_count() || l.rounds.size() != blocks + 1 || l.shared.size() != blocks ||
+      l.start.size() != blocks * width)
+    return false;
   const std::size_t slots = std::size_t(l.rounds.back()) * width;
   return l.rounds[0] == 0 && l.influence.size() == slots && l.bones.size() == slots &&
          l.moments.size() == slots * moment_floats;
@@ -44,6 +46,11 @@ bool lanes_match_rows(const DirectDeltaMushBinding& b) noexcept {
     for (std::size_t lane = 0; lane < width; ++lane) {
       const std::size_t i = k * width + lane;
       const std::uint32_t first = i < n ? b.offsets[i] : 0, last = i < n ? b.offsets[i + 1] : 0;
+      // Its strongest bone (the row's first) from a shared round that has it, or none.
+      const std::uint32_t start = l.start[k * width + lane];
+      if (start != DirectDeltaMushLanes::none &&
+          (start >= l.shared[k] || first == last || l.bones[std::size_t(r0 + start) * width] != b.bones[first]))
+        return false;
       std::size_t found = 0;
       std::uint64_t sum = 0;  // of the influences named: with the count, a slot naming one twice shows
       for (std::uint32_t r = r0; r < r1; ++r) {
@@ -189,6 +196,7 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
   l.point_count = n;
   l.rounds.assign(1, 0);
   l.shared.reserve(blocks);
+  l.start.reserve(blocks * width);
   std::vector<std::pair<std::uint32_t, std::uint16_t>> coverage;  // (lanes with the bone, bone)
   std::vector<std::uint32_t> rows[width];                         // per lane: its influences left for gathered rounds
   std::vector<std::uint32_t> shared_slots;                        // per shared round and lane: influence or none
@@ -261,6 +269,13 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
           l.moments[start + (r * moment_floats + c) * width + lane] = row[c];
       }
     l.shared.push_back(std::uint32_t(best));
+    for (std::size_t lane = 0; lane < width; ++lane) {
+      const std::size_t i = k * width + lane;
+      std::uint32_t strongest = DirectDeltaMushLanes::none;
+      for (std::size_t r = 0; r < best && i < n && b.offsets[i] < b.offsets[i + 1]; ++r)
+        if (coverage[r].second == b.bones[b.offsets[i]]) strongest = std::uint32_t(r);
+      l.start.push_back(strongest);
+    }
     l.rounds.push_back(l.rounds.back() + std::uint32_t(best + gathered));
   }
   b.lanes = std::move(l);

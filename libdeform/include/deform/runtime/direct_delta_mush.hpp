@@ -54,6 +54,7 @@ struct DirectDeltaMushLanes {
   std::size_t point_count = 0;           // the rows' point count when packed
   std::vector<std::uint32_t> rounds;     // block k's rounds: [rounds[k], rounds[k + 1]); blocks + 1 entries
   std::vector<std::uint32_t> shared;     // per block: how many of its first rounds share one bone
+  std::vector<std::uint32_t> start;      // per block and lane: the shared round of its strongest bone, or `none`
   std::vector<std::uint32_t> influence;  // per round and lane (width per round): the row's influence, or `none`
   std::vector<std::uint16_t> bones;      // per round and lane: the palette entry (a shared round's in every lane)
   std::vector<float> moments;            // per round: the 10 moments (declaration order) × width lanes, 0 for none

@@ -26,7 +26,8 @@ struct DdmKernelArgs {
 // Newton steps every point takes (ddm_kernel.inl): measured worst case over the tests' models and poses
 // (docs/performance.md, 2026-11-28). A point still turning by more than 1e-4 rad after them takes more, up to 16, on
 // its own (the others in its block keep theirs), so its result never depends on its block.
-inline constexpr int ddm_fixed_steps = 3;
+inline constexpr int ddm_fixed_steps = 2;
+inline constexpr float ddm_settled = 1e-6f;
 
 // One copy per instruction set (isa.hpp), each compiled with its own flags: ddm_portable.cpp, and ddm_avx2.cpp,
 // ddm_avx512.cpp (x86-64), ddm_neon.cpp (aarch64), ddm_simd128.cpp (WebAssembly with SIMD128).

@@ -121,16 +121,36 @@ inline void newton_step(Block& b, const int* active) noexcept {
     const float ox = (newton ? kx : gx) * inverse, oy = (newton ? ky : gy) * inverse, oz = (newton ? kz : gz) * inverse;
     const float angle2 = ox * ox + oy * oy + oz * oz;
     const bool step = (active[l] != 0) & can & (angle2 > 0.0f) & (angle2 <= largest);
-    const float limit = 1.0f / std::sqrt(angle2 > 1.0f ? angle2 : 1.0f);  // at most a radian a step
-    const float hx = 0.5f * limit * ox, hy = 0.5f * limit * oy, hz = 0.5f * limit * oz;
-    // q · (1, h), normalised.
-    const float nw = w - x * hx - y * hy - z * hz, nx = x + w * hx + y * hz - z * hy;
-    const float ny = y + w * hy + z * hx - x * hz, nz = z + w * hz + x * hy - y * hx;
+    // At most a radian a step: (1, ω/2) scaled by 1/|ω| past a radian, which is (|ω|, ω/2) once normalised.
+    const float s = std::sqrt(angle2 > 1.0f ? angle2 : 1.0f);
+    const float hx = 0.5f * ox, hy = 0.5f * oy, hz = 0.5f * oz;
+    // q · (s, h), normalised.
+    const float nw = s * w - x * hx - y * hy - z * hz, nx = s * x + w * hx + y * hz - z * hy;
+    const float ny = s * y + w * hy + z * hx - x * hz, nz = s * z + w * hz + x * hy - y * hx;
     const float norm = 1.0f / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
     b.q[0][l] = step ? nw * norm : w, b.q[1][l] = step ? nx * norm : x;
     b.q[2][l] = step ? ny * norm : y, b.q[3][l] = step ? nz * norm : z;
-    b.moving[l] = int(step & !(angle2 < 1e-8f));
+    b.moving[l] = int(step & !(angle2 < deform::detail::ddm_settled));
   }
+}
+
+// A whole block's points in[0..lanes) read into three lanes' values.
+inline void load(L* v, const glm::vec3* in) noexcept {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  const float* f = reinterpret_cast<const float*>(in);
+  for (int l = 0; l < lanes; ++l) v[0][l] = f[3 * l], v[1][l] = f[3 * l + 1], v[2][l] = f[3 * l + 2];
+}
+
+// Lanes [low, high) of three lanes' values written as points out[low..high): a whole block as one loop of a fixed
+// count, which the vectoriser takes as interleaved stores.
+inline void store(const L* v, glm::vec3* out, int low, int high) noexcept {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  if (low == 0 && high == lanes) {
+    float* f = reinterpret_cast<float*>(out);
+    for (int l = 0; l < lanes; ++l) f[3 * l] = v[0][l], f[3 * l + 1] = v[1][l], f[3 * l + 2] = v[2][l];
+    return;
+  }
+  for (int l = low; l < high; ++l) out[l] = glm::vec3(v[0][l], v[1][l], v[2][l]);
 }
 
 // One round of a block's influences (DirectDeltaMushLanes): C += A P + d pᵀ, q += A p + d ψ (d = M u − anchor), Σ p,
@@ -221,33 +241,77 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
     // Per lane: its strongest bone (its row's first influence) for the anchor and the start; lanes past the binding
     // have none.
     std::uint32_t first[lanes], influences[lanes];
-    for (int l = 0; l < lanes; ++l) {
-      const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
-      first[l] = bd.offsets[i];
-      influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
-      const glm::vec3 u = bd.rest[i];
-      rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
-      const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
-      b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
-      const glm::vec3 nv = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
-      b.normal[0][l] = nv.x, b.normal[1][l] = nv.y, b.normal[2][l] = nv.z;
+    if (count == lanes) {
+      // A whole block: loops of a fixed count, which the vectoriser takes as interleaved loads.
+      const std::uint32_t* offsets = bd.offsets.data() + block_begin;
+      for (int l = 0; l < lanes; ++l) first[l] = offsets[l], influences[l] = offsets[l + 1] - offsets[l];
+      load(rest, bd.rest.data() + block_begin);
+      if (args.in_positions != nullptr) {
+        load(b.offset, args.in_positions + block_begin);
+        for (int l = 0; l < lanes; ++l)
+          for (int c = 0; c < 3; ++c) b.offset[c][l] -= rest[c][l];
+      } else {
+        for (int c = 0; c < 3; ++c) b.offset[c] = L::filled(0.0f);
+      }
+      if (args.in_normals != nullptr) load(b.normal, args.in_normals + block_begin);
+      else
+        for (int c = 0; c < 3; ++c) b.normal[c] = L::filled(0.0f);
+    } else {
+      for (int l = 0; l < lanes; ++l) {
+        const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
+        first[l] = bd.offsets[i];
+        influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
+        const glm::vec3 u = bd.rest[i];
+        rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
+        const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
+        b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
+        const glm::vec3 nv = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
+        b.normal[0][l] = nv.x, b.normal[1][l] = nv.y, b.normal[2][l] = nv.z;
+      }
     }
-    // The anchor, and the start rotation's matrix, from each lane's strongest bone (the identity where it has none).
+    // The anchor, and the start rotation's matrix, from each lane's strongest bone (the identity where it has none):
+    // selected from the block's shared rounds' bones where one of them is it, else copied from the palette.
+    const std::uint32_t round_begin = pack.rounds[block], round_end = pack.rounds[block + 1];
+    const std::uint32_t shared = pack.shared[block];
+    const std::uint32_t* start = pack.start.data() + block * lanes;
+    L strongest[12];  // its 3×4, m[k + k / 3]
+    for (int l = 0; l < lanes; ++l) {
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) strongest[k][l] = k % 4 == 0 ? 1.0f : 0.0f;
+    }
+    for (std::uint32_t j = 0; j < shared; ++j) {
+      const float* m = matrix_floats + 16 * std::size_t(pack.bones[std::size_t(round_begin + j) * lanes]);
+      float one[12];
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) one[k] = m[k + k / 3];
+      for (int l = 0; l < lanes; ++l) {
+        const bool chosen = start[l] == j;
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) strongest[k][l] = chosen ? one[k] : strongest[k][l];
+      }
+    }
+    for (int l = 0; l < lanes; ++l)
+      if (influences[l] > 0 && start[l] == DirectDeltaMushLanes::none) {
+        const float* m = matrix_floats + 16 * std::size_t(bd.bones[first[l]]);
+        for (int k = 0; k < 12; ++k) strongest[k][l] = m[k + k / 3];
+      }
     for (int l = 0; l < lanes; ++l) {
       const bool has = influences[l] > 0;
-      const float* m = matrix_floats + (has ? 16 * std::size_t(bd.bones[first[l]]) : 0);
       const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
       DEFORM_UNROLL
-      for (int k = 0; k < 9; ++k) b.a[k][l] = has ? m[4 * (k / 3) + k % 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+      for (int k = 0; k < 9; ++k) b.a[k][l] = strongest[k][l];
       DEFORM_UNROLL
-      for (int r = 0; r < 3; ++r)
-        b.anchor[r][l] = has ? mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) : 0.0f;
+      for (int r = 0; r < 3; ++r) {
+        const float at =
+            mul_add(strongest[r][l], ux,
+                    mul_add(strongest[3 + r][l], uy, mul_add(strongest[6 + r][l], uz, strongest[9 + r][l])));
+        b.anchor[r][l] = has ? at : 0.0f;
+      }
     }
     // The block's rounds (DirectDeltaMushLanes): the shared ones read one matrix; the others copy each lane's.
     L acc[16];  // C column-major (9), q (3), Σ p (3), Σ ψ
     for (int k = 0; k < 16; ++k) acc[k] = L::filled(0.0f);
-    const std::uint32_t round_begin = pack.rounds[block], round_end = pack.rounds[block + 1];
-    const std::uint32_t shared_end = round_begin + pack.shared[block];
+    const std::uint32_t shared_end = round_begin + shared;
     for (std::uint32_t r = round_begin; r < round_end; ++r) {
       const float* moment = pack.moments.data() + std::size_t(r) * 10 * lanes;
       const std::uint16_t* bone = pack.bones.data() + std::size_t(r) * lanes;
@@ -302,12 +366,11 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
     Outputs o;
     if (args.out_normals != nullptr) outputs<true>(b, rest, o);
     else outputs<false>(b, rest, o);
-    for (int l = low; l < high; ++l) {
-      const std::size_t i = block_begin + std::size_t(l);
-      args.out_positions[i] = glm::vec3(o.position[0][l], o.position[1][l], o.position[2][l]);
-      if (args.out_normals != nullptr) args.out_normals[i] = glm::vec3(o.normal[0][l], o.normal[1][l], o.normal[2][l]);
-      if (args.out_rotations != nullptr) args.out_rotations[i] = glm::quat(b.q[0][l], b.q[1][l], b.q[2][l], b.q[3][l]);
-    }
+    store(o.position, args.out_positions + block_begin, low, high);
+    if (args.out_normals != nullptr) store(o.normal, args.out_normals + block_begin, low, high);
+    if (args.out_rotations != nullptr)
+      for (int l = low; l < high; ++l)
+        args.out_rotations[block_begin + std::size_t(l)] = glm::quat(b.q[0][l], b.q[1][l], b.q[2][l], b.q[3][l]);
   }
 }
 
