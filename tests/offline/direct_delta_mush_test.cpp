@@ -560,6 +560,12 @@ TEST_CASE("Direct Delta Mush: ranges and threads give the same bits; no allocati
   const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
   const Output whole = run(b, palette, normals);
   CHECK(max_distance(whole.positions, mesh.positions) > 0.05 * diagonal(mesh.positions));  // the arm moved
+  // The kernel's layout of this binding has both kinds of rounds (a bone shared by a block's lanes, a bone per lane),
+  // so that this test runs both; most are shared.
+  std::size_t shared = 0;
+  for (const std::uint32_t s : b.lanes.shared) shared += s;
+  CHECK(shared > b.lanes.rounds.back() / 2);
+  CHECK(shared < b.lanes.rounds.back());
 
   std::vector<glm::vec3> out(mesh.point_count()), out_normals(mesh.point_count());
   std::vector<glm::quat> rotations(mesh.point_count());

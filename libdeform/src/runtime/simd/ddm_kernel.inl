@@ -37,7 +37,7 @@ struct Block {
   L offset[3];        // in_positions − rest (0 without in_positions)
   L normal[3];        // in_normals (0 without them)
   L turned;           // 1 where a rotation is found, else 0 (the point stays put)
-  int moving[lanes];  // per lane: its last step turned by at least 1e-4 rad
+  int moving[lanes];  // per lane: its last step turned by at least 1e-3 rad (ddm_settled)
 };
 
 // The start rotation: the strongest bone's columns normalised, the quaternion glm::quat_cast would give (the largest
@@ -84,7 +84,7 @@ inline void start_rotations(Block& b) noexcept {
 
 // One of nearest_rotation's steps (direct_delta_mush.cpp says what it is) in every lane whose `active` is set, written
 // with selects: the Newton step where H is positive definite, else the gradient step; none where neither can be taken.
-// Sets b.moving to whether the lane stepped by at least 1e-4 rad.
+// Sets b.moving to whether the lane stepped by at least 1e-3 rad (ddm_settled).
 inline void newton_step(Block& b, const int* active) noexcept {
   constexpr float largest = std::numeric_limits<float>::max();
   for (int l = 0; l < lanes; ++l) {
@@ -354,7 +354,7 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
     int all[lanes];
     for (int l = 0; l < lanes; ++l) all[l] = 1;
     for (int step = 0; step < ddm_fixed_steps; ++step) newton_step(b, all);
-    // Lanes still turning go on by themselves, as nearest_rotation would, up to its 16 steps.
+    // Lanes still turning go on by themselves, up to nearest_rotation's 16 steps.
     for (int step = ddm_fixed_steps; step < 16; ++step) {
       int any = 0;
       for (int l = 0; l < lanes; ++l) any |= b.moving[l];
