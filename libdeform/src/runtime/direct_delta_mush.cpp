@@ -188,8 +188,9 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
     return Status::failure("binding is malformed: arrays differ in size");
   for (std::size_t i = 0; i < n; ++i)
     if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
-  // The cost of a round, in shared rounds: one with a bone per lane copies each lane's matrix into the lanes (measured
-  // on the benchmark's models, docs/performance.md 2026-11-28 04:xx).
+  // The cost of a round with a bone per lane, in shared rounds: it copies 16 matrices into the lanes (16 × 12 scalar
+  // loads and stores) besides the same products; an estimate from the instruction counts, not tuned: on the
+  // benchmark's models nearly every round is shared whatever it is (docs/performance.md, 2026-11-28 04:45 UTC).
   constexpr std::size_t gathered_cost = 4;
   const std::size_t blocks = (n + width - 1) / width;
   DirectDeltaMushLanes l;
