@@ -126,6 +126,12 @@ void ddm(benchmark::State& state, int which, bool threads) {
   }
   state.SetItemsProcessed(state.iterations() * std::int64_t(r.mesh.point_count()));
   state.counters["influences"] = double(binding.influence_count()) / double(binding.point_count());
+  // The kernel's layout (DirectDeltaMushLanes): rounds per block of 16 points, and how many of them share one bone.
+  const deform::DirectDeltaMushLanes& lanes = binding.lanes;
+  double shared = 0.0;
+  for (const std::uint32_t s : lanes.shared) shared += double(s);
+  state.counters["rounds"] = double(lanes.rounds.back()) / double(lanes.shared.size());
+  state.counters["shared"] = shared / double(lanes.shared.size());
 }
 
 void lbs(benchmark::State& state, int which) {

@@ -423,6 +423,10 @@ TEST_CASE("Direct Delta Mush: isolated points, zero weights and non-manifold mes
   last.offsets.push_back(last.offsets.back());
   last.bones.shrink_to_fit();
   last.moments.shrink_to_fit();
+  DirectDeltaMushJob stale;
+  stale.binding = &last;
+  CHECK(std::string(stale.run().reason()) == "binding is malformed: lanes not packed from its rows");  // pack again
+  REQUIRE(deform::pack_direct_delta_mush(last));
   REQUIRE(last.point_count() % 16 != 1);  // not alone in its block of 16 (the kernel's)
   const Output with_last = run(last, palette, {});
   CHECK(with_last.positions.back() == glm::vec3(7.0f, 0.0f, 0.0f));
@@ -514,6 +518,30 @@ TEST_CASE("Direct Delta Mush: isolated points, zero weights and non-manifold mes
   malformed = b;
   malformed.moments.pop_back();
   refuses(j, "binding is malformed: arrays differ in size");
+  CHECK(std::string(deform::pack_direct_delta_mush(malformed).reason()) ==
+        "binding is malformed: arrays differ in size");
+  CHECK(malformed.lanes.rounds.empty());
+  // Lanes that are not the rows' as they are now: validate() compares them (run() only their sizes).
+  malformed = b;
+  malformed.lanes = {};
+  refuses(j, "binding is malformed: lanes not packed from its rows");
+  malformed = b;
+  malformed.moments[4].yz += 1.0f;
+  refuses(j, "binding is malformed: lanes not packed from its rows", false);
+  REQUIRE(deform::pack_direct_delta_mush(malformed));
+  CHECK(j.validate());
+  malformed = b;
+  malformed.bones[0] = std::uint16_t(malformed.bones[0] == 0 ? 1 : 0);  // another bone in range
+  refuses(j, "binding is malformed: lanes not packed from its rows", false);
+  malformed = b;
+  std::swap(malformed.lanes.influence[0], malformed.lanes.influence[1]);  // two lanes' slots crossed
+  refuses(j, "binding is malformed: lanes not packed from its rows", false);
+  // No points: a binding the job runs (nothing to do).
+  const DirectDeltaMushBinding nothing = deform::bind_direct_delta_mush(deform::Mesh{}, deform::SkinWeights{});
+  DirectDeltaMushJob none;
+  none.binding = &nothing;
+  CHECK(none.validate());
+  CHECK(none.run());
   CHECK(std::string(job.run(4, 3).reason()) == "range outside the job");
   CHECK(std::string(job.run(0, b.point_count() + 1).reason()) == "range outside the job");
 }
@@ -532,6 +560,12 @@ TEST_CASE("Direct Delta Mush: ranges and threads give the same bits; no allocati
   const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
   const Output whole = run(b, palette, normals);
   CHECK(max_distance(whole.positions, mesh.positions) > 0.05 * diagonal(mesh.positions));  // the arm moved
+  // The kernel's layout of this binding has both kinds of rounds (a bone shared by a block's lanes, a bone per lane),
+  // so that this test runs both; most are shared.
+  std::size_t shared = 0;
+  for (const std::uint32_t s : b.lanes.shared) shared += s;
+  CHECK(shared > b.lanes.rounds.back() / 2);
+  CHECK(shared < b.lanes.rounds.back());
 
   std::vector<glm::vec3> out(mesh.point_count()), out_normals(mesh.point_count());
   std::vector<glm::quat> rotations(mesh.point_count());

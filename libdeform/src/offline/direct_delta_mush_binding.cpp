@@ -3,6 +3,7 @@
 // stored as compressed rows of floats.
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <stdexcept>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -104,7 +105,12 @@ DirectDeltaMushBinding bind_direct_delta_mush(const Mesh& mesh, const SkinWeight
   if (!(settings.prune >= 0.0f && settings.prune < 0.5f))
     throw Error::invalid_argument(element, "prune must be within [0, 0.5)");
   const std::size_t n = mesh.point_count();
-  if (n == 0 && weights.size() == 0) return {{}, {0}, {}, {}, 0};
+  if (n == 0 && weights.size() == 0) {
+    DirectDeltaMushBinding empty;
+    empty.offsets = {0};
+    (void)pack_direct_delta_mush(empty);  // consistent: no points
+    return empty;
+  }
   if (n >= std::size_t{0x7fffffff}) throw Error::invalid_argument(element, "2^31 - 1 points or more");
   if (weights.size() != n)
     throw Error::invalid_argument(
@@ -268,6 +274,8 @@ DirectDeltaMushBinding bind_direct_delta_mush(const Mesh& mesh, const SkinWeight
     binding.offsets[i + 1] = std::uint32_t(binding.bones.size());
     std::vector<Entry>().swap(list);
   }
+  // The rows are consistent by construction; the kernel's layout of them.
+  if (!pack_direct_delta_mush(binding)) throw std::logic_error("bind_direct_delta_mush: rows built inconsistent");
   return binding;
 }
 

@@ -5,7 +5,10 @@
 // nearest_rotation below is the same step for one point, for callers and the tests.
 #include "deform/runtime/direct_delta_mush.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <utility>
 
 #include "deform/runtime/parallel.hpp"
 #include "deform/runtime/isa.hpp"
@@ -14,6 +17,65 @@
 
 namespace deform {
 namespace {
+
+constexpr std::size_t width = DirectDeltaMushLanes::width;
+constexpr std::size_t moment_floats = sizeof(DirectDeltaMushMoments) / sizeof(float);
+static_assert(sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
+
+// The lanes' arrays sized for the rows' point count (O(1)): what the kernel relies on to read within them.
+bool lanes_shape_ok(const DirectDeltaMushBinding& b) noexcept {
+  const DirectDeltaMushLanes& l = b.lanes;
+  const std::size_t blocks = (b.point_count() + width - 1) / width;
+  if (l.point_count != b.point_count() || l.rounds.size() != blocks + 1 || l.shared.size() != blocks ||
+      l.start.size() != blocks * width)
+    return false;
+  const std::size_t slots = std::size_t(l.rounds.back()) * width;
+  return l.rounds[0] == 0 && l.influence.size() == slots && l.bones.size() == slots &&
+         l.moments.size() == slots * moment_floats;
+}
+
+// The lanes hold exactly the rows (O(influences)): each lane's slots name each of its point's influences once, with
+// its bone and its moments' bits, the empty slots zero moments, the shared rounds one bone; the rounds ascend. The
+// rows are checked (offsets ascending, bones in range) before.
+bool lanes_match_rows(const DirectDeltaMushBinding& b) noexcept {
+  const DirectDeltaMushLanes& l = b.lanes;
+  const std::size_t n = b.point_count();
+  for (std::size_t k = 0; k + 1 < l.rounds.size(); ++k) {
+    const std::uint32_t r0 = l.rounds[k], r1 = l.rounds[k + 1];
+    if (r1 < r0 || l.shared[k] > r1 - r0) return false;
+    for (std::size_t lane = 0; lane < width; ++lane) {
+      const std::size_t i = k * width + lane;
+      const std::uint32_t first = i < n ? b.offsets[i] : 0, last = i < n ? b.offsets[i + 1] : 0;
+      // Its strongest bone (the row's first) from a shared round that has it, or none.
+      const std::uint32_t start = l.start[k * width + lane];
+      if (start != DirectDeltaMushLanes::none &&
+          (start >= l.shared[k] || first == last || l.bones[std::size_t(r0 + start) * width] != b.bones[first]))
+        return false;
+      std::size_t found = 0;
+      std::uint64_t sum = 0;  // of the influences named: with the count, a slot naming one twice shows
+      for (std::uint32_t r = r0; r < r1; ++r) {
+        const std::size_t slot = std::size_t(r) * width + lane;
+        const float* m = l.moments.data() + std::size_t(r) * width * moment_floats + lane;
+        const std::uint32_t e = l.influence[slot];
+        if (r - r0 < l.shared[k] && l.bones[slot] != l.bones[std::size_t(r) * width]) return false;
+        if (e == DirectDeltaMushLanes::none) {
+          if (l.bones[slot] >= b.bone_count) return false;
+          for (std::size_t c = 0; c < moment_floats; ++c)
+            if (m[c * width] != 0.0f) return false;
+          continue;
+        }
+        if (e < first || e >= last || l.bones[slot] != b.bones[e]) return false;
+        const float* row = reinterpret_cast<const float*>(&b.moments[e]);
+        for (std::size_t c = 0; c < moment_floats; ++c)
+          if (std::memcmp(&m[c * width], &row[c], sizeof(float)) != 0) return false;
+        ++found, sum += e;
+      }
+      const std::uint64_t count = last - first;
+      if (found != count || sum != (std::uint64_t(first) + last - 1) * count / 2) return false;
+    }
+  }
+  return true;
+}
 
 // The O(1) checks of run(): the binding's arrays sized consistently and the spans one per point.
 Status shape_ok(const DirectDeltaMushJob& job) noexcept {
@@ -24,6 +86,7 @@ Status shape_ok(const DirectDeltaMushJob& job) noexcept {
     return Status::failure("binding is malformed: arrays differ in size");
   if (b->offsets.back() != b->bones.size())
     return Status::failure("binding is malformed: offsets do not end at the end");
+  if (!lanes_shape_ok(*b)) return Status::failure("binding is malformed: lanes not packed from its rows");
   if (job.matrices.size() < b->bone_count) return Status::failure("palette is too small");
   if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
     return Status::failure("positions are not one per point");
@@ -113,6 +176,110 @@ Status DirectDeltaMushJob::validate() const noexcept {
   }
   for (std::size_t j = 0; j < b.bone_count; ++j)
     if (!finite(matrices[j])) return Status::failure("palette matrix is not finite");
+  if (!lanes_match_rows(b)) return Status::failure("binding is malformed: lanes not packed from its rows");
+  return {};
+}
+
+Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
+  b.lanes = {};
+  const std::size_t n = b.point_count();
+  if (b.offsets.size() != n + 1 || b.moments.size() != b.bones.size() || b.offsets[0] != 0 ||
+      b.offsets.back() != b.bones.size())
+    return Status::failure("binding is malformed: arrays differ in size");
+  for (std::size_t i = 0; i < n; ++i)
+    if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
+  // The cost of a round with a bone per lane, in shared rounds: it copies 16 matrices into the lanes (16 × 12 scalar
+  // loads and stores) besides the same products; an estimate from the instruction counts, not tuned: on the
+  // benchmark's models nearly every round is shared whatever it is (docs/performance.md, 2026-11-28 04:45 UTC).
+  constexpr std::size_t gathered_cost = 4;
+  const std::size_t blocks = (n + width - 1) / width;
+  DirectDeltaMushLanes l;
+  l.point_count = n;
+  l.rounds.assign(1, 0);
+  l.shared.reserve(blocks);
+  l.start.reserve(blocks * width);
+  std::vector<std::pair<std::uint32_t, std::uint16_t>> coverage;  // (lanes with the bone, bone)
+  std::vector<std::uint32_t> rows[width];                         // per lane: its influences left for gathered rounds
+  std::vector<std::uint32_t> shared_slots;                        // per shared round and lane: influence or none
+  for (std::size_t k = 0; k < blocks; ++k) {
+    coverage.clear();
+    for (std::size_t lane = 0; lane < width; ++lane) {
+      rows[lane].clear();
+      const std::size_t i = k * width + lane;
+      if (i >= n) continue;
+      for (std::uint32_t e = b.offsets[i]; e < b.offsets[i + 1]; ++e) {
+        rows[lane].push_back(e);
+        // Count a bone once per lane.
+        bool seen = false;
+        for (std::uint32_t f = b.offsets[i]; f < e; ++f) seen |= b.bones[f] == b.bones[e];
+        if (seen) continue;
+        auto it = std::find_if(coverage.begin(), coverage.end(), [&](const auto& c) { return c.second == b.bones[e]; });
+        if (it == coverage.end()) coverage.emplace_back(1, b.bones[e]);
+        else ++it->first;
+      }
+    }
+    // The bones covering most lanes first (then the lower bone, for a layout that does not depend on anything else).
+    std::sort(coverage.begin(), coverage.end(), [](const auto& x, const auto& y) {
+      return x.first != y.first ? x.first > y.first : x.second < y.second;
+    });
+    // Sharing the first s bones leaves each lane its other influences for the gathered rounds: pick s of least cost.
+    std::size_t left[width];
+    std::size_t most = 0;
+    for (std::size_t lane = 0; lane < width; ++lane) left[lane] = rows[lane].size(), most = std::max(most, left[lane]);
+    std::size_t best = 0, best_cost = most * gathered_cost;
+    for (std::size_t s = 1; s <= coverage.size(); ++s) {
+      most = 0;
+      for (std::size_t lane = 0; lane < width; ++lane) {
+        for (const std::uint32_t e : rows[lane])
+          if (b.bones[e] == coverage[s - 1].second) {
+            --left[lane];
+            break;
+          }
+        most = std::max(most, left[lane]);
+      }
+      if (s + most * gathered_cost < best_cost) best = s, best_cost = s + most * gathered_cost;
+    }
+    // The shared rounds take each lane's first influence of their bone out of its row.
+    shared_slots.assign(best * width, DirectDeltaMushLanes::none);
+    for (std::size_t s = 0; s < best; ++s)
+      for (std::size_t lane = 0; lane < width; ++lane) {
+        std::vector<std::uint32_t>& row = rows[lane];
+        auto it =
+            std::find_if(row.begin(), row.end(), [&](std::uint32_t e) { return b.bones[e] == coverage[s].second; });
+        if (it == row.end()) continue;
+        shared_slots[s * width + lane] = *it;
+        row.erase(it);
+      }
+    std::size_t gathered = 0;
+    for (std::size_t lane = 0; lane < width; ++lane) gathered = std::max(gathered, rows[lane].size());
+    const auto slot = [&](std::uint32_t e, std::uint16_t bone) {
+      l.influence.push_back(e);
+      l.bones.push_back(bone);
+    };
+    const std::size_t start = l.moments.size();
+    l.moments.resize(start + (best + gathered) * width * moment_floats, 0.0f);
+    for (std::size_t r = 0; r < best + gathered; ++r)
+      for (std::size_t lane = 0; lane < width; ++lane) {
+        const std::uint32_t e = r < best                       ? shared_slots[r * width + lane]
+                                : r - best < rows[lane].size() ? rows[lane][r - best]
+                                                               : DirectDeltaMushLanes::none;
+        slot(e, r < best ? coverage[r].second : e != DirectDeltaMushLanes::none ? b.bones[e] : 0);
+        if (e == DirectDeltaMushLanes::none) continue;
+        const float* row = reinterpret_cast<const float*>(&b.moments[e]);
+        for (std::size_t c = 0; c < moment_floats; ++c)
+          l.moments[start + (r * moment_floats + c) * width + lane] = row[c];
+      }
+    l.shared.push_back(std::uint32_t(best));
+    for (std::size_t lane = 0; lane < width; ++lane) {
+      const std::size_t i = k * width + lane;
+      std::uint32_t strongest = DirectDeltaMushLanes::none;
+      for (std::size_t r = 0; r < best && i < n && b.offsets[i] < b.offsets[i + 1]; ++r)
+        if (coverage[r].second == b.bones[b.offsets[i]]) strongest = std::uint32_t(r);
+      l.start.push_back(strongest);
+    }
+    l.rounds.push_back(l.rounds.back() + std::uint32_t(best + gathered));
+  }
+  b.lanes = std::move(l);
   return {};
 }
 

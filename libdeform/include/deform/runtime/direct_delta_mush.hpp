@@ -42,13 +42,34 @@ struct DirectDeltaMushMoments {
   float w = 0.0f;
 };
 
-// What bind_direct_delta_mush builds: read-only data for DirectDeltaMushJob, compressed rows by point.
+// The binding's rows laid out for the job's kernel (pack_direct_delta_mush builds it from the rows; derived data, never
+// edited by hand). Points go in blocks of `width` (point width · k + l is lane l of block k), a block's influences in
+// rounds of one influence per lane (or none: zero moments): first its `shared` rounds, in each of which every lane
+// takes the same bone (the kernel reads that bone's matrix once for the block), then rounds with a bone per lane, each
+// lane's other influences in row order. The packer picks the shared bones per block to minimise the rounds' cost; the
+// kernel streams the moments, already in lanes. A point's sums are taken in its block's round order, which the
+// binding fixes, so its result does not depend on the range it is run in.
+struct DirectDeltaMushLanes {
+  static constexpr std::size_t width = 16;
+  std::size_t point_count = 0;           // the rows' point count when packed
+  std::vector<std::uint32_t> rounds;     // block k's rounds: [rounds[k], rounds[k + 1]); blocks + 1 entries
+  std::vector<std::uint32_t> shared;     // per block: how many of its first rounds share one bone
+  std::vector<std::uint32_t> start;      // per block and lane: the shared round of its strongest bone, or `none`
+  std::vector<std::uint32_t> influence;  // per round and lane (width per round): the row's influence, or `none`
+  std::vector<std::uint16_t> bones;      // per round and lane: the palette entry (a shared round's in every lane)
+  std::vector<float> moments;            // per round: the 10 moments (declaration order) × width lanes, 0 for none
+  static constexpr std::uint32_t none = 0xffffffffu;
+};
+
+// What bind_direct_delta_mush builds: read-only data for DirectDeltaMushJob, compressed rows by point, and the same
+// laid out for the kernel (`lanes`: after changing the rows, call pack_direct_delta_mush again, or validate() refuses).
 struct DirectDeltaMushBinding {
   std::vector<glm::vec3> rest;                  // the rest points, the origin of each point's moments
   std::vector<std::uint32_t> offsets;           // point i's influences: [offsets[i], offsets[i + 1]); point_count() + 1
   std::vector<std::uint16_t> bones;             // per influence: the palette entry; the largest ψ first in each row
   std::vector<DirectDeltaMushMoments> moments;  // per influence
   std::uint32_t bone_count = 0;                 // the palette size the influences need (largest bone + 1)
+  DirectDeltaMushLanes lanes;                   // the rows for the kernel (pack_direct_delta_mush)
 
   std::size_t point_count() const noexcept { return rest.size(); }
   std::size_t influence_count() const noexcept { return bones.size(); }
@@ -80,8 +101,9 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
   // Ok when the call is well formed, else why not: a binding ("no binding"), its arrays consistent ("binding is
   // malformed: ..."), its moments and rest points finite ("binding is not finite"), a palette of at least bone_count
   // matrices ("palette is too small"), every matrix finite ("palette matrix is not finite"), the spans one per point
-  // ("positions are not one per point", "normals are not one per point", "rotations are not one per point"), and the
-  // instruction set available ("instruction set not available").
+  // ("positions are not one per point", "normals are not one per point", "rotations are not one per point"), the
+  // instruction set available ("instruction set not available"), and its lanes packed from its rows as they are now
+  // ("binding is malformed: lanes not packed from its rows": pack_direct_delta_mush).
   // O(points + influences + bones): call it when binding, not every frame.
   Status validate() const noexcept;
 
@@ -95,10 +117,18 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
   Status run(ThreadPool& pool, std::size_t min_chunk = min_parallel_chunk) const noexcept;
 };
 
+// Builds binding.lanes from its rows (rest, offsets, bones, moments). bind_direct_delta_mush calls it; call it again
+// after editing the rows. Refuses rows whose arrays are inconsistent ("binding is malformed: arrays differ in size",
+// "... offsets do not ascend from 0"), leaving the lanes empty (the job then refuses the binding). Allocates; cost
+// O(influences · bones in a block of 16 points) and 46 bytes per influence slot (an empty slot of a lane with
+// fewer influences than its block's rounds counts).
+DEFORM_RUNTIME_API Status pack_direct_delta_mush(DirectDeltaMushBinding& binding);
+
 // The proper rotation R maximising trace(Rᵀ C) (the rotation of C's polar decomposition, with a reflection turned into
 // the nearest rotation: U diag(1, 1, det UVᵀ) Vᵀ), found by Newton steps on the rotation group from `start`. C must not
 // be close to rank 1 for a unique answer (the binder's spread sees to that for the job). The job runs the
-// same steps on blocks of points at once; this one is for callers and the tests. No allocation.
+// same steps on blocks of points at once (stopping after a step under 1e-3 rad rather than 1e-4: its result
+// differs from this one's by about 1e-6 rad); this one is for callers and the tests. No allocation.
 DEFORM_RUNTIME_API glm::quat nearest_rotation(const glm::mat3& c, glm::quat start) noexcept;
 
 }  // namespace deform

@@ -2,15 +2,17 @@
 // _neon.cpp, _simd128.cpp, each compiled with its own flags). Everything here has internal linkage but the one entry
 // point the includer names with DEFORM_DDM_ENTRY, so the copies never meet at link time.
 //
-// Points are taken 16 at a time. Per point (scalar, its influences one after another): the bones' matrices applied to
-// its smoothed moments give C (3×3) and the sums for its position, relative to where its strongest bone carries its
-// rest point (the anchor), so that no float sum cancels the model's distance from the origin; they go into
-// structure-of-arrays lanes. Then, as loops over the lanes around scalar code that the compiler vectorises (lanes.hpp):
-// the start rotation from the strongest bone's matrix (its columns normalised, quat_cast written with selects), a fixed
-// number of Newton steps towards the rotation nearest C (nearest_rotation's step, selects for its branches), further
-// steps only for the lanes that still turn, and the outputs. Each lane computes alone, so a point's result does not
-// depend on its block or range. The lanes past the range, and points without a rotation to find, hold C = I and the
-// identity, which never steps.
+// Points are taken in the binding's blocks of 16 (DirectDeltaMushLanes, packed at bind time), one lane each, as loops
+// over the lanes around scalar code that the compiler vectorises (lanes.hpp). Per block: the bones' matrices applied to
+// its lanes' smoothed moments, round after round as the binding lays them out (a shared round reads one bone's matrix
+// for every lane, the others copy each lane's; the moments are already in lanes), give C (3×3) and the sums for each
+// position, relative to where its strongest bone carries its rest point (the anchor), so that no float sum cancels the
+// model's distance from the origin. Then the start rotation from the strongest bone's matrix (its columns normalised,
+// quat_cast written with selects), a fixed number of Newton steps towards the rotation nearest C (nearest_rotation's
+// step, selects for its branches), further steps only for the lanes that still turn, and the outputs (normals only
+// when asked for). Each lane computes alone in an order its block fixes, so a point's result does not depend on the
+// range it is run in. The lanes past the binding, and points without a rotation to find, hold C = I and the identity,
+// which never steps.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -35,7 +37,7 @@ struct Block {
   L offset[3];        // in_positions − rest (0 without in_positions)
   L normal[3];        // in_normals (0 without them)
   L turned;           // 1 where a rotation is found, else 0 (the point stays put)
-  int moving[lanes];  // per lane: its last step turned by at least 1e-4 rad
+  int moving[lanes];  // per lane: its last step turned by at least 1e-3 rad (ddm_settled)
 };
 
 // The start rotation: the strongest bone's columns normalised, the quaternion glm::quat_cast would give (the largest
@@ -82,7 +84,7 @@ inline void start_rotations(Block& b) noexcept {
 
 // One of nearest_rotation's steps (direct_delta_mush.cpp says what it is) in every lane whose `active` is set, written
 // with selects: the Newton step where H is positive definite, else the gradient step; none where neither can be taken.
-// Sets b.moving to whether the lane stepped by at least 1e-4 rad.
+// Sets b.moving to whether the lane stepped by at least 1e-3 rad (ddm_settled).
 inline void newton_step(Block& b, const int* active) noexcept {
   constexpr float largest = std::numeric_limits<float>::max();
   for (int l = 0; l < lanes; ++l) {
@@ -119,15 +121,66 @@ inline void newton_step(Block& b, const int* active) noexcept {
     const float ox = (newton ? kx : gx) * inverse, oy = (newton ? ky : gy) * inverse, oz = (newton ? kz : gz) * inverse;
     const float angle2 = ox * ox + oy * oy + oz * oz;
     const bool step = (active[l] != 0) & can & (angle2 > 0.0f) & (angle2 <= largest);
-    const float limit = 1.0f / std::sqrt(angle2 > 1.0f ? angle2 : 1.0f);  // at most a radian a step
-    const float hx = 0.5f * limit * ox, hy = 0.5f * limit * oy, hz = 0.5f * limit * oz;
-    // q · (1, h), normalised.
-    const float nw = w - x * hx - y * hy - z * hz, nx = x + w * hx + y * hz - z * hy;
-    const float ny = y + w * hy + z * hx - x * hz, nz = z + w * hz + x * hy - y * hx;
+    // At most a radian a step: (1, ω/2) scaled by 1/|ω| past a radian, which is (|ω|, ω/2) once normalised.
+    const float s = std::sqrt(angle2 > 1.0f ? angle2 : 1.0f);
+    const float hx = 0.5f * ox, hy = 0.5f * oy, hz = 0.5f * oz;
+    // q · (s, h), normalised.
+    const float nw = s * w - x * hx - y * hy - z * hz, nx = s * x + w * hx + y * hz - z * hy;
+    const float ny = s * y + w * hy + z * hx - x * hz, nz = s * z + w * hz + x * hy - y * hx;
     const float norm = 1.0f / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
     b.q[0][l] = step ? nw * norm : w, b.q[1][l] = step ? nx * norm : x;
     b.q[2][l] = step ? ny * norm : y, b.q[3][l] = step ? nz * norm : z;
-    b.moving[l] = int(step & !(angle2 < 1e-8f));
+    b.moving[l] = int(step & !(angle2 < deform::detail::ddm_settled));
+  }
+}
+
+// A whole block's points in[0..lanes) read into three lanes' values.
+inline void load(L* v, const glm::vec3* in) noexcept {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  const float* f = reinterpret_cast<const float*>(in);
+  for (int l = 0; l < lanes; ++l) v[0][l] = f[3 * l], v[1][l] = f[3 * l + 1], v[2][l] = f[3 * l + 2];
+}
+
+// Lanes [low, high) of three lanes' values written as points out[low..high): a whole block as one loop of a fixed
+// count, which the vectoriser takes as interleaved stores.
+inline void store(const L* v, glm::vec3* out, int low, int high) noexcept {
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  if (low == 0 && high == lanes) {
+    float* f = reinterpret_cast<float*>(out);
+    for (int l = 0; l < lanes; ++l) f[3 * l] = v[0][l], f[3 * l + 1] = v[1][l], f[3 * l + 2] = v[2][l];
+    return;
+  }
+  for (int l = low; l < high; ++l) out[l] = glm::vec3(v[0][l], v[1][l], v[2][l]);
+}
+
+// One round of a block's influences (DirectDeltaMushLanes): C += A P + d pᵀ, q += A p + d ψ (d = M u − anchor), Σ p,
+// Σ ψ, with each lane's moments from `moment` (10 × lanes floats) and its matrix (3×4, m[4 · column + row] less the
+// last row) from `one` (a shared round: one bone's, read once) or `each` (a lane's own). An empty slot's moments are
+// zero, so it adds exact zeros.
+template <bool shared>
+inline void accumulate(L* acc, const float* one, const L* each, const float* moment, const L* rest,
+                       const L* anchor) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    float m[16];
+    DEFORM_UNROLL
+    for (int k = 0; k < 12; ++k) m[k + k / 3] = shared ? one[k] : each[k][l];
+    const float xx = moment[l], xy = moment[lanes + l], xz = moment[2 * lanes + l], yy = moment[3 * lanes + l];
+    const float yz = moment[4 * lanes + l], zz = moment[5 * lanes + l], px = moment[6 * lanes + l];
+    const float py = moment[7 * lanes + l], pz = moment[8 * lanes + l], psi = moment[9 * lanes + l];
+    const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+    float d[3];
+    DEFORM_UNROLL
+    for (int r = 0; r < 3; ++r)
+      d[r] = mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) - anchor[r][l];
+    DEFORM_UNROLL
+    for (int r = 0; r < 3; ++r) {
+      const float a0 = m[r], a1 = m[4 + r], a2 = m[8 + r];
+      acc[r][l] += mul_add(a0, xx, mul_add(a1, xy, mul_add(a2, xz, d[r] * px)));
+      acc[3 + r][l] += mul_add(a0, xy, mul_add(a1, yy, mul_add(a2, yz, d[r] * py)));
+      acc[6 + r][l] += mul_add(a0, xz, mul_add(a1, yz, mul_add(a2, zz, d[r] * pz)));
+      acc[9 + r][l] += mul_add(a0, px, mul_add(a1, py, mul_add(a2, pz, d[r] * psi)));
+    }
+    acc[12][l] += px, acc[13][l] += py, acc[14][l] += pz, acc[15][l] += psi;
   }
 }
 
@@ -137,6 +190,7 @@ struct Outputs {
   L position[3];
   L normal[3];
 };
+template <bool normals>
 inline void outputs(const Block& b, const L* rest, Outputs& o) noexcept {
   for (int l = 0; l < lanes; ++l) {
     const float w = b.q[0][l], x = b.q[1][l], y = b.q[2][l], z = b.q[3][l];
@@ -153,6 +207,7 @@ inline void outputs(const Block& b, const L* rest, Outputs& o) noexcept {
     o.position[0][l] = (turned ? tx : rest[0][l]) + (r00 * ux + r10 * uy + r20 * uz);
     o.position[1][l] = (turned ? ty : rest[1][l]) + (r01 * ux + r11 * uy + r21 * uz);
     o.position[2][l] = (turned ? tz : rest[2][l]) + (r02 * ux + r12 * uy + r22 * uz);
+    if (!normals) continue;
     const float ix = b.normal[0][l], iy = b.normal[1][l], iz = b.normal[2][l];
     const float nx = r00 * ix + r10 * iy + r20 * iz, ny = r01 * ix + r11 * iy + r21 * iz;
     const float nz = r02 * ix + r12 * iy + r22 * iz;
@@ -168,85 +223,112 @@ namespace deform::detail {
 
 void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
   const DirectDeltaMushBinding& bd = *args.binding;
-  const glm::mat4* palette = args.palette;
-  const DirectDeltaMushMoments* moments = bd.moments.data();
-  for (std::size_t block_begin = args.begin; block_begin < args.end; block_begin += lanes) {
-    const int count = int(std::min<std::size_t>(lanes, args.end - block_begin));
+  const DirectDeltaMushLanes& pack = bd.lanes;
+  static_assert(DirectDeltaMushLanes::width == lanes && sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
+  static_assert(sizeof(glm::mat4) == 16 * sizeof(float));
+  const std::size_t n = bd.point_count();
+  // The palette read as flat floats: a matrix is 16, column-major (m[4 · column + row]). (A cast, not
+  // &palette[0][0][0]: an empty palette is a null pointer, not an element to bind.)
+  const float* matrix_floats = reinterpret_cast<const float*>(args.palette);
+  // The binding's blocks that meet [begin, end): each computed whole, its lanes in the range written.
+  for (std::size_t block = args.begin / lanes; block * lanes < args.end; ++block) {
+    const std::size_t block_begin = block * lanes;
+    const int count = int(std::min<std::size_t>(lanes, n - block_begin));
+    const int low = int(std::max(args.begin, block_begin) - block_begin);
+    const int high = int(std::min(args.end, block_begin + lanes) - block_begin);
     Block b;
     L rest[3];
-    // Per lane: its first influence and how many; lanes past the range have none.
+    // Per lane: its strongest bone (its row's first influence) for the anchor and the start; lanes past the binding
+    // have none.
     std::uint32_t first[lanes], influences[lanes];
-    std::uint32_t most = 0;
-    for (int l = 0; l < lanes; ++l) {
-      const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
-      first[l] = bd.offsets[i];
-      influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
-      most = std::max(most, influences[l]);
-      const glm::vec3 u = bd.rest[i];
-      rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
-      const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
-      b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
-      const glm::vec3 n = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
-      b.normal[0][l] = n.x, b.normal[1][l] = n.y, b.normal[2][l] = n.z;
+    if (count == lanes) {
+      // A whole block: loops of a fixed count, which the vectoriser takes as interleaved loads.
+      const std::uint32_t* offsets = bd.offsets.data() + block_begin;
+      for (int l = 0; l < lanes; ++l) first[l] = offsets[l], influences[l] = offsets[l + 1] - offsets[l];
+      load(rest, bd.rest.data() + block_begin);
+      if (args.in_positions != nullptr) {
+        load(b.offset, args.in_positions + block_begin);
+        for (int l = 0; l < lanes; ++l)
+          for (int c = 0; c < 3; ++c) b.offset[c][l] -= rest[c][l];
+      } else {
+        for (int c = 0; c < 3; ++c) b.offset[c] = L::filled(0.0f);
+      }
+      if (args.in_normals != nullptr) load(b.normal, args.in_normals + block_begin);
+      else
+        for (int c = 0; c < 3; ++c) b.normal[c] = L::filled(0.0f);
+    } else {
+      for (int l = 0; l < lanes; ++l) {
+        const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
+        first[l] = bd.offsets[i];
+        influences[l] = l < count ? bd.offsets[i + 1] - bd.offsets[i] : 0;
+        const glm::vec3 u = bd.rest[i];
+        rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
+        const glm::vec3 d = args.in_positions != nullptr ? args.in_positions[i] - u : glm::vec3(0.0f);
+        b.offset[0][l] = d.x, b.offset[1][l] = d.y, b.offset[2][l] = d.z;
+        const glm::vec3 nv = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
+        b.normal[0][l] = nv.x, b.normal[1][l] = nv.y, b.normal[2][l] = nv.z;
+      }
     }
-    // The palette and the moments read as flat float arrays: a matrix is 16 floats, column-major (m[4 · column + row]);
-    // a moments record 10 floats in declaration order.
-    static_assert(sizeof(glm::mat4) == 16 * sizeof(float) && sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
-    // (Casts, not &palette[0][0][0]: an empty palette or binding is a null pointer, not an element to bind.)
-    const float* matrix_floats = reinterpret_cast<const float*>(palette);
-    const float* moment_floats = reinterpret_cast<const float*>(moments);
-    // The anchor, and the start rotation's matrix, from each lane's strongest bone (its first; the identity where it
-    // has none).
+    // The anchor, and the start rotation's matrix, from each lane's strongest bone (the identity where it has none):
+    // selected from the block's shared rounds' bones where one of them is it, else copied from the palette.
+    const std::uint32_t round_begin = pack.rounds[block], round_end = pack.rounds[block + 1];
+    const std::uint32_t shared = pack.shared[block];
+    const std::uint32_t* start = pack.start.data() + block * lanes;
+    L strongest[12];  // its 3×4, m[k + k / 3]
     for (int l = 0; l < lanes; ++l) {
-      const float* m = matrix_floats + (influences[l] > 0 ? 16 * std::size_t(bd.bones[first[l]]) : 0);
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) strongest[k][l] = k % 4 == 0 ? 1.0f : 0.0f;
+    }
+    for (std::uint32_t j = 0; j < shared; ++j) {
+      const float* m = matrix_floats + 16 * std::size_t(pack.bones[std::size_t(round_begin + j) * lanes]);
+      float one[12];
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) one[k] = m[k + k / 3];
+      for (int l = 0; l < lanes; ++l) {
+        const bool chosen = start[l] == j;
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) strongest[k][l] = chosen ? one[k] : strongest[k][l];
+      }
+    }
+    for (int l = 0; l < lanes; ++l)
+      if (influences[l] > 0 && start[l] == DirectDeltaMushLanes::none) {
+        const float* m = matrix_floats + 16 * std::size_t(bd.bones[first[l]]);
+        for (int k = 0; k < 12; ++k) strongest[k][l] = m[k + k / 3];
+      }
+    for (int l = 0; l < lanes; ++l) {
       const bool has = influences[l] > 0;
       const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
       DEFORM_UNROLL
-      for (int k = 0; k < 9; ++k) b.a[k][l] = has ? m[4 * (k / 3) + k % 3] : (k % 4 == 0 ? 1.0f : 0.0f);
+      for (int k = 0; k < 9; ++k) b.a[k][l] = strongest[k][l];
       DEFORM_UNROLL
-      for (int r = 0; r < 3; ++r)
-        b.anchor[r][l] = has ? mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) : 0.0f;
+      for (int r = 0; r < 3; ++r) {
+        const float at =
+            mul_add(strongest[r][l], ux,
+                    mul_add(strongest[3 + r][l], uy, mul_add(strongest[6 + r][l], uz, strongest[9 + r][l])));
+        b.anchor[r][l] = has ? at : 0.0f;
+      }
     }
-    // C = Σ A P + d pᵀ, q = Σ A p + d ψ (d = M u − anchor), Σ p, Σ ψ: the lanes' e-th influences together, a lane past
-    // its last adding exact zeros (its moments taken as 0), so that its sums do not depend on its block.
+    // The block's rounds (DirectDeltaMushLanes): the shared ones read one matrix; the others copy each lane's.
     L acc[16];  // C column-major (9), q (3), Σ p (3), Σ ψ
     for (int k = 0; k < 16; ++k) acc[k] = L::filled(0.0f);
-    for (std::uint32_t e = 0; e < most; ++e) {
-      // The lanes' e-th matrices (3×4) and moments copied into lanes (the vectoriser does not gather them).
-      L mat[12], mom[10];
-      for (int l = 0; l < lanes; ++l) {
-        const bool has = e < influences[l];
-        // A lane without an e-th influence reads the binding's first (there is one: some lane has an e-th), not its
-        // own row's start, which for a point without influences at the end of the binding is one past the last.
-        const std::uint32_t at = has ? first[l] + e : 0;
-        const float f = has ? 1.0f : 0.0f;
-        const float* m = matrix_floats + 16 * std::size_t(bd.bones[at]);
-        const float* o = moment_floats + 10 * std::size_t(at);
+    const std::uint32_t shared_end = round_begin + shared;
+    for (std::uint32_t r = round_begin; r < round_end; ++r) {
+      const float* moment = pack.moments.data() + std::size_t(r) * 10 * lanes;
+      const std::uint16_t* bone = pack.bones.data() + std::size_t(r) * lanes;
+      if (r < shared_end) {
+        const float* m = matrix_floats + 16 * std::size_t(bone[0]);
+        float one[12];
         DEFORM_UNROLL
-        for (int k = 0; k < 12; ++k) mat[k][l] = m[k + k / 3];
-        DEFORM_UNROLL
-        for (int k = 0; k < 10; ++k) mom[k][l] = o[k] * f;
-      }
-      for (int l = 0; l < lanes; ++l) {
-        float m[16];
-        DEFORM_UNROLL
-        for (int k = 0; k < 12; ++k) m[k + k / 3] = mat[k][l];
-        const float xx = mom[0][l], xy = mom[1][l], xz = mom[2][l], yy = mom[3][l], yz = mom[4][l], zz = mom[5][l];
-        const float px = mom[6][l], py = mom[7][l], pz = mom[8][l], psi = mom[9][l];
-        const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
-        float d[3];
-        DEFORM_UNROLL
-        for (int r = 0; r < 3; ++r)
-          d[r] = mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) - b.anchor[r][l];
-        DEFORM_UNROLL
-        for (int r = 0; r < 3; ++r) {
-          const float a0 = m[r], a1 = m[4 + r], a2 = m[8 + r];
-          acc[r][l] += mul_add(a0, xx, mul_add(a1, xy, mul_add(a2, xz, d[r] * px)));
-          acc[3 + r][l] += mul_add(a0, xy, mul_add(a1, yy, mul_add(a2, yz, d[r] * py)));
-          acc[6 + r][l] += mul_add(a0, xz, mul_add(a1, yz, mul_add(a2, zz, d[r] * pz)));
-          acc[9 + r][l] += mul_add(a0, px, mul_add(a1, py, mul_add(a2, pz, d[r] * psi)));
+        for (int k = 0; k < 12; ++k) one[k] = m[k + k / 3];
+        accumulate<true>(acc, one, nullptr, moment, rest, b.anchor);
+      } else {
+        L each[12];
+        for (int l = 0; l < lanes; ++l) {
+          const float* m = matrix_floats + 16 * std::size_t(bone[l]);
+          DEFORM_UNROLL
+          for (int k = 0; k < 12; ++k) each[k][l] = m[k + k / 3];
         }
-        acc[12][l] += px, acc[13][l] += py, acc[14][l] += pz, acc[15][l] += psi;
+        accumulate<false>(acc, nullptr, each, moment, rest, b.anchor);
       }
     }
     // C −= q (Σ p / ψ)ᵀ where Σ ψ > 0; else C = I, the start the identity, and the point stays put.
@@ -272,7 +354,7 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
     int all[lanes];
     for (int l = 0; l < lanes; ++l) all[l] = 1;
     for (int step = 0; step < ddm_fixed_steps; ++step) newton_step(b, all);
-    // Lanes still turning go on by themselves, as nearest_rotation would, up to its 16 steps.
+    // Lanes still turning go on by themselves, up to nearest_rotation's 16 steps.
     for (int step = ddm_fixed_steps; step < 16; ++step) {
       int any = 0;
       for (int l = 0; l < lanes; ++l) any |= b.moving[l];
@@ -282,13 +364,13 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
       newton_step(b, active);
     }
     Outputs o;
-    outputs(b, rest, o);
-    for (int l = 0; l < count; ++l) {
-      const std::size_t i = block_begin + std::size_t(l);
-      args.out_positions[i] = glm::vec3(o.position[0][l], o.position[1][l], o.position[2][l]);
-      if (args.out_normals != nullptr) args.out_normals[i] = glm::vec3(o.normal[0][l], o.normal[1][l], o.normal[2][l]);
-      if (args.out_rotations != nullptr) args.out_rotations[i] = glm::quat(b.q[0][l], b.q[1][l], b.q[2][l], b.q[3][l]);
-    }
+    if (args.out_normals != nullptr) outputs<true>(b, rest, o);
+    else outputs<false>(b, rest, o);
+    store(o.position, args.out_positions + block_begin, low, high);
+    if (args.out_normals != nullptr) store(o.normal, args.out_normals + block_begin, low, high);
+    if (args.out_rotations != nullptr)
+      for (int l = low; l < high; ++l)
+        args.out_rotations[block_begin + std::size_t(l)] = glm::quat(b.q[0][l], b.q[1][l], b.q[2][l], b.q[3][l]);
   }
 }
 
