@@ -1,6 +1,8 @@
 // Spring chains: tails as damped oscillators in fixed sub-steps, their bones' lengths kept, colliders, and the bent
 // pose written back into the world matrices.
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -349,24 +351,27 @@ using Lane = float[lane_count];
 constexpr int collider_rows = 8;  // start xyz, axis xyz, inverse_length2, radius
 constexpr std::size_t max_lane_colliders = 16;
 
+// c ? a : b by bits. A lane loop that writes `x[k] = c ? a : x[k]` is a conditional store to GCC, which it does not
+// vectorise ("control flow in loop"); the bit select is a plain store, and exact (it picks a or b, NaNs included).
+inline float pick(bool c, float a, float b) noexcept {
+  const std::uint32_t mask = 0u - std::uint32_t(c);
+  return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & mask) | (std::bit_cast<std::uint32_t>(b) & ~mask));
+}
+
 }  // namespace
 
-void SpringChains::links_lanes(SpringChains* const* group, std::size_t count, std::size_t c, std::size_t i,
-                               const Oscillator* maps, Link* carry, const float* colliders,
-                               std::size_t collider_count) noexcept {
-  // links_substep for up to lane_count members in structure-of-arrays lanes: each line of links_substep (and of glm's
+void SpringChains::chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
+                               const Link* carry, const float* colliders, std::size_t collider_count) noexcept {
+  // substep()'s links for up to lane_count members in structure-of-arrays lanes: each line of substep (and of glm's
   // products it calls) written per lane with its operations in the same order, and its branches as selects, so that
-  // each lane rounds exactly as the member alone and the loops over the lanes become vector code. Lanes past `count`
-  // repeat the first member and are not written back.
+  // each lane rounds exactly as the member alone and the loops over the lanes become vector code. What a link hands
+  // the next (bend, head, its velocity) stays in the lanes along the chain. Lanes past `count` repeat the first member
+  // and are not written back.
   const Chain& shape = group[0]->chains_[c];
-  const std::size_t j = shape.first + i, point0 = shape.first + c;
-  Lane ax, ay, az, qw, qx, qy, qz, hx, hy, hz, hvx, hvy, hvz, gx, gy, gz, radius, inverse_h;
-  Lane py, pv, vy, vv, pg, vg, rx0, ry0, rz0, px0, py0, pz0, vx0, vy0, vz0;
+  const std::size_t point0 = shape.first + c;
+  Lane qw, qx, qy, qz, hx, hy, hz, hvx, hvy, hvz, gx, gy, gz, radius, inverse_h, py, pv, vy, vv, pg, vg;
   for (int k = 0; k < lane_count; ++k) {
     const std::size_t g = std::size_t(k) < count ? std::size_t(k) : 0;
-    const SpringChains& s = *group[g];
-    const glm::vec3 from = s.sample_points_[point0 + i], to = s.sample_points_[point0 + i + 1];
-    ax[k] = to.x - from.x, ay[k] = to.y - from.y, az[k] = to.z - from.z;
     const Link& l = carry[g];
     qw[k] = l.bend.w, qx[k] = l.bend.x, qy[k] = l.bend.y, qz[k] = l.bend.z;
     hx[k] = l.head.x, hy[k] = l.head.y, hz[k] = l.head.z;
@@ -375,140 +380,158 @@ void SpringChains::links_lanes(SpringChains* const* group, std::size_t count, st
     radius[k] = l.radius, inverse_h[k] = l.inverse_h;
     const Oscillator& m = maps[g];
     py[k] = m.py, pv[k] = m.pv, vy[k] = m.vy, vv[k] = m.vv, pg[k] = m.pg, vg[k] = m.vg;
-    const glm::vec3 r = s.rests_[j], p = s.positions_[j], v = s.velocities_[j];
-    rx0[k] = r.x, ry0[k] = r.y, rz0[k] = r.z, px0[k] = p.x, py0[k] = p.y, pz0[k] = p.z;
-    vx0[k] = v.x, vy0[k] = v.y, vz0[k] = v.z;
   }
-  Lane length, bx, by, bz, rx, ry, rz, px, pyy, pz, vx, vyy, vz;
-  // keep_length on lane k: back to the bone's length from the head, the velocity along it made the head's.
-  const auto keep_length = [&](int k, float& ox, float& oy, float& oz, float& wx, float& wy, float& wz) {
-    const float fx = ox - hx[k], fy = oy - hy[k], fz = oz - hz[k];
-    const float distance = std::sqrt(fx * fx + fy * fy + fz * fz);
-    const float inverse_distance = 1.0f / distance, inverse_length = 1.0f / length[k];
-    const bool far = distance > 1e-12f * length[k], long_bone = length[k] > 0.0f;
-    const float lx = far ? fx * inverse_distance : long_bone ? bx[k] * inverse_length : bx[k];
-    const float ly = far ? fy * inverse_distance : long_bone ? by[k] * inverse_length : by[k];
-    const float lz = far ? fz * inverse_distance : long_bone ? bz[k] * inverse_length : bz[k];
-    ox = hx[k] + lx * length[k], oy = hy[k] + ly * length[k], oz = hz[k] + lz * length[k];
-    const float d = (wx - hvx[k]) * lx + (wy - hvy[k]) * ly + (wz - hvz[k]) * lz;
-    wx = wx - d * lx, wy = wy - d * ly, wz = wz - d * lz;
-  };
-  for (int k = 0; k < lane_count; ++k) {
-    length[k] = std::sqrt(ax[k] * ax[k] + ay[k] * ay[k] + az[k] * az[k]);
-    // bend * animated (glm): v + ((uv * w) + uuv) * 2, uv = q.xyz × v, uuv = q.xyz × uv.
-    const float ux = qy[k] * az[k] - ay[k] * qz[k], uy = qz[k] * ax[k] - az[k] * qx[k],
-                uz = qx[k] * ay[k] - ax[k] * qy[k];
-    const float uux = qy[k] * uz - uy * qz[k], uuy = qz[k] * ux - uz * qx[k], uuz = qx[k] * uy - ux * qy[k];
-    bx[k] = ax[k] + (ux * qw[k] + uux) * 2.0f, by[k] = ay[k] + (uy * qw[k] + uuy) * 2.0f,
-    bz[k] = az[k] + (uz * qw[k] + uuz) * 2.0f;
-    rx[k] = hx[k] + bx[k], ry[k] = hy[k] + by[k], rz[k] = hz[k] + bz[k];
-    const float rvx = (rx[k] - rx0[k]) * inverse_h[k], rvy = (ry[k] - ry0[k]) * inverse_h[k],
-                rvz = (rz[k] - rz0[k]) * inverse_h[k];
-    const float yx = px0[k] - rx0[k], yy = py0[k] - ry0[k], yz = pz0[k] - rz0[k];
-    const float wx = vx0[k] - rvx, wy = vy0[k] - rvy, wz = vz0[k] - rvz;
-    px[k] = rx[k] + py[k] * yx + pv[k] * wx + pg[k] * gx[k];
-    pyy[k] = ry[k] + py[k] * yy + pv[k] * wy + pg[k] * gy[k];
-    pz[k] = rz[k] + py[k] * yz + pv[k] * wz + pg[k] * gz[k];
-    vx[k] = rvx + vy[k] * yx + vv[k] * wx + vg[k] * gx[k];
-    vyy[k] = rvy + vy[k] * yy + vv[k] * wy + vg[k] * gy[k];
-    vz[k] = rvz + vy[k] * yz + vv[k] * wz + vg[k] * gz[k];
-    keep_length(k, px[k], pyy[k], pz[k], vx[k], vyy[k], vz[k]);
-  }
-  // Flags as int lanes and combined by & and | (no short circuit): branch-free loops the vectoriser takes.
-  int active[lane_count];
-  for (int k = 0; k < lane_count; ++k) active[k] = 1;
-  for (int round = 0; round < 4; ++round) {
-    int pushed[lane_count];
-    for (int k = 0; k < lane_count; ++k) pushed[k] = 0;
-    for (std::size_t n = 0; n < collider_count; ++n) {
-      const float* row = colliders + n * collider_rows * lane_count;
-      const float* sx = row;
-      const float* sy = row + lane_count;
-      const float* sz = row + 2 * lane_count;
-      const float* cx = row + 3 * lane_count;
-      const float* cy = row + 4 * lane_count;
-      const float* cz = row + 5 * lane_count;
-      const float* inverse_length2 = row + 6 * lane_count;
-      const float* collider_radius = row + 7 * lane_count;
+  for (std::size_t i = 0; i < shape.count; ++i) {
+    const std::size_t j = shape.first + i;
+    Lane ax, ay, az, rx0, ry0, rz0, px0, py0, pz0, vx0, vy0, vz0;
+    for (int k = 0; k < lane_count; ++k) {
+      const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
+      const glm::vec3 from = s.sample_points_[point0 + i], to = s.sample_points_[point0 + i + 1];
+      ax[k] = to.x - from.x, ay[k] = to.y - from.y, az[k] = to.z - from.z;
+      const glm::vec3 r = s.rests_[j], p = s.positions_[j], v = s.velocities_[j];
+      rx0[k] = r.x, ry0[k] = r.y, rz0[k] = r.z, px0[k] = p.x, py0[k] = p.y, pz0[k] = p.z;
+      vx0[k] = v.x, vy0[k] = v.y, vz0[k] = v.z;
+    }
+    Lane length, bx, by, bz, rx, ry, rz, px, pyy, pz, vx, vyy, vz;
+    // keep_length on lane k: back to the bone's length from the head, the velocity along it made the head's.
+    const auto keep_length = [&](int k, float& ox, float& oy, float& oz, float& wx, float& wy, float& wz) {
+      const float fx = ox - hx[k], fy = oy - hy[k], fz = oz - hz[k];
+      const float distance = std::sqrt(fx * fx + fy * fy + fz * fz);
+      const float inverse_distance = 1.0f / distance, inverse_length = 1.0f / length[k];
+      const bool far = distance > 1e-12f * length[k], long_bone = length[k] > 0.0f;
+      const float lx = far ? fx * inverse_distance : long_bone ? bx[k] * inverse_length : bx[k];
+      const float ly = far ? fy * inverse_distance : long_bone ? by[k] * inverse_length : by[k];
+      const float lz = far ? fz * inverse_distance : long_bone ? bz[k] * inverse_length : bz[k];
+      ox = hx[k] + lx * length[k], oy = hy[k] + ly * length[k], oz = hz[k] + lz * length[k];
+      const float d = (wx - hvx[k]) * lx + (wy - hvy[k]) * ly + (wz - hvz[k]) * lz;
+      wx = wx - d * lx, wy = wy - d * ly, wz = wz - d * lz;
+    };
+    for (int k = 0; k < lane_count; ++k) {
+      length[k] = std::sqrt(ax[k] * ax[k] + ay[k] * ay[k] + az[k] * az[k]);
+      // bend * animated (glm): v + ((uv * w) + uuv) * 2, uv = q.xyz × v, uuv = q.xyz × uv.
+      const float ux = qy[k] * az[k] - ay[k] * qz[k], uy = qz[k] * ax[k] - az[k] * qx[k],
+                  uz = qx[k] * ay[k] - ax[k] * qy[k];
+      const float uux = qy[k] * uz - uy * qz[k], uuy = qz[k] * ux - uz * qx[k], uuz = qx[k] * uy - ux * qy[k];
+      bx[k] = ax[k] + (ux * qw[k] + uux) * 2.0f, by[k] = ay[k] + (uy * qw[k] + uuy) * 2.0f,
+      bz[k] = az[k] + (uz * qw[k] + uuz) * 2.0f;
+      rx[k] = hx[k] + bx[k], ry[k] = hy[k] + by[k], rz[k] = hz[k] + bz[k];
+      const float rvx = (rx[k] - rx0[k]) * inverse_h[k], rvy = (ry[k] - ry0[k]) * inverse_h[k],
+                  rvz = (rz[k] - rz0[k]) * inverse_h[k];
+      const float yx = px0[k] - rx0[k], yy = py0[k] - ry0[k], yz = pz0[k] - rz0[k];
+      const float wx = vx0[k] - rvx, wy = vy0[k] - rvy, wz = vz0[k] - rvz;
+      px[k] = rx[k] + py[k] * yx + pv[k] * wx + pg[k] * gx[k];
+      pyy[k] = ry[k] + py[k] * yy + pv[k] * wy + pg[k] * gy[k];
+      pz[k] = rz[k] + py[k] * yz + pv[k] * wz + pg[k] * gz[k];
+      vx[k] = rvx + vy[k] * yx + vv[k] * wx + vg[k] * gx[k];
+      vyy[k] = rvy + vy[k] * yy + vv[k] * wy + vg[k] * gy[k];
+      vz[k] = rvz + vy[k] * yz + vv[k] * wz + vg[k] * gz[k];
+      keep_length(k, px[k], pyy[k], pz[k], vx[k], vyy[k], vz[k]);
+    }
+    // Flags as int lanes and combined by & and | (no short circuit): branch-free loops the vectoriser takes.
+    int active[lane_count];
+    for (int k = 0; k < lane_count; ++k) active[k] = 1;
+    for (int round = 0; round < 4; ++round) {
+      int pushed[lane_count];
+      for (int k = 0; k < lane_count; ++k) pushed[k] = 0;
+      for (std::size_t n = 0; n < collider_count; ++n) {
+        const float* row = colliders + n * collider_rows * lane_count;
+        const float* sx = row;
+        const float* sy = row + lane_count;
+        const float* sz = row + 2 * lane_count;
+        const float* cx = row + 3 * lane_count;
+        const float* cy = row + 4 * lane_count;
+        const float* cz = row + 5 * lane_count;
+        const float* inverse_length2 = row + 6 * lane_count;
+        const float* collider_radius = row + 7 * lane_count;
+        // First which lanes are inside, without a square root (most tails are outside every capsule); the push only
+        // when one is.
+        Lane nx, ny, nz, ox, oy, oz, reach;
+        int hit[lane_count];
+        for (int k = 0; k < lane_count; ++k) {
+          const float along =
+              ((px[k] - sx[k]) * cx[k] + (pyy[k] - sy[k]) * cy[k] + (pz[k] - sz[k]) * cz[k]) * inverse_length2[k];
+          const float t = along < 0.0f ? 0.0f : 1.0f < along ? 1.0f : along;  // std::clamp
+          nx[k] = sx[k] + cx[k] * t, ny[k] = sy[k] + cy[k] * t, nz[k] = sz[k] + cz[k] * t;
+          ox[k] = px[k] - nx[k], oy[k] = pyy[k] - ny[k], oz[k] = pz[k] - nz[k];
+          reach[k] = collider_radius[k] + radius[k];
+          const float distance2 = ox[k] * ox[k] + oy[k] * oy[k] + oz[k] * oz[k];
+          hit[k] = active[k] & int(!(distance2 >= reach[k] * reach[k]));
+        }
+        int any_hit = 0;
+        for (int k = 0; k < lane_count; ++k) any_hit |= hit[k];
+        if (any_hit == 0) continue;
+        for (int k = 0; k < lane_count; ++k) {
+          const float p0x = px[k], p0y = pyy[k], p0z = pz[k], v0x = vx[k], v0y = vyy[k], v0z = vz[k];
+          const float distance = std::sqrt(ox[k] * ox[k] + oy[k] * oy[k] + oz[k] * oz[k]);
+          // glm::normalize(rest - nearest + 1e-30f): the direction from the nearest point to the rest.
+          const float ex = rx[k] - nx[k] + 1e-30f, ey = ry[k] - ny[k] + 1e-30f, ez = rz[k] - nz[k] + 1e-30f;
+          const float inverse_e = 1.0f / std::sqrt(ex * ex + ey * ey + ez * ez);
+          const float inverse_o = 1.0f / distance;
+          const int apart = int(distance > 1e-12f * reach[k]);
+          const float mx = apart ? ox[k] * inverse_o : ex * inverse_e, my = apart ? oy[k] * inverse_o : ey * inverse_e,
+                      mz = apart ? oz[k] * inverse_o : ez * inverse_e;
+          const float inward = v0x * mx + v0y * my + v0z * mz;
+          const int into = hit[k] & int(inward < 0.0f);
+          const float qx_ = nx[k] + mx * reach[k], qy_ = ny[k] + my * reach[k], qz_ = nz[k] + mz * reach[k];
+          const float ux = v0x - inward * mx, uy = v0y - inward * my, uz = v0z - inward * mz;
+          px[k] = pick(hit[k] != 0, qx_, p0x);
+          pyy[k] = pick(hit[k] != 0, qy_, p0y);
+          pz[k] = pick(hit[k] != 0, qz_, p0z);
+          vx[k] = pick(into != 0, ux, v0x);
+          vyy[k] = pick(into != 0, uy, v0y);
+          vz[k] = pick(into != 0, uz, v0z);
+          pushed[k] = pushed[k] | hit[k];
+        }
+      }
+      int any = 0;
+      for (int k = 0; k < lane_count; ++k) any |= pushed[k];
+      if (any == 0) break;
       for (int k = 0; k < lane_count; ++k) {
         const float p0x = px[k], p0y = pyy[k], p0z = pz[k], v0x = vx[k], v0y = vyy[k], v0z = vz[k];
-        const float along =
-            ((p0x - sx[k]) * cx[k] + (p0y - sy[k]) * cy[k] + (p0z - sz[k]) * cz[k]) * inverse_length2[k];
-        const float t = along < 0.0f ? 0.0f : 1.0f < along ? 1.0f : along;  // std::clamp
-        const float nx = sx[k] + cx[k] * t, ny = sy[k] + cy[k] * t, nz = sz[k] + cz[k] * t;
-        const float ox = p0x - nx, oy = p0y - ny, oz = p0z - nz;
-        const float reach = collider_radius[k] + radius[k];
-        const float distance2 = ox * ox + oy * oy + oz * oz;
-        const int hit = active[k] & int(!(distance2 >= reach * reach));
-        const float distance = std::sqrt(distance2);
-        // glm::normalize(rest - nearest + 1e-30f): the direction from the nearest point to the rest.
-        const float ex = rx[k] - nx + 1e-30f, ey = ry[k] - ny + 1e-30f, ez = rz[k] - nz + 1e-30f;
-        const float inverse_e = 1.0f / std::sqrt(ex * ex + ey * ey + ez * ez);
-        const float inverse_o = 1.0f / distance;
-        const int apart = int(distance > 1e-12f * reach);
-        const float mx = apart ? ox * inverse_o : ex * inverse_e, my = apart ? oy * inverse_o : ey * inverse_e,
-                    mz = apart ? oz * inverse_o : ez * inverse_e;
-        const float inward = v0x * mx + v0y * my + v0z * mz;
-        const int into = hit & int(inward < 0.0f);
-        const float qx_ = nx + mx * reach, qy_ = ny + my * reach, qz_ = nz + mz * reach;
-        const float ux = v0x - inward * mx, uy = v0y - inward * my, uz = v0z - inward * mz;
-        px[k] = hit != 0 ? qx_ : p0x;
-        pyy[k] = hit != 0 ? qy_ : p0y;
-        pz[k] = hit != 0 ? qz_ : p0z;
-        vx[k] = into != 0 ? ux : v0x;
-        vyy[k] = into != 0 ? uy : v0y;
-        vz[k] = into != 0 ? uz : v0z;
-        pushed[k] = pushed[k] | hit;
+        float ox = p0x, oy = p0y, oz = p0z, wx = v0x, wy = v0y, wz = v0z;
+        keep_length(k, ox, oy, oz, wx, wy, wz);
+        const int on = pushed[k];
+        active[k] = on;
+        px[k] = pick(on != 0, ox, p0x);
+        pyy[k] = pick(on != 0, oy, p0y);
+        pz[k] = pick(on != 0, oz, p0z);
+        vx[k] = pick(on != 0, wx, v0x);
+        vyy[k] = pick(on != 0, wy, v0y);
+        vz[k] = pick(on != 0, wz, v0z);
       }
     }
     for (int k = 0; k < lane_count; ++k) {
-      const float p0x = px[k], p0y = pyy[k], p0z = pz[k], v0x = vx[k], v0y = vyy[k], v0z = vz[k];
-      float ox = p0x, oy = p0y, oz = p0z, wx = v0x, wy = v0y, wz = v0z;
-      keep_length(k, ox, oy, oz, wx, wy, wz);
-      const int on = pushed[k];
-      active[k] = on;
-      px[k] = on != 0 ? ox : p0x;
-      pyy[k] = on != 0 ? oy : p0y;
-      pz[k] = on != 0 ? oz : p0z;
-      vx[k] = on != 0 ? wx : v0x;
-      vyy[k] = on != 0 ? wy : v0y;
-      vz[k] = on != 0 ? wz : v0z;
+      // shortest_arc(bone, p - head, length²) * bend, as the scalar functions compute it.
+      const float norms = length[k] * length[k];
+      const float ex = px[k] - hx[k], ey = pyy[k] - hy[k], ez = pz[k] - hz[k];
+      const float w = norms + (bx[k] * ex + by[k] * ey + bz[k] * ez);
+      const bool opposite = w <= 1e-6f * norms;
+      const bool x_major = std::abs(bx[k]) > std::abs(bz[k]);
+      const float tw = opposite ? 0.0f : w;
+      const float tx = opposite ? (x_major ? -by[k] : 0.0f) : by[k] * ez - ey * bz[k];
+      const float ty = opposite ? (x_major ? bx[k] : -bz[k]) : bz[k] * ex - ez * bx[k];
+      const float tz = opposite ? (x_major ? 0.0f : by[k]) : bx[k] * ey - ex * by[k];
+      const float inverse = 1.0f / std::sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
+      const bool turn = norms > 0.0f;
+      const float rw = turn ? tw * inverse : 1.0f, rxx = turn ? tx * inverse : 0.0f, ryy = turn ? ty * inverse : 0.0f,
+                  rzz = turn ? tz * inverse : 0.0f;
+      const float nw = rw * qw[k] - rxx * qx[k] - ryy * qy[k] - rzz * qz[k];
+      const float nx = rw * qx[k] + rxx * qw[k] + ryy * qz[k] - rzz * qy[k];
+      const float ny = rw * qy[k] + ryy * qw[k] + rzz * qx[k] - rxx * qz[k];
+      const float nz = rw * qz[k] + rzz * qw[k] + rxx * qy[k] - ryy * qx[k];
+      qw[k] = nw, qx[k] = nx, qy[k] = ny, qz[k] = nz;
     }
-    int any = 0;
-    for (int k = 0; k < lane_count; ++k) any |= pushed[k];
-    if (any == 0) break;
-  }
-  for (int k = 0; k < lane_count; ++k) {
-    // shortest_arc(bone, p - head, length²) * bend, as the scalar functions compute it.
-    const float norms = length[k] * length[k];
-    const float ex = px[k] - hx[k], ey = pyy[k] - hy[k], ez = pz[k] - hz[k];
-    const float w = norms + (bx[k] * ex + by[k] * ey + bz[k] * ez);
-    const bool opposite = w <= 1e-6f * norms;
-    const bool x_major = std::abs(bx[k]) > std::abs(bz[k]);
-    const float tw = opposite ? 0.0f : w;
-    const float tx = opposite ? (x_major ? -by[k] : 0.0f) : by[k] * ez - ey * bz[k];
-    const float ty = opposite ? (x_major ? bx[k] : -bz[k]) : bz[k] * ex - ez * bx[k];
-    const float tz = opposite ? (x_major ? 0.0f : by[k]) : bx[k] * ey - ex * by[k];
-    const float inverse = 1.0f / std::sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
-    const bool turn = norms > 0.0f;
-    const float rw = turn ? tw * inverse : 1.0f, rxx = turn ? tx * inverse : 0.0f, ryy = turn ? ty * inverse : 0.0f,
-                rzz = turn ? tz * inverse : 0.0f;
-    const float nw = rw * qw[k] - rxx * qx[k] - ryy * qy[k] - rzz * qz[k];
-    const float nx = rw * qx[k] + rxx * qw[k] + ryy * qz[k] - rzz * qy[k];
-    const float ny = rw * qy[k] + ryy * qw[k] + rzz * qx[k] - rxx * qz[k];
-    const float nz = rw * qz[k] + rzz * qw[k] + rxx * qy[k] - ryy * qx[k];
-    qw[k] = nw, qx[k] = nx, qy[k] = ny, qz[k] = nz;
-  }
-  for (std::size_t g = 0; g < count; ++g) {
-    SpringChains& s = *group[g];
-    const auto k = int(g);
-    s.positions_[j] = glm::vec3(px[k], pyy[k], pz[k]);
-    s.velocities_[j] = glm::vec3(vx[k], vyy[k], vz[k]);
-    s.rests_[j] = glm::vec3(rx[k], ry[k], rz[k]);
-    Link& l = carry[g];
-    l.bend = glm::quat(qw[k], qx[k], qy[k], qz[k]);
-    l.head = s.positions_[j];
-    l.head_velocity = s.velocities_[j];
+    for (std::size_t g = 0; g < count; ++g) {
+      SpringChains& s = *group[g];
+      const auto k = int(g);
+      s.positions_[j] = glm::vec3(px[k], pyy[k], pz[k]);
+      s.velocities_[j] = glm::vec3(vx[k], vyy[k], vz[k]);
+      s.rests_[j] = glm::vec3(rx[k], ry[k], rz[k]);
+    }
+    for (int k = 0; k < lane_count; ++k) {  // the next link's head is this tail
+      hx[k] = px[k], hy[k] = pyy[k], hz[k] = pz[k];
+      hvx[k] = vx[k], hvy[k] = vyy[k], hvz[k] = vz[k];
+    }
   }
 }
 
@@ -574,8 +597,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
             for (int r = 0; r < collider_rows; ++r) row[r * lane_count + k] = values[r];
           }
         }
-        for (std::size_t i = 0; i < first.chains_[c].count; ++i)
-          links_lanes(group, count, c, i, maps, carry, colliders, used.size());
+        chain_lanes(group, count, c, maps, carry, colliders, used.size());
       }
     }
   };

@@ -161,11 +161,10 @@ class DEFORM_RUNTIME_API SpringChains {
   Link begin_substep(const Chain& chain, float h, glm::vec3* heads) const noexcept;
   void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
                glm::vec3* rests, glm::vec3* heads) const noexcept;
-  // Link i of chain c, one sub-step of the kept state, for `count` (2 to SpringCrowdJob::max_group) members of one
-  // layout in lanes: what substep() does for each, the same bits. `colliders`: the chain's colliders in lanes.
-  static void links_lanes(SpringChains* const* group, std::size_t count, std::size_t c, std::size_t i,
-                          const Oscillator* maps, Link* carry, const float* colliders,
-                          std::size_t collider_count) noexcept;
+  // Chain c, one sub-step of the kept state, for `count` (2 to SpringCrowdJob::max_group) members of one layout in
+  // lanes: what substep() does for each, the same bits. `colliders`: the chain's colliders in lanes.
+  static void chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
+                          const Link* carry, const float* colliders, std::size_t collider_count) noexcept;
   // advance() for `count` chains of one layout (same_layout) whose kept state is as old (owed_), their sub-steps
   // interleaved link by link: each chain's links wait on one another, the chains do not. The same bits as one by one.
   static void advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept;
