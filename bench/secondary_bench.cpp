@@ -174,8 +174,8 @@ void spring_crowd(benchmark::State& state) {
 }
 
 // spring/crowd_job_1000x32/threads:N/group:G: the same crowd and motion through SpringCrowdJob (G instances' sub-steps
-// interleaved link by link; group 1 is the per-instance order), the bone matrices in flat arrays, instance after
-// instance. The same bits as spring/crowd_1000x32 computes.
+// together in lanes; group 1 runs each alone), the bone matrices in flat arrays, instance after instance. The same bits
+// as spring/crowd_1000x32 computes.
 void spring_crowd_job(benchmark::State& state) {
   const deform::Skeleton skeleton = strand_skeleton();
   std::vector<deform::SpringChainSpec> chains;

@@ -165,8 +165,8 @@ class DEFORM_RUNTIME_API SpringChains {
   // lanes: what substep() does for each, the same bits. `colliders`: the chain's colliders in lanes.
   static void chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
                           const Link* carry, const float* colliders, std::size_t collider_count) noexcept;
-  // advance() for `count` chains of one layout (same_layout) whose kept state is as old (owed_), their sub-steps
-  // interleaved link by link: each chain's links wait on one another, the chains do not. The same bits as one by one.
+  // advance() for `count` members of one layout (same_layout) whose kept state is as old (owed_), their sub-steps in
+  // lanes (chain_lanes): each chain's links wait on one another, the members do not. The same bits as one by one.
   static void advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept;
   void advance(double dt) noexcept;
   bool same_layout(const SpringChains& other) const noexcept;
@@ -206,9 +206,10 @@ class DEFORM_RUNTIME_API SpringChains {
 // Many characters' spring chains stepped together: each instance's run(dt, its world, its rate, its palette), the
 // instances' bone matrices laid out one instance after another in caller-owned flat arrays. A chain's links wait on
 // one another (each link's rest turns with the bend above it: square roots and divisions in a row), so one
-// character's sub-step is bound by that latency; the job runs up to `group` instances' sub-steps interleaved link by
-// link, so that the processor overlaps independent instances. Each instance computes exactly what its own run()
-// would, so the result is the same bits for any group size, range split or thread count.
+// character's sub-step is bound by that latency; the job runs up to `group` instances' sub-steps together in
+// structure-of-arrays lanes (one lane per instance, vector code), each lane the scalar code's operations in its
+// order. Each instance computes exactly what its own run() would: the same bits for any group size, range split or
+// thread count. Group 8 fills the lanes; smaller groups leave lanes idle (group 1 runs each instance alone).
 //
 // Every instance must have the chains of instances[0] laid out alike (the same chain count, bones per chain, collider
 // count and each chain's colliders, the same skeleton size and sub-step; settings such as frequency may differ):
