@@ -860,14 +860,14 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
       std::uniform_real_distribution<double> jitter(0.9, 1.1);
       double t = 0.0;
       float closest = 1e9f;
-      for (int frame = 0; frame < 150; ++frame) {
+      for (int frame = 0; frame < 90; ++frame) {
         // Frame times jittered so that leftovers differ; a pause (dt 0) now and then; rates on some frames only;
         // some instances reset or restarted, so that their kept states differ in age within a group.
         const float dt = frame == 0 ? 0.0f : frame % 37 == 0 ? 0.0f : float(jitter(random) / 60.0);
         t += double(dt);
         const bool rates = frame % 4 != 3;
         for (std::size_t i = 0; i < count; ++i) {
-          if ((frame == 40 && i % 5 == 2) || (frame == 90 && i % 4 == 0)) {
+          if ((frame == 40 && i % 5 == 2) || (frame == 80 && i % 4 == 0)) {
             alone.instances[i].reset();
             together.instances[i].reset();
           }
