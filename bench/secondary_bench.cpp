@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdlib>
 #include <functional>
 #include <string>
 #include <vector>
@@ -172,6 +173,60 @@ void spring_crowd(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(spring_crowd_size));
 }
 
+// spring/crowd_job_1000x32/threads:N/group:G: the same crowd and motion through SpringCrowdJob (G instances' sub-steps
+// together in lanes; group 1 runs each alone), the bone matrices in flat arrays, instance after instance. The same bits
+// as spring/crowd_1000x32 computes.
+void spring_crowd_job(benchmark::State& state) {
+  const deform::Skeleton skeleton = strand_skeleton();
+  std::vector<deform::SpringChainSpec> chains;
+  for (int s = 0; s < strands; ++s) {
+    deform::SpringChainSpec chain;
+    chain.name = "strand" + std::to_string(s);
+    for (int k = 0; k < strand_links; ++k) chain.bones.push_back(2 + s * strand_links + k);
+    chain.frequency = 3.0f;
+    chain.damping_ratio = 0.3f;
+    chain.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+    chain.radius = 0.01f;
+    chain.colliders = {0, 1};
+    chains.push_back(chain);
+  }
+  const std::vector<deform::SpringCollider> colliders = {
+      {1, glm::vec3(-0.08f, -0.1f, 0.0f), glm::vec3(0.08f, -0.1f, 0.0f), 0.1f},
+      {1, glm::vec3(0.0f, -0.3f, -0.05f), glm::vec3(0.0f, -0.3f, 0.05f), 0.12f}};
+  const std::size_t bones = skeleton.bone_count();
+  std::vector<deform::SpringChains> springs(spring_crowd_size, deform::SpringChains(skeleton, chains, colliders));
+  std::vector<glm::mat4> world(bones * spring_crowd_size), rate(world.size()), palette(world.size());
+  const double hz = 60.0;
+  int frame = 0;
+  deform::SpringCrowdJob job;
+  job.instances = springs;
+  job.dt = float(1.0 / hz);
+  job.world = world;
+  job.world_rate = rate;
+  job.palette = palette;
+  job.group = std::size_t(state.range(1));
+  if (!job.validate()) state.SkipWithError(job.validate().reason());
+  const std::function<void(std::size_t, std::size_t)> range = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const double t = frame / hz + 0.37 * double(i);
+      const glm::mat4 root = swing(t), root_rate = (swing(t + 1e-3) - root) / 1e-3f;
+      for (std::size_t b = 0; b < bones; ++b) {  // what the character's FK gives
+        world[i * bones + b] = root * skeleton.bind_world()[b];
+        rate[i * bones + b] = root_rate * skeleton.bind_world()[b];
+      }
+    }
+    if (!job.run(begin, end)) std::abort();
+    benchmark::DoNotOptimize(palette.data());
+  };
+  deform::ThreadPool pool(unsigned(state.range(0)));
+  for (int f = 0; f < 60; ++f, ++frame) range(0, spring_crowd_size);  // every instance under way
+  for (auto _ : state) {
+    pool.parallel_for(spring_crowd_size, 1, range);
+    ++frame;
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(spring_crowd_size));
+}
+
 BENCHMARK(spring_chain)->Name("spring/chain")->ArgNames({"links", "hz"})->Args({6, 60})->Args({6, 240})->Args({24, 60});
 BENCHMARK(lattices_step)->Name("elastic/builtin_lattices_step")->ArgName("inertial")->Arg(0)->Arg(1);
 
@@ -181,5 +236,11 @@ BENCHMARK(spring_crowd)
     ->ArgName("threads")
     ->Arg(1)
     ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(spring_crowd_job)
+    ->Name("spring/crowd_job_1000x32")
+    ->ArgNames({"threads", "group"})
+    ->ArgsProduct({{1, 2}, {1, 4, 8}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <glm/gtc/matrix_transform.hpp>
 #include <random>
@@ -767,4 +768,214 @@ TEST_CASE("vrm_spring_settings: at 60 Hz the converted chain moves as VRM's upda
   CHECK_THROWS_WITH_AS(deform::vrm_spring_settings(joint, 0.0f), doctest::Contains("length"), deform::Error);
   joint.stiffness = 0.0f;
   CHECK_THROWS_WITH_AS(deform::vrm_spring_settings(joint, 0.3f), doctest::Contains("stiffness"), deform::Error);
+}
+
+namespace {
+
+// A crowd for SpringCrowdJob: a root with two chains of five hanging from it (so that gravity lays them on the
+// colliders under them), a sphere and a capsule; instance i swings at its own seeded phase and amplitude, and some
+// have their own frequency and damping.
+struct SpringCrowd {
+  deform::Skeleton skeleton;
+  std::vector<deform::SpringChains> instances;
+};
+
+SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed) {
+  std::vector<deform::Bone> bones;
+  bones.push_back({"root", -1, {1, 6}, glm::vec3(0.0f), glm::vec3(0.0f), {}});
+  for (int s = 0; s < 2; ++s) {
+    for (int k = 0; k < 5; ++k) {
+      const auto id = std::int32_t(1 + s * 5 + k);
+      bones.push_back({"strand" + std::to_string(s) + "_" + std::to_string(k),
+                       k == 0 ? 0 : id - 1,
+                       k + 1 < 5 ? std::vector<std::int32_t>{id + 1} : std::vector<std::int32_t>{},
+                       k == 0 ? glm::vec3(s == 0 ? 0.1f : -0.1f, 0.0f, 0.0f) : glm::vec3(0.06f, 0.0f, 0.0f),
+                       glm::vec3(0.0f),
+                       {}});
+    }
+  }
+  SpringCrowd crowd{deform::Skeleton(bones), {}};
+  std::vector<deform::SpringChainSpec> chains;
+  for (int s = 0; s < 2; ++s) {
+    deform::SpringChainSpec chain;
+    chain.name = "strand" + std::to_string(s);
+    for (int k = 0; k < 5; ++k) chain.bones.push_back(1 + s * 5 + k);
+    chain.frequency = 2.0f;
+    chain.damping_ratio = 0.2f;
+    chain.gravity = glm::vec3(0.0f, -9.81f, 0.0f);
+    chain.radius = 0.02f;
+    chain.colliders = {0, 1};
+    chains.push_back(chain);
+  }
+  const std::vector<deform::SpringCollider> colliders = {
+      {0, glm::vec3(0.25f, -0.2f, 0.0f), glm::vec3(0.25f, -0.2f, 0.0f), 0.15f},
+      {0, glm::vec3(-0.3f, -0.15f, -0.1f), glm::vec3(-0.3f, -0.15f, 0.1f), 0.1f}};
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> uniform(0.5f, 4.0f);
+  for (std::size_t i = 0; i < count; ++i) {
+    crowd.instances.emplace_back(crowd.skeleton, chains, colliders);
+    if (i % 3 == 1) {
+      deform::SpringChainSpec tuned = chains[1];
+      tuned.frequency = uniform(random);
+      tuned.damping_ratio = uniform(random) * 0.2f;
+      crowd.instances.back().set_settings(1, tuned);
+    }
+  }
+  return crowd;
+}
+
+// Instance i's animated pose at time t: the root swinging about Z and bobbing, at the instance's own phase.
+void crowd_pose(const deform::Skeleton& skeleton, std::size_t i, double t, std::span<glm::mat4> world,
+                std::span<glm::mat4> rate) {
+  const auto root = [&](double time) {
+    const double phase = 0.71 * double(i), amplitude = 0.3 + 0.05 * double(i % 7);
+    glm::dmat4 m = glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 0.1 * std::sin(2 * pi * 1.3 * time + phase), 0.0));
+    return glm::rotate(m, amplitude * std::sin(2 * pi * 0.9 * time + phase), glm::dvec3(0, 0, 1));
+  };
+  const glm::dmat4 now = root(t), rate_now = (root(t + 1e-6) - root(t - 1e-6)) / 2e-6;
+  for (std::size_t b = 0; b < world.size(); ++b) {
+    world[b] = glm::mat4(now * glm::dmat4(skeleton.bind_world()[b]));
+    if (!rate.empty()) rate[b] = glm::mat4(rate_now * glm::dmat4(skeleton.bind_world()[b]));
+  }
+}
+
+bool same_bits(std::span<const glm::mat4> a, std::span<const glm::mat4> b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and range split, colliders hit") {
+  constexpr std::size_t count = 37;  // not a multiple of any group
+  const SpringCrowd reference_crowd = spring_crowd(count, 7);
+  const std::size_t bones = reference_crowd.skeleton.bone_count();
+  for (const std::size_t group : {std::size_t(1), std::size_t(3), std::size_t(8)}) {
+    for (const std::size_t split : {std::size_t(1), std::size_t(2), std::size_t(5)}) {
+      CAPTURE(group);
+      CAPTURE(split);
+      SpringCrowd alone = spring_crowd(count, 7), together = spring_crowd(count, 7);
+      std::vector<glm::mat4> world(bones * count), rate(world.size()), palette(world.size());
+      std::vector<glm::mat4> world_alone(world.size()), palette_alone(world.size());
+      std::mt19937 random(11);
+      std::uniform_real_distribution<double> jitter(0.9, 1.1);
+      double t = 0.0;
+      float closest = 1e9f;
+      for (int frame = 0; frame < 90; ++frame) {
+        // Frame times jittered so that leftovers differ; a pause (dt 0) now and then; rates on some frames only;
+        // some instances reset or restarted, so that their kept states differ in age within a group.
+        const float dt = frame == 0 ? 0.0f : frame % 37 == 0 ? 0.0f : float(jitter(random) / 60.0);
+        t += double(dt);
+        const bool rates = frame % 4 != 3;
+        for (std::size_t i = 0; i < count; ++i) {
+          if ((frame == 40 && i % 5 == 2) || (frame == 80 && i % 4 == 0)) {
+            alone.instances[i].reset();
+            together.instances[i].reset();
+          }
+          if (frame == 60 && i % 6 == 1) {
+            REQUIRE(alone.instances[i].restart(0));
+            REQUIRE(together.instances[i].restart(0));
+          }
+          const std::span<glm::mat4> w = std::span<glm::mat4>(world).subspan(i * bones, bones);
+          crowd_pose(alone.skeleton, i, frame == 74 && i % 2 == 0 ? t + 3.0 : t, w,
+                     std::span<glm::mat4>(rate).subspan(i * bones, bones));
+        }
+        world_alone = world;
+        for (std::size_t i = 0; i < count; ++i) {
+          const auto part = [&](std::vector<glm::mat4>& v) {
+            return std::span<glm::mat4>(v).subspan(i * bones, bones);
+          };
+          REQUIRE(alone.instances[i].run(dt, part(world_alone),
+                                         rates ? std::span<const glm::mat4>(part(rate)) : std::span<const glm::mat4>(),
+                                         part(palette_alone)));
+        }
+        deform::SpringCrowdJob job;
+        job.instances = together.instances;
+        job.dt = dt;
+        job.world = world;
+        if (rates) job.world_rate = rate;
+        job.palette = palette;
+        job.group = group;
+        REQUIRE(job.validate());
+        for (std::size_t part = 0; part < split; ++part)
+          REQUIRE(job.run(count * part / split, count * (part + 1) / split));
+        REQUIRE(same_bits(world, world_alone));
+        REQUIRE(same_bits(palette, palette_alone));
+        for (std::size_t i = 0; i < count; ++i) {
+          for (std::size_t c = 0; c < 2; ++c) {
+            const auto a = alone.instances[i].points(c), b = together.instances[i].points(c);
+            REQUIRE(std::memcmp(a.data(), b.data(), a.size_bytes()) == 0);
+            const glm::vec3 sphere(world[i * bones] * glm::vec4(0.25f, -0.2f, 0.0f, 1.0f));
+            for (const glm::vec3& p : b) closest = std::min(closest, glm::length(p - sphere));
+          }
+        }
+      }
+      // The chains come to the sphere (radius 0.15 plus the tails' 0.02) and are kept about out of it (the length
+      // may pull a tail back in by a little): the colliders were in play.
+      CHECK(closest < 0.171f);
+      CHECK(closest > 0.15f);
+    }
+  }
+}
+
+TEST_CASE("SpringCrowdJob: refuses bad sizes, dt, group, range and an instance laid out unlike the first") {
+  SpringCrowd crowd = spring_crowd(4, 3);
+  const std::size_t bones = crowd.skeleton.bone_count();
+  std::vector<glm::mat4> world(bones * 4), palette(world.size());
+  for (std::size_t i = 0; i < 4; ++i)
+    crowd_pose(crowd.skeleton, i, 0.0, std::span<glm::mat4>(world).subspan(i * bones, bones), {});
+  deform::SpringCrowdJob job;
+  job.instances = crowd.instances;
+  job.dt = 1.0f / 60.0f;
+  job.world = world;
+  job.palette = palette;
+  REQUIRE(job.validate());
+  const std::vector<glm::mat4> before = world;
+  const auto refused = [&](deform::SpringCrowdJob bad, const char* why) {
+    CAPTURE(why);
+    CHECK_FALSE(bad.validate());
+    CHECK(std::string(bad.validate().reason()).find(why) != std::string::npos);
+    CHECK_FALSE(bad.run());
+    CHECK(same_bits(world, before));
+  };
+  deform::SpringCrowdJob bad = job;
+  bad.dt = -1.0f;
+  refused(bad, "dt");
+  bad.dt = std::nanf("");
+  refused(bad, "dt");
+  bad = job;
+  bad.world = std::span<glm::mat4>(world).first(world.size() - 1);
+  refused(bad, "world");
+  bad = job;
+  const std::vector<glm::mat4> short_rate(3);
+  bad.world_rate = short_rate;
+  refused(bad, "world_rate");
+  bad = job;
+  bad.palette = std::span<glm::mat4>(palette).first(bones);
+  refused(bad, "palette");
+  bad = job;
+  bad.group = 0;
+  refused(bad, "group");
+  bad.group = deform::SpringCrowdJob::max_group + 1;
+  refused(bad, "group");
+  CHECK_FALSE(job.run(3, 2));
+  CHECK_FALSE(job.run(0, 5));
+  // An instance with one chain fewer.
+  std::vector<deform::SpringChains> mixed = crowd.instances;
+  deform::SpringChainSpec one = crowd.instances[0].spec(0);
+  mixed[2] = deform::SpringChains(crowd.skeleton, {one},
+                                  {crowd.instances[0].colliders().begin(), crowd.instances[0].colliders().end()});
+  bad = job;
+  bad.instances = mixed;
+  refused(bad, "laid out");
+  CHECK(bad.run(0, 2));  // the range before it is fine
+  CHECK_FALSE(bad.run(1, 3));
+  // No instances: nothing to do, and matrices for none refused.
+  deform::SpringCrowdJob empty;
+  CHECK(empty.validate());
+  CHECK(empty.run());
+  empty.world = world;
+  CHECK_FALSE(empty.validate());
+  CHECK(job.run());  // the first run starts at rest on the pose
+  CHECK(job.run());  // then gravity bends the chains
+  CHECK_FALSE(same_bits(world, before));
 }
