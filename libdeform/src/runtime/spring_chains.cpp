@@ -1,8 +1,8 @@
 // Spring chains: tails as damped oscillators in fixed sub-steps, their bones' lengths kept, colliders, and the bent
 // pose written back into the world matrices.
 #include <algorithm>
-#include <bit>
 #include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -353,9 +353,16 @@ constexpr std::size_t max_lane_colliders = 16;
 
 // c ? a : b by bits. A lane loop that writes `x[k] = c ? a : x[k]` is a conditional store to GCC, which it does not
 // vectorise ("control flow in loop"); the bit select is a plain store, and exact (it picks a or b, NaNs included).
+// Through memcpy rather than std::bit_cast, which emscripten 3.1.6's libc++ lacks; compilers make it a plain move.
 inline float pick(bool c, float a, float b) noexcept {
   const std::uint32_t mask = 0u - std::uint32_t(c);
-  return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & mask) | (std::bit_cast<std::uint32_t>(b) & ~mask));
+  std::uint32_t ua, ub;
+  std::memcpy(&ua, &a, 4);
+  std::memcpy(&ub, &b, 4);
+  const std::uint32_t picked = (ua & mask) | (ub & ~mask);
+  float out;
+  std::memcpy(&out, &picked, 4);
+  return out;
 }
 
 }  // namespace
