@@ -51,14 +51,6 @@ DeltaMushBinding bind_delta_mush(const Mesh& mesh, const DeltaMushSettings& sett
   PointTopology topology = build_point_topology(mesh);  // throws for indices out of range
   b.ring_offsets = std::move(topology.neighbour_offsets);
   b.rings = std::move(topology.neighbours);
-  // The rings padded to groups of four with the index n (the zero after each scratch buffer).
-  b.padded_offsets.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    b.padded_offsets[i + 1] = b.padded_offsets[i] + (b.ring_offsets[i + 1] - b.ring_offsets[i] + 3) / 4;
-  b.padded_rings.assign(std::size_t{4} * b.padded_offsets[n], std::uint32_t(n));
-  for (std::size_t i = 0; i < n; ++i)
-    std::copy(b.rings.begin() + b.ring_offsets[i], b.rings.begin() + b.ring_offsets[i + 1],
-              b.padded_rings.begin() + std::ptrdiff_t(4) * b.padded_offsets[i]);
 
   // Fans: for each triangle (a, b, c) of distinct points, a gets (b, c), b gets (c, a), c gets (a, b), so that every
   // cross product turns the same way as the triangle.

@@ -43,11 +43,6 @@ struct DeltaMushBinding {
   std::vector<std::uint32_t> ring_offsets;  // point i's neighbours: rings[ring_offsets[i] .. ring_offsets[i + 1])
   std::vector<std::uint32_t> rings;         // each point's one-ring over triangle edges between points
   std::vector<glm::vec2> smoothing;         // (keep, pull) per point
-  // The same rings padded to groups of four with the index point_count() (a zero the job keeps after each scratch
-  // buffer), for the passes after the first: every point's loop then runs a whole number of groups, mostly two, with
-  // no exit that depends on its valence. Point i's groups: padded_rings[4·padded_offsets[i] .. 4·padded_offsets[i+1]).
-  std::vector<std::uint32_t> padded_offsets;
-  std::vector<std::uint32_t> padded_rings;
   // The frame: normal = Σ cross(x_a − xᵢ, x_b − xᵢ) over the triangles (i, a, b) around i, in their winding (twice the
   // area-weighted normal); tangent = x_t − xᵢ without its normal part, t = tangent_neighbour[i]; bitangent =
   // normal × tangent.
@@ -81,10 +76,9 @@ struct DEFORM_RUNTIME_API DeltaMushJob {
   std::span<glm::vec4> scratch;             // at least scratch_size(binding) entries, not overlapping the positions
 
   // Scratch entries the job needs: 0 for no iterations, one buffer for one, two for more (the smoothed positions of
-  // the last two iterations, padded to 16 bytes for the gathers), each of point_count() + 1 entries (the last a zero
-  // that the padded rings point at).
+  // the last two iterations, padded to 16 bytes so that a neighbour is one vector load), each of point_count() entries.
   static std::size_t scratch_size(const DeltaMushBinding& binding) noexcept {
-    return binding.iterations == 0 ? 0 : (binding.point_count() + 1) * (binding.iterations == 1 ? 1 : 2);
+    return binding.iterations == 0 ? 0 : binding.point_count() * (binding.iterations == 1 ? 1 : 2);
   }
 
   // Ok when the call is well formed, else why not: a binding ("no binding"), its iterations and step in range
