@@ -78,8 +78,8 @@ TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") {
 
 // The side-by-side study with Blender (docs/weights.md, "Side by side with Blender"): heat weights in 32 random poses
 // (seed 1) stay within a tenth above the figures the table reports and, on the models where the table says heat
-// leads, at or below Blender 3.4.1's recorded figures in mean, p99 and max. Blender is not run here: its figures are
-// the table's.
+// leads, at or below Blender 3.4.1's recorded figures in mean, p99 and max (Blender given each mesh with its normals
+// recalculated outside, as a rigger binds). Blender is not run here: its figures are the table's.
 namespace {
 
 struct SideBySide {
@@ -114,7 +114,7 @@ void check_side_by_side(const SideBySide& e) {
 }  // namespace
 
 TEST_CASE("side by side with Blender's bone heat: X/Testwuson.X") {
-  check_side_by_side({"X/Testwuson.X", {0.77, 5.40, 11.53}, {1.76, 24.97, 39.73}, true});
+  check_side_by_side({"X/Testwuson.X", {0.77, 5.40, 11.53}, {1.40, 21.50, 39.73}, true});
 }
 TEST_CASE("side by side with Blender's bone heat: X/BCN_Epileptic.X") {
   check_side_by_side({"X/BCN_Epileptic.X", {0.36, 2.19, 4.98}, {0.54, 4.45, 31.64}, true});
@@ -123,7 +123,7 @@ TEST_CASE("side by side with Blender's bone heat: X/anim_test.x") {
   check_side_by_side({"X/anim_test.x", {1.18, 6.74, 11.43}, {1.52, 10.53, 16.98}, true});
 }
 TEST_CASE("side by side with Blender's bone heat: FBX/animation_with_skeleton.fbx") {
-  check_side_by_side({"FBX/animation_with_skeleton.fbx", {1.47, 12.49, 19.72}, {0.90, 5.92, 9.11}, false});
+  check_side_by_side({"FBX/animation_with_skeleton.fbx", {1.47, 12.49, 19.72}, {1.60, 14.37, 23.80}, true});
 }
 TEST_CASE("side by side with Blender's bone heat: FBX/huesitos.fbx") {
   check_side_by_side({"FBX/huesitos.fbx", {0.69, 1.91, 2.37}, {0.0, 0.0, 0.0}, false});

@@ -3,8 +3,9 @@
 #
 #   blender --background --factory-startup --python blender_heat.py -- DIR
 #
-# For each DIR/NAME.bind.json (weights_study --blender-export DIR): builds the mesh (vertex order kept) and an
-# armature of the bones as given (head, tail, parent; "deform": false bones get use_deform off, so that Blender
+# For each DIR/NAME.bind.json (weights_study --blender-export DIR): builds the mesh (vertex order kept), makes its
+# normals consistent and outward as a rigger does before binding (Mesh > Normals > Recalculate Outside; the faces it
+# turns are counted and reported), builds an armature of the bones as given (head, tail, parent; "deform": false bones get use_deform off, so that Blender
 # weights only the deforming bones), parents the mesh with ARMATURE_AUTO, and writes each vertex's group weights
 # to DIR/NAME.blender.json (atomically), with Blender's version and the seconds the parenting took.
 import json
@@ -24,6 +25,25 @@ def clear_scene():
         bpy.data.armatures.remove(armature)
 
 
+def recalculate_outside(body):
+    """Mesh > Normals > Recalculate Outside on every face of `body`; returns how many faces it turned round.
+
+    Blender's bone heat takes a vertex's normal as it is: on a mesh wound inwards its visibility test fails for every
+    bone. Riggers make normals consistent before binding; a mesh already wound outwards is left as it was.
+    """
+    mesh = body.data
+    before = [p.normal.copy() for p in mesh.polygons]
+    bpy.ops.object.select_all(action="DESELECT")
+    body.select_set(True)
+    bpy.context.view_layer.objects.active = body
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.normals_make_consistent(inside=False)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    mesh.update()
+    return sum(1 for p, n in zip(mesh.polygons, before) if p.normal.dot(n) < 0.0)
+
+
 def bind(path):
     with open(path) as f:
         data = json.load(f)
@@ -35,6 +55,7 @@ def bind(path):
         raise RuntimeError(f"{path}: Blender kept {len(mesh.vertices)} of {len(data['vertices'])} vertices")
     body = bpy.data.objects.new("body", mesh)
     bpy.context.scene.collection.objects.link(body)
+    flipped = recalculate_outside(body)
 
     armature = bpy.data.armatures.new("rig")
     rig = bpy.data.objects.new("rig", armature)
@@ -74,13 +95,18 @@ def bind(path):
         "blender": bpy.app.version_string,
         "seconds": seconds,
         "unweighted_vertices": unweighted,
+        "faces_turned_outwards": flipped,
         "weights": weights,
     }
     target = path[: -len(".bind.json")] + ".blender.json"
     with open(target + ".tmp", "w") as f:
         json.dump(out, f)
     os.replace(target + ".tmp", target)
-    print(f"{data['model']}: {seconds:.3f} s, {unweighted} of {len(weights)} vertices unweighted", flush=True)
+    print(
+        f"{data['model']}: {flipped} of {len(mesh.polygons)} faces turned outwards, {seconds:.3f} s, "
+        f"{unweighted} of {len(weights)} vertices unweighted",
+        flush=True,
+    )
 
 
 def main():
