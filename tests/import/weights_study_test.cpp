@@ -73,7 +73,7 @@ TEST_CASE("heat weights stay near the artists' on FBX/huesitos.fbx") {
   check_model({"FBX/huesitos.fbx", 0.78, 2.38, 3.01});
 }
 TEST_CASE("heat weights stay near the artists' on IQM/mrfixit.iqm") {
-  check_model({"IQM/mrfixit.iqm", 0.24, 1.13, 1.69});
+  check_model({"IQM/mrfixit.iqm", 0.24, 1.12, 1.70});
 }
 
 // The side-by-side study with Blender (docs/weights.md, "Side by side with Blender"): heat weights in 32 random poses
@@ -129,7 +129,7 @@ TEST_CASE("side by side with Blender's bone heat: FBX/huesitos.fbx") {
   check_side_by_side({"FBX/huesitos.fbx", {0.69, 1.91, 2.37}, {0.0, 0.0, 0.0}, false});
 }
 TEST_CASE("side by side with Blender's bone heat: IQM/mrfixit.iqm") {
-  check_side_by_side({"IQM/mrfixit.iqm", {0.42, 2.97, 12.92}, {0.35, 2.21, 6.17}, false});
+  check_side_by_side({"IQM/mrfixit.iqm", {0.40, 2.61, 6.67}, {0.35, 2.21, 6.17}, false});
 }
 
 // The random-pose mode (weights_study --random-poses): the same seed gives the same poses, another seed others; every

@@ -1,7 +1,7 @@
 // Volumetric weights: bone heat (heat_weights.hpp) and geodesic voxel (voxel_weights.hpp) weights on a two-bone
 // cylinder (monotone along the axis, sums of 1), a hand resting against a thigh (where distance weights bind the
-// hand to the leg and these do not), islands no bone sees or reaches, bones with no vertex, points outside every
-// triangle, the deforming mask, invalid options.
+// hand to the leg and these do not), a hand bone parented elsewhere at the end of the forearm, islands no bone sees or
+// reaches, bones with no vertex, points outside every triangle, the deforming mask, invalid options.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -304,6 +304,38 @@ TEST_CASE("heat weights: a bone's segment toward a child placed outside the body
     CHECK(weight_of(r.weights, i, 2) + weight_of(r.weights, i, 3) > 0.99f);
   }
   CHECK(far >= 40);
+}
+
+TEST_CASE("heat weights: a hand bone parented elsewhere and placed at the wrist leaves the forearm to the forearm") {
+  // A forearm (cylinder of radius 0.2 along +Y) whose bone ends at a non-deforming wrist node at y = 1.2, and a hand
+  // bone parented to the root and placed at the wrist, as an IK goal is (mrfixit.iqm's HandGoal.L/R under the
+  // spine), forking to a finger up the axis and to a thumb node beside it. Its segment toward the thumb passes
+  // about 0.12 from the forearm's +X points just behind the wrist, which the forearm's bone is 0.2 straight behind: the
+  // hand would heat them. It continues the forearm's chain, so the points behind its head go to the forearm.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton = make_skeleton({bone(-1, {0, 0, 0}, "root"), bone(0, {0, 0.2f, 0}, "forearm"),
+                                           bone(1, {0, 1.0f, 0}, "wrist"), bone(0, {0, 1.2f, 0}, "hand"),
+                                           bone(3, {0.17f, 0.02f, 0}, "thumb"), bone(3, {0, 0.6f, 0}, "finger")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {0, 1, 0, 1, 0, 1};
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+  check_contract(r.weights, mesh.point_count(), 6);
+  std::size_t behind = 0, past = 0;
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
+    const glm::vec3 p = mesh.positions[i];
+    if (p.x < 0.15f) continue;
+    CAPTURE(i);
+    if (p.y > 1.05f && p.y < 1.19f) {
+      ++behind;
+      CHECK(weight_of(r.weights, i, 1) > 0.45f);
+    } else if (p.y > 1.35f) {
+      ++past;
+      CHECK(weight_of(r.weights, i, 1) < 0.5f);
+    }
+  }
+  CHECK(behind >= 2);
+  CHECK(past >= 10);
 }
 
 TEST_CASE("voxel weights on a two-bone cylinder: sums of 1, monotone along the axis, each end on its bone") {

@@ -222,6 +222,10 @@ struct HeatFinder {
   std::vector<glm::vec3> normal;  // per surface vertex, outward (orient_normals), or 0 before and for no triangle
   std::vector<std::pair<float, std::uint32_t>> by_distance;
   std::vector<glm::vec3> nearest_point;  // per bone
+  // Per bone: the deforming bone whose chain it continues (find_chain_joints), or UINT32_MAX; and that bone's
+  // segment's direction into the joint.
+  std::vector<std::uint32_t> continues;
+  std::vector<glm::vec3> continues_direction;
 
   HeatFinder(const Surface& s, const std::vector<detail::BoneShape>& bone_shapes,
              const std::vector<std::uint32_t>& deforming, const HeatWeightsOptions& o, std::size_t bone_count)
@@ -237,6 +241,40 @@ struct HeatFinder {
     sources.heated_by.assign(s.size(), UINT32_MAX);
     sources.heat.assign(s.size(), 0.0);
     sources.nearest_any.assign(s.size(), 0);
+  }
+
+  // A deforming bone whose head sits where another deforming bone's segment ends, and which is not that bone's child,
+  // continues that bone's chain: an IK goal or hand bone parented to the spine and placed at the wrist, at the end
+  // of the forearm's segment (mrfixit.iqm's HandGoal.L/R). Heat_vertex gives the incoming bone the points on its
+  // side of that joint. A child's joint is left to heat: its points already see their own bone, and sharpening
+  // every joint costs the models whose artists blend there. `parent`: each bone's parent. O(deforming² · segments),
+  // once; run after the segments are clipped.
+  void find_chain_joints(const std::vector<std::int32_t>& parent) {
+    continues.assign(shapes.size(), UINT32_MAX);
+    continues_direction.assign(shapes.size(), glm::vec3(0.0f));
+    for (std::uint32_t b : candidates) {
+      const glm::vec3 head = shapes[b].segments.front().first;
+      for (std::size_t k = 0; k < candidates.size() && continues[b] == UINT32_MAX; ++k) {
+        const std::uint32_t a = candidates[k];
+        if (a == b || parent[b] == static_cast<std::int32_t>(a)) continue;
+        for (const auto& [from, to] : shapes[a].segments)
+          if (glm::length(to - head) <= min_distance && glm::length(to - from) > min_distance) {
+            continues[b] = a;
+            continues_direction[b] = to - from;
+            break;
+          }
+      }
+    }
+  }
+
+  // Whether v sees `bone` past `bvh` (null: nothing), from behind its surface with `facing` (heat_vertex's test).
+  bool sees(std::uint32_t v, std::uint32_t bone, const TriangleBvh* bvh, bool facing) const {
+    const glm::vec3 p = surface.position[v];
+    const float distance = glm::length(nearest_point[bone] - p);
+    if (bvh == nullptr || bvh->triangle_count() == 0 || distance <= 2.0f * offset) return true;
+    const glm::vec3 direction = (nearest_point[bone] - p) / distance;
+    if (facing && glm::dot(direction, normal[v]) > max_facing) return false;
+    return !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset, v).hit;
   }
 
   // Outward vertex normals: area-weighted, each island turned so that most of its points have their nearest bone
@@ -272,7 +310,8 @@ struct HeatFinder {
   // Heats v from its nearest bone that `bvh` (null: nothing) does not hide; with `facing`, only from a bone behind
   // the surface (a point in no triangle has no side and takes any). v's own triangles never hide a bone: the segment
   // crosses them only at a sharp or creased corner of a coarse mesh, while what the test is for is another part of
-  // the body in between.
+  // the body in between. A bone that continues another's chain (find_chain_joints) gives way to the incoming bone
+  // at a point behind its head, on the incoming side of the plane across the incoming segment, when v sees it.
   void heat_vertex(std::uint32_t v, const TriangleBvh* bvh, bool facing) {
     const glm::vec3 p = surface.position[v];
     for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -294,33 +333,32 @@ struct HeatFinder {
       std::sort(by_distance.begin(), tried_end);
     }
     for (std::size_t k = 0; k < tries; ++k) {
-      const std::uint32_t bone = by_distance[k].second;
-      const float distance = glm::length(nearest_point[bone] - p);
-      bool visible = true;
-      if (bvh != nullptr && bvh->triangle_count() > 0 && distance > 2.0f * offset) {
-        const glm::vec3 direction = (nearest_point[bone] - p) / distance;
-        if (facing && glm::dot(direction, normal[v]) > max_facing) continue;
-        visible = !bvh->intersect({p + offset * direction, direction}, distance - 2.0f * offset, v).hit;
-      }
-      if (visible) {
-        sources.heated_by[v] = bone;
-        const double d = std::max(distance, min_distance);
-        sources.heat[v] = static_cast<double>(options.heat) / (d * d);
-        return;
-      }
+      std::uint32_t bone = by_distance[k].second;
+      if (!sees(v, bone, bvh, facing)) continue;
+      const std::uint32_t incoming = continues.empty() ? UINT32_MAX : continues[bone];
+      if (incoming != UINT32_MAX &&
+          glm::dot(p - shapes[bone].segments.front().first, continues_direction[bone]) < 0.0f &&
+          sees(v, incoming, bvh, facing))
+        bone = incoming;
+      sources.heated_by[v] = bone;
+      const double d = std::max(glm::length(nearest_point[bone] - p), min_distance);
+      sources.heat[v] = static_cast<double>(options.heat) / (d * d);
+      return;
     }
   }
 };
 
 // Heats every vertex past the whole mesh, from behind its surface; clips the guessed bone segments to the mesh first
-// (`shapes` is the finder's). A piece with no bone behind any of its points (a lone sheet, a piece that lies beside
-// the bones) takes the nearest visible bone on either side.
-void heat_past_whole_mesh(HeatFinder& finder, std::vector<detail::BoneShape>& shapes) {
+// (`shapes` is the finder's) and finds the chain joints (`parent`: each bone's parent). A piece with no bone behind
+// any of its points (a lone sheet, a piece that lies beside the bones) takes the nearest visible bone on either side.
+void heat_past_whole_mesh(HeatFinder& finder, std::vector<detail::BoneShape>& shapes,
+                          const std::vector<std::int32_t>& parent) {
   const Surface& s = finder.surface;
   const bool visibility = finder.options.visibility;
   TriangleBvh whole;
   build_bvh(s, whole, UINT32_MAX);
   detail::clip_guessed_segments(shapes, whole);
+  finder.find_chain_joints(parent);
   if (visibility) finder.orient_normals();
   for (std::uint32_t v = 0; v < s.size(); ++v) finder.heat_vertex(v, visibility ? &whole : nullptr, true);
   std::vector<std::uint8_t> heated(s.island_count, 0);
@@ -554,7 +592,10 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
 
   std::vector<detail::BoneShape> shapes = detail::bone_shapes(skeleton, options.leaf_length);
   HeatFinder finder(surface, shapes, input.deforming, options, input.bone_count);
-  heat_past_whole_mesh(finder, shapes);
+  std::vector<std::int32_t> parent;
+  parent.reserve(skeleton.bone_count());
+  for (const Bone& b : skeleton.bones()) parent.push_back(b.parent);
+  heat_past_whole_mesh(finder, shapes, parent);
   Islands islands = describe_islands(surface, finder.sources);
   if (options.visibility && options.island_visibility) heat_past_own_triangles(finder, islands, result.warnings);
 
