@@ -28,8 +28,9 @@ void check_weights(const Model& model) {
   const std::size_t bones = model.skeleton.bone_count();
   if (w.size() != model.mesh.point_count() || w.weights.size() != w.size())
     throw Error::invalid_argument("weights", "not one entry per point");
-  if (w.has_extra() && (w.extra_offsets.size() != w.extra_points.size() + 1 ||
-                        w.extra_bones.size() != w.extra_weights.size() || w.extra_offsets.back() != w.extra_bones.size()))
+  if (w.has_extra() &&
+      (w.extra_offsets.size() != w.extra_points.size() + 1 || w.extra_bones.size() != w.extra_weights.size() ||
+       w.extra_offsets.back() != w.extra_bones.size()))
     throw Error::invalid_argument("weights", "extra influences are inconsistent");
   for (std::size_t p = 0; p < w.size(); ++p) {
     for (int k = 0; k < 4; ++k) {
@@ -78,7 +79,8 @@ BoneLod build_bone_lod(const Model& model, const BoneLodSettings& settings) {
   std::vector<bool> pinned(bones, false);
   for (std::size_t b = 0; b < bones; ++b) pinned[b] = skeleton.bones()[b].parent < 0;
   for (const std::int32_t b : settings.keep) {
-    if (b < 0 || std::size_t(b) >= bones) throw Error::invalid_argument("keep", "bone " + std::to_string(b) + " out of range");
+    if (b < 0 || std::size_t(b) >= bones)
+      throw Error::invalid_argument("keep", "bone " + std::to_string(b) + " out of range");
     pinned[std::size_t(b)] = true;
   }
   // The kept set must be closed under parents: a pinned bone pins its ancestors.
