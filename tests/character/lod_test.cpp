@@ -140,7 +140,12 @@ TEST_CASE("levels: an update interval interpolates the points (no pop) and defor
   at_once.frame();
   const std::vector<glm::vec3> target(at_once.c.positions().begin(), at_once.c.positions().end());
   CHECK(largest_move(probe.c.positions(), target) > 1e-3f);  // a quarter of the way
-  for (int f = 0; f < 3; ++f) probe.frame();
+  for (int f = 0; f < 3; ++f) {
+    CHECK_FALSE(probe.c.next_update_deforms());
+    probe.frame();
+  }
+  CHECK(probe.c.next_update_deforms());
+  CHECK(at_once.c.next_update_deforms());
   CHECK(largest_move(probe.c.positions(), target) < 1e-5f);
   probe.frame();  // the next deformed update: on toward the new pose's points
   CHECK(largest_move(probe.c.positions(), target) > 1e-4f);

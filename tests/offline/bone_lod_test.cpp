@@ -166,6 +166,12 @@ TEST_CASE("bone LOD on the built-in character: levels by bone count under the wa
     for (const std::int32_t child : model.skeleton.bones()[b].children)
       CHECK(lod.levels[1].bone_map[std::size_t(child)] != child);
   }
+  for (std::size_t l = 1; l < lod.levels.size(); ++l) {
+    std::string kept;
+    for (std::size_t b = 0; b < bones; ++b)
+      if (lod.levels[l].bone_map[b] == std::int32_t(b)) kept += model.skeleton.bones()[b].name + " ";
+    MESSAGE("builtin level " << l << " keeps " << kept);
+  }
   check_levels("builtin", model, lod, test_poses(model, &walk));
 }
 

@@ -547,7 +547,15 @@ void Character::release() {
 
 void Character::prefetch_record() const noexcept { prefetch_bytes(this, sizeof(*this)); }
 
+bool Character::next_update_deforms() const noexcept {
+  if (!levels_ || !settings.deform_on_cpu) return true;
+  const std::uint32_t interval = levels_->costs[level_].update_interval;
+  return !(interval > 1 && shown_ == level_ && tick_ + 1 < interval && approach_left_ > 0);
+}
+
 void Character::prefetch() const noexcept {
+  // An update that only interpolates streams the points and touches none of this.
+  if (!next_update_deforms()) return;
   prefetch_span(pose_.rotations);
   prefetch_span(pose_.translations);
   prefetch_span(world_);
@@ -558,6 +566,7 @@ void Character::prefetch() const noexcept {
     prefetch_span(world_later_);
     prefetch_span(world_rate_);
   }
+  if (levels_ && !levels_->costs[level_].deformers) return;
   springs_.prefetch();
   hierarchy_.prefetch();
 }
@@ -611,7 +620,7 @@ Status Character::update(float dt) {
   }
   const LevelCost& cost = levels_->costs[level_];
   const std::uint32_t interval = cost.update_interval;
-  if (interval > 1 && shown_ == level_ && tick_ + 1 < interval && approach_left_ > 0) {
+  if (!next_update_deforms()) {
     // Between deformed updates: the time adds up for the next one, positions() goes a share of the way on (below).
     ++tick_;
     pending_dt_ += dt;

@@ -289,6 +289,10 @@ class DEFORM_CHARACTER_API Character {
   // Shows `level` from the next update() on (see set_levels for the blend). Refuses, changing nothing, a level out of
   // range. No allocation, O(1): call it per frame with what pick_level gives.
   Status set_level(std::size_t level) noexcept;
+  // Whether the next update() deforms: true without levels or off the CPU; false while an update_interval level is
+  // between its deformed updates (that update only moves positions() on, reading no pose: a crowd loop may skip
+  // sampling the clip and set_pose for it). No allocation, O(1).
+  bool next_update_deforms() const noexcept;
   // What a level costs per deformed update, for a caller that budgets a crowd.
   struct LevelCost {
     std::size_t points = 0;      // points skinned
