@@ -40,7 +40,8 @@
 // A crowd: instance() makes another character of the same model and rig that shares the immutable bind data
 // (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
 // positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
-// thread (no hidden threads; bench/crowd_bench.cpp).
+// thread (no hidden threads; bench/crowd_bench.cpp). Distant ones show levels of detail (set_levels, set_level:
+// fewer bones per point, deformers off, deformed every Nth update; docs/skinning.md, "Levels of detail").
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
