@@ -173,6 +173,16 @@ TEST_CASE("bone LOD on the built-in character: levels by bone count under the wa
     MESSAGE("builtin level " << l << " keeps " << kept);
   }
   check_levels("builtin", model, lod, test_poses(model, &walk));
+  // The consistency check refuses a kept bone under a merged one, and a bone mapped outside its ancestors.
+  deform::BoneLodLevel broken = lod.levels[3];
+  const std::int32_t hand = model.skeleton.find("hand_l");
+  REQUIRE(broken.bone_map[std::size_t(hand)] != hand);
+  broken.bone_map[std::size_t(hand)] = hand;
+  ++broken.kept_bones;
+  CHECK_FALSE(deform::bone_lod_consistent(model.skeleton, broken));
+  broken = lod.levels[3];
+  broken.bone_map[std::size_t(hand)] = model.skeleton.find("thigh_r");
+  CHECK_FALSE(deform::bone_lod_consistent(model.skeleton, broken));
 }
 
 TEST_CASE("bone LOD by weight-error budget, and kept bones") {
