@@ -308,7 +308,8 @@ class DEFORM_CHARACTER_API Character {
   // Advances the springs by dt seconds and deforms the held pose: FK once (twice with a lead), the spring chains,
   // the lattices' springs, skinning, lattices (see the top of this file). Refuses, changing nothing, a dt that is
   // negative or not finite. The later stages cannot refuse for a pose set by set_pose or reach; should one, update
-  // reports its reason, never success. No allocation; O(bones + points + bound points · lattice cost).
+  // reports its reason, never success. No allocation; O(bones + points + bound points · lattice cost). With levels
+  // (set_levels), at the level set_level asked for: its skin, its deformers, its update interval and a switch's blend.
   Status update(float dt);
 
   // Cache hints for the state the next update() and normals() read and write (deform/runtime/prefetch.hpp): no
