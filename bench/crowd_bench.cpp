@@ -7,9 +7,22 @@
 // one per thread, as an engine's job system would (here a ThreadPool; the library runs no threads of its own).
 // Counters: bytes_first — heap bytes held by the first character (make_builtin_character);
 // bytes_per_instance — held by each further instance (glibc's mallinfo2, live bytes after construction).
+//
+// crowd/builtin_10000/threads:N — one frame of 10,000 instances at levels of detail (Character::set_levels), the mix
+// issue #36 states for one camera: 100 at level 0 (the full character), 900 at level 1, 4,500 each at levels 2 and 3,
+// interleaved by index (as a camera's distances would be, and so each thread's range gets the same mix), all walking
+// at their own clip times, each updated as above (walk sampled, set_pose, update, normals()), except that the clip is
+// not sampled for an update that does not deform (Character::next_update_deforms). The levels, from
+// build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
+// bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Counters: error_mean_lN,
+// error_max_lN — level N's points against the full character's walking beside it (the same clip times, 2 s), as a
+// fraction of its height: the mean over points and frames and the largest; points_influences_lN — its
+// LevelCost::influences.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <string>
 #include <vector>
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -17,6 +30,7 @@
 
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/offline/bone_lod.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/parallel.hpp"
 namespace {
@@ -106,6 +120,139 @@ void crowd(benchmark::State& state) {
 
 BENCHMARK(crowd)
     ->Name("crowd/builtin_1000")
+    ->ArgName("threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+constexpr std::size_t big_crowd_size = 10000;
+
+deform::BoneLod crowd_lod(const deform::Character& c) {
+  deform::BoneLodSettings settings;
+  settings.bones_per_level = {25, 20, 17};
+  // The hands and feet kept, with the bones above them: a walk bends the elbows and knees at every level (merged by
+  // weight alone, the forearms go before the ponytail, a fifth of the height of error at the hands).
+  const deform::Skeleton& skeleton = c.skeleton();
+  settings.keep = {skeleton.find("hand_l"), skeleton.find("hand_r"), skeleton.find("foot_l"), skeleton.find("foot_r")};
+  return deform::build_bone_lod(c.model(), settings);
+}
+
+const std::vector<deform::Character::LevelOptions> crowd_levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+
+// The level of instance i: 1 in 100 at 0, 9 at 1, 45 each at 2 and 3.
+std::size_t crowd_level(std::size_t i) {
+  const std::size_t k = i % 100;
+  return k == 0 ? 0 : k < 10 ? 1 : k < 55 ? 2 : 3;
+}
+
+struct LevelError {
+  double mean = 0.0;
+  double max = 0.0;
+};
+
+// Each level against the full character walking beside it: 2 s of frames after 1 s to get the springs going.
+std::vector<LevelError> level_errors(const deform::Character& first, const deform::Animation& walk) {
+  const std::vector<glm::vec3>& bind = first.model().mesh.positions;
+  float low = bind.front().y, high = bind.front().y;
+  for (const glm::vec3& p : bind) low = std::min(low, p.y), high = std::max(high, p.y);
+  const double height = double(high - low);
+  std::vector<LevelError> errors(first.level_count());
+  for (std::size_t l = 1; l < first.level_count(); ++l) {
+    deform::Character full = first.instance(), level = first.instance();
+    full.set_level(0);
+    level.set_level(l);
+    deform::Pose pose = first.skeleton().bind_pose();
+    deform::SamplingJob sampling;
+    sampling.animation = &walk;
+    sampling.rotations = pose.rotations;
+    sampling.translations = pose.translations;
+    const int frames = 180, measured = 120;
+    for (int f = 0; f < frames; ++f) {
+      sampling.time = float(f) * dt;
+      sampling.run();
+      full.set_pose(pose);
+      level.set_pose(pose);
+      full.update(dt);
+      level.update(dt);
+      if (f < frames - measured) continue;
+      const auto a = full.positions(), b = level.positions();
+      for (std::size_t p = 0; p < a.size(); ++p) {
+        const double d = double(glm::length(a[p] - b[p])) / height;
+        errors[l].mean += d / double(a.size() * std::size_t(measured));
+        errors[l].max = std::max(errors[l].max, d);
+      }
+    }
+  }
+  return errors;
+}
+
+struct LevelCrowd {
+  std::vector<deform::Character> characters;
+  std::vector<deform::Pose> poses;
+  std::vector<float> times;
+  deform::Animation walk;
+  std::vector<LevelError> errors;
+  std::vector<std::size_t> influences;
+
+  LevelCrowd() {
+    deform::Character first = deform::make_builtin_character();
+    first.set_levels(crowd_lod(first), crowd_levels);
+    walk = deform::builtin_walk(first.model());
+    errors = level_errors(first, walk);
+    for (std::size_t l = 0; l < first.level_count(); ++l) influences.push_back(first.level_cost(l).influences);
+    characters.reserve(big_crowd_size);
+    for (std::size_t i = 1; i < big_crowd_size; ++i) characters.push_back(first.instance());
+    characters.push_back(std::move(first));
+    poses.assign(big_crowd_size, characters.front().skeleton().bind_pose());
+    for (std::size_t i = 0; i < big_crowd_size; ++i) {
+      characters[i].set_level(crowd_level(i));
+      times.push_back(0.618034f * float(i));
+    }
+  }
+
+  void update(std::size_t begin, std::size_t end) {
+    deform::SamplingJob sampling;
+    sampling.animation = &walk;
+    for (std::size_t i = begin; i < end; ++i) {
+      deform::Character& c = characters[i];
+      times[i] += dt;
+      if (i + 2 < end) characters[i + 2].prefetch_record();
+      if (i + 1 < end) characters[i + 1].prefetch();
+      // An update between a level's deformed ones reads no pose: the clip is not sampled for it.
+      if (c.next_update_deforms()) {
+        sampling.time = times[i];
+        sampling.rotations = poses[i].rotations;
+        sampling.translations = poses[i].translations;
+        sampling.run();
+        c.set_pose(poses[i]);
+      }
+      c.update(dt);
+      benchmark::DoNotOptimize(c.normals().data());
+    }
+  }
+};
+
+void level_crowd(benchmark::State& state) {
+  LevelCrowd crowd;
+  // Every level's interval under way, the springs moving: a few frames.
+  for (int f = 0; f < 8; ++f) crowd.update(0, big_crowd_size);
+  deform::ThreadPool pool(unsigned(state.range(0)));
+  const std::function<void(std::size_t, std::size_t)> range = [&](std::size_t begin, std::size_t end) {
+    crowd.update(begin, end);
+  };
+  for (auto _ : state) pool.parallel_for(big_crowd_size, 1, range);
+  state.SetItemsProcessed(state.iterations() * std::int64_t(big_crowd_size));
+  for (std::size_t l = 1; l < crowd.errors.size(); ++l) {
+    state.counters["error_mean_l" + std::to_string(l)] = crowd.errors[l].mean;
+    state.counters["error_max_l" + std::to_string(l)] = crowd.errors[l].max;
+  }
+  for (std::size_t l = 0; l < crowd.influences.size(); ++l)
+    state.counters["points_influences_l" + std::to_string(l)] = double(crowd.influences[l]);
+}
+
+BENCHMARK(level_crowd)
+    ->Name("crowd/builtin_10000")
     ->ArgName("threads")
     ->Arg(1)
     ->Arg(2)

@@ -14,6 +14,7 @@
 
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/offline/bone_lod.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/skeleton.hpp"
@@ -263,6 +264,45 @@ TEST_CASE(
     tally.note(c.update(dt));
     tally.normals_checksum += c.normals()[std::size_t(frame) % 100].z;
     tally.largest_stretch = std::max(tally.largest_stretch, c.stretch());
+  }
+  tally.allocations = allocations.load() - before;
+  check(tally);
+}
+
+TEST_CASE("1,000 frames of a crowd switching levels of detail allocate nothing: set_level, update, normals") {
+  // Three instances walking, each set to a level every frame from a schedule that visits every level (deformers on
+  // and off, an update interval of 3) and switches mid-blend; the arm stretched so the deformers have work.
+  std::vector<Character> characters;
+  characters.push_back(deform::make_builtin_character());
+  deform::BoneLodSettings settings;
+  settings.bones_per_level = {25, 14, 8};
+  characters.front().set_levels(deform::build_bone_lod(characters.front().model(), settings),
+                                std::vector<Character::LevelOptions>{{true, 1}, {true, 1}, {false, 1}, {false, 3}}, 6);
+  characters.push_back(characters.front().instance());
+  characters.push_back(characters.front().instance());
+  const deform::Animation walk = deform::builtin_walk(characters.front().model());
+  deform::Pose pose = characters.front().skeleton().bind_pose();
+  deform::SamplingJob sampling;
+  sampling.animation = &walk;
+  sampling.rotations = pose.rotations;
+  sampling.translations = pose.translations;
+  for (Character& c : characters)
+    for (std::size_t l = 0; l < c.deformers().lattice_count(); ++l)
+      c.deformers().set_stretch_target(l, 0.2f * c.deformers().length(l));
+  Tally tally;
+  tally.reaches = 5;  // (no reaches here)
+  const long before = allocations.load();
+  for (int frame = 0; frame < frames; ++frame) {
+    for (std::size_t i = 0; i < characters.size(); ++i) {
+      Character& c = characters[i];
+      sampling.time = float(frame) * dt + 0.3f * float(i);
+      tally.note(sampling.run());
+      tally.note(c.set_pose(pose));
+      tally.note(c.set_level(std::size_t((frame / (7 + 3 * int(i)) + int(i)) % 4)));
+      tally.note(c.update(dt));
+      tally.normals_checksum += c.normals()[std::size_t(frame) % 100].y;
+      tally.largest_stretch = std::max(tally.largest_stretch, c.deformers().stretch(0));
+    }
   }
   tally.allocations = allocations.load() - before;
   check(tally);

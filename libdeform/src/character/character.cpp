@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "deform/offline/hierarchy_binding.hpp"
@@ -121,7 +122,7 @@ Character::Character(Model model, const Rig& rig)
     if (const Status status = add_pose_driver(bind_corrective(group, bound.skeleton), targets); !status)
       throw Error::in_file(bound.name, "corrective group '" + group.name + "'", status.reason());
   }
-  const SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, true);
+  const SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, true, bound.weights);
   if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
   if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
 }
@@ -200,6 +201,12 @@ Character Character::instance() const {
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
     if (copy.normals_scratch_.empty()) copy.normals_scratch_.resize(bind_->vertex_normals.scratch_size());
+  }
+  if (levels_) {  // levels of detail: shared, at this character's level, the buffers this copy's own
+    copy.levels_ = levels_;
+    copy.level_ = copy.shown_ = level_;
+    copy.blend_.assign(blend_.size(), glm::vec3(0.0f));
+    copy.target_ = copy.positions_;
   }
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
@@ -540,7 +547,15 @@ void Character::release() {
 
 void Character::prefetch_record() const noexcept { prefetch_bytes(this, sizeof(*this)); }
 
+bool Character::next_update_deforms() const noexcept {
+  if (!levels_ || !settings.deform_on_cpu) return true;
+  const std::uint32_t interval = levels_->costs[level_].update_interval;
+  return !(interval > 1 && shown_ == level_ && tick_ + 1 < interval && approach_left_ > 0);
+}
+
 void Character::prefetch() const noexcept {
+  // An update that only interpolates streams the points and touches none of this.
+  if (!next_update_deforms()) return;
   prefetch_span(pose_.rotations);
   prefetch_span(pose_.translations);
   prefetch_span(world_);
@@ -551,6 +566,7 @@ void Character::prefetch() const noexcept {
     prefetch_span(world_later_);
     prefetch_span(world_rate_);
   }
+  if (levels_ && !levels_->costs[level_].deformers) return;
   springs_.prefetch();
   hierarchy_.prefetch();
 }
@@ -558,16 +574,15 @@ void Character::prefetch() const noexcept {
 // The skinning job of this character's weights and palette, from `rest_positions` (and, transporting, their normals)
 // into positions_ and point_normals(); the method and DQS palette are the caller's. No allocation.
 SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                                    bool transport) noexcept {
-  const Model& bound = bind_->model;
+                                    bool transport, const SkinWeights& weights) noexcept {
   SkinningJob job;
   job.matrices = palette_;
-  job.bone_indices = bound.weights.bones;
-  job.bone_weights = bound.weights.weights;
-  job.extra_vertices = bound.weights.extra_points;
-  job.extra_offsets = bound.weights.extra_offsets;
-  job.extra_bones = bound.weights.extra_bones;
-  job.extra_weights = bound.weights.extra_weights;
+  job.bone_indices = weights.bones;
+  job.bone_weights = weights.weights;
+  job.extra_vertices = weights.extra_points;
+  job.extra_offsets = weights.extra_offsets;
+  job.extra_bones = weights.extra_bones;
+  job.extra_weights = weights.extra_weights;
   job.in_positions = as_floats(rest_positions);
   job.out_positions = as_floats(std::span<glm::vec3>(positions_));
   if (transport) {
@@ -580,8 +595,8 @@ SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, s
 // LBS or DQS (settings.skinning) of the (morphed) bind points and, transporting, their normals into positions_ and
 // point_normals(). No allocation.
 Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                       bool transport) noexcept {
-  SkinningJob job = skinning_job(rest_positions, rest_normals, transport);
+                       bool transport, const SkinWeights& weights) noexcept {
+  SkinningJob job = skinning_job(rest_positions, rest_normals, transport, weights);
   job.method = settings.skinning;
   if (settings.skinning == SkinningMethod::dqs) {
     bool has_scale = false;
@@ -595,6 +610,77 @@ Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<cons
 
 Status Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
+  if (!levels_) return deform_frame(dt, 0);
+  if (!settings.deform_on_cpu) {
+    // Posing only: no points to blend or interpolate.
+    shown_ = level_;
+    approach_left_ = 0;
+    blend_left_ = 0;
+    return deform_frame(dt, level_);
+  }
+  const LevelCost& cost = levels_->costs[level_];
+  const std::uint32_t interval = cost.update_interval;
+  if (!next_update_deforms()) {
+    // Between deformed updates: the time adds up for the next one, positions() goes a share of the way on (below).
+    ++tick_;
+    pending_dt_ += dt;
+  } else {
+    const float step = dt + pending_dt_;
+    tick_ = 0;
+    pending_dt_ = 0.0f;
+    const bool switching = shown_ != level_;
+    const bool restart = switching && !levels_->costs[shown_].deformers && cost.deformers;
+    // The outgoing level interpolates, behind the pose by up to its interval: the blend starts where positions()
+    // would have gone this update, not from that level's points at the pose (a jump of a few updates' motion).
+    const bool from_shown = switching && levels_->costs[shown_].update_interval > 1;
+    if (from_shown) {
+      const float share = approach_left_ > 0 ? 1.0f / float(approach_left_) : 0.0f;
+      for (std::size_t p = 0; p < blend_.size(); ++p) blend_[p] = positions_[p] + share * (target_[p] - positions_[p]);
+    }
+    approach_left_ = 0;
+    // Deform into target_ when the level interpolates, into positions_ (what positions() shows) otherwise.
+    const bool approach = interval > 1;
+    if (approach) std::swap(positions_, target_);
+    Status status;
+    if (switching && !from_shown) {
+      // The frame at the outgoing level (the whole step) is the blend's start; the new level then takes no more time.
+      status = deform_frame(step, shown_);
+      if (status) std::copy(positions_.begin(), positions_.end(), blend_.begin());
+    }
+    if (status && restart) {
+      // The deformers come back on: they start again from the pose, as they are after a cut.
+      for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) (void)hierarchy_.restart_motion(l);
+      for (std::size_t c = 0; c < springs_.chain_count(); ++c) (void)springs_.restart(c);
+    }
+    if (status) status = deform_frame(switching && !from_shown ? 0.0f : step, level_);
+    if (status && switching) {
+      for (std::size_t p = 0; p < blend_.size(); ++p) blend_[p] -= positions_[p];
+      blend_left_ = levels_->blend_frames;
+    }
+    shown_ = level_;
+    if (status && blend_left_ > 0) {
+      // The switch's offset, shrinking linearly: all of it on the switch's update, none after blend_frames.
+      const float share = float(blend_left_) / float(levels_->blend_frames);
+      for (std::size_t p = 0; p < blend_.size(); ++p) positions_[p] += share * blend_[p];
+      --blend_left_;
+    }
+    if (approach) std::swap(positions_, target_);
+    if (!status) return status;
+    approach_left_ = approach ? interval : 0;
+  }
+  if (approach_left_ > 0) {
+    // Piecewise linear toward the last deformed points: 1 / approach_left_ of the way that remains.
+    const float share = 1.0f / float(approach_left_);
+    for (std::size_t p = 0; p < positions_.size(); ++p) positions_[p] += share * (target_[p] - positions_[p]);
+    --approach_left_;
+  }
+  return {};
+}
+
+// One frame of the held pose at `level` (update()'s work, see the top of character.hpp).
+Status Character::deform_frame(float dt, std::size_t level) {
+  const bool deformers = !levels_ || levels_->costs[level].deformers;
+  const SkinWeights& weights = levels_ ? levels_->weights[level] : bind_->model.weights;
   // A crowd's characters are cold when their update starts: ask for every small array at once, so that their
   // first lines arrive together rather than one wait each (the large per-point arrays the streaming hardware
   // prefetcher fetches well once skinning runs through them).
@@ -628,8 +714,10 @@ Status Character::update(float dt) {
       if (skel.is_ancestor(jumped_root_, springs_.spec(c).bones.front())) (void)springs_.restart(c);
     jumped_root_ = -1;
   }
-  if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
-  if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
+  if (deformers) {
+    if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
+    if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
+  }
   // Pose-space correctives: each driver's weights become its shapes' morph weights (validated when it was added),
   // before the early return below, so that a caller deforming elsewhere morphs with them too.
   for (Driven& driven : drivers_) {
@@ -641,7 +729,7 @@ Status Character::update(float dt) {
     for (std::size_t s = 0; s < driven.targets.size(); ++s) morph_weights_[driven.targets[s]] = driven.weights[s];
   }
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
-  if (!settings.deform_on_cpu) return hierarchy_.update(world_);
+  if (!settings.deform_on_cpu) return deformers ? hierarchy_.update(world_) : Status();
   const bool transport = normals_mode_ == NormalsMode::transported;
   // Morph targets, in bind space before skinning; skipped (the bind arrays skinned directly) when every weight is 0.
   std::span<const glm::vec3> rest_positions = bound.mesh.positions;
@@ -663,7 +751,7 @@ Status Character::update(float dt) {
   }
   normals_current_ = false;
   transported_current_ = false;
-  if (direct_mush_) {
+  if (direct_mush_ && deformers && level == 0) {
     // Direct Delta Mush in place of settings.skinning: the morphed points' offsets from the rest points turn with
     // their points, and so do the transported normals (the rotation of each point's smoothed neighbourhood).
     DirectDeltaMushJob ddm;
@@ -676,8 +764,12 @@ Status Character::update(float dt) {
       ddm.out_normals = point_normals();
     }
     if (const Status status = ddm.run(); !status) return status;
-  } else if (const Status status = skin(rest_positions, rest_normals, transport); !status) {
+  } else if (const Status status = skin(rest_positions, rest_normals, transport, weights); !status) {
     return status;
+  }
+  if (!deformers) {
+    transported_current_ = transport;
+    return {};
   }
   if (const Status status = hierarchy_.update(world_); !status) return status;
   if (!settings.lattice_fields) {
@@ -769,6 +861,81 @@ std::span<const glm::vec3> Character::normals() {
     normals_current_ = true;
   }
   return std::span<const glm::vec3>(normals_).first(bind_->model.mesh.vertex_count());
+}
+
+void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> options, std::uint32_t blend_frames) {
+  const Model& bound = bind_->model;
+  if (lod.levels.empty()) throw Error::invalid_argument("level 0", "no levels");
+  if (lod.levels.size() != options.size())
+    throw Error::invalid_argument("level " + std::to_string(std::min(lod.levels.size(), options.size())),
+                                  "levels and options differ in count");
+  if (blend_frames > 1000) throw Error::invalid_argument("blend_frames", "more than 1000");
+  auto data = std::make_shared<LevelData>();
+  data->blend_frames = blend_frames;
+  for (std::size_t l = 0; l < lod.levels.size(); ++l) {
+    const std::string element = "level " + std::to_string(l);
+    const BoneLodLevel& level = lod.levels[l];
+    if (options[l].update_interval < 1 || options[l].update_interval > 64)
+      throw Error::invalid_argument(element, "update_interval must be in [1, 64]");
+    // Checked once here, so that update() cannot refuse it (the palette is the skeleton's).
+    SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, false, level.weights);
+    if (level.weights.size() != bound.mesh.point_count())
+      throw Error::invalid_argument(element, "skin is not one entry per point");
+    if (const Status status = job.validate(); !status) throw Error::invalid_argument(element, status.reason());
+    LevelCost cost;
+    cost.points = level.weights.size();
+    cost.influences = 0;
+    for (std::size_t p = 0; p < cost.points; ++p) cost.influences += influence_count(level.weights, p);
+    std::vector<bool> used(bound.skeleton.bone_count(), false);
+    for (std::size_t p = 0; p < cost.points; ++p)
+      for (int k = 0; k < 4; ++k)
+        if (level.weights.weights[p][k] > 0.0f) used[level.weights.bones[p][k]] = true;
+    for (const std::uint16_t b : level.weights.extra_bones) used[b] = true;
+    cost.bones = std::size_t(std::count(used.begin(), used.end(), true));
+    cost.deformers = options[l].deformers;
+    cost.update_interval = options[l].update_interval;
+    data->weights.push_back(level.weights);
+    data->costs.push_back(cost);
+  }
+  blend_.assign(bound.mesh.point_count(), glm::vec3(0.0f));
+  target_ = positions_;
+  levels_ = std::move(data);
+  level_ = shown_ = 0;
+  tick_ = 0;
+  pending_dt_ = 0.0f;
+  blend_left_ = approach_left_ = 0;
+}
+
+std::size_t Character::level_count() const noexcept { return levels_ ? levels_->costs.size() : 1; }
+
+Status Character::set_level(std::size_t level) noexcept {
+  if (level >= level_count()) return Status::failure("level out of range");
+  level_ = level;
+  return {};
+}
+
+Character::LevelCost Character::level_cost(std::size_t level) const noexcept {
+  if (levels_) return level < levels_->costs.size() ? levels_->costs[level] : LevelCost{0, 0, 0, false, 0};
+  if (level != 0) return {0, 0, 0, false, 0};
+  const Model& bound = bind_->model;
+  LevelCost cost;
+  cost.points = bound.mesh.point_count();
+  for (std::size_t p = 0; p < cost.points; ++p) cost.influences += influence_count(bound.weights, p);
+  cost.bones = bound.skeleton.bone_count();
+  return cost;
+}
+
+float screen_height(float extent, float distance, float vertical_fov) noexcept {
+  if (!(extent > 0.0f) || !(distance > 0.0f) || !(vertical_fov > 0.0f) || !std::isfinite(extent) ||
+      !std::isfinite(distance) || !(vertical_fov < 3.14159265f))
+    return 0.0f;
+  return 2.0f * std::atan(0.5f * extent / distance) / vertical_fov;
+}
+
+std::size_t pick_level(std::span<const float> thresholds, float height) noexcept {
+  std::size_t level = 0;
+  while (level < thresholds.size() && height < thresholds[level]) ++level;
+  return level;
 }
 
 glm::vec3 Character::bone_position(std::int32_t bone) const {

@@ -40,7 +40,8 @@
 // A crowd: instance() makes another character of the same model and rig that shares the immutable bind data
 // (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
 // positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
-// thread (no hidden threads; bench/crowd_bench.cpp).
+// thread (no hidden threads; bench/crowd_bench.cpp). Distant ones show levels of detail (set_levels, set_level:
+// fewer bones per point, deformers off, deformed every Nth update; docs/skinning.md, "Levels of detail").
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -50,6 +51,7 @@
 #include <vector>
 
 #include "deform/character/export.hpp"
+#include "deform/offline/bone_lod.hpp"
 #include "deform/offline/rig.hpp"
 #include "deform/offline/delta_mush.hpp"
 #include "deform/offline/direct_delta_mush.hpp"
@@ -260,10 +262,54 @@ class DEFORM_CHARACTER_API Character {
   // Lets go: every stretch target back to zero; the pose reached stays.
   void release();
 
+  // --- levels of detail (docs/skinning.md, "Levels of detail") ---
+  // How a level runs, besides its skin (BoneLodLevel): whether its deformers run, and how often it updates.
+  struct LevelOptions {
+    // true: the lattices, the spring chains, Delta Mush and (at level 0 only) Direct Delta Mush run as set. false: the
+    // level skins the animated pose alone (settings.skinning); the deformers' state waits and starts again from the
+    // pose (restart) when a level with them is next shown.
+    bool deformers = true;
+    // The level deforms on every Nth update() (1 to 64): update() sums the dt of the updates between, so the springs
+    // take the longer step, and positions() moves each update a share of the way to the last deformed points, reaching
+    // them after N updates: piecewise linear, N updates behind, no pop. Normals follow the deformed updates only.
+    // Used while the character deforms on the CPU (settings.deform_on_cpu), else every update poses.
+    std::uint32_t update_interval = 1;
+  };
+  // Binds levels: level l skins with lod.levels[l].weights (the full skeleton's bone ids) and runs as options[l] says;
+  // level 0 should be the whole character (build_bone_lod's level 0). A switch (set_level) blends: its first update
+  // deforms the frame at both levels (that update costs both) and positions() then goes from the outgoing level's
+  // points to the new level's in `blend_frames` deformed updates (0: at once), by an offset per point that shrinks
+  // linearly. Throws deform::Error (kind argument, element "level N") for a level count that differs from
+  // options' or is 0, a skin that SkinningJob refuses for this model (its reason), an update_interval outside [1, 64];
+  // and for blend_frames over 1000 (element "blend_frames"). Allocates the levels (shared with instance()) and a
+  // per-point blend and interpolation buffer; the character starts at level 0. Call at set-up, not per frame.
+  void set_levels(const BoneLod& lod, std::span<const LevelOptions> options, std::uint32_t blend_frames = 8);
+  // The level the next update() shows (0 without levels), and how many there are (1 without levels).
+  std::size_t level() const noexcept { return level_; }
+  std::size_t level_count() const noexcept;
+  // Shows `level` from the next update() on (see set_levels for the blend). Refuses, changing nothing, a level out of
+  // range. No allocation, O(1): call it per frame with what pick_level gives.
+  Status set_level(std::size_t level) noexcept;
+  // Whether the next update() deforms: true without levels or off the CPU; false while an update_interval level is
+  // between its deformed updates (that update only moves positions() on, reading no pose: a crowd loop may skip
+  // sampling the clip and set_pose for it). No allocation, O(1).
+  bool next_update_deforms() const noexcept;
+  // What a level costs per deformed update, for a caller that budgets a crowd.
+  struct LevelCost {
+    std::size_t points = 0;      // points skinned
+    std::size_t influences = 0;  // Σ over points of their influences
+    std::size_t bones = 0;       // bones the skin uses (the kept bones; forward kinematics still runs over all)
+    bool deformers = true;
+    std::uint32_t update_interval = 1;
+  };
+  // Level 0 without levels; a level out of range gives a zero cost.
+  LevelCost level_cost(std::size_t level) const noexcept;
+
   // Advances the springs by dt seconds and deforms the held pose: FK once (twice with a lead), the spring chains,
   // the lattices' springs, skinning, lattices (see the top of this file). Refuses, changing nothing, a dt that is
   // negative or not finite. The later stages cannot refuse for a pose set by set_pose or reach; should one, update
-  // reports its reason, never success. No allocation; O(bones + points + bound points · lattice cost).
+  // reports its reason, never success. No allocation; O(bones + points + bound points · lattice cost). With levels
+  // (set_levels), at the level set_level asked for: its skin, its deformers, its update interval and a switch's blend.
   Status update(float dt);
 
   // Cache hints for the state the next update() and normals() read and write (deform/runtime/prefetch.hpp): no
@@ -336,9 +382,9 @@ class DEFORM_CHARACTER_API Character {
   void clamp_pose(Pose& pose) const noexcept;
   // update()'s LBS or DQS (settings.skinning) of the (morphed) bind points, and their normals when transporting.
   SkinningJob skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                           bool transport) noexcept;
-  Status skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-              bool transport) noexcept;
+                           bool transport, const SkinWeights& weights) noexcept;
+  Status skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals, bool transport,
+              const SkinWeights& weights) noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
   std::span<glm::vec3> point_normals() noexcept;
   // reach()'s steps (character.cpp): refuse a bad effector or target, the chain, its lattices, the first solve, the
@@ -399,6 +445,22 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec4> mush_scratch_;
   // Direct Delta Mush: the binding (shared by instances; null when off). Its job needs no scratch.
   std::shared_ptr<const DirectDeltaMushBinding> direct_mush_;
+  // Levels of detail (set_levels): shared by instances; null without levels.
+  struct LevelData {
+    std::vector<SkinWeights> weights;  // per level
+    std::vector<LevelCost> costs;
+    std::uint32_t blend_frames = 0;
+  };
+  std::shared_ptr<const LevelData> levels_;
+  std::size_t level_ = 0;            // the level asked for (set_level)
+  std::size_t shown_ = 0;            // the level the last deformed update showed
+  std::uint32_t tick_ = 0;           // updates at an update_interval > 1 since its last deformed one
+  float pending_dt_ = 0.0f;          // their dt, summed
+  std::uint32_t blend_left_ = 0;     // deformed updates the switch's offset still shrinks over
+  std::vector<glm::vec3> blend_;     // the switch's offset per point (outgoing - new)
+  std::vector<glm::vec3> target_;    // update_interval > 1: the last deformed points, positions() moving toward them
+  std::uint32_t approach_left_ = 0;  // updates until positions() reaches target_
+  Status deform_frame(float dt, std::size_t level);
   // Pose-space correctives: each driver (shared), the morph target of each of its shapes, its weights' room.
   struct Driven {
     std::shared_ptr<const PoseDriverBinding> binding;
@@ -417,6 +479,16 @@ DEFORM_CHARACTER_API std::vector<std::int32_t> reach_effectors(const Character& 
 // Of reach_effectors(), the one whose head (bone_position: as deformed now) is nearest `target`; ties go to the lower
 // id. -1 when there is none or the target is not finite. No allocation; O(lattices² · depth + depth).
 DEFORM_CHARACTER_API std::int32_t nearest_reach_effector(const Character& character, glm::vec3 target);
+
+// Choosing a level is the caller's (Character::set_level); these help from a camera. The height `extent` (model units)
+// at `distance` from a perspective camera of vertical field of view `vertical_fov` (radians, in (0, pi)) covers this
+// fraction of the viewport's height (2 · atan(extent / 2 / distance) / vertical_fov, 1 or more when it fills it); 0
+// for an argument not finite or not positive. No allocation.
+DEFORM_CHARACTER_API float screen_height(float extent, float distance, float vertical_fov) noexcept;
+// The level for a screen height: the number of `thresholds` (decreasing fractions of the viewport's height, one per
+// level after 0: level l while the height is below thresholds[l - 1]) that `height` is below; thresholds not
+// decreasing are taken as they come (the first that the height is not below ends the count). No allocation.
+DEFORM_CHARACTER_API std::size_t pick_level(std::span<const float> thresholds, float height) noexcept;
 
 // `clip` with the character's pose drivers baked in, for a file that plays without libdeform (a skinned glTF export,
 // docs/gltf-export.md "Pose-space correctives"): each morph target a driver sets gets a linear weight track with a key
