@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -185,6 +186,54 @@ TEST_CASE("bone LOD on the built-in character: levels by bone count under the wa
   CHECK_FALSE(deform::bone_lod_consistent(model.skeleton, broken));
 }
 
+TEST_CASE("bone LOD judged on the motion: the walk's poses keep the bones the walk moves") {
+  const Model model = deform::builtin_character();
+  const deform::Animation walk = deform::builtin_walk(model);
+  // The motion given (the walk sampled at other times than the poses measured on) against weight alone, without a
+  // keep list, at bone counts where the walk's limbs compete with the bones it leaves still: the walk's error at each
+  // level is less than half (by weight alone the shins and forearms go before the head and the clavicles).
+  std::vector<Pose> motion;
+  for (int k = 0; k < 12; ++k) {
+    Pose pose = model.skeleton.bind_pose();
+    deform::SamplingJob sampling;
+    sampling.animation = &walk;
+    sampling.time = walk.duration * (float(k) + 0.5f) / 12.0f;
+    sampling.rotations = pose.rotations;
+    sampling.translations = pose.translations;
+    REQUIRE(sampling.run());
+    motion.push_back(std::move(pose));
+  }
+  deform::BoneLodSettings by_weight;
+  by_weight.bones_per_level = {14, 10, 8};
+  deform::BoneLodSettings by_motion = by_weight;
+  by_motion.poses = motion;
+  const BoneLod weight_lod = deform::build_bone_lod(model, by_weight);
+  const BoneLod motion_lod = deform::build_bone_lod(model, by_motion);
+  std::vector<Pose> walk_poses = test_poses(model, &walk);
+  walk_poses.resize(8);  // the walk only: the random bends move every bone alike
+  check_levels("builtin by motion", model, motion_lod, walk_poses);
+  const std::vector<LevelError> by_weight_errors = level_errors(model, weight_lod, walk_poses);
+  const std::vector<LevelError> by_motion_errors = level_errors(model, motion_lod, walk_poses);
+  for (std::size_t l = 1; l < 4; ++l) {
+    MESSAGE("level " << l << ": walk error mean/max by weight " << by_weight_errors[l].mean << " / "
+                     << by_weight_errors[l].max << ", by motion " << by_motion_errors[l].mean << " / "
+                     << by_motion_errors[l].max);
+    CHECK(by_motion_errors[l].mean < 0.5 * by_weight_errors[l].mean);
+    CHECK(by_motion_errors[l].max < 0.6 * by_weight_errors[l].max);
+  }
+  // A pose that does not fit the skeleton is refused, naming it.
+  by_motion.poses[3].rotations.pop_back();
+  try {
+    (void)deform::build_bone_lod(model, by_motion);
+    FAIL("a short pose was accepted");
+  } catch (const deform::Error& error) {
+    CHECK(std::string(error.what()).find("pose 3") != std::string::npos);
+  }
+  by_motion.poses[3] = model.skeleton.bind_pose();
+  by_motion.poses[3].translations[2].x = std::numeric_limits<float>::quiet_NaN();
+  CHECK_THROWS_AS((void)deform::build_bone_lod(model, by_motion), deform::Error);
+}
+
 TEST_CASE("bone LOD by weight-error budget, and kept bones") {
   const Model model = deform::builtin_character();
   deform::BoneLodSettings settings;
@@ -221,16 +270,16 @@ TEST_CASE("bone LOD refuses bad settings, naming the element") {
     }
   };
   refused({}, "settings");
-  refused({{10}, {0.1f}, {}, 4}, "settings");
-  refused({{10, 12}, {}, {}, 4}, "level 2");
-  refused({{}, {0.2f, 0.1f}, {}, 4}, "level 2");
-  refused({{}, {1.5f}, {}, 4}, "level 1");
-  refused({{10}, {}, {999}, 4}, "keep");
-  refused({{10}, {}, {}, 0}, "settings");
+  refused({{10}, {0.1f}, {}, 4, {}}, "settings");
+  refused({{10, 12}, {}, {}, 4, {}}, "level 2");
+  refused({{}, {0.2f, 0.1f}, {}, 4, {}}, "level 2");
+  refused({{}, {1.5f}, {}, 4, {}}, "level 1");
+  refused({{10}, {}, {999}, 4, {}}, "keep");
+  refused({{10}, {}, {}, 0, {}}, "settings");
   Model broken = model;
   broken.weights.weights[5].x = -1.0f;
   try {
-    (void)deform::build_bone_lod(broken, {{10}, {}, {}, 4});
+    (void)deform::build_bone_lod(broken, {{10}, {}, {}, 4, {}});
     FAIL("accepted");
   } catch (const deform::Error& error) {
     CHECK(std::string(error.what()).find("point 5") != std::string::npos);

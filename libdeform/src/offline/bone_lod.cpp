@@ -6,6 +6,7 @@
 #include <string>
 
 #include "deform/runtime/error.hpp"
+#include "deform/runtime/skeleton.hpp"
 
 namespace deform {
 namespace {
@@ -44,6 +45,25 @@ void check_weights(const Model& model) {
     if (!std::isfinite(w.extra_weights[e]) || w.extra_weights[e] < 0.0f || w.extra_bones[e] >= bones)
       throw Error::invalid_argument("weights", "extra influence " + std::to_string(e) + " is out of range");
   }
+}
+
+// Each pose's skinning matrices (world × inverse bind), pose after pose: bones matrices each.
+std::vector<glm::mat4> pose_palettes(const Skeleton& skeleton, const std::vector<Pose>& poses) {
+  const std::size_t bones = skeleton.bone_count();
+  std::vector<glm::mat4> palettes(poses.size() * bones);
+  std::vector<glm::mat4> world(bones);
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    LocalToWorldJob fk;
+    fk.skeleton = &skeleton;
+    fk.rotations = poses[k].rotations;
+    fk.translations = poses[k].translations;
+    fk.world = world;
+    fk.palette = std::span<glm::mat4>(palettes).subspan(k * bones, bones);
+    if (poses[k].rotations.size() != bones || poses[k].translations.size() != bones || !fk.run())
+      throw Error::invalid_argument("pose " + std::to_string(k),
+                                    "not one finite rotation and translation per bone of the skeleton");
+  }
+  return palettes;
 }
 
 std::size_t count_influences(const SkinWeights& weights) {
@@ -99,8 +119,34 @@ BoneLod build_bone_lod(const Model& model, const BoneLodSettings& settings) {
     if (parent >= 0) depth[std::size_t(id)] = depth[std::size_t(parent)] + 1;
   }
 
-  // The greedy sequence of merges, each bone's accumulated weight moving to its parent.
-  std::vector<double> accumulated = own;
+  // What merging each bone into its parent costs: its points' weight on it (own and merged descendants'), each
+  // times how far the point moves between the two bones' skinning matrices over the poses (1 without poses).
+  const std::vector<glm::mat4> palettes = pose_palettes(skeleton, settings.poses);
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> carried(bones);  // per bone: (point, weight) it skins
+  for (std::size_t p = 0; p < points; ++p)
+    for_each_influence(model.weights, p, [&](std::size_t b, float w) { carried[b].emplace_back(std::uint32_t(p), w); });
+  const auto merge_cost = [&](std::size_t b) {
+    const std::int32_t parent = skeleton.bones()[b].parent;
+    double cost = 0.0;
+    for (const auto& [p, w] : carried[b]) {
+      if (settings.poses.empty() || parent < 0) {
+        cost += w;
+        continue;
+      }
+      const glm::vec4 x(model.mesh.positions[p], 1.0f);
+      double moved = 0.0;
+      for (std::size_t k = 0; k < settings.poses.size(); ++k) {
+        const glm::mat4* palette = palettes.data() + k * bones;
+        moved += glm::length(glm::vec3(palette[b] * x - palette[std::size_t(parent)] * x));
+      }
+      cost += w * moved / double(settings.poses.size());
+    }
+    return cost;
+  };
+  std::vector<double> cost(bones);
+  for (std::size_t b = 0; b < bones; ++b) cost[b] = merge_cost(b);
+
+  // The greedy sequence of merges, each bone's carried points moving to its parent.
   std::vector<bool> kept(bones, true);
   std::vector<std::size_t> kept_children(bones, 0);
   for (std::size_t b = 0; b < bones; ++b)
@@ -112,15 +158,16 @@ BoneLod build_bone_lod(const Model& model, const BoneLodSettings& settings) {
     std::size_t best = bones;
     for (std::size_t b = 0; b < bones; ++b) {
       if (!kept[b] || pinned[b] || kept_children[b] != 0) continue;
-      if (best == bones || accumulated[b] < accumulated[best] ||
-          (accumulated[b] == accumulated[best] && (depth[b] > depth[best] || (depth[b] == depth[best] && b > best))))
+      if (best == bones || cost[b] < cost[best] ||
+          (cost[b] == cost[best] && (depth[b] > depth[best] || (depth[b] == depth[best] && b > best))))
         best = b;
     }
     if (best == bones) break;
     const auto parent = std::size_t(skeleton.bones()[best].parent);
     kept[best] = false;
     --kept_children[parent];
-    accumulated[parent] += accumulated[best];
+    carried[parent].insert(carried[parent].end(), carried[best].begin(), carried[best].end());
+    cost[parent] = merge_cost(parent);
     moved += own[best];
     removals.push_back(best);
     error_after.push_back(points == 0 ? 0.0 : moved / double(points));

@@ -3,9 +3,12 @@
 // character still skins with, and its skin on those bones. Offline: computed once, at bind time; allocates.
 //
 // Bones are merged by weight, leaves and fingers first. One greedy sequence: of the bones still kept, the candidates
-// are those with no kept child that are neither a root nor in `keep`; the candidate with the least skin weight (its
-// own plus what its merged descendants gave it, summed over the points) is merged into its parent, which takes that
-// weight; ties go to the deeper bone, then the higher id. Level k's kept set is a prefix of that sequence's removals,
+// are those with no kept child that are neither a root nor in `keep`; the candidate that costs least is merged into
+// its parent, which takes its skin weight (its own plus what its merged descendants gave it). A merge costs the skin
+// weight it moves, summed over the points; given `poses` (the motion the levels will show), that weight times how
+// far each point moves when its skinning matrix becomes the parent's (the mean over the poses): a forearm that swings
+// then goes after a ponytail that hangs still, where by weight alone it goes first. Ties go to the deeper bone, then
+// the higher id. Level k's kept set is a prefix of that sequence's removals,
 // so the levels are nested, each kept set is closed under parents (a kept bone's parent is kept) and the roots, which
 // carry the root motion, are always kept. Level 0 is the whole skeleton with the model's skin unchanged.
 //
@@ -35,6 +38,9 @@ struct BoneLodSettings {
   // Influences per point at levels after 0, strongest kept, renormalised (1 to 8; SkinningJob takes any number, its
   // four-slot kernels are fastest).
   std::size_t max_influences = 4;
+  // The motion to judge merges on (see above): poses of the model's skeleton (local rotations and translations, one
+  // per bone), e.g. its clips sampled over their length. Empty: by weight alone.
+  std::vector<Pose> poses;
 };
 
 struct BoneLodLevel {
@@ -57,7 +63,8 @@ struct BoneLod {
 // The levels for `model` (its skeleton and skin weights). Throws deform::Error (kind argument) naming the element: a
 // model whose weights are not one per point or name a bone out of range ("weights"), settings with neither or both
 // lists ("settings"), a level's count larger than the one before or a budget outside [0, 1] or smaller than the one
-// before ("level N"), a kept bone out of range ("keep"), max_influences outside [1, 8].
+// before ("level N"), a kept bone out of range ("keep"), max_influences outside [1, 8], a pose without one finite
+// rotation and translation per bone ("pose N"). Cost: O(points · influences · bones) per pose at most.
 DEFORM_OFFLINE_API BoneLod build_bone_lod(const Model& model, const BoneLodSettings& settings);
 
 // Whether `level`'s kept bones are closed under parents and every bone maps to a kept ancestor of itself or itself.
