@@ -7,7 +7,7 @@
 # (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
 # (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held; the
 # lattice overlay drawing the reaching limb's lattices only, unless all are asked for; the bent elbow with Direct
-# Delta Mush and with Delta Mush; imported characters framed by the camera and standing on the floor, with and
+# Delta Mush and with Delta Mush; the walk at a level of detail; imported characters framed by the camera and standing on the floor, with and
 # without their clip.
 # usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
 set -euo pipefail
@@ -53,6 +53,12 @@ run --bare --screenshot "$work/walk.png" --frames 40 --clip walk
 "$check" "$work/before.png" "$work/walk.png"
 run --bare --screenshot "$work/walk_rigid.png" --frames 40 --clip walk --inertia 0  # the jiggle shows
 "$check" "$work/walk_rigid.png" "$work/walk.png"
+# A level of detail (--lod-bones): with every bone, the rigid walk's picture; with 8, merged on the walk's motion, the
+# knees no longer bend: another picture.
+run --bare --screenshot "$work/walk_lod33.png" --frames 40 --clip walk --inertia 0 --lod-bones 33 2>/dev/null
+"$check" --same-picture "$work/walk_rigid.png" "$work/walk_lod33.png"
+run --bare --screenshot "$work/walk_lod8.png" --frames 40 --clip walk --inertia 0 --lod-bones 8 2>/dev/null
+"$check" "$work/walk_rigid.png" "$work/walk_lod8.png"
 run --bare --screenshot "$work/walk_reach.png" --frames 40 --clip walk --reach 1.3,1.6,0.4 --at 2
 "$check" "$work/walk.png" "$work/walk_reach.png"
 run --screenshot "$work/walk_full.png" --frames 40 --clip walk --rig "$rig" --reach 1.3,1.6,0.4 --at 2 >/dev/null

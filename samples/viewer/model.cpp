@@ -144,6 +144,10 @@ void set_gpu(ViewerState& state, bool on) {
     std::fprintf(stderr, "deform_viewer: Direct Delta Mush and Delta Mush are CPU stages; deforming on the CPU\n");
     on = false;
   }
+  if (on && state.options.lod_bones > 0) {  // GpuSkinning skins with the model's own weights, not a level's
+    std::fprintf(stderr, "deform_viewer: --lod-bones is a CPU level of detail; deforming on the CPU\n");
+    on = false;
+  }
   if (on && state.character->morph_target_count() > 0) {  // GpuSkinning skins the bind positions, not the morphed ones
     std::fprintf(stderr,
                  "deform_viewer: the model has morph targets, which the GPU path does not apply; "
@@ -196,6 +200,28 @@ deform::Rig tuned_rig(ViewerState& state) {
 
 // Everything a new state.character needs around it: the picking triangles and BVH, the renderer, the per-lattice
 // and per-target state, the poses, and the panel's settings passed to it.
+// --lod-bones N: the character shown at a level of detail that skins with N bones (fewer when the skeleton has
+// fewer), merged on the motion of all the model's clips (16 poses from each), by weight alone when it has none.
+void apply_lod(ViewerState& state) {
+  const int bones = state.options.lod_bones;
+  if (bones <= 0) return;
+  deform::BoneLodSettings settings;
+  settings.bones_per_level = {std::size_t(bones)};
+  for (const deform::Animation& clip : state.clips) {
+    for (int k = 0; k < 16; ++k) {
+      deform::Pose pose = state.character->skeleton().bind_pose();
+      sample_one(state, clip, clip.duration * float(k) / 16.0f, pose);
+      settings.poses.push_back(std::move(pose));
+    }
+  }
+  const deform::BoneLod lod = deform::build_bone_lod(state.character->model(), settings);
+  const std::vector<deform::Character::LevelOptions> options(2);  // deformers on, every update
+  state.character->set_levels(lod, options, 0);
+  (void)state.character->set_level(1);  // cannot fail: the level exists
+  std::fprintf(stderr, "deform_viewer: --lod-bones %d: skinning with %zu of %zu bones\n", bones,
+               lod.levels[1].kept_bones, lod.levels[0].kept_bones);
+}
+
 void adopt_character(ViewerState& state) {
   const deform::Mesh& mesh = state.character->model().mesh;
   state.triangle_points.resize(mesh.triangles.size());
@@ -219,6 +245,7 @@ void adopt_character(ViewerState& state) {
   apply_shape(state);
   apply_reach_settings(state);
   apply_mush(state);
+  apply_lod(state);
   set_gpu(state, state.gpu);
 }
 

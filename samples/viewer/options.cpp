@@ -16,7 +16,7 @@ const char* usage =
     "                     [--limits euler|swing-twist] [--weight-map BONE] [--weights-tool TOOL]...\n"
     "                     [--save-weights OUT.skw]\n"
     "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
-    "                     [--skinning lbs|dqs|ddm] [--mush N]\n"
+    "                     [--skinning lbs|dqs|ddm] [--mush N] [--lod-bones N]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
@@ -39,7 +39,10 @@ const char* usage =
     "keeps the weights. --save-weights OUT.skw: write the weights after the tools (atomically).\n"
     "--gpu: skinning and lattices on the GPU (OpenGL 4.3), the CPU only posing. --dqs: start with dual quaternion\n"
     "skinning. --skinning ddm: Direct Delta Mush (CPU only; --dqs is --skinning dqs). --mush N: Delta Mush with N\n"
-    "iterations after the lattices (CPU only; 0, the default: off). --up z: the model's up axis is +Z (default: +Y, or "
+    "iterations after the lattices (CPU only; 0, the default: off). --lod-bones N: the level of detail that skins "
+    "with\n"
+    "N bones, merged on the motion of the model's clips (CPU only; docs/skinning.md, \"Levels of detail\"). --up z: "
+    "the model's up axis is +Z (default: +Y, or "
     "what an imported file's metadata says).\n"
     "--lattices: draw no lattice, the active limb's (default: the one reaching, else the one a click would move),\n"
     "or all of them (L cycles the three).\n"
@@ -197,6 +200,9 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--mush") {
       o.mush = parse_int(next(), "--mush");
       if (o.mush > 10000) fail("--mush: more than 10000 iterations");
+    } else if (a == "--lod-bones") {
+      o.lod_bones = parse_int(next(), "--lod-bones");
+      if (o.lod_bones < 1) fail("--lod-bones: fewer than 1 bone");
     } else if (a == "--limits") {
       const std::string limits = next();
       if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");

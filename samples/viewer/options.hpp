@@ -34,6 +34,7 @@ struct Options {
   bool dqs = false;           // start with dual quaternion skinning
   bool ddm = false;           // start with Direct Delta Mush skinning (--skinning ddm)
   int mush = 0;               // Delta Mush iterations after the lattices (--mush; 0: off)
+  int lod_bones = 0;          // --lod-bones N: skin with N bones merged on the clips' motion (0: every bone)
   bool swing_twist = false;   // reach with swing-twist joint limits
   char up = 0;                // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   char lattices = 'a';        // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)
