@@ -225,6 +225,58 @@ void bind_character_mush(CharacterClass& character) {
           "Whether Direct Delta Mush skins the character.");
 }
 
+// Levels of detail (docs/skinning.md, "Levels of detail"): bone levels built here from counts and a motion.
+void bind_character_levels(CharacterClass& character) {
+  character
+      .def(
+          "set_levels",
+          [](deform::Character& c, const std::vector<std::size_t>& bones_per_level,
+             const std::vector<deform::Pose>& poses, const std::vector<py::object>& keep,
+             std::optional<std::vector<bool>> deformers, std::optional<std::vector<std::uint32_t>> update_interval,
+             std::uint32_t blend_frames) {
+            deform::BoneLodSettings settings;
+            settings.bones_per_level = bones_per_level;
+            settings.poses = poses;
+            for (const py::object& bone : keep) settings.keep.push_back(resolve_bone(c.skeleton(), bone));
+            const std::size_t levels = bones_per_level.size() + 1;
+            if ((deformers && deformers->size() != levels) || (update_interval && update_interval->size() != levels))
+              throw deform::Error::invalid_argument("levels",
+                                                    "deformers and update_interval need one entry per level, "
+                                                    "level 0 included");
+            std::vector<deform::Character::LevelOptions> options(levels);
+            for (std::size_t l = 0; l < levels; ++l) {
+              if (deformers) options[l].deformers = (*deformers)[l];
+              if (update_interval) options[l].update_interval = (*update_interval)[l];
+            }
+            c.set_levels(deform::build_bone_lod(c.model(), settings), options, blend_frames);
+          },
+          py::arg("bones_per_level"), py::arg("poses") = std::vector<deform::Pose>{},
+          py::arg("keep") = std::vector<py::object>{}, py::arg("deformers") = py::none(),
+          py::arg("update_interval") = py::none(), py::arg("blend_frames") = 8u,
+          "Levels of detail: level 0 the whole character, then one level per entry of `bones_per_level` (bones it "
+          "skins with, non-increasing), merged on the motion of `poses` (deform.Pose, e.g. a clip sampled over its "
+          "length; none: by weight alone), `keep` bones (names or ids) kept at every level. `deformers` and "
+          "`update_interval` (1 to 64): one per level, level 0 included (default: on, every update). A switch blends "
+          "over `blend_frames` deformed updates. Raises deform.Error naming what is wrong; call it at set-up.")
+      .def(
+          "set_level", [](deform::Character& c, std::size_t level) { check(c.set_level(level)); }, py::arg("level"),
+          "Shows `level` from the next update() on (deform.Error when out of range).")
+      .def_property_readonly("level", &deform::Character::level, "The level the next update() shows.")
+      .def_property_readonly("level_count", &deform::Character::level_count, "1 without levels.")
+      .def(
+          "level_cost",
+          [](const deform::Character& c, std::size_t level) {
+            const deform::Character::LevelCost cost = c.level_cost(level);
+            py::dict d;
+            d["points"] = cost.points, d["influences"] = cost.influences, d["bones"] = cost.bones;
+            d["deformers"] = cost.deformers, d["update_interval"] = cost.update_interval;
+            return d;
+          },
+          py::arg("level"), "What a level's deformed update skins: points, influences, bones; its options.")
+      .def_property_readonly("next_update_deforms", &deform::Character::next_update_deforms,
+                             "False while an update_interval level only interpolates (it reads no pose).");
+}
+
 // Reach, release and update, and the views of what the character shows.
 void bind_character_reach(CharacterClass& character) {
   character
@@ -361,11 +413,19 @@ void bind_character(py::module_& m) {
   bind_character_motion(character);
   bind_character_settings(character);
   bind_character_mush(character);
+  bind_character_levels(character);
   bind_character_reach(character);
   bind_character_morphs(character);
   character
       .def_property_readonly("stretch", &deform::Character::stretch, "The stretch the lattices have now (model units).")
       .def_property_readonly("effector", &deform::Character::effector);
+  m.def("screen_height", &deform::screen_height, py::arg("extent"), py::arg("distance"), py::arg("vertical_fov"),
+        "The fraction of a perspective viewport's height that `extent` at `distance` covers (fov in radians).");
+  m.def(
+      "pick_level",
+      [](const std::vector<float>& thresholds, float height) { return deform::pick_level(thresholds, height); },
+      py::arg("thresholds"), py::arg("height"),
+      "The level for a screen height: how many of the decreasing `thresholds` it is below.");
 }
 
 }  // namespace deform_python

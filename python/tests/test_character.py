@@ -144,3 +144,34 @@ def test_direct_delta_mush_skins_in_place_of_lbs_and_matches_the_job():
     bare.update(0.0)
     _, palette = deform.forward_kinematics(bare.skeleton, bare.pose)
     np.testing.assert_allclose(bare.positions, deform.DirectDeltaMush(model).skin(palette), atol=1e-5)
+
+
+def test_levels_of_detail_skin_with_fewer_bones_and_switch_on_request():
+    hero = deform.Character.builtin()
+    walk = [c for c in deform.builtin_clips(hero.model) if c.name == "walk"][0]
+    poses = []
+    for k in range(12):
+        pose = hero.skeleton.bind_pose()
+        walk.sample(walk.duration * k / 12, pose)
+        poses.append(pose)
+    hero.set_levels([14, 8], poses=poses, keep=["hips"], blend_frames=0)
+    assert hero.level_count == 3 and hero.level == 0
+    assert hero.level_cost(1)["bones"] == 14 and hero.level_cost(2)["bones"] == 8
+    assert hero.level_cost(2)["influences"] < hero.level_cost(0)["influences"]
+    pose = hero.skeleton.bind_pose()
+    walk.sample(0.4, pose)
+    shown = []
+    for level in range(3):
+        hero.set_level(level)
+        hero.set_pose(pose)
+        hero.update(0.0)
+        shown.append(hero.positions.copy())
+    height = np.ptp(shown[0][:, 1])
+    # 14 bones judged on the walk skin its pose as all 33 do; 8 cannot (the knees).
+    assert np.abs(shown[1] - shown[0]).max() < 1e-5 * height
+    assert np.abs(shown[2] - shown[0]).max() > 0.01 * height
+    with pytest.raises(deform.Error):
+        hero.set_level(3)
+    with pytest.raises(deform.Error):
+        hero.set_levels([14, 20])  # more bones than the level before
+    assert deform.pick_level([0.5, 0.2], deform.screen_height(1.8, 30.0, 1.0)) == 2
