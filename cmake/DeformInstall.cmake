@@ -4,6 +4,7 @@
 #   target_link_libraries(tool PRIVATE deform::c)                 # the C API (deform/c/deform.h)
 #   find_package(libdeform CONFIG REQUIRED COMPONENTS import)    # also deform::import: only then is Assimp looked for
 #   find_package(libdeform CONFIG REQUIRED COMPONENTS gpu)       # also deform::gpu (OpenGL 4.3 compute lattices)
+#   find_package(libdeform CONFIG REQUIRED COMPONENTS simplify)  # also deform::simplify (meshoptimizer is looked for)
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -18,7 +19,7 @@ install(TARGETS deform_runtime deform_offline deform_io deform_character deform_
   EXPORT libdeformTargets ${deform_install_args})
 install(EXPORT libdeformTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-  PATTERN "import" EXCLUDE PATTERN "gpu" EXCLUDE)
+  PATTERN "import" EXCLUDE PATTERN "gpu" EXCLUDE PATTERN "simplify" EXCLUDE)
 # deform-c.pc: the C API for a build without CMake: cc app.c $(pkg-config --cflags --libs deform-c). Relocatable
 # (paths from the .pc file's own folder), so an install with --prefix anywhere works. A static build lists every
 # layer's archive, in link order, and the C++ runtime; a shared one, libdeform_c alone.
@@ -47,6 +48,14 @@ if(TARGET deform_import)
   install(TARGETS deform_import_worker RUNTIME DESTINATION ${CMAKE_INSTALL_LIBEXECDIR})
   install(EXPORT libdeformImportTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform/import DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/deform)
+endif()
+set(DEFORM_HAVE_SIMPLIFY_COMPONENT 0)
+if(TARGET deform_simplify)
+  set(DEFORM_HAVE_SIMPLIFY_COMPONENT 1)
+  install(TARGETS deform_simplify EXPORT libdeformSimplifyTargets ${deform_install_args})
+  install(EXPORT libdeformSimplifyTargets NAMESPACE deform:: DESTINATION ${DEFORM_INSTALL_CMAKEDIR})
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform/simplify
+          DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/deform)
 endif()
 set(DEFORM_HAVE_GPU_COMPONENT 0)
 set(DEFORM_GPU_LINKS_EPOXY 0)

@@ -3,7 +3,7 @@
 deform_packages=(
   build-essential cmake pkg-config python3 clang libclang-rt-14-dev clang-format
   libglm-dev doctest-dev libopenmesh-dev nlohmann-json3-dev libbenchmark-dev
-  libassimp-dev assimp-testmodels libeigen3-dev libtinygltf-dev libfast-float-dev libdragonbox-dev
+  libassimp-dev assimp-testmodels libeigen3-dev libtinygltf-dev libfast-float-dev libdragonbox-dev libmeshoptimizer-dev
   libglfw3-dev libimgui-dev libstb-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pip python3-setuptools python3-wheel
   g++-mingw-w64-x86-64-posix wine wine64

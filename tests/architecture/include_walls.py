@@ -28,6 +28,7 @@ LAYERS = {
     "extras": ("runtime", "offline", "character"),
     "c": ("runtime", "offline", "io", "character", "extras"),
     "import": ("runtime", "io"),
+    "simplify": ("runtime",),
     "gpu": ("runtime",),
 }
 BASE = "base"  # libdeform/src/base: private to the library, included by every layer (bare names: "finite.hpp")

@@ -1,7 +1,7 @@
 # Installs the already-built libdeform into a scratch prefix, then configures, builds and runs a tiny consumer
 # project against it with find_package(libdeform CONFIG): what an engine integrating the SDK does. Twice: once
 # without components (Assimp must not be looked for, deform::gpu not defined), once with the components the build
-# has (import, gpu).
+# has (import, gpu, simplify).
 file(REMOVE_RECURSE ${WORK_DIR})
 if(NOT BUILD_TYPE)
   set(BUILD_TYPE Release)
@@ -12,11 +12,11 @@ if(rc)
   message(FATAL_ERROR "install failed (${rc})")
 endif()
 
-function(consume name with_import with_gpu)
+function(consume name with_import with_gpu with_simplify)
   set(build ${WORK_DIR}/${name})
   execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${build} -G ${GENERATOR}
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DWITH_IMPORT=${with_import}
-    -DWITH_GPU=${with_gpu}
+    -DWITH_GPU=${with_gpu} -DWITH_SIMPLIFY=${with_simplify}
     RESULT_VARIABLE rc)
   if(rc)
     message(FATAL_ERROR "configuring the consumer (${name}) failed (${rc})")
@@ -32,6 +32,9 @@ function(consume name with_import with_gpu)
   if(with_gpu)
     list(APPEND programs gpu)
   endif()
+  if(with_simplify)
+    list(APPEND programs simplifier)
+  endif()
   foreach(program ${programs})
     execute_process(COMMAND ${build}/${program} RESULT_VARIABLE rc OUTPUT_VARIABLE out)
     message(STATUS "${out}")
@@ -44,9 +47,12 @@ endfunction()
 if(NOT HAVE_GPU)
   set(HAVE_GPU OFF)
 endif()
-consume(plain OFF OFF)
-if(HAVE_IMPORT OR HAVE_GPU)
-  consume(with-components ${HAVE_IMPORT} ${HAVE_GPU})
+if(NOT HAVE_SIMPLIFY)
+  set(HAVE_SIMPLIFY OFF)
+endif()
+consume(plain OFF OFF OFF)
+if(HAVE_IMPORT OR HAVE_GPU OR HAVE_SIMPLIFY)
+  consume(with-components ${HAVE_IMPORT} ${HAVE_GPU} ${HAVE_SIMPLIFY})
 endif()
 
 # --- the C API from C alone (docs/c-api.md's frame loop): a project(x C) with find_package, then a plain compiler
