@@ -402,36 +402,49 @@ Status DirectDeltaMushReducedJob::run(std::size_t begin, std::size_t end) const 
     const glm::vec3 r = b.rest[i];
     const glm::vec3 x = in_positions.empty() ? r : in_positions[i];
     const std::uint32_t first = b.offsets[i], last = b.offsets[i + 1];
-    glm::quat rotation(1.0f, 0.0f, 0.0f, 0.0f);
     if (first == last) {
       out_positions[i] = x;
-    } else {
-      // Sums relative to c = M₀ rᵢ; at the identity palette every term below is exactly 0 (see the header).
-      const glm::mat4& m0 = matrices[b.bones[first]];
-      const glm::quat q0 = dual_quats[b.bones[first]].real;
-      const glm::vec3 c = transform(m0, r);
-      glm::vec3 blend(0.0f), moved(0.0f), centroid(0.0f);
-      glm::quat q(0.0f, 0.0f, 0.0f, 0.0f);
-      for (std::uint32_t e = first; e < last; ++e) {
-        const glm::mat4& m = matrices[b.bones[e]];
-        const glm::quat qj = dual_quats[b.bones[e]].real;
-        const glm::vec4 mo = b.moments[e];
-        const glm::vec3 p(mo);
-        blend += mo.w * (transform(m, r) - c);
-        moved += linear(m, p);
-        centroid += p;
-        const float w = glm::dot(qj, q0) < 0.0f ? -mo.w : mo.w;
-        q.x += w * qj.x, q.y += w * qj.y, q.z += w * qj.z, q.w += w * qj.w;
+      if (normals) {
+        const glm::vec3 n = in_normals[i];
+        const float length2 = glm::dot(n, n);
+        out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
       }
-      rotation = glm::normalize(q);
-      out_positions[i] = c + (blend + (moved - rotation * centroid) + rotation * (x - r));
+      if (!out_rotations.empty()) out_rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+      continue;
     }
+    // Sums relative to c = M₀ rᵢ; at the identity palette every term below is exactly 0 (see the header).
+    const glm::mat4& m0 = matrices[b.bones[first]];
+    const glm::quat q0 = dual_quats[b.bones[first]].real;
+    const glm::vec3 c = transform(m0, r);
+    glm::vec3 blend(0.0f), moved(0.0f), centroid(0.0f);
+    float qx = 0.0f, qy = 0.0f, qz = 0.0f, qw = 0.0f;
+    for (std::uint32_t e = first; e < last; ++e) {
+      const glm::mat4& m = matrices[b.bones[e]];
+      const glm::quat qj = dual_quats[b.bones[e]].real;
+      const glm::vec4 mo = b.moments[e];
+      const glm::vec3 p(mo);
+      blend += mo.w * (transform(m, r) - c);
+      moved += linear(m, p);
+      centroid += p;
+      const float w = qj.x * q0.x + qj.y * q0.y + qj.z * q0.z + qj.w * q0.w < 0.0f ? -mo.w : mo.w;
+      qx += w * qj.x, qy += w * qj.y, qz += w * qj.z, qw += w * qj.w;
+    }
+    // The rotation of the blended quaternion as a matrix, without normalising it first: for q of squared length s,
+    // R = I + (2 / s) (w [v]× + [v]×²), one division for the three products below. q is not 0 (validate(): its part
+    // along q₀ is at least the first ψ).
+    const float k = 2.0f / (qx * qx + qy * qy + qz * qz + qw * qw);
+    const float xx = k * qx * qx, yy = k * qy * qy, zz = k * qz * qz;
+    const float xy = k * qx * qy, xz = k * qx * qz, yz = k * qy * qz;
+    const float wx = k * qw * qx, wy = k * qw * qy, wz = k * qw * qz;
+    const glm::mat3 rotation(1.0f - yy - zz, xy + wz, xz - wy, xy - wz, 1.0f - xx - zz, yz + wx, xz + wy, yz - wx,
+                             1.0f - xx - yy);
+    out_positions[i] = c + (blend + (moved - rotation * centroid) + rotation * (x - r));
     if (normals) {
       const glm::vec3 n = rotation * in_normals[i];
       const float length2 = glm::dot(n, n);
       out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
     }
-    if (!out_rotations.empty()) out_rotations[i] = rotation;
+    if (!out_rotations.empty()) out_rotations[i] = glm::normalize(glm::quat(qw, qx, qy, qz));
   }
   return {};
 }
