@@ -4,6 +4,9 @@
 //   ddm/run/builtin, lbs/builtin        the built-in character (2,850 points, its own weights, 33 bones)
 //   ddm/run/100k, lbs/100k              the 400 × 250 torus, 16 bones around its ring, two to three influences a point
 //   ddm/run_threads/100k                DirectDeltaMushJob::run(pool) on every thread
+//   ddm/reduced/builtin, ddm/reduced/100k  DirectDeltaMushReducedJob (reduce_direct_delta_mush of the same binding),
+//                                       compute_dual_quat_palette of each frame's palette included
+//   ddm/reduced_job/builtin, .../100k   the same with the rotations converted ahead: the job alone
 //   ddm/bind/builtin, ddm/bind/40k      bind_direct_delta_mush with the default settings (the 200 × 200 torus)
 // The LBS figures are SkinningJob's fastest kernel (the library's: what a caller would use), not a plain loop.
 #include <benchmark/benchmark.h>
@@ -134,6 +137,46 @@ void ddm(benchmark::State& state, int which, bool threads) {
   state.counters["shared"] = shared / double(lanes.shared.size());
 }
 
+void ddm_reduced(benchmark::State& state, int which, bool convert) {
+  const Rig& r = rig(which);
+  deform::DirectDeltaMushReducedBinding binding;
+  if (!deform::reduce_direct_delta_mush(deform::bind_direct_delta_mush(r.mesh, r.weights), binding)) {
+    state.SkipWithError("reduce_direct_delta_mush refused the binding");
+    return;
+  }
+  std::vector<glm::vec3> out(r.mesh.point_count()), out_normals(r.mesh.point_count());
+  std::vector<deform::DualQuat> dual_quats(std::size_t(r.bones));
+  std::vector<glm::mat3> scales(std::size_t(r.bones));
+  // Each frame's rotations converted ahead, for the job's cost alone (convert = false).
+  std::vector<std::vector<deform::DualQuat>> converted(16, dual_quats);
+  for (std::size_t f = 0; f < 16; ++f) {
+    bool has_scale = false;
+    (void)deform::compute_dual_quat_palette(r.palettes[f], converted[f], scales, has_scale);
+  }
+  deform::DirectDeltaMushReducedJob job;
+  job.binding = &binding;
+  job.dual_quats = dual_quats;
+  job.out_positions = out;
+  job.in_normals = r.normals;
+  job.out_normals = out_normals;
+  int frame = 0;
+  for (auto _ : state) {
+    const std::size_t f = std::size_t(frame++ % 16);
+    job.matrices = r.palettes[f];
+    bool has_scale = false;
+    if (convert) {
+      (void)deform::compute_dual_quat_palette(job.matrices, dual_quats, scales, has_scale);
+      job.dual_quats = dual_quats;
+    } else {
+      job.dual_quats = converted[f];
+    }
+    (void)job.run();
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(r.mesh.point_count()));
+  state.counters["influences"] = double(binding.influence_count()) / double(binding.point_count());
+}
+
 void lbs(benchmark::State& state, int which) {
   const Rig& r = rig(which);
   std::vector<glm::vec3> out(r.mesh.point_count()), out_normals(r.mesh.point_count());
@@ -169,6 +212,10 @@ BENCHMARK_CAPTURE(ddm, builtin, 0, false)->Name("ddm/run/builtin");
 BENCHMARK_CAPTURE(lbs, builtin, 0)->Name("ddm/lbs/builtin");
 BENCHMARK_CAPTURE(ddm, 100k, 1, false)->Name("ddm/run/100k")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(lbs, 100k, 1)->Name("ddm/lbs/100k")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(ddm_reduced, builtin, 0, true)->Name("ddm/reduced/builtin");
+BENCHMARK_CAPTURE(ddm_reduced, builtin_job, 0, false)->Name("ddm/reduced_job/builtin");
+BENCHMARK_CAPTURE(ddm_reduced, 100k, 1, true)->Name("ddm/reduced/100k")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(ddm_reduced, 100k_job, 1, false)->Name("ddm/reduced_job/100k")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(ddm, 100k_threads, 1, true)
     ->Name("ddm/run_threads/100k")
     ->Unit(benchmark::kMillisecond)

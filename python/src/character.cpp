@@ -210,19 +210,34 @@ void bind_character_mush(CharacterClass& character) {
       .def(
           "set_direct_delta_mush",
           [](deform::Character& c, int iterations, float step, float translation_blend, float translation_step,
-             float regularization, float prune) {
-            c.set_direct_delta_mush({iterations, step, translation_blend, translation_step, regularization, prune});
+             float regularization, float prune, const std::string& variant) {
+            if (variant != "full" && variant != "reduced")
+              throw deform::Error::invalid_argument("variant", "expected 'full' or 'reduced'");
+            c.set_direct_delta_mush({iterations, step, translation_blend, translation_step, regularization, prune,
+                                     variant == "reduced" ? deform::DirectDeltaMushVariant::reduced
+                                                          : deform::DirectDeltaMushVariant::full});
           },
           py::arg("iterations") = 4, py::arg("step") = 2.0f, py::arg("translation_blend") = 0.0f,
           py::arg("translation_step") = 0.5f, py::arg("regularization") = 0.05f, py::arg("prune") = 1e-3f,
+          py::arg("variant") = "full",
           "Direct Delta Mush as the skinning (docs/skinning.md), in place of `skinning` while bound; the settings as "
-          "deform.DirectDeltaMush's. Binds at once (a sparse factorisation: call it at set-up); raises deform.Error "
-          "for a value out of range, changing nothing.")
+          "deform.DirectDeltaMush's; variant 'full' (default) or 'reduced' (4 floats an influence, the bones' "
+          "rotations blended: docs/skinning.md, Reduced storage). Binds at once (a sparse factorisation: call it at "
+          "set-up); raises deform.Error for a value out of range, changing nothing.")
       .def("clear_direct_delta_mush", &deform::Character::clear_direct_delta_mush,
            "Back to `skinning` (LBS or DQS), the default.")
       .def_property_readonly(
-          "direct_delta_mush_bound", [](const deform::Character& c) { return c.direct_delta_mush() != nullptr; },
-          "Whether Direct Delta Mush skins the character.");
+          "direct_delta_mush_bound",
+          [](const deform::Character& c) {
+            return c.direct_delta_mush() != nullptr || c.direct_delta_mush_reduced() != nullptr;
+          },
+          "Whether Direct Delta Mush (either variant) skins the character.")
+      .def_property_readonly(
+          "direct_delta_mush_variant",
+          [](const deform::Character& c) {
+            return std::string(c.direct_delta_mush() ? "full" : c.direct_delta_mush_reduced() ? "reduced" : "");
+          },
+          "'full' or 'reduced' while Direct Delta Mush is bound, else ''.");
 }
 
 // Levels of detail (docs/skinning.md, "Levels of detail"): bone levels built here from counts and a motion.

@@ -113,6 +113,28 @@ def test_delta_mush_smooths_a_bent_elbow_and_gives_the_rest_back():
     assert mushed.delta_mush_iterations == 0
 
 
+def test_direct_delta_mush_reduced_variant():
+    full, reduced = deform.Character.builtin(), deform.Character.builtin()
+    full.set_direct_delta_mush()
+    reduced.set_direct_delta_mush(variant="reduced")
+    assert full.direct_delta_mush_variant == "full" and reduced.direct_delta_mush_variant == "reduced"
+    assert reduced.direct_delta_mush_bound
+    reduced.update(0.0)
+    np.testing.assert_allclose(reduced.positions, reduced.model.positions, atol=2e-5)  # the rest pose back
+    for c in (full, reduced):
+        pose = c.pose
+        c.skeleton.set_euler(pose, "forearm_l", [150, 0, 0])
+        c.pose = pose
+        c.update(0.0)
+    gap = np.abs(full.positions - reduced.positions).max()
+    assert 1e-5 < gap < 0.1  # near the full form, not the same
+    with pytest.raises(deform.Error):
+        reduced.set_direct_delta_mush(variant="v2")
+    assert reduced.direct_delta_mush_variant == "reduced"  # kept
+    reduced.clear_direct_delta_mush()
+    assert reduced.direct_delta_mush_variant == "" and not reduced.direct_delta_mush_bound
+
+
 def test_direct_delta_mush_skins_in_place_of_lbs_and_matches_the_job():
     lbs, ddm = deform.Character.builtin(), deform.Character.builtin()
     assert not ddm.direct_delta_mush_bound

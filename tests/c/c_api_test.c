@@ -412,7 +412,21 @@ static void character_direct_delta_mush(void) {
           fmax(moved, distance3(deform_character_positions(ddm) + 3 * p, deform_character_positions(plain) + 3 * p));
     if (pass == 0) CHECK(moved > 1e-3); /* not LBS */
     else CHECK(moved == 0.0);           /* off: LBS to the bit */
-    if (pass == 0) CHECK(deform_character_set_direct_delta_mush(ddm, 0, 0.0f) == DEFORM_OK);
+    if (pass == 0) {
+      /* The reduced form: near the full one at the bent elbow, not the same. */
+      float* full = malloc(points * 3 * sizeof(float));
+      CHECK(deform_character_copy_positions(ddm, full, points * 3) == DEFORM_OK);
+      CHECK(deform_character_set_direct_delta_mush_reduced(NULL, 4, 2.0f) == DEFORM_ERROR_ARGUMENT);
+      CHECK(deform_character_set_direct_delta_mush_reduced(ddm, 4, 2.0f) == DEFORM_OK);
+      CHECK(deform_character_update(ddm, 0.0f) == DEFORM_OK);
+      double gap = 0.0;
+      for (size_t p = 0; p < points; ++p)
+        gap = fmax(gap, distance3(deform_character_positions(ddm) + 3 * p, full + 3 * p));
+      CHECK(gap > 1e-5);
+      CHECK(gap < 0.1);
+      free(full);
+      CHECK(deform_character_set_direct_delta_mush(ddm, 0, 0.0f) == DEFORM_OK);
+    }
   }
   free(rest);
   free(rotations);

@@ -179,3 +179,74 @@ TEST_CASE("Character: instances share the Direct Delta Mush binding and give wha
   CHECK(copy.direct_delta_mush() == nullptr);
   CHECK(on.direct_delta_mush() != nullptr);
 }
+
+TEST_CASE("Character: the reduced variant equals DirectDeltaMushReducedJob by hand; rest, instances, clear") {
+  Character c(morphed_builtin());
+  deform::DirectDeltaMushSettings settings;
+  settings.variant = deform::DirectDeltaMushVariant::reduced;
+  c.set_direct_delta_mush(settings);
+  CHECK(c.direct_delta_mush() == nullptr);  // only the reduced binding is kept
+  REQUIRE(c.direct_delta_mush_reduced() != nullptr);
+  const float size = diagonal(c.model().mesh.positions);
+  // The rest pose given back.
+  REQUIRE(c.update(0.0f));
+  CHECK(max_distance(c.positions(), c.model().mesh.positions) <= 1e-6 * size);
+
+  REQUIRE(c.set_pose(bent_elbow(c.skeleton())));
+  for (const float weight : {0.0f, 0.7f}) {
+    CAPTURE(weight);
+    REQUIRE(c.set_morph_weight(std::size_t(0), weight));
+    REQUIRE(c.update(0.0f));
+    std::vector<glm::vec3> positions(c.model().mesh.point_count()), normals(positions.size());
+    std::vector<deform::DualQuat> dual_quats(c.palette().size());
+    std::vector<glm::mat3> scales(c.palette().size());
+    bool has_scale = false;
+    REQUIRE(deform::compute_dual_quat_palette(c.palette(), dual_quats, scales, has_scale));
+    deform::DirectDeltaMushReducedJob job;
+    job.binding = c.direct_delta_mush_reduced();
+    job.matrices = c.palette();
+    job.dual_quats = dual_quats;
+    job.in_positions = c.morphed_bind_positions();
+    job.out_positions = positions;
+    if (weight == 0.0f) {
+      job.in_normals = c.bind_normals();
+      job.out_normals = normals;
+    }
+    REQUIRE(job.validate());
+    REQUIRE(job.run());
+    CHECK(same_bits(c.positions(), positions));
+    if (weight == 0.0f) {
+      const std::span<const glm::vec3> rendered = c.normals();
+      const std::vector<std::uint32_t>& vertex_point = c.model().mesh.vertex_point;
+      double worst = 0.0;
+      for (std::size_t v = 0; v < vertex_point.size(); ++v)
+        worst = std::max(worst, double(glm::length(rendered[v] - normals[vertex_point[v]])));
+      CHECK(worst <= 1e-6);
+    }
+  }
+  // Not the full form: the two differ at the bent elbow, but not by much.
+  Character full(morphed_builtin());
+  full.set_direct_delta_mush({});
+  REQUIRE(full.set_pose(bent_elbow(full.skeleton())));
+  REQUIRE(full.set_morph_weight(std::size_t(0), 0.7f));
+  REQUIRE(full.update(0.0f));
+  CHECK(max_distance(full.positions(), c.positions()) > 1e-4 * size);
+  CHECK(max_distance(full.positions(), c.positions()) < 0.05 * size);
+
+  // An instance shares the reduced binding and gives the same bits; cleared, the frame is LBS's again.
+  Character copy = c.instance();
+  CHECK(copy.direct_delta_mush_reduced() == c.direct_delta_mush_reduced());
+  REQUIRE(copy.set_pose(bent_elbow(copy.skeleton())));
+  REQUIRE(copy.set_morph_weight(std::size_t(0), 0.7f));
+  REQUIRE(copy.update(0.0f));
+  CHECK(same_bits(copy.positions(), c.positions()));
+  copy.clear_direct_delta_mush();
+  CHECK(copy.direct_delta_mush_reduced() == nullptr);
+  CHECK(c.direct_delta_mush_reduced() != nullptr);
+  Character lbs(morphed_builtin());
+  REQUIRE(lbs.set_pose(bent_elbow(lbs.skeleton())));
+  REQUIRE(lbs.set_morph_weight(std::size_t(0), 0.7f));
+  REQUIRE(lbs.update(0.0f));
+  REQUIRE(copy.update(0.0f));
+  CHECK(same_bits(copy.positions(), lbs.positions()));
+}

@@ -372,3 +372,23 @@ TEST_CASE("1,000 frames of an imported character allocate nothing: clip, reach, 
   check(tally);
 }
 #endif
+
+TEST_CASE("100 frames with the reduced Direct Delta Mush allocate nothing: posed, reached, normals transported") {
+  Character c = deform::make_builtin_character();
+  deform::DirectDeltaMushSettings settings;
+  settings.variant = deform::DirectDeltaMushVariant::reduced;
+  c.set_direct_delta_mush(settings);  // binds here, at set-up
+  REQUIRE(c.direct_delta_mush_reduced() != nullptr);
+  const std::int32_t hand = c.skeleton().find("hand_l");
+  const glm::vec3 shoulder = c.bone_position(c.skeleton().find("clavicle_l"));
+  REQUIRE(c.update(dt));
+  const long before = allocations.load();
+  bool ok = true;
+  for (int frame = 0; frame < 100; ++frame) {
+    ok = ok && c.reach(hand, shoulder + glm::vec3(1.0f, 0.2f, 0.3f * std::sin(float(frame) * 0.1f))).status;
+    ok = ok && c.update(dt);
+  }
+  const long allocated = allocations.load() - before;
+  CHECK(ok);
+  CHECK(allocated == 0);
+}

@@ -141,6 +141,19 @@ if rc1 == 0 and rc2 == 0:
     check(sum(m > 1e-3 * size for m in moved) < len(moved) / 2, "--method ddm moved more than the arm")
     check(len(a[1]) == len(b[1]) and a[2] == b[2], "--method ddm changed the OBJ's layout")
     check(all(abs(math.hypot(*n) - 1.0) < 1e-5 for n in b[1]), "--method ddm: normals not unit")
+    # --ddm-variant reduced: the same layout, near the full form's points but not equal to them; full is the default.
+    reduced = os.path.join(work, "elbow_ddm_reduced.obj")
+    full = os.path.join(work, "elbow_ddm_full.obj")
+    rc3, _, stderr = run("--builtin", "--pose", elbow, "--method", "ddm", "--ddm-variant", "reduced", "--out", reduced)
+    rc4, _, _ = run("--builtin", "--pose", elbow, "--method", "ddm", "--ddm-variant", "full", "--out", full)
+    check(rc3 == 0 and rc4 == 0, f"--ddm-variant: exit {rc3}, {rc4}: {stderr}")
+    if rc3 == 0 and rc4 == 0:
+        c, d = read_obj(reduced), read_obj(full)
+        check(d == b, "--ddm-variant full is not the default")
+        gap = [math.dist(p, q) for p, q in zip(b[0], c[0])]
+        check(1e-5 * size < max(gap) < 0.05 * size, f"--ddm-variant reduced: {max(gap) / size} of the size from full")
+        check(len(c[1]) == len(b[1]) and c[2] == b[2], "--ddm-variant reduced changed the OBJ's layout")
+        check(all(abs(math.hypot(*n) - 1.0) < 1e-5 for n in c[1]), "--ddm-variant reduced: normals not unit")
 
 # Invalid input: exit 2, nothing on stdout, a message naming the problem, and an existing output left untouched.
 existing = write("existing.obj", "keep me\n")
@@ -161,6 +174,8 @@ bad_cases = [
     (["--builtin", "--pose", bind, "--mush", "10", "--mush-step", "nan"], "--mush-step"),
     (["--builtin", "--pose", bind, "--mush", "10", "--mush-step", "0"], "--mush-step"),
     (["--builtin", "--pose", bind, "--mush-step", "0.5"], "--mush-step needs --mush"),
+    (["--builtin", "--pose", bind, "--ddm-variant", "reduced"], "--ddm-variant needs --method ddm"),
+    (["--builtin", "--pose", bind, "--method", "ddm", "--ddm-variant", "v2"], "--ddm-variant"),
 ]
 for args, mention in bad_cases:
     rc, stdout, stderr = run(*args, "--out", existing)

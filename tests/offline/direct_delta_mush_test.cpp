@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -689,4 +690,321 @@ TEST_CASE("nearest_rotation: the rotation of the SVD, reflections made proper, f
   }
   MESSAGE("nearest_rotation vs SVD: within " << worst);
   CHECK(worst < 1e-4);
+}
+
+// --- the reduced form (reduce_direct_delta_mush, DirectDeltaMushReducedJob): ψ and first moments per influence, the
+// rotation blended from the bones' quaternions ---
+
+namespace {
+
+using deform::DirectDeltaMushReducedBinding;
+using deform::DirectDeltaMushReducedJob;
+
+DirectDeltaMushReducedBinding reduced(const DirectDeltaMushBinding& full) {
+  DirectDeltaMushReducedBinding r;
+  REQUIRE(deform::reduce_direct_delta_mush(full, r));
+  return r;
+}
+
+std::vector<deform::DualQuat> rotations_of(const std::vector<glm::mat4>& palette) {
+  std::vector<deform::DualQuat> dq(palette.size());
+  std::vector<glm::mat3> scales(palette.size());
+  bool has_scale = false;
+  REQUIRE(deform::compute_dual_quat_palette(palette, dq, scales, has_scale));
+  return dq;
+}
+
+Output run_reduced(const DirectDeltaMushReducedBinding& b, const std::vector<glm::mat4>& palette,
+                   const std::vector<deform::DualQuat>& dq, std::span<const glm::vec3> normals) {
+  Output out{std::vector<glm::vec3>(b.point_count()), std::vector<glm::vec3>(normals.size())};
+  DirectDeltaMushReducedJob job;
+  job.binding = &b;
+  job.matrices = palette;
+  job.dual_quats = dq;
+  job.out_positions = out.positions;
+  job.in_normals = normals;
+  job.out_normals = out.normals;
+  REQUIRE(job.validate());
+  REQUIRE(job.run());
+  return out;
+}
+
+// The rest pose of the reduced form: identity and bind palettes, the worst distance as a fraction of the size.
+double reduced_rest_error(const deform::Model& model) {
+  deform::Character c(model);
+  REQUIRE(c.update(0.0f));
+  const deform::Mesh& mesh = c.model().mesh;
+  const float size = diagonal(mesh.positions);
+  const DirectDeltaMushReducedBinding b = reduced(deform::bind_direct_delta_mush(mesh, c.model().weights));
+  const std::vector<glm::mat4> identity(std::max<std::size_t>(b.bone_count, 1), glm::mat4(1.0f));
+  const std::vector<glm::mat4> bind(c.palette().begin(), c.palette().end());
+  const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
+  double worst = 0.0;
+  for (const std::vector<glm::mat4>* palette : {&identity, &bind}) {
+    const Output out = run_reduced(b, *palette, rotations_of(*palette), normals);
+    worst = std::max(worst, max_distance(out.positions, mesh.positions) / size);
+    for (std::size_t i = 0; i < normals.size(); ++i) REQUIRE(glm::length(out.normals[i] - normals[i]) < 1e-4f);
+  }
+  return worst;
+}
+
+double signed_volume(const deform::Mesh& mesh, std::span<const glm::vec3> points) {
+  double v = 0.0;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const glm::dvec3 a(points[mesh.vertex_point[mesh.triangles[3 * t]]]);
+    const glm::dvec3 b(points[mesh.vertex_point[mesh.triangles[3 * t + 1]]]);
+    const glm::dvec3 c(points[mesh.vertex_point[mesh.triangles[3 * t + 2]]]);
+    v += glm::dot(a, glm::cross(b, c)) / 6.0;
+  }
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("Reduced Direct Delta Mush: the job agrees with its equations in double precision over 2,000 poses") {
+  // The built-in character; each pose a random rigid motion of the whole body, each bone turned by up to 80° about a
+  // random pivot and scaled uniformly by 0.8 to 1.25, and each bone's quaternion given a random sign (which the
+  // kernel must align as the reference does). The reference: the full binding's moments in double, normalised per
+  // point; Rᵢ = normalise(Σ ψ sⱼ qⱼ) with the generating quaternions; tᵢ = Σ (Aⱼ p̃ⱼ + ψ tⱼ) − Rᵢ Σ p̃ⱼ in model
+  // coordinates (p̃ absolute: no relative trick); out = Rᵢ rᵢ + tᵢ; normals Rᵢ nᵢ.
+  deform::Character c(deform::builtin_character());
+  const deform::Mesh& mesh = c.model().mesh;
+  const float size = diagonal(mesh.positions);
+  const DirectDeltaMushBinding full = deform::bind_direct_delta_mush(mesh, c.model().weights);
+  const DirectDeltaMushReducedBinding b = reduced(full);
+  const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
+  const std::size_t bones = std::max<std::size_t>(b.bone_count, 1);
+  std::mt19937 random(33);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), scale(0.8, 1.25);
+  std::bernoulli_distribution flip(0.5);
+  std::vector<glm::mat4> palette(bones, glm::mat4(1.0f));
+  std::vector<glm::dquat> turns(bones);
+  std::vector<deform::DualQuat> dq = rotations_of(palette);
+  Output out{std::vector<glm::vec3>(b.point_count()), std::vector<glm::vec3>(b.point_count())};
+  DirectDeltaMushReducedJob job;
+  job.binding = &b;
+  job.matrices = palette;
+  job.dual_quats = dq;
+  job.out_positions = out.positions;
+  job.in_normals = normals;
+  job.out_normals = out.normals;
+  REQUIRE(job.validate());
+  double worst = 0.0, worst_normal = 0.0, moved = 0.0;
+  for (int pose = 0; pose < 2000; ++pose) {
+    const glm::dquat g = random_turn(random, 180.0);
+    const glm::dvec3 shift(unit(random), unit(random), unit(random));
+    for (std::size_t j = 0; j < bones; ++j) {
+      turns[j] = g * random_turn(random, 80.0);
+      if (flip(random)) turns[j] = -turns[j];
+      const glm::dvec3 pivot = glm::dvec3(unit(random), unit(random), unit(random)) * double(size) * 0.5;
+      const glm::dmat4 m = glm::translate(glm::dmat4(1.0), shift + pivot) * glm::mat4_cast(turns[j]) *
+                           glm::scale(glm::dmat4(1.0), glm::dvec3(scale(random))) *
+                           glm::translate(glm::dmat4(1.0), -pivot);
+      palette[j] = glm::mat4(m);
+    }
+    dq = rotations_of(palette);
+    // The same rotations with the generating signs.
+    for (std::size_t j = 0; j < bones; ++j)
+      if (glm::dot(glm::dquat(dq[j].real), turns[j]) < 0.0) dq[j].real = -dq[j].real;
+    // Each pose runs a window of 256 points (run(begin, end)), the windows walking round the mesh: every point
+    // meets about 180 poses, and the test stays short under the sanitizers.
+    const std::size_t begin = std::size_t(pose) * 256 % b.point_count(), end = std::min(b.point_count(), begin + 256);
+    job.matrices = palette, job.dual_quats = dq;
+    REQUIRE(job.run(begin, end));
+    for (std::size_t i = begin; i < end; ++i) {
+      double psi_sum = 0.0;
+      for (std::uint32_t e = full.offsets[i]; e < full.offsets[i + 1]; ++e) psi_sum += full.moments[e].w;
+      const glm::dvec3 r(mesh.positions[i]);
+      const glm::dquat q0 = turns[full.bones[full.offsets[i]]];
+      glm::dquat q(0.0, 0.0, 0.0, 0.0);
+      glm::dvec3 sum(0.0), p(0.0);
+      for (std::uint32_t e = full.offsets[i]; e < full.offsets[i + 1]; ++e) {
+        const deform::DirectDeltaMushMoments& m = full.moments[e];
+        const double psi = m.w / psi_sum;
+        const glm::dvec3 pt = glm::dvec3(m.x, m.y, m.z) / psi_sum + psi * r;  // absolute: p̃ = p̃ʳ + ψ r
+        const glm::dmat4 a(palette[full.bones[e]]);
+        const glm::dquat qj = turns[full.bones[e]];
+        sum += glm::dmat3(a) * pt + psi * glm::dvec3(a[3]);
+        p += pt;
+        const double s = glm::dot(qj, q0) < 0.0 ? -psi : psi;
+        q.x += s * qj.x, q.y += s * qj.y, q.z += s * qj.z, q.w += s * qj.w;
+      }
+      q = glm::normalize(q);
+      const glm::dvec3 expected = q * r + (sum - q * p);
+      worst = std::max(worst, glm::length(glm::dvec3(out.positions[i]) - expected));
+      worst_normal = std::max(worst_normal, glm::length(glm::dvec3(out.normals[i]) - q * glm::dvec3(normals[i])));
+      moved = std::max(moved, glm::length(expected - r));
+    }
+  }
+  MESSAGE("reduced job vs its double reference over 2,000 poses: positions within "
+          << worst / size << " of the size, normals within " << worst_normal);
+  CHECK(worst <= 1e-5 * size);
+  CHECK(worst_normal <= 1e-5);
+  CHECK(moved > 0.2 * size);
+}
+
+TEST_CASE("Reduced Direct Delta Mush gives the rest pose back on the built-in character and assimp-testmodels") {
+  const double builtin = reduced_rest_error(deform::builtin_character());
+  MESSAGE("built-in character: rest pose within " << builtin << " of the size");
+  CHECK(builtin <= 1e-6);
+#if defined(DEFORM_HAVE_IMPORT)
+  const std::string dir = "/usr/share/assimp/models/";
+  for (const char* path :
+       {"IQM/mrfixit.iqm", "X/BCN_Epileptic.X", "X/Testwuson.X", "X/anim_test.x", "FBX/animation_with_skeleton.fbx",
+        "FBX/huesitos.fbx", "Collada/box_nested_animation.dae", "glTF2/simple_skin/simple_skin.gltf"}) {
+    CAPTURE(path);
+    REQUIRE_MESSAGE(std::filesystem::exists(dir + path), path << " is missing: install Debian's assimp-testmodels");
+    const double error = reduced_rest_error(deform::import_model(dir + path).model);
+    MESSAGE(std::string(path) << ": reduced rest pose within " << error << " of the size");
+    CHECK(error <= 1e-6);
+  }
+#endif
+}
+
+TEST_CASE("Reduced Direct Delta Mush: fewer bytes an influence; near the full form at 150°; no candy wrapper") {
+  deform::Character lbs(deform::builtin_character());
+  const deform::Model& model = lbs.model();
+  const DirectDeltaMushBinding full = deform::bind_direct_delta_mush(model.mesh, model.weights);
+  const DirectDeltaMushReducedBinding b = reduced(full);
+  // Storage: every array of each form, per influence.
+  const auto bytes = [](const auto& v) { return double(v.size() * sizeof(v[0])); };
+  const double full_bytes = bytes(full.rest) + bytes(full.offsets) + bytes(full.bones) + bytes(full.moments) +
+                            bytes(full.lanes.rounds) + bytes(full.lanes.shared) + bytes(full.lanes.start) +
+                            bytes(full.lanes.influence) + bytes(full.lanes.bones) + bytes(full.lanes.moments);
+  const double reduced_bytes = bytes(b.rest) + bytes(b.offsets) + bytes(b.bones) + bytes(b.moments);
+  const double influences = double(full.influence_count());
+  MESSAGE("bytes an influence: full " << full_bytes / influences << " (moments " << bytes(full.moments) / influences
+                                      << " + lanes), reduced " << reduced_bytes / influences << " (moments "
+                                      << bytes(b.moments) / influences << ")");
+  CHECK(b.influence_count() == full.influence_count());
+  CHECK(reduced_bytes * 2.5 <= full_bytes);
+  CHECK(bytes(b.moments) * 2.5 <= bytes(full.moments));
+
+  // The left elbow bent 150°: the reduced form close to the full one. Both lose more of the body's volume than LBS
+  // there (smoothing cuts the fold's corner: docs/skinning.md), so volume is reported, not required.
+  const float size = diagonal(model.mesh.positions);
+  deform::Pose pose = lbs.skeleton().bind_pose();
+  lbs.skeleton().set_euler(pose, lbs.skeleton().find("forearm_l"), {150.0f, 0.0f, 0.0f}, false);
+  REQUIRE(lbs.set_pose(pose));
+  REQUIRE(lbs.update(0.0f));
+  const std::vector<glm::mat4> palette(lbs.palette().begin(), lbs.palette().end());
+  const std::vector<glm::vec3> none;
+  const Output v0 = run(full, palette, none);
+  const Output v = run_reduced(b, palette, rotations_of(palette), none);
+  const double gap = max_distance(v.positions, v0.positions) / size;
+  const double rest = signed_volume(model.mesh, model.mesh.positions);
+  const double kept_lbs = signed_volume(model.mesh, lbs.positions()) / rest;
+  const double kept_full = signed_volume(model.mesh, v0.positions) / rest;
+  const double kept_reduced = signed_volume(model.mesh, v.positions) / rest;
+  MESSAGE("elbow 150°: reduced within " << 100.0 * gap << "% of the diagonal of the full form; volume kept: LBS "
+                                        << 100.0 * kept_lbs << "%, full " << 100.0 * kept_full << "%, reduced "
+                                        << 100.0 * kept_reduced << "%");
+  CHECK(gap <= 0.03);
+  CHECK(gap > 0.0);
+
+  // The candy wrapper (as tests/runtime/skinning_test.cpp measures it): a tube's middle bone twisted 150° about the
+  // tube's axis; LBS pinches the twisted rings toward the axis (to |cos 75°| of their radius at the blend's middle).
+  // The reduced form pinches less: its rotation is blended, but its smoothed centroids move as LBS moves them.
+  const Tube tube = make_tube(20, 12, 3);
+  const DirectDeltaMushReducedBinding tb = reduced(deform::bind_direct_delta_mush(tube.mesh, tube.weights));
+  const std::vector<glm::mat4> twist =
+      chain_palette({glm::dquat(1.0, 0.0, 0.0, 0.0), glm::angleAxis(glm::radians(150.0), glm::dvec3(0.0, 1.0, 0.0)),
+                     glm::dquat(1.0, 0.0, 0.0, 0.0)},
+                    4.0f, {});
+  const Output twisted = run_reduced(tb, twist, rotations_of(twist), none);
+  const Output twisted_full = run(deform::bind_direct_delta_mush(tube.mesh, tube.weights), twist, none);
+  double lbs_least = 1.0, reduced_least = 1.0, full_least = 1.0;
+  for (std::size_t i = 0; i < tube.mesh.point_count(); ++i) {
+    const glm::vec3 r = tube.mesh.positions[i];
+    const double radius = std::hypot(r.x, r.z);
+    if (radius < 0.1) continue;  // the caps' centres
+    glm::vec3 l(0.0f);
+    for (int k = 0; k < 4; ++k)
+      l += tube.weights.weights[i][k] * glm::vec3(twist[tube.weights.bones[i][k]] * glm::vec4(r, 1.0f));
+    lbs_least = std::min(lbs_least, std::hypot(double(l.x), double(l.z)) / radius);
+    reduced_least =
+        std::min(reduced_least, std::hypot(double(twisted.positions[i].x), double(twisted.positions[i].z)) / radius);
+    full_least = std::min(
+        full_least, std::hypot(double(twisted_full.positions[i].x), double(twisted_full.positions[i].z)) / radius);
+  }
+  MESSAGE("tube twisted 150°: the thinnest ring point keeps " << 100.0 * lbs_least << "% of its radius under LBS, "
+                                                              << 100.0 * reduced_least << "% under the reduced form, "
+                                                              << 100.0 * full_least << "% under the full form");
+  CHECK(lbs_least < 0.4);
+  CHECK(reduced_least > lbs_least + 0.1);
+}
+
+TEST_CASE("Reduced Direct Delta Mush: ranges, threads and in-place input give the same bits; hostile input refused") {
+  deform::Character c(deform::builtin_character());
+  const deform::Mesh& mesh = c.model().mesh;
+  DirectDeltaMushReducedBinding b = reduced(deform::bind_direct_delta_mush(mesh, c.model().weights));
+  deform::Pose pose = c.skeleton().bind_pose();
+  c.skeleton().set_euler(pose, c.skeleton().find("forearm_l"), {110.0f, 0.0f, 0.0f});
+  REQUIRE(c.set_pose(pose));
+  REQUIRE(c.update(0.0f));
+  const std::vector<glm::mat4> palette(c.palette().begin(), c.palette().end());
+  const std::vector<deform::DualQuat> dq = rotations_of(palette);
+  const std::vector<glm::vec3> normals = some_normals(mesh.point_count());
+  const Output whole = run_reduced(b, palette, dq, normals);
+  Output parts{std::vector<glm::vec3>(b.point_count()), std::vector<glm::vec3>(b.point_count())};
+  std::vector<glm::quat> rotations(b.point_count());
+  DirectDeltaMushReducedJob job;
+  job.binding = &b, job.matrices = palette, job.dual_quats = dq;
+  job.out_positions = parts.positions, job.in_normals = normals, job.out_normals = parts.normals;
+  job.out_rotations = rotations;
+  REQUIRE(job.validate());
+  const long before = allocations.load();
+  for (std::size_t begin = 0; begin < b.point_count(); begin += 37)
+    REQUIRE(job.run(begin, std::min(b.point_count(), begin + 37)));
+  CHECK(allocations.load() == before);
+  CHECK(std::memcmp(parts.positions.data(), whole.positions.data(), parts.positions.size() * 12) == 0);
+  CHECK(std::memcmp(parts.normals.data(), whole.normals.data(), parts.normals.size() * 12) == 0);
+  deform::ThreadPool pool(2);
+  std::fill(parts.positions.begin(), parts.positions.end(), glm::vec3(0.0f));
+  REQUIRE(job.run(pool, 64));
+  CHECK(std::memcmp(parts.positions.data(), whole.positions.data(), parts.positions.size() * 12) == 0);
+  // The input points: the rest points given explicitly give the same bits as none.
+  job.in_positions = mesh.positions;
+  REQUIRE(job.run());
+  CHECK(std::memcmp(parts.positions.data(), whole.positions.data(), parts.positions.size() * 12) == 0);
+  CHECK(job.run(5, 3).reason() == std::string("range outside the job"));
+
+  // Hostile: each refused by validate() with its reason.
+  const auto refused = [&](const DirectDeltaMushReducedJob& j, const char* reason) {
+    const deform::Status s = j.validate();
+    CHECK(!s);
+    CHECK(s.reason() == std::string(reason));
+  };
+  DirectDeltaMushReducedJob bad = job;
+  bad.binding = nullptr;
+  refused(bad, "no binding");
+  bad = job, bad.dual_quats = std::span<const deform::DualQuat>(dq).first(b.bone_count - 1);
+  refused(bad, "palette is too small");
+  bad = job, bad.out_positions = std::span<glm::vec3>(parts.positions).first(3);
+  refused(bad, "positions are not one per point");
+  std::vector<deform::DualQuat> nan_dq = dq;
+  nan_dq[b.bones[0]].real.x = std::nanf("");
+  bad = job, bad.dual_quats = nan_dq;
+  refused(bad, "dual quaternion is not finite");
+  const auto edited = [&](auto edit, const char* reason) {
+    DirectDeltaMushReducedBinding e = b;
+    edit(e);
+    DirectDeltaMushReducedJob j = job;
+    j.binding = &e;
+    refused(j, reason);
+  };
+  edited([](DirectDeltaMushReducedBinding& e) { e.bones[10] = std::uint16_t(e.bone_count); },
+         "binding is malformed: bone out of range");
+  edited([](DirectDeltaMushReducedBinding& e) { e.moments[7].y = INFINITY; }, "binding is not finite");
+  edited([](DirectDeltaMushReducedBinding& e) { e.moments[e.offsets[3]].w = 0.0f; },
+         "binding is malformed: a point's smoothed weights do not sum above 0");
+  edited([](DirectDeltaMushReducedBinding& e) { e.moments.pop_back(); }, "binding is malformed: arrays differ in size");
+  edited([](DirectDeltaMushReducedBinding& e) { std::swap(e.offsets[4], e.offsets[5]); },
+         "binding is malformed: offsets do not ascend from 0");
+  // The reduction refuses a malformed full binding, leaving its output empty.
+  DirectDeltaMushBinding broken = deform::bind_direct_delta_mush(mesh, c.model().weights);
+  broken.offsets.pop_back();
+  DirectDeltaMushReducedBinding out = b;
+  CHECK(!deform::reduce_direct_delta_mush(broken, out));
+  CHECK(out.point_count() == 0);
 }

@@ -233,8 +233,9 @@ std::vector<float> morph_weights(const Args& args, const LoadedModel& loaded, co
 struct SkinOptions {
   std::string method_name;  // lbs, dqs or ddm
   bool direct_mush = false;
-  bool animated = false;  // --clip or --blend
-  std::string pose_path;  // --pose, when not animated
+  bool reduced_mush = false;  // --ddm-variant reduced
+  bool animated = false;      // --clip or --blend
+  std::string pose_path;      // --pose, when not animated
   std::vector<BlendItem> blend;
   std::string out_path;
   bool limits = true;
@@ -248,6 +249,12 @@ SkinOptions skin_options(const Args& args) {
   if (o.method_name != "lbs" && o.method_name != "dqs" && o.method_name != "ddm")
     throw UsageError("--method: '" + o.method_name + "' is not lbs, dqs or ddm");
   o.direct_mush = o.method_name == "ddm";
+  if (const auto variant = args.value("--ddm-variant")) {
+    if (!o.direct_mush) throw UsageError("--ddm-variant needs --method ddm");
+    if (*variant != "full" && *variant != "reduced")
+      throw UsageError("--ddm-variant: '" + *variant + "' is not full or reduced");
+    o.reduced_mush = *variant == "reduced";
+  }
   o.animated = args.has("--clip") || args.has("--blend");
   o.pose_path = o.animated ? std::string() : args.required("--pose");
   if (args.has("--blend")) o.blend = parse_blend(*args.value("--blend"));
@@ -329,20 +336,40 @@ struct SkinnedMesh {
 
 // Direct Delta Mush of the morphed points (each morph offset turned with its point), bound on the rest points; each
 // render vertex's normal turns with its point's rotation.
+// --ddm-variant reduced: the reduced form (DirectDeltaMushReducedJob), the bones' rotations from the DQS palette.
 void direct_delta_mush(const LoadedModel& loaded, const BonePalette& bones, const std::vector<glm::vec3>& rest,
-                       const std::vector<glm::vec3>& vertex_normals, SkinnedMesh& out) {
+                       const std::vector<glm::vec3>& vertex_normals, bool reduced, SkinnedMesh& out) {
   const deform::Mesh& mesh = loaded.model.mesh;
   const deform::DirectDeltaMushBinding binding = deform::bind_direct_delta_mush(mesh, loaded.model.weights);
   std::vector<glm::quat> rotations(mesh.point_count());
-  deform::DirectDeltaMushJob ddm;
-  ddm.binding = &binding;
-  ddm.matrices = bones.palette;
-  ddm.in_positions = rest;
-  ddm.out_positions = out.positions;
-  ddm.out_rotations = rotations;
-  if (const deform::Status status = ddm.validate(); !status)
-    throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
-  ddm.run();
+  if (reduced) {
+    deform::DirectDeltaMushReducedBinding small;
+    std::vector<deform::DualQuat> dual_quats(bones.palette.size());
+    std::vector<glm::mat3> scales(bones.palette.size());
+    bool has_scale = false;
+    deform::DirectDeltaMushReducedJob job;
+    job.binding = &small;
+    job.matrices = bones.palette;
+    job.dual_quats = dual_quats;
+    job.in_positions = rest;
+    job.out_positions = out.positions;
+    job.out_rotations = rotations;
+    deform::Status status = deform::reduce_direct_delta_mush(binding, small);
+    if (status) status = deform::compute_dual_quat_palette(bones.palette, dual_quats, scales, has_scale);
+    if (status) status = job.validate();
+    if (!status) throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
+    job.run();
+  } else {
+    deform::DirectDeltaMushJob ddm;
+    ddm.binding = &binding;
+    ddm.matrices = bones.palette;
+    ddm.in_positions = rest;
+    ddm.out_positions = out.positions;
+    ddm.out_rotations = rotations;
+    if (const deform::Status status = ddm.validate(); !status)
+      throw deform::Error::in_file(loaded.source, "--method ddm", status.reason());
+    ddm.run();
+  }
   for (std::size_t r = 0; r < out.normals.size(); ++r) {
     const glm::vec3 n = rotations[mesh.vertex_point[r]] * vertex_normals[r];
     const float length = glm::length(n);
@@ -364,7 +391,7 @@ SkinnedMesh skin_mesh(const LoadedModel& loaded, const SkinOptions& o, const Bon
     vertex_normals[r] = mesh.vertex_normals[r] + rest.normal_deltas[point];
   }
   if (o.direct_mush) {
-    direct_delta_mush(loaded, bones, rest.positions, vertex_normals, out);
+    direct_delta_mush(loaded, bones, rest.positions, vertex_normals, o.reduced_mush, out);
     return out;
   }
   deform::SkinningJob job;
@@ -452,7 +479,7 @@ void print_skin_report(const LoadedModel& loaded, const SkinOptions& o, const de
 int run(const std::vector<std::string>& argv) {
   std::vector<std::string> value_flags = model_value_flags;
   value_flags.insert(value_flags.end(), {"--pose", "--method", "--out", "--clip", "--time", "--blend", "--morph",
-                                         "--mush", "--mush-step"});
+                                         "--mush", "--mush-step", "--ddm-variant"});
   std::vector<std::string> switch_flags = model_switch_flags;
   switch_flags.push_back("--no-limits");
   const Args args(argv, value_flags, switch_flags);
@@ -481,7 +508,7 @@ int run(const std::vector<std::string>& argv) {
 const Command skin_command = {
     "skin", "deform a mesh by a pose (LBS, DQS or Direct Delta Mush)",
     "usage: deform skin (MESH.obj --skeleton S.sk --weights W.skw | --builtin) --pose P.json\n"
-    "                   [--method lbs|dqs|ddm]\n"
+    "                   [--method lbs|dqs|ddm [--ddm-variant full|reduced]]\n"
     "                   [--mush N [--mush-step S]] [--no-limits] --out OUT.obj\n"
     "       deform skin MODEL (--pose P.json | --clip NAME --time T) [--morph NAME:W[,NAME:W...]] ...\n"
     "                   (MODEL: an import: glTF, FBX, .x, ...)\n"
@@ -489,7 +516,8 @@ const Command skin_command = {
     "Poses the skeleton (bones not in P.json keep their bind pose; angles clamped into the DOF limits unless\n"
     "--no-limits) and deforms the mesh: linear blend skinning (lbs, default), dual quaternion skinning (dqs) or\n"
     "Direct Delta Mush (ddm: the weights smoothed over the mesh at bind time, a rotation per point; slower to bind,\n"
-    "smooth at bent joints, the rest pose exact; docs/skinning.md).\n"
+    "smooth at bent joints, the rest pose exact; docs/skinning.md). --ddm-variant reduced keeps 4 floats an influence\n"
+    "instead of 10 and blends the bones' rotations instead of fitting one per point (default full).\n"
     "OUT.obj keeps the input's `v` lines in order and count, its UVs and faces; normals are skinned too.\n"
     "Morph targets (blend shapes) apply before skinning, at their default weights, the clip's animated weights (with\n"
     "--blend, the clips' weights averaged by the blend's weights), or the weights --morph gives by target name\n"

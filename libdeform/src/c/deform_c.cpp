@@ -237,8 +237,10 @@ deform_status deform_character_set_delta_mush(deform_character* character, int i
   });
 }
 
-deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations, float step) {
-  if (character == nullptr) return fail_argument("deform_character_set_direct_delta_mush: the handle is NULL");
+namespace {
+
+deform_status set_direct_delta_mush(deform_character* character, int iterations, float step,
+                                    deform::DirectDeltaMushVariant variant) {
   return guarded([&] {
     if (iterations == 0) {
       character->character.clear_direct_delta_mush();
@@ -247,9 +249,22 @@ deform_status deform_character_set_direct_delta_mush(deform_character* character
     deform::DirectDeltaMushSettings settings;
     settings.iterations = iterations;
     settings.step = step;
+    settings.variant = variant;
     character->character.set_direct_delta_mush(settings);  // throws deform::Error (argument), changing nothing
     return DEFORM_OK;
   });
+}
+
+}  // namespace
+
+deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations, float step) {
+  if (character == nullptr) return fail_argument("deform_character_set_direct_delta_mush: the handle is NULL");
+  return set_direct_delta_mush(character, iterations, step, deform::DirectDeltaMushVariant::full);
+}
+
+deform_status deform_character_set_direct_delta_mush_reduced(deform_character* character, int iterations, float step) {
+  if (character == nullptr) return fail_argument("deform_character_set_direct_delta_mush_reduced: the handle is NULL");
+  return set_direct_delta_mush(character, iterations, step, deform::DirectDeltaMushVariant::reduced);
 }
 
 deform_status deform_character_reach(deform_character* character, int32_t effector, const float target[3],

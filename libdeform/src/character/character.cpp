@@ -196,8 +196,9 @@ Character Character::instance() const {
   copy.settings = settings;
   copy.set_normals_mode(normals_mode_);
   copy.direct_mush_ = direct_mush_;  // Direct Delta Mush: the binding shared (its job has no scratch)
-  copy.drivers_ = drivers_;          // pose-space correctives: each driver shared, the weights' room this copy's own
-  copy.mush_ = mush_;  // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
+  copy.reduced_mush_ = reduced_mush_;
+  copy.drivers_ = drivers_;  // pose-space correctives: each driver shared, the weights' room this copy's own
+  copy.mush_ = mush_;        // Delta Mush: the binding shared; the job's and the normals' scratch this copy's own
   if (mush_) {
     copy.mush_scratch_.resize(mush_scratch_.size());
     if (copy.normals_scratch_.empty()) copy.normals_scratch_.resize(bind_->vertex_normals.scratch_size());
@@ -764,6 +765,22 @@ Status Character::deform_frame(float dt, std::size_t level) {
       ddm.out_normals = point_normals();
     }
     if (const Status status = ddm.run(); !status) return status;
+  } else if (reduced_mush_ && deformers && level == 0) {
+    // The reduced form alike, with the bones' rotations from the DQS palette of the same matrices.
+    bool has_scale = false;
+    if (const Status status = compute_dual_quat_palette(palette_, dual_quats_, scales_, has_scale); !status)
+      return status;
+    DirectDeltaMushReducedJob ddm;
+    ddm.binding = reduced_mush_.get();
+    ddm.matrices = palette_;
+    ddm.dual_quats = dual_quats_;
+    if (morphed_) ddm.in_positions = rest_positions;
+    ddm.out_positions = positions_;
+    if (transport) {
+      ddm.in_normals = rest_normals;
+      ddm.out_normals = point_normals();
+    }
+    if (const Status status = ddm.run(); !status) return status;
   } else if (const Status status = skin(rest_positions, rest_normals, transport, weights); !status) {
     return status;
   }
@@ -806,6 +823,22 @@ void Character::set_delta_mush(const DeltaMushSettings& mush) {
 void Character::set_direct_delta_mush(const DirectDeltaMushSettings& ddm) {
   auto binding = std::make_shared<const DirectDeltaMushBinding>(
       bind_direct_delta_mush(bind_->model.mesh, bind_->model.weights, ddm));
+  if (ddm.variant == DirectDeltaMushVariant::reduced) {
+    auto reduced = std::make_shared<DirectDeltaMushReducedBinding>();
+    if (const Status status = reduce_direct_delta_mush(*binding, *reduced); !status)
+      throw Error::invalid_argument("direct delta mush", status.reason());
+    // Checked once here, as below; the DQS palette's rotations are identities until update() computes them.
+    DirectDeltaMushReducedJob job;
+    job.binding = reduced.get();
+    job.matrices = palette_;
+    job.dual_quats = dual_quats_;
+    job.out_positions = positions_;
+    if (const Status status = job.validate(); !status)
+      throw Error::invalid_argument("direct delta mush", status.reason());
+    direct_mush_.reset();
+    reduced_mush_ = std::move(reduced);
+    return;
+  }
   // Checked once here, so that update() cannot refuse it: the palette is the skeleton's, the spans one per point.
   DirectDeltaMushJob job;
   job.binding = binding.get();
@@ -813,10 +846,14 @@ void Character::set_direct_delta_mush(const DirectDeltaMushSettings& ddm) {
   job.out_positions = positions_;
   if (const Status status = job.validate(); !status)
     throw Error::invalid_argument("direct delta mush", status.reason());
+  reduced_mush_.reset();
   direct_mush_ = std::move(binding);
 }
 
-void Character::clear_direct_delta_mush() noexcept { direct_mush_.reset(); }
+void Character::clear_direct_delta_mush() noexcept {
+  direct_mush_.reset();
+  reduced_mush_.reset();
+}
 
 Status Character::add_pose_driver(const PoseDriverBinding& driver, std::span<const std::uint32_t> targets) {
   std::vector<float> weights(driver.shape_count);

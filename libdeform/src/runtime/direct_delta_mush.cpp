@@ -300,4 +300,157 @@ Status DirectDeltaMushJob::run(ThreadPool& pool, std::size_t min_chunk) const no
   return run_parallel(*this, pool, min_chunk);
 }
 
+// --- the reduced form: ψ and first moments, the rotation blended from the bones' quaternions ---
+
+namespace {
+
+// The O(1) checks of the reduced job's run().
+Status reduced_shape_ok(const DirectDeltaMushReducedJob& job) noexcept {
+  const DirectDeltaMushReducedBinding* b = job.binding;
+  if (b == nullptr) return Status::failure("no binding");
+  const std::size_t n = b->point_count();
+  if (b->offsets.size() != n + 1 || b->moments.size() != b->bones.size())
+    return Status::failure("binding is malformed: arrays differ in size");
+  if (b->offsets.back() != b->bones.size())
+    return Status::failure("binding is malformed: offsets do not end at the end");
+  if (job.matrices.size() < b->bone_count || job.dual_quats.size() < b->bone_count)
+    return Status::failure("palette is too small");
+  if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
+    return Status::failure("positions are not one per point");
+  if (job.in_normals.size() != job.out_normals.size() || (!job.in_normals.empty() && job.in_normals.size() != n))
+    return Status::failure("normals are not one per point");
+  if (!job.out_rotations.empty() && job.out_rotations.size() != n)
+    return Status::failure("rotations are not one per point");
+  return {};
+}
+
+// Bone matrix m applied to point p (its 3×3 part and translation).
+inline glm::vec3 transform(const glm::mat4& m, const glm::vec3& p) noexcept {
+  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
+}
+
+inline glm::vec3 linear(const glm::mat4& m, const glm::vec3& p) noexcept {
+  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z;
+}
+
+}  // namespace
+
+Status reduce_direct_delta_mush(const DirectDeltaMushBinding& full, DirectDeltaMushReducedBinding& out) {
+  out = {};
+  const std::size_t n = full.point_count();
+  if (full.offsets.size() != n + 1 || full.moments.size() != full.bones.size() || full.offsets[0] != 0 ||
+      full.offsets.back() != full.bones.size())
+    return Status::failure("binding is malformed: arrays differ in size");
+  DirectDeltaMushReducedBinding r;
+  r.rest = full.rest;
+  r.offsets = full.offsets;
+  r.bones = full.bones;
+  r.bone_count = full.bone_count;
+  r.moments.reserve(full.influence_count());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (full.offsets[i + 1] < full.offsets[i])
+      return Status::failure("binding is malformed: offsets do not ascend from 0");
+    double sum = 0.0;
+    for (std::uint32_t e = full.offsets[i]; e < full.offsets[i + 1]; ++e) sum += double(full.moments[e].w);
+    if (full.offsets[i + 1] > full.offsets[i] && !(sum > 0.0))
+      return Status::failure("binding is malformed: a point's smoothed weights do not sum above 0");
+    for (std::uint32_t e = full.offsets[i]; e < full.offsets[i + 1]; ++e) {
+      const DirectDeltaMushMoments& m = full.moments[e];
+      const glm::vec4 v(float(double(m.x) / sum), float(double(m.y) / sum), float(double(m.z) / sum),
+                        float(double(m.w) / sum));
+      if (!finite(v)) return Status::failure("binding is not finite");
+      r.moments.push_back(v);
+    }
+  }
+  out = std::move(r);
+  return {};
+}
+
+Status DirectDeltaMushReducedJob::validate() const noexcept {
+  if (const Status status = reduced_shape_ok(*this); !status) return status;
+  const DirectDeltaMushReducedBinding& b = *binding;
+  if (b.offsets[0] != 0) return Status::failure("binding is malformed: offsets do not ascend from 0");
+  for (std::size_t i = 0; i < b.point_count(); ++i) {
+    if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
+    if (!finite(b.rest[i])) return Status::failure("binding is not finite");
+    float weight = 0.0f;
+    for (std::uint32_t e = b.offsets[i]; e < b.offsets[i + 1]; ++e) {
+      if (!finite(b.moments[e])) return Status::failure("binding is not finite");
+      weight += b.moments[e].w;
+    }
+    // The first ψ positive keeps the blended quaternion away from zero (its part along q₀ is at least that ψ).
+    if (b.offsets[i + 1] > b.offsets[i] && (!(weight > 0.0f) || !(b.moments[b.offsets[i]].w > 0.0f)))
+      return Status::failure("binding is malformed: a point's smoothed weights do not sum above 0");
+  }
+  for (std::size_t e = 0; e < b.influence_count(); ++e)
+    if (b.bones[e] >= b.bone_count) return Status::failure("binding is malformed: bone out of range");
+  for (std::size_t j = 0; j < b.bone_count; ++j) {
+    if (!finite(matrices[j])) return Status::failure("palette matrix is not finite");
+    if (!finite(dual_quats[j].real)) return Status::failure("dual quaternion is not finite");
+  }
+  return {};
+}
+
+Status DirectDeltaMushReducedJob::run() const noexcept { return run(0, count()); }
+
+Status DirectDeltaMushReducedJob::run(std::size_t begin, std::size_t end) const noexcept {
+  if (const Status status = reduced_shape_ok(*this); !status) return status;
+  if (begin > end || end > count()) return Status::failure("range outside the job");
+  const DirectDeltaMushReducedBinding& b = *binding;
+  const bool normals = !in_normals.empty();
+  for (std::size_t i = begin; i < end; ++i) {
+    const glm::vec3 r = b.rest[i];
+    const glm::vec3 x = in_positions.empty() ? r : in_positions[i];
+    const std::uint32_t first = b.offsets[i], last = b.offsets[i + 1];
+    if (first == last) {
+      out_positions[i] = x;
+      if (normals) {
+        const glm::vec3 n = in_normals[i];
+        const float length2 = glm::dot(n, n);
+        out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
+      }
+      if (!out_rotations.empty()) out_rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+      continue;
+    }
+    // Sums relative to c = M₀ rᵢ; at the identity palette every term below is exactly 0 (see the header).
+    const glm::mat4& m0 = matrices[b.bones[first]];
+    const glm::quat q0 = dual_quats[b.bones[first]].real;
+    const glm::vec3 c = transform(m0, r);
+    glm::vec3 blend(0.0f), moved(0.0f), centroid(0.0f);
+    float qx = 0.0f, qy = 0.0f, qz = 0.0f, qw = 0.0f;
+    for (std::uint32_t e = first; e < last; ++e) {
+      const glm::mat4& m = matrices[b.bones[e]];
+      const glm::quat qj = dual_quats[b.bones[e]].real;
+      const glm::vec4 mo = b.moments[e];
+      const glm::vec3 p(mo);
+      blend += mo.w * (transform(m, r) - c);
+      moved += linear(m, p);
+      centroid += p;
+      const float w = qj.x * q0.x + qj.y * q0.y + qj.z * q0.z + qj.w * q0.w < 0.0f ? -mo.w : mo.w;
+      qx += w * qj.x, qy += w * qj.y, qz += w * qj.z, qw += w * qj.w;
+    }
+    // The rotation of the blended quaternion as a matrix, without normalising it first: for q of squared length s,
+    // R = I + (2 / s) (w [v]× + [v]×²), one division for the three products below. q is not 0 (validate(): its part
+    // along q₀ is at least the first ψ).
+    const float k = 2.0f / (qx * qx + qy * qy + qz * qz + qw * qw);
+    const float xx = k * qx * qx, yy = k * qy * qy, zz = k * qz * qz;
+    const float xy = k * qx * qy, xz = k * qx * qz, yz = k * qy * qz;
+    const float wx = k * qw * qx, wy = k * qw * qy, wz = k * qw * qz;
+    const glm::mat3 rotation(1.0f - yy - zz, xy + wz, xz - wy, xy - wz, 1.0f - xx - zz, yz + wx, xz + wy, yz - wx,
+                             1.0f - xx - yy);
+    out_positions[i] = c + (blend + (moved - rotation * centroid) + rotation * (x - r));
+    if (normals) {
+      const glm::vec3 n = rotation * in_normals[i];
+      const float length2 = glm::dot(n, n);
+      out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
+    }
+    if (!out_rotations.empty()) out_rotations[i] = glm::normalize(glm::quat(qw, qx, qy, qz));
+  }
+  return {};
+}
+
+Status DirectDeltaMushReducedJob::run(ThreadPool& pool, std::size_t min_chunk) const noexcept {
+  return run_parallel(*this, pool, min_chunk);
+}
+
 }  // namespace deform

@@ -26,7 +26,8 @@ void check(const Model& model, const SimplifySettings& settings) {
   if (mesh.triangles.empty() || mesh.triangles.size() % 3 != 0)
     throw Error::invalid_argument("mesh", "has no triangles, or a partial one");
   for (const std::uint32_t v : mesh.triangles)
-    if (v >= mesh.vertex_count()) throw Error::invalid_argument("mesh", "a triangle names a render vertex out of range");
+    if (v >= mesh.vertex_count())
+      throw Error::invalid_argument("mesh", "a triangle names a render vertex out of range");
   for (const std::uint32_t p : mesh.vertex_point)
     if (p >= mesh.point_count()) throw Error::invalid_argument("mesh", "a render vertex names a point out of range");
   if (model.weights.size() != mesh.point_count() && model.weights.size() != 0)

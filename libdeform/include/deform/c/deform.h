@@ -116,6 +116,10 @@ DEFORM_C_API deform_status deform_character_set_delta_mush(deform_character* cha
  * naming the value for one out of range, changing nothing. */
 DEFORM_C_API deform_status deform_character_set_direct_delta_mush(deform_character* character, int iterations,
                                                                   float step);
+/* The same with the reduced-storage form (docs/skinning.md "Reduced storage": 4 floats an influence, the bones'
+ * rotations blended; Character's DirectDeltaMushVariant::reduced). Either call replaces what the other bound. */
+DEFORM_C_API deform_status deform_character_set_direct_delta_mush_reduced(deform_character* character, int iterations,
+                                                                          float step);
 
 /* Morph targets (blend shapes: the model's, and the shapes of the rig's pose-space corrective groups, appended after
  * them) and their weights, as the next update() applies them (Character::morph_weights). A weight set here holds

@@ -173,11 +173,16 @@ class DEFORM_CHARACTER_API Character {
   // sparse factorisation and solves, and throws deform::Error as the binder does, changing nothing: call it at
   // set-up) and takes effect at the next update(). It runs only when update() deforms (deform_on_cpu; else the caller
   // skins, with direct_delta_mush() and palette()). Instances share the binding. Off, the frame is what it was without
-  // it, to the bit. No allocation per frame: the job needs no scratch.
+  // it, to the bit. No allocation per frame: the job needs no scratch. settings.variant = reduced skins with
+  // DirectDeltaMushReducedJob instead (4 floats an influence, the bones' rotations blended: the DQS palette of
+  // palette() computed each frame) and keeps only the reduced binding: direct_delta_mush() is then null and
+  // direct_delta_mush_reduced() the binding; the rest of the above holds alike.
   void set_direct_delta_mush(const DirectDeltaMushSettings& settings);
   void clear_direct_delta_mush() noexcept;
   // The binding in use, or null when Direct Delta Mush is off.
   const DirectDeltaMushBinding* direct_delta_mush() const noexcept { return direct_mush_.get(); }
+  // The reduced binding in use (settings.variant = reduced), or null.
+  const DirectDeltaMushReducedBinding* direct_delta_mush_reduced() const noexcept { return reduced_mush_.get(); }
 
   // Pose-space correctives (runtime/pose_driver.hpp): a driver's shapes are morph targets of the model, shape s the
   // target `targets[s]`; each update() then sets those targets' weights from the pose (PoseDriverJob on pose()'s
@@ -461,6 +466,7 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec3> target_;    // update_interval > 1: the last deformed points, positions() moving toward them
   std::uint32_t approach_left_ = 0;  // updates until positions() reaches target_
   Status deform_frame(float dt, std::size_t level);
+  std::shared_ptr<const DirectDeltaMushReducedBinding> reduced_mush_;  // set_direct_delta_mush's reduced variant
   // Pose-space correctives: each driver (shared), the morph target of each of its shapes, its weights' room.
   struct Driven {
     std::shared_ptr<const PoseDriverBinding> binding;

@@ -8,6 +8,12 @@
 
 namespace deform {
 
+// Which per-frame form a Character (Character::set_direct_delta_mush) or the CLI skins with: `full`, DirectDeltaMushJob
+// on every influence's whole moments (10 floats) and the rotation fitted to each smoothed neighbourhood; `reduced`,
+// DirectDeltaMushReducedJob on 4 floats an influence (reduce_direct_delta_mush) and the bones' rotations blended
+// (deform/runtime/direct_delta_mush.hpp states both).
+enum class DirectDeltaMushVariant : std::uint8_t { full, reduced };
+
 struct DirectDeltaMushSettings {
   // The smoothing B = (I + λ L)⁻ᵖ: p = `iterations` implicit Laplacian steps of size λ = `step` over the point
   // adjacency (L = I − D⁻¹A, the uniform Laplacian: each point against its neighbours' mean, as Delta Mush smooths).
@@ -30,6 +36,9 @@ struct DirectDeltaMushSettings {
   // for the rows, and as much again or a little more for the kernel's layout of them (DirectDeltaMushLanes: 46 bytes
   // a slot; 1.0 to 1.2 slots an influence on the benchmark's models). In [0, 0.5); 0 keeps every nonzero influence.
   float prune = 1e-3f;
+  // The per-frame form its user runs (see DirectDeltaMushVariant). bind_direct_delta_mush ignores it: it always builds
+  // the full binding, from which the reduced one is derived.
+  DirectDeltaMushVariant variant = DirectDeltaMushVariant::full;
 };
 
 // Binds `mesh` (rest points: Mesh::positions) skinned by `weights` (one entry per point; any number of influences)

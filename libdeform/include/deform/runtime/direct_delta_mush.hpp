@@ -29,6 +29,7 @@
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
 #include "deform/runtime/isa.hpp"
+#include "deform/runtime/skinning.hpp"
 
 namespace deform {
 
@@ -114,6 +115,72 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
   Status run() const noexcept;
   Status run(std::size_t begin, std::size_t end) const noexcept;
   // run_parallel over the pool, in chunks of at least `min_chunk` points.
+  Status run(ThreadPool& pool, std::size_t min_chunk = min_parallel_chunk) const noexcept;
+};
+
+// The reduced-storage form of a binding (reduce_direct_delta_mush): of each influence's moments Ωᵢⱼ only the smoothed
+// weight ψᵢⱼ and first moment p̃ᵢⱼ (relative to the rest point i) are kept, 4 floats and a bone where the full form
+// keeps 10 and its lanes as much again. The per-frame rotation is then not the polar decomposition of the posed
+// second moments (which this form does not have) but a blend of the bones' rotations:
+//   Rᵢ = the rotation of the unit quaternion normalise(Σⱼ ψᵢⱼ sⱼ qⱼ), qⱼ bone j's rotation (the DQS palette's real
+//   part:
+//        the rotation of Aⱼ's polar decomposition), sⱼ = ±1 so that sⱼ qⱼ · q₀ >= 0 for q₀ the point's strongest bone
+//        (the first of its row), as dual quaternion skinning aligns them;
+//   tᵢ = Σⱼ (Aⱼ p̃ᵢⱼ + ψᵢⱼ tⱼ) − Rᵢ pᵢ with pᵢ = Σⱼ p̃ᵢⱼ (Aⱼ, tⱼ: palette matrix j's 3×3 part and translation);
+//   out = Rᵢ xᵢ + tᵢ, normals Rᵢ nᵢ renormalised.
+// With p̃ relative to the rest point rᵢ (p̃ = p̃ʳ + ψ rᵢ) and Σⱼ ψᵢⱼ = 1 that is out = Σⱼ ψᵢⱼ Mⱼ rᵢ + Σⱼ Aⱼ p̃ʳᵢⱼ +
+// Rᵢ (xᵢ − rᵢ − pʳᵢ), which the job evaluates (the first sum relative to M₀ rᵢ, M₀ the strongest bone, so that no
+// float sum cancels the model's distance from the origin). Contract: the identity palette gives every point back
+// exactly up to the rounding of pʳᵢ's two equal sums (Rᵢ = I, tᵢ = 0); a rigid motion G of every bone moves every
+// point by G (the ψ sum to 1); pᵢ is summed per frame, beside the other sums, rather than stored.
+struct DirectDeltaMushReducedBinding {
+  std::vector<glm::vec3> rest;         // the rest points
+  std::vector<std::uint32_t> offsets;  // point i's influences: [offsets[i], offsets[i + 1]); point_count() + 1
+  std::vector<std::uint16_t> bones;    // per influence: the palette entry; the largest ψ first in each row
+  std::vector<glm::vec4> moments;      // per influence: p̃ʳᵢⱼ (x, y, z) and ψᵢⱼ (w); each row's ψ sum to 1
+  std::uint32_t bone_count = 0;        // the palette size the influences need (largest bone + 1)
+
+  std::size_t point_count() const noexcept { return rest.size(); }
+  std::size_t influence_count() const noexcept { return bones.size(); }
+};
+
+// Derives the reduced form from a full binding's rows: each row's ψ and first moments divided by the row's ψ sum (the
+// pruning leaves it a little under 1; the full job is unchanged by that scale, it normalises its centroids). Refuses
+// rows whose arrays are inconsistent ("binding is malformed: ..."), a nonempty row whose ψ do not sum above 0, or a
+// moment not finite ("binding is not finite"), leaving `out` empty. Allocates.
+DEFORM_RUNTIME_API Status reduce_direct_delta_mush(const DirectDeltaMushBinding& full,
+                                                   DirectDeltaMushReducedBinding& out);
+
+// The job of the reduced form, shaped as DirectDeltaMushJob (validate() once, run() / run(begin, end) / run(pool),
+// caller-owned spans, no allocation, no throw). One portable kernel, a point at a time.
+struct DEFORM_RUNTIME_API DirectDeltaMushReducedJob {
+  const DirectDeltaMushReducedBinding* binding = nullptr;
+  std::span<const glm::mat4> matrices;   // at least binding->bone_count, affine (bottom row 0 0 0 1)
+  std::span<const DualQuat> dual_quats;  // the same palette through compute_dual_quat_palette (its `real` is read)
+
+  // As DirectDeltaMushJob's: optional input points (empty: the rest points), positions out required, normals both or
+  // neither, rotations optional.
+  std::span<const glm::vec3> in_positions;
+  std::span<glm::vec3> out_positions;
+  std::span<const glm::vec3> in_normals;
+  std::span<glm::vec3> out_normals;
+  std::span<glm::quat> out_rotations;
+
+  static constexpr std::size_t split_multiple = 16;
+  static constexpr std::size_t min_parallel_chunk = 4096;
+
+  // Ok when the call is well formed, else why not: "no binding", "binding is malformed: ..." (array sizes, offsets
+  // ascending from 0, a bone out of range, a nonempty row whose ψ do not sum above 0 or whose first ψ is not positive),
+  // "binding is not finite", "palette is too small" (matrices or dual_quats under bone_count), "palette matrix is not
+  // finite", "dual quaternion is not finite", and the spans as DirectDeltaMushJob's. O(points + influences + bones).
+  Status validate() const noexcept;
+
+  std::size_t count() const noexcept { return binding ? binding->point_count() : 0; }
+
+  // As DirectDeltaMushJob's: O(1) checks, then points [begin, end); no allocation. An empty row leaves its point as
+  // it comes in (R = I, t = 0).
+  Status run() const noexcept;
+  Status run(std::size_t begin, std::size_t end) const noexcept;
   Status run(ThreadPool& pool, std::size_t min_chunk = min_parallel_chunk) const noexcept;
 };
 
