@@ -77,7 +77,10 @@ std::vector<Pose> test_poses(const Model& model, const deform::Animation* clip) 
   std::uniform_real_distribution<float> angle(-0.6f, 0.6f);
   for (int k = 0; k < 4; ++k) {
     Pose pose = model.skeleton.bind_pose();
-    for (glm::quat& q : pose.rotations) q = q * glm::quat(glm::vec3(angle(random), angle(random), angle(random)));
+    for (glm::quat& q : pose.rotations) {
+      const float x = angle(random), y = angle(random), z = angle(random);  // in this order on every compiler
+      q = q * glm::quat(glm::vec3(x, y, z));
+    }
     poses.push_back(std::move(pose));
   }
   return poses;

@@ -142,7 +142,10 @@ void check_simplified(const std::string& name, const Model& model, float ratio, 
   std::mt19937 random(7);
   std::uniform_real_distribution<float> angle(-0.5f, 0.5f);
   deform::Pose pose = model.skeleton.bind_pose();
-  for (glm::quat& q : pose.rotations) q = q * glm::quat(glm::vec3(angle(random), angle(random), angle(random)));
+  for (glm::quat& q : pose.rotations) {
+    const float x = angle(random), y = angle(random), z = angle(random);  // in this order on every compiler
+    q = q * glm::quat(glm::vec3(x, y, z));
+  }
   const std::vector<glm::vec3> full = skin(model, pose), simple = skin(s.model, pose);
   for (std::size_t p = 0; p < simple.size(); ++p) CHECK(simple[p] == full[s.source_point[p]]);
   const auto [mean, largest] = surface_gap(full, simple, out, model_size(model));
@@ -192,7 +195,7 @@ TEST_CASE("simplify_model on assimp-testmodels' rigged characters") {
     REQUIRE_MESSAGE(std::filesystem::exists(dir + path), path << " is missing: install Debian's assimp-testmodels");
     const deform::ImportedModel imported = deform::import_model(dir + path);
     REQUIRE(imported.rigged);
-    check_simplified(path, imported.model, 0.5f, 0.03);
+    check_simplified(path, imported.model, 0.5f, 0.04);
     check_simplified(path, imported.model, 0.25f, 0.06);
   }
 }
