@@ -1,6 +1,6 @@
 #pragma once
-// Test helper for the importer and character tests: a model's points skinned (LBS, every influence, the extras too) by
-// a pose.
+// Test helper for the importer, character, level-of-detail and simplification tests: a model's points skinned (LBS,
+// every influence, the extras too) by a pose, with its own weights or others given per point.
 #include <doctest/doctest.h>
 
 #include <glm/glm.hpp>
@@ -13,7 +13,7 @@
 
 namespace import_test {
 
-inline std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
+inline std::vector<glm::vec3> skin(const deform::Model& model, const deform::SkinWeights& w, const deform::Pose& pose) {
   const std::size_t bones = model.skeleton.bone_count();
   std::vector<glm::mat4> world(bones), palette(bones);
   deform::LocalToWorldJob fk;
@@ -24,7 +24,6 @@ inline std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pos
   fk.palette = palette;
   REQUIRE(fk.run());
   std::vector<glm::vec3> out(model.mesh.point_count());
-  const deform::SkinWeights& w = model.weights;
   deform::SkinningJob job;
   job.matrices = palette;
   job.bone_indices = w.bones;
@@ -38,6 +37,10 @@ inline std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pos
   REQUIRE(job.validate());
   REQUIRE(job.run());
   return out;
+}
+
+inline std::vector<glm::vec3> skin(const deform::Model& model, const deform::Pose& pose) {
+  return skin(model, model.weights, pose);
 }
 
 }  // namespace import_test

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "import/skin_model.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/bone_lod.hpp"
 #include "deform/runtime/animation.hpp"
@@ -34,29 +35,7 @@ float model_size(const Model& model) {
   return std::max({extent.x, extent.y, extent.z});
 }
 
-std::vector<glm::vec3> skin(const Model& model, const deform::SkinWeights& weights, const Pose& pose) {
-  std::vector<glm::mat4> world(model.skeleton.bone_count()), palette(world.size());
-  deform::LocalToWorldJob fk;
-  fk.skeleton = &model.skeleton;
-  fk.rotations = pose.rotations;
-  fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
-  REQUIRE(fk.run());
-  std::vector<glm::vec3> out(model.mesh.point_count());
-  deform::SkinningJob job;
-  job.matrices = palette;
-  job.bone_indices = weights.bones;
-  job.bone_weights = weights.weights;
-  job.extra_vertices = weights.extra_points;
-  job.extra_offsets = weights.extra_offsets;
-  job.extra_bones = weights.extra_bones;
-  job.extra_weights = weights.extra_weights;
-  job.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
-  job.out_positions = deform::as_floats(std::span<glm::vec3>(out));
-  REQUIRE(job.run());
-  return out;
-}
+using import_test::skin;
 
 // Poses to measure with: the clip sampled over its length when there is one, and seeded random bends of every bone.
 std::vector<Pose> test_poses(const Model& model, const deform::Animation* clip) {

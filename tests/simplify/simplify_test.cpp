@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "import/skin_model.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/skeleton.hpp"
@@ -31,29 +32,7 @@ float model_size(const Model& model) {
   return std::max({e.x, e.y, e.z});
 }
 
-std::vector<glm::vec3> skin(const Model& model, const deform::Pose& pose) {
-  std::vector<glm::mat4> world(model.skeleton.bone_count()), palette(world.size());
-  deform::LocalToWorldJob fk;
-  fk.skeleton = &model.skeleton;
-  fk.rotations = pose.rotations;
-  fk.translations = pose.translations;
-  fk.world = world;
-  fk.palette = palette;
-  REQUIRE(fk.run());
-  std::vector<glm::vec3> out(model.mesh.point_count());
-  deform::SkinningJob job;
-  job.matrices = palette;
-  job.bone_indices = model.weights.bones;
-  job.bone_weights = model.weights.weights;
-  job.extra_vertices = model.weights.extra_points;
-  job.extra_offsets = model.weights.extra_offsets;
-  job.extra_bones = model.weights.extra_bones;
-  job.extra_weights = model.weights.extra_weights;
-  job.in_positions = deform::as_floats(std::span<const glm::vec3>(model.mesh.positions));
-  job.out_positions = deform::as_floats(std::span<glm::vec3>(out));
-  REQUIRE(job.run());
-  return out;
-}
+using import_test::skin;
 
 // Edges (point pairs) used by one triangle only: the mesh's open borders, in points (seams are not edges here).
 std::size_t open_edges(const deform::Mesh& mesh) {
