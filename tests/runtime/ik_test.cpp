@@ -422,6 +422,29 @@ TEST_CASE("swing-twist limits: the split agrees with a plain reference; projecti
   CHECK(std::isfinite(bad.w));
 }
 
+TEST_CASE("swing-twist limits: a flat cone (one swing limit thousands of times the other) still projects inside") {
+  // A hinge-like joint given as a cone: 20° one way and (after degrees -> radians) a ten-thousandth of that or less the
+  // other. The projection onto so flat an ellipse once stopped outside it.
+  std::mt19937 random(77);
+  std::normal_distribution<float> normal;
+  int outside_before = 0;
+  for (const float flat : {1e-2f, 1e-3f, 1e-4f, 1e-5f, 1e-6f}) {
+    for (int c = 0; c < 500; ++c) {
+      const SwingTwistLimits limits =
+          make_swing_twist_limits(ik_rigs::random_direction(random), 20.0f, 20.0f * flat, -30.0f, 30.0f);
+      const glm::quat q = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
+      if (!reference_within(limits, reference_swing_twist(limits, q), 0.0)) ++outside_before;
+      glm::quat clamped = q;
+      clamp_swing_twist(limits, clamped);
+      CHECK(reference_within(limits, reference_swing_twist(limits, clamped), 1e-5));
+      glm::quat again = clamped;
+      clamp_swing_twist(limits, again);
+      CHECK(rotation_difference(again, clamped) <= 1e-6);
+    }
+  }
+  CHECK(outside_before > 2000);  // nearly every rotation needed the projection
+}
+
 TEST_CASE("swing-twist joints in CCD and FABRIK chains end within their cones; bad chains are refused") {
   std::mt19937 random(9191);
   int reached = 0, cases = 0;

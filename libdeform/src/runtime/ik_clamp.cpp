@@ -397,13 +397,15 @@ Split split(const SwingTwistLimits& limits, glm::quat rotation) {
 
 // The point of the ellipse (x / a)² + (y / b)² <= 1 (a, b >= 0) nearest (x, y), which lies outside it: (a² x / (t +
 // a²), b² y / (t + b²)) at the root t > 0 of f(t) = (a x / (t + a²))² + (b y / (t + b²))² - 1, which is convex and
-// decreasing there, so Newton's method from t = 0 climbs to it without overshooting.
+// decreasing there, so Newton's method from below climbs to it without overshooting. It starts where either term
+// alone reaches 1 (f >= 0 there, so the root is not below): from t = 0 a flat cone (b a thousandth of a or less) took
+// more than 32 steps, each growing t + b² by about half, and the point stayed outside.
 glm::dvec2 nearest_on_ellipse(glm::dvec2 p, double a, double b) {
   if (a <= 0.0 && b <= 0.0) return glm::dvec2(0.0);
   if (a <= 0.0) return glm::dvec2(0.0, std::clamp(p.y, -b, b));
   if (b <= 0.0) return glm::dvec2(std::clamp(p.x, -a, a), 0.0);
   const double a2 = a * a, b2 = b * b, ax = a * p.x, by = b * p.y;
-  double t = 0.0;
+  double t = std::max({0.0, std::abs(ax) - a2, std::abs(by) - b2});
   for (int step = 0; step < 32; ++step) {
     const double u = ax / (t + a2), v = by / (t + b2);
     const double f = u * u + v * v - 1.0;
