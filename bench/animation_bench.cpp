@@ -35,13 +35,13 @@ deform::Animation make_clip(unsigned seed, deform::Interpolation interpolation) 
       const float t = duration * float(k) / float(keys - 1);
       c.rotation.times.push_back(t);
       c.translation.times.push_back(t);
-      c.rotation.values.push_back(glm::normalize(glm::quat(2.0f + u(random), u(random), u(random), u(random))));
-      c.translation.values.emplace_back(u(random), u(random), u(random));
+      c.rotation.values.push_back(glm::normalize(glm::quat{2.0f + u(random), u(random), u(random), u(random)}));
+      c.translation.values.push_back({u(random), u(random), u(random)});
       if (cubic) {
-        c.rotation.in_tangents.emplace_back(u(random), u(random), u(random), u(random));
-        c.rotation.out_tangents.emplace_back(u(random), u(random), u(random), u(random));
-        c.translation.in_tangents.emplace_back(u(random), u(random), u(random));
-        c.translation.out_tangents.emplace_back(u(random), u(random), u(random));
+        c.rotation.in_tangents.push_back({u(random), u(random), u(random), u(random)});
+        c.rotation.out_tangents.push_back({u(random), u(random), u(random), u(random)});
+        c.translation.in_tangents.push_back({u(random), u(random), u(random)});
+        c.translation.out_tangents.push_back({u(random), u(random), u(random)});
       }
     }
     clip.channels.push_back(std::move(c));

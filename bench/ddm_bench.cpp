@@ -66,7 +66,8 @@ std::unique_ptr<Rig> torus_rig(int n, int around) {
       const float a = tau * float(b) / float(ring_bones);
       const glm::vec3 centre(std::cos(a), std::sin(a), 0.0f);
       glm::mat4 m = glm::translate(glm::mat4(1.0f), centre);
-      m = glm::rotate(m, angle(random), glm::normalize(glm::vec3(angle(random), angle(random), 1.0f)));
+      const float turn = angle(random);
+      m = glm::rotate(m, turn, glm::normalize(glm::vec3{angle(random), angle(random), 1.0f}));
       palette.push_back(glm::translate(m, -centre));
     }
     rig->palettes.push_back(std::move(palette));

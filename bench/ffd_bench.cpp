@@ -37,7 +37,7 @@ struct Scene {
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     for (std::size_t i = 0; i < vertices; ++i) {
       positions.push_back(frame.to_world({unit(rng), unit(rng), unit(rng)}));
-      normals.push_back(glm::normalize(glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, 1.0f)));
+      normals.push_back(glm::normalize(glm::vec3{unit(rng) - 0.5f, unit(rng) - 0.5f, 1.0f}));
     }
     if (random_order) return;
     auto key = [&](const glm::vec3& p) {
@@ -52,7 +52,7 @@ struct Scene {
 void jitter(std::span<glm::vec3> points) {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> d(-0.2f, 0.2f);
-  for (glm::vec3& p : points) p += glm::vec3(d(rng), d(rng), d(rng));
+  for (glm::vec3& p : points) p += glm::vec3{d(rng), d(rng), d(rng)};
 }
 
 deform::ThreadPool& pool() {

@@ -28,7 +28,7 @@ deform::Model scaled_model(std::size_t points) {
   std::uniform_real_distribution<float> jitter(-1e-3f, 1e-3f);
   for (std::size_t p = 0; p < points; ++p) {
     const std::size_t source = p % base.mesh.point_count();
-    big.mesh.positions.push_back(base.mesh.positions[source] + glm::vec3(jitter(rng), jitter(rng), jitter(rng)));
+    big.mesh.positions.push_back(base.mesh.positions[source] + glm::vec3{jitter(rng), jitter(rng), jitter(rng)});
     big.weights.bones.push_back(base.weights.bones[source]);
     big.weights.weights.push_back(base.weights.weights[source]);
   }

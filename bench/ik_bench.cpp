@@ -172,7 +172,7 @@ void clamp(benchmark::State& state) {
   for (const deform::Bone& bone : skeleton.bones()) limits.push_back(deform::prepare_limits(bone.limits));
   deform::Pose rotations = skeleton.bind_pose(), pose = rotations;
   for (glm::quat& q : rotations.rotations)
-    q = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    q = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
   const bool fast = state.range(0) == 1;
   long clamps = 0;
   for (auto _ : state) {

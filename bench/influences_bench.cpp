@@ -35,8 +35,8 @@ InfluenceData make_data(int influences, bool mixed) {
   std::vector<std::uint16_t> bones;
   std::vector<float> values;
   for (std::size_t i = 0; i < vertex_count; ++i) {
-    d.positions.emplace_back(u(rng), u(rng), u(rng));
-    d.normals.push_back(glm::normalize(glm::vec3(u(rng), u(rng), 2.0f)));
+    d.positions.push_back({u(rng), u(rng), u(rng)});
+    d.normals.push_back(glm::normalize(glm::vec3{u(rng), u(rng), 2.0f}));
     const int n = mixed && i % 10 != 3 ? 4 : influences;
     const auto first = static_cast<int>(rng() % bone_count);
     bones.clear(), values.clear();
@@ -47,8 +47,9 @@ InfluenceData make_data(int influences, bool mixed) {
   d.out_positions.resize(vertex_count);
   d.out_normals.resize(vertex_count);
   for (int b = 0; b < bone_count; ++b) {
-    glm::mat4 m = glm::rotate(glm::mat4(1.0f), u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1.0f)));
-    m[3] = glm::vec4(u(rng), u(rng), u(rng), 1.0f);
+    const float turn = u(rng) * 3.0f;
+    glm::mat4 m = glm::rotate(glm::mat4(1.0f), turn, glm::normalize(glm::vec3{u(rng), u(rng), 1.0f}));
+    m[3] = glm::vec4{u(rng), u(rng), u(rng), 1.0f};
     d.palette.push_back(m);
   }
   d.dual_quats.resize(bone_count);
@@ -110,8 +111,8 @@ void morph(benchmark::State& state) {
     for (std::uint32_t p = 0; p < vertex_count; ++p)
       if (rng() % 100 < percent) {
         t.points.push_back(p);
-        t.position_deltas.emplace_back(u(rng), u(rng), u(rng));
-        t.normal_deltas.emplace_back(u(rng), u(rng), u(rng));
+        t.position_deltas.push_back({u(rng), u(rng), u(rng)});
+        t.normal_deltas.push_back({u(rng), u(rng), u(rng)});
       }
   std::vector<float> weights(target_count, 0.3f);
   deform::MorphJob job;

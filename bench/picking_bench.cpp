@@ -33,8 +33,8 @@ std::vector<deform::Ray> rays(int count) {
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   std::vector<deform::Ray> out;
   for (int i = 0; i < count; ++i) {
-    const glm::vec3 origin = 4.0f * glm::normalize(glm::vec3(unit(random), unit(random), unit(random)) + 1e-3f);
-    out.push_back({origin, glm::vec3(unit(random), unit(random), unit(random)) * 0.7f - origin});
+    const glm::vec3 origin = 4.0f * glm::normalize(glm::vec3{unit(random), unit(random), unit(random)} + 1e-3f);
+    out.push_back({origin, glm::vec3{unit(random), unit(random), unit(random)} * 0.7f - origin});
   }
   return out;
 }

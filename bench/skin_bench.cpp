@@ -39,18 +39,19 @@ const SkinData& data(std::size_t vertices) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), positive(0.1f, 1.0f);
   for (std::size_t i = 0; i < vertices; ++i) {
-    d->positions.emplace_back(u(rng), u(rng), u(rng));
-    d->normals.push_back(glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(0.0f, 0.0f, 2.0f)));
+    d->positions.push_back({u(rng), u(rng), u(rng)});
+    d->normals.push_back(glm::normalize(glm::vec3{u(rng), u(rng), u(rng)} + glm::vec3(0.0f, 0.0f, 2.0f)));
     const auto first = static_cast<std::uint16_t>(rng() % bone_count);
     d->bones.emplace_back(first, (first + 1) % bone_count, (first + 5) % bone_count, (first + 11) % bone_count);
-    glm::vec4 w(positive(rng), positive(rng), positive(rng), positive(rng));
+    glm::vec4 w{positive(rng), positive(rng), positive(rng), positive(rng)};
     d->weights.push_back(w / (w.x + w.y + w.z + w.w));
   }
   d->out_positions.resize(vertices);
   d->out_normals.resize(vertices);
   for (int b = 0; b < bone_count; ++b) {
-    glm::mat4 m = glm::rotate(glm::mat4(1.0f), u(rng) * 3.0f, glm::normalize(glm::vec3(u(rng), u(rng), 1.0f)));
-    m[3] = glm::vec4(u(rng), u(rng), u(rng), 1.0f);
+    const float turn = u(rng) * 3.0f;
+    glm::mat4 m = glm::rotate(glm::mat4(1.0f), turn, glm::normalize(glm::vec3{u(rng), u(rng), 1.0f}));
+    m[3] = glm::vec4{u(rng), u(rng), u(rng), 1.0f};
     d->palette.push_back(m);
   }
   d->dual_quats.resize(bone_count);

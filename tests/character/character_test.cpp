@@ -57,7 +57,7 @@ glm::vec3 far_target(const Character& c, std::mt19937& rng) {
   const Arm arm = left_arm(c);
   const glm::vec3 shoulder = c.bone_position(arm.clavicle);
   const float arm_length = glm::length(c.bone_position(arm.hand) - shoulder);
-  const glm::vec3 direction = glm::normalize(glm::vec3(1.0f, 0.6f * unit(rng), 0.6f * unit(rng)));
+  const glm::vec3 direction = glm::normalize(glm::vec3{1.0f, 0.6f * unit(rng), 0.6f * unit(rng)});
   return shoulder + direction * arm_length * scale(rng);
 }
 
@@ -163,7 +163,7 @@ TEST_CASE("reach with swing-twist limits: every chain joint ends inside its cone
   const glm::vec3 shoulder = c.bone_position(c.skeleton().find("upperarm_l"));
   int reached = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    const glm::vec3 target = shoulder + glm::vec3(0.3f + offset(random), offset(random), offset(random));
+    const glm::vec3 target = shoulder + glm::vec3{0.3f + offset(random), offset(random), offset(random)};
     const deform::ReachResult result = c.reach(arm.hand, target);
     REQUIRE(result.status);
     reached += result.residual < 1e-3f;

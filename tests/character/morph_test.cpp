@@ -63,7 +63,7 @@ deform::Pose random_pose(std::mt19937& rng, const deform::Skeleton& skeleton) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   deform::Pose pose = skeleton.bind_pose();
   for (std::size_t b = 0; b < pose.rotations.size(); ++b) {
-    const glm::vec3 axis = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(1e-3f));
+    const glm::vec3 axis = glm::normalize(glm::vec3{u(rng), u(rng), u(rng)} + glm::vec3(1e-3f));
     pose.rotations[b] = glm::normalize(pose.rotations[b] * glm::angleAxis(0.4f * u(rng), axis));
   }
   return pose;

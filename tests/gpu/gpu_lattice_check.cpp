@@ -43,7 +43,7 @@ bool same_bits(glm::vec3 a, glm::vec3 b) { return std::memcmp(&a, &b, sizeof a) 
 glm::vec3 random_unit(std::mt19937& rng) {
   std::normal_distribution<float> g;
   for (;;) {
-    const glm::vec3 n(g(rng), g(rng), g(rng));
+    const glm::vec3 n{g(rng), g(rng), g(rng)};
     if (glm::length(n) > 1e-3f) return glm::normalize(n);
   }
 }
@@ -58,7 +58,7 @@ deform::LatticeFrame random_frame(std::mt19937& rng) {
   shape[1][0] = shear(rng), shape[2][0] = shear(rng), shape[2][1] = shear(rng);
   const glm::mat3 m = rotation * shape;
   deform::LatticeFrame f;
-  f.origin = glm::vec3(origin(rng), origin(rng), origin(rng));
+  f.origin = glm::vec3{origin(rng), origin(rng), origin(rng)};
   f.u_axis = m[0] * scale(rng);
   f.v_axis = m[1] * scale(rng);
   f.w_axis = m[2] * scale(rng);
@@ -74,8 +74,10 @@ bool check(const Case& c) {
   // normals stay well conditioned and comparable.
   const float amplitude = 0.25f / float(std::max({c.degree.x, c.degree.y, c.degree.z}));
   std::uniform_real_distribution<float> jitter(-amplitude, amplitude);
-  for (glm::vec3& p : lattice.control_points())
-    p += jitter(rng) * frame.u_axis + jitter(rng) * frame.v_axis + jitter(rng) * frame.w_axis;
+  for (glm::vec3& p : lattice.control_points()) {
+    const glm::vec3 step{jitter(rng), jitter(rng), jitter(rng)};
+    p += step.x * frame.u_axis + step.y * frame.v_axis + step.z * frame.w_axis;
+  }
   if (c.collapse != Case::none) {
     const glm::vec3 point = frame.to_world(glm::vec3(0.5f)), along = frame.u_axis + 0.5f * frame.v_axis;
     const std::span<glm::vec3> control = lattice.control_points();
@@ -87,7 +89,7 @@ bool check(const Case& c) {
   std::uniform_real_distribution<float> param(-0.25f, 1.25f);
   std::vector<glm::vec3> positions, normals;
   for (int i = 0; i < 4000; ++i) {
-    positions.push_back(frame.to_world(glm::vec3(param(rng), param(rng), param(rng))));
+    positions.push_back(frame.to_world(glm::vec3{param(rng), param(rng), param(rng)}));
     normals.push_back(random_unit(rng));
   }
   for (int corner = 0; corner < 8; ++corner) {
@@ -266,11 +268,11 @@ void bench() {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   std::vector<glm::vec3> points(100000), normals(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    points[i] = glm::vec3(unit(rng), unit(rng), unit(rng));
+    points[i] = glm::vec3{unit(rng), unit(rng), unit(rng)};
     normals[i] = random_unit(rng);
   }
   deform::BezierLattice cube(deform::LatticeFrame::axis_aligned(glm::vec3(0.0f), glm::vec3(1.0f)), glm::ivec3(3));
-  for (glm::vec3& p : cube.control_points()) p += 0.05f * glm::vec3(unit(rng), unit(rng), unit(rng));
+  for (glm::vec3& p : cube.control_points()) p += 0.05f * glm::vec3{unit(rng), unit(rng), unit(rng)};
   bench_one("100k points (tricubic)", cube, deform::bind_lattice(cube, points), normals);
 }
 

@@ -120,7 +120,7 @@ struct Skin {
 glm::vec3 random_unit(std::mt19937& rng) {
   std::normal_distribution<float> g;
   for (;;) {
-    const glm::vec3 n(g(rng), g(rng), g(rng));
+    const glm::vec3 n{g(rng), g(rng), g(rng)};
     if (glm::length(n) > 1e-3f) return glm::normalize(n);
   }
 }
@@ -130,7 +130,7 @@ Skin random_skin(std::mt19937& rng, std::size_t points, int bones) {
   std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f), weight(0.05f, 1.0f), sum(0.5f, 2.0f);
   std::uniform_int_distribution<int> bone(0, bones - 1), influences(1, 4);
   for (std::size_t i = 0; i < points; ++i) {
-    skin.positions.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+    skin.positions.push_back({coordinate(rng), coordinate(rng), coordinate(rng)});
     skin.normals.push_back(random_unit(rng));
     glm::u16vec4 b;
     glm::vec4 w(0.0f);
@@ -155,7 +155,8 @@ std::vector<glm::mat4> random_palette(std::mt19937& rng, int bones, PaletteKind 
       shear(-0.3f, 0.3f);
   std::vector<glm::mat4> palette;
   for (int b = 0; b < bones; ++b) {
-    glm::mat4 m = glm::mat4_cast(glm::angleAxis(angle(rng), random_unit(rng)));
+    const float turn = angle(rng);
+    glm::mat4 m = glm::mat4_cast(glm::angleAxis(turn, random_unit(rng)));
     if (kind == PaletteKind::uniform_scale) m = m * glm::mat4(glm::mat3(scale(rng)));
     if (kind == PaletteKind::scale_shear) {
       glm::mat3 s(1.0f);
@@ -163,7 +164,7 @@ std::vector<glm::mat4> random_palette(std::mt19937& rng, int bones, PaletteKind 
       s[1][0] = shear(rng), s[2][0] = shear(rng), s[2][1] = shear(rng);
       m = m * glm::mat4(s);
     }
-    m[3] = glm::vec4(offset(rng), offset(rng), offset(rng), 1.0f);
+    m[3] = glm::vec4{offset(rng), offset(rng), offset(rng), 1.0f};
     palette.push_back(m);
   }
   return palette;

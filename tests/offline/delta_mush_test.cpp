@@ -189,7 +189,8 @@ TEST_CASE("Delta Mush: the job agrees with the double-precision reference, and a
     std::uniform_real_distribution<float> angle(20.0f, 150.0f), swing(-40.0f, 40.0f);
     double worst = 0.0;
     for (int trial = 0; trial < 8; ++trial) {
-      const std::vector<glm::vec3> posed = bent_arm(c, angle(random), {swing(random), swing(random), 0.0f});
+      const float bend = angle(random);
+      const std::vector<glm::vec3> posed = bent_arm(c, bend, {swing(random), swing(random), 0.0f});
       const std::vector<glm::vec3> out = mush(b, posed);
       const std::vector<glm::dvec3> expected = ref.mush(to_double(posed));
       for (std::size_t i = 0; i < out.size(); ++i)

@@ -101,7 +101,7 @@ std::vector<glm::mat4> chain_palette(const std::vector<glm::dquat>& turns, float
 glm::dquat random_turn(std::mt19937& random, double max_degrees) {
   std::normal_distribution<double> axis(0.0, 1.0);
   std::uniform_real_distribution<double> angle(-max_degrees, max_degrees);
-  glm::dvec3 a(axis(random), axis(random), axis(random));
+  glm::dvec3 a{axis(random), axis(random), axis(random)};
   return glm::angleAxis(glm::radians(angle(random)), glm::normalize(a));
 }
 
@@ -792,11 +792,11 @@ TEST_CASE("Reduced Direct Delta Mush: the job agrees with its equations in doubl
   double worst = 0.0, worst_normal = 0.0, moved = 0.0;
   for (int pose = 0; pose < 2000; ++pose) {
     const glm::dquat g = random_turn(random, 180.0);
-    const glm::dvec3 shift(unit(random), unit(random), unit(random));
+    const glm::dvec3 shift{unit(random), unit(random), unit(random)};
     for (std::size_t j = 0; j < bones; ++j) {
       turns[j] = g * random_turn(random, 80.0);
       if (flip(random)) turns[j] = -turns[j];
-      const glm::dvec3 pivot = glm::dvec3(unit(random), unit(random), unit(random)) * double(size) * 0.5;
+      const glm::dvec3 pivot = glm::dvec3{unit(random), unit(random), unit(random)} * double(size) * 0.5;
       const glm::dmat4 m = glm::translate(glm::dmat4(1.0), shift + pivot) * glm::mat4_cast(turns[j]) *
                            glm::scale(glm::dmat4(1.0), glm::dvec3(scale(random))) *
                            glm::translate(glm::dmat4(1.0), -pivot);

@@ -98,7 +98,7 @@ std::vector<glm::vec3> around_bone(std::mt19937& rng, std::size_t count) {
   std::vector<glm::vec3> out;  // bind-pose world positions, bone-local x in [-0.5, 2.5]
   for (std::size_t i = 0; i < count; ++i)
     out.push_back(glm::vec3(
-        bind_world * glm::vec4(uniform(rng, -0.5f, 2.5f), uniform(rng, -0.6f, 0.6f), uniform(rng, -0.6f, 0.6f), 1.0f)));
+        bind_world * glm::vec4{uniform(rng, -0.5f, 2.5f), uniform(rng, -0.6f, 0.6f), uniform(rng, -0.6f, 0.6f), 1.0f}));
   return out;
 }
 

@@ -54,18 +54,18 @@ void random_mesh(std::mt19937& random, int n, int loose, std::vector<glm::vec3>&
       indices.insert(indices.end(),
                      {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1)});
   for (int t = 0; t < loose; ++t) {
-    const glm::vec3 centre(unit(random), unit(random), unit(random));
+    const glm::vec3 centre{unit(random), unit(random), unit(random)};
     for (int c = 0; c < 3; ++c) {
       indices.push_back(static_cast<std::uint32_t>(positions.size()));
-      positions.push_back(centre + 0.2f * glm::vec3(unit(random), unit(random), unit(random)));
+      positions.push_back(centre + 0.2f * glm::vec3{unit(random), unit(random), unit(random)});
     }
   }
 }
 
 Ray random_ray(std::mt19937& random) {
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  const glm::vec3 origin = 3.0f * glm::vec3(unit(random), unit(random), unit(random));
-  const glm::vec3 aim = 0.9f * glm::vec3(unit(random), unit(random), unit(random));
+  const glm::vec3 origin = 3.0f * glm::vec3{unit(random), unit(random), unit(random)};
+  const glm::vec3 aim = 0.9f * glm::vec3{unit(random), unit(random), unit(random)};
   return Ray{origin, (aim - origin) * (0.5f + unit(random) + 1.0f)};
 }
 
@@ -226,7 +226,7 @@ TEST_CASE("a camera ray through a pixel passes through what that pixel shows") {
   std::mt19937 random(5);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (int i = 0; i < 1000; ++i) {
-    const glm::vec3 point(unit(random), unit(random), unit(random));
+    const glm::vec3 point{unit(random), unit(random), unit(random)};
     // Project with GL conventions, then flip y to window coordinates (top-left origin).
     const glm::vec3 window = glm::project(point, view, projection, viewport);
     const Ray ray = ray_from_pixel(view, projection, glm::vec2(window.x, 600.0f - window.y), viewport);

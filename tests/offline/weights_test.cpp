@@ -227,10 +227,12 @@ TEST_CASE("random skeletons and points agree with the reference method") {
   int checked = 0;
   for (int trial = 0; trial < 60; ++trial) {
     const int count = 1 + static_cast<int>(rng() % 12);
-    std::vector<Bone> bones{bone(-1, {unit(rng), unit(rng), unit(rng)}, {angle(rng), angle(rng), angle(rng)})};
-    for (int i = 1; i < count; ++i)
-      bones.push_back(bone(static_cast<std::int32_t>(rng() % static_cast<unsigned>(i)),
-                           {unit(rng), unit(rng), unit(rng)}, {angle(rng), angle(rng), angle(rng)}));
+    std::vector<Bone> bones;
+    for (int i = 0; i < count; ++i) {
+      const std::int32_t parent = i == 0 ? -1 : static_cast<std::int32_t>(rng() % static_cast<unsigned>(i));
+      const glm::vec3 translation{unit(rng), unit(rng), unit(rng)};
+      bones.push_back(bone(parent, translation, {angle(rng), angle(rng), angle(rng)}));
+    }
     const Skeleton s = make_skeleton(bones);
     AutoWeightsOptions o;
     o.falloff_power = 1.0f + 0.1f * static_cast<float>(rng() % 60);
@@ -238,7 +240,7 @@ TEST_CASE("random skeletons and points agree with the reference method") {
     o.leaf_length = 0.1f * static_cast<float>(rng() % 20);
     o.max_influences = 1 + static_cast<int>(rng() % 4);
     std::vector<glm::vec3> points(100);
-    for (glm::vec3& p : points) p = 2.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
+    for (glm::vec3& p : points) p = 2.0f * glm::vec3{unit(rng), unit(rng), unit(rng)};
     const SkinWeights w = deform::compute_automatic_weights(points, s, o);
     check_normalised(w, points.size(), s.bone_count(), o.max_influences);
     for (std::size_t i = 0; i < points.size(); ++i) {

@@ -69,13 +69,13 @@ TEST_CASE("sampling at key times gives the keys, for random tracks of every inte
       t += gap(random);
       translation.times.push_back(t);
       rotation.times.push_back(t);
-      translation.values.emplace_back(value(random), value(random), value(random));
-      rotation.values.push_back(glm::normalize(glm::quat(value(random), value(random), value(random), value(random))));
+      translation.values.push_back({value(random), value(random), value(random)});
+      rotation.values.push_back(glm::normalize(glm::quat{value(random), value(random), value(random), value(random)}));
       if (interpolation == Interpolation::cubic_spline) {
-        translation.in_tangents.emplace_back(value(random), value(random), value(random));
-        translation.out_tangents.emplace_back(value(random), value(random), value(random));
-        rotation.in_tangents.emplace_back(value(random), value(random), value(random), value(random));
-        rotation.out_tangents.emplace_back(value(random), value(random), value(random), value(random));
+        translation.in_tangents.push_back({value(random), value(random), value(random)});
+        translation.out_tangents.push_back({value(random), value(random), value(random)});
+        rotation.in_tangents.push_back({value(random), value(random), value(random), value(random)});
+        rotation.out_tangents.push_back({value(random), value(random), value(random), value(random)});
       }
     }
     for (std::size_t k = 0; k < translation.times.size(); ++k) {

@@ -126,8 +126,8 @@ TEST_CASE("optimised kernel = pow/binomial reference to 1e-5 over thousands of r
   int compared = 0;
   for (int trial = 0; trial < 1500; ++trial) {
     const bool high = trial % 10 == 0;
-    const glm::ivec3 degree(1 + static_cast<int>(rng() % (high ? 16 : 6)), 1 + static_cast<int>(rng() % 6),
-                            1 + static_cast<int>(rng() % (high ? 12 : 6)));
+    const glm::ivec3 degree{1 + static_cast<int>(rng() % (high ? 16 : 6)), 1 + static_cast<int>(rng() % 6),
+                            1 + static_cast<int>(rng() % (high ? 12 : 6))};
     const LatticeFrame frame = random_frame(rng);
     BezierLattice lattice(frame, degree);
     for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.3f, 0.3f);
@@ -172,8 +172,8 @@ TEST_CASE("optimised kernel = pow/binomial reference to 1e-5 over thousands of r
 TEST_CASE("the Jacobian agrees with finite differences, and so do the deformed normals") {
   std::mt19937 rng(14);
   for (int trial = 0; trial < 200; ++trial) {
-    const glm::ivec3 degree(1 + static_cast<int>(rng() % 5), 1 + static_cast<int>(rng() % 5),
-                            1 + static_cast<int>(rng() % 5));
+    const glm::ivec3 degree{1 + static_cast<int>(rng() % 5), 1 + static_cast<int>(rng() % 5),
+                            1 + static_cast<int>(rng() % 5)};
     const LatticeFrame frame = random_frame(rng);
     BezierLattice lattice(frame, degree);
     for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.2f, 0.2f);
@@ -213,15 +213,18 @@ TEST_CASE("weights: the field added by each point's weight and the normals blend
   for (int trial = 0; trial < 600; ++trial) {
     const bool bspline = trial % 3 == 2;
     const LatticeFrame frame = random_frame(rng);
-    const glm::ivec3 counts = bspline ? glm::ivec3(4 + int(rng() % 4), 4 + int(rng() % 4), 4 + int(rng() % 4))
-                                      : glm::ivec3(2 + int(rng() % 5), 2 + int(rng() % 5), 2 + int(rng() % 5));
+    const glm::ivec3 counts = bspline ? glm::ivec3{4 + int(rng() % 4), 4 + int(rng() % 4), 4 + int(rng() % 4)}
+                                      : glm::ivec3{2 + int(rng() % 5), 2 + int(rng() % 5), 2 + int(rng() % 5)};
     BezierLattice bezier(frame, counts - 1);
     deform::BsplineLattice bspline_lattice(frame, bspline ? counts : glm::ivec3(4));
     const std::span<glm::vec3> control = bspline ? bspline_lattice.control_points() : bezier.control_points();
     for (glm::vec3& p : control) p = uniform3(rng, -0.3f, 0.3f);  // a displacement field: small vectors
     // Some fields collapsed to a point or a line: no normal to give, each point keeps its own.
     const bool collapsed = trial % 20 == 7;
-    if (collapsed) collapse(control, uniform3(rng, -1.0f, 1.0f), uniform3(rng, -0.1f, 0.1f), trial % 40 == 7);
+    if (collapsed) {
+      const glm::vec3 point = uniform3(rng, -1.0f, 1.0f);
+      collapse(control, point, uniform3(rng, -0.1f, 0.1f), trial % 40 == 7);
+    }
     std::vector<glm::vec3> in = points_inside(frame, rng, 1 + rng() % 40);
     in.push_back(frame.to_world(glm::vec3(1.5f, 0.5f, 0.5f)));  // outside: not bound
     const deform::LatticeBinding binding = bspline ? deform::bind_lattice(BsplineLattice(frame, counts), in)
@@ -234,9 +237,11 @@ TEST_CASE("weights: the field added by each point's weight and the normals blend
         lane_weight[lane] = point_weight[binding.vertices[lane]];
     // Half the trials carry the normals by a rotation and a scale first, as a skinned bone's would be.
     const glm::vec3 axis = glm::normalize(uniform3(rng, 0.1f, 1.0f));
-    const glm::mat3 to_binding =
-        trial % 2 ? glm::mat3(glm::rotate(glm::mat4(1.0f), uniform(rng, -3.0f, 3.0f), axis)) * uniform(rng, 0.5f, 2.0f)
-                  : glm::mat3(1.0f);
+    glm::mat3 to_binding(1.0f);
+    if (trial % 2) {
+      const float turn = uniform(rng, -3.0f, 3.0f);
+      to_binding = glm::mat3(glm::rotate(glm::mat4(1.0f), turn, axis)) * uniform(rng, 0.5f, 2.0f);
+    }
     const std::vector<glm::vec3> normals_in = random_normals(rng, in.size());
 
     const glm::dmat3 axes(glm::dvec3(frame.u_axis), glm::dvec3(frame.v_axis), glm::dvec3(frame.w_axis));

@@ -22,8 +22,8 @@ TEST_CASE("B-spline rest lattice: one cell of overhang on each side, identity to
   CHECK(lattice.rest_point(5, 3, 4) == glm::vec3(16.0f / 3.0f, 4.0f, 1.5f));
   std::mt19937 rng(21);
   for (int trial = 0; trial < 100; ++trial) {
-    const glm::ivec3 counts(4 + static_cast<int>(rng() % 12), 4 + static_cast<int>(rng() % 12),
-                            4 + static_cast<int>(rng() % 12));
+    const glm::ivec3 counts{4 + static_cast<int>(rng() % 12), 4 + static_cast<int>(rng() % 12),
+                            4 + static_cast<int>(rng() % 12)};
     const LatticeFrame frame = random_frame(rng);
     const BsplineLattice b(frame, counts);
     const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
@@ -44,7 +44,7 @@ TEST_CASE("B-spline rest lattice: one cell of overhang on each side, identity to
 TEST_CASE("a collapsed B-spline lattice keeps the input normals on every kernel copy") {
   std::mt19937 rng(22);
   for (int trial = 0; trial < 6; ++trial) {
-    const glm::ivec3 counts(4 + static_cast<int>(rng() % 8), 4 + static_cast<int>(rng() % 8), 4);
+    const glm::ivec3 counts{4 + static_cast<int>(rng() % 8), 4 + static_cast<int>(rng() % 8), 4};
     const LatticeFrame frame = random_frame(rng);
     BsplineLattice lattice(frame, counts);
     const std::vector<glm::vec3> in = points_inside(frame, rng, 100);
@@ -64,8 +64,8 @@ TEST_CASE("B-spline affine precision and optimised = Cox-de Boor reference to 1e
   std::mt19937 rng(22);
   int compared = 0;
   for (int trial = 0; trial < 1000; ++trial) {
-    const glm::ivec3 counts(4 + static_cast<int>(rng() % 8), 4 + static_cast<int>(rng() % 8),
-                            4 + static_cast<int>(rng() % 8));
+    const glm::ivec3 counts{4 + static_cast<int>(rng() % 8), 4 + static_cast<int>(rng() % 8),
+                            4 + static_cast<int>(rng() % 8)};
     const LatticeFrame frame = random_frame(rng);
     BsplineLattice lattice(frame, counts);
     const bool affine_case = trial % 4 == 0;
@@ -105,7 +105,8 @@ TEST_CASE("B-spline affine precision and optimised = Cox-de Boor reference to 1e
 TEST_CASE("B-spline Jacobian agrees with finite differences") {
   std::mt19937 rng(23);
   for (int trial = 0; trial < 200; ++trial) {
-    BsplineLattice lattice(random_frame(rng), glm::ivec3(4 + static_cast<int>(rng() % 6)));
+    const LatticeFrame frame = random_frame(rng);
+    BsplineLattice lattice(frame, glm::ivec3(4 + static_cast<int>(rng() % 6)));
     for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.2f, 0.2f);
     const glm::vec3 uvw = uniform3(rng, 0.05f, 0.95f);
     const glm::mat3 jac = lattice.jacobian(uvw);

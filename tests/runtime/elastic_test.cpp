@@ -130,8 +130,8 @@ TEST_CASE("ElasticLattice's exact step matches a double-precision per-point refe
   const ElasticParams p{300.0f, 0.15f, 1.0f};
   std::vector<glm::vec3> rest(1000), start(1000);
   for (std::size_t i = 0; i < rest.size(); ++i) {
-    rest[i] = glm::vec3(unit(rng), unit(rng), unit(rng)) * 5.0f;
-    start[i] = rest[i] + glm::vec3(unit(rng), unit(rng), unit(rng));
+    rest[i] = glm::vec3{unit(rng), unit(rng), unit(rng)} * 5.0f;
+    start[i] = rest[i] + glm::vec3{unit(rng), unit(rng), unit(rng)};
   }
   ElasticLattice lattice(start, settings_with(p.stiffness, p.damping_ratio));
   double t = 0.0;

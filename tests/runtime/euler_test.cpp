@@ -58,7 +58,7 @@ TEST_CASE("quat_from_euler is the rotation Rx·Ry·Rz (seeded, 5000 triples)") {
   std::mt19937 rng(1234);
   std::uniform_real_distribution<float> angle(-360.0f, 360.0f);
   for (int i = 0; i < 5000; ++i) {
-    const glm::vec3 e(angle(rng), angle(rng), angle(rng));
+    const glm::vec3 e{angle(rng), angle(rng), angle(rng)};
     CHECK(max_difference(glm::mat3_cast(deform::quat_from_euler(e)), reference_matrix(e)) < 2e-6f);
   }
 }
@@ -83,7 +83,7 @@ TEST_CASE("round trip over seeded random angles: same angles away from gimbal lo
   std::uniform_real_distribution<float> angle(-179.9f, 179.9f);
   std::uniform_real_distribution<float> pitch(-85.0f, 85.0f);
   for (int i = 0; i < 10000; ++i) {
-    const glm::vec3 e(angle(rng), pitch(rng), angle(rng));
+    const glm::vec3 e{angle(rng), pitch(rng), angle(rng)};
     const glm::vec3 back = deform::euler_from_quat(deform::quat_from_euler(e));
     REQUIRE(finite(back));
     CHECK(glm::all(glm::lessThan(glm::abs(back - e), glm::vec3(2e-3f))));
@@ -91,7 +91,7 @@ TEST_CASE("round trip over seeded random angles: same angles away from gimbal lo
   // Any angles, including beyond ±90 on y: compare rotations.
   std::uniform_real_distribution<float> any(-720.0f, 720.0f);
   for (int i = 0; i < 10000; ++i) {
-    const glm::vec3 e(any(rng), any(rng), any(rng));
+    const glm::vec3 e{any(rng), any(rng), any(rng)};
     const glm::vec3 back = deform::euler_from_quat(deform::quat_from_euler(e));
     REQUIRE(finite(back));
     CHECK(in_canonical_range(back));
@@ -105,7 +105,7 @@ TEST_CASE("gimbal lock: y = ±90 and within a hair of it, no NaN, same rotation"
   const float pitches[] = {90.0f, -90.0f, 89.9999f, -89.9999f, 90.0001f, -90.0001f, 89.99f, -89.99f, 89.0f};
   for (const float y : pitches)
     for (int i = 0; i < 1000; ++i) {
-      const glm::vec3 e(angle(rng), y, angle(rng));
+      const glm::vec3 e{angle(rng), y, angle(rng)};
       const glm::quat q = deform::quat_from_euler(e);
       const glm::vec3 back = deform::euler_from_quat(q);
       REQUIRE(finite(back));
@@ -126,7 +126,7 @@ TEST_CASE("random unit quaternions survive quat -> euler -> quat (seeded, 10000)
   std::mt19937 rng(99);
   std::normal_distribution<float> n(0.0f, 1.0f);
   for (int i = 0; i < 10000; ++i) {
-    const glm::quat q = glm::normalize(glm::quat(n(rng), n(rng), n(rng), n(rng)));
+    const glm::quat q = glm::normalize(glm::quat{n(rng), n(rng), n(rng), n(rng)});
     const glm::quat back = deform::quat_from_euler(deform::euler_from_quat(q));
     CHECK(glm::abs(glm::dot(q, back)) > 1.0f - 1e-6f);
   }

@@ -691,7 +691,7 @@ DeformerHierarchy sculpted_rest(const DeformerHierarchy& fitted, const deform::S
     deform::BoundLattice b;
     b.spec = fitted.spec(l);
     b.rest = fitted.rest_lattice(l);
-    for (glm::vec3& x : b.rest.control_points()) x += glm::vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (glm::vec3& x : b.rest.control_points()) x += glm::vec3{jitter(rng), jitter(rng), jitter(rng)};
     b.axis = glm::normalize(b.rest.frame().u_axis);
     b.length = fitted.length(l);
     b.binding = fitted.binding(l);
@@ -722,7 +722,7 @@ TEST_CASE("apply with normals: apply's positions to the bit, and the normals of 
   std::mt19937 rng(91);
   std::normal_distribution<float> normal;
   std::vector<glm::vec3> normals0(skinned.size());
-  for (glm::vec3& n : normals0) n = glm::normalize(glm::vec3(normal(rng), normal(rng), normal(rng)));
+  for (glm::vec3& n : normals0) n = glm::normalize(glm::vec3{normal(rng), normal(rng), normal(rng)});
   for (DeformerHierarchy* h : {&fitted, &sculpted}) {
     const std::string label = std::string(h == &fitted ? "fitted" : "sculpted") + " rest lattices";
     INFO(label);

@@ -190,10 +190,10 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
   for (int c = 0; c < 20000; ++c) {
     // The solvers' random limits and limits of every kind; uniform rotations, and every tenth near gimbal lock.
     const DofLimits limits = c % 2 ? general_limits(random) : ik_rigs::random_limits(random);
-    glm::quat rotation = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    glm::quat rotation = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
     if (c % 10 == 0) {
       const float y = (c % 20 ? 90.0f : -90.0f) - 1e-3f * unit(random);
-      rotation = quat_from_euler(glm::vec3(360.0f * unit(random) - 180.0f, y, 360.0f * unit(random) - 180.0f));
+      rotation = quat_from_euler(glm::vec3{360.0f * unit(random) - 180.0f, y, 360.0f * unit(random) - 180.0f});
     }
     std::vector<Bone> bones(1);
     bones[0].limits = limits;
@@ -232,7 +232,7 @@ TEST_CASE("clamp_rotation agrees with the double-precision Skeleton::clamp_to_li
     glm::quat rotation = inside;
     CHECK_FALSE(clamp_rotation(prepare_limits(limits), rotation));
     CHECK(rotation == glm::normalize(inside));
-    const glm::quat any = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::quat any = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
     rotation = any;
     CHECK_FALSE(clamp_rotation(prepare_limits(DofLimits{}), rotation));
     CHECK(rotation == glm::normalize(any));
@@ -262,7 +262,7 @@ TEST_CASE("euler_within_limits: the triple the limits mean, within them; the rot
     worst = std::max(worst, difference);
     second_triple += !within_limits(euler_from_quat(inside), limits, 1e-3f);
     // Any rotation: within the limits, and a fixed point (what is printed reads back as itself).
-    const glm::quat any = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::quat any = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
     const glm::vec3 clamped = euler_within_limits(any, limits);
     CHECK(angles_within(clamped, limits));
     const glm::quat back = quat_from_euler(clamped);
@@ -375,7 +375,7 @@ TEST_CASE("swing-twist limits: the split agrees with a plain reference; projecti
   int inside = 0, projected = 0;
   for (int c = 0; c < 20000; ++c) {
     const SwingTwistLimits limits = random_swing_twist(random);
-    const glm::quat q = glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+    const glm::quat q = glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
     const glm::dvec3 reference = reference_swing_twist(limits, q);
     const glm::vec3 split = swing_twist_angles(limits, q);
     if (glm::length(glm::dvec2(reference)) < 3.1) {  // away from a half-turn swing, where the split is not unique
@@ -609,7 +609,7 @@ TEST_CASE("an unconstrained chain ends straight and pointing at an unreachable t
     const IkChain chain = make_chain(rig.skeleton, rig.root, rig.effector);
     const Pose bind = rig.skeleton.bind_pose();
     const glm::vec3 root = ik_rigs::chain_root_head(bind);
-    glm::vec3 direction(unit(random), unit(random), unit(random));
+    glm::vec3 direction{unit(random), unit(random), unit(random)};
     if (glm::length(direction) < 0.1f) direction = glm::vec3(1, 0, 0);
     const glm::vec3 target = root + glm::normalize(direction) * rig.length * (1.05f + 2.0f * (unit(random) + 1.0f));
     const float best = glm::length(target - root) - rig.length;
@@ -1035,7 +1035,7 @@ TEST_CASE("two-bone: exact for reachable targets, bends toward the pole, straigh
     Pose pose = ik_rigs::random_in_limit_pose(random, rig);
     const Pose before = pose;
     const glm::vec3 target = ik_rigs::random_reachable_target(random, rig);
-    const glm::vec3 pole(unit(random), unit(random), unit(random));
+    const glm::vec3 pole{unit(random), unit(random), unit(random)};
     IkResult result;
     REQUIRE(solve_two_bone(chain, pose, target, pole, 1e-5f * rig.length, result));
     CHECK(result.iterations == 1);

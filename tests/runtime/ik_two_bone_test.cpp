@@ -56,14 +56,14 @@ struct LimbPose {
 glm::dvec3 random_unit(std::mt19937& random) {
   std::normal_distribution<double> normal;
   for (;;) {
-    const glm::dvec3 v(normal(random), normal(random), normal(random));
+    const glm::dvec3 v{normal(random), normal(random), normal(random)};
     if (glm::length(v) > 1e-3) return glm::normalize(v);
   }
 }
 
 glm::quat random_rotation(std::mt19937& random) {
   std::normal_distribution<float> normal;
-  return glm::normalize(glm::quat(normal(random), normal(random), normal(random), normal(random)));
+  return glm::normalize(glm::quat{normal(random), normal(random), normal(random), normal(random)});
 }
 
 LimbPose random_limb_pose(std::mt19937& random) {
@@ -72,10 +72,12 @@ LimbPose random_limb_pose(std::mt19937& random) {
   pose.scale = std::pow(10.0, -2.0 + 4.0 * unit(random));  // 0.01 .. 100
   const double s = pose.scale;
   pose.rotations = {random_rotation(random), random_rotation(random), random_rotation(random), random_rotation(random)};
-  pose.translations = {glm::vec3(random_unit(random) * (3.0 * s * unit(random))),
-                       glm::vec3(random_unit(random) * (0.5 * s * unit(random))),
-                       glm::vec3(random_unit(random) * (s * (0.05 + 1.45 * unit(random)))),
-                       glm::vec3(random_unit(random) * (s * (0.05 + 1.45 * unit(random))))};
+  // A random direction, then a length between low and high (times the scale).
+  const auto offset = [&](double low, double high) {
+    const glm::dvec3 direction = random_unit(random);
+    return glm::vec3(direction * (s * (low + (high - low) * unit(random))));
+  };
+  pose.translations = {offset(0.0, 3.0), offset(0.0, 0.5), offset(0.05, 1.5), offset(0.05, 1.5)};
   return pose;
 }
 
@@ -194,10 +196,12 @@ TEST_CASE("two-bone matches the double-precision reference over 6,000 random lim
     p.max_stretch = c % 4 == 0 ? 1.0f : static_cast<float>(1.0 + 2.0 * unit(random));
     p.swivel = c % 2 == 0 ? 0.0f : static_cast<float>(360.0 * unit(random) - 180.0);
     // Targets inside the folded reach, between, and beyond even the stretched reach.
-    const double r = reach * 3.5 * unit(random) * unit(random) + 1e-3 * reach;
+    const double spread = unit(random);
+    const double r = reach * 3.5 * spread * unit(random) + 1e-3 * reach;
     p.target = glm::vec3(input.root + random_unit(random) * r);
     p.kind = c % 5 < 2 ? PoleKind::point : PoleKind::direction;
-    const glm::dvec3 pole_vector = random_unit(random) * (pose.scale * (0.1 + 3.0 * unit(random)));
+    const glm::dvec3 pole_direction = random_unit(random);
+    const glm::dvec3 pole_vector = pole_direction * (pose.scale * (0.1 + 3.0 * unit(random)));
     p.pole = glm::vec3(p.kind == PoleKind::point ? input.root + pole_vector : pole_vector);
     const glm::dvec3 read_pole = p.kind == PoleKind::point ? glm::dvec3(p.pole) - input.root : glm::dvec3(p.pole);
 
@@ -270,7 +274,8 @@ TEST_CASE("two-bone weight: 0 leaves the pose bit-identical, between turns each 
     const Heads input = heads(pose.rotations, pose.translations);
     const double reach = glm::length(glm::dvec3(pose.translations[2])) + glm::length(glm::dvec3(pose.translations[3]));
     Params p;
-    p.target = glm::vec3(input.root + random_unit(random) * (2.5 * reach * unit(random)));
+    const glm::dvec3 direction = random_unit(random);
+    p.target = glm::vec3(input.root + direction * (2.5 * reach * unit(random)));
     p.pole = glm::vec3(random_unit(random));
     p.soften = static_cast<float>(unit(random));
     p.max_stretch = static_cast<float>(1.0 + 2.0 * unit(random));
@@ -474,7 +479,8 @@ TEST_CASE("two-bone with limits, soften, stretch and weight never leaves the lim
     REQUIRE(chain_base(chain, pose.rotations, pose.translations, job.base));
     job.rotations = pose.rotations;
     job.translations = pose.translations;
-    job.target = ik_rigs::random_reachable_target(random, rig) * (0.5f + unit(random));
+    const glm::vec3 reachable = ik_rigs::random_reachable_target(random, rig);
+    job.target = reachable * (0.5f + unit(random));
     job.pole = glm::vec3(ik_rigs::random_direction(random));
     job.soften = unit(random);
     job.weight = unit(random);

@@ -26,8 +26,8 @@ double squared_norm(std::span<const glm::vec3> a, std::span<const glm::vec3> b) 
 TEST_CASE("move_point puts the embedded point on its target with the minimum-norm displacement (Bézier)") {
   std::mt19937 rng(41);
   for (int trial = 0; trial < 500; ++trial) {
-    const glm::ivec3 degree(1 + static_cast<int>(rng() % 5), 1 + static_cast<int>(rng() % 5),
-                            1 + static_cast<int>(rng() % 5));
+    const glm::ivec3 degree{1 + static_cast<int>(rng() % 5), 1 + static_cast<int>(rng() % 5),
+                            1 + static_cast<int>(rng() % 5)};
     const deform::LatticeFrame frame = random_frame(rng);
     deform::BezierLattice lattice(frame, degree);
     for (glm::vec3& p : lattice.control_points()) p += uniform3(rng, -0.2f, 0.2f);
@@ -77,8 +77,8 @@ TEST_CASE("move_point puts the embedded point on its target with the minimum-nor
 TEST_CASE("move_point on a B-spline lattice lands and touches only the 4x4x4 points of the cell") {
   std::mt19937 rng(42);
   for (int trial = 0; trial < 300; ++trial) {
-    const glm::ivec3 counts(4 + static_cast<int>(rng() % 6), 4 + static_cast<int>(rng() % 6),
-                            4 + static_cast<int>(rng() % 6));
+    const glm::ivec3 counts{4 + static_cast<int>(rng() % 6), 4 + static_cast<int>(rng() % 6),
+                            4 + static_cast<int>(rng() % 6)};
     deform::BsplineLattice lattice(random_frame(rng), counts);
     const std::vector<glm::vec3> before(lattice.control_points().begin(), lattice.control_points().end());
     const glm::vec3 uvw = uniform3(rng, 0.0f, 1.0f);

@@ -17,19 +17,20 @@ namespace lattice_test {
 
 inline float uniform(std::mt19937& rng, float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); }
 inline glm::vec3 uniform3(std::mt19937& rng, float a, float b) {
-  return glm::vec3(uniform(rng, a, b), uniform(rng, a, b), uniform(rng, a, b));
+  return glm::vec3{uniform(rng, a, b), uniform(rng, a, b), uniform(rng, a, b)};
 }
 
 // A rotated, sheared, non-uniformly scaled right-handed frame near the origin.
 inline deform::LatticeFrame random_frame(std::mt19937& rng) {
-  const glm::mat4 r = glm::rotate(glm::mat4(1.0f), uniform(rng, -3.0f, 3.0f),
-                                  glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 0.01f)));
+  const float turn = uniform(rng, -3.0f, 3.0f);
+  const glm::mat4 r =
+      glm::rotate(glm::mat4(1.0f), turn, glm::normalize(uniform3(rng, -1.0f, 1.0f) + glm::vec3(0.0f, 0.0f, 0.01f)));
   const glm::mat3 rot(r);
   deform::LatticeFrame f;
   f.origin = uniform3(rng, -2.0f, 2.0f);
-  f.u_axis = rot * glm::vec3(uniform(rng, 0.5f, 3.0f), uniform(rng, -0.3f, 0.3f), 0.0f);
-  f.v_axis = rot * glm::vec3(0.0f, uniform(rng, 0.5f, 3.0f), uniform(rng, -0.3f, 0.3f));
-  f.w_axis = rot * glm::vec3(uniform(rng, -0.3f, 0.3f), 0.0f, uniform(rng, 0.5f, 3.0f));
+  f.u_axis = rot * glm::vec3{uniform(rng, 0.5f, 3.0f), uniform(rng, -0.3f, 0.3f), 0.0f};
+  f.v_axis = rot * glm::vec3{0.0f, uniform(rng, 0.5f, 3.0f), uniform(rng, -0.3f, 0.3f)};
+  f.w_axis = rot * glm::vec3{uniform(rng, -0.3f, 0.3f), 0.0f, uniform(rng, 0.5f, 3.0f)};
   return f;
 }
 

@@ -21,8 +21,8 @@ std::vector<MorphTarget> random_targets(std::mt19937& rng, std::size_t points, s
     for (std::uint32_t p = 0; p < points; ++p) {
       if (density(rng) > keep) continue;
       t.points.push_back(p);
-      t.position_deltas.emplace_back(u(rng), u(rng), u(rng));
-      if (normals) t.normal_deltas.emplace_back(u(rng), u(rng), u(rng));
+      t.position_deltas.push_back({u(rng), u(rng), u(rng)});
+      if (normals) t.normal_deltas.push_back({u(rng), u(rng), u(rng)});
     }
   }
   return targets;

@@ -121,12 +121,14 @@ Mesh cube(bool flip) {
   return make_mesh(corners, triangles);
 }
 
-// An n x m grid of points in z = 0 (jittered in-plane), each cell split along a random diagonal.
-Mesh flat_grid(int n, int m, std::mt19937& random) {
+// An n x m grid of points in z = 0 (jittered in-plane), each cell split along a random diagonal. (The sizes come as
+// one braced pair so that a caller drawing both draws them in order.)
+Mesh flat_grid(glm::ivec2 size, std::mt19937& random) {
+  const int n = size.x, m = size.y;
   std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
   std::vector<glm::vec3> positions;
   for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) positions.emplace_back(float(i) + jitter(random), float(j) + jitter(random), 0.0f);
+    for (int j = 0; j < m; ++j) positions.push_back({float(i) + jitter(random), float(j) + jitter(random), 0.0f});
   std::vector<std::uint32_t> triangles;
   for (int i = 0; i + 1 < n; ++i)
     for (int j = 0; j + 1 < m; ++j) {
@@ -139,7 +141,8 @@ Mesh flat_grid(int n, int m, std::mt19937& random) {
 
 // A closed torus of n x m points with random diagonals and radial noise; its render vertices are split along the
 // u = 0 and v = 0 seams the way a UV-mapped torus is, (n + 1) x (m + 1) of them.
-Mesh torus(int n, int m, std::mt19937& random) {
+Mesh torus(glm::ivec2 size, std::mt19937& random) {
+  const int n = size.x, m = size.y;
   std::uniform_real_distribution<float> noise(-0.05f, 0.05f);
   Mesh mesh;
   for (int i = 0; i < n; ++i)
@@ -273,7 +276,7 @@ TEST_CASE("normals: a cube's corners point along the diagonal, whichever way the
 TEST_CASE("normals: a flat grid gives +z everywhere for any triangulation") {
   std::mt19937 random(7);
   for (int round = 0; round < 20; ++round) {
-    const Mesh mesh = flat_grid(2 + int(random() % 8), 2 + int(random() % 8), random);
+    const Mesh mesh = flat_grid({2 + int(random() % 8), 2 + int(random() % 8)}, random);
     for (const Path path : all_paths)
       for (const glm::vec3& n : normals_of(mesh, path)) check_near(n, glm::vec3(0, 0, 1));
   }
@@ -281,7 +284,7 @@ TEST_CASE("normals: a flat grid gives +z everywhere for any triangulation") {
 
 TEST_CASE("normals: seams split by UV share the point's normal; degenerate triangles add nothing") {
   std::mt19937 random(3);
-  const Mesh mesh = torus(12, 8, random);
+  const Mesh mesh = torus({12, 8}, random);
   for (const Path path : all_paths) {
     INFO(path_name(path));
     const auto normals = normals_of(mesh, path);
@@ -332,7 +335,7 @@ TEST_CASE("normals: agree with plain references on random meshes, manifold or no
     Mesh mesh;
     const int points = 3 + int(random() % 30);
     for (int i = 0; i < points; ++i)
-      mesh.positions.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+      mesh.positions.push_back({coordinate(random), coordinate(random), coordinate(random)});
     for (int r = 0; r < points + int(random() % 10); ++r)
       mesh.vertex_point.push_back(std::uint32_t(random() % unsigned(points)));
     const int triangles = 1 + int(random() % 60);
@@ -357,7 +360,7 @@ TEST_CASE("normals: the built-in character and seeded deformed tori — fast pat
   meshes.push_back(deform::builtin_character().mesh);
   std::mt19937 random(17);
   for (int round = 0; round < 40; ++round)
-    meshes.push_back(torus(3 + int(random() % 40), 3 + int(random() % 30), random));
+    meshes.push_back(torus({3 + int(random() % 40), 3 + int(random() % 30)}, random));
   for (const Mesh& mesh : meshes) {
     std::vector<glm::vec3> warped;
     for (const glm::vec3& p : mesh.positions) warped.push_back(warp(p));
@@ -389,10 +392,10 @@ TEST_CASE("normals: rotating, scaling and moving the points rotates the normals 
   std::mt19937 random(23);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   for (int round = 0; round < 50; ++round) {
-    const Mesh mesh = torus(4 + int(random() % 20), 3 + int(random() % 20), random);
-    const glm::vec3 axis = glm::normalize(glm::vec3(unit(random), unit(random), unit(random)) + glm::vec3(0, 0, 2));
+    const Mesh mesh = torus({4 + int(random() % 20), 3 + int(random() % 20)}, random);
+    const glm::vec3 axis = glm::normalize(glm::vec3{unit(random), unit(random), unit(random)} + glm::vec3(0, 0, 2));
     const float angle = 3.0f * unit(random), scale = 0.1f + 10.0f * std::abs(unit(random));
-    const glm::vec3 offset = scale * glm::vec3(unit(random), unit(random), unit(random));
+    const glm::vec3 offset = scale * glm::vec3{unit(random), unit(random), unit(random)};
     const glm::mat3 rotation = glm::mat3(glm::rotate(glm::mat4(1.0f), angle, axis));
     std::vector<glm::vec3> moved;
     for (const glm::vec3& p : mesh.positions) moved.push_back(scale * (rotation * p) + offset);
@@ -413,7 +416,7 @@ TEST_CASE("normals: every kernel copy and the one-shot function agree to float r
   INFO("best kernel copy on this CPU: ", std::string(deform::isa_name(deform::isa_best())));
   std::mt19937 random(29);
   for (int round = 0; round < 100; ++round) {
-    Mesh mesh = torus(3 + int(random() % 50), 3 + int(random() % 50), random);
+    Mesh mesh = torus({3 + int(random() % 50), 3 + int(random() % 50)}, random);
     for (glm::vec3& p : mesh.positions) p = warp(p);
     std::vector<double> condition;
     reference_normals(mesh, &condition);
@@ -429,7 +432,7 @@ TEST_CASE("normals: every kernel copy and the one-shot function agree to float r
 #if DEFORM_HAVE_OPENMESH  // (tests/CMakeLists.txt: not in a cross build)
 TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge circulators") {
   std::mt19937 random(5);
-  const Mesh mesh = torus(24, 16, random);
+  const Mesh mesh = torus({24, 16}, random);
   OmMesh om = to_openmesh(mesh);
   om.request_face_normals();
   om.update_face_normals();
@@ -438,7 +441,7 @@ TEST_CASE("normals: match angle-weighted normals built on OpenMesh's half-edge c
   // OpenMesh's own update_normals() weighs faces differently (not by angle): the two agree where every weighting
   // must, on a flat grid.
   std::mt19937 random2(9);
-  const Mesh grid = flat_grid(6, 5, random2);
+  const Mesh grid = flat_grid({6, 5}, random2);
   OmMesh om_grid = to_openmesh(grid);
   om_grid.request_face_normals();
   om_grid.request_vertex_normals();
@@ -554,7 +557,7 @@ TEST_CASE("normals: any split of the points, and run_parallel, give run()'s bits
   std::mt19937 random(31);
   deform::ThreadPool pool(3);
   for (int round = 0; round < 20; ++round) {
-    Mesh mesh = torus(3 + int(random() % 60), 3 + int(random() % 60), random);
+    Mesh mesh = torus({3 + int(random() % 60), 3 + int(random() % 60)}, random);
     for (glm::vec3& p : mesh.positions) p = warp(p);
     const deform::VertexNormalsBinding binding = deform::bind_vertex_normals(mesh);
     for (const Path path : all_paths) {
@@ -599,8 +602,8 @@ TEST_CASE("bounds") {
 TEST_CASE("topology: one-rings and boundary edges match OpenMesh on open and closed meshes") {
   std::mt19937 random(21);
   for (int round = 0; round < 10; ++round) {
-    const Mesh mesh = round % 2 ? torus(5 + int(random() % 6), 4 + int(random() % 6), random)
-                                : flat_grid(2 + int(random() % 7), 2 + int(random() % 7), random);
+    const Mesh mesh = round % 2 ? torus({5 + int(random() % 6), 4 + int(random() % 6)}, random)
+                                : flat_grid({2 + int(random() % 7), 2 + int(random() % 7)}, random);
     const deform::PointTopology topology = deform::build_point_topology(mesh);
     const OmMesh om = to_openmesh(mesh);
     REQUIRE(topology.neighbour_offsets.size() == mesh.point_count() + 1);

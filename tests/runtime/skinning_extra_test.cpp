@@ -72,11 +72,11 @@ std::vector<glm::mat4> random_palette(std::mt19937& rng, int bones, bool scale) 
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), s(0.6f, 1.6f);
   std::vector<glm::mat4> palette;
   for (int i = 0; i < bones; ++i) {
-    glm::vec3 axis(u(rng), u(rng), u(rng));
+    glm::vec3 axis{u(rng), u(rng), u(rng)};
     if (glm::length(axis) < 1e-3f) axis = glm::vec3(0, 0, 1);
     glm::mat4 m = glm::mat4_cast(glm::angleAxis(glm::radians(150.0f * u(rng)), glm::normalize(axis)));
-    m[3] = glm::vec4(u(rng), u(rng), u(rng), 1.0f);
-    if (scale) m = m * glm::scale(glm::mat4(1.0f), glm::vec3(s(rng), s(rng), s(rng)));
+    m[3] = glm::vec4{u(rng), u(rng), u(rng), 1.0f};
+    if (scale) m = m * glm::scale(glm::mat4(1.0f), glm::vec3{s(rng), s(rng), s(rng)});
     palette.push_back(m);
   }
   return palette;
@@ -96,8 +96,8 @@ Case random_case(std::mt19937& rng, std::size_t count, int bones, int max_influe
   std::uniform_int_distribution<int> bone(0, bones - 1), many(1, max_influences);
   Case c;
   for (std::size_t i = 0; i < count; ++i) {
-    c.positions.emplace_back(u(rng), u(rng), u(rng));
-    glm::vec3 n(u(rng), u(rng), u(rng));
+    c.positions.push_back({u(rng), u(rng), u(rng)});
+    glm::vec3 n{u(rng), u(rng), u(rng)};
     c.normals.push_back(glm::length(n) > 1e-3f ? glm::normalize(n) : glm::vec3(0, 1, 0));
     const int used = std::min(many(rng), bones);
     std::vector<std::uint16_t> b;

@@ -82,7 +82,7 @@ std::vector<Isa> available_isas() {
 
 glm::quat random_rotation(std::mt19937& rng, float max_degrees) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  glm::vec3 axis(u(rng), u(rng), u(rng));
+  glm::vec3 axis{u(rng), u(rng), u(rng)};
   if (glm::length(axis) < 1e-3f) axis = glm::vec3(0, 0, 1);
   return glm::angleAxis(glm::radians(max_degrees * u(rng)), glm::normalize(axis));
 }
@@ -94,8 +94,8 @@ std::vector<glm::mat4> random_palette(std::mt19937& rng, int bones, float max_de
   std::vector<glm::mat4> palette;
   for (int i = 0; i < bones; ++i) {
     glm::mat4 m = glm::mat4_cast(random_rotation(rng, max_degrees));
-    m[3] = glm::vec4(u(rng), u(rng), u(rng), 1.0f);
-    if (scale) m = m * glm::scale(glm::mat4(1.0f), glm::vec3(s(rng), s(rng), s(rng)));
+    m[3] = glm::vec4{u(rng), u(rng), u(rng), 1.0f};
+    if (scale) m = m * glm::scale(glm::mat4(1.0f), glm::vec3{s(rng), s(rng), s(rng)});
     palette.push_back(m);
   }
   return palette;
@@ -114,8 +114,8 @@ Vertices random_vertices(std::mt19937& rng, std::size_t count, int bone_count) {
   std::uniform_int_distribution<int> bone(0, bone_count - 1), influences(1, 4);
   Vertices v;
   for (std::size_t i = 0; i < count; ++i) {
-    v.positions.emplace_back(u(rng), u(rng), u(rng));
-    glm::vec3 n(u(rng), u(rng), u(rng));
+    v.positions.push_back({u(rng), u(rng), u(rng)});
+    glm::vec3 n{u(rng), u(rng), u(rng)};
     v.normals.push_back(glm::length(n) > 1e-3f ? glm::normalize(n) : glm::vec3(0, 1, 0));
     glm::u16vec4 b(0);
     glm::vec4 w(0.0f);
