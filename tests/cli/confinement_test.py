@@ -153,6 +153,7 @@ def model_commands(model, native):
         ("export --format gltf",
          ["export", model, *triple, "--format", "gltf", "--out", os.path.join(outputs, "o.gltf")]),
         ("skin", ["skin", model, *triple, "--pose", pose, "--out", os.path.join(outputs, "s.obj")]),
+        ("simplify", ["simplify", model, *triple, "--ratio", "0.5", "--out", os.path.join(outputs, "l.glb")]),
     ]
     if importer:  # the native export needs the importer component, even for native files
         commands.append(("export", ["export", model, *triple, "--out", os.path.join(outputs, "native")]))

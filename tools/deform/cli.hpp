@@ -79,5 +79,6 @@ extern const Command ffd_command;
 extern const Command simulate_command;
 extern const Command export_command;
 extern const Command bake_command;
+extern const Command simplify_command;
 
 }  // namespace cli

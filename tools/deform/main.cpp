@@ -11,10 +11,10 @@
 
 namespace {
 
-const cli::Command* const commands[] = {&cli::info_command,         &cli::skin_command,   &cli::weights_command,
-                                        &cli::weights_edit_command, &cli::ik_command,     &cli::ffd_command,
-                                        &cli::simulate_command,     &cli::export_command, &cli::bake_command,
-                                        &cli::corrective_command};
+const cli::Command* const commands[] = {&cli::info_command,         &cli::skin_command,    &cli::weights_command,
+                                        &cli::weights_edit_command, &cli::ik_command,      &cli::ffd_command,
+                                        &cli::simulate_command,     &cli::export_command,  &cli::bake_command,
+                                        &cli::corrective_command,   &cli::simplify_command};
 
 void print_usage(std::ostream& out) {
   out << "usage: deform [--help] [--version] COMMAND [ARGS...]\n\n"
