@@ -1,6 +1,7 @@
 // Volumetric weights: bone heat (heat_weights.hpp) and geodesic voxel (voxel_weights.hpp) weights on a two-bone
 // cylinder (monotone along the axis, sums of 1), a hand resting against a thigh (where distance weights bind the
-// hand to the leg and these do not), a hand bone parented elsewhere at the end of the forearm, islands no bone sees or
+// hand to the leg and these do not), a hand bone parented elsewhere at the end of the forearm (the points behind it
+// left to the forearm, the two bones' weights shared over a narrow band at the wrist), islands no bone sees or
 // reaches, bones with no vertex, points outside every triangle, the deforming mask, invalid options.
 #include <doctest/doctest.h>
 
@@ -336,6 +337,67 @@ TEST_CASE("heat weights: a hand bone parented elsewhere and placed at the wrist 
   }
   CHECK(behind >= 2);
   CHECK(past >= 10);
+}
+
+TEST_CASE("heat weights: a hand bone parented elsewhere shares the forearm's weight over a narrow band at the wrist") {
+  // The forearm (bone 1, from y = 0.2 to the wrist at y = 1.2) and a hand bone parented to the root at the wrist, as
+  // an IK goal is: nothing in the hierarchy bends there, so the two share their summed weight by the side of the
+  // wrist, all to the forearm up to 12% of its length (0.12) behind it, all to the hand from as far past it, evenly
+  // on the ring at the wrist. Heat's diffusion alone spreads the hand over the forearm's end and the forearm over
+  // the hand (a tenth and more at a ring's distance).
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton =
+      make_skeleton({bone(-1, {0, 0, 0}, "root"), bone(0, {0, 0.2f, 0}, "forearm"), bone(1, {0, 1.0f, 0}, "wrist"),
+                     bone(0, {0, 1.2f, 0}, "hand"), bone(3, {0, 0.6f, 0}, "finger")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {0, 1, 0, 1, 1};
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+  check_contract(r.weights, mesh.point_count(), 5);
+  const int sides = 12;
+  std::size_t behind = 0, past = 0;
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
+    const float y = mesh.positions[i].y;
+    CAPTURE(i);
+    if (y > 0.85f && y < 1.09f) {  // the rings at 0.9 and 1.0
+      ++behind;
+      CHECK(weight_of(r.weights, i, 3) == 0.0f);
+      CHECK(weight_of(r.weights, i, 1) > 0.9f);
+    } else if (y > 1.31f && y < 1.55f) {  // the rings at 1.4 and 1.5
+      ++past;
+      CHECK(weight_of(r.weights, i, 1) == 0.0f);
+    }
+  }
+  CHECK(behind == 2 * sides);
+  CHECK(past == 2 * sides);
+  for (int s = 0; s < sides; ++s) {  // the ring at the wrist, y = 1.2
+    const auto i = static_cast<std::size_t>(12 * sides + s);
+    CAPTURE(i);
+    CHECK(weight_of(r.weights, i, 1) > 0.2f);
+    CHECK(weight_of(r.weights, i, 1) == doctest::Approx(weight_of(r.weights, i, 3)).epsilon(0.02));
+  }
+}
+
+TEST_CASE("heat weights: a hand bone that descends from the forearm through a bone of no length keeps heat's blend") {
+  // As above, but the hand hangs from the forearm through a wrist node at the same place (BCN_Epileptic.X's neck sits
+  // on two such bones): the chain is the forearm's own, a joint that bends, so the weights blend as heat gives them.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  const Skeleton skeleton =
+      make_skeleton({bone(-1, {0, 0, 0}, "root"), bone(0, {0, 0.2f, 0}, "forearm"), bone(1, {0, 1.0f, 0}, "wrist"),
+                     bone(2, {0, 0, 0}, "hand"), bone(3, {0, 0.6f, 0}, "finger")});
+  deform::HeatWeightsOptions o;
+  o.deforming = {0, 1, 0, 1, 1};
+  const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+  check_contract(r.weights, mesh.point_count(), 5);
+  const int sides = 12;
+  for (int s = 0; s < sides; ++s) {
+    const auto i = static_cast<std::size_t>(10 * sides + s);  // the ring at y = 1.0, behind the wrist
+    const auto j = static_cast<std::size_t>(14 * sides + s);  // the ring at y = 1.4, past it
+    CAPTURE(i);
+    CHECK(weight_of(r.weights, i, 3) > 0.02f);
+    CHECK(weight_of(r.weights, j, 1) > 0.02f);
+  }
 }
 
 TEST_CASE("voxel weights on a two-bone cylinder: sums of 1, monotone along the axis, each end on its bone") {

@@ -3,13 +3,14 @@
 // Markdown table.
 //
 //   weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail | --detail-bone B] [HEAT OPTIONS]
-//                 [--resolution N] [--blender-export DIR] [--blender-weights DIR] MODEL...
+//                 [--resolution N] [--digits N] [--blender-export DIR] [--blender-weights DIR] MODEL...
 //
 // Poses: by default every clip of the model at N (--samples, 8) evenly spaced times; with --random-poses N, N seeded
 // random poses (study.hpp, random_palettes: every bone the artist weighted turned by up to ±20° about each axis).
 // --all-bones lets every bone of the imported skeleton take weight; by default only the bones the artist weighted
 // deform (the rig's deform bones, as a rigger flags them), for every method. Heat options (HeatWeightsOptions):
-// --heat C, --oblique K (oblique_penalty), --no-visibility, --max-influences N; --resolution: the voxel grid.
+// --heat C, --oblique K (oblique_penalty), --no-visibility, --max-influences N; --resolution: the voxel grid;
+// --digits N: decimals of the figures (default 2; 0 to 6), for methods that differ in the third.
 // Blender's bone heat, side by side (tools/weights_study/blender_study.sh): --blender-export DIR writes each model's
 // bind mesh and bones as DIR/NAME.bind.json for blender_heat.py; --blender-weights DIR reads the weights it wrote,
 // DIR/NAME.blender.json, and scores them as the method "blender" in the same poses.
@@ -251,6 +252,7 @@ int main(int argc, char** argv) {
   bool detail = false;
   std::string detail_bone;
   int voxel_resolution = 128;
+  int digits = 2;
   std::string blender_export, blender_weights;
   deform::HeatWeightsOptions heat_options;
   std::vector<std::string> paths;
@@ -269,16 +271,17 @@ int main(int argc, char** argv) {
       detail = true;
       detail_bone = argv[++i];
     } else if (a == "--resolution" && i + 1 < argc) voxel_resolution = std::atoi(argv[++i]);
+    else if (a == "--digits" && i + 1 < argc) digits = std::atoi(argv[++i]);
     else if (a == "--blender-export" && i + 1 < argc) blender_export = argv[++i];
     else if (a == "--blender-weights" && i + 1 < argc) blender_weights = argv[++i];
     else paths.push_back(a);
   }
-  if (paths.empty() || samples < 1 || random_poses < 0) {
+  if (paths.empty() || samples < 1 || random_poses < 0 || digits < 0 || digits > 6) {
     std::fprintf(
         stderr,
         "usage: weights_study [--samples N | --random-poses N [--seed S]] [--all-bones] [--detail | --detail-bone B] "
         "[--heat C] "
-        "[--oblique K] [--no-visibility] [--max-influences N] [--resolution N] [--blender-export DIR] "
+        "[--oblique K] [--no-visibility] [--max-influences N] [--resolution N] [--digits N] [--blender-export DIR] "
         "[--blender-weights DIR] MODEL...\n");
     return 2;
   }
@@ -356,10 +359,11 @@ int main(int argc, char** argv) {
           }
       for (const Run& run : runs) {
         const weights_study::Figures f = weights_study::compare_palettes(model, palettes, run.weights);
-        std::printf("| %s | %zu | %zu (%zu) | %zu (%zu) | %s | %.2f%% | %.2f%% | %.2f%% | %.1f%% | %.3f s |\n",
+        std::printf("| %s | %zu | %zu (%zu) | %zu (%zu) | %s | %.*f%% | %.*f%% | %.*f%% | %.1f%% | %.3f s |\n",
                     name.c_str(), model.mesh.point_count(), model.skeleton.bone_count(), deforming_count,
-                    random_poses > 0 ? std::size_t{0} : imported.clips.size(), f.poses, run.method.c_str(),
-                    f.mean_percent, f.p99_percent, f.max_percent, f.strongest_differs_percent, run.seconds);
+                    random_poses > 0 ? std::size_t{0} : imported.clips.size(), f.poses, run.method.c_str(), digits,
+                    f.mean_percent, digits, f.p99_percent, digits, f.max_percent, f.strongest_differs_percent,
+                    run.seconds);
       }
       std::fflush(stdout);
     } catch (const std::exception& e) {

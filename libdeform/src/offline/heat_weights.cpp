@@ -31,6 +31,9 @@ constexpr std::size_t max_visibility_tries = 32;
 // A bone heats a point only from behind the surface: the direction to the bone at most 78° from the inward normal
 // (cos 78° ≈ 0.2). A bone beside or in front of the surface is another part's (a finger resting on the hip).
 constexpr float max_facing = -0.2f;
+// At a joint where a rig breaks a chain (HeatFinder::find_chain_joints), the two bones' weights are shared across a
+// band this fraction of the incoming segment's length either side of the joint (share_across_chain_joint).
+constexpr float chain_seam_half_width = 0.12f;
 
 void check_options(const HeatWeightsOptions& o) {
   auto fail = [](const char* what, const std::string& rule) { throw Error::invalid_argument(what, rule); };
@@ -243,20 +246,27 @@ struct HeatFinder {
     sources.nearest_any.assign(s.size(), 0);
   }
 
-  // A deforming bone whose head sits where another deforming bone's segment ends, and which is not that bone's child,
-  // continues that bone's chain: an IK goal or hand bone parented to the spine and placed at the wrist, at the end
-  // of the forearm's segment (mrfixit.iqm's HandGoal.L/R). Heat_vertex gives the incoming bone the points on its
-  // side of that joint. A child's joint is left to heat: its points already see their own bone, and sharpening
+  // A deforming bone whose head sits where another deforming bone's segment ends, and which does not descend from
+  // that bone, continues that bone's chain: an IK goal or hand bone parented to the spine and placed at the wrist, at
+  // the end of the forearm's segment (mrfixit.iqm's HandGoal.L/R). Heat_vertex gives the incoming bone the points on
+  // its side of that joint. A child's joint is left to heat: its points already see their own bone, and sharpening
   // every joint costs the models whose artists blend there. `parent`: each bone's parent. O(deforming² · segments),
   // once; run after the segments are clipped.
   void find_chain_joints(const std::vector<std::int32_t>& parent) {
     continues.assign(shapes.size(), UINT32_MAX);
     continues_direction.assign(shapes.size(), glm::vec3(0.0f));
+    // A descendant continues its ancestor's own chain, through bones of no length too (BCN_Epileptic.X's neck
+    // sits on two bones at the same place).
+    auto descends = [&](std::uint32_t b, std::uint32_t a) {
+      for (std::int32_t up = parent[b]; up >= 0; up = parent[static_cast<std::size_t>(up)])
+        if (up == static_cast<std::int32_t>(a)) return true;
+      return false;
+    };
     for (std::uint32_t b : candidates) {
       const glm::vec3 head = shapes[b].segments.front().first;
       for (std::size_t k = 0; k < candidates.size() && continues[b] == UINT32_MAX; ++k) {
         const std::uint32_t a = candidates[k];
-        if (a == b || parent[b] == static_cast<std::int32_t>(a)) continue;
+        if (a == b || descends(b, a)) continue;
         for (const auto& [from, to] : shapes[a].segments)
           if (glm::length(to - head) <= min_distance && glm::length(to - from) > min_distance) {
             continues[b] = a;
@@ -507,10 +517,50 @@ HeatSystem heat_system(const Surface& s, const HeatSources& sources, const Islan
   return system;
 }
 
-// Factors the system once and solves it for each bone that heats a vertex in it; keeps each vertex's strongest
-// `max_influences` bones. Empty (no influence) for a vertex outside the system.
-std::vector<Strongest> solve_heat(const HeatSystem& system, const HeatSources& sources, std::size_t bone_count,
-                                  int max_influences) {
+// A joint where a rig breaks a chain (HeatFinder::find_chain_joints): the incoming bone, the bone that continues
+// it, the joint (the continuing bone's head) and the incoming segment, from its start to the joint.
+struct ChainJoint {
+  std::uint32_t incoming = 0, continuing = 0;
+  glm::vec3 joint{0.0f}, incoming_segment{0.0f};
+};
+
+std::vector<ChainJoint> chain_joints(const HeatFinder& finder) {
+  std::vector<ChainJoint> joints;
+  for (std::uint32_t b : finder.candidates)
+    if (finder.continues[b] != UINT32_MAX)
+      joints.push_back(
+          {finder.continues[b], b, finder.shapes[b].segments.front().first, finder.continues_direction[b]});
+  return joints;
+}
+
+// Shares the summed weight of a chain joint's two bones (`incoming`, `continuing`: their solutions over the system's
+// rows) by the side of the joint a vertex lies on: all to the incoming bone from chain_seam_half_width of its
+// segment's length behind the plane through the joint across that segment, all to the continuing bone from as far
+// ahead, linearly between. Nothing in the hierarchy bends at such a joint (the continuing bone, an IK goal, moves
+// with whatever it hangs from), so a blend as wide as heat's diffusion mixes two transforms that move apart;
+// mrfixit.iqm's artist blends its wrist over one loop of the mesh.
+void share_across_chain_joint(const ChainJoint& j, const std::vector<glm::vec3>& position,
+                              const std::vector<std::int32_t>& row, Eigen::VectorXd& incoming,
+                              Eigen::VectorXd& continuing) {
+  const float length = glm::length(j.incoming_segment);
+  if (!(length > 0.0f)) return;
+  const double half_width = static_cast<double>(chain_seam_half_width * length);
+  for (std::size_t v = 0; v < row.size(); ++v) {
+    if (row[v] < 0) continue;
+    const double ahead = static_cast<double>(glm::dot(position[v] - j.joint, j.incoming_segment) / length);
+    const double share = std::clamp(0.5 + ahead / (2.0 * half_width), 0.0, 1.0);
+    const double sum = incoming[row[v]] + continuing[row[v]];
+    incoming[row[v]] = sum * (1.0 - share);
+    continuing[row[v]] = sum * share;
+  }
+}
+
+// Factors the system once and solves it for each bone that heats a vertex in it; shares the weights of the bones of
+// each chain joint across it (share_across_chain_joint); keeps each vertex's strongest `max_influences` bones. Empty
+// (no influence) for a vertex outside the system.
+std::vector<Strongest> solve_heat(const HeatSystem& system, const HeatSources& sources,
+                                  const std::vector<ChainJoint>& joints, const std::vector<glm::vec3>& position,
+                                  std::size_t bone_count, int max_influences) {
   const std::size_t n = system.row.size();
   std::vector<Strongest> strongest(n);
   if (system.rows == 0) return strongest;
@@ -520,20 +570,34 @@ std::vector<Strongest> solve_heat(const HeatSystem& system, const HeatSources& s
   std::vector<std::uint8_t> heats(bone_count, 0);
   for (std::uint32_t v = 0; v < n; ++v)
     if (row[v] >= 0 && sources.heated_by[v] != UINT32_MAX) heats[sources.heated_by[v]] = 1;
+  // The bones of a chain joint where both have heat keep their whole solution until it is shared.
+  std::vector<std::uint8_t> kept(bone_count, 0);
+  for (const ChainJoint& j : joints)
+    if (heats[j.incoming] && heats[j.continuing]) kept[j.incoming] = kept[j.continuing] = 1;
+  std::vector<Eigen::VectorXd> solution(bone_count);
   const auto size = static_cast<Eigen::Index>(system.rows);
   Eigen::VectorXd rhs(size), w(size);
+  auto offer = [&](std::uint32_t bone, const Eigen::VectorXd& weights) {
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (row[v] < 0) continue;
+      const double x = weights[row[v]];
+      if (x > 1e-6) strongest[v].offer(bone, static_cast<float>(std::min(x, 1.0)), max_influences);
+    }
+  };
   for (std::uint32_t bone = 0; bone < bone_count; ++bone) {
     if (!heats[bone]) continue;
     rhs.setZero();
     for (std::uint32_t v = 0; v < n; ++v)
       if (row[v] >= 0 && sources.heated_by[v] == bone) rhs[row[v]] = system.mass[v] * sources.heat[v];
     w = solver.solve(rhs);
-    for (std::uint32_t v = 0; v < n; ++v) {
-      if (row[v] < 0) continue;
-      const double x = w[row[v]];
-      if (x > 1e-6) strongest[v].offer(bone, static_cast<float>(std::min(x, 1.0)), max_influences);
-    }
+    if (kept[bone]) solution[bone] = w;
+    else offer(bone, w);
   }
+  for (const ChainJoint& j : joints)
+    if (kept[j.incoming] && kept[j.continuing])
+      share_across_chain_joint(j, position, row, solution[j.incoming], solution[j.continuing]);
+  for (std::uint32_t bone = 0; bone < bone_count; ++bone)
+    if (kept[bone]) offer(bone, solution[bone]);
   return strongest;
 }
 
@@ -602,7 +666,8 @@ WeightsResult compute_heat_weights(const Mesh& mesh, const Skeleton& skeleton, c
   std::vector<Strongest> strongest;
   {
     const HeatSystem system = heat_system(surface, finder.sources, islands);
-    strongest = solve_heat(system, finder.sources, input.bone_count, options.max_influences);
+    strongest = solve_heat(system, finder.sources, chain_joints(finder), surface.position, input.bone_count,
+                           options.max_influences);
   }
   const std::vector<std::uint32_t> rigid_bone =
       rigid_bones(surface, finder.sources, islands, skeleton, result.warnings);
