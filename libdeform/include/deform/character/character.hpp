@@ -285,11 +285,12 @@ class DEFORM_CHARACTER_API Character {
     // gathered for those points at set_levels, so that skinning, the interpolation, the switch's blend and the normals
     // run over them alone. positions() and normals() keep the full mesh's numbering and size: the level writes its
     // points and the render vertices of those points only, and the others keep stale values (what an earlier level
-    // left there; don't draw them): the renderer draws the simplified mesh's triangles with their indices mapped to
-    // the full mesh's render vertices (SimplifiedModel::source_vertex) and points (source_point). Such a level runs
-    // without deformers (`deformers` must be false: the lattices, spring chains and mushes work on the whole mesh)
-    // and transports its normals whatever normals_mode() says (recomputing them from the full mesh's triangles would
-    // read stale points): normals() gives each of its render vertices its point's skinned bind-pose normal.
+    // or a switch's frame at the outgoing level left there; don't draw them): the renderer draws the simplified mesh's
+    // triangles with their indices mapped to the full mesh's render vertices (SimplifiedModel::source_vertex) and
+    // points (source_point). Such a level runs without deformers (`deformers` must be false: the lattices, spring
+    // chains and mushes work on the whole mesh) and transports its normals whatever normals_mode() says (recomputing
+    // them from the full mesh's triangles would read stale points): normals() gives each of its render vertices its
+    // point's skinned bind-pose normal.
     std::span<const std::uint32_t> points = {};
   };
   // Binds levels: level l skins with lod.levels[l].weights (the full skeleton's bone ids) and runs as options[l] says;
