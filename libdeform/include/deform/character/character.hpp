@@ -41,7 +41,8 @@
 // (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
 // positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
 // thread (no hidden threads; bench/crowd_bench.cpp). Distant ones show levels of detail (set_levels, set_level:
-// fewer bones per point, deformers off, deformed every Nth update; docs/skinning.md, "Levels of detail").
+// fewer bones per point, deformers off, deformed every Nth update, a simplified mesh's points only; docs/skinning.md,
+// "Levels of detail").
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
