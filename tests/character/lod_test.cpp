@@ -10,6 +10,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/bone_lod.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 
 using deform::Character;
@@ -397,4 +398,55 @@ TEST_CASE("levels: point subsets refused") {
   c.set_levels(builtin_lod(c), opts);
   CHECK(c.level_cost(2).points == 3);
   CHECK(c.level_cost(2).bones <= 3 * 8);
+}
+
+TEST_CASE(
+    "order_points_first: the listed points first, the model drawing and skinning the same; a subset level a prefix") {
+  deform::Model model = deform::builtin_character();
+  deform::MorphTarget target;  // with normal deltas, over points that the renumbering reorders
+  target.name = "bulge";
+  for (std::uint32_t p = 1; p < model.mesh.point_count(); p += 7) {
+    target.points.push_back(p);
+    target.position_deltas.push_back({0.0f, 0.001f * float(p % 13), 0.01f});
+    target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
+  }
+  model.morph_targets.push_back(target);
+  const deform::Model before = model;
+  const std::vector<std::uint32_t> first = every(model.mesh.point_count(), 3, true);  // descending ids
+  const deform::PointOrder order = deform::order_points_first(model, first);
+  REQUIRE(order.point.size() == before.mesh.point_count());
+  REQUIRE(order.vertex.size() == before.mesh.vertex_count());
+  for (std::size_t i = 0; i < first.size(); ++i) CHECK(order.point[first[i]] == i);
+  for (std::size_t p = 0; p < before.mesh.point_count(); ++p) {
+    CHECK(model.mesh.positions[order.point[p]] == before.mesh.positions[p]);
+    CHECK(model.weights.bones[order.point[p]] == before.weights.bones[p]);
+  }
+  for (std::size_t c = 0; c < before.mesh.triangles.size(); ++c) {  // every corner draws the same point, normal, UV
+    const std::uint32_t v = before.mesh.triangles[c];
+    CHECK(model.mesh.triangles[c] == order.vertex[v]);
+    CHECK(model.mesh.vertex_point[order.vertex[v]] == order.point[before.mesh.vertex_point[v]]);
+    CHECK(model.mesh.vertex_normals[order.vertex[v]] == before.mesh.vertex_normals[v]);
+  }
+  CHECK(std::is_sorted(model.morph_targets[0].points.begin(), model.morph_targets[0].points.end()));
+  CHECK(model.morph_targets[0].points != before.morph_targets[0].points);
+  // Skinned and morphed at a pose: the same points, renumbered (the same arithmetic on the same values: bit-equal).
+  Character a(before), b(model);
+  for (Character* c : {&a, &b}) {
+    REQUIRE(c->set_morph_weight(0, 1.0f));
+    deform::Pose pose = c->skeleton().bind_pose();
+    pose.rotations[3] = glm::angleAxis(0.5f, glm::vec3(0.0f, 0.0f, 1.0f));
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->update(dt));
+  }
+  const auto na = a.normals(), nb = b.normals();
+  for (std::size_t p = 0; p < before.mesh.point_count(); ++p)
+    CHECK(glm::length(a.positions()[p] - b.positions()[order.point[p]]) <= 1e-6f * height(a));
+  for (std::size_t v = 0; v < before.mesh.vertex_count(); ++v) CHECK(glm::length(na[v] - nb[order.vertex[v]]) <= 1e-5f);
+  // Refused, the model unchanged.
+  const deform::Model kept = model;
+  CHECK_THROWS_AS(deform::order_points_first(model, std::vector<std::uint32_t>{4, 2, 4}), deform::Error);
+  CHECK_THROWS_AS(deform::order_points_first(model, std::vector<std::uint32_t>{std::uint32_t(kept.mesh.point_count())}),
+                  deform::Error);
+  CHECK(model.mesh.positions == kept.mesh.positions);
+  CHECK(model.mesh.vertex_point == kept.mesh.vertex_point);
 }
