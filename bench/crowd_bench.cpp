@@ -16,7 +16,10 @@
 // build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
 // bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Where the optional
 // deform::simplify is built, levels 2 and 3 deform only the points of a simplified mesh (LevelOptions::points from
-// simplify_model's source_point: triangle ratios 0.25 and 0.1, max_error 0.05), else every point. Counters:
+// simplify_model's source_point: 0.25 of the triangles, and that mesh simplified again to 0.4 of its own, 0.1 of
+// the whole; max_error 0.05), the model's points renumbered so that level 3's come first and level 2's next
+// (order_points_first): each level a prefix of the points. Without deform::simplify every level deforms every point.
+// Counters:
 // error_mean_lN, error_max_lN — level N's own points against the full character's walking beside it (the same clip
 // times, 2 s), as a fraction of its height: the mean over points and frames and the largest; points_influences_lN —
 // its LevelCost::influences; points_lN — its LevelCost::points.
@@ -34,6 +37,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/bone_lod.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/parallel.hpp"
 #if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
@@ -144,21 +148,31 @@ deform::BoneLod crowd_lod(const deform::Character& c) {
   return deform::build_bone_lod(c.model(), settings);
 }
 
-// The levels' options; levels 2 and 3 with the points of a simplified mesh where deform::simplify is built.
-std::vector<deform::Character::LevelOptions> crowd_levels(const deform::Character& c,
-                                                          std::vector<std::vector<std::uint32_t>>& points) {
-  std::vector<deform::Character::LevelOptions> levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+// The crowd's character and its levels' options: levels 2 and 3 with the points of simplified meshes, nested and
+// first in the model's renumbered points (a prefix each), where deform::simplify is built.
+deform::Character crowd_character(std::vector<deform::Character::LevelOptions>& levels,
+                                  std::vector<std::uint32_t>& points) {
+  levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
 #if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
-  points.clear();
-  for (const float ratio : {0.25f, 0.1f})
-    points.push_back(deform::simplify_model(c.model(), {ratio, 0.05f}).source_point);
-  levels[2].points = points[0];
-  levels[3].points = points[1];
+  deform::Model model = deform::builtin_character();
+  const deform::SimplifiedModel near = deform::simplify_model(model, {0.25f, 0.05f});
+  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
+  std::vector<std::uint32_t> first;
+  std::vector<bool> listed(model.mesh.point_count(), false);
+  for (const std::uint32_t p : far.source_point) first.push_back(near.source_point[p]), listed[first.back()] = true;
+  for (const std::uint32_t p : near.source_point)
+    if (!listed[p]) first.push_back(p);
+  deform::order_points_first(model, first);
+  points.resize(near.source_point.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = std::uint32_t(i);
+  levels[2].points = points;
+  levels[3].points = std::span<const std::uint32_t>(points).first(far.source_point.size());
+  const deform::Rig rig = deform::builtin_rig(model);
+  return deform::Character(std::move(model), rig);
 #else
-  (void)c;
   (void)points;
+  return deform::make_builtin_character();
 #endif
-  return levels;
 }
 
 // The level of instance i: 1 in 100 at 0, 9 at 1, 45 each at 2 and 3.
@@ -222,9 +236,9 @@ struct LevelCrowd {
   std::vector<std::size_t> points;
 
   LevelCrowd() {
-    deform::Character first = deform::make_builtin_character();
-    std::vector<std::vector<std::uint32_t>> level_points;
-    const std::vector<deform::Character::LevelOptions> options = crowd_levels(first, level_points);
+    std::vector<deform::Character::LevelOptions> options;
+    std::vector<std::uint32_t> level_points;
+    deform::Character first = crowd_character(options, level_points);
     first.set_levels(crowd_lod(first), options);
     walk = deform::builtin_walk(first.model());
     errors = level_errors(first, walk, options);
