@@ -450,3 +450,29 @@ TEST_CASE(
   CHECK(model.mesh.positions == kept.mesh.positions);
   CHECK(model.mesh.vertex_point == kept.mesh.vertex_point);
 }
+
+TEST_CASE("levels: a subset that is a range of points (renumbered) is skinned in place, as the whole level") {
+  Walker full, mesh;
+  const std::size_t points = full.c.model().mesh.point_count();
+  std::vector<std::uint32_t> range;
+  for (std::uint32_t p = 1600; p-- > 100;) range.push_back(p);  // any order
+  std::vector<Character::LevelOptions> subset_options = options;
+  subset_options[3].points = range;
+  full.c.set_levels(builtin_lod(full.c), options);
+  mesh.c.set_levels(builtin_lod(mesh.c), subset_options);
+  REQUIRE(full.c.set_level(3));
+  REQUIRE(mesh.c.set_level(3));
+  for (int f = 0; f < 6; ++f) full.frame(), mesh.frame();  // past the switch
+  std::vector<glm::vec3> before(mesh.c.positions().begin(), mesh.c.positions().end());
+  for (int f = 0; f < 9; ++f) {
+    full.frame(), mesh.frame();
+    const auto a = full.c.positions(), b = mesh.c.positions();
+    for (std::size_t p = 0; p < points; ++p) CHECK(((p >= 100 && p < 1600) ? a[p] == b[p] : b[p] == before[p]));
+  }
+  const auto na = full.c.normals(), nb = mesh.c.normals();
+  for (std::size_t v = 0; v < na.size(); ++v) {
+    const std::uint32_t p = full.c.model().mesh.vertex_point[v];
+    if (p >= 100 && p < 1600) CHECK(na[v] == nb[v]);
+  }
+  CHECK(largest_move(full.c.positions(), before) > 1e-3f);
+}

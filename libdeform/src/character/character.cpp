@@ -627,12 +627,16 @@ Status Character::skin_subset(std::size_t level) noexcept {
     rest_positions = positions;
     rest_normals = normals;
   }
-  const std::span<glm::vec3> out = std::span<glm::vec3>(level_positions_).first(count);
+  // A range of points is skinned in place; scattered ones through level_positions_.
+  const std::span<glm::vec3> out = subset.contiguous
+                                       ? std::span<glm::vec3>(positions_).subspan(subset.points.front(), count)
+                                       : std::span<glm::vec3>(level_positions_).first(count);
   if (const Status status = skin(rest_positions, rest_normals, true, levels_->weights[level], out,
                                  std::span<glm::vec3>(level_normals_).first(count));
       !status)
     return status;
-  for (std::size_t i = 0; i < count; ++i) positions_[subset.points[i]] = out[i];
+  if (!subset.contiguous)
+    for (std::size_t i = 0; i < count; ++i) positions_[subset.points[i]] = out[i];
   subset_normals_ = std::int32_t(level);
   return {};
 }
@@ -651,11 +655,14 @@ Status Character::update(float dt) {
   const std::uint32_t interval = cost.update_interval;
   // The points of the level shown (all, or its subset: the rest are not drawn and keep stale values).
   const auto each_point = [this](std::size_t level, auto&& f) {
-    const std::vector<std::uint32_t>& points = levels_->subsets[level].points;
-    if (points.empty()) {
+    const LevelPoints& subset = levels_->subsets[level];
+    if (subset.points.empty()) {
       for (std::size_t p = 0; p < positions_.size(); ++p) f(p);
+    } else if (subset.contiguous) {
+      const std::size_t begin = subset.points.front(), end = begin + subset.points.size();
+      for (std::size_t p = begin; p < end; ++p) f(p);
     } else {
-      for (const std::uint32_t p : points) f(std::size_t(p));
+      for (const std::uint32_t p : subset.points) f(std::size_t(p));
     }
   };
   if (!next_update_deforms()) {
@@ -992,6 +999,7 @@ void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> opt
       // Ascending, for the skinning's and the scatter's memory order; the skin, bind points and normals gathered.
       for (std::uint32_t p = 0; p < point_count; ++p)
         if (subset.member[p]) subset.points.push_back(p);
+      subset.contiguous = subset.points.back() - subset.points.front() + 1 == subset.points.size();
       std::vector<std::uint32_t> slot(point_count, 0);
       for (std::size_t i = 0; i < subset.points.size(); ++i) {
         const std::uint32_t p = subset.points[i];

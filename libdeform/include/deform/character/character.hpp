@@ -477,6 +477,7 @@ class DEFORM_CHARACTER_API Character {
   // A level's point subset (LevelOptions::points), bound: all empty for a level of all points.
   struct LevelPoints {
     std::vector<std::uint32_t> points;      // the full mesh's point ids, ascending
+    bool contiguous = false;                // they are a range of ids (points renumbered, order_points_first)
     std::vector<std::uint8_t> member;       // per mesh point: 1 when the level deforms it
     std::vector<glm::vec3> rest_positions;  // per subset point: its bind position and bind normal
     std::vector<glm::vec3> rest_normals;
