@@ -14,14 +14,20 @@
 // at their own clip times, each updated as above (walk sampled, set_pose, update, normals()), except that the clip is
 // not sampled for an update that does not deform (Character::next_update_deforms). The levels, from
 // build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
-// bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Counters: error_mean_lN,
-// error_max_lN — level N's points against the full character's walking beside it (the same clip times, 2 s), as a
-// fraction of its height: the mean over points and frames and the largest; points_influences_lN — its
-// LevelCost::influences.
+// bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Where the optional
+// deform::simplify is built, levels 2 and 3 deform only the points of a simplified mesh (LevelOptions::points from
+// simplify_model's source_point: 0.25 of the triangles, and that mesh simplified again to 0.4 of its own, 0.1 of
+// the whole; max_error 0.05), the model's points renumbered so that level 3's come first and level 2's next
+// (order_points_first): each level a prefix of the points. Without deform::simplify every level deforms every point.
+// Counters:
+// error_mean_lN, error_max_lN — level N's own points against the full character's walking beside it (the same clip
+// times, 2 s), as a fraction of its height: the mean over points and frames and the largest; points_influences_lN —
+// its LevelCost::influences; points_lN — its LevelCost::points.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 #if defined(__GLIBC__)
@@ -31,8 +37,12 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/bone_lod.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 #include "deform/runtime/parallel.hpp"
+#if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
+#include "deform/simplify/simplify.hpp"
+#endif
 namespace {
 
 constexpr std::size_t crowd_size = 1000;
@@ -138,7 +148,32 @@ deform::BoneLod crowd_lod(const deform::Character& c) {
   return deform::build_bone_lod(c.model(), settings);
 }
 
-const std::vector<deform::Character::LevelOptions> crowd_levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+// The crowd's character and its levels' options: levels 2 and 3 with the points of simplified meshes, nested and
+// first in the model's renumbered points (a prefix each), where deform::simplify is built.
+deform::Character crowd_character(std::vector<deform::Character::LevelOptions>& levels,
+                                  std::vector<std::uint32_t>& points) {
+  levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+#if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
+  deform::Model model = deform::builtin_character();
+  const deform::SimplifiedModel near = deform::simplify_model(model, {0.25f, 0.05f});
+  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
+  std::vector<std::uint32_t> first;
+  std::vector<bool> listed(model.mesh.point_count(), false);
+  for (const std::uint32_t p : far.source_point) first.push_back(near.source_point[p]), listed[first.back()] = true;
+  for (const std::uint32_t p : near.source_point)
+    if (!listed[p]) first.push_back(p);
+  deform::order_points_first(model, first);
+  points.resize(near.source_point.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = std::uint32_t(i);
+  levels[2].points = points;
+  levels[3].points = std::span<const std::uint32_t>(points).first(far.source_point.size());
+  const deform::Rig rig = deform::builtin_rig(model);
+  return deform::Character(std::move(model), rig);
+#else
+  (void)points;
+  return deform::make_builtin_character();
+#endif
+}
 
 // The level of instance i: 1 in 100 at 0, 9 at 1, 45 each at 2 and 3.
 std::size_t crowd_level(std::size_t i) {
@@ -151,8 +186,10 @@ struct LevelError {
   double max = 0.0;
 };
 
-// Each level against the full character walking beside it: 2 s of frames after 1 s to get the springs going.
-std::vector<LevelError> level_errors(const deform::Character& first, const deform::Animation& walk) {
+// Each level against the full character walking beside it, over the level's own points (those it draws): 2 s of
+// frames after 1 s to get the springs going.
+std::vector<LevelError> level_errors(const deform::Character& first, const deform::Animation& walk,
+                                     const std::vector<deform::Character::LevelOptions>& options) {
   const std::vector<glm::vec3>& bind = first.model().mesh.positions;
   float low = bind.front().y, high = bind.front().y;
   for (const glm::vec3& p : bind) low = std::min(low, p.y), high = std::max(high, p.y);
@@ -177,9 +214,11 @@ std::vector<LevelError> level_errors(const deform::Character& first, const defor
       level.update(dt);
       if (f < frames - measured) continue;
       const auto a = full.positions(), b = level.positions();
-      for (std::size_t p = 0; p < a.size(); ++p) {
+      const std::size_t count = options[l].points.empty() ? a.size() : options[l].points.size();
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t p = options[l].points.empty() ? i : options[l].points[i];
         const double d = double(glm::length(a[p] - b[p])) / height;
-        errors[l].mean += d / double(a.size() * std::size_t(measured));
+        errors[l].mean += d / double(count * std::size_t(measured));
         errors[l].max = std::max(errors[l].max, d);
       }
     }
@@ -194,13 +233,19 @@ struct LevelCrowd {
   deform::Animation walk;
   std::vector<LevelError> errors;
   std::vector<std::size_t> influences;
+  std::vector<std::size_t> points;
 
   LevelCrowd() {
-    deform::Character first = deform::make_builtin_character();
-    first.set_levels(crowd_lod(first), crowd_levels);
+    std::vector<deform::Character::LevelOptions> options;
+    std::vector<std::uint32_t> level_points;
+    deform::Character first = crowd_character(options, level_points);
+    first.set_levels(crowd_lod(first), options);
     walk = deform::builtin_walk(first.model());
-    errors = level_errors(first, walk);
-    for (std::size_t l = 0; l < first.level_count(); ++l) influences.push_back(first.level_cost(l).influences);
+    errors = level_errors(first, walk, options);
+    for (std::size_t l = 0; l < first.level_count(); ++l) {
+      influences.push_back(first.level_cost(l).influences);
+      points.push_back(first.level_cost(l).points);
+    }
     characters.reserve(big_crowd_size);
     for (std::size_t i = 1; i < big_crowd_size; ++i) characters.push_back(first.instance());
     characters.push_back(std::move(first));
@@ -247,8 +292,10 @@ void level_crowd(benchmark::State& state) {
     state.counters["error_mean_l" + std::to_string(l)] = crowd.errors[l].mean;
     state.counters["error_max_l" + std::to_string(l)] = crowd.errors[l].max;
   }
-  for (std::size_t l = 0; l < crowd.influences.size(); ++l)
+  for (std::size_t l = 0; l < crowd.influences.size(); ++l) {
     state.counters["points_influences_l" + std::to_string(l)] = double(crowd.influences[l]);
+    state.counters["points_l" + std::to_string(l)] = double(crowd.points[l]);
+  }
 }
 
 BENCHMARK(level_crowd)

@@ -248,31 +248,36 @@ void bind_character_levels(CharacterClass& character) {
           [](deform::Character& c, const std::vector<std::size_t>& bones_per_level,
              const std::vector<deform::Pose>& poses, const std::vector<py::object>& keep,
              std::optional<std::vector<bool>> deformers, std::optional<std::vector<std::uint32_t>> update_interval,
-             std::uint32_t blend_frames) {
+             std::uint32_t blend_frames, std::optional<std::vector<std::vector<std::uint32_t>>> points) {
             deform::BoneLodSettings settings;
             settings.bones_per_level = bones_per_level;
             settings.poses = poses;
             for (const py::object& bone : keep) settings.keep.push_back(resolve_bone(c.skeleton(), bone));
             const std::size_t levels = bones_per_level.size() + 1;
-            if ((deformers && deformers->size() != levels) || (update_interval && update_interval->size() != levels))
+            if ((deformers && deformers->size() != levels) || (update_interval && update_interval->size() != levels) ||
+                (points && points->size() != levels))
               throw deform::Error::invalid_argument("levels",
-                                                    "deformers and update_interval need one entry per level, "
+                                                    "deformers, update_interval and points need one entry per level, "
                                                     "level 0 included");
             std::vector<deform::Character::LevelOptions> options(levels);
             for (std::size_t l = 0; l < levels; ++l) {
               if (deformers) options[l].deformers = (*deformers)[l];
               if (update_interval) options[l].update_interval = (*update_interval)[l];
+              if (points) options[l].points = (*points)[l];
             }
             c.set_levels(deform::build_bone_lod(c.model(), settings), options, blend_frames);
           },
           py::arg("bones_per_level"), py::arg("poses") = std::vector<deform::Pose>{},
           py::arg("keep") = std::vector<py::object>{}, py::arg("deformers") = py::none(),
-          py::arg("update_interval") = py::none(), py::arg("blend_frames") = 8u,
+          py::arg("update_interval") = py::none(), py::arg("blend_frames") = 8u, py::arg("points") = py::none(),
           "Levels of detail: level 0 the whole character, then one level per entry of `bones_per_level` (bones it "
           "skins with, non-increasing), merged on the motion of `poses` (deform.Pose, e.g. a clip sampled over its "
           "length; none: by weight alone), `keep` bones (names or ids) kept at every level. `deformers` and "
           "`update_interval` (1 to 64): one per level, level 0 included (default: on, every update). A switch blends "
-          "over `blend_frames` deformed updates. Raises deform.Error naming what is wrong; call it at set-up.")
+          "over `blend_frames` deformed updates. `points`: one list per level of the mesh's point ids it deforms (a "
+          "simplified mesh's; [] for all), such a level with its deformers off; positions and normals outside a "
+          "level's "
+          "points keep stale values. Raises deform.Error naming what is wrong; call it at set-up.")
       .def(
           "set_level", [](deform::Character& c, std::size_t level) { check(c.set_level(level)); }, py::arg("level"),
           "Shows `level` from the next update() on (deform.Error when out of range).")

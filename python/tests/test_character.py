@@ -197,3 +197,29 @@ def test_levels_of_detail_skin_with_fewer_bones_and_switch_on_request():
     with pytest.raises(deform.Error):
         hero.set_levels([14, 20])  # more bones than the level before
     assert deform.pick_level([0.5, 0.2], deform.screen_height(1.8, 30.0, 1.0)) == 2
+
+
+def test_a_level_deforms_only_its_points():
+    full, mesh = deform.Character.builtin(), deform.Character.builtin()
+    count = len(full.positions)
+    even = list(range(0, count, 2))
+    full.set_levels([14], deformers=[True, False])
+    mesh.set_levels([14], deformers=[True, False], points=[[], even])
+    assert mesh.level_cost(1)["points"] == len(even)
+    for c in (full, mesh):
+        c.set_level(1)
+        c.update(0.0)  # the switch's update deforms the outgoing level 0 too
+    before = mesh.positions.copy()
+    pose = full.skeleton.bind_pose()
+    walk = [c for c in deform.builtin_clips(full.model) if c.name == "walk"][0]
+    walk.sample(0.4, pose)
+    for c in (full, mesh):
+        c.set_pose(pose)
+        c.update(0.0)
+    np.testing.assert_array_equal(mesh.positions[even], full.positions[even])
+    np.testing.assert_array_equal(mesh.positions[1::2], before[1::2])  # not the level's: untouched
+    assert np.abs(full.positions[1::2] - before[1::2]).max() > 1e-3
+    with pytest.raises(deform.Error):
+        mesh.set_levels([14], points=[[], even])  # deformers on with a subset
+    with pytest.raises(deform.Error):
+        mesh.set_levels([14], deformers=[True, False], points=[[]])  # not one per level

@@ -10,6 +10,7 @@
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/offline/bone_lod.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/animation.hpp"
 
 using deform::Character;
@@ -206,4 +207,272 @@ TEST_CASE("levels: costs, the camera helper, refusals") {
     CHECK(std::string(error.what()).find("level 2") != std::string::npos);
   }
   CHECK(c.level_count() == 4);  // the refused calls changed nothing
+}
+
+namespace {
+
+// Mesh levels (LevelOptions::points): hand-made subsets, as simplify_model's source_point would give (any order).
+std::vector<std::uint32_t> every(std::size_t points, std::uint32_t step, bool keep) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t p = std::uint32_t(points); p-- > 0;)
+    if ((p % step == 0) == keep) out.push_back(p);
+  return out;
+}
+
+float height(const Character& c) {
+  float low = c.model().mesh.positions.front().y, high = low;
+  for (const glm::vec3& p : c.model().mesh.positions) low = std::min(low, p.y), high = std::max(high, p.y);
+  return high - low;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "levels: a point subset deforms its points as the whole level would, its vertices' normals too, and no more") {
+  Walker full, mesh;
+  const std::size_t points = full.c.model().mesh.point_count();
+  const std::vector<std::uint32_t> half = every(points, 2, true);
+  full.c.set_levels(builtin_lod(full.c), options);
+  std::vector<Character::LevelOptions> subset_options = options;
+  subset_options[2].points = half;
+  mesh.c.set_levels(builtin_lod(mesh.c), subset_options);
+  CHECK(mesh.c.level_cost(2).points == half.size());
+  CHECK(mesh.c.level_cost(2).influences < full.c.level_cost(2).influences);
+  CHECK(mesh.c.level_cost(3).points == points);
+  for (int f = 0; f < 30; ++f) full.frame(), mesh.frame();  // level 0: the same
+  REQUIRE(full.c.set_level(2));
+  REQUIRE(mesh.c.set_level(2));
+  const float tolerance = 1e-6f * height(full.c);
+  std::size_t bit_equal = 0;
+  float largest = 0.0f, largest_normal = 0.0f;
+  for (int f = 0; f < 40; ++f) {
+    const std::vector<glm::vec3> before(mesh.c.positions().begin(), mesh.c.positions().end());
+    full.frame(), mesh.frame();
+    const auto a = full.c.positions(), b = mesh.c.positions();
+    REQUIRE(b.size() == points);
+    for (std::size_t p = 0; p < points; ++p) {
+      if (p % 2 == 0) {
+        largest = std::max(largest, glm::length(a[p] - b[p]));
+        bit_equal += a[p] == b[p];
+      } else if (f > 0) {
+        CHECK(b[p] == before[p]);  // not the level's: untouched (the switch's update deforms the outgoing level 0)
+      }
+    }
+    const auto na = full.c.normals(), nb = mesh.c.normals();
+    REQUIRE(nb.size() == na.size());
+    for (std::size_t v = 0; v < na.size(); ++v)
+      if (full.c.model().mesh.vertex_point[v] % 2 == 0)
+        largest_normal = std::max(largest_normal, glm::length(na[v] - nb[v]));
+  }
+  MESSAGE("subset against the whole level: largest difference " << largest << ", " << bit_equal << " of "
+                                                                << 40 * half.size() << " bit-equal");
+  CHECK(largest <= tolerance);
+  CHECK(largest_normal <= 1e-5f);
+  // The whole level moved the others: the check above would see them if the subset did.
+  CHECK(largest_move(full.c.positions(), mesh.c.positions()) > 1e-3f);
+  // Recomputed normals: a subset level transports them still (the full mesh's triangles would read stale points).
+  mesh.c.set_normals_mode(Character::NormalsMode::recomputed);
+  full.c.set_normals_mode(Character::NormalsMode::transported);
+  full.frame(), mesh.frame();
+  const auto na = full.c.normals(), nb = mesh.c.normals();
+  for (std::size_t v = 0; v < na.size(); ++v)
+    if (full.c.model().mesh.vertex_point[v] % 2 == 0) CHECK(glm::length(na[v] - nb[v]) <= 1e-5f);
+}
+
+TEST_CASE("levels: a switch between subsets blends the shared points and starts the new ones at their place") {
+  // Level 2 deforms the points p % 3 != 0, level 3 the even ones: shared p % 6 == 2 or 4, new to level 3 p % 6 == 0.
+  const auto make = [](Walker& w, std::uint32_t blend, std::uint32_t interval, const std::vector<std::uint32_t>& a,
+                       const std::vector<std::uint32_t>& b) {
+    std::vector<Character::LevelOptions> opts = {{true, 1}, {true, 1}, {false, 1}, {false, interval}};
+    opts[2].points = a;
+    opts[3].points = b;
+    w.c.set_levels(builtin_lod(w.c), opts, blend);
+    REQUIRE(w.c.set_level(2));
+  };
+  Walker probe;
+  const std::size_t points = probe.c.model().mesh.point_count();
+  const std::vector<std::uint32_t> thirds = every(points, 3, false), halves = every(points, 2, true);
+  for (const std::uint32_t interval : {1u, 4u}) {
+    CAPTURE(interval);
+    Walker blended, abrupt, still;
+    make(blended, 8, interval, thirds, halves);
+    make(abrupt, 0, 1, thirds, halves);  // level 3's points at the pose, at once
+    make(still, 8, interval, thirds, halves);
+    for (int f = 0; f < 30; ++f) blended.frame(), abrupt.frame(), still.frame();
+    const std::vector<glm::vec3> before(blended.c.positions().begin(), blended.c.positions().end());
+    std::vector<glm::vec3> still_before(still.c.positions().begin(), still.c.positions().end());
+    REQUIRE(blended.c.set_level(3));
+    REQUIRE(abrupt.c.set_level(3));
+    blended.frame(), abrupt.frame(), still.frame();
+    const auto b = blended.c.positions(), a = abrupt.c.positions(), s = still.c.positions();
+    float shared_move = 0.0f, usual = 0.0f, new_error = 0.0f, abrupt_jump = 0.0f;
+    for (std::size_t p = 0; p < points; ++p) {
+      if (p % 2 != 0) {
+        if (p % 3 != 0) usual = std::max(usual, glm::length(s[p] - still_before[p]));
+        if (p % 3 == 0) CHECK(b[p] == before[p]);  // in neither level: untouched
+      } else if (p % 3 != 0) {
+        shared_move = std::max(shared_move, glm::length(b[p] - before[p]));
+        abrupt_jump = std::max(abrupt_jump, glm::length(a[p] - before[p]));
+      } else {
+        new_error = std::max(new_error, glm::length(b[p] - a[p]));  // at its place, not blended from a stale one
+      }
+    }
+    MESSAGE("switch: shared points moved " << shared_move << " (unblended " << abrupt_jump << ", ordinary " << usual
+                                           << "), new points off their place by " << new_error);
+    CHECK(new_error <= 1e-6f * height(blended.c));
+    CHECK(shared_move <= 1.5f * usual);
+    CHECK(abrupt_jump > 2.0f * usual);  // the bones of level 3 differ: without the blend the shared points jump
+    // Interpolating, no update deforms until the 4th: the new points stay at their place meanwhile.
+    if (interval == 4) {
+      const std::vector<glm::vec3> at_switch(a.begin(), a.end());
+      for (int f = 0; f < 3; ++f) {
+        CHECK_FALSE(blended.c.next_update_deforms());
+        blended.frame();
+        for (std::size_t p = 0; p < points; p += 6) CHECK(blended.c.positions()[p] == at_switch[p]);
+      }
+    } else {
+      for (int f = 0; f < 8; ++f) blended.frame(), abrupt.frame();  // the blend over: the points level 3 deforms
+      for (std::size_t p = 0; p < points; p += 2)
+        CHECK(glm::length(blended.c.positions()[p] - abrupt.c.positions()[p]) <= 1e-6f * height(blended.c));
+    }
+  }
+}
+
+TEST_CASE("levels: a subset skins the morphed points as the whole level does") {
+  deform::Model model = deform::builtin_character();
+  deform::MorphTarget target;
+  target.name = "bulge";
+  for (std::uint32_t p = 0; p < model.mesh.point_count(); p += 5) {
+    target.points.push_back(p);
+    target.position_deltas.push_back({0.0f, 0.01f, 0.02f});
+    target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
+  }
+  model.morph_targets.push_back(target);
+  Character full(model), mesh(model);
+  const std::vector<std::uint32_t> half = every(model.mesh.point_count(), 2, true);
+  const std::vector<Character::LevelOptions> whole = {{true, 1}, {false, 1}};
+  std::vector<Character::LevelOptions> subset = whole;
+  subset[1].points = half;
+  deform::BoneLodSettings settings;
+  settings.bones_per_level = {14};
+  full.set_levels(deform::build_bone_lod(full.model(), settings), whole);
+  mesh.set_levels(deform::build_bone_lod(mesh.model(), settings), subset);
+  for (Character* c : {&full, &mesh}) {
+    REQUIRE(c->set_morph_weight(0, 1.0f));
+    REQUIRE(c->set_level(1));
+    deform::Pose pose = c->skeleton().bind_pose();
+    pose.rotations[3] = glm::angleAxis(0.5f, glm::vec3(0.0f, 0.0f, 1.0f));
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->update(dt));
+  }
+  const auto na = full.normals(), nb = mesh.normals();
+  for (const std::uint32_t p : half)
+    CHECK(glm::length(full.positions()[p] - mesh.positions()[p]) <= 1e-6f * height(full));
+  for (std::size_t v = 0; v < na.size(); ++v)
+    if (model.mesh.vertex_point[v] % 2 == 0) CHECK(glm::length(na[v] - nb[v]) <= 1e-5f);
+  CHECK(largest_move(full.positions(), std::span<const glm::vec3>(model.mesh.positions)) > 1e-3f);
+}
+
+TEST_CASE("levels: point subsets refused") {
+  Character c = deform::make_builtin_character();
+  const std::uint32_t points = std::uint32_t(c.model().mesh.point_count());
+  const auto refused = [&](std::vector<std::uint32_t> list, bool deformers, const std::string& reason) {
+    std::vector<Character::LevelOptions> opts = options;
+    opts[2].points = list;
+    opts[2].deformers = deformers;
+    try {
+      c.set_levels(builtin_lod(c), opts);
+      FAIL("accepted");
+    } catch (const deform::Error& error) {
+      CHECK(std::string(error.what()).find("level 2") != std::string::npos);
+      CHECK(std::string(error.what()).find(reason) != std::string::npos);
+    }
+  };
+  refused({0, 1, 2}, true, "deformers off");
+  refused({0, points, 2}, false, "out of range");
+  refused({0, 5, 2, 5}, false, "listed twice");
+  CHECK(c.level_count() == 1);  // the refused calls changed nothing
+  std::vector<Character::LevelOptions> opts = options;
+  const std::vector<std::uint32_t> some = {7, 3, 5};
+  opts[2].points = some;
+  c.set_levels(builtin_lod(c), opts);
+  CHECK(c.level_cost(2).points == 3);
+  CHECK(c.level_cost(2).bones <= 3 * 8);
+}
+
+TEST_CASE(
+    "order_points_first: the listed points first, the model drawing and skinning the same; a subset level a prefix") {
+  deform::Model model = deform::builtin_character();
+  deform::MorphTarget target;  // with normal deltas, over points that the renumbering reorders
+  target.name = "bulge";
+  for (std::uint32_t p = 1; p < model.mesh.point_count(); p += 7) {
+    target.points.push_back(p);
+    target.position_deltas.push_back({0.0f, 0.001f * float(p % 13), 0.01f});
+    target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
+  }
+  model.morph_targets.push_back(target);
+  const deform::Model before = model;
+  const std::vector<std::uint32_t> first = every(model.mesh.point_count(), 3, true);  // descending ids
+  const deform::PointOrder order = deform::order_points_first(model, first);
+  REQUIRE(order.point.size() == before.mesh.point_count());
+  REQUIRE(order.vertex.size() == before.mesh.vertex_count());
+  for (std::size_t i = 0; i < first.size(); ++i) CHECK(order.point[first[i]] == i);
+  for (std::size_t p = 0; p < before.mesh.point_count(); ++p) {
+    CHECK(model.mesh.positions[order.point[p]] == before.mesh.positions[p]);
+    CHECK(model.weights.bones[order.point[p]] == before.weights.bones[p]);
+  }
+  for (std::size_t c = 0; c < before.mesh.triangles.size(); ++c) {  // every corner draws the same point, normal, UV
+    const std::uint32_t v = before.mesh.triangles[c];
+    CHECK(model.mesh.triangles[c] == order.vertex[v]);
+    CHECK(model.mesh.vertex_point[order.vertex[v]] == order.point[before.mesh.vertex_point[v]]);
+    CHECK(model.mesh.vertex_normals[order.vertex[v]] == before.mesh.vertex_normals[v]);
+  }
+  CHECK(std::is_sorted(model.morph_targets[0].points.begin(), model.morph_targets[0].points.end()));
+  CHECK(model.morph_targets[0].points != before.morph_targets[0].points);
+  // Skinned and morphed at a pose: the same points, renumbered (the same arithmetic on the same values: bit-equal).
+  Character a(before), b(model);
+  for (Character* c : {&a, &b}) {
+    REQUIRE(c->set_morph_weight(0, 1.0f));
+    deform::Pose pose = c->skeleton().bind_pose();
+    pose.rotations[3] = glm::angleAxis(0.5f, glm::vec3(0.0f, 0.0f, 1.0f));
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->update(dt));
+  }
+  const auto na = a.normals(), nb = b.normals();
+  for (std::size_t p = 0; p < before.mesh.point_count(); ++p)
+    CHECK(glm::length(a.positions()[p] - b.positions()[order.point[p]]) <= 1e-6f * height(a));
+  for (std::size_t v = 0; v < before.mesh.vertex_count(); ++v) CHECK(glm::length(na[v] - nb[order.vertex[v]]) <= 1e-5f);
+  // Refused, the model unchanged.
+  const deform::Model kept = model;
+  CHECK_THROWS_AS(deform::order_points_first(model, std::vector<std::uint32_t>{4, 2, 4}), deform::Error);
+  CHECK_THROWS_AS(deform::order_points_first(model, std::vector<std::uint32_t>{std::uint32_t(kept.mesh.point_count())}),
+                  deform::Error);
+  CHECK(model.mesh.positions == kept.mesh.positions);
+  CHECK(model.mesh.vertex_point == kept.mesh.vertex_point);
+}
+
+TEST_CASE("levels: a subset that is a range of points (renumbered) is skinned in place, as the whole level") {
+  Walker full, mesh;
+  const std::size_t points = full.c.model().mesh.point_count();
+  std::vector<std::uint32_t> range;
+  for (std::uint32_t p = 1600; p-- > 100;) range.push_back(p);  // any order
+  std::vector<Character::LevelOptions> subset_options = options;
+  subset_options[3].points = range;
+  full.c.set_levels(builtin_lod(full.c), options);
+  mesh.c.set_levels(builtin_lod(mesh.c), subset_options);
+  REQUIRE(full.c.set_level(3));
+  REQUIRE(mesh.c.set_level(3));
+  for (int f = 0; f < 6; ++f) full.frame(), mesh.frame();  // past the switch
+  std::vector<glm::vec3> before(mesh.c.positions().begin(), mesh.c.positions().end());
+  for (int f = 0; f < 9; ++f) {
+    full.frame(), mesh.frame();
+    const auto a = full.c.positions(), b = mesh.c.positions();
+    for (std::size_t p = 0; p < points; ++p) CHECK(((p >= 100 && p < 1600) ? a[p] == b[p] : b[p] == before[p]));
+  }
+  const auto na = full.c.normals(), nb = mesh.c.normals();
+  for (std::size_t v = 0; v < na.size(); ++v) {
+    const std::uint32_t p = full.c.model().mesh.vertex_point[v];
+    if (p >= 100 && p < 1600) CHECK(na[v] == nb[v]);
+  }
+  CHECK(largest_move(full.c.positions(), before) > 1e-3f);
 }

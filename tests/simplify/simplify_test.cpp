@@ -7,13 +7,17 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <random>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "import/skin_model.hpp"
+#include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
+#include "deform/offline/bone_lod.hpp"
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/skeleton.hpp"
 #include "deform/runtime/skinning.hpp"
@@ -179,3 +183,50 @@ TEST_CASE("simplify_model on assimp-testmodels' rigged characters") {
   }
 }
 #endif
+
+// A Character level on simplified meshes, built as docs/skinning.md says: nested simplifications, the model's points
+// renumbered so that each level is a prefix, the simplified triangles drawn from the full character's arrays through
+// source_vertex, source_point and the renumbering.
+TEST_CASE("simplified meshes as Character levels: prefixes after order_points_first, drawn through the maps") {
+  Model model = deform::builtin_character();
+  const deform::SimplifiedModel near = deform::simplify_model(model, {0.25f, 0.05f});
+  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
+  std::vector<std::uint32_t> first;
+  for (const std::uint32_t p : far.source_point) first.push_back(near.source_point[p]);
+  for (const std::uint32_t p : near.source_point)
+    if (std::find(first.begin(), first.end(), p) == first.end()) first.push_back(p);
+  const Model before = model;
+  const deform::PointOrder order = deform::order_points_first(model, first);
+  deform::Character hero(model);
+  deform::Character whole(model);
+  std::vector<std::uint32_t> prefix(near.source_point.size());
+  std::iota(prefix.begin(), prefix.end(), 0u);
+  std::vector<deform::Character::LevelOptions> options = {{true, 1}, {false, 1}, {false, 1}};
+  options[1].points = prefix;
+  options[2].points = std::span<const std::uint32_t>(prefix).first(far.source_point.size());
+  deform::BoneLodSettings lod;
+  lod.bones_per_level = {20, 20};
+  hero.set_levels(deform::build_bone_lod(hero.model(), lod), options);
+  whole.set_levels(deform::build_bone_lod(whole.model(), lod), {{{true, 1}, {false, 1}, {false, 1}}});
+  CHECK(hero.level_cost(2).points == far.model.mesh.point_count());
+  deform::Pose pose = hero.skeleton().bind_pose();
+  pose.rotations[5] = glm::angleAxis(0.6f, glm::vec3(1.0f, 0.0f, 0.0f));
+  for (deform::Character* c : {&hero, &whole}) {
+    REQUIRE(c->set_level(2));
+    REQUIRE(c->set_pose(pose));
+    REQUIRE(c->update(0.0f));
+    REQUIRE(c->update(0.0f));  // past the switch's update (which deforms the outgoing level 0 too)
+  }
+  const auto normals = hero.normals(), whole_normals = whole.normals();
+  // Each corner of far's triangles: its render vertex in the renumbered full mesh, and that vertex's point.
+  for (const std::uint32_t v : far.model.mesh.triangles) {
+    const std::uint32_t full_vertex = order.vertex[near.source_vertex[far.source_vertex[v]]];
+    const std::uint32_t full_point = hero.model().mesh.vertex_point[full_vertex];
+    CHECK(full_point == order.point[near.source_point[far.source_point[far.model.mesh.vertex_point[v]]]]);
+    CHECK(full_point < far.model.mesh.point_count());  // in level 2's prefix
+    CHECK(hero.positions()[full_point] == whole.positions()[full_point]);
+    CHECK(normals[full_vertex] == whole_normals[full_vertex]);
+    CHECK(hero.model().mesh.positions[full_point] == far.model.mesh.positions[far.model.mesh.vertex_point[v]]);
+  }
+  CHECK(before.mesh.point_count() == model.mesh.point_count());
+}

@@ -122,7 +122,8 @@ Character::Character(Model model, const Rig& rig)
     if (const Status status = add_pose_driver(bind_corrective(group, bound.skeleton), targets); !status)
       throw Error::in_file(bound.name, "corrective group '" + group.name + "'", status.reason());
   }
-  const SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, true, bound.weights);
+  const SkinningJob job =
+      skinning_job(bound.mesh.positions, bind_->point_normals, true, bound.weights, positions_, point_normals());
   if (!job.validate()) throw Error::in_file(bound.name, "weights", "skin weights do not fit the mesh and skeleton");
   if (const Status status = update(0.0f); !status) throw Error::in_file(bound.name, "bind pose", status.reason());
 }
@@ -205,9 +206,8 @@ Character Character::instance() const {
   }
   if (levels_) {  // levels of detail: shared, at this character's level, the buffers this copy's own
     copy.levels_ = levels_;
+    copy.allocate_level_state();
     copy.level_ = copy.shown_ = level_;
-    copy.blend_.assign(blend_.size(), glm::vec3(0.0f));
-    copy.target_ = copy.positions_;
   }
   // The same update as this character's at construction, which succeeded on the same data.
   copy.update(0.0f);
@@ -575,7 +575,8 @@ void Character::prefetch() const noexcept {
 // The skinning job of this character's weights and palette, from `rest_positions` (and, transporting, their normals)
 // into positions_ and point_normals(); the method and DQS palette are the caller's. No allocation.
 SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                                    bool transport, const SkinWeights& weights) noexcept {
+                                    bool transport, const SkinWeights& weights, std::span<glm::vec3> out_positions,
+                                    std::span<glm::vec3> out_normals) noexcept {
   SkinningJob job;
   job.matrices = palette_;
   job.bone_indices = weights.bones;
@@ -585,10 +586,10 @@ SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, s
   job.extra_bones = weights.extra_bones;
   job.extra_weights = weights.extra_weights;
   job.in_positions = as_floats(rest_positions);
-  job.out_positions = as_floats(std::span<glm::vec3>(positions_));
+  job.out_positions = as_floats(out_positions);
   if (transport) {
     job.in_normals = as_floats(rest_normals);
-    job.out_normals = as_floats(point_normals());
+    job.out_normals = as_floats(out_normals);
   }
   return job;
 }
@@ -596,8 +597,9 @@ SkinningJob Character::skinning_job(std::span<const glm::vec3> rest_positions, s
 // LBS or DQS (settings.skinning) of the (morphed) bind points and, transporting, their normals into positions_ and
 // point_normals(). No allocation.
 Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                       bool transport, const SkinWeights& weights) noexcept {
-  SkinningJob job = skinning_job(rest_positions, rest_normals, transport, weights);
+                       bool transport, const SkinWeights& weights, std::span<glm::vec3> out_positions,
+                       std::span<glm::vec3> out_normals) noexcept {
+  SkinningJob job = skinning_job(rest_positions, rest_normals, transport, weights, out_positions, out_normals);
   job.method = settings.skinning;
   if (settings.skinning == SkinningMethod::dqs) {
     bool has_scale = false;
@@ -607,6 +609,36 @@ Status Character::skin(std::span<const glm::vec3> rest_positions, std::span<cons
     if (has_scale) job.scales = scales_;
   }
   return job.run();
+}
+
+Status Character::skin_subset(std::size_t level) noexcept {
+  const LevelPoints& subset = levels_->subsets[level];
+  const std::size_t count = subset.points.size();
+  std::span<const glm::vec3> rest_positions = subset.rest_positions;
+  std::span<const glm::vec3> rest_normals = subset.rest_normals;
+  if (morphed_) {
+    // The subset's points (and bind normals, transported) of the morphed bind arrays.
+    const std::span<glm::vec3> positions = std::span<glm::vec3>(level_rest_).first(count);
+    const std::span<glm::vec3> normals = std::span<glm::vec3>(level_rest_).subspan(count, count);
+    for (std::size_t i = 0; i < count; ++i) {
+      positions[i] = morphed_positions_[subset.points[i]];
+      normals[i] = morphed_normals_[subset.points[i]];
+    }
+    rest_positions = positions;
+    rest_normals = normals;
+  }
+  // A range of points is skinned in place; scattered ones through level_positions_.
+  const std::span<glm::vec3> out = subset.contiguous
+                                       ? std::span<glm::vec3>(positions_).subspan(subset.points.front(), count)
+                                       : std::span<glm::vec3>(level_positions_).first(count);
+  if (const Status status = skin(rest_positions, rest_normals, true, levels_->weights[level], out,
+                                 std::span<glm::vec3>(level_normals_).first(count));
+      !status)
+    return status;
+  if (!subset.contiguous)
+    for (std::size_t i = 0; i < count; ++i) positions_[subset.points[i]] = out[i];
+  subset_normals_ = std::int32_t(level);
+  return {};
 }
 
 Status Character::update(float dt) {
@@ -621,6 +653,18 @@ Status Character::update(float dt) {
   }
   const LevelCost& cost = levels_->costs[level_];
   const std::uint32_t interval = cost.update_interval;
+  // The points of the level shown (all, or its subset: the rest are not drawn and keep stale values).
+  const auto each_point = [this](std::size_t level, auto&& f) {
+    const LevelPoints& subset = levels_->subsets[level];
+    if (subset.points.empty()) {
+      for (std::size_t p = 0; p < positions_.size(); ++p) f(p);
+    } else if (subset.contiguous) {
+      const std::size_t begin = subset.points.front(), end = begin + subset.points.size();
+      for (std::size_t p = begin; p < end; ++p) f(p);
+    } else {
+      for (const std::uint32_t p : subset.points) f(std::size_t(p));
+    }
+  };
   if (!next_update_deforms()) {
     // Between deformed updates: the time adds up for the next one, positions() goes a share of the way on (below).
     ++tick_;
@@ -629,14 +673,15 @@ Status Character::update(float dt) {
     const float step = dt + pending_dt_;
     tick_ = 0;
     pending_dt_ = 0.0f;
-    const bool switching = shown_ != level_;
-    const bool restart = switching && !levels_->costs[shown_].deformers && cost.deformers;
+    const std::size_t outgoing = shown_;
+    const bool switching = outgoing != level_;
+    const bool restart = switching && !levels_->costs[outgoing].deformers && cost.deformers;
     // The outgoing level interpolates, behind the pose by up to its interval: the blend starts where positions()
     // would have gone this update, not from that level's points at the pose (a jump of a few updates' motion).
-    const bool from_shown = switching && levels_->costs[shown_].update_interval > 1;
+    const bool from_shown = switching && levels_->costs[outgoing].update_interval > 1;
     if (from_shown) {
       const float share = approach_left_ > 0 ? 1.0f / float(approach_left_) : 0.0f;
-      for (std::size_t p = 0; p < blend_.size(); ++p) blend_[p] = positions_[p] + share * (target_[p] - positions_[p]);
+      each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p] + share * (target_[p] - positions_[p]); });
     }
     approach_left_ = 0;
     // Deform into target_ when the level interpolates, into positions_ (what positions() shows) otherwise.
@@ -645,8 +690,8 @@ Status Character::update(float dt) {
     Status status;
     if (switching && !from_shown) {
       // The frame at the outgoing level (the whole step) is the blend's start; the new level then takes no more time.
-      status = deform_frame(step, shown_);
-      if (status) std::copy(positions_.begin(), positions_.end(), blend_.begin());
+      status = deform_frame(step, outgoing);
+      if (status) each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p]; });
     }
     if (status && restart) {
       // The deformers come back on: they start again from the pose, as they are after a cut.
@@ -655,24 +700,33 @@ Status Character::update(float dt) {
     }
     if (status) status = deform_frame(switching && !from_shown ? 0.0f : step, level_);
     if (status && switching) {
-      for (std::size_t p = 0; p < blend_.size(); ++p) blend_[p] -= positions_[p];
+      // A point new to the level was not drawn: no offset, it starts at its new place.
+      each_point(level_, [&](std::size_t p) {
+        blend_[p] = level_has(outgoing, p) ? blend_[p] - positions_[p] : glm::vec3(0.0f);
+      });
       blend_left_ = levels_->blend_frames;
     }
     shown_ = level_;
     if (status && blend_left_ > 0) {
       // The switch's offset, shrinking linearly: all of it on the switch's update, none after blend_frames.
       const float share = float(blend_left_) / float(levels_->blend_frames);
-      for (std::size_t p = 0; p < blend_.size(); ++p) positions_[p] += share * blend_[p];
+      each_point(level_, [&](std::size_t p) { positions_[p] += share * blend_[p]; });
       --blend_left_;
     }
     if (approach) std::swap(positions_, target_);
     if (!status) return status;
+    if (approach && switching) {
+      // Interpolating, a point new to the level starts at its deformed place too, not on its way from a stale one.
+      each_point(level_, [&](std::size_t p) {
+        if (!level_has(outgoing, p)) positions_[p] = target_[p];
+      });
+    }
     approach_left_ = approach ? interval : 0;
   }
   if (approach_left_ > 0) {
     // Piecewise linear toward the last deformed points: 1 / approach_left_ of the way that remains.
     const float share = 1.0f / float(approach_left_);
-    for (std::size_t p = 0; p < positions_.size(); ++p) positions_[p] += share * (target_[p] - positions_[p]);
+    each_point(shown_, [&](std::size_t p) { positions_[p] += share * (target_[p] - positions_[p]); });
     --approach_left_;
   }
   return {};
@@ -731,7 +785,9 @@ Status Character::deform_frame(float dt, std::size_t level) {
   }
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
   if (!settings.deform_on_cpu) return deformers ? hierarchy_.update(world_) : Status();
-  const bool transport = normals_mode_ == NormalsMode::transported;
+  // A subset level transports its normals whatever the mode (LevelOptions::points).
+  const bool subset = levels_ && !levels_->subsets[level].points.empty();
+  const bool transport = normals_mode_ == NormalsMode::transported || subset;
   // Morph targets, in bind space before skinning; skipped (the bind arrays skinned directly) when every weight is 0.
   std::span<const glm::vec3> rest_positions = bound.mesh.positions;
   std::span<const glm::vec3> rest_normals = bind_->point_normals;
@@ -752,6 +808,8 @@ Status Character::deform_frame(float dt, std::size_t level) {
   }
   normals_current_ = false;
   transported_current_ = false;
+  subset_normals_ = -1;
+  if (subset) return skin_subset(level);  // no deformers (set_levels refuses them on a subset)
   if (direct_mush_ && deformers && level == 0) {
     // Direct Delta Mush in place of settings.skinning: the morphed points' offsets from the rest points turn with
     // their points, and so do the transported normals (the rotation of each point's smoothed neighbourhood).
@@ -781,7 +839,8 @@ Status Character::deform_frame(float dt, std::size_t level) {
       ddm.out_normals = point_normals();
     }
     if (const Status status = ddm.run(); !status) return status;
-  } else if (const Status status = skin(rest_positions, rest_normals, transport, weights); !status) {
+  } else if (const Status status = skin(rest_positions, rest_normals, transport, weights, positions_, point_normals());
+             !status) {
     return status;
   }
   if (!deformers) {
@@ -879,7 +938,12 @@ void Character::clear_delta_mush() noexcept {
 
 std::span<const glm::vec3> Character::normals() {
   if (!normals_current_) {
-    if (transported_current_ && bind_->normals_in_place) {
+    if (subset_normals_ >= 0) {
+      // A subset level: its render vertices only (the others keep stale values; LevelOptions::points).
+      const LevelPoints& subset = levels_->subsets[std::size_t(subset_normals_)];
+      for (std::size_t i = 0; i < subset.vertices.size(); ++i)
+        normals_[subset.vertices[i]] = level_normals_[subset.vertex_slot[i]];
+    } else if (transported_current_ && bind_->normals_in_place) {
       InPlaceGatherJob gather;
       gather.plan = &bind_->normals_gather;
       gather.values = normals_;
@@ -902,6 +966,7 @@ std::span<const glm::vec3> Character::normals() {
 
 void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> options, std::uint32_t blend_frames) {
   const Model& bound = bind_->model;
+  const std::size_t point_count = bound.mesh.point_count();
   if (lod.levels.empty()) throw Error::invalid_argument("level 0", "no levels");
   if (lod.levels.size() != options.size())
     throw Error::invalid_argument("level " + std::to_string(std::min(lod.levels.size(), options.size())),
@@ -915,28 +980,85 @@ void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> opt
     if (options[l].update_interval < 1 || options[l].update_interval > 64)
       throw Error::invalid_argument(element, "update_interval must be in [1, 64]");
     // Checked once here, so that update() cannot refuse it (the palette is the skeleton's).
-    SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, false, level.weights);
-    if (level.weights.size() != bound.mesh.point_count())
-      throw Error::invalid_argument(element, "skin is not one entry per point");
+    SkinningJob job = skinning_job(bound.mesh.positions, bind_->point_normals, false, level.weights, positions_, {});
+    if (level.weights.size() != point_count) throw Error::invalid_argument(element, "skin is not one entry per point");
     if (const Status status = job.validate(); !status) throw Error::invalid_argument(element, status.reason());
+    LevelPoints subset;
+    SkinWeights weights;
+    if (options[l].points.empty()) {
+      weights = level.weights;
+    } else {
+      if (options[l].deformers)
+        throw Error::invalid_argument(element, "a level with a point subset must have its deformers off");
+      subset.member.assign(point_count, 0);
+      for (const std::uint32_t p : options[l].points) {
+        if (p >= point_count) throw Error::invalid_argument(element, "point " + std::to_string(p) + " out of range");
+        if (subset.member[p]) throw Error::invalid_argument(element, "point " + std::to_string(p) + " listed twice");
+        subset.member[p] = 1;
+      }
+      // Ascending, for the skinning's and the scatter's memory order; the skin, bind points and normals gathered.
+      for (std::uint32_t p = 0; p < point_count; ++p)
+        if (subset.member[p]) subset.points.push_back(p);
+      subset.contiguous = subset.points.back() - subset.points.front() + 1 == subset.points.size();
+      std::vector<std::uint32_t> slot(point_count, 0);
+      for (std::size_t i = 0; i < subset.points.size(); ++i) {
+        const std::uint32_t p = subset.points[i];
+        slot[p] = std::uint32_t(i);
+        weights.bones.push_back(level.weights.bones[p]);
+        weights.weights.push_back(level.weights.weights[p]);
+        subset.rest_positions.push_back(bound.mesh.positions[p]);
+        subset.rest_normals.push_back(bind_->point_normals[p]);
+        const auto extra = std::lower_bound(level.weights.extra_points.begin(), level.weights.extra_points.end(), p);
+        if (extra != level.weights.extra_points.end() && *extra == p) {
+          const std::size_t j = std::size_t(extra - level.weights.extra_points.begin());
+          if (weights.extra_offsets.empty()) weights.extra_offsets.push_back(0);
+          weights.extra_points.push_back(std::uint32_t(i));
+          for (std::uint32_t k = level.weights.extra_offsets[j]; k < level.weights.extra_offsets[j + 1]; ++k) {
+            weights.extra_bones.push_back(level.weights.extra_bones[k]);
+            weights.extra_weights.push_back(level.weights.extra_weights[k]);
+          }
+          weights.extra_offsets.push_back(std::uint32_t(weights.extra_bones.size()));
+        }
+      }
+      const std::vector<std::uint32_t>& vertex_point = bound.mesh.vertex_point;
+      for (std::size_t v = 0; v < vertex_point.size(); ++v) {
+        if (!subset.member[vertex_point[v]]) continue;
+        subset.vertices.push_back(std::uint32_t(v));
+        subset.vertex_slot.push_back(slot[vertex_point[v]]);
+      }
+      data->largest_subset = std::max(data->largest_subset, subset.points.size());
+    }
     LevelCost cost;
-    cost.points = level.weights.size();
+    cost.points = weights.size();
     cost.influences = 0;
-    for (std::size_t p = 0; p < cost.points; ++p) cost.influences += influence_count(level.weights, p);
+    for (std::size_t p = 0; p < cost.points; ++p) cost.influences += influence_count(weights, p);
     std::vector<bool> used(bound.skeleton.bone_count(), false);
     for (std::size_t p = 0; p < cost.points; ++p)
       for (int k = 0; k < 4; ++k)
-        if (level.weights.weights[p][k] > 0.0f) used[level.weights.bones[p][k]] = true;
-    for (const std::uint16_t b : level.weights.extra_bones) used[b] = true;
+        if (weights.weights[p][k] > 0.0f) used[weights.bones[p][k]] = true;
+    for (const std::uint16_t b : weights.extra_bones) used[b] = true;
     cost.bones = std::size_t(std::count(used.begin(), used.end(), true));
     cost.deformers = options[l].deformers;
     cost.update_interval = options[l].update_interval;
-    data->weights.push_back(level.weights);
+    data->weights.push_back(std::move(weights));
     data->costs.push_back(cost);
+    data->subsets.push_back(std::move(subset));
   }
-  blend_.assign(bound.mesh.point_count(), glm::vec3(0.0f));
-  target_ = positions_;
   levels_ = std::move(data);
+  allocate_level_state();
+}
+
+// The per-character state of the levels (set_levels, instance()): the blend and interpolation buffers, a subset
+// level's skinned points and normals, and its gathered morphed rest points; at level 0's start, or as instance() copies
+// it, at the level this character asks for.
+void Character::allocate_level_state() {
+  const std::size_t subset = levels_->largest_subset;
+  blend_.assign(positions_.size(), glm::vec3(0.0f));
+  target_ = positions_;
+  level_positions_.assign(subset, glm::vec3(0.0f));
+  level_normals_.assign(subset, glm::vec3(0.0f));
+  level_rest_.assign(morph_weights_.empty() ? 0 : 2 * subset, glm::vec3(0.0f));
+  subset_normals_ = -1;
   level_ = shown_ = 0;
   tick_ = 0;
   pending_dt_ = 0.0f;

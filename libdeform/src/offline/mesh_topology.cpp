@@ -2,6 +2,9 @@
 // equal keys give the boundary (edges used by exactly one triangle), and the distinct edges in both directions,
 // sorted, give the one-rings (CSR). Works on any triangle soup, manifold or not.
 #include <algorithm>
+#include <numeric>
+#include <string>
+#include <utility>
 #include <type_traits>
 
 #include "deform/runtime/error.hpp"
@@ -105,6 +108,72 @@ std::vector<std::uint32_t> order_vertices_by_point(Mesh& mesh) {
   for (std::uint32_t& v : mesh.triangles) v = slot_of[v];
   for (std::uint32_t& v : mesh.face_corners) v = slot_of[v];
   return slot_of;
+}
+
+PointOrder order_points_first(Model& model, std::span<const std::uint32_t> first) {
+  const std::size_t count = model.mesh.point_count();
+  constexpr std::uint32_t unset = ~std::uint32_t(0);
+  std::vector<std::uint32_t> new_point(count, unset);
+  std::vector<std::uint32_t> source;  // per new point: its previous id
+  source.reserve(count);
+  for (const std::uint32_t p : first) {
+    if (p >= count) throw Error::invalid_argument("first", "point " + std::to_string(p) + " out of range");
+    if (new_point[p] != unset) throw Error::invalid_argument("first", "point " + std::to_string(p) + " listed twice");
+    new_point[p] = std::uint32_t(source.size());
+    source.push_back(p);
+  }
+  for (std::uint32_t p = 0; p < count; ++p) {
+    if (new_point[p] != unset) continue;
+    new_point[p] = std::uint32_t(source.size());
+    source.push_back(p);
+  }
+  Model out = model;  // the model is changed only once nothing can throw
+  for (std::uint32_t& p : out.mesh.vertex_point) {
+    if (p >= count) throw Error::invalid_argument("mesh", "a vertex_point entry is out of range");
+    p = new_point[p];
+  }
+  for (std::size_t i = 0; i < count; ++i) out.mesh.positions[i] = model.mesh.positions[source[i]];
+  const SkinWeights& in = model.weights;
+  if (in.size() == count) {
+    SkinWeights& w = out.weights;
+    w = SkinWeights();
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t p = source[i];
+      w.bones.push_back(in.bones[p]);
+      w.weights.push_back(in.weights[p]);
+      const auto extra = std::lower_bound(in.extra_points.begin(), in.extra_points.end(), p);
+      if (extra == in.extra_points.end() || *extra != p) continue;
+      const std::size_t j = std::size_t(extra - in.extra_points.begin());
+      if (w.extra_offsets.empty()) w.extra_offsets.push_back(0);
+      w.extra_points.push_back(std::uint32_t(i));
+      for (std::uint32_t e = in.extra_offsets[j]; e < in.extra_offsets[j + 1]; ++e) {
+        w.extra_bones.push_back(in.extra_bones[e]);
+        w.extra_weights.push_back(in.extra_weights[e]);
+      }
+      w.extra_offsets.push_back(std::uint32_t(w.extra_bones.size()));
+    }
+  } else if (in.size() != 0) {
+    throw Error::invalid_argument("weights", "not one entry per point");
+  }
+  for (MorphTarget& target : out.morph_targets) {
+    std::vector<std::size_t> order(target.points.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    for (const std::uint32_t p : target.points)
+      if (p >= count) throw Error::invalid_argument("morph target '" + target.name + "'", "point out of range");
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return new_point[target.points[a]] < new_point[target.points[b]]; });
+    const MorphTarget before = target;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      target.points[k] = new_point[before.points[order[k]]];
+      if (k < before.position_deltas.size()) target.position_deltas[k] = before.position_deltas[order[k]];
+      if (k < before.normal_deltas.size()) target.normal_deltas[k] = before.normal_deltas[order[k]];
+    }
+  }
+  PointOrder result;
+  result.vertex = order_vertices_by_point(out.mesh);
+  result.point = std::move(new_point);
+  model = std::move(out);
+  return result;
 }
 
 }  // namespace deform

@@ -41,7 +41,8 @@
 // (mesh, skeleton, weights, normals binding, bind normals) and owns only its per-frame state (pose, springs,
 // positions, normals). Characters are independent: an engine's job system updates a contiguous range of them per
 // thread (no hidden threads; bench/crowd_bench.cpp). Distant ones show levels of detail (set_levels, set_level:
-// fewer bones per point, deformers off, deformed every Nth update; docs/skinning.md, "Levels of detail").
+// fewer bones per point, deformers off, deformed every Nth update, a simplified mesh's points only; docs/skinning.md,
+// "Levels of detail").
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -279,15 +280,32 @@ class DEFORM_CHARACTER_API Character {
     // them after N updates: piecewise linear, N updates behind, no pop. Normals follow the deformed updates only.
     // Used while the character deforms on the CPU (settings.deform_on_cpu), else every update poses.
     std::uint32_t update_interval = 1;
+    // The mesh points the level deforms, as the full mesh's point ids (any order, each once; copied by set_levels);
+    // empty: all of them. A level drawn with a simplified mesh lists that mesh's points: simplify_model's
+    // SimplifiedModel::source_point (deform/simplify/simplify.hpp, docs/skinning.md "Levels of detail"). Its skin is
+    // gathered for those points at set_levels, so that skinning, the interpolation, the switch's blend and the normals
+    // run over them alone. positions() and normals() keep the full mesh's numbering and size: the level writes its
+    // points and the render vertices of those points only, and the others keep stale values (what an earlier level
+    // or a switch's frame at the outgoing level left there; don't draw them): the renderer draws the simplified mesh's
+    // triangles with their indices mapped to the full mesh's render vertices (SimplifiedModel::source_vertex) and
+    // points (source_point). Such a level runs without deformers (`deformers` must be false: the lattices, spring
+    // chains and mushes work on the whole mesh) and transports its normals whatever normals_mode() says (recomputing
+    // them from the full mesh's triangles would read stale points): normals() gives each of its render vertices its
+    // point's skinned bind-pose normal.
+    std::span<const std::uint32_t> points = {};
   };
   // Binds levels: level l skins with lod.levels[l].weights (the full skeleton's bone ids) and runs as options[l] says;
   // level 0 should be the whole character (build_bone_lod's level 0). A switch (set_level) blends: its first update
   // deforms the frame at both levels (that update costs both) and positions() then goes from the outgoing level's
   // points to the new level's in `blend_frames` deformed updates (0: at once), by an offset per point that shrinks
-  // linearly. Throws deform::Error (kind argument, element "level N") for a level count that differs from
-  // options' or is 0, a skin that SkinningJob refuses for this model (its reason), an update_interval outside [1, 64];
+  // linearly. With point subsets (LevelOptions::points) the blend runs over the new level's points: a point the
+  // outgoing level deformed too blends by its offset as above; a point new to the level (not drawn before) starts at
+  // its new place, at once and when the level interpolates. Throws deform::Error (kind argument, element "level N")
+  // for a level count that differs from options' or is 0, a skin that SkinningJob refuses for this model (its reason),
+  // an update_interval outside [1, 64], a point id out of range or listed twice, a point subset with deformers on;
   // and for blend_frames over 1000 (element "blend_frames"). Allocates the levels (shared with instance()) and a
-  // per-point blend and interpolation buffer; the character starts at level 0. Call at set-up, not per frame.
+  // per-point blend and interpolation buffer (and one per point of the largest subset); the character starts at
+  // level 0. Call at set-up, not per frame.
   void set_levels(const BoneLod& lod, std::span<const LevelOptions> options, std::uint32_t blend_frames = 8);
   // The level the next update() shows (0 without levels), and how many there are (1 without levels).
   std::size_t level() const noexcept { return level_; }
@@ -301,7 +319,7 @@ class DEFORM_CHARACTER_API Character {
   bool next_update_deforms() const noexcept;
   // What a level costs per deformed update, for a caller that budgets a crowd.
   struct LevelCost {
-    std::size_t points = 0;      // points skinned
+    std::size_t points = 0;      // points skinned (the level's subset, LevelOptions::points)
     std::size_t influences = 0;  // Σ over points of their influences
     std::size_t bones = 0;       // bones the skin uses (the kept bones; forward kinematics still runs over all)
     bool deformers = true;
@@ -386,10 +404,15 @@ class DEFORM_CHARACTER_API Character {
   void forget_held_specs() noexcept;
   void clamp_pose(Pose& pose) const noexcept;
   // update()'s LBS or DQS (settings.skinning) of the (morphed) bind points, and their normals when transporting.
+  // Into `out_positions` and `out_normals` (transporting), one per skin entry.
   SkinningJob skinning_job(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals,
-                           bool transport, const SkinWeights& weights) noexcept;
+                           bool transport, const SkinWeights& weights, std::span<glm::vec3> out_positions,
+                           std::span<glm::vec3> out_normals) noexcept;
   Status skin(std::span<const glm::vec3> rest_positions, std::span<const glm::vec3> rest_normals, bool transport,
-              const SkinWeights& weights) noexcept;
+              const SkinWeights& weights, std::span<glm::vec3> out_positions,
+              std::span<glm::vec3> out_normals) noexcept;
+  // A subset level's skinning (deform_frame): its points into positions_, its normals into level_normals_.
+  Status skin_subset(std::size_t level) noexcept;
   // Where update() transports the per-point normals: normals_'s first entries, or point_normals_.
   std::span<glm::vec3> point_normals() noexcept;
   // reach()'s steps (character.cpp): refuse a bad effector or target, the chain, its lattices, the first solve, the
@@ -451,11 +474,27 @@ class DEFORM_CHARACTER_API Character {
   // Direct Delta Mush: the binding (shared by instances; null when off). Its job needs no scratch.
   std::shared_ptr<const DirectDeltaMushBinding> direct_mush_;
   // Levels of detail (set_levels): shared by instances; null without levels.
+  // A level's point subset (LevelOptions::points), bound: all empty for a level of all points.
+  struct LevelPoints {
+    std::vector<std::uint32_t> points;      // the full mesh's point ids, ascending
+    bool contiguous = false;                // they are a range of ids (points renumbered, order_points_first)
+    std::vector<std::uint8_t> member;       // per mesh point: 1 when the level deforms it
+    std::vector<glm::vec3> rest_positions;  // per subset point: its bind position and bind normal
+    std::vector<glm::vec3> rest_normals;
+    std::vector<std::uint32_t> vertices;  // the render vertices of those points, and each one's subset index
+    std::vector<std::uint32_t> vertex_slot;
+  };
   struct LevelData {
-    std::vector<SkinWeights> weights;  // per level
+    std::vector<SkinWeights> weights;  // per level: one per mesh point, or one per subset point
     std::vector<LevelCost> costs;
+    std::vector<LevelPoints> subsets;
+    std::size_t largest_subset = 0;
     std::uint32_t blend_frames = 0;
   };
+  bool level_has(std::size_t level, std::size_t point) const noexcept {
+    return levels_->subsets[level].points.empty() || levels_->subsets[level].member[point] != 0;
+  }
+  void allocate_level_state();
   std::shared_ptr<const LevelData> levels_;
   std::size_t level_ = 0;            // the level asked for (set_level)
   std::size_t shown_ = 0;            // the level the last deformed update showed
@@ -465,6 +504,13 @@ class DEFORM_CHARACTER_API Character {
   std::vector<glm::vec3> blend_;     // the switch's offset per point (outgoing - new)
   std::vector<glm::vec3> target_;    // update_interval > 1: the last deformed points, positions() moving toward them
   std::uint32_t approach_left_ = 0;  // updates until positions() reaches target_
+  // A subset level's skinned points and normals, one per subset point (sized by the largest subset), and its rest
+  // points and normals gathered from the morphed ones (only with morph targets); the subset level whose normals
+  // normals() scatters to its render vertices (-1: none, the last update's normals are the whole mesh's).
+  std::vector<glm::vec3> level_positions_;
+  std::vector<glm::vec3> level_normals_;
+  std::vector<glm::vec3> level_rest_;
+  std::int32_t subset_normals_ = -1;
   Status deform_frame(float dt, std::size_t level);
   std::shared_ptr<const DirectDeltaMushReducedBinding> reduced_mush_;  // set_direct_delta_mush's reduced variant
   // Pose-space correctives: each driver (shared), the morph target of each of its shapes, its weights' room.

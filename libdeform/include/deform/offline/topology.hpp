@@ -6,6 +6,7 @@
 
 #include "deform/offline/export.hpp"
 #include "deform/runtime/mesh.hpp"
+#include "deform/runtime/model.hpp"
 
 namespace deform {
 
@@ -39,5 +40,24 @@ DEFORM_OFFLINE_API PointTopology build_point_topology(const Mesh& mesh);
 // element "mesh") when a vertex_point entry, triangle or face corner is out of range, or an optional per-vertex
 // array is neither empty nor one per render vertex; the mesh is unchanged then. O(render vertices + corners).
 DEFORM_OFFLINE_API std::vector<std::uint32_t> order_vertices_by_point(Mesh& mesh);
+
+// What order_points_first did: the new index of each previous point and of each previous render vertex.
+struct PointOrder {
+  std::vector<std::uint32_t> point;
+  std::vector<std::uint32_t> vertex;
+};
+// Renumbers a model's points so that `first` (previous point ids, each once, in any order) become points 0, 1, ... in
+// that order and the others follow in their previous order; positions, skin weights (one per point, or none), morph
+// targets (their points renumbered, kept ascending with their deltas) and vertex_point follow, and the render vertices
+// are then ordered by order_vertices_by_point. The model draws and skins the same. Why: a Character level of detail
+// that deforms a simplified mesh's points (Character::LevelOptions::points, from simplify_model's source_point) reads
+// and writes a few scattered points of every cache line when they are spread over the mesh, and whole lines when they
+// come first: list the coarsest level's points, then the next's (nested levels: simplify the simplified model
+// further), and each level is a prefix (docs/skinning.md, "Levels of detail"). Per-point data made before (a rig's
+// corrective shapes, simplified models' source_point) is renumbered through `point` by the caller. Throws
+// deform::Error (kind argument, element "first") for an id out of range or listed twice, or what
+// order_vertices_by_point throws; the model is unchanged then. Allocates; O(points + render vertices + corners + morph
+// entries).
+DEFORM_OFFLINE_API PointOrder order_points_first(Model& model, std::span<const std::uint32_t> first);
 
 }  // namespace deform
