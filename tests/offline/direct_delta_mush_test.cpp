@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -871,13 +872,17 @@ TEST_CASE("Reduced Direct Delta Mush: fewer bytes an influence; near the full fo
   const double full_bytes = bytes(full.rest) + bytes(full.offsets) + bytes(full.bones) + bytes(full.moments) +
                             bytes(full.lanes.rounds) + bytes(full.lanes.shared) + bytes(full.lanes.start) +
                             bytes(full.lanes.influence) + bytes(full.lanes.bones) + bytes(full.lanes.moments);
-  const double reduced_bytes = bytes(b.rest) + bytes(b.offsets) + bytes(b.bones) + bytes(b.moments);
+  const double reduced_bytes = bytes(b.rest) + bytes(b.offsets) + bytes(b.bones) + bytes(b.moments) +
+                               bytes(b.lanes.rounds) + bytes(b.lanes.shared) + bytes(b.lanes.start) +
+                               bytes(b.lanes.influence) + bytes(b.lanes.bones) + bytes(b.lanes.moments);
   const double influences = double(full.influence_count());
   MESSAGE("bytes an influence: full " << full_bytes / influences << " (moments " << bytes(full.moments) / influences
                                       << " + lanes), reduced " << reduced_bytes / influences << " (moments "
-                                      << bytes(b.moments) / influences << ")");
+                                      << bytes(b.moments) / influences << " + lanes)");
   CHECK(b.influence_count() == full.influence_count());
-  CHECK(reduced_bytes * 2.5 <= full_bytes);
+  // Both forms' kernels read their moments from lanes, which copy them (the reduced form's 4 floats a slot, the full
+  // form's 10): in all, the reduced form takes under half the bytes; its moments, under 1 / 2.5.
+  CHECK(reduced_bytes * 2.0 <= full_bytes);
   CHECK(bytes(b.moments) * 2.5 <= bytes(full.moments));
 
   // The left elbow bent 150°: the reduced form close to the full one. Both lose more of the body's volume than LBS
@@ -1007,4 +1012,181 @@ TEST_CASE("Reduced Direct Delta Mush: ranges, threads and in-place input give th
   DirectDeltaMushReducedBinding out = b;
   CHECK(!deform::reduce_direct_delta_mush(broken, out));
   CHECK(out.point_count() == 0);
+}
+
+namespace {
+
+// A reduced binding made up: `n` points, each with 0 to 12 influences (bones of 20, a bone now and then twice in a
+// row, the largest ψ first, the ψ summing to 1), first moments of a few centimetres, rest points in a metre's box.
+DirectDeltaMushReducedBinding random_reduced(std::mt19937& random, std::size_t n) {
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), positive(0.05f, 1.0f);
+  std::uniform_int_distribution<int> bone(0, 19), count(0, 12);
+  DirectDeltaMushReducedBinding b;
+  b.bone_count = 20;
+  b.offsets.push_back(0);
+  for (std::size_t i = 0; i < n; ++i) {
+    b.rest.push_back({unit(random), unit(random), unit(random)});
+    const int k = i == 1 ? 0 : i == 2 ? 12 : count(random);  // an empty row and a long one in any binding of 3 or more
+    std::vector<float> psi;
+    double sum = 0.0;
+    for (int j = 0; j < k; ++j) psi.push_back(positive(random)), sum += psi.back();
+    std::sort(psi.begin(), psi.end(), std::greater<>());
+    for (int j = 0; j < k; ++j) {
+      const int same = j > 0 && bone(random) == 0 ? int(b.bones.back()) : bone(random);
+      b.bones.push_back(std::uint16_t(same));
+      b.moments.push_back({0.05f * unit(random), 0.05f * unit(random), 0.05f * unit(random), float(psi[j] / sum)});
+    }
+    b.offsets.push_back(std::uint32_t(b.bones.size()));
+  }
+  REQUIRE(deform::pack_direct_delta_mush(b));
+  return b;
+}
+
+// The reduced job's equations (the header) evaluated a point at a time in float, each row in its own order: what the
+// job computed before it had lanes, for the comparison below.
+Output scalar_reduced(const DirectDeltaMushReducedBinding& b, const std::vector<glm::mat4>& palette,
+                      const std::vector<deform::DualQuat>& dq, std::span<const glm::vec3> in,
+                      std::span<const glm::vec3> normals) {
+  Output out{std::vector<glm::vec3>(b.point_count()), std::vector<glm::vec3>(normals.size())};
+  for (std::size_t i = 0; i < b.point_count(); ++i) {
+    const glm::vec3 r = b.rest[i], x = in.empty() ? r : in[i];
+    glm::mat3 rotation(1.0f);
+    glm::vec3 position = x;
+    if (b.offsets[i] < b.offsets[i + 1]) {
+      const glm::mat4& m0 = palette[b.bones[b.offsets[i]]];
+      const glm::quat q0 = dq[b.bones[b.offsets[i]]].real;
+      const glm::vec3 c(m0 * glm::vec4(r, 1.0f));
+      glm::vec3 blend(0.0f), moved(0.0f), centroid(0.0f);
+      glm::vec4 q(0.0f);  // x, y, z, w
+      for (std::uint32_t e = b.offsets[i]; e < b.offsets[i + 1]; ++e) {
+        const glm::mat4& m = palette[b.bones[e]];
+        const glm::quat qj = dq[b.bones[e]].real;
+        const glm::vec3 p(b.moments[e]);
+        const float psi = b.moments[e].w;
+        blend += psi * (glm::vec3(m * glm::vec4(r, 1.0f)) - c);
+        moved += glm::mat3(m) * p;
+        centroid += p;
+        const float w = glm::dot(qj, q0) < 0.0f ? -psi : psi;
+        q += w * glm::vec4(qj.x, qj.y, qj.z, qj.w);
+      }
+      rotation = glm::mat3_cast(glm::normalize(glm::quat(q.w, q.x, q.y, q.z)));
+      position = c + (blend + (moved - rotation * centroid) + rotation * (x - r));
+    }
+    out.positions[i] = position;
+    if (!normals.empty()) {
+      const glm::vec3 n = rotation * normals[i];
+      out.normals[i] = glm::dot(n, n) > 0.0f ? glm::normalize(n) : glm::vec3(0.0f);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("Reduced Direct Delta Mush: every instruction set's copy agrees with the equations point by point") {
+  // Made-up bindings of 1 to 101 points (blocks of 16 and a partial one, rows of up to 12 influences, empty ones, a
+  // bone twice in a row), random palettes (turns, uniform scales, translations; the quaternions' signs flipped at
+  // random), input points and normals: each copy of the kernel against the scalar evaluation, a point's bits the same
+  // over any range, and the identity palette giving each rest point back exactly.
+  std::mt19937 random(61);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), scale(0.8, 1.25);
+  std::bernoulli_distribution flip(0.5);
+  int ran = 0;
+  for (const std::size_t n : {std::size_t(1), std::size_t(2), std::size_t(15), std::size_t(17), std::size_t(101)}) {
+    CAPTURE(n);
+    const DirectDeltaMushReducedBinding b = random_reduced(random, n);
+    std::vector<glm::mat4> palette(b.bone_count);
+    for (glm::mat4& m : palette) {
+      const glm::dvec3 shift{unit(random), unit(random), unit(random)};
+      const glm::dquat turn = random_turn(random, 120.0);
+      const double size = scale(random);
+      m = glm::mat4(glm::translate(glm::dmat4(1.0), shift) * glm::mat4_cast(turn) *
+                    glm::scale(glm::dmat4(1.0), glm::dvec3(size)));
+    }
+    std::vector<deform::DualQuat> dq = rotations_of(palette);
+    for (deform::DualQuat& d : dq)
+      if (flip(random)) d.real = -d.real;
+    std::vector<glm::vec3> in(n), normals = some_normals(n);
+    for (std::size_t i = 0; i < n; ++i)
+      in[i] = b.rest[i] + 0.01f * glm::vec3{float(unit(random)), float(unit(random)), float(unit(random))};
+    normals[0] = glm::vec3(0.0f);  // zero stays zero
+    const Output expected = scalar_reduced(b, palette, dq, in, normals);
+    const std::vector<glm::mat4> identity(b.bone_count, glm::mat4(1.0f));
+    const std::vector<deform::DualQuat> identity_dq = rotations_of(identity);
+    for (const deform::Isa isa : {deform::Isa::automatic, deform::Isa::portable, deform::Isa::avx2, deform::Isa::avx512,
+                                  deform::Isa::neon, deform::Isa::simd128}) {
+      CAPTURE(deform::isa_name(isa));
+      Output out{std::vector<glm::vec3>(n), std::vector<glm::vec3>(n)}, pieces = out;
+      std::vector<glm::quat> rotations(n);
+      DirectDeltaMushReducedJob job;
+      job.binding = &b, job.matrices = palette, job.dual_quats = dq, job.isa = isa;
+      job.in_positions = in, job.out_positions = out.positions;
+      job.in_normals = normals, job.out_normals = out.normals, job.out_rotations = rotations;
+      if (!deform::isa_available(isa)) {
+        CHECK(std::string(job.validate().reason()) == "instruction set not available");
+        CHECK(std::string(job.run().reason()) == "instruction set not available");
+        continue;
+      }
+      ++ran;
+      REQUIRE(job.validate());
+      REQUIRE(job.run());
+      double worst = 0.0, worst_normal = 0.0, worst_rotation = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        worst = std::max(worst, double(glm::length(out.positions[i] - expected.positions[i])));
+        worst_normal = std::max(worst_normal, double(glm::length(out.normals[i] - expected.normals[i])));
+        worst_rotation =
+            std::max(worst_rotation,
+                     double(glm::length(rotations[i] * normals[i] - expected.normals[i] * glm::length(normals[i]))));
+        if (b.offsets[i] == b.offsets[i + 1]) {  // no influences: the input point, its normal, the identity
+          CHECK(out.positions[i] == in[i]);
+          CHECK(rotations[i] == glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+        }
+      }
+      CHECK(worst <= 2e-6);  // the points are within 2 of the origin
+      CHECK(worst_normal <= 2e-6);
+      CHECK(worst_rotation <= 2e-6);
+      CHECK(out.normals[0] == glm::vec3(0.0f));
+      // Ranges of 7 cut the blocks of 16 elsewhere: the same bits.
+      job.out_positions = pieces.positions, job.out_normals = pieces.normals;
+      for (std::size_t begin = 0; begin < n; begin += 7) REQUIRE(job.run(begin, std::min(n, begin + 7)));
+      CHECK(std::memcmp(pieces.positions.data(), out.positions.data(), n * sizeof(glm::vec3)) == 0);
+      CHECK(std::memcmp(pieces.normals.data(), out.normals.data(), n * sizeof(glm::vec3)) == 0);
+      // The identity palette, without input points: each rest point exactly.
+      job.matrices = identity, job.dual_quats = identity_dq, job.in_positions = {};
+      REQUIRE(job.run());
+      CHECK(std::memcmp(pieces.positions.data(), b.rest.data(), n * sizeof(glm::vec3)) == 0);
+    }
+  }
+  CHECK(ran >= 6);  // automatic and portable at least, for each binding
+}
+
+TEST_CASE("Reduced Direct Delta Mush: its lanes share bones where they can; rows edited after packing are refused") {
+  deform::Character c(deform::builtin_character());
+  DirectDeltaMushReducedBinding b = reduced(deform::bind_direct_delta_mush(c.model().mesh, c.model().weights));
+  // The built-in character's blocks take most of their rounds with one bone for all their lanes, some not (so that
+  // the tests above run both kinds of rounds on it); the lanes copy the 4 floats an influence.
+  std::size_t shared = 0;
+  for (const std::uint32_t s : b.lanes.shared) shared += s;
+  CHECK(shared > b.lanes.rounds.back() / 2);
+  CHECK(shared < b.lanes.rounds.back());
+  CHECK(b.lanes.moments.size() == std::size_t(b.lanes.rounds.back()) * 16 * 4);
+  const std::vector<glm::mat4> palette(c.palette().begin(), c.palette().end());
+  const std::vector<deform::DualQuat> dq = rotations_of(palette);
+  std::vector<glm::vec3> out(b.point_count());
+  DirectDeltaMushReducedJob job;
+  job.binding = &b, job.matrices = palette, job.dual_quats = dq, job.out_positions = out;
+  REQUIRE(job.validate());
+  // A moment edited in the rows: the lanes no longer hold them. Packing again mends it.
+  b.moments[5].x += 0.001f;
+  CHECK(std::string(job.validate().reason()) == "binding is malformed: lanes not packed from its rows");
+  REQUIRE(deform::pack_direct_delta_mush(b));
+  CHECK(job.validate());
+  // No lanes at all: refused by run() too (its O(1) checks), writing nothing.
+  b.lanes = {};
+  CHECK(std::string(job.validate().reason()) == "binding is malformed: lanes not packed from its rows");
+  CHECK(std::string(job.run().reason()) == "binding is malformed: lanes not packed from its rows");
+  // Rows the packer refuses leave the lanes empty.
+  b.offsets.pop_back();
+  CHECK(std::string(deform::pack_direct_delta_mush(b).reason()) == "binding is malformed: arrays differ in size");
+  CHECK(b.lanes.rounds.empty());
 }

@@ -2,7 +2,8 @@
 // cross-covariance that gives, and the point carried by it (Le and Lewis 2019). Sums are taken relative to where the
 // point's strongest bone carries its rest point, so that no float sum cancels the model's distance from the origin.
 // run() hands its range to the lane kernel (simd/ddm_kernel.inl), in the copy its Isa picks (the widest by default);
-// nearest_rotation below is the same step for one point, for callers and the tests.
+// nearest_rotation below is the same step for one point, for callers and the tests. The reduced job
+// (DirectDeltaMushReducedJob) runs a second kernel in the same files over lanes packed by the same packer.
 #include "deform/runtime/direct_delta_mush.hpp"
 
 #include <algorithm>
@@ -22,24 +23,49 @@ constexpr std::size_t width = DirectDeltaMushLanes::width;
 constexpr std::size_t moment_floats = sizeof(DirectDeltaMushMoments) / sizeof(float);
 static_assert(sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
 
+// A binding's rows as the lanes see them, for either form: the full form's lanes copy its 10 moments an influence,
+// the reduced form's none (floats 0: its kernel reads its rows' moments through the lanes' influences).
+struct Rows {
+  std::size_t n;                 // points
+  const std::uint32_t* offsets;  // n + 1, ascending from 0
+  const std::uint16_t* bones;    // offsets[n]
+  std::uint32_t bone_count;      // the binding's
+  const float* moments;          // `floats` per influence, or null when floats is 0
+  std::size_t floats;            // the moment floats each slot of the lanes copies
+};
+
+Rows rows_of(const DirectDeltaMushBinding& b) noexcept {
+  return {
+      b.point_count(), b.offsets.data(), b.bones.data(), b.bone_count, reinterpret_cast<const float*>(b.moments.data()),
+      moment_floats};
+}
+
+Rows rows_of(const DirectDeltaMushReducedBinding& b) noexcept {
+  static_assert(sizeof(glm::vec4) == 4 * sizeof(float));
+  return {b.point_count(),
+          b.offsets.data(),
+          b.bones.data(),
+          b.bone_count,
+          reinterpret_cast<const float*>(b.moments.data()),
+          4};
+}
+
 // The lanes' arrays sized for the rows' point count (O(1)): what the kernel relies on to read within them.
-bool lanes_shape_ok(const DirectDeltaMushBinding& b) noexcept {
-  const DirectDeltaMushLanes& l = b.lanes;
-  const std::size_t blocks = (b.point_count() + width - 1) / width;
-  if (l.point_count != b.point_count() || l.rounds.size() != blocks + 1 || l.shared.size() != blocks ||
+bool lanes_shape_ok(const DirectDeltaMushLanes& l, std::size_t n, std::size_t floats) noexcept {
+  const std::size_t blocks = (n + width - 1) / width;
+  if (l.point_count != n || l.rounds.size() != blocks + 1 || l.shared.size() != blocks ||
       l.start.size() != blocks * width)
     return false;
   const std::size_t slots = std::size_t(l.rounds.back()) * width;
   return l.rounds[0] == 0 && l.influence.size() == slots && l.bones.size() == slots &&
-         l.moments.size() == slots * moment_floats;
+         l.moments.size() == slots * floats;
 }
 
 // The lanes hold exactly the rows (O(influences)): each lane's slots name each of its point's influences once, with
 // its bone and its moments' bits, the empty slots zero moments, the shared rounds one bone; the rounds ascend. The
 // rows are checked (offsets ascending, bones in range) before.
-bool lanes_match_rows(const DirectDeltaMushBinding& b) noexcept {
-  const DirectDeltaMushLanes& l = b.lanes;
-  const std::size_t n = b.point_count();
+bool lanes_match_rows(const DirectDeltaMushLanes& l, const Rows& b) noexcept {
+  const std::size_t n = b.n, floats = b.floats;
   for (std::size_t k = 0; k + 1 < l.rounds.size(); ++k) {
     const std::uint32_t r0 = l.rounds[k], r1 = l.rounds[k + 1];
     if (r1 < r0 || l.shared[k] > r1 - r0) return false;
@@ -55,18 +81,18 @@ bool lanes_match_rows(const DirectDeltaMushBinding& b) noexcept {
       std::uint64_t sum = 0;  // of the influences named: with the count, a slot naming one twice shows
       for (std::uint32_t r = r0; r < r1; ++r) {
         const std::size_t slot = std::size_t(r) * width + lane;
-        const float* m = l.moments.data() + std::size_t(r) * width * moment_floats + lane;
+        const float* m = l.moments.data() + std::size_t(r) * width * floats + lane;
         const std::uint32_t e = l.influence[slot];
         if (r - r0 < l.shared[k] && l.bones[slot] != l.bones[std::size_t(r) * width]) return false;
         if (e == DirectDeltaMushLanes::none) {
           if (l.bones[slot] >= b.bone_count) return false;
-          for (std::size_t c = 0; c < moment_floats; ++c)
+          for (std::size_t c = 0; c < floats; ++c)
             if (m[c * width] != 0.0f) return false;
           continue;
         }
         if (e < first || e >= last || l.bones[slot] != b.bones[e]) return false;
-        const float* row = reinterpret_cast<const float*>(&b.moments[e]);
-        for (std::size_t c = 0; c < moment_floats; ++c)
+        const float* row = b.moments + std::size_t(e) * floats;
+        for (std::size_t c = 0; c < floats; ++c)
           if (std::memcmp(&m[c * width], &row[c], sizeof(float)) != 0) return false;
         ++found, sum += e;
       }
@@ -86,7 +112,8 @@ Status shape_ok(const DirectDeltaMushJob& job) noexcept {
     return Status::failure("binding is malformed: arrays differ in size");
   if (b->offsets.back() != b->bones.size())
     return Status::failure("binding is malformed: offsets do not end at the end");
-  if (!lanes_shape_ok(*b)) return Status::failure("binding is malformed: lanes not packed from its rows");
+  if (!lanes_shape_ok(b->lanes, n, moment_floats))
+    return Status::failure("binding is malformed: lanes not packed from its rows");
   if (job.matrices.size() < b->bone_count) return Status::failure("palette is too small");
   if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
     return Status::failure("positions are not one per point");
@@ -176,18 +203,16 @@ Status DirectDeltaMushJob::validate() const noexcept {
   }
   for (std::size_t j = 0; j < b.bone_count; ++j)
     if (!finite(matrices[j])) return Status::failure("palette matrix is not finite");
-  if (!lanes_match_rows(b)) return Status::failure("binding is malformed: lanes not packed from its rows");
+  if (!lanes_match_rows(b.lanes, rows_of(b)))
+    return Status::failure("binding is malformed: lanes not packed from its rows");
   return {};
 }
 
-Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
-  b.lanes = {};
-  const std::size_t n = b.point_count();
-  if (b.offsets.size() != n + 1 || b.moments.size() != b.bones.size() || b.offsets[0] != 0 ||
-      b.offsets.back() != b.bones.size())
-    return Status::failure("binding is malformed: arrays differ in size");
-  for (std::size_t i = 0; i < n; ++i)
-    if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
+namespace {
+
+// The rows' lanes (DirectDeltaMushLanes), which pack_direct_delta_mush's checks have found consistent.
+DirectDeltaMushLanes pack_rows(const Rows& b) {
+  const std::size_t n = b.n, floats = b.floats;
   // The cost of a round with a bone per lane, in shared rounds: it copies 16 matrices into the lanes (16 × 12 scalar
   // loads and stores) besides the same products; an estimate from the instruction counts, not tuned: on the
   // benchmark's models nearly every round is shared whatever it is (docs/performance.md, 2026-11-28 04:45 UTC).
@@ -257,7 +282,7 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
       l.bones.push_back(bone);
     };
     const std::size_t start = l.moments.size();
-    l.moments.resize(start + (best + gathered) * width * moment_floats, 0.0f);
+    l.moments.resize(start + (best + gathered) * width * floats, 0.0f);
     for (std::size_t r = 0; r < best + gathered; ++r)
       for (std::size_t lane = 0; lane < width; ++lane) {
         const std::uint32_t e = r < best                       ? shared_slots[r * width + lane]
@@ -265,9 +290,8 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
                                                                : DirectDeltaMushLanes::none;
         slot(e, r < best ? coverage[r].second : e != DirectDeltaMushLanes::none ? b.bones[e] : 0);
         if (e == DirectDeltaMushLanes::none) continue;
-        const float* row = reinterpret_cast<const float*>(&b.moments[e]);
-        for (std::size_t c = 0; c < moment_floats; ++c)
-          l.moments[start + (r * moment_floats + c) * width + lane] = row[c];
+        const float* row = b.moments + std::size_t(e) * floats;
+        for (std::size_t c = 0; c < floats; ++c) l.moments[start + (r * floats + c) * width + lane] = row[c];
       }
     l.shared.push_back(std::uint32_t(best));
     for (std::size_t lane = 0; lane < width; ++lane) {
@@ -279,7 +303,32 @@ Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
     }
     l.rounds.push_back(l.rounds.back() + std::uint32_t(best + gathered));
   }
-  b.lanes = std::move(l);
+  return l;
+}
+
+}  // namespace
+
+Status pack_direct_delta_mush(DirectDeltaMushBinding& b) {
+  b.lanes = {};
+  const std::size_t n = b.point_count();
+  if (b.offsets.size() != n + 1 || b.moments.size() != b.bones.size() || b.offsets[0] != 0 ||
+      b.offsets.back() != b.bones.size())
+    return Status::failure("binding is malformed: arrays differ in size");
+  for (std::size_t i = 0; i < n; ++i)
+    if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
+  b.lanes = pack_rows(rows_of(b));
+  return {};
+}
+
+Status pack_direct_delta_mush(DirectDeltaMushReducedBinding& b) {
+  b.lanes = {};
+  const std::size_t n = b.point_count();
+  if (b.offsets.size() != n + 1 || b.moments.size() != b.bones.size() || b.offsets[0] != 0 ||
+      b.offsets.back() != b.bones.size())
+    return Status::failure("binding is malformed: arrays differ in size");
+  for (std::size_t i = 0; i < n; ++i)
+    if (b.offsets[i + 1] < b.offsets[i]) return Status::failure("binding is malformed: offsets do not ascend from 0");
+  b.lanes = pack_rows(rows_of(b));
   return {};
 }
 
@@ -313,6 +362,7 @@ Status reduced_shape_ok(const DirectDeltaMushReducedJob& job) noexcept {
     return Status::failure("binding is malformed: arrays differ in size");
   if (b->offsets.back() != b->bones.size())
     return Status::failure("binding is malformed: offsets do not end at the end");
+  if (!lanes_shape_ok(b->lanes, n, 4)) return Status::failure("binding is malformed: lanes not packed from its rows");
   if (job.matrices.size() < b->bone_count || job.dual_quats.size() < b->bone_count)
     return Status::failure("palette is too small");
   if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
@@ -321,16 +371,26 @@ Status reduced_shape_ok(const DirectDeltaMushReducedJob& job) noexcept {
     return Status::failure("normals are not one per point");
   if (!job.out_rotations.empty() && job.out_rotations.size() != n)
     return Status::failure("rotations are not one per point");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   return {};
 }
 
-// Bone matrix m applied to point p (its 3×3 part and translation).
-inline glm::vec3 transform(const glm::mat4& m, const glm::vec3& p) noexcept {
-  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z + glm::vec3(m[3]);
-}
+using ReducedKernelEntry = void (*)(const detail::DdmReducedKernelArgs&) noexcept;
 
-inline glm::vec3 linear(const glm::mat4& m, const glm::vec3& p) noexcept {
-  return glm::vec3(m[0]) * p.x + glm::vec3(m[1]) * p.y + glm::vec3(m[2]) * p.z;
+// The reduced kernel's copy for `isa`, which isa_available() has accepted.
+ReducedKernelEntry reduced_kernel_for(Isa isa) noexcept {
+  if (isa == Isa::automatic) isa = isa_best();
+#if defined(DEFORM_X86_KERNELS)
+  if (isa == Isa::avx512) return detail::direct_delta_mush_reduced_avx512;
+  if (isa == Isa::avx2) return detail::direct_delta_mush_reduced_avx2;
+#endif
+#if defined(DEFORM_NEON_KERNELS)
+  if (isa == Isa::neon) return detail::direct_delta_mush_reduced_neon;
+#endif
+#if defined(DEFORM_SIMD128_KERNELS)
+  if (isa == Isa::simd128) return detail::direct_delta_mush_reduced_simd128;
+#endif
+  return detail::direct_delta_mush_reduced_portable;
 }
 
 }  // namespace
@@ -362,6 +422,7 @@ Status reduce_direct_delta_mush(const DirectDeltaMushBinding& full, DirectDeltaM
       r.moments.push_back(v);
     }
   }
+  if (const Status status = pack_direct_delta_mush(r); !status) return status;
   out = std::move(r);
   return {};
 }
@@ -388,6 +449,8 @@ Status DirectDeltaMushReducedJob::validate() const noexcept {
     if (!finite(matrices[j])) return Status::failure("palette matrix is not finite");
     if (!finite(dual_quats[j].real)) return Status::failure("dual quaternion is not finite");
   }
+  if (!lanes_match_rows(b.lanes, rows_of(b)))
+    return Status::failure("binding is malformed: lanes not packed from its rows");
   return {};
 }
 
@@ -396,56 +459,12 @@ Status DirectDeltaMushReducedJob::run() const noexcept { return run(0, count());
 Status DirectDeltaMushReducedJob::run(std::size_t begin, std::size_t end) const noexcept {
   if (const Status status = reduced_shape_ok(*this); !status) return status;
   if (begin > end || end > count()) return Status::failure("range outside the job");
-  const DirectDeltaMushReducedBinding& b = *binding;
-  const bool normals = !in_normals.empty();
-  for (std::size_t i = begin; i < end; ++i) {
-    const glm::vec3 r = b.rest[i];
-    const glm::vec3 x = in_positions.empty() ? r : in_positions[i];
-    const std::uint32_t first = b.offsets[i], last = b.offsets[i + 1];
-    if (first == last) {
-      out_positions[i] = x;
-      if (normals) {
-        const glm::vec3 n = in_normals[i];
-        const float length2 = glm::dot(n, n);
-        out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
-      }
-      if (!out_rotations.empty()) out_rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-      continue;
-    }
-    // Sums relative to c = M₀ rᵢ; at the identity palette every term below is exactly 0 (see the header).
-    const glm::mat4& m0 = matrices[b.bones[first]];
-    const glm::quat q0 = dual_quats[b.bones[first]].real;
-    const glm::vec3 c = transform(m0, r);
-    glm::vec3 blend(0.0f), moved(0.0f), centroid(0.0f);
-    float qx = 0.0f, qy = 0.0f, qz = 0.0f, qw = 0.0f;
-    for (std::uint32_t e = first; e < last; ++e) {
-      const glm::mat4& m = matrices[b.bones[e]];
-      const glm::quat qj = dual_quats[b.bones[e]].real;
-      const glm::vec4 mo = b.moments[e];
-      const glm::vec3 p(mo);
-      blend += mo.w * (transform(m, r) - c);
-      moved += linear(m, p);
-      centroid += p;
-      const float w = qj.x * q0.x + qj.y * q0.y + qj.z * q0.z + qj.w * q0.w < 0.0f ? -mo.w : mo.w;
-      qx += w * qj.x, qy += w * qj.y, qz += w * qj.z, qw += w * qj.w;
-    }
-    // The rotation of the blended quaternion as a matrix, without normalising it first: for q of squared length s,
-    // R = I + (2 / s) (w [v]× + [v]×²), one division for the three products below. q is not 0 (validate(): its part
-    // along q₀ is at least the first ψ).
-    const float k = 2.0f / (qx * qx + qy * qy + qz * qz + qw * qw);
-    const float xx = k * qx * qx, yy = k * qy * qy, zz = k * qz * qz;
-    const float xy = k * qx * qy, xz = k * qx * qz, yz = k * qy * qz;
-    const float wx = k * qw * qx, wy = k * qw * qy, wz = k * qw * qz;
-    const glm::mat3 rotation(1.0f - yy - zz, xy + wz, xz - wy, xy - wz, 1.0f - xx - zz, yz + wx, xz + wy, yz - wx,
-                             1.0f - xx - yy);
-    out_positions[i] = c + (blend + (moved - rotation * centroid) + rotation * (x - r));
-    if (normals) {
-      const glm::vec3 n = rotation * in_normals[i];
-      const float length2 = glm::dot(n, n);
-      out_normals[i] = length2 > 0.0f ? n / std::sqrt(length2) : glm::vec3(0.0f);
-    }
-    if (!out_rotations.empty()) out_rotations[i] = glm::normalize(glm::quat(qw, qx, qy, qz));
-  }
+  if (begin == end) return {};
+  reduced_kernel_for(isa)({binding, matrices.data(), dual_quats.data(),
+                           in_positions.empty() ? nullptr : in_positions.data(),
+                           in_normals.empty() ? nullptr : in_normals.data(), out_positions.data(),
+                           out_normals.empty() ? nullptr : out_normals.data(),
+                           out_rotations.empty() ? nullptr : out_rotations.data(), begin, end});
   return {};
 }
 

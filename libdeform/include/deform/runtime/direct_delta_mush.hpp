@@ -43,13 +43,15 @@ struct DirectDeltaMushMoments {
   float w = 0.0f;
 };
 
-// The binding's rows laid out for the job's kernel (pack_direct_delta_mush builds it from the rows; derived data, never
+// A binding's rows laid out for its job's kernel (pack_direct_delta_mush builds it from the rows; derived data, never
 // edited by hand). Points go in blocks of `width` (point width · k + l is lane l of block k), a block's influences in
 // rounds of one influence per lane (or none: zero moments): first its `shared` rounds, in each of which every lane
 // takes the same bone (the kernel reads that bone's matrix once for the block), then rounds with a bone per lane, each
 // lane's other influences in row order. The packer picks the shared bones per block to minimise the rounds' cost; the
-// kernel streams the moments, already in lanes. A point's sums are taken in its block's round order, which the
-// binding fixes, so its result does not depend on the range it is run in.
+// kernel streams the moments, already in lanes (the full form's 10 floats a slot, the reduced form's 4: a copy of the
+// rows' that the kernel reads as vectors; reading the rows through `influence` instead, one lane at a time, measured
+// 1.7× slower for the reduced job). A point's sums are taken in its block's round order, which the binding fixes, so
+// its result does not depend on the range it is run in.
 struct DirectDeltaMushLanes {
   static constexpr std::size_t width = 16;
   std::size_t point_count = 0;           // the rows' point count when packed
@@ -58,7 +60,8 @@ struct DirectDeltaMushLanes {
   std::vector<std::uint32_t> start;      // per block and lane: the shared round of its strongest bone, or `none`
   std::vector<std::uint32_t> influence;  // per round and lane (width per round): the row's influence, or `none`
   std::vector<std::uint16_t> bones;      // per round and lane: the palette entry (a shared round's in every lane)
-  std::vector<float> moments;            // per round: the 10 moments (declaration order) × width lanes, 0 for none
+  std::vector<float> moments;            // per round: the moments (the full form's 10 in declaration order, the
+                                         // reduced form's x, y, z, w) × width lanes, 0 for none
   static constexpr std::uint32_t none = 0xffffffffu;
 };
 
@@ -120,7 +123,8 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
 
 // The reduced-storage form of a binding (reduce_direct_delta_mush): of each influence's moments Ωᵢⱼ only the smoothed
 // weight ψᵢⱼ and first moment p̃ᵢⱼ (relative to the rest point i) are kept, 4 floats and a bone where the full form
-// keeps 10 and its lanes as much again. The per-frame rotation is then not the polar decomposition of the posed
+// keeps 10 (each form's lanes copy its floats again: on the built-in character 49 bytes an influence in all against
+// 102). The per-frame rotation is then not the polar decomposition of the posed
 // second moments (which this form does not have) but a blend of the bones' rotations:
 //   Rᵢ = the rotation of the unit quaternion normalise(Σⱼ ψᵢⱼ sⱼ qⱼ), qⱼ bone j's rotation (the DQS palette's real
 //   part:
@@ -132,13 +136,17 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
 // Rᵢ (xᵢ − rᵢ − pʳᵢ), which the job evaluates (the first sum relative to M₀ rᵢ, M₀ the strongest bone, so that no
 // float sum cancels the model's distance from the origin). Contract: the identity palette gives every point back
 // exactly up to the rounding of pʳᵢ's two equal sums (Rᵢ = I, tᵢ = 0); a rigid motion G of every bone moves every
-// point by G (the ψ sum to 1); pᵢ is summed per frame, beside the other sums, rather than stored.
+// point by G (the ψ sum to 1); pᵢ is summed per frame, beside the other sums, rather than stored. The job's kernel
+// takes a point's influences in its block's round order (`lanes`), not its row's: the sums round accordingly.
 struct DirectDeltaMushReducedBinding {
   std::vector<glm::vec3> rest;         // the rest points
   std::vector<std::uint32_t> offsets;  // point i's influences: [offsets[i], offsets[i + 1]); point_count() + 1
   std::vector<std::uint16_t> bones;    // per influence: the palette entry; the largest ψ first in each row
   std::vector<glm::vec4> moments;      // per influence: p̃ʳᵢⱼ (x, y, z) and ψᵢⱼ (w); each row's ψ sum to 1
   std::uint32_t bone_count = 0;        // the palette size the influences need (largest bone + 1)
+  // The rows laid out for the kernel, their moments copied (reduce_direct_delta_mush packs them; after changing the
+  // rows, call pack_direct_delta_mush again, or validate() refuses).
+  DirectDeltaMushLanes lanes;
 
   std::size_t point_count() const noexcept { return rest.size(); }
   std::size_t influence_count() const noexcept { return bones.size(); }
@@ -147,12 +155,13 @@ struct DirectDeltaMushReducedBinding {
 // Derives the reduced form from a full binding's rows: each row's ψ and first moments divided by the row's ψ sum (the
 // pruning leaves it a little under 1; the full job is unchanged by that scale, it normalises its centroids). Refuses
 // rows whose arrays are inconsistent ("binding is malformed: ..."), a nonempty row whose ψ do not sum above 0, or a
-// moment not finite ("binding is not finite"), leaving `out` empty. Allocates.
+// moment not finite ("binding is not finite"), leaving `out` empty. Packs out's lanes. Allocates.
 DEFORM_RUNTIME_API Status reduce_direct_delta_mush(const DirectDeltaMushBinding& full,
                                                    DirectDeltaMushReducedBinding& out);
 
 // The job of the reduced form, shaped as DirectDeltaMushJob (validate() once, run() / run(begin, end) / run(pool),
-// caller-owned spans, no allocation, no throw). One portable kernel, a point at a time.
+// caller-owned spans, no allocation, no throw). A lane kernel in one copy per instruction set, as DirectDeltaMushJob's:
+// blocks of 16 points, the bones' matrices and quaternions read once per block for a bone its lanes share.
 struct DEFORM_RUNTIME_API DirectDeltaMushReducedJob {
   const DirectDeltaMushReducedBinding* binding = nullptr;
   std::span<const glm::mat4> matrices;   // at least binding->bone_count, affine (bottom row 0 0 0 1)
@@ -165,6 +174,7 @@ struct DEFORM_RUNTIME_API DirectDeltaMushReducedJob {
   std::span<const glm::vec3> in_normals;
   std::span<glm::vec3> out_normals;
   std::span<glm::quat> out_rotations;
+  Isa isa = Isa::automatic;  // the kernel copy (isa.hpp); the copies differ in rounding only (fused multiply-adds)
 
   static constexpr std::size_t split_multiple = 16;
   static constexpr std::size_t min_parallel_chunk = 4096;
@@ -172,7 +182,8 @@ struct DEFORM_RUNTIME_API DirectDeltaMushReducedJob {
   // Ok when the call is well formed, else why not: "no binding", "binding is malformed: ..." (array sizes, offsets
   // ascending from 0, a bone out of range, a nonempty row whose ψ do not sum above 0 or whose first ψ is not positive),
   // "binding is not finite", "palette is too small" (matrices or dual_quats under bone_count), "palette matrix is not
-  // finite", "dual quaternion is not finite", and the spans as DirectDeltaMushJob's. O(points + influences + bones).
+  // finite", "dual quaternion is not finite", the spans as DirectDeltaMushJob's, "instruction set not available", and
+  // "binding is malformed: lanes not packed from its rows" (pack_direct_delta_mush). O(points + influences + bones).
   Status validate() const noexcept;
 
   std::size_t count() const noexcept { return binding ? binding->point_count() : 0; }
@@ -190,6 +201,9 @@ struct DEFORM_RUNTIME_API DirectDeltaMushReducedJob {
 // O(influences · bones in a block of 16 points) and 46 bytes per influence slot (an empty slot of a lane with
 // fewer influences than its block's rounds counts).
 DEFORM_RUNTIME_API Status pack_direct_delta_mush(DirectDeltaMushBinding& binding);
+// The same for a reduced binding's rows: reduce_direct_delta_mush calls it. Refuses as the other; 22 bytes per
+// influence slot.
+DEFORM_RUNTIME_API Status pack_direct_delta_mush(DirectDeltaMushReducedBinding& binding);
 
 // The proper rotation R maximising trace(Rᵀ C) (the rotation of C's polar decomposition, with a reflection turned into
 // the nearest rotation: U diag(1, 1, det UVᵀ) Vᵀ), found by Newton steps on the rotation group from `start`. C must not

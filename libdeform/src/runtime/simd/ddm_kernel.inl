@@ -375,3 +375,228 @@ void DEFORM_DDM_ENTRY(const DdmKernelArgs& args) noexcept {
 }
 
 }  // namespace deform::detail
+
+// --- the reduced form's kernel (DirectDeltaMushReducedJob; the header says what it computes) ---
+//
+// The same blocks of 16 points and rounds as the full kernel (the reduced binding's lanes, which carry no moments: a
+// slot's ψ and p̃ʳ come from the rows through its influence). Per block: each lane's strongest bone's matrix M₀ and
+// quaternion q₀ (from a shared round where it is one, else copied), the anchor c = M₀ r; per round, for each lane,
+// Σ ψ (M r − c), Σ A p̃ʳ, Σ p̃ʳ and Σ ±ψ q; then the rotation of the blended quaternion and the outputs, as the scalar
+// equations in the header. No iteration: every lane does the same work. A lane without influences gives its input
+// point back, its normal normalised and the identity.
+
+namespace {
+
+struct ReducedSums {
+  L blend[3];     // Σ ψ (M r − c)
+  L moved[3];     // Σ A p̃ʳ
+  L centroid[3];  // Σ p̃ʳ
+  L q[4];         // Σ ±ψ q (x, y, z, w)
+};
+
+// One round: `one`/`one_q` (a shared round: one bone's 3×4, m[k + k / 3], and quaternion x, y, z, w) or
+// `each`/`each_q` (a bone per lane); each lane's p̃ʳ and ψ from `moment` (4 × lanes floats: x, y, z, ψ; zero for
+// an empty slot, which so adds exact zeros).
+template <bool shared>
+inline void accumulate_reduced(ReducedSums& s, const float* one, const float* one_q, const L* each, const L* each_q,
+                               const float* moment, const L* rest, const L* anchor, const L* q0) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    float m[16], q[4];
+    DEFORM_UNROLL
+    for (int k = 0; k < 12; ++k) m[k + k / 3] = shared ? one[k] : each[k][l];
+    DEFORM_UNROLL
+    for (int k = 0; k < 4; ++k) q[k] = shared ? one_q[k] : each_q[k][l];
+    const float px = moment[l], py = moment[lanes + l], pz = moment[2 * lanes + l], psi = moment[3 * lanes + l];
+    const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+    DEFORM_UNROLL
+    for (int r = 0; r < 3; ++r) {
+      const float d = mul_add(m[r], ux, mul_add(m[4 + r], uy, mul_add(m[8 + r], uz, m[12 + r]))) - anchor[r][l];
+      s.blend[r][l] = mul_add(psi, d, s.blend[r][l]);
+      s.moved[r][l] += mul_add(m[r], px, mul_add(m[4 + r], py, m[8 + r] * pz));
+    }
+    s.centroid[0][l] += px, s.centroid[1][l] += py, s.centroid[2][l] += pz;
+    // Aligned with the strongest bone's quaternion as dual quaternion skinning aligns them.
+    const float dot = q[0] * q0[0][l] + q[1] * q0[1][l] + q[2] * q0[2][l] + q[3] * q0[3][l];
+    const float w = dot < 0.0f ? -psi : psi;
+    DEFORM_UNROLL
+    for (int k = 0; k < 4; ++k) s.q[k][l] = mul_add(w, q[k], s.q[k][l]);
+  }
+}
+
+// Each lane's outputs from its sums: R the rotation of q (not normalised first: R = I + (2 / |q|²)(w [v]× + [v]×²));
+// position = c + ((Σ ψ (M r − c) + (Σ A p̃ʳ − R Σ p̃ʳ)) + R (x − r)), which a lane without influences (its sums zero,
+// its q (0, 0, 0, 1), its anchor x and its offset 0) gives as x exactly; normal = R n normalised (zero stays zero).
+template <bool normals>
+inline void reduced_outputs(const ReducedSums& s, const L* anchor, const L* offset, const L* normal,
+                            Outputs& o) noexcept {
+  for (int l = 0; l < lanes; ++l) {
+    // (A lane without influences has q = (0, 0, 0, 1) from the start: R = I. No select here: GCC would split the loop
+    // into two paths for the constant one, and not vectorise it.)
+    const float qx = s.q[0][l], qy = s.q[1][l], qz = s.q[2][l], qw = s.q[3][l];
+    const float k = 2.0f / (qx * qx + qy * qy + qz * qz + qw * qw);
+    const float xx = k * qx * qx, yy = k * qy * qy, zz = k * qz * qz;
+    const float xy = k * qx * qy, xz = k * qx * qz, yz = k * qy * qz;
+    const float wx = k * qw * qx, wy = k * qw * qy, wz = k * qw * qz;
+    // Columns.
+    const float r00 = 1.0f - yy - zz, r01 = xy + wz, r02 = xz - wy;
+    const float r10 = xy - wz, r11 = 1.0f - xx - zz, r12 = yz + wx;
+    const float r20 = xz + wy, r21 = yz - wx, r22 = 1.0f - xx - yy;
+    const float cx = s.centroid[0][l], cy = s.centroid[1][l], cz = s.centroid[2][l];
+    const float ux = offset[0][l], uy = offset[1][l], uz = offset[2][l];
+    const float rc[3] = {r00 * cx + r10 * cy + r20 * cz, r01 * cx + r11 * cy + r21 * cz,
+                         r02 * cx + r12 * cy + r22 * cz};
+    const float ru[3] = {r00 * ux + r10 * uy + r20 * uz, r01 * ux + r11 * uy + r21 * uz,
+                         r02 * ux + r12 * uy + r22 * uz};
+    const float px = anchor[0][l] + ((s.blend[0][l] + (s.moved[0][l] - rc[0])) + ru[0]);
+    const float py = anchor[1][l] + ((s.blend[1][l] + (s.moved[1][l] - rc[1])) + ru[1]);
+    const float pz = anchor[2][l] + ((s.blend[2][l] + (s.moved[2][l] - rc[2])) + ru[2]);
+    o.position[0][l] = px, o.position[1][l] = py, o.position[2][l] = pz;
+    if constexpr (normals) {
+      const float ix = normal[0][l], iy = normal[1][l], iz = normal[2][l];
+      const float nx = r00 * ix + r10 * iy + r20 * iz, ny = r01 * ix + r11 * iy + r21 * iz;
+      const float nz = r02 * ix + r12 * iy + r22 * iz;
+      const float length2 = nx * nx + ny * ny + nz * nz;
+      const float scale = length2 > 0.0f ? 1.0f / std::sqrt(length2 > 0.0f ? length2 : 1.0f) : 0.0f;
+      o.normal[0][l] = nx * scale, o.normal[1][l] = ny * scale, o.normal[2][l] = nz * scale;
+    }
+  }
+}
+
+}  // namespace
+
+namespace deform::detail {
+
+void DEFORM_DDM_REDUCED_ENTRY(const DdmReducedKernelArgs& args) noexcept {
+  const DirectDeltaMushReducedBinding& bd = *args.binding;
+  const DirectDeltaMushLanes& pack = bd.lanes;
+  const std::size_t n = bd.point_count();
+  const float* matrix_floats = reinterpret_cast<const float*>(args.palette);
+  const DualQuat* dq = args.dual_quats;
+  for (std::size_t block = args.begin / lanes; block * lanes < args.end; ++block) {
+    const std::size_t block_begin = block * lanes;
+    const int count = int(std::min<std::size_t>(lanes, n - block_begin));
+    const int low = int(std::max(args.begin, block_begin) - block_begin);
+    const int high = int(std::min(args.end, block_begin + lanes) - block_begin);
+    L rest[3], input[3], normal[3];
+    std::uint32_t first[lanes];
+    L has;  // 1 where the point has influences, else 0
+    if (count == lanes) {
+      const std::uint32_t* offsets = bd.offsets.data() + block_begin;
+      for (int l = 0; l < lanes; ++l) first[l] = offsets[l], has[l] = offsets[l + 1] != offsets[l] ? 1.0f : 0.0f;
+      load(rest, bd.rest.data() + block_begin);
+      if (args.in_positions != nullptr) load(input, args.in_positions + block_begin);
+      else
+        for (int c = 0; c < 3; ++c) input[c] = rest[c];
+      if (args.in_normals != nullptr) load(normal, args.in_normals + block_begin);
+      else
+        for (int c = 0; c < 3; ++c) normal[c] = L::filled(0.0f);
+    } else {
+      for (int l = 0; l < lanes; ++l) {
+        const std::size_t i = block_begin + std::size_t(l < count ? l : 0);
+        first[l] = bd.offsets[i];
+        has[l] = l < count && bd.offsets[i + 1] != bd.offsets[i] ? 1.0f : 0.0f;
+        const glm::vec3 u = bd.rest[i];
+        rest[0][l] = u.x, rest[1][l] = u.y, rest[2][l] = u.z;
+        const glm::vec3 x = args.in_positions != nullptr ? args.in_positions[i] : u;
+        input[0][l] = x.x, input[1][l] = x.y, input[2][l] = x.z;
+        const glm::vec3 nv = args.in_normals != nullptr ? args.in_normals[i] : glm::vec3(0.0f);
+        normal[0][l] = nv.x, normal[1][l] = nv.y, normal[2][l] = nv.z;
+      }
+    }
+    // Each lane's strongest bone: its 3×4 and quaternion (the identity where it has none), selected from the shared
+    // rounds' bones where one of them is it, else copied.
+    const std::uint32_t round_begin = pack.rounds[block], round_end = pack.rounds[block + 1];
+    const std::uint32_t shared = pack.shared[block];
+    const std::uint32_t* start = pack.start.data() + block * lanes;
+    L strongest[12], q0[4];
+    for (int l = 0; l < lanes; ++l) {
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) strongest[k][l] = k % 4 == 0 ? 1.0f : 0.0f;
+      DEFORM_UNROLL
+      for (int k = 0; k < 4; ++k) q0[k][l] = k == 3 ? 1.0f : 0.0f;
+    }
+    for (std::uint32_t j = 0; j < shared; ++j) {
+      const std::uint16_t bone = pack.bones[std::size_t(round_begin + j) * lanes];
+      const float* m = matrix_floats + 16 * std::size_t(bone);
+      const glm::quat& qb = dq[bone].real;
+      float one[12];
+      DEFORM_UNROLL
+      for (int k = 0; k < 12; ++k) one[k] = m[k + k / 3];
+      const float one_q[4] = {qb.x, qb.y, qb.z, qb.w};
+      for (int l = 0; l < lanes; ++l) {
+        const bool chosen = start[l] == j;
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) strongest[k][l] = chosen ? one[k] : strongest[k][l];
+        DEFORM_UNROLL
+        for (int k = 0; k < 4; ++k) q0[k][l] = chosen ? one_q[k] : q0[k][l];
+      }
+    }
+    for (int l = 0; l < lanes; ++l)
+      if (has[l] != 0.0f && start[l] == DirectDeltaMushLanes::none) {
+        const std::uint16_t bone = bd.bones[first[l]];
+        const float* m = matrix_floats + 16 * std::size_t(bone);
+        for (int k = 0; k < 12; ++k) strongest[k][l] = m[k + k / 3];
+        const glm::quat& qb = dq[bone].real;
+        q0[0][l] = qb.x, q0[1][l] = qb.y, q0[2][l] = qb.z, q0[3][l] = qb.w;
+      }
+    L anchor[3];
+    for (int l = 0; l < lanes; ++l) {
+      const float ux = rest[0][l], uy = rest[1][l], uz = rest[2][l];
+      DEFORM_UNROLL
+      for (int r = 0; r < 3; ++r)
+        anchor[r][l] = mul_add(strongest[r][l], ux,
+                               mul_add(strongest[3 + r][l], uy, mul_add(strongest[6 + r][l], uz, strongest[9 + r][l])));
+    }
+    ReducedSums s;
+    for (int c = 0; c < 3; ++c) s.blend[c] = s.moved[c] = s.centroid[c] = L::filled(0.0f);
+    for (int c = 0; c < 3; ++c) s.q[c] = L::filled(0.0f);
+    for (int l = 0; l < lanes; ++l) s.q[3][l] = has[l] != 0.0f ? 0.0f : 1.0f;
+    const std::uint32_t shared_end = round_begin + shared;
+    for (std::uint32_t r = round_begin; r < round_end; ++r) {
+      const std::uint16_t* bone = pack.bones.data() + std::size_t(r) * lanes;
+      const float* moment = pack.moments.data() + std::size_t(r) * 4 * lanes;
+      if (r < shared_end) {
+        const float* m = matrix_floats + 16 * std::size_t(bone[0]);
+        const glm::quat& qb = dq[bone[0]].real;
+        float one[12];
+        DEFORM_UNROLL
+        for (int k = 0; k < 12; ++k) one[k] = m[k + k / 3];
+        const float one_q[4] = {qb.x, qb.y, qb.z, qb.w};
+        accumulate_reduced<true>(s, one, one_q, nullptr, nullptr, moment, rest, anchor, q0);
+      } else {
+        L each[12], each_q[4];
+        for (int l = 0; l < lanes; ++l) {
+          const float* m = matrix_floats + 16 * std::size_t(bone[l]);
+          DEFORM_UNROLL
+          for (int k = 0; k < 12; ++k) each[k][l] = m[k + k / 3];
+          const glm::quat& qb = dq[bone[l]].real;
+          each_q[0][l] = qb.x, each_q[1][l] = qb.y, each_q[2][l] = qb.z, each_q[3][l] = qb.w;
+        }
+        accumulate_reduced<false>(s, nullptr, nullptr, each, each_q, moment, rest, anchor, q0);
+      }
+    }
+    Outputs o;
+    // The anchor and offset a lane without influences gives x back with (reduced_outputs).
+    L offset[3];
+    for (int l = 0; l < lanes; ++l) {
+      const bool any = has[l] != 0.0f;
+      DEFORM_UNROLL
+      for (int c = 0; c < 3; ++c) {
+        const float x = input[c][l];
+        offset[c][l] = any ? x - rest[c][l] : 0.0f;
+        anchor[c][l] = any ? anchor[c][l] : x;
+      }
+    }
+    if (args.out_normals != nullptr) reduced_outputs<true>(s, anchor, offset, normal, o);
+    else reduced_outputs<false>(s, anchor, offset, normal, o);
+    store(o.position, args.out_positions + block_begin, low, high);
+    if (args.out_normals != nullptr) store(o.normal, args.out_normals + block_begin, low, high);
+    if (args.out_rotations != nullptr)
+      for (int l = low; l < high; ++l)
+        args.out_rotations[block_begin + std::size_t(l)] =
+            has[l] != 0.0f ? glm::normalize(glm::quat(s.q[3][l], s.q[0][l], s.q[1][l], s.q[2][l]))
+                           : glm::quat(1, 0, 0, 0);
+  }
+}
+
+}  // namespace deform::detail
