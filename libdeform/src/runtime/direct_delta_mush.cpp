@@ -22,9 +22,11 @@ namespace {
 constexpr std::size_t width = DirectDeltaMushLanes::width;
 constexpr std::size_t moment_floats = sizeof(DirectDeltaMushMoments) / sizeof(float);
 static_assert(sizeof(DirectDeltaMushMoments) == 10 * sizeof(float));
+constexpr std::size_t reduced_moment_floats = sizeof(glm::vec4) / sizeof(float);  // p̃ (x, y, z) and ψ
+static_assert(sizeof(glm::vec4) == 4 * sizeof(float));
 
-// A binding's rows as the lanes see them, for either form: the full form's lanes copy its 10 moments an influence,
-// the reduced form's none (floats 0: its kernel reads its rows' moments through the lanes' influences).
+// A binding's rows as the lanes see them, for either form: the lanes copy each influence's moments, the full form's
+// 10 floats or the reduced form's 4.
 struct Rows {
   std::size_t n;                 // points
   const std::uint32_t* offsets;  // n + 1, ascending from 0
@@ -41,13 +43,12 @@ Rows rows_of(const DirectDeltaMushBinding& b) noexcept {
 }
 
 Rows rows_of(const DirectDeltaMushReducedBinding& b) noexcept {
-  static_assert(sizeof(glm::vec4) == 4 * sizeof(float));
   return {b.point_count(),
           b.offsets.data(),
           b.bones.data(),
           b.bone_count,
           reinterpret_cast<const float*>(b.moments.data()),
-          4};
+          reduced_moment_floats};
 }
 
 // The lanes' arrays sized for the rows' point count (O(1)): what the kernel relies on to read within them.
@@ -103,18 +104,23 @@ bool lanes_match_rows(const DirectDeltaMushLanes& l, const Rows& b) noexcept {
   return true;
 }
 
-// The O(1) checks of run(): the binding's arrays sized consistently and the spans one per point.
-Status shape_ok(const DirectDeltaMushJob& job) noexcept {
-  const DirectDeltaMushBinding* b = job.binding;
+// The O(1) checks of both jobs' run(): the binding's arrays sized consistently, its lanes packed from its rows
+// (`moment_floats_per_slot` a slot: the full form's 10, the reduced form's 4), the palette (and the reduced form's
+// quaternions) covering its bones and the spans one per point.
+template <class Job>
+Status shape_ok(const Job& job, std::size_t moment_floats_per_slot) noexcept {
+  const auto* b = job.binding;
   if (b == nullptr) return Status::failure("no binding");
   const std::size_t n = b->point_count();
   if (b->offsets.size() != n + 1 || b->moments.size() != b->bones.size())
     return Status::failure("binding is malformed: arrays differ in size");
   if (b->offsets.back() != b->bones.size())
     return Status::failure("binding is malformed: offsets do not end at the end");
-  if (!lanes_shape_ok(b->lanes, n, moment_floats))
+  if (!lanes_shape_ok(b->lanes, n, moment_floats_per_slot))
     return Status::failure("binding is malformed: lanes not packed from its rows");
   if (job.matrices.size() < b->bone_count) return Status::failure("palette is too small");
+  if constexpr (requires { job.dual_quats; })
+    if (job.dual_quats.size() < b->bone_count) return Status::failure("palette is too small");
   if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
     return Status::failure("positions are not one per point");
   if (job.in_normals.size() != job.out_normals.size() || (!job.in_normals.empty() && job.in_normals.size() != n))
@@ -184,7 +190,7 @@ glm::quat nearest_rotation(const glm::mat3& c, glm::quat q) noexcept {
 }
 
 Status DirectDeltaMushJob::validate() const noexcept {
-  if (const Status status = shape_ok(*this); !status) return status;
+  if (const Status status = shape_ok(*this, moment_floats); !status) return status;
   const DirectDeltaMushBinding& b = *binding;
   if (b.offsets[0] != 0) return Status::failure("binding is malformed: offsets do not ascend from 0");
   for (std::size_t i = 0; i < b.point_count(); ++i) {
@@ -335,7 +341,7 @@ Status pack_direct_delta_mush(DirectDeltaMushReducedBinding& b) {
 Status DirectDeltaMushJob::run() const noexcept { return run(0, count()); }
 
 Status DirectDeltaMushJob::run(std::size_t begin, std::size_t end) const noexcept {
-  if (const Status status = shape_ok(*this); !status) return status;
+  if (const Status status = shape_ok(*this, moment_floats); !status) return status;
   if (begin > end || end > count()) return Status::failure("range outside the job");
   if (begin == end) return {};
   kernel_for(isa)({binding, matrices.data(), in_positions.empty() ? nullptr : in_positions.data(),
@@ -352,28 +358,6 @@ Status DirectDeltaMushJob::run(ThreadPool& pool, std::size_t min_chunk) const no
 // --- the reduced form: ψ and first moments, the rotation blended from the bones' quaternions ---
 
 namespace {
-
-// The O(1) checks of the reduced job's run().
-Status reduced_shape_ok(const DirectDeltaMushReducedJob& job) noexcept {
-  const DirectDeltaMushReducedBinding* b = job.binding;
-  if (b == nullptr) return Status::failure("no binding");
-  const std::size_t n = b->point_count();
-  if (b->offsets.size() != n + 1 || b->moments.size() != b->bones.size())
-    return Status::failure("binding is malformed: arrays differ in size");
-  if (b->offsets.back() != b->bones.size())
-    return Status::failure("binding is malformed: offsets do not end at the end");
-  if (!lanes_shape_ok(b->lanes, n, 4)) return Status::failure("binding is malformed: lanes not packed from its rows");
-  if (job.matrices.size() < b->bone_count || job.dual_quats.size() < b->bone_count)
-    return Status::failure("palette is too small");
-  if (job.out_positions.size() != n || (!job.in_positions.empty() && job.in_positions.size() != n))
-    return Status::failure("positions are not one per point");
-  if (job.in_normals.size() != job.out_normals.size() || (!job.in_normals.empty() && job.in_normals.size() != n))
-    return Status::failure("normals are not one per point");
-  if (!job.out_rotations.empty() && job.out_rotations.size() != n)
-    return Status::failure("rotations are not one per point");
-  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
-  return {};
-}
 
 using ReducedKernelEntry = void (*)(const detail::DdmReducedKernelArgs&) noexcept;
 
@@ -428,7 +412,7 @@ Status reduce_direct_delta_mush(const DirectDeltaMushBinding& full, DirectDeltaM
 }
 
 Status DirectDeltaMushReducedJob::validate() const noexcept {
-  if (const Status status = reduced_shape_ok(*this); !status) return status;
+  if (const Status status = shape_ok(*this, reduced_moment_floats); !status) return status;
   const DirectDeltaMushReducedBinding& b = *binding;
   if (b.offsets[0] != 0) return Status::failure("binding is malformed: offsets do not ascend from 0");
   for (std::size_t i = 0; i < b.point_count(); ++i) {
@@ -457,7 +441,7 @@ Status DirectDeltaMushReducedJob::validate() const noexcept {
 Status DirectDeltaMushReducedJob::run() const noexcept { return run(0, count()); }
 
 Status DirectDeltaMushReducedJob::run(std::size_t begin, std::size_t end) const noexcept {
-  if (const Status status = reduced_shape_ok(*this); !status) return status;
+  if (const Status status = shape_ok(*this, reduced_moment_floats); !status) return status;
   if (begin > end || end > count()) return Status::failure("range outside the job");
   if (begin == end) return {};
   reduced_kernel_for(isa)({binding, matrices.data(), dual_quats.data(),

@@ -124,12 +124,11 @@ struct DEFORM_RUNTIME_API DirectDeltaMushJob {
 // The reduced-storage form of a binding (reduce_direct_delta_mush): of each influence's moments Ωᵢⱼ only the smoothed
 // weight ψᵢⱼ and first moment p̃ᵢⱼ (relative to the rest point i) are kept, 4 floats and a bone where the full form
 // keeps 10 (each form's lanes copy its floats again: on the built-in character 49 bytes an influence in all against
-// 102). The per-frame rotation is then not the polar decomposition of the posed
-// second moments (which this form does not have) but a blend of the bones' rotations:
+// 102). The per-frame rotation is then not the polar decomposition of the posed second moments (which this form does
+// not have) but a blend of the bones' rotations:
 //   Rᵢ = the rotation of the unit quaternion normalise(Σⱼ ψᵢⱼ sⱼ qⱼ), qⱼ bone j's rotation (the DQS palette's real
-//   part:
-//        the rotation of Aⱼ's polar decomposition), sⱼ = ±1 so that sⱼ qⱼ · q₀ >= 0 for q₀ the point's strongest bone
-//        (the first of its row), as dual quaternion skinning aligns them;
+//        part: the rotation of Aⱼ's polar decomposition), sⱼ = ±1 so that sⱼ qⱼ · q₀ >= 0 for q₀ the point's
+//        strongest bone (the first of its row), as dual quaternion skinning aligns them;
 //   tᵢ = Σⱼ (Aⱼ p̃ᵢⱼ + ψᵢⱼ tⱼ) − Rᵢ pᵢ with pᵢ = Σⱼ p̃ᵢⱼ (Aⱼ, tⱼ: palette matrix j's 3×3 part and translation);
 //   out = Rᵢ xᵢ + tᵢ, normals Rᵢ nᵢ renormalised.
 // With p̃ relative to the rest point rᵢ (p̃ = p̃ʳ + ψ rᵢ) and Σⱼ ψᵢⱼ = 1 that is out = Σⱼ ψᵢⱼ Mⱼ rᵢ + Σⱼ Aⱼ p̃ʳᵢⱼ +
