@@ -15,10 +15,12 @@
 // not sampled for an update that does not deform (Character::next_update_deforms). The levels, from
 // build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
 // bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Where the optional
-// deform::simplify is built, levels 2 and 3 deform only the points of a simplified mesh (LevelOptions::points from
-// simplify_model's source_point: 0.25 of the triangles, and that mesh simplified again to 0.4 of its own, 0.1 of
-// the whole; max_error 0.05), the model's points renumbered so that level 3's come first and level 2's next
-// (order_points_first): each level a prefix of the points. Without deform::simplify every level deforms every point.
+// deform::simplify is built, levels 1, 2 and 3 deform only the points of a simplified mesh (LevelOptions::points
+// from simplify_model's source_point: 0.5 of the triangles, that mesh simplified again to 0.5 of its own, 0.25 of the
+// whole, and that one to 0.4 of its own, 0.1 of the whole; max_error 0.05), the model's points renumbered so that
+// level 3's come first, then level 2's, then level 1's (order_points_first): each level a prefix of the points. Level
+// 1 then runs the ponytail's spring chain but not the arm's lattices (a subset runs the springs alone). Without
+// deform::simplify every level deforms every point.
 // Counters:
 // error_mean_lN, error_max_lN — level N's own points against the full character's walking beside it (the same clip
 // times, 2 s), as a fraction of its height: the mean over points and frames and the largest; points_influences_lN —
@@ -148,24 +150,30 @@ deform::BoneLod crowd_lod(const deform::Character& c) {
   return deform::build_bone_lod(c.model(), settings);
 }
 
-// The crowd's character and its levels' options: levels 2 and 3 with the points of simplified meshes, nested and
+// The crowd's character and its levels' options: levels 1, 2 and 3 with the points of simplified meshes, nested and
 // first in the model's renumbered points (a prefix each), where deform::simplify is built.
 deform::Character crowd_character(std::vector<deform::Character::LevelOptions>& levels,
                                   std::vector<std::uint32_t>& points) {
   levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
 #if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
   deform::Model model = deform::builtin_character();
-  const deform::SimplifiedModel near = deform::simplify_model(model, {0.25f, 0.05f});
+  // Each mesh simplified from the one before: 0.5, 0.25 and 0.1 of the triangles, each one's points the next's too.
+  const deform::SimplifiedModel mid = deform::simplify_model(model, {0.5f, 0.05f});
+  const deform::SimplifiedModel near = deform::simplify_model(mid.model, {0.5f, 0.05f});
   const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
   std::vector<std::uint32_t> first;
   std::vector<bool> listed(model.mesh.point_count(), false);
-  for (const std::uint32_t p : far.source_point) first.push_back(near.source_point[p]), listed[first.back()] = true;
-  for (const std::uint32_t p : near.source_point)
-    if (!listed[p]) first.push_back(p);
+  const auto list = [&](std::uint32_t p) {
+    if (!listed[p]) first.push_back(p), listed[p] = true;
+  };
+  for (const std::uint32_t p : far.source_point) list(mid.source_point[near.source_point[p]]);
+  for (const std::uint32_t p : near.source_point) list(mid.source_point[p]);
+  for (const std::uint32_t p : mid.source_point) list(p);
   deform::order_points_first(model, first);
-  points.resize(near.source_point.size());
+  points.resize(mid.source_point.size());
   for (std::size_t i = 0; i < points.size(); ++i) points[i] = std::uint32_t(i);
-  levels[2].points = points;
+  levels[1].points = points;  // deformers on: the ponytail's spring chain; the arm's lattices wait for level 0
+  levels[2].points = std::span<const std::uint32_t>(points).first(near.source_point.size());
   levels[3].points = std::span<const std::uint32_t>(points).first(far.source_point.size());
   const deform::Rig rig = deform::builtin_rig(model);
   return deform::Character(std::move(model), rig);

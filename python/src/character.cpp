@@ -275,9 +275,8 @@ void bind_character_levels(CharacterClass& character) {
           "length; none: by weight alone), `keep` bones (names or ids) kept at every level. `deformers` and "
           "`update_interval` (1 to 64): one per level, level 0 included (default: on, every update). A switch blends "
           "over `blend_frames` deformed updates. `points`: one list per level of the mesh's point ids it deforms (a "
-          "simplified mesh's; [] for all), such a level with its deformers off; positions and normals outside a "
-          "level's "
-          "points keep stale values. Raises deform.Error naming what is wrong; call it at set-up.")
+          "simplified mesh's; [] for all), where `deformers` runs the spring chains alone; positions and normals "
+          "outside a level's points keep stale values. Raises deform.Error naming what is wrong; call it at set-up.")
       .def(
           "set_level", [](deform::Character& c, std::size_t level) { check(c.set_level(level)); }, py::arg("level"),
           "Shows `level` from the next update() on (deform.Error when out of range).")

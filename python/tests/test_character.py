@@ -219,7 +219,8 @@ def test_a_level_deforms_only_its_points():
     np.testing.assert_array_equal(mesh.positions[even], full.positions[even])
     np.testing.assert_array_equal(mesh.positions[1::2], before[1::2])  # not the level's: untouched
     assert np.abs(full.positions[1::2] - before[1::2]).max() > 1e-3
+    mesh.set_levels([14], points=[[], even])  # deformers on with a subset: the spring chains alone
     with pytest.raises(deform.Error):
-        mesh.set_levels([14], points=[[], even])  # deformers on with a subset
+        mesh.set_levels([14], deformers=[True, False], points=[[], [len(full.positions)]])  # out of range
     with pytest.raises(deform.Error):
         mesh.set_levels([14], deformers=[True, False], points=[[]])  # not one per level

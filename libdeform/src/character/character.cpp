@@ -569,7 +569,7 @@ void Character::prefetch() const noexcept {
   }
   if (levels_ && !levels_->costs[level_].deformers) return;
   springs_.prefetch();
-  hierarchy_.prefetch();
+  if (runs_lattices(level_)) hierarchy_.prefetch();
 }
 
 // The skinning job of this character's weights and palette, from `rest_positions` (and, transporting, their normals)
@@ -675,7 +675,10 @@ Status Character::update(float dt) {
     pending_dt_ = 0.0f;
     const std::size_t outgoing = shown_;
     const bool switching = outgoing != level_;
-    const bool restart = switching && !levels_->costs[outgoing].deformers && cost.deformers;
+    // Deformers that come back on start again from the pose: the spring chains after a level without deformers, the
+    // lattices after one without them or with a point subset (which runs the springs only).
+    const bool restart_springs = switching && !levels_->costs[outgoing].deformers && cost.deformers;
+    const bool restart_lattices = switching && !runs_lattices(outgoing) && runs_lattices(level_);
     // The outgoing level interpolates, behind the pose by up to its interval: the blend starts where positions()
     // would have gone this update, not from that level's points at the pose (a jump of a few updates' motion).
     const bool from_shown = switching && levels_->costs[outgoing].update_interval > 1;
@@ -693,11 +696,10 @@ Status Character::update(float dt) {
       status = deform_frame(step, outgoing);
       if (status) each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p]; });
     }
-    if (status && restart) {
-      // The deformers come back on: they start again from the pose, as they are after a cut.
+    if (status && restart_lattices)  // as they are after a cut
       for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) (void)hierarchy_.restart_motion(l);
+    if (status && restart_springs)
       for (std::size_t c = 0; c < springs_.chain_count(); ++c) (void)springs_.restart(c);
-    }
     if (status) status = deform_frame(switching && !from_shown ? 0.0f : step, level_);
     if (status && switching) {
       // A point new to the level was not drawn: no offset, it starts at its new place.
@@ -735,6 +737,7 @@ Status Character::update(float dt) {
 // One frame of the held pose at `level` (update()'s work, see the top of character.hpp).
 Status Character::deform_frame(float dt, std::size_t level) {
   const bool deformers = !levels_ || levels_->costs[level].deformers;
+  const bool lattices = runs_lattices(level);  // false on a point subset: the spring chains alone (LevelOptions)
   const SkinWeights& weights = levels_ ? levels_->weights[level] : bind_->model.weights;
   // A crowd's characters are cold when their update starts: ask for every small array at once, so that their
   // first lines arrive together rather than one wait each (the large per-point arrays the streaming hardware
@@ -769,10 +772,10 @@ Status Character::deform_frame(float dt, std::size_t level) {
       if (skel.is_ancestor(jumped_root_, springs_.spec(c).bones.front())) (void)springs_.restart(c);
     jumped_root_ = -1;
   }
-  if (deformers) {
+  if (deformers)
     if (const Status status = springs_.run(dt, world_, rate, palette_); !status) return status;
+  if (lattices)
     if (const Status status = hierarchy_.step(dt, world_, rate); !status) return status;
-  }
   // Pose-space correctives: each driver's weights become its shapes' morph weights (validated when it was added),
   // before the early return below, so that a caller deforming elsewhere morphs with them too.
   for (Driven& driven : drivers_) {
@@ -784,7 +787,7 @@ Status Character::deform_frame(float dt, std::size_t level) {
     for (std::size_t s = 0; s < driven.targets.size(); ++s) morph_weights_[driven.targets[s]] = driven.weights[s];
   }
   // Posing only: the deformation is the caller's (a GPU), from palette_ and the hierarchy's state.
-  if (!settings.deform_on_cpu) return deformers ? hierarchy_.update(world_) : Status();
+  if (!settings.deform_on_cpu) return lattices ? hierarchy_.update(world_) : Status();
   // A subset level transports its normals whatever the mode (LevelOptions::points).
   const bool subset = levels_ && !levels_->subsets[level].points.empty();
   const bool transport = normals_mode_ == NormalsMode::transported || subset;
@@ -809,7 +812,7 @@ Status Character::deform_frame(float dt, std::size_t level) {
   normals_current_ = false;
   transported_current_ = false;
   subset_normals_ = -1;
-  if (subset) return skin_subset(level);  // no deformers (set_levels refuses them on a subset)
+  if (subset) return skin_subset(level);  // the spring chains moved its bones above; no lattices or mushes
   if (direct_mush_ && deformers && level == 0) {
     // Direct Delta Mush in place of settings.skinning: the morphed points' offsets from the rest points turn with
     // their points, and so do the transported normals (the rotation of each point's smoothed neighbourhood).
@@ -988,8 +991,6 @@ void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> opt
     if (options[l].points.empty()) {
       weights = level.weights;
     } else {
-      if (options[l].deformers)
-        throw Error::invalid_argument(element, "a level with a point subset must have its deformers off");
       subset.member.assign(point_count, 0);
       for (const std::uint32_t p : options[l].points) {
         if (p >= point_count) throw Error::invalid_argument(element, "point " + std::to_string(p) + " out of range");

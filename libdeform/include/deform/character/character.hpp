@@ -288,10 +288,11 @@ class DEFORM_CHARACTER_API Character {
     // points and the render vertices of those points only, and the others keep stale values (what an earlier level
     // or a switch's frame at the outgoing level left there; don't draw them): the renderer draws the simplified mesh's
     // triangles with their indices mapped to the full mesh's render vertices (SimplifiedModel::source_vertex) and
-    // points (source_point). Such a level runs without deformers (`deformers` must be false: the lattices, spring
-    // chains and mushes work on the whole mesh) and transports its normals whatever normals_mode() says (recomputing
-    // them from the full mesh's triangles would read stale points): normals() gives each of its render vertices its
-    // point's skinned bind-pose normal.
+    // points (source_point). With `deformers` such a level runs the spring chains alone: they move bones, which its
+    // points follow; the lattices and the mushes work on the whole mesh and wait (they start again from the pose at
+    // the next level that runs them, as after a cut). It transports its normals whatever normals_mode() says
+    // (recomputing them from the full mesh's triangles would read stale points): normals() gives each of its render
+    // vertices its point's skinned bind-pose normal.
     std::span<const std::uint32_t> points = {};
   };
   // Binds levels: level l skins with lod.levels[l].weights (the full skeleton's bone ids) and runs as options[l] says;
@@ -302,10 +303,9 @@ class DEFORM_CHARACTER_API Character {
   // outgoing level deformed too blends by its offset as above; a point new to the level (not drawn before) starts at
   // its new place, at once and when the level interpolates. Throws deform::Error (kind argument, element "level N")
   // for a level count that differs from options' or is 0, a skin that SkinningJob refuses for this model (its reason),
-  // an update_interval outside [1, 64], a point id out of range or listed twice, a point subset with deformers on;
-  // and for blend_frames over 1000 (element "blend_frames"). Allocates the levels (shared with instance()) and a
-  // per-point blend and interpolation buffer (and one per point of the largest subset); the character starts at
-  // level 0. Call at set-up, not per frame.
+  // an update_interval outside [1, 64], a point id out of range or listed twice; and for blend_frames over 1000
+  // (element "blend_frames"). Allocates the levels (shared with instance()) and a per-point blend and interpolation
+  // buffer (and one per point of the largest subset); the character starts at level 0. Call at set-up, not per frame.
   void set_levels(const BoneLod& lod, std::span<const LevelOptions> options, std::uint32_t blend_frames = 8);
   // The level the next update() shows (0 without levels), and how many there are (1 without levels).
   std::size_t level() const noexcept { return level_; }
@@ -491,6 +491,10 @@ class DEFORM_CHARACTER_API Character {
     std::size_t largest_subset = 0;
     std::uint32_t blend_frames = 0;
   };
+  // Whether `level` runs the lattices (and the mushes): its deformers on and every point deformed.
+  bool runs_lattices(std::size_t level) const noexcept {
+    return !levels_ || (levels_->costs[level].deformers && levels_->subsets[level].points.empty());
+  }
   bool level_has(std::size_t level, std::size_t point) const noexcept {
     return levels_->subsets[level].points.empty() || levels_->subsets[level].member[point] != 0;
   }
