@@ -148,25 +148,16 @@ class DEFORM_RUNTIME_API SpringChains {
     float inverse_length2 = 0.0f;  // 1 / |axis|², 0 for a sphere (start = end)
     float radius = 0.0f;
   };
-  struct Link {  // what a sub-step of a chain carries from one link to the next, and the chain's constants
-    glm::vec3 head{0.0f}, head_velocity{0.0f};
-    glm::quat bend{1.0f, 0.0f, 0.0f, 0.0f};
-    glm::vec3 gravity{0.0f};
-    float radius = 0.0f, inverse_h = 0.0f;
-  };
   friend struct SpringCrowdJob;
   Oscillator oscillator(const Chain& chain, double h) const noexcept;
   void sample_points(double tau, double dt);
   void sample_colliders(float blend);
-  Link begin_substep(const Chain& chain, float h, glm::vec3* heads) const noexcept;
   void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
                glm::vec3* rests, glm::vec3* heads) const noexcept;
-  // Chain c, one sub-step of the kept state, for `count` (2 to SpringCrowdJob::max_group) members of one layout in
-  // lanes: what substep() does for each, the same bits. `colliders`: the chain's colliders in lanes.
-  static void chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
-                          const Link* carry, const float* colliders, std::size_t collider_count) noexcept;
   // advance() for `count` members of one layout (same_layout) whose kept state is as old (owed_), their sub-steps in
-  // lanes (chain_lanes): each chain's links wait on one another, the members do not. The same bits as one by one.
+  // lanes (links_lanes in spring_chains.cpp): each chain's links wait on one another, the members do not. Chain by
+  // chain, its state and animated points put in lanes once for all the step's sub-steps and written back after them.
+  // The same bits as one by one.
   static void advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept;
   void advance(double dt) noexcept;
   bool same_layout(const SpringChains& other) const noexcept;
