@@ -895,6 +895,8 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
         if (rates) job.world_rate = rate;
         job.palette = palette;
         job.group = group;
+        // The lanes' portable copy on one split, the widest here on the others (the same bits either way).
+        job.isa = split == 2 ? deform::Isa::portable : deform::Isa::automatic;
         REQUIRE(job.validate());
         for (std::size_t part = 0; part < split; ++part)
           REQUIRE(job.run(count * part / split, count * (part + 1) / split));
@@ -957,6 +959,13 @@ TEST_CASE("SpringCrowdJob: refuses bad sizes, dt, group, range and an instance l
   refused(bad, "group");
   bad.group = deform::SpringCrowdJob::max_group + 1;
   refused(bad, "group");
+  bad = job;
+  bad.isa = deform::Isa(200);  // no such instruction set
+  refused(bad, "instruction set");
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
+    bad.isa = isa;
+    if (!deform::isa_available(isa)) refused(bad, "instruction set");
+  }
   CHECK_FALSE(job.run(3, 2));
   CHECK_FALSE(job.run(0, 5));
   // An instance with one chain fewer.

@@ -56,11 +56,13 @@ constexpr int end_rows = detail::spring_end_rows;
 constexpr std::size_t max_lane_links = detail::spring_max_links;
 constexpr std::size_t max_lane_colliders = detail::spring_max_colliders;
 
-// The lane kernel's widest copy this CPU runs (all give the same bits).
-void lanes_kernel(const detail::SpringLanesArgs& args) noexcept {
+// The lane kernel's copy for `isa` (accepted by isa_available): automatic the widest here. All give the same bits.
+void lanes_kernel(Isa isa, const detail::SpringLanesArgs& args) noexcept {
 #if defined(DEFORM_X86_KERNELS)
-  static const bool avx2 = isa_available(Isa::avx2);
-  if (avx2) return detail::spring_lanes_avx2(args);
+  if (isa == Isa::automatic) isa = isa_best();
+  if (isa == Isa::avx2 || isa == Isa::avx512) return detail::spring_lanes_avx2(args);
+#else
+  (void)isa;
 #endif
   detail::spring_lanes_portable(args);
 }
@@ -361,7 +363,7 @@ void SpringChains::advance(double dt) noexcept {
   advance_together(&self, 1, dt);
 }
 
-void SpringChains::advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept {
+void SpringChains::advance_together(SpringChains* const* group, std::size_t count, double dt, Isa isa) noexcept {
   // Whole sub-steps from the kept state's time (owed_ before this step's start) to the last one within the step,
   // then the leftover from a copy: the kept state only ever moves by the fixed sub-step. The group shares owed_,
   // the sub-step and the chains' shapes (same_layout), so one count of sub-steps serves all. Chains do not act on one
@@ -468,7 +470,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     args.h = h;
     args.stall = stall;
     args.steps = steps;
-    lanes_kernel(args);
+    lanes_kernel(isa, args);
     for (std::size_t g = 0; g < count; ++g) {
       SpringChains& s = *group[g];
       const auto k = int(g);
@@ -599,6 +601,7 @@ void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> pale
 Status SpringCrowdJob::check(std::size_t begin, std::size_t end) const noexcept {
   const SpringCrowdJob& job = *this;
   if (job.group < 1 || job.group > SpringCrowdJob::max_group) return Status::failure("group is not in [1, 8]");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   if (job.instances.empty())
     return (job.world.empty() && job.world_rate.empty() && job.palette.empty())
                ? Status()
@@ -648,7 +651,7 @@ Status SpringCrowdJob::run(std::size_t begin, std::size_t end) const noexcept {
           advancing[left++] = advancing[k];
         }
       }
-      SpringChains::advance_together(together, together_count, double(dt));
+      SpringChains::advance_together(together, together_count, double(dt), isa);
       count = left;
     }
     for (std::size_t i = from; i < to; ++i) instances[i].end_run(span_of(world, i), span_of(palette, i));

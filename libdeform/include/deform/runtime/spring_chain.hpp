@@ -27,6 +27,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace deform {
 
@@ -158,7 +159,8 @@ class DEFORM_RUNTIME_API SpringChains {
   // lanes (links_lanes in spring_chains.cpp): each chain's links wait on one another, the members do not. Chain by
   // chain, its state and animated points put in lanes once for all the step's sub-steps and written back after them.
   // The same bits as one by one.
-  static void advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept;
+  static void advance_together(SpringChains* const* group, std::size_t count, double dt,
+                               Isa isa = Isa::automatic) noexcept;
   void advance(double dt) noexcept;
   bool same_layout(const SpringChains& other) const noexcept;
   Status check(float dt, std::size_t world, std::size_t world_rate, std::size_t palette) const noexcept;
@@ -214,8 +216,11 @@ struct DEFORM_RUNTIME_API SpringCrowdJob {
   std::span<const glm::mat4> world_rate;  // empty, or as world
   std::span<glm::mat4> palette;           // out: empty, or as world
   std::size_t group = 8;                  // instances stepped together, in [1, max_group]
+  Isa isa = Isa::automatic;  // the lanes' kernel copy (isa.hpp): portable, or avx2 (which avx512 also runs); every
+                             // copy gives the same bits (none fuses a multiply and an add)
 
-  // Why run() would refuse: a dt negative or not finite, a group out of range, an instance laid out unlike the first,
+  // Why run() would refuse: a dt negative or not finite, a group out of range, an isa not available here
+  // (isa_available), an instance laid out unlike the first,
   // or world, world_rate or palette not one matrix per bone per instance (the last two may be empty). O(instances ×
   // chains).
   Status validate() const noexcept;

@@ -42,8 +42,6 @@ inline float pick(bool c, float a, float b) noexcept {
   return out;
 }
 
-
-
 void links_lanes(const ChainLanes& in, const float* sampled, float* state, const float* colliders,
                  std::size_t collider_count) noexcept {
   // substep()'s links for lane_count members in structure-of-arrays lanes: each line of substep (and of glm's products
@@ -263,7 +261,8 @@ void DEFORM_SPRING_ENTRY(const SpringLanesArgs& a) noexcept {
                     az = to[2 * lane_count + k] - from[2 * lane_count + k];
         const float length2 = ax * ax + ay * ay + az * az;
         const float start = a.radii[2 * n * lane_count + k], end = a.radii[(2 * n + 1) * lane_count + k];
-        row[k] = from[k], row[lane_count + k] = from[lane_count + k], row[2 * lane_count + k] = from[2 * lane_count + k];
+        row[k] = from[k], row[lane_count + k] = from[lane_count + k],
+        row[2 * lane_count + k] = from[2 * lane_count + k];
         row[3 * lane_count + k] = ax, row[4 * lane_count + k] = ay, row[5 * lane_count + k] = az;
         row[6 * lane_count + k] = length2 > 0.0f ? 1.0f / length2 : 0.0f;
         row[7 * lane_count + k] = start + (end - start) * blend;
