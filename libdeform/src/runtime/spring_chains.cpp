@@ -421,12 +421,16 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     for (int k = 0; k < lane_count; ++k) {
       const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
       const Chain& chain = s.chains_[c];
+      // Plain stores of each float (a copy through a small array on the stack cost as much as the sub-steps).
+      const auto put = [&](float* at, const glm::vec3& v) {
+        at[0] = v.x, at[lane_count] = v.y, at[2 * lane_count] = v.z;
+      };
       const auto put_ends = [&](std::size_t row, std::size_t point) {
         float* at = ends + row * end_rows * lane_count + k;
-        const glm::vec3 values[4] = {s.start_points_[point], s.start_velocities_[point], s.end_points_[point],
-                                     s.end_velocities_[point]};
-        for (int v = 0; v < 4; ++v)
-          for (int axis = 0; axis < 3; ++axis) at[(3 * v + axis) * lane_count] = values[v][axis];
+        put(at, s.start_points_[point]);
+        put(at + 3 * lane_count, s.start_velocities_[point]);
+        put(at + 6 * lane_count, s.end_points_[point]);
+        put(at + 9 * lane_count, s.end_velocities_[point]);
       };
       for (std::size_t i = 0; i < chain_points; ++i) put_ends(i, point0 + i);
       for (std::size_t n = 0; n < used.size(); ++n) {
@@ -437,10 +441,9 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
       }
       for (std::size_t i = 0; i < shape.count; ++i) {
         float* at = state + i * state_rows * lane_count + k;
-        const glm::vec3 values[3] = {s.positions_[shape.first + i], s.velocities_[shape.first + i],
-                                     s.rests_[shape.first + i]};
-        for (int v = 0; v < 3; ++v)
-          for (int axis = 0; axis < 3; ++axis) at[(3 * v + axis) * lane_count] = values[v][axis];
+        put(at, s.positions_[shape.first + i]);
+        put(at + 3 * lane_count, s.velocities_[shape.first + i]);
+        put(at + 6 * lane_count, s.rests_[shape.first + i]);
       }
       heads[k] = s.heads_[c].x, heads[lane_count + k] = s.heads_[c].y, heads[2 * lane_count + k] = s.heads_[c].z;
       // substep()'s gravity and radius, the same over the step; the maps of a whole sub-step and of a stall's.
