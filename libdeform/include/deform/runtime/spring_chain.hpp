@@ -201,8 +201,12 @@ class DEFORM_RUNTIME_API SpringChains {
 // one another (each link's rest turns with the bend above it: square roots and divisions in a row), so one
 // character's sub-step is bound by that latency; the job runs up to `group` instances' sub-steps together in
 // structure-of-arrays lanes (one lane per instance, vector code), each lane the scalar code's operations in its
-// order. Each instance computes exactly what its own run() would: the same bits for any group size, range split or
-// thread count. Group 8 fills the lanes; smaller groups leave lanes idle (group 1 runs each instance alone).
+// order. A group goes chain by chain (chains do not act on one another): the chain's state and animated points are
+// put in lanes once a step, all the step's sub-steps run there, and the state is written back to each instance, which
+// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). A chain of
+// more than 32 bones or 8 colliders runs one instance at a time. Each instance computes exactly what its own run()
+// would: the same bits for any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave
+// lanes idle (group 1 runs each instance alone).
 //
 // Every instance must have the chains of instances[0] laid out alike (the same chain count, bones per chain, collider
 // count and each chain's colliders, the same skeleton size and sub-step; settings such as frequency may differ):
