@@ -774,13 +774,14 @@ namespace {
 
 // A crowd for SpringCrowdJob: a root with two chains of five hanging from it (so that gravity lays them on the
 // colliders under them), a sphere and a capsule; instance i swings at its own seeded phase and amplitude, and some
-// have their own frequency and damping.
+// have their own frequency and damping. `crowded`: the second chain also has 9 far spheres, more colliders than
+// SpringCrowdJob's lanes take, so that it runs one instance at a time beside the first chain in lanes.
 struct SpringCrowd {
   deform::Skeleton skeleton;
   std::vector<deform::SpringChains> instances;
 };
 
-SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed) {
+SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed, bool crowded = false) {
   std::vector<deform::Bone> bones;
   bones.push_back({"root", -1, {1, 6}, glm::vec3(0.0f), glm::vec3(0.0f), {}});
   for (int s = 0; s < 2; ++s) {
@@ -807,9 +808,16 @@ SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed) {
     chain.colliders = {0, 1};
     chains.push_back(chain);
   }
-  const std::vector<deform::SpringCollider> colliders = {
+  std::vector<deform::SpringCollider> colliders = {
       {0, glm::vec3(0.25f, -0.2f, 0.0f), glm::vec3(0.25f, -0.2f, 0.0f), 0.15f},
       {0, glm::vec3(-0.3f, -0.15f, -0.1f), glm::vec3(-0.3f, -0.15f, 0.1f), 0.1f}};
+  if (crowded) {
+    for (std::uint32_t n = 0; n < 9; ++n) {
+      const auto far = float(50 + n);
+      colliders.push_back({0, glm::vec3(far, far, 0.0f), glm::vec3(far, far, 0.0f), 0.05f});
+      chains[1].colliders.push_back(std::uint32_t(colliders.size() - 1));
+    }
+  }
   std::mt19937 random(seed);
   std::uniform_real_distribution<float> uniform(0.5f, 4.0f);
   for (std::size_t i = 0; i < count; ++i) {
@@ -853,7 +861,9 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
     for (const std::size_t split : {std::size_t(1), std::size_t(2), std::size_t(5)}) {
       CAPTURE(group);
       CAPTURE(split);
-      SpringCrowd alone = spring_crowd(count, 7), together = spring_crowd(count, 7);
+      // Group 8 on 5 ranges: the second chain with more colliders than the lanes take (one instance at a time).
+      const bool crowded = group == 8 && split == 5;
+      SpringCrowd alone = spring_crowd(count, 7, crowded), together = spring_crowd(count, 7, crowded);
       std::vector<glm::mat4> world(bones * count), rate(world.size()), palette(world.size());
       std::vector<glm::mat4> world_alone(world.size()), palette_alone(world.size());
       std::mt19937 random(11);
@@ -895,6 +905,8 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
         if (rates) job.world_rate = rate;
         job.palette = palette;
         job.group = group;
+        // The lanes' portable copy on one split, the widest here on the others (the same bits either way).
+        job.isa = split == 2 ? deform::Isa::portable : deform::Isa::automatic;
         REQUIRE(job.validate());
         for (std::size_t part = 0; part < split; ++part)
           REQUIRE(job.run(count * part / split, count * (part + 1) / split));
@@ -957,6 +969,13 @@ TEST_CASE("SpringCrowdJob: refuses bad sizes, dt, group, range and an instance l
   refused(bad, "group");
   bad.group = deform::SpringCrowdJob::max_group + 1;
   refused(bad, "group");
+  bad = job;
+  bad.isa = deform::Isa(200);  // no such instruction set
+  refused(bad, "instruction set");
+  for (const deform::Isa isa : {deform::Isa::avx2, deform::Isa::avx512, deform::Isa::neon, deform::Isa::simd128}) {
+    bad.isa = isa;
+    if (!deform::isa_available(isa)) refused(bad, "instruction set");
+  }
   CHECK_FALSE(job.run(3, 2));
   CHECK_FALSE(job.run(0, 5));
   // An instance with one chain fewer.

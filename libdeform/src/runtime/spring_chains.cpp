@@ -8,9 +8,11 @@
 #include <string>
 
 #include "deform/runtime/elastic.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/prefetch.hpp"
 #include "deform/runtime/spring_chain.hpp"
 #include "finite.hpp"
+#include "simd/spring_lanes_kernel.hpp"
 
 namespace deform {
 namespace {
@@ -45,6 +47,24 @@ glm::quat shortest_arc(glm::vec3 a, glm::vec3 b) noexcept {
 
 void require(bool ok, const std::string& element, const char* what) {
   if (!ok) throw Error::invalid_argument(element, what);
+}
+
+constexpr int lane_count = detail::spring_lanes;
+static_assert(std::size_t(lane_count) == SpringCrowdJob::max_group);
+constexpr int state_rows = detail::spring_state_rows;
+constexpr int end_rows = detail::spring_end_rows;
+constexpr std::size_t max_lane_links = detail::spring_max_links;
+constexpr std::size_t max_lane_colliders = detail::spring_max_colliders;
+
+// The lane kernel's copy for `isa` (accepted by isa_available): automatic the widest here. All give the same bits.
+void lanes_kernel(Isa isa, const detail::SpringLanesArgs& args) noexcept {
+#if defined(DEFORM_X86_KERNELS)
+  if (isa == Isa::automatic) isa = isa_best();
+  if (isa == Isa::avx2 || isa == Isa::avx512) return detail::spring_lanes_avx2(args);
+#else
+  (void)isa;
+#endif
+  detail::spring_lanes_portable(args);
 }
 
 }  // namespace
@@ -235,12 +255,11 @@ void SpringChains::place_at_rest(Chain& chain) noexcept {
 
 void SpringChains::sample_points(double tau, double dt) {
   // The cubic Hermite through the step's start and end (positions, velocities), at tau in [0, dt].
-  const double s = dt > 0.0 ? std::clamp(tau / dt, 0.0, 1.0) : 1.0;
-  const auto s2 = float(s * s), s3 = float(s * s * s), sf = float(s), h = float(dt);
-  const float h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + sf, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+  float w[4];
+  detail::spring_hermite_weights(tau, dt, w);
   for (std::size_t k = 0; k < sample_points_.size(); ++k) {
     const glm::vec3 p0 = start_points_[k], v0 = start_velocities_[k], p1 = end_points_[k], v1 = end_velocities_[k];
-    sample_points_[k] = h00 * p0 + (h10 * h) * v0 + h01 * p1 + (h11 * h) * v1;
+    sample_points_[k] = w[0] * p0 + w[1] * v0 + w[2] * p1 + w[3] * v1;
   }
 }
 
@@ -252,22 +271,6 @@ void SpringChains::sample_colliders(float blend) {
     const float length2 = glm::dot(to - from, to - from);
     sample_colliders_[c] = {from, to - from, length2 > 0.0f ? 1.0f / length2 : 0.0f, start + (end - start) * blend};
   }
-}
-
-SpringChains::Link SpringChains::begin_substep(const Chain& chain, float h, glm::vec3* heads) const noexcept {
-  const std::size_t index = std::size_t(&chain - chains_.data());
-  Link carry;
-  carry.head = sample_points_[chain.first + index];
-  // The first head's velocity over the sub-step, as the rests' (linear over it): from its positions only, which a
-  // frame's cubic gives to O(h⁴). The cubic's own derivative carries the caller's rate, whose error (a forward
-  // difference over a lead of a millisecond is off by half the lead times the acceleration) differs between a
-  // frame's ends and its inside: sub-steps inside frames and sub-steps on frames would part by it.
-  carry.head_velocity = (carry.head - heads[index]) * (1.0f / h);
-  heads[index] = carry.head;
-  carry.gravity = chain.spec.gravity * (chain.spec.units_per_metre * chain.scale);
-  carry.radius = chain.spec.radius * chain.scale;
-  carry.inverse_h = 1.0f / h;
-  return carry;
 }
 
 void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions,
@@ -344,204 +347,6 @@ void SpringChains::substep(const Chain& chain, const Oscillator& m, float h, glm
   }
 }
 
-namespace {
-
-constexpr int lane_count = SpringCrowdJob::max_group;
-using Lane = float[lane_count];
-constexpr int collider_rows = 8;  // start xyz, axis xyz, inverse_length2, radius
-constexpr std::size_t max_lane_colliders = 16;
-
-// c ? a : b by bits. A lane loop that writes `x[k] = c ? a : x[k]` is a conditional store to GCC, which it does not
-// vectorise ("control flow in loop"); the bit select is a plain store, and exact (it picks a or b, NaNs included).
-// Through memcpy rather than std::bit_cast, which emscripten 3.1.6's libc++ lacks; compilers make it a plain move.
-inline float pick(bool c, float a, float b) noexcept {
-  const std::uint32_t mask = 0u - std::uint32_t(c);
-  std::uint32_t ua, ub;
-  std::memcpy(&ua, &a, 4);
-  std::memcpy(&ub, &b, 4);
-  const std::uint32_t picked = (ua & mask) | (ub & ~mask);
-  float out;
-  std::memcpy(&out, &picked, 4);
-  return out;
-}
-
-}  // namespace
-
-void SpringChains::chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
-                               const Link* carry, const float* colliders, std::size_t collider_count) noexcept {
-  // substep()'s links for up to lane_count members in structure-of-arrays lanes: each line of substep (and of glm's
-  // products it calls) written per lane with its operations in the same order, and its branches as selects, so that
-  // each lane rounds exactly as the member alone and the loops over the lanes become vector code. What a link hands
-  // the next (bend, head, its velocity) stays in the lanes along the chain. Lanes past `count` repeat the first member
-  // and are not written back.
-  const Chain& shape = group[0]->chains_[c];
-  const std::size_t point0 = shape.first + c;
-  Lane qw, qx, qy, qz, hx, hy, hz, hvx, hvy, hvz, gx, gy, gz, radius, inverse_h, py, pv, vy, vv, pg, vg;
-  for (int k = 0; k < lane_count; ++k) {
-    const std::size_t g = std::size_t(k) < count ? std::size_t(k) : 0;
-    const Link& l = carry[g];
-    qw[k] = l.bend.w, qx[k] = l.bend.x, qy[k] = l.bend.y, qz[k] = l.bend.z;
-    hx[k] = l.head.x, hy[k] = l.head.y, hz[k] = l.head.z;
-    hvx[k] = l.head_velocity.x, hvy[k] = l.head_velocity.y, hvz[k] = l.head_velocity.z;
-    gx[k] = l.gravity.x, gy[k] = l.gravity.y, gz[k] = l.gravity.z;
-    radius[k] = l.radius, inverse_h[k] = l.inverse_h;
-    const Oscillator& m = maps[g];
-    py[k] = m.py, pv[k] = m.pv, vy[k] = m.vy, vv[k] = m.vv, pg[k] = m.pg, vg[k] = m.vg;
-  }
-  for (std::size_t i = 0; i < shape.count; ++i) {
-    const std::size_t j = shape.first + i;
-    Lane ax, ay, az, rx0, ry0, rz0, px0, py0, pz0, vx0, vy0, vz0;
-    for (int k = 0; k < lane_count; ++k) {
-      const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
-      const glm::vec3 from = s.sample_points_[point0 + i], to = s.sample_points_[point0 + i + 1];
-      ax[k] = to.x - from.x, ay[k] = to.y - from.y, az[k] = to.z - from.z;
-      const glm::vec3 r = s.rests_[j], p = s.positions_[j], v = s.velocities_[j];
-      rx0[k] = r.x, ry0[k] = r.y, rz0[k] = r.z, px0[k] = p.x, py0[k] = p.y, pz0[k] = p.z;
-      vx0[k] = v.x, vy0[k] = v.y, vz0[k] = v.z;
-    }
-    Lane length, bx, by, bz, rx, ry, rz, px, pyy, pz, vx, vyy, vz;
-    // keep_length on lane k: back to the bone's length from the head, the velocity along it made the head's.
-    const auto keep_length = [&](int k, float& ox, float& oy, float& oz, float& wx, float& wy, float& wz) {
-      const float fx = ox - hx[k], fy = oy - hy[k], fz = oz - hz[k];
-      const float distance = std::sqrt(fx * fx + fy * fy + fz * fz);
-      const float inverse_distance = 1.0f / distance, inverse_length = 1.0f / length[k];
-      const bool far = distance > 1e-12f * length[k], long_bone = length[k] > 0.0f;
-      const float lx = far ? fx * inverse_distance : long_bone ? bx[k] * inverse_length : bx[k];
-      const float ly = far ? fy * inverse_distance : long_bone ? by[k] * inverse_length : by[k];
-      const float lz = far ? fz * inverse_distance : long_bone ? bz[k] * inverse_length : bz[k];
-      ox = hx[k] + lx * length[k], oy = hy[k] + ly * length[k], oz = hz[k] + lz * length[k];
-      const float d = (wx - hvx[k]) * lx + (wy - hvy[k]) * ly + (wz - hvz[k]) * lz;
-      wx = wx - d * lx, wy = wy - d * ly, wz = wz - d * lz;
-    };
-    for (int k = 0; k < lane_count; ++k) {
-      length[k] = std::sqrt(ax[k] * ax[k] + ay[k] * ay[k] + az[k] * az[k]);
-      // bend * animated (glm): v + ((uv * w) + uuv) * 2, uv = q.xyz × v, uuv = q.xyz × uv.
-      const float ux = qy[k] * az[k] - ay[k] * qz[k], uy = qz[k] * ax[k] - az[k] * qx[k],
-                  uz = qx[k] * ay[k] - ax[k] * qy[k];
-      const float uux = qy[k] * uz - uy * qz[k], uuy = qz[k] * ux - uz * qx[k], uuz = qx[k] * uy - ux * qy[k];
-      bx[k] = ax[k] + (ux * qw[k] + uux) * 2.0f, by[k] = ay[k] + (uy * qw[k] + uuy) * 2.0f,
-      bz[k] = az[k] + (uz * qw[k] + uuz) * 2.0f;
-      rx[k] = hx[k] + bx[k], ry[k] = hy[k] + by[k], rz[k] = hz[k] + bz[k];
-      const float rvx = (rx[k] - rx0[k]) * inverse_h[k], rvy = (ry[k] - ry0[k]) * inverse_h[k],
-                  rvz = (rz[k] - rz0[k]) * inverse_h[k];
-      const float yx = px0[k] - rx0[k], yy = py0[k] - ry0[k], yz = pz0[k] - rz0[k];
-      const float wx = vx0[k] - rvx, wy = vy0[k] - rvy, wz = vz0[k] - rvz;
-      px[k] = rx[k] + py[k] * yx + pv[k] * wx + pg[k] * gx[k];
-      pyy[k] = ry[k] + py[k] * yy + pv[k] * wy + pg[k] * gy[k];
-      pz[k] = rz[k] + py[k] * yz + pv[k] * wz + pg[k] * gz[k];
-      vx[k] = rvx + vy[k] * yx + vv[k] * wx + vg[k] * gx[k];
-      vyy[k] = rvy + vy[k] * yy + vv[k] * wy + vg[k] * gy[k];
-      vz[k] = rvz + vy[k] * yz + vv[k] * wz + vg[k] * gz[k];
-      keep_length(k, px[k], pyy[k], pz[k], vx[k], vyy[k], vz[k]);
-    }
-    // Flags as int lanes and combined by & and | (no short circuit): branch-free loops the vectoriser takes.
-    int active[lane_count];
-    for (int k = 0; k < lane_count; ++k) active[k] = 1;
-    for (int round = 0; round < 4; ++round) {
-      int pushed[lane_count];
-      for (int k = 0; k < lane_count; ++k) pushed[k] = 0;
-      for (std::size_t n = 0; n < collider_count; ++n) {
-        const float* row = colliders + n * collider_rows * lane_count;
-        const float* sx = row;
-        const float* sy = row + lane_count;
-        const float* sz = row + 2 * lane_count;
-        const float* cx = row + 3 * lane_count;
-        const float* cy = row + 4 * lane_count;
-        const float* cz = row + 5 * lane_count;
-        const float* inverse_length2 = row + 6 * lane_count;
-        const float* collider_radius = row + 7 * lane_count;
-        // First which lanes are inside, without a square root (most tails are outside every capsule); the push only
-        // when one is.
-        Lane nx, ny, nz, ox, oy, oz, reach;
-        int hit[lane_count];
-        for (int k = 0; k < lane_count; ++k) {
-          const float along =
-              ((px[k] - sx[k]) * cx[k] + (pyy[k] - sy[k]) * cy[k] + (pz[k] - sz[k]) * cz[k]) * inverse_length2[k];
-          const float t = along < 0.0f ? 0.0f : 1.0f < along ? 1.0f : along;  // std::clamp
-          nx[k] = sx[k] + cx[k] * t, ny[k] = sy[k] + cy[k] * t, nz[k] = sz[k] + cz[k] * t;
-          ox[k] = px[k] - nx[k], oy[k] = pyy[k] - ny[k], oz[k] = pz[k] - nz[k];
-          reach[k] = collider_radius[k] + radius[k];
-          const float distance2 = ox[k] * ox[k] + oy[k] * oy[k] + oz[k] * oz[k];
-          hit[k] = active[k] & int(!(distance2 >= reach[k] * reach[k]));
-        }
-        int any_hit = 0;
-        for (int k = 0; k < lane_count; ++k) any_hit |= hit[k];
-        if (any_hit == 0) continue;
-        for (int k = 0; k < lane_count; ++k) {
-          const float p0x = px[k], p0y = pyy[k], p0z = pz[k], v0x = vx[k], v0y = vyy[k], v0z = vz[k];
-          const float distance = std::sqrt(ox[k] * ox[k] + oy[k] * oy[k] + oz[k] * oz[k]);
-          // glm::normalize(rest - nearest + 1e-30f): the direction from the nearest point to the rest.
-          const float ex = rx[k] - nx[k] + 1e-30f, ey = ry[k] - ny[k] + 1e-30f, ez = rz[k] - nz[k] + 1e-30f;
-          const float inverse_e = 1.0f / std::sqrt(ex * ex + ey * ey + ez * ez);
-          const float inverse_o = 1.0f / distance;
-          const int apart = int(distance > 1e-12f * reach[k]);
-          const float mx = apart ? ox[k] * inverse_o : ex * inverse_e, my = apart ? oy[k] * inverse_o : ey * inverse_e,
-                      mz = apart ? oz[k] * inverse_o : ez * inverse_e;
-          const float inward = v0x * mx + v0y * my + v0z * mz;
-          const int into = hit[k] & int(inward < 0.0f);
-          const float qx_ = nx[k] + mx * reach[k], qy_ = ny[k] + my * reach[k], qz_ = nz[k] + mz * reach[k];
-          const float ux = v0x - inward * mx, uy = v0y - inward * my, uz = v0z - inward * mz;
-          px[k] = pick(hit[k] != 0, qx_, p0x);
-          pyy[k] = pick(hit[k] != 0, qy_, p0y);
-          pz[k] = pick(hit[k] != 0, qz_, p0z);
-          vx[k] = pick(into != 0, ux, v0x);
-          vyy[k] = pick(into != 0, uy, v0y);
-          vz[k] = pick(into != 0, uz, v0z);
-          pushed[k] = pushed[k] | hit[k];
-        }
-      }
-      int any = 0;
-      for (int k = 0; k < lane_count; ++k) any |= pushed[k];
-      if (any == 0) break;
-      for (int k = 0; k < lane_count; ++k) {
-        const float p0x = px[k], p0y = pyy[k], p0z = pz[k], v0x = vx[k], v0y = vyy[k], v0z = vz[k];
-        float ox = p0x, oy = p0y, oz = p0z, wx = v0x, wy = v0y, wz = v0z;
-        keep_length(k, ox, oy, oz, wx, wy, wz);
-        const int on = pushed[k];
-        active[k] = on;
-        px[k] = pick(on != 0, ox, p0x);
-        pyy[k] = pick(on != 0, oy, p0y);
-        pz[k] = pick(on != 0, oz, p0z);
-        vx[k] = pick(on != 0, wx, v0x);
-        vyy[k] = pick(on != 0, wy, v0y);
-        vz[k] = pick(on != 0, wz, v0z);
-      }
-    }
-    for (int k = 0; k < lane_count; ++k) {
-      // shortest_arc(bone, p - head, length²) * bend, as the scalar functions compute it.
-      const float norms = length[k] * length[k];
-      const float ex = px[k] - hx[k], ey = pyy[k] - hy[k], ez = pz[k] - hz[k];
-      const float w = norms + (bx[k] * ex + by[k] * ey + bz[k] * ez);
-      const bool opposite = w <= 1e-6f * norms;
-      const bool x_major = std::abs(bx[k]) > std::abs(bz[k]);
-      const float tw = opposite ? 0.0f : w;
-      const float tx = opposite ? (x_major ? -by[k] : 0.0f) : by[k] * ez - ey * bz[k];
-      const float ty = opposite ? (x_major ? bx[k] : -bz[k]) : bz[k] * ex - ez * bx[k];
-      const float tz = opposite ? (x_major ? 0.0f : by[k]) : bx[k] * ey - ex * by[k];
-      const float inverse = 1.0f / std::sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
-      const bool turn = norms > 0.0f;
-      const float rw = turn ? tw * inverse : 1.0f, rxx = turn ? tx * inverse : 0.0f, ryy = turn ? ty * inverse : 0.0f,
-                  rzz = turn ? tz * inverse : 0.0f;
-      const float nw = rw * qw[k] - rxx * qx[k] - ryy * qy[k] - rzz * qz[k];
-      const float nx = rw * qx[k] + rxx * qw[k] + ryy * qz[k] - rzz * qy[k];
-      const float ny = rw * qy[k] + ryy * qw[k] + rzz * qx[k] - rxx * qz[k];
-      const float nz = rw * qz[k] + rzz * qw[k] + rxx * qy[k] - ryy * qx[k];
-      qw[k] = nw, qx[k] = nx, qy[k] = ny, qz[k] = nz;
-    }
-    for (std::size_t g = 0; g < count; ++g) {
-      SpringChains& s = *group[g];
-      const auto k = int(g);
-      s.positions_[j] = glm::vec3(px[k], pyy[k], pz[k]);
-      s.velocities_[j] = glm::vec3(vx[k], vyy[k], vz[k]);
-      s.rests_[j] = glm::vec3(rx[k], ry[k], rz[k]);
-    }
-    for (int k = 0; k < lane_count; ++k) {  // the next link's head is this tail
-      hx[k] = px[k], hy[k] = pyy[k], hz[k] = pz[k];
-      hvx[k] = vx[k], hvy[k] = vyy[k], hvz[k] = vz[k];
-    }
-  }
-}
-
 bool SpringChains::same_layout(const SpringChains& other) const noexcept {
   if (other.substep_ != substep_ || other.chains_.size() != chains_.size() ||
       other.colliders_.size() != colliders_.size() || other.governed_.size() != governed_.size() ||
@@ -558,63 +363,129 @@ void SpringChains::advance(double dt) noexcept {
   advance_together(&self, 1, dt);
 }
 
-void SpringChains::advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept {
+void SpringChains::advance_together(SpringChains* const* group, std::size_t count, double dt, Isa isa) noexcept {
   // Whole sub-steps from the kept state's time (owed_ before this step's start) to the last one within the step,
   // then the leftover from a copy: the kept state only ever moves by the fixed sub-step. The group shares owed_,
-  // the sub-step and the chains' shapes (same_layout), so one count of sub-steps serves all; each chain's links run
-  // in turn for every member before the next link, the members' arithmetic untouched.
-  constexpr std::size_t most = SpringCrowdJob::max_group;
+  // the sub-step and the chains' shapes (same_layout), so one count of sub-steps serves all. Chains do not act on one
+  // another (each reads only the animated points, the colliders and its own state), so a group runs chain after chain,
+  // each through all the step's sub-steps: the chain's state and its animated points' ends are put in lanes once a
+  // step, stay there over its sub-steps and are written back at the end — the members' arithmetic untouched.
   const SpringChains& first = *group[0];
   const double h = first.substep_;
-  double kept = -first.owed_;  // the kept state's time relative to this step's start
   double available = first.owed_ + dt;
   constexpr double max_substepped = 1.0;  // a longer stall takes its excess in one sub-step
-  const auto whole = [&](double length) {
-    kept += length;
-    for (std::size_t g = 0; g < count; ++g) {
-      group[g]->sample_points(kept, dt);
-      group[g]->sample_colliders(dt > 0.0 ? float(std::clamp(kept / dt, 0.0, 1.0)) : 1.0f);
-    }
-    for (std::size_t c = 0; c < first.chains_.size(); ++c) {
-      const std::vector<std::uint32_t>& used = first.chains_[c].spec.colliders;
-      if (count == 1 || used.size() > max_lane_colliders) {  // one by one, as run() alone
+  // The lengths of the whole sub-steps: a stall's excess first, then `steps` of h (counted first so that rounding in
+  // `available` cannot drop or add one).
+  const double stall = available > max_substepped ? available - max_substepped : 0.0;
+  if (stall > 0.0) available = max_substepped;
+  const auto steps = std::size_t(std::floor(available / h + 1e-9));
+  const auto lanes_for = [&](const Chain& chain) {
+    return count > 1 && chain.count <= max_lane_links && chain.spec.colliders.size() <= max_lane_colliders;
+  };
+  bool any_alone = false;  // a chain that runs one member at a time (count 1, or beyond the lanes' sizes)
+  for (const Chain& chain : first.chains_) any_alone = any_alone || !lanes_for(chain);
+  if (any_alone) {
+    double kept = -first.owed_;  // the kept state's time relative to this step's start
+    const auto whole = [&](double length) {
+      kept += length;
+      for (std::size_t g = 0; g < count; ++g) {
+        group[g]->sample_points(kept, dt);
+        group[g]->sample_colliders(dt > 0.0 ? float(std::clamp(kept / dt, 0.0, 1.0)) : 1.0f);
+      }
+      for (std::size_t c = 0; c < first.chains_.size(); ++c) {
+        if (lanes_for(first.chains_[c])) continue;
         for (std::size_t g = 0; g < count; ++g) {
           SpringChains& s = *group[g];
           const Chain& chain = s.chains_[c];
           s.substep(chain, length == h ? chain.fixed : s.oscillator(chain, length), float(length), s.positions_.data(),
                     s.velocities_.data(), s.rests_.data(), s.heads_.data());
         }
-      } else {
-        Oscillator maps[most];
-        Link carry[most];
-        for (std::size_t g = 0; g < count; ++g) {
-          SpringChains& s = *group[g];
-          const Chain& chain = s.chains_[c];
-          maps[g] = length == h ? chain.fixed : s.oscillator(chain, length);
-          carry[g] = s.begin_substep(chain, float(length), s.heads_.data());
-        }
-        // The chain's colliders in lanes, once for its links.
-        float colliders[max_lane_colliders * collider_rows * lane_count];
-        for (std::size_t n = 0; n < used.size(); ++n) {
-          float* row = colliders + n * collider_rows * lane_count;
-          for (int k = 0; k < lane_count; ++k) {
-            const Placed& placed = group[std::size_t(k) < count ? std::size_t(k) : 0]->sample_colliders_[used[n]];
-            const float values[collider_rows] = {placed.start.x, placed.start.y, placed.start.z,         placed.axis.x,
-                                                 placed.axis.y,  placed.axis.z,  placed.inverse_length2, placed.radius};
-            for (int r = 0; r < collider_rows; ++r) row[r * lane_count + k] = values[r];
-          }
-        }
-        chain_lanes(group, count, c, maps, carry, colliders, used.size());
       }
-    }
-  };
-  if (available > max_substepped) {
-    whole(available - max_substepped);
-    available = max_substepped;
+    };
+    if (stall > 0.0) whole(stall);
+    for (std::size_t n = 0; n < steps; ++n) whole(h);
   }
-  // Count the sub-steps first so that rounding in `available` cannot drop or add one.
-  const auto steps = std::size_t(std::floor(available / h + 1e-9));
-  for (std::size_t n = 0; n < steps; ++n) whole(h);
+  for (std::size_t c = 0; c < first.chains_.size(); ++c) {
+    if (!lanes_for(first.chains_[c])) continue;
+    const Chain& shape = first.chains_[c];
+    const std::size_t point0 = shape.first + c;
+    const std::vector<std::uint32_t>& used = shape.spec.colliders;
+    // In lanes for the step (lanes past `count` repeat the first member and are not written back): the animated
+    // points' ends (the chain's, then its colliders' two each), the kept state, the first head at the last sub-step.
+    alignas(32) float ends[(max_lane_links + 1 + 2 * max_lane_colliders) * end_rows * lane_count];
+    alignas(32) float state[max_lane_links * state_rows * lane_count];
+    alignas(32) float radii[max_lane_colliders * 2 * lane_count];  // per collider: its radius at the start, at the end
+    alignas(32) float heads[3 * lane_count];
+    alignas(32) float gravity[3 * lane_count], radius[lane_count], maps[6 * lane_count], stall_maps[6 * lane_count];
+    const std::size_t chain_points = shape.count + 1;
+    for (int k = 0; k < lane_count; ++k) {
+      const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
+      const Chain& chain = s.chains_[c];
+      // Plain stores of each float (a copy through a small array on the stack cost as much as the sub-steps).
+      const auto put = [&](float* at, const glm::vec3& v) {
+        at[0] = v.x, at[lane_count] = v.y, at[2 * lane_count] = v.z;
+      };
+      const auto put_ends = [&](std::size_t row, std::size_t point) {
+        float* at = ends + row * end_rows * lane_count + k;
+        put(at, s.start_points_[point]);
+        put(at + 3 * lane_count, s.start_velocities_[point]);
+        put(at + 6 * lane_count, s.end_points_[point]);
+        put(at + 9 * lane_count, s.end_velocities_[point]);
+      };
+      for (std::size_t i = 0; i < chain_points; ++i) put_ends(i, point0 + i);
+      for (std::size_t n = 0; n < used.size(); ++n) {
+        put_ends(chain_points + 2 * n, s.collider_points_ + 2 * used[n]);
+        put_ends(chain_points + 2 * n + 1, s.collider_points_ + 2 * used[n] + 1);
+        radii[2 * n * lane_count + k] = s.collider_start_radius_[used[n]];
+        radii[(2 * n + 1) * lane_count + k] = s.collider_end_radius_[used[n]];
+      }
+      for (std::size_t i = 0; i < shape.count; ++i) {
+        float* at = state + i * state_rows * lane_count + k;
+        put(at, s.positions_[shape.first + i]);
+        put(at + 3 * lane_count, s.velocities_[shape.first + i]);
+        put(at + 6 * lane_count, s.rests_[shape.first + i]);
+      }
+      heads[k] = s.heads_[c].x, heads[lane_count + k] = s.heads_[c].y, heads[2 * lane_count + k] = s.heads_[c].z;
+      // substep()'s gravity and radius, the same over the step; the maps of a whole sub-step and of a stall's.
+      const glm::vec3 g = chain.spec.gravity * (chain.spec.units_per_metre * chain.scale);
+      gravity[k] = g.x, gravity[lane_count + k] = g.y, gravity[2 * lane_count + k] = g.z;
+      radius[k] = chain.spec.radius * chain.scale;
+      const auto put_maps = [&](float* rows, const Oscillator& m) {
+        rows[k] = m.py, rows[lane_count + k] = m.pv, rows[2 * lane_count + k] = m.vy;
+        rows[3 * lane_count + k] = m.vv, rows[4 * lane_count + k] = m.pg, rows[5 * lane_count + k] = m.vg;
+      };
+      put_maps(maps, chain.fixed);
+      if (stall > 0.0) put_maps(stall_maps, stall == h ? chain.fixed : s.oscillator(chain, stall));
+    }
+    detail::SpringLanesArgs args{};
+    args.links = shape.count;
+    args.colliders = used.size();
+    args.ends = ends;
+    args.radii = radii;
+    args.state = state;
+    args.heads = heads;
+    args.gravity = gravity;
+    args.radius = radius;
+    args.maps = maps;
+    args.stall_maps = stall_maps;
+    args.owed = first.owed_;
+    args.dt = dt;
+    args.h = h;
+    args.stall = stall;
+    args.steps = steps;
+    lanes_kernel(isa, args);
+    for (std::size_t g = 0; g < count; ++g) {
+      SpringChains& s = *group[g];
+      const auto k = int(g);
+      for (std::size_t i = 0; i < shape.count; ++i) {
+        const float* at = state + i * state_rows * lane_count + k;
+        s.positions_[shape.first + i] = glm::vec3(at[0], at[lane_count], at[2 * lane_count]);
+        s.velocities_[shape.first + i] = glm::vec3(at[3 * lane_count], at[4 * lane_count], at[5 * lane_count]);
+        s.rests_[shape.first + i] = glm::vec3(at[6 * lane_count], at[7 * lane_count], at[8 * lane_count]);
+      }
+      s.heads_[c] = glm::vec3(heads[k], heads[lane_count + k], heads[2 * lane_count + k]);
+    }
+  }
   for (std::size_t g = 0; g < count; ++g) {
     SpringChains& s = *group[g];
     s.owed_ = std::max(0.0, available - double(steps) * h);
@@ -733,6 +604,7 @@ void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> pale
 Status SpringCrowdJob::check(std::size_t begin, std::size_t end) const noexcept {
   const SpringCrowdJob& job = *this;
   if (job.group < 1 || job.group > SpringCrowdJob::max_group) return Status::failure("group is not in [1, 8]");
+  if (!isa_available(job.isa)) return Status::failure("instruction set not available");
   if (job.instances.empty())
     return (job.world.empty() && job.world_rate.empty() && job.palette.empty())
                ? Status()
@@ -782,7 +654,7 @@ Status SpringCrowdJob::run(std::size_t begin, std::size_t end) const noexcept {
           advancing[left++] = advancing[k];
         }
       }
-      SpringChains::advance_together(together, together_count, double(dt));
+      SpringChains::advance_together(together, together_count, double(dt), isa);
       count = left;
     }
     for (std::size_t i = from; i < to; ++i) instances[i].end_run(span_of(world, i), span_of(palette, i));

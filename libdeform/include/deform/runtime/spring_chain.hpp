@@ -27,6 +27,7 @@
 
 #include "deform/runtime/error.hpp"
 #include "deform/runtime/export.hpp"
+#include "deform/runtime/isa.hpp"
 #include "deform/runtime/skeleton.hpp"
 namespace deform {
 
@@ -148,26 +149,18 @@ class DEFORM_RUNTIME_API SpringChains {
     float inverse_length2 = 0.0f;  // 1 / |axis|², 0 for a sphere (start = end)
     float radius = 0.0f;
   };
-  struct Link {  // what a sub-step of a chain carries from one link to the next, and the chain's constants
-    glm::vec3 head{0.0f}, head_velocity{0.0f};
-    glm::quat bend{1.0f, 0.0f, 0.0f, 0.0f};
-    glm::vec3 gravity{0.0f};
-    float radius = 0.0f, inverse_h = 0.0f;
-  };
   friend struct SpringCrowdJob;
   Oscillator oscillator(const Chain& chain, double h) const noexcept;
   void sample_points(double tau, double dt);
   void sample_colliders(float blend);
-  Link begin_substep(const Chain& chain, float h, glm::vec3* heads) const noexcept;
   void substep(const Chain& chain, const Oscillator& m, float h, glm::vec3* positions, glm::vec3* velocities,
                glm::vec3* rests, glm::vec3* heads) const noexcept;
-  // Chain c, one sub-step of the kept state, for `count` (2 to SpringCrowdJob::max_group) members of one layout in
-  // lanes: what substep() does for each, the same bits. `colliders`: the chain's colliders in lanes.
-  static void chain_lanes(SpringChains* const* group, std::size_t count, std::size_t c, const Oscillator* maps,
-                          const Link* carry, const float* colliders, std::size_t collider_count) noexcept;
   // advance() for `count` members of one layout (same_layout) whose kept state is as old (owed_), their sub-steps in
-  // lanes (chain_lanes): each chain's links wait on one another, the members do not. The same bits as one by one.
-  static void advance_together(SpringChains* const* group, std::size_t count, double dt) noexcept;
+  // lanes (links_lanes in spring_chains.cpp): each chain's links wait on one another, the members do not. Chain by
+  // chain, its state and animated points put in lanes once for all the step's sub-steps and written back after them.
+  // The same bits as one by one.
+  static void advance_together(SpringChains* const* group, std::size_t count, double dt,
+                               Isa isa = Isa::automatic) noexcept;
   void advance(double dt) noexcept;
   bool same_layout(const SpringChains& other) const noexcept;
   Status check(float dt, std::size_t world, std::size_t world_rate, std::size_t palette) const noexcept;
@@ -208,8 +201,12 @@ class DEFORM_RUNTIME_API SpringChains {
 // one another (each link's rest turns with the bend above it: square roots and divisions in a row), so one
 // character's sub-step is bound by that latency; the job runs up to `group` instances' sub-steps together in
 // structure-of-arrays lanes (one lane per instance, vector code), each lane the scalar code's operations in its
-// order. Each instance computes exactly what its own run() would: the same bits for any group size, range split or
-// thread count. Group 8 fills the lanes; smaller groups leave lanes idle (group 1 runs each instance alone).
+// order. A group goes chain by chain (chains do not act on one another): the chain's state and animated points are
+// put in lanes once a step, all the step's sub-steps run there, and the state is written back to each instance, which
+// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). A chain of
+// more than 32 bones or 8 colliders runs one instance at a time. Each instance computes exactly what its own run()
+// would: the same bits for any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave
+// lanes idle (group 1 runs each instance alone).
 //
 // Every instance must have the chains of instances[0] laid out alike (the same chain count, bones per chain, collider
 // count and each chain's colliders, the same skeleton size and sub-step; settings such as frequency may differ):
@@ -223,12 +220,16 @@ struct DEFORM_RUNTIME_API SpringCrowdJob {
   std::span<const glm::mat4> world_rate;  // empty, or as world
   std::span<glm::mat4> palette;           // out: empty, or as world
   std::size_t group = 8;                  // instances stepped together, in [1, max_group]
+  Isa isa = Isa::automatic;  // the lanes' kernel copy (isa.hpp): portable, or avx2 (which avx512 also runs); every
+                             // copy gives the same bits (none fuses a multiply and an add)
 
-  // Why run() would refuse: a dt negative or not finite, a group out of range, an instance laid out unlike the first,
+  // Why run() would refuse: a dt negative or not finite, a group out of range, an isa not available here
+  // (isa_available), an instance laid out unlike the first,
   // or world, world_rate or palette not one matrix per bone per instance (the last two may be empty). O(instances ×
   // chains).
   Status validate() const noexcept;
-  // validate(), then each instance's run(). On failure changes nothing. No allocation.
+  // validate(), then each instance's run(). On failure changes nothing. No allocation: the lanes of one chain for a
+  // group live on the calling thread's stack, about 35 KB, which a job system's fibers must have to spare.
   Status run() const noexcept;
   // The instances [begin, end), for ranges on threads (ThreadPool::parallel_for): refuses a range out of bounds, and
   // what validate() refuses of those instances (the sizes, the layout of each against instances[0]).
