@@ -229,6 +229,32 @@ if os.path.exists(wuson):
 else:
     print(f"skipped the imported character: {wuson} is missing (Debian's assimp-testmodels)")
 
+# --- export: a Z-up import (IQM is +Z up) is written turned into glTF's +Y up, (x, y, z) -> (x, z, -y), so that
+# viewers stand it upright; re-imported it comes back turned, in the bind pose and posed by a clip ---
+mrfixit = os.path.join(models, "IQM", "mrfixit.iqm")
+if os.path.exists(mrfixit):
+    out = run("export", mrfixit, "--format", "gltf", "--out", "mrfixit.glb")
+    written.append("mrfixit.glb")
+    native = run("export", mrfixit, "--out", "mrfixit-native")
+    back = run("export", "mrfixit.glb", "--out", "mrfixit-back")
+    if out and native and back:
+        def turned(points):
+            return [(x, z, -y) for x, y, z in points]
+        mapping = correspondence("mrfixit.glb (bind pose, turned)",
+                                 turned(obj_points(os.path.join(work, native["obj"]))),
+                                 obj_points(os.path.join(work, back["obj"])))
+        a = run("skin", mrfixit, "--clip", "idle", "--time", "0.7", "--out", "mrfixit-posed-source.obj")
+        b = run("skin", "mrfixit.glb", "--clip", "idle", "--time", "0.7", "--out", "mrfixit-posed-back.obj")
+        if a and b and mapping:
+            posed_source = turned(obj_points(os.path.join(work, "mrfixit-posed-source.obj")))
+            posed_back = obj_points(os.path.join(work, "mrfixit-posed-back.obj"))
+            limit = TOLERANCE * diagonal(posed_source)
+            worst = max(math.dist(posed_back[i], posed_source[j]) for i, j in enumerate(mapping))
+            check(worst <= limit, f"mrfixit.glb posed by idle at 0.7 s: a point is {worst:g} from the turned "
+                  f"source's (limit {limit:g})")
+else:
+    print(f"skipped the Z-up character: {mrfixit} is missing (Debian's assimp-testmodels)")
+
 # --- bake: the FFD of a box around the head, and the reach-stretch-release ---
 lattice = {"origin": [-0.3, 1.4, -0.2], "size": [0.6, 0.5, 0.5], "degree": [2, 2, 2],
            "displacements": [{"index": [1, 2, 1], "offset": [0.0, 0.25, 0.05]},

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -228,6 +229,74 @@ TEST_CASE("write_gltf: a skinned model's morph targets, named, and each clip's m
   options.clips = bad;
   CHECK_THROWS_AS(deform::write_gltf((folder.path / "bad.glb").string(), model, options), deform::Error);
   CHECK(!fs::exists(folder.path / "bad.glb"));
+}
+
+TEST_CASE("write_gltf: a model whose up is not +Y is written turned so that it stands in glTF's +Y up") {
+  const Folder folder("deform_gltf_up_test");
+  deform::Model model = quad();
+  model.morph_targets.push_back({"bulge", "quad", 0.0f, {2}, {{0, 0, 1}}, {}});
+  deform::Animation clip;
+  clip.name = "rise";
+  clip.duration = 1.0f;
+  deform::Channel channel;
+  channel.bone = 0;  // the root's track turns with the model; a child's is relative to it and stays
+  channel.translation.times = {0.0f, 1.0f};
+  channel.translation.values = {{0, 0, 0}, {0, 0, 2}};
+  clip.channels.push_back(channel);
+  const std::vector<deform::Animation> clips = {clip};
+  const auto written = [&](glm::vec3 up, const char* name) {
+    deform::GltfExportOptions options;
+    options.clips = clips;
+    options.up = up;
+    const std::string path = (folder.path / name).string();
+    deform::write_gltf(path, model, options);
+    const Json doc = Json::parse(deform::read_file_text(path));
+    const std::string bin_name = std::string(name).substr(0, std::string(name).size() - 5) + ".bin";
+    return std::pair(doc, deform::read_file_bytes((folder.path / bin_name).string()));
+  };
+  const auto [y_doc, y_bin] = written({0, 3, 0}, "y.gltf");  // its length does not matter
+  const auto [default_doc, default_bin] = written({0, 1, 0}, "default.gltf");
+  CHECK(y_bin == default_bin);
+  CHECK(!y_doc["nodes"][0].contains("rotation"));
+
+  // +Z up: (x, y, z) is written as (x, z, -y), the root bone turned by -90 degrees about X, the tip's node as it was.
+  const auto [z_doc, z_bin] = written({0, 0, 1}, "z.gltf");
+  const Json& primitive = z_doc["meshes"][0]["primitives"][0];
+  const std::vector<float> positions = floats(z_doc, z_bin, primitive["attributes"]["POSITION"].get<int>());
+  const std::vector<float> expected = {0, 0, 0, 1, 0, 0, 1, 0, -1, 0, 0, -1};
+  REQUIRE(positions.size() == expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) CHECK(positions[i] == doctest::Approx(expected[i]).epsilon(1e-6));
+  const std::vector<float> normal = floats(z_doc, z_bin, primitive["attributes"]["NORMAL"].get<int>());
+  CHECK(normal[1] == doctest::Approx(1.0f));  // +Z was the quad's facing: now +Y
+  const Json& rotation = z_doc["nodes"][0]["rotation"];
+  CHECK(rotation[0].get<float>() == doctest::Approx(-0.70710678f));
+  CHECK(rotation[3].get<float>() == doctest::Approx(0.70710678f));
+  CHECK(z_doc["nodes"][1]["translation"] == y_doc["nodes"][1]["translation"]);
+  // The tip's inverse bind undoes its turned world transform (at (0, 0, -1), turned): its rotation part is the turn
+  // undone, which takes +Y to +Z (column 1 is (0, 0, 1)), and it takes the tip's place to the origin.
+  const std::vector<float> inverse_binds = floats(z_doc, z_bin, z_doc["skins"][0]["inverseBindMatrices"].get<int>());
+  CHECK(inverse_binds[16 + 6] == doctest::Approx(1.0f));
+  CHECK(inverse_binds[16 + 13] == doctest::Approx(-1.0f));
+  // The morph delta +Z turns to +Y, the root's translation track from +Z to +Y.
+  const Json& target = primitive["targets"][0];
+  CHECK(z_doc["accessors"][target["POSITION"].get<int>()]["max"][1].get<float>() == doctest::Approx(1.0f));
+  const Json& sampler = z_doc["animations"][0]["samplers"][0];
+  const std::vector<float> track = floats(z_doc, z_bin, sampler["output"].get<int>());
+  REQUIRE(track.size() == 6);
+  CHECK(track[4] == doctest::Approx(2.0f));
+  CHECK(track[5] == doctest::Approx(0.0f).epsilon(1e-6));
+
+  // -Y up: half a turn. Zero or not finite: refused, writing nothing.
+  const auto [down_doc, down_bin] = written({0, -1, 0}, "down.gltf");
+  const std::vector<float> down = floats(down_doc, down_bin, primitive["attributes"]["POSITION"].get<int>());
+  CHECK(down[7] == doctest::Approx(-1.0f));  // point 2's y
+  const std::vector<std::string> before = folder.files();
+  deform::GltfExportOptions zero;
+  zero.up = glm::vec3(0.0f);
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "zero.glb").string(), model, zero), deform::Error);
+  zero.up = glm::vec3(0.0f, std::nanf(""), 1.0f);
+  CHECK_THROWS_AS(deform::write_gltf((folder.path / "nan.glb").string(), model, zero), deform::Error);
+  CHECK(folder.files() == before);
 }
 
 TEST_CASE("write_gltf: refuses what it cannot write, writing nothing") {

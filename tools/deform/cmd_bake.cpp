@@ -297,7 +297,8 @@ int bake_animated(const Args& args) {
   if (!character.update(0.0f)) throw std::runtime_error("internal error: the bind pose did not deform");
   const std::span<const glm::vec3> bind_normals = character.normals();
   rest.mesh.vertex_normals.assign(bind_normals.begin(), bind_normals.end());
-  const deform::GltfExportOptions options = export_options(rigged.texture_root, reference_policy(args));
+  deform::GltfExportOptions options = export_options(rigged.texture_root, reference_policy(args));
+  options.up = rigged.loaded.up;
   const auto name_of = [](const Motion& m) { return m.clip != nullptr ? m.clip->name : std::string("reach"); };
 
   if (request.bones) {

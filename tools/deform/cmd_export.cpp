@@ -57,6 +57,7 @@ int run_gltf(const Args& args, const std::string& out) {
   options.generator = "libdeform " DEFORM_VERSION_STRING;
   options.texture_root = rigged ? rigged->texture_root : texture_root(args);
   options.references = reference_policy(args);
+  options.up = loaded.up;  // a Z-up import stands upright in glTF's +Y
   const deform::GltfWritten written = deform::write_gltf(out, model, options);
   for (const std::string& w : written.warnings) note(w);
   Json names = Json::array();

@@ -55,6 +55,7 @@ int run(const std::vector<std::string>& argv) {
     root = std::filesystem::path(args.positionals()[0]).parent_path().lexically_normal().string();
   gltf.texture_root = root.empty() ? "." : root;  // textures only from the model's own folder
   gltf.references = reference_policy(args);
+  gltf.up = loaded.up;
   const deform::GltfWritten written = deform::write_gltf(out, model, gltf);
   for (const std::string& w : written.warnings) note(w);
   print_json(Json{{"gltf", written.gltf},

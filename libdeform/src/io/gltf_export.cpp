@@ -272,6 +272,9 @@ bool check_export(const std::string& path, const Model& model, const GltfExportO
   if (skinned && (model.weights.size() != mesh.point_count() || model.skeleton.bone_count() == 0))
     throw Error::invalid_argument(path, "the model's weights do not match its points, or it has no skeleton");
   if (!skinned) check_baked(*options.baked, model);
+  const glm::vec3 up = options.up;
+  if (!std::isfinite(up.x) || !std::isfinite(up.y) || !std::isfinite(up.z) || up == glm::vec3(0.0f))
+    throw Error::invalid_argument("up", "the up direction is zero or not finite");
   if (skinned) {
     require_valid_morph_targets(model.morph_targets, mesh.point_count(), path);
     for (const Animation& clip : options.clips)
@@ -283,6 +286,54 @@ bool check_export(const std::string& path, const Model& model, const GltfExportO
                                             std::to_string(model.morph_targets.size()) + " morph targets");
   }
   return binary;
+}
+
+// The shortest turn that takes `up` (finite, not zero: check_export) to +Y; half a turn about X when it is -Y; the
+// identity, exactly, when it is +Y.
+glm::quat turn_to_y_up(glm::vec3 up) {
+  const glm::dvec3 u = glm::normalize(glm::dvec3(up)), y(0.0, 1.0, 0.0);
+  const double cosine = glm::dot(u, y);
+  if (cosine >= 1.0 - 1e-12) return {1.0f, 0.0f, 0.0f, 0.0f};
+  if (cosine <= -1.0 + 1e-12) return {0.0f, 1.0f, 0.0f, 0.0f};
+  const glm::dvec3 axis = glm::cross(u, y);  // (1 + u·y, u × y) is twice the half-angle quaternion, unnormalised
+  return glm::quat(glm::normalize(glm::dquat(1.0 + cosine, axis.x, axis.y, axis.z)));
+}
+
+// What write_gltf writes for a model whose up is not +Y: the model, its clips and its baked frames turned about the
+// origin. Points, normals and morph deltas turn; of the bones only the root does (bone 0: the others are relative to
+// their parents), in its bind transform and its clip tracks.
+struct TurnedExport {
+  Model model;
+  std::vector<Animation> clips;
+  BakedFrames baked;
+};
+
+TurnedExport turned_export(const Model& source, const GltfExportOptions& options, glm::quat turn) {
+  const auto turn_all = [turn](std::vector<glm::vec3>& vectors) {
+    for (glm::vec3& v : vectors) v = turn * v;
+  };
+  TurnedExport out{
+      source, {options.clips.begin(), options.clips.end()}, options.baked ? *options.baked : BakedFrames{}};
+  Model& model = out.model;
+  turn_all(model.mesh.positions);
+  turn_all(model.mesh.vertex_normals);
+  for (MorphTarget& target : model.morph_targets) turn_all(target.position_deltas), turn_all(target.normal_deltas);
+  std::vector<Bone> bones(model.skeleton.bones().begin(), model.skeleton.bones().end());
+  bones[0].bind_translation = turn * bones[0].bind_translation;
+  bones[0].bind_rotation = euler_from_quat(turn * quat_from_euler(bones[0].bind_rotation));
+  model.skeleton = Skeleton(std::move(bones));
+  // A Hermite curve is linear in its values and tangents, so turning both turns every sample between the keys.
+  for (Animation& clip : out.clips)
+    for (Channel& channel : clip.channels) {
+      if (channel.bone != 0) continue;
+      turn_all(channel.translation.values), turn_all(channel.translation.in_tangents);
+      turn_all(channel.translation.out_tangents);
+      for (auto* keys : {&channel.rotation.values, &channel.rotation.in_tangents, &channel.rotation.out_tangents})
+        for (glm::quat& q : *keys) q = turn * q;
+    }
+  for (auto& frame : out.baked.positions) turn_all(frame);
+  for (auto& frame : out.baked.normals) turn_all(frame);
+  return out;
 }
 
 // One glTF export, built in steps: the per-vertex data, the materials and images, one primitive per submesh (with the
@@ -763,7 +814,13 @@ class GltfExport {
 
 GltfWritten write_gltf(const std::string& path, const Model& model, const GltfExportOptions& options) {
   const bool binary = check_export(path, model, options);
-  return GltfExport(path, model, options).write(binary);
+  const glm::quat turn = turn_to_y_up(options.up);
+  if (turn == glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) return GltfExport(path, model, options).write(binary);
+  const TurnedExport turned = turned_export(model, options, turn);
+  GltfExportOptions turned_options = options;
+  turned_options.clips = turned.clips;
+  if (options.baked) turned_options.baked = &turned.baked;
+  return GltfExport(path, turned.model, turned_options).write(binary);
 }
 
 }  // namespace deform

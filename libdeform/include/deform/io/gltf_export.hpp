@@ -45,6 +45,11 @@ struct GltfExportOptions {
   // When set, the file holds the mesh without skin or skeleton plus the baked morph-target animation, and `clips`
   // must be empty (the frames already contain whatever moved the skeleton).
   const BakedFrames* baked = nullptr;
+  // The up direction of the model's data (ImportedModel::up: +Z for IQM, the axis an FBX declares). glTF is +Y up, so
+  // when this is another direction the file holds the model turned about the origin by the shortest turn that takes
+  // it to +Y (points, normals, morph deltas, the root bone's bind and clip tracks, baked frames), and viewers and
+  // engines show it standing. Must be finite and not zero; its length does not matter.
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
   // Written as asset.generator.
   std::string generator = "libdeform";
   // The only folder textures are embedded from: a material's diffuse texture (Material::diffuse_map) is embedded in
@@ -76,9 +81,9 @@ struct GltfWritten {
 // Skeleton::inverse_bind_world), JOINTS_0 and WEIGHTS_0 from `model.weights`, the model's morph targets (sparse
 // POSITION, and NORMAL when any target has normal deltas; names in mesh.extras.targetNames) and the clips, each
 // clip's morph channels as one `weights` channel on the mesh node. Throws deform::Error of
-// kind argument for another extension, a model whose weights do not match its points, a mesh without triangles, or
-// inconsistent `baked` frames; deform::Error naming the file when a file cannot be written. Cost: O(vertices · (1 +
-// frames) + frames² + keys) time and the file's size in memory.
+// kind argument for another extension, a model whose weights do not match its points, a mesh without triangles,
+// inconsistent `baked` frames or an `up` that is zero or not finite; deform::Error naming the file when a file cannot
+// be written. Cost: O(vertices · (1 + frames) + frames² + keys) time and the file's size in memory.
 DEFORM_IO_API GltfWritten write_gltf(const std::string& path, const Model& model,
                                      const GltfExportOptions& options = {});
 
