@@ -379,6 +379,10 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
   const double stall = available > max_substepped ? available - max_substepped : 0.0;
   if (stall > 0.0) available = max_substepped;
   const auto steps = std::size_t(std::floor(available / h + 1e-9));
+  // The kept state's age after the step; when no leftover is owed the reported state is the kept one, and the lanes
+  // also give end_run()'s bend (Chain::bent).
+  const double owed_after = std::max(0.0, available - double(steps) * h);
+  const bool bend_in_lanes = !(owed_after > 1e-12);
   const auto lanes_for = [&](const Chain& chain) {
     return count > 1 && chain.count <= max_lane_links && chain.spec.colliders.size() <= max_lane_colliders;
   };
@@ -417,6 +421,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     alignas(32) float radii[max_lane_colliders * 2 * lane_count];  // per collider: its radius at the start, at the end
     alignas(32) float heads[3 * lane_count];
     alignas(32) float gravity[3 * lane_count], radius[lane_count], maps[6 * lane_count], stall_maps[6 * lane_count];
+    alignas(32) float corrections[max_lane_links * 12 * lane_count];  // end_run()'s bend: mat3 and translation
     const std::size_t chain_points = shape.count + 1;
     for (int k = 0; k < lane_count; ++k) {
       const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
@@ -473,6 +478,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     args.h = h;
     args.stall = stall;
     args.steps = steps;
+    args.corrections = bend_in_lanes ? corrections : nullptr;
     lanes_kernel(isa, args);
     for (std::size_t g = 0; g < count; ++g) {
       SpringChains& s = *group[g];
@@ -484,11 +490,21 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
         s.rests_[shape.first + i] = glm::vec3(at[6 * lane_count], at[7 * lane_count], at[8 * lane_count]);
       }
       s.heads_[c] = glm::vec3(heads[k], heads[lane_count + k], heads[2 * lane_count + k]);
+      if (!bend_in_lanes) continue;
+      for (std::size_t i = 0; i < shape.count; ++i) {
+        const float* at = corrections + i * 12 * lane_count + k;
+        glm::mat4& correction = s.corrections_[shape.first + i];
+        correction[0] = glm::vec4(at[0], at[lane_count], at[2 * lane_count], 0.0f);
+        correction[1] = glm::vec4(at[3 * lane_count], at[4 * lane_count], at[5 * lane_count], 0.0f);
+        correction[2] = glm::vec4(at[6 * lane_count], at[7 * lane_count], at[8 * lane_count], 0.0f);
+        correction[3] = glm::vec4(at[9 * lane_count], at[10 * lane_count], at[11 * lane_count], 1.0f);
+      }
+      s.chains_[c].bent = true;
     }
   }
   for (std::size_t g = 0; g < count; ++g) {
     SpringChains& s = *group[g];
-    s.owed_ = std::max(0.0, available - double(steps) * h);
+    s.owed_ = owed_after;
     s.report_positions_ = s.positions_;
     s.report_velocities_ = s.velocities_;
     s.report_rests_ = s.rests_;
@@ -573,10 +589,15 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
 
 void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> palette) noexcept {
   // The bent pose: per joint the rigid map taking its animated bone onto its simulated one.
-  for (const Chain& chain : chains_) {
+  for (Chain& chain : chains_) {
     const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
     glm::vec3 head = end_points_[point0];
     drawn_[point0] = head;
+    if (chain.bent) {  // SpringCrowdJob's lanes computed the corrections below, bit for bit
+      for (std::size_t i = 0; i < chain.count; ++i) drawn_[point0 + i + 1] = report_positions_[chain.first + i];
+      chain.bent = false;
+      continue;
+    }
     glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
     for (std::size_t i = 0; i < chain.count; ++i) {
       const std::size_t j = chain.first + i;

@@ -142,6 +142,7 @@ class DEFORM_RUNTIME_API SpringChains {
     float bind_scale = 1.0f;  // the first bone's scale in the bind pose
     float scale = 1.0f;       // ... and as of the last run
     bool restart = false;     // restart(): at rest on the animated pose at the next run
+    bool bent = false;        // advance_together() wrote this step's corrections_ in lanes: end_run() takes them
   };
   struct Placed {  // a collider in world space
     glm::vec3 start{0.0f};
@@ -229,7 +230,7 @@ struct DEFORM_RUNTIME_API SpringCrowdJob {
   // chains).
   Status validate() const noexcept;
   // validate(), then each instance's run(). On failure changes nothing. No allocation: the lanes of one chain for a
-  // group live on the calling thread's stack, about 35 KB, which a job system's fibers must have to spare.
+  // group live on the calling thread's stack, about 48 KB, which a job system's fibers must have to spare.
   Status run() const noexcept;
   // The instances [begin, end), for ranges on threads (ThreadPool::parallel_for): refuses a range out of bounds, and
   // what validate() refuses of those instances (the sizes, the layout of each against instances[0]).
