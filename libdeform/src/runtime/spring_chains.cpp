@@ -157,7 +157,8 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
       }
       require(glm::dot(chain.tip, chain.tip) > 0.0f, element, "the last bone has no tip to guess: give one");
     }
-    chain.bind_scale = matrix_scale(skeleton.bind_world()[std::size_t(spec.bones.front())]);
+    chain.root = spec.bones.front();
+    chain.bind_scale = matrix_scale(skeleton.bind_world()[std::size_t(chain.root)]);
     chain.spec = std::move(spec);
     chain.fixed = oscillator(chain, substep_);
     joints += chain.count;
@@ -505,11 +506,13 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
   for (std::size_t g = 0; g < count; ++g) {
     SpringChains& s = *group[g];
     s.owed_ = owed_after;
-    s.report_positions_ = s.positions_;
-    s.report_velocities_ = s.velocities_;
-    s.report_rests_ = s.rests_;
-    s.report_heads_ = s.heads_;
-    if (s.owed_ > 1e-12) {
+    // With no leftover the reported state is the kept one (reported_kept_: nothing copied); else a copy advanced by it.
+    s.reported_kept_ = !(s.owed_ > 1e-12);
+    if (!s.reported_kept_) {
+      s.report_positions_ = s.positions_;
+      s.report_velocities_ = s.velocities_;
+      s.report_rests_ = s.rests_;
+      s.report_heads_ = s.heads_;
       s.sample_points(dt, dt);
       s.sample_colliders(1.0f);
       for (const Chain& chain : s.chains_) {
@@ -553,8 +556,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
   }
   for (std::size_t c = 0; c < colliders_.size(); ++c)
     collider_end_radius_[c] = colliders_[c].radius * matrix_scale(world[std::size_t(colliders_[c].bone)]);
-  for (Chain& chain : chains_)
-    chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
+  for (Chain& chain : chains_) chain.scale = matrix_scale(world[std::size_t(chain.root)]) / chain.bind_scale;
   // A pose that changed while no time passed is a jump (a cut, a teleport): the chains start again on it, at rest.
   if (started_ && dt == 0.0f) started_ = std::equal(end_points_.begin(), end_points_.end(), start_points_.begin());
   if (!started_) {
@@ -562,9 +564,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
     start_velocities_ = end_velocities_;
     collider_start_radius_ = collider_end_radius_;
     for (Chain& chain : chains_) place_at_rest(chain);
-    report_positions_ = positions_;
-    report_velocities_ = velocities_;
-    report_rests_ = rests_;
+    reported_kept_ = true;
     owed_ = 0.0;
     started_ = true;
   } else {
@@ -576,6 +576,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
         start_velocities_[k] = end_velocities_[k];
       }
       place_at_rest(chain);
+      if (reported_kept_) continue;
       for (std::size_t j = chain.first; j < chain.first + chain.count; ++j) {
         report_positions_[j] = positions_[j];
         report_velocities_[j] = velocities_[j];
@@ -589,12 +590,13 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
 
 void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> palette) noexcept {
   // The bent pose: per joint the rigid map taking its animated bone onto its simulated one.
+  const std::vector<glm::vec3>& report_positions = reported_kept_ ? positions_ : report_positions_;
   for (Chain& chain : chains_) {
     const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
     glm::vec3 head = end_points_[point0];
     drawn_[point0] = head;
     if (chain.bent) {  // SpringCrowdJob's lanes computed the corrections below, bit for bit
-      for (std::size_t i = 0; i < chain.count; ++i) drawn_[point0 + i + 1] = report_positions_[chain.first + i];
+      for (std::size_t i = 0; i < chain.count; ++i) drawn_[point0 + i + 1] = report_positions[chain.first + i];
       chain.bent = false;
       continue;
     }
@@ -603,11 +605,11 @@ void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> pale
       const std::size_t j = chain.first + i;
       const glm::vec3 animated_head = end_points_[point0 + i];
       const glm::vec3 bone = bend * (end_points_[point0 + i + 1] - animated_head);
-      bend = shortest_arc(bone, report_positions_[j] - head) * bend;
+      bend = shortest_arc(bone, report_positions[j] - head) * bend;
       glm::mat4 correction = glm::mat4_cast(bend);
       correction[3] = glm::vec4(head - glm::mat3(correction) * animated_head, 1.0f);
       corrections_[j] = correction;
-      head = report_positions_[j];
+      head = report_positions[j];
       drawn_[point0 + i + 1] = head;
     }
   }
@@ -617,9 +619,11 @@ void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> pale
     world[b] = corrections_[std::size_t(joint)] * world[b];
     if (!palette.empty()) palette[b] = world[b] * inverse_bind_[b];
   }
-  start_points_ = end_points_;
-  start_velocities_ = end_velocities_;
-  collider_start_radius_ = collider_end_radius_;
+  // The end becomes the next step's start; begin_run() rewrites every end value before reading one: swapped, not
+  // copied.
+  start_points_.swap(end_points_);
+  start_velocities_.swap(end_velocities_);
+  collider_start_radius_.swap(collider_end_radius_);
 }
 
 Status SpringCrowdJob::check(std::size_t begin, std::size_t end) const noexcept {

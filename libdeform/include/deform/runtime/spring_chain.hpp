@@ -138,6 +138,7 @@ class DEFORM_RUNTIME_API SpringChains {
     Oscillator fixed;         // the maps of one whole sub-step
     std::size_t first = 0;    // its first joint in the flat arrays (one per bone); its points start at first + index
     std::size_t count = 0;    // bones
+    std::int32_t root = 0;    // spec.bones.front(), kept here: begin_run() reads it per run
     glm::vec3 tip{0.0f};      // the last bone's tail, bone-local
     float bind_scale = 1.0f;  // the first bone's scale in the bind pose
     float scale = 1.0f;       // ... and as of the last run
@@ -189,6 +190,7 @@ class DEFORM_RUNTIME_API SpringChains {
   // Per joint: the kept state (positions, velocities, rest at the last sub-step), the reported one, corrections.
   std::vector<glm::vec3> positions_, velocities_, rests_;
   std::vector<glm::vec3> report_positions_, report_velocities_, report_rests_;
+  bool reported_kept_ = true;  // the reported state is the kept one (no leftover owed): report_* not written
   // Per chain: its animated first head at the kept state's last sub-step, and in the reported state.
   std::vector<glm::vec3> heads_, report_heads_;
   std::vector<glm::vec3> drawn_;  // per point: the reported chain (first head, tails)
