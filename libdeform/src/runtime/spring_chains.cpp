@@ -543,6 +543,10 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
 
 bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
                              std::span<const glm::mat4> world_rate) noexcept {
+  // Hints for the state the advance reads and writes next (cold in a crowd by now), issued before the pose is read.
+  for (const auto* points : {&start_points_, &start_velocities_, &positions_, &velocities_, &rests_})
+    prefetch_span(*points);
+  prefetch_span(corrections_);
   // The animated points and colliders at the end of the step.
   for (std::size_t k = 0; k < point_bone_.size(); ++k) {
     const auto b = std::size_t(point_bone_[k]);

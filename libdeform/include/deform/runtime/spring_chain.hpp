@@ -206,10 +206,12 @@ class DEFORM_RUNTIME_API SpringChains {
 // structure-of-arrays lanes (one lane per instance, vector code), each lane the scalar code's operations in its
 // order. A group goes chain by chain (chains do not act on one another): the chain's state and animated points are
 // put in lanes once a step, all the step's sub-steps run there, and the state is written back to each instance, which
-// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). A chain of
-// more than 32 bones or 8 colliders runs one instance at a time. Each instance computes exactly what its own run()
-// would: the same bits for any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave
-// lanes idle (group 1 runs each instance alone).
+// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). When the step
+// leaves no leftover (the reported state is the kept one), the lanes also compute end_run()'s bend (each joint's
+// shortest arc and correction), which each instance then applies to its bones. A chain of more than 32 bones or 8
+// colliders runs one instance at a time. Each instance computes exactly what its own run() would: the same bits for
+// any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave lanes idle (group 1 runs
+// each instance alone).
 //
 // Every instance must have the chains of instances[0] laid out alike (the same chain count, bones per chain, collider
 // count and each chain's colliders, the same skeleton size and sub-step; settings such as frequency may differ):
