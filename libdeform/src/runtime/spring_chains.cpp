@@ -157,7 +157,8 @@ SpringChains::SpringChains(const Skeleton& skeleton, std::vector<SpringChainSpec
       }
       require(glm::dot(chain.tip, chain.tip) > 0.0f, element, "the last bone has no tip to guess: give one");
     }
-    chain.bind_scale = matrix_scale(skeleton.bind_world()[std::size_t(spec.bones.front())]);
+    chain.root = spec.bones.front();
+    chain.bind_scale = matrix_scale(skeleton.bind_world()[std::size_t(chain.root)]);
     chain.spec = std::move(spec);
     chain.fixed = oscillator(chain, substep_);
     joints += chain.count;
@@ -379,6 +380,10 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
   const double stall = available > max_substepped ? available - max_substepped : 0.0;
   if (stall > 0.0) available = max_substepped;
   const auto steps = std::size_t(std::floor(available / h + 1e-9));
+  // The kept state's age after the step; when no leftover is owed the reported state is the kept one, and the lanes
+  // also give end_run()'s bend (Chain::bent).
+  const double owed_after = std::max(0.0, available - double(steps) * h);
+  const bool bend_in_lanes = !(owed_after > 1e-12);
   const auto lanes_for = [&](const Chain& chain) {
     return count > 1 && chain.count <= max_lane_links && chain.spec.colliders.size() <= max_lane_colliders;
   };
@@ -417,6 +422,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     alignas(32) float radii[max_lane_colliders * 2 * lane_count];  // per collider: its radius at the start, at the end
     alignas(32) float heads[3 * lane_count];
     alignas(32) float gravity[3 * lane_count], radius[lane_count], maps[6 * lane_count], stall_maps[6 * lane_count];
+    alignas(32) float corrections[max_lane_links * 12 * lane_count];  // end_run()'s bend: mat3 and translation
     const std::size_t chain_points = shape.count + 1;
     for (int k = 0; k < lane_count; ++k) {
       const SpringChains& s = *group[std::size_t(k) < count ? std::size_t(k) : 0];
@@ -473,6 +479,7 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
     args.h = h;
     args.stall = stall;
     args.steps = steps;
+    args.corrections = bend_in_lanes ? corrections : nullptr;
     lanes_kernel(isa, args);
     for (std::size_t g = 0; g < count; ++g) {
       SpringChains& s = *group[g];
@@ -484,16 +491,28 @@ void SpringChains::advance_together(SpringChains* const* group, std::size_t coun
         s.rests_[shape.first + i] = glm::vec3(at[6 * lane_count], at[7 * lane_count], at[8 * lane_count]);
       }
       s.heads_[c] = glm::vec3(heads[k], heads[lane_count + k], heads[2 * lane_count + k]);
+      if (!bend_in_lanes) continue;
+      for (std::size_t i = 0; i < shape.count; ++i) {
+        const float* at = corrections + i * 12 * lane_count + k;
+        glm::mat4& correction = s.corrections_[shape.first + i];
+        correction[0] = glm::vec4(at[0], at[lane_count], at[2 * lane_count], 0.0f);
+        correction[1] = glm::vec4(at[3 * lane_count], at[4 * lane_count], at[5 * lane_count], 0.0f);
+        correction[2] = glm::vec4(at[6 * lane_count], at[7 * lane_count], at[8 * lane_count], 0.0f);
+        correction[3] = glm::vec4(at[9 * lane_count], at[10 * lane_count], at[11 * lane_count], 1.0f);
+      }
+      s.chains_[c].bent = true;
     }
   }
   for (std::size_t g = 0; g < count; ++g) {
     SpringChains& s = *group[g];
-    s.owed_ = std::max(0.0, available - double(steps) * h);
-    s.report_positions_ = s.positions_;
-    s.report_velocities_ = s.velocities_;
-    s.report_rests_ = s.rests_;
-    s.report_heads_ = s.heads_;
-    if (s.owed_ > 1e-12) {
+    s.owed_ = owed_after;
+    // With no leftover the reported state is the kept one (reported_kept_: nothing copied); else a copy advanced by it.
+    s.reported_kept_ = !(s.owed_ > 1e-12);
+    if (!s.reported_kept_) {
+      s.report_positions_ = s.positions_;
+      s.report_velocities_ = s.velocities_;
+      s.report_rests_ = s.rests_;
+      s.report_heads_ = s.heads_;
       s.sample_points(dt, dt);
       s.sample_colliders(1.0f);
       for (const Chain& chain : s.chains_) {
@@ -524,6 +543,10 @@ Status SpringChains::run(float dt, std::span<glm::mat4> world, std::span<const g
 
 bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
                              std::span<const glm::mat4> world_rate) noexcept {
+  // Hints for the state the advance reads and writes next (cold in a crowd by now), issued before the pose is read.
+  for (const auto* points : {&start_points_, &start_velocities_, &positions_, &velocities_, &rests_})
+    prefetch_span(*points);
+  prefetch_span(corrections_);
   // The animated points and colliders at the end of the step.
   for (std::size_t k = 0; k < point_bone_.size(); ++k) {
     const auto b = std::size_t(point_bone_[k]);
@@ -537,8 +560,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
   }
   for (std::size_t c = 0; c < colliders_.size(); ++c)
     collider_end_radius_[c] = colliders_[c].radius * matrix_scale(world[std::size_t(colliders_[c].bone)]);
-  for (Chain& chain : chains_)
-    chain.scale = matrix_scale(world[std::size_t(chain.spec.bones.front())]) / chain.bind_scale;
+  for (Chain& chain : chains_) chain.scale = matrix_scale(world[std::size_t(chain.root)]) / chain.bind_scale;
   // A pose that changed while no time passed is a jump (a cut, a teleport): the chains start again on it, at rest.
   if (started_ && dt == 0.0f) started_ = std::equal(end_points_.begin(), end_points_.end(), start_points_.begin());
   if (!started_) {
@@ -546,9 +568,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
     start_velocities_ = end_velocities_;
     collider_start_radius_ = collider_end_radius_;
     for (Chain& chain : chains_) place_at_rest(chain);
-    report_positions_ = positions_;
-    report_velocities_ = velocities_;
-    report_rests_ = rests_;
+    reported_kept_ = true;
     owed_ = 0.0;
     started_ = true;
   } else {
@@ -560,6 +580,7 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
         start_velocities_[k] = end_velocities_[k];
       }
       place_at_rest(chain);
+      if (reported_kept_) continue;
       for (std::size_t j = chain.first; j < chain.first + chain.count; ++j) {
         report_positions_[j] = positions_[j];
         report_velocities_[j] = velocities_[j];
@@ -573,20 +594,26 @@ bool SpringChains::begin_run(float dt, std::span<const glm::mat4> world,
 
 void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> palette) noexcept {
   // The bent pose: per joint the rigid map taking its animated bone onto its simulated one.
-  for (const Chain& chain : chains_) {
+  const std::vector<glm::vec3>& report_positions = reported_kept_ ? positions_ : report_positions_;
+  for (Chain& chain : chains_) {
     const std::size_t point0 = chain.first + std::size_t(&chain - chains_.data());
     glm::vec3 head = end_points_[point0];
     drawn_[point0] = head;
+    if (chain.bent) {  // SpringCrowdJob's lanes computed the corrections below, bit for bit
+      for (std::size_t i = 0; i < chain.count; ++i) drawn_[point0 + i + 1] = report_positions[chain.first + i];
+      chain.bent = false;
+      continue;
+    }
     glm::quat bend(1.0f, 0.0f, 0.0f, 0.0f);
     for (std::size_t i = 0; i < chain.count; ++i) {
       const std::size_t j = chain.first + i;
       const glm::vec3 animated_head = end_points_[point0 + i];
       const glm::vec3 bone = bend * (end_points_[point0 + i + 1] - animated_head);
-      bend = shortest_arc(bone, report_positions_[j] - head) * bend;
+      bend = shortest_arc(bone, report_positions[j] - head) * bend;
       glm::mat4 correction = glm::mat4_cast(bend);
       correction[3] = glm::vec4(head - glm::mat3(correction) * animated_head, 1.0f);
       corrections_[j] = correction;
-      head = report_positions_[j];
+      head = report_positions[j];
       drawn_[point0 + i + 1] = head;
     }
   }
@@ -596,9 +623,11 @@ void SpringChains::end_run(std::span<glm::mat4> world, std::span<glm::mat4> pale
     world[b] = corrections_[std::size_t(joint)] * world[b];
     if (!palette.empty()) palette[b] = world[b] * inverse_bind_[b];
   }
-  start_points_ = end_points_;
-  start_velocities_ = end_velocities_;
-  collider_start_radius_ = collider_end_radius_;
+  // The end becomes the next step's start; begin_run() rewrites every end value before reading one: swapped, not
+  // copied.
+  start_points_.swap(end_points_);
+  start_velocities_.swap(end_velocities_);
+  collider_start_radius_.swap(collider_end_radius_);
 }
 
 Status SpringCrowdJob::check(std::size_t begin, std::size_t end) const noexcept {

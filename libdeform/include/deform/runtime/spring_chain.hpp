@@ -138,10 +138,12 @@ class DEFORM_RUNTIME_API SpringChains {
     Oscillator fixed;         // the maps of one whole sub-step
     std::size_t first = 0;    // its first joint in the flat arrays (one per bone); its points start at first + index
     std::size_t count = 0;    // bones
+    std::int32_t root = 0;    // spec.bones.front(), kept here: begin_run() reads it per run
     glm::vec3 tip{0.0f};      // the last bone's tail, bone-local
     float bind_scale = 1.0f;  // the first bone's scale in the bind pose
     float scale = 1.0f;       // ... and as of the last run
     bool restart = false;     // restart(): at rest on the animated pose at the next run
+    bool bent = false;        // advance_together() wrote this step's corrections_ in lanes: end_run() takes them
   };
   struct Placed {  // a collider in world space
     glm::vec3 start{0.0f};
@@ -188,6 +190,7 @@ class DEFORM_RUNTIME_API SpringChains {
   // Per joint: the kept state (positions, velocities, rest at the last sub-step), the reported one, corrections.
   std::vector<glm::vec3> positions_, velocities_, rests_;
   std::vector<glm::vec3> report_positions_, report_velocities_, report_rests_;
+  bool reported_kept_ = true;  // the reported state is the kept one (no leftover owed): report_* not written
   // Per chain: its animated first head at the kept state's last sub-step, and in the reported state.
   std::vector<glm::vec3> heads_, report_heads_;
   std::vector<glm::vec3> drawn_;  // per point: the reported chain (first head, tails)
@@ -203,10 +206,12 @@ class DEFORM_RUNTIME_API SpringChains {
 // structure-of-arrays lanes (one lane per instance, vector code), each lane the scalar code's operations in its
 // order. A group goes chain by chain (chains do not act on one another): the chain's state and animated points are
 // put in lanes once a step, all the step's sub-steps run there, and the state is written back to each instance, which
-// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). A chain of
-// more than 32 bones or 8 colliders runs one instance at a time. Each instance computes exactly what its own run()
-// would: the same bits for any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave
-// lanes idle (group 1 runs each instance alone).
+// owns it between runs (reset(), restart(), set_settings() and the instance's own run() go on working). When the step
+// leaves no leftover (the reported state is the kept one), the lanes also compute end_run()'s bend (each joint's
+// shortest arc and correction), which each instance then applies to its bones. A chain of more than 32 bones or 8
+// colliders runs one instance at a time. Each instance computes exactly what its own run() would: the same bits for
+// any group size, range split or thread count. Group 8 fills the lanes; smaller groups leave lanes idle (group 1 runs
+// each instance alone).
 //
 // Every instance must have the chains of instances[0] laid out alike (the same chain count, bones per chain, collider
 // count and each chain's colliders, the same skeleton size and sub-step; settings such as frequency may differ):
@@ -229,7 +234,7 @@ struct DEFORM_RUNTIME_API SpringCrowdJob {
   // chains).
   Status validate() const noexcept;
   // validate(), then each instance's run(). On failure changes nothing. No allocation: the lanes of one chain for a
-  // group live on the calling thread's stack, about 35 KB, which a job system's fibers must have to spare.
+  // group live on the calling thread's stack, about 48 KB, which a job system's fibers must have to spare.
   Status run() const noexcept;
   // The instances [begin, end), for ranges on threads (ThreadPool::parallel_for): refuses a range out of bounds, and
   // what validate() refuses of those instances (the sizes, the layout of each against instances[0]).

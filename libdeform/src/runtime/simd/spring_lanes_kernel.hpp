@@ -32,6 +32,8 @@ struct SpringLanesArgs {
   double h;                 // the sub-step
   double stall;             // > 0: first a sub-step of this length (a stall's excess)
   std::size_t steps;        // then this many of h
+  float* corrections;       // out, when not null: after the sub-steps, end_run()'s bend from the ends' end positions
+                            // to the kept positions, 12 rows a joint (mat3 columns 0, 1, 2, then the translation)
 };
 
 // sample_points()' cubic Hermite at tau in [0, dt] as four weights: of the start position, the start velocity, the

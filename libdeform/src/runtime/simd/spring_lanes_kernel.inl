@@ -220,6 +220,73 @@ void links_lanes(const ChainLanes& in, const float* sampled, float* state, const
   }
 }
 
+// SpringChains::end_run()'s bend after the step, in lanes: per joint the rigid map taking the animated bone (its
+// end points, `ends`) onto the simulated one (the kept positions, `state`), as mat4_cast(bend) with the translation
+// head - mat3 · animated head; 12 rows a joint (columns 0, 1, 2 and the translation, xyz each). Each line is
+// end_run()'s (shortest_arc, glm's quaternion and matrix products) per lane in its order, its branches as selects.
+void bend_lanes(std::size_t links, const float* ends, const float* state, float* corrections) noexcept {
+  // Inputs copied into local lanes and results stored from them (as links_lanes does): loops over local arrays only,
+  // which the vectoriser takes without alias checks.
+  Lane qw, qx, qy, qz, hx, hy, hz;
+  for (int k = 0; k < lane_count; ++k) {
+    qw[k] = 1.0f, qx[k] = 0.0f, qy[k] = 0.0f, qz[k] = 0.0f;
+    hx[k] = ends[6 * lane_count + k], hy[k] = ends[7 * lane_count + k], hz[k] = ends[8 * lane_count + k];
+  }
+  for (std::size_t i = 0; i < links; ++i) {
+    const float* from = ends + i * end_rows * lane_count + 6 * lane_count;  // the animated head (end position)
+    const float* to = from + end_rows * lane_count;                         // the animated tail
+    const float* joint = state + i * state_rows * lane_count;
+    float* out = corrections + i * 12 * lane_count;
+    Lane fx, fy, fz, tx0, ty0, tz0, px, py, pz, m[12];
+    for (int k = 0; k < lane_count; ++k) {
+      fx[k] = from[k], fy[k] = from[lane_count + k], fz[k] = from[2 * lane_count + k];
+      tx0[k] = to[k], ty0[k] = to[lane_count + k], tz0[k] = to[2 * lane_count + k];
+      px[k] = joint[k], py[k] = joint[lane_count + k], pz[k] = joint[2 * lane_count + k];
+    }
+    for (int k = 0; k < lane_count; ++k) {
+      const float ax = tx0[k] - fx[k], ay = ty0[k] - fy[k], az = tz0[k] - fz[k];
+      // bend * (tail - head) (glm): v + ((uv * w) + uuv) * 2, uv = q.xyz × v, uuv = q.xyz × uv.
+      const float ux = qy[k] * az - ay * qz[k], uy = qz[k] * ax - az * qx[k], uz = qx[k] * ay - ax * qy[k];
+      const float uux = qy[k] * uz - uy * qz[k], uuy = qz[k] * ux - uz * qx[k], uuz = qx[k] * uy - ux * qy[k];
+      const float bx = ax + (ux * qw[k] + uux) * 2.0f, by = ay + (uy * qw[k] + uuy) * 2.0f,
+                  bz = az + (uz * qw[k] + uuz) * 2.0f;
+      // shortest_arc(bone, p - head) * bend, norms = sqrt(|bone|² |p - head|²).
+      const float ex = px[k] - hx[k], ey = py[k] - hy[k], ez = pz[k] - hz[k];
+      const float norms = std::sqrt((bx * bx + by * by + bz * bz) * (ex * ex + ey * ey + ez * ez));
+      const float w = norms + (bx * ex + by * ey + bz * ez);
+      const bool opposite = w <= 1e-6f * norms;
+      const bool x_major = std::abs(bx) > std::abs(bz);
+      const float tw = opposite ? 0.0f : w;
+      const float tx = opposite ? (x_major ? -by : 0.0f) : by * ez - ey * bz;
+      const float ty = opposite ? (x_major ? bx : -bz) : bz * ex - ez * bx;
+      const float tz = opposite ? (x_major ? 0.0f : by) : bx * ey - ex * by;
+      const float inverse = 1.0f / std::sqrt(tw * tw + tx * tx + ty * ty + tz * tz);
+      const bool turn = norms > 0.0f;
+      const float rw = turn ? tw * inverse : 1.0f, rxx = turn ? tx * inverse : 0.0f, ryy = turn ? ty * inverse : 0.0f,
+                  rzz = turn ? tz * inverse : 0.0f;
+      const float nw = rw * qw[k] - rxx * qx[k] - ryy * qy[k] - rzz * qz[k];
+      const float nx = rw * qx[k] + rxx * qw[k] + ryy * qz[k] - rzz * qy[k];
+      const float ny = rw * qy[k] + ryy * qw[k] + rzz * qx[k] - rxx * qz[k];
+      const float nz = rw * qz[k] + rzz * qw[k] + rxx * qy[k] - ryy * qx[k];
+      qw[k] = nw, qx[k] = nx, qy[k] = ny, qz[k] = nz;
+      // glm::mat3_cast(bend), then head - mat3 · animated head.
+      const float qxx = nx * nx, qyy = ny * ny, qzz = nz * nz, qxz = nx * nz, qxy = nx * ny, qyz = ny * nz,
+                  qwx = nw * nx, qwy = nw * ny, qwz = nw * nz;
+      const float m00 = 1.0f - 2.0f * (qyy + qzz), m01 = 2.0f * (qxy + qwz), m02 = 2.0f * (qxz - qwy);
+      const float m10 = 2.0f * (qxy - qwz), m11 = 1.0f - 2.0f * (qxx + qzz), m12 = 2.0f * (qyz + qwx);
+      const float m20 = 2.0f * (qxz + qwy), m21 = 2.0f * (qyz - qwx), m22 = 1.0f - 2.0f * (qxx + qyy);
+      m[0][k] = m00, m[1][k] = m01, m[2][k] = m02, m[3][k] = m10, m[4][k] = m11, m[5][k] = m12;
+      m[6][k] = m20, m[7][k] = m21, m[8][k] = m22;
+      m[9][k] = hx[k] - (m00 * fx[k] + m10 * fy[k] + m20 * fz[k]);
+      m[10][k] = hy[k] - (m01 * fx[k] + m11 * fy[k] + m21 * fz[k]);
+      m[11][k] = hz[k] - (m02 * fx[k] + m12 * fy[k] + m22 * fz[k]);
+      hx[k] = px[k], hy[k] = py[k], hz[k] = pz[k];
+    }
+    for (int row = 0; row < 12; ++row)
+      for (int k = 0; k < lane_count; ++k) out[row * lane_count + k] = m[row][k];
+  }
+}
+
 }  // namespace
 
 namespace deform::detail {
@@ -284,6 +351,7 @@ void DEFORM_SPRING_ENTRY(const SpringLanesArgs& a) noexcept {
   };
   if (a.stall > 0.0) whole(a.stall, a.stall_maps);
   for (std::size_t n = 0; n < a.steps; ++n) whole(a.h, a.maps);
+  if (a.corrections != nullptr) bend_lanes(a.links, a.ends, a.state, a.corrections);
 }
 
 }  // namespace deform::detail
