@@ -10,7 +10,7 @@
 //  ozz/frame/<n>:    the whole common frame of n characters, one thread: sample walk and run, blend them at 0.5,
 //                    local to model, the skinning palette, skin positions and normals. Character c plays from
 //                    0.37 · c s on, every iteration one frame (1/60 s) later: forward playback, which ozz's sampling
-//                    contexts are made for (one per clip and character).
+//                    contexts are made for (one per clip and character), and libdeform's SamplingJob cursors too.
 //  ozz/skin_positions/auto, ozz/pose/<n>: where the time goes: skinning positions only, and the frame without the
 //                    skinning (sampling, blending, local to model and the palette).
 // Each benchmark times both libraries in every iteration, alternating which goes first, and reports the mean time of
@@ -99,6 +99,7 @@ ozz_side::ClipData clip_data(const deform::Animation& clip, const deform::Skelet
 struct DeformCharacter {
   deform::Pose layers[2];
   deform::Pose blended;
+  std::vector<std::uint32_t> cursors[2];  // SamplingJob's key cursor per clip (forward playback: no search)
   std::vector<glm::mat4> world, palette;
   std::vector<glm::vec3> positions, normals;
 };
@@ -134,6 +135,7 @@ struct Scene {
     characters.resize(crowd);
     for (DeformCharacter& c : characters) {
       c.layers[0] = c.layers[1] = c.blended = rest;
+      for (int k = 0; k < 2; ++k) c.cursors[k].assign(2 * clips[std::size_t(k)].channels.size(), 0);
       c.world.resize(bones);
       c.palette.resize(bones);
       c.positions.resize(points);
@@ -177,6 +179,7 @@ struct Scene {
       sampling.time = seconds;
       sampling.rotations = c.layers[k].rotations;
       sampling.translations = c.layers[k].translations;
+      sampling.cursor = c.cursors[k];
       if (!sampling.run()) throw std::runtime_error("SamplingJob refused");
     }
     const deform::BlendLayer layers[2] = {{c.layers[0].rotations, c.layers[0].translations, 1.0f - run_weight, {}},

@@ -4,10 +4,14 @@
 #include "deform/runtime/skeleton.hpp"
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <random>
 #include <span>
 #include <string>
+#include <vector>
 
 using deform::Animation;
 using deform::Channel;
@@ -283,4 +287,205 @@ TEST_CASE("find_clip looks clips up by name") {
   clips[1].name = "run";
   CHECK(deform::find_clip(clips, "run") == 1);
   CHECK(deform::find_clip(clips, "jump") == -1);
+}
+
+namespace {
+
+// A clip of `channels` channels on bones 0.., each track with 0 to 40 keys at random gaps, of a random interpolation
+// (mostly linear), rotations of any angle and either sign; some tracks empty.
+Animation random_clip(std::mt19937& random, std::size_t channels, bool loop) {
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), gap(0.005f, 0.2f);
+  std::uniform_int_distribution<int> keys(0, 40), kind(0, 5);
+  Animation clip;
+  clip.name = "random";
+  clip.loop = loop;
+  for (std::size_t c = 0; c < channels; ++c) {
+    Channel channel;
+    channel.bone = static_cast<std::int32_t>(c);
+    const int k = kind(random);
+    const auto interpolation = k < 4 ? Interpolation::linear : static_cast<Interpolation>(k == 4 ? 0 : 2);
+    channel.translation.interpolation = channel.rotation.interpolation = interpolation;
+    for (Track<glm::vec3>* track : {&channel.translation}) {
+      float t = gap(random) - 0.1f;
+      for (int n = keys(random); n > 0; --n, t += gap(random)) {
+        track->times.push_back(t);
+        track->values.push_back({unit(random), unit(random), unit(random)});
+        if (interpolation == Interpolation::cubic_spline) {
+          track->in_tangents.push_back({unit(random), unit(random), unit(random)});
+          track->out_tangents.push_back({unit(random), unit(random), unit(random)});
+        }
+      }
+      clip.duration = std::max(clip.duration, t);
+    }
+    float t = gap(random) - 0.1f;
+    for (int n = keys(random); n > 0; --n, t += gap(random)) {
+      channel.rotation.times.push_back(t);
+      channel.rotation.values.push_back(
+          glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random))));
+      if (interpolation == Interpolation::cubic_spline) {
+        channel.rotation.in_tangents.push_back({unit(random), unit(random), unit(random), unit(random)});
+        channel.rotation.out_tangents.push_back({unit(random), unit(random), unit(random), unit(random)});
+      }
+    }
+    clip.duration = std::max(clip.duration, t);
+    clip.channels.push_back(std::move(channel));
+  }
+  return clip;
+}
+
+bool same_bits(const deform::Pose& a, const deform::Pose& b) {
+  return std::memcmp(a.rotations.data(), b.rotations.data(), a.rotations.size() * sizeof(glm::quat)) == 0 &&
+         std::memcmp(a.translations.data(), b.translations.data(), a.translations.size() * sizeof(glm::vec3)) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("a cursor gives the search's result bit for bit: forward, backward, jumps, loops, any starting values") {
+  std::mt19937 random(36);
+  std::uniform_real_distribution<float> step(0.0f, 1.0f / 30.0f);
+  std::size_t samples = 0, moved = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::size_t channels = 1 + static_cast<std::size_t>(trial % 40);
+    const Animation clip = random_clip(random, channels, trial % 3 != 0);
+    REQUIRE_NOTHROW(clip.require_valid(channels));
+    deform::Pose plain = identity_pose(channels), cursored = identity_pose(channels);
+    std::vector<std::uint32_t> cursor(2 * channels);
+    // Start from zeros, from the largest values or from noise: every start is safe.
+    for (std::uint32_t& c : cursor) c = trial % 3 == 0 ? 0u : (trial % 3 == 1 ? 0xffffffffu : random() % 64u);
+    deform::SamplingJob with{&clip, 0.0f, cursored.rotations, cursored.translations, cursor};
+    deform::SamplingJob without{&clip, 0.0f, plain.rotations, plain.translations};
+    REQUIRE(with.cursor_size() == cursor.size());
+    REQUIRE(with.validate());
+    float t = -0.5f;
+    for (int frame = 0; frame < 400; ++frame) {
+      // Mostly forward by under a frame; sometimes backward, a jump anywhere (several loops included), or still.
+      const int move = static_cast<int>(random() % 20);
+      if (move == 0) t -= 4.0f * step(random);
+      else if (move == 1) t = (std::uniform_real_distribution<float>(-3.0f, 3.0f)(random)) * (clip.duration + 0.1f);
+      else if (move != 2) t += step(random);
+      with.time = without.time = t;
+      const std::vector<std::uint32_t> before = cursor;
+      REQUIRE(with.run());
+      REQUIRE(without.run());
+      REQUIRE(same_bits(cursored, plain));
+      moved += before != cursor;
+      ++samples;
+    }
+  }
+  CHECK(samples == 24000);
+  CHECK(moved > 1000);  // the cursor is written back, not only read
+}
+
+TEST_CASE("a cursor holds each track's segment; a cursor of the wrong size is refused, nothing written") {
+  // Keys at 0, 1, 2, 3: at 1.5 the rotation's segment is 1, the translation (keys at 0, 2) is in segment 0.
+  Animation clip;
+  clip.duration = 3.0f;
+  Channel channel;
+  channel.bone = 0;
+  channel.translation = {Interpolation::linear, {0.0f, 2.0f}, {glm::vec3(0.0f), glm::vec3(2.0f)}, {}, {}};
+  channel.rotation = {
+      Interpolation::linear,
+      {0.0f, 1.0f, 2.0f, 3.0f},
+      {axis_angle(0, {0, 0, 1}), axis_angle(30, {0, 0, 1}), axis_angle(60, {0, 0, 1}), axis_angle(90, {0, 0, 1})},
+      {},
+      {}};
+  clip.channels.push_back(channel);
+  deform::Pose pose = identity_pose(1);
+  std::vector<std::uint32_t> cursor{7, 7};
+  deform::SamplingJob job{&clip, 1.5f, pose.rotations, pose.translations, cursor};
+  REQUIRE(job.run());
+  CHECK(cursor == std::vector<std::uint32_t>{0, 1});
+  CHECK(near(pose.rotations[0], axis_angle(45, {0, 0, 1})));
+  job.time = 2.5f;
+  REQUIRE(job.run());
+  CHECK(cursor == std::vector<std::uint32_t>{1, 2});
+  job.time = 0.5f;  // backwards
+  REQUIRE(job.run());
+  CHECK(cursor == std::vector<std::uint32_t>{0, 0});
+
+  std::vector<std::uint32_t> short_cursor(1), long_cursor(3);
+  const deform::Pose before = pose;
+  for (std::span<std::uint32_t> bad : {std::span<std::uint32_t>(short_cursor), std::span<std::uint32_t>(long_cursor)}) {
+    job.cursor = bad;
+    job.time = 1.25f;
+    const deform::Status validated = job.validate(), ran = job.run();
+    CHECK_FALSE(validated);
+    CHECK(std::string(ran.reason()) == "cursor is neither empty nor two entries per channel");
+    CHECK(same_bits(pose, before));
+  }
+}
+
+TEST_CASE("linear rotations: within 1e-6 of the exact slerp, angles near 0 and near 180° included") {
+  // The reference: the shortest-path slerp of the same float keys in double precision. Where the keys are half a turn
+  // apart (dot product 0) both arcs are equally short; the reference takes the side the float dot product picks.
+  auto float_dot = [](glm::quat a, glm::quat b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; };
+  auto exact = [&](glm::quat a, glm::quat b, float u) {
+    glm::dquat x(a), y(b);
+    x = glm::normalize(x);
+    y = glm::normalize(y);
+    if (float_dot(a, b) < 0.0f) y = -y;
+    const double theta = std::acos(std::clamp(glm::dot(x, y), -1.0, 1.0));
+    if (theta < 1e-12) return glm::normalize(x * (1.0 - u) + y * double(u));
+    return glm::normalize(x * (std::sin((1.0 - u) * theta) / std::sin(theta)) +
+                          y * (std::sin(double(u) * theta) / std::sin(theta)));
+  };
+  std::mt19937 random(180);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), fraction(0.0f, 1.0f);
+  double worst = 0.0, worst_glm = 0.0;
+  int near_zero = 0, near_half_turn = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const glm::quat a = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
+    glm::quat b;
+    const int kind = i % 4;
+    if (kind == 0) {
+      b = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
+    } else {
+      // Rotations apart by an angle near 0 (down to 1e-7 rad) or near 180° (the keys' dot product near 0),
+      // either sign.
+      const float small = std::pow(10.0f, -7.0f * fraction(random));
+      const float angle = kind == 1 ? small : glm::radians(180.0f) - small;
+      b = a * glm::angleAxis(angle, glm::normalize(glm::vec3(unit(random), unit(random), unit(random))));
+      if (kind == 3) b = -b;
+      (kind == 1 ? near_zero : near_half_turn)++;
+    }
+    const float u = i % 50 == 0 ? float(i % 100 == 0) : fraction(random);
+    const Track<glm::quat> track{Interpolation::linear, {0.0f, 1.0f}, {a, b}, {}, {}};
+    // At u = 1 the track holds its last key, b itself, which is -b' when the arc went to -b: one rotation.
+    glm::quat got = deform::sample_track(track, u, glm::quat(1, 0, 0, 0));
+    if (u == 1.0f && float_dot(a, b) < 0.0f) got = -got;
+    const glm::dquat want = exact(a, b, u);
+    // glm decides the side by its own dot product: compared where the two cannot disagree.
+    const glm::quat plain_glm = glm::normalize(glm::slerp(a, b, u));
+    for (int k = 0; k < 4; ++k) {
+      worst = std::max(worst, std::abs(double(got[k]) - want[k]));
+      if (std::abs(float_dot(a, b)) > 1e-5f)
+        worst_glm = std::max(worst_glm, std::abs(double(got[k]) - double(plain_glm[k])));
+    }
+  }
+  CHECK(near_zero == 50000);
+  CHECK(near_half_turn == 100000);
+  MESSAGE("largest difference per component: " << worst << " from the exact slerp, " << worst_glm << " from glm's");
+  CHECK(worst <= 1e-6);
+  CHECK(worst_glm <= 2e-6);
+}
+
+TEST_CASE("SamplingJob's blocks of slerps give sample_track's bits, every interpolation, beyond one block") {
+  std::mt19937 random(37);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::size_t channels = 10 + static_cast<std::size_t>(trial) * 3;  // 10 to 67: several blocks of 16
+    const Animation clip = random_clip(random, channels, true);
+    for (int frame = 0; frame < 50; ++frame) {
+      const float t = std::uniform_real_distribution<float>(-1.0f, clip.duration + 1.0f)(random);
+      deform::Pose pose = identity_pose(channels), reference = identity_pose(channels);
+      deform::SamplingJob job{&clip, t, pose.rotations, pose.translations};
+      REQUIRE(job.run());
+      const float local = clip.local_time(t);
+      for (std::size_t c = 0; c < channels; ++c) {
+        reference.translations[c] =
+            deform::sample_track(clip.channels[c].translation, local, reference.translations[c]);
+        reference.rotations[c] = deform::sample_track(clip.channels[c].rotation, local, reference.rotations[c]);
+      }
+      REQUIRE(same_bits(pose, reference));
+    }
+  }
 }

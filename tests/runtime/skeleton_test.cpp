@@ -4,7 +4,9 @@
 #include "deform/io/pose_json.hpp"
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <limits>
+#include <random>
 #include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -202,6 +204,53 @@ TEST_CASE("LocalToWorldJob: ranges in order() give the whole run; bad sizes and 
   bad.palette = {};
   CHECK(bad.validate());
   CHECK(bad.run());
+}
+
+TEST_CASE("LocalToWorldJob: glm's products bit for bit over random trees; a range checks only its own bones") {
+  // A random tree of 50 bones (parents listed after children too) in random poses: world = parent world times
+  // local_matrix, palette = world times the inverse bind matrix, as plain glm mat4 products give them.
+  std::mt19937 random(36);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 50;
+    std::vector<Bone> bones(n);
+    std::vector<int> ids(n - 1);
+    for (int i = 0; i < n - 1; ++i) ids[std::size_t(i)] = i + 1;
+    std::shuffle(ids.begin(), ids.end(), random);
+    std::vector<int> placed{0};
+    for (const int id : ids) {
+      const int parent = placed[random() % placed.size()];
+      bones[std::size_t(id)].parent = parent;
+      bones[std::size_t(parent)].children.push_back(id);
+      bones[std::size_t(id)].bind_translation = {unit(random), unit(random), unit(random)};
+      bones[std::size_t(id)].bind_rotation = 180.0f * glm::vec3(unit(random), unit(random), unit(random));
+      placed.push_back(id);
+    }
+    const Skeleton s(bones);
+    deform::Pose pose = s.bind_pose();
+    for (std::size_t b = 0; b < s.bone_count(); ++b) {
+      pose.rotations[b] = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
+      pose.translations[b] = 3.0f * glm::vec3(unit(random), unit(random), unit(random));
+    }
+    std::vector<glm::mat4> world(s.bone_count()), palette(s.bone_count());
+    deform::LocalToWorldJob fk{&s, pose.rotations, pose.translations, world, palette};
+    REQUIRE(fk.run());
+    std::vector<glm::mat4> expected(s.bone_count());
+    for (const std::int32_t id : s.order()) {
+      const auto i = std::size_t(id);
+      const glm::mat4 local = deform::local_matrix(pose.rotations[i], pose.translations[i]);
+      const std::int32_t parent = s.bones()[i].parent;
+      expected[i] = parent < 0 ? local : expected[std::size_t(parent)] * local;
+      CHECK(world[i] == expected[i]);
+      CHECK(palette[i] == expected[i] * s.inverse_bind_world()[i]);
+    }
+    // A range reads only its own bones: a non-finite bone after it does not stop it, one inside it does.
+    const std::size_t last = std::size_t(s.order().back());
+    pose.rotations[last].x = std::numeric_limits<float>::infinity();
+    CHECK(fk.run(0, s.bone_count() - 1));
+    CHECK(std::string(fk.run(s.bone_count() - 1, s.bone_count()).reason()) == "pose is not finite");
+    CHECK(std::string(fk.run().reason()) == "pose is not finite");
+  }
 }
 
 TEST_CASE("set_euler clamps into the limits; clamp_to_limits converts, clamps and converts back") {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include "finite.hpp"
@@ -45,16 +46,6 @@ float bone_weight(const BlendLayer& layer, std::size_t b) noexcept {
   return layer.bone_weights.empty() ? layer.weight : layer.weight * layer.bone_weights[b];
 }
 
-// Adds w·q to the running sum, q's sign flipped into the sum's hemisphere.
-void accumulate(glm::quat& sum, glm::quat q, float w) noexcept {
-  const float d = sum.x * q.x + sum.y * q.y + sum.z * q.z + sum.w * q.w;
-  const float s = d < 0.0f ? -w : w;
-  sum.x += s * q.x;
-  sum.y += s * q.y;
-  sum.z += s * q.z;
-  sum.w += s * q.w;
-}
-
 // q^w for a unit quaternion: the slerp from the identity to q by w along the shorter arc.
 glm::quat power(glm::quat q, float w) noexcept {
   if (q.w < 0.0f) q = glm::quat(-q.w, -q.x, -q.y, -q.z);
@@ -94,36 +85,81 @@ Status BlendingJob::validate() const noexcept {
 
 Status BlendingJob::run() const noexcept { return run(0, count()); }
 
+// The bones go in chunks of `chunk`, each layer's contribution summed into per-chunk arrays (one array per
+// component), so that a layer without a mask is one loop over the chunk with a uniform weight (the compiler keeps
+// several bones in flight, or in vector lanes) instead of a dependent chain per bone. Each bone's arithmetic is the
+// per-bone rule above in the same order (running sum, hemisphere test against it, rest fallback, normalisation,
+// additive layers), so the result is the same bit for bit. Every input of a chunk is read before its outputs are
+// written, which keeps in-place blending (an output that is a layer's input) correct.
 Status BlendingJob::run(std::size_t begin, std::size_t end) const noexcept {
   if (const Status s = run_checks(*this, begin, end); !s) return s;
-  for (std::size_t b = begin; b < end; ++b) {
-    glm::quat q(0.0f, 0.0f, 0.0f, 0.0f);
-    glm::vec3 t(0.0f);
-    float total = 0.0f;
+  constexpr std::size_t chunk = 16;
+  for (std::size_t first = begin; first < end; first += chunk) {
+    const std::size_t m = std::min(chunk, end - first);
+    float qx[chunk] = {}, qy[chunk] = {}, qz[chunk] = {}, qw[chunk] = {};
+    float tx[chunk] = {}, ty[chunk] = {}, tz[chunk] = {}, total[chunk] = {};
+    auto add = [&](std::size_t j, glm::quat q, glm::vec3 t, float w) noexcept {
+      const float d = qx[j] * q.x + qy[j] * q.y + qz[j] * q.z + qw[j] * q.w;
+      const float s = d < 0.0f ? -w : w;
+      qx[j] += s * q.x;
+      qy[j] += s * q.y;
+      qz[j] += s * q.z;
+      qw[j] += s * q.w;
+      tx[j] += w * t.x;
+      ty[j] += w * t.y;
+      tz[j] += w * t.z;
+      total[j] += w;
+    };
     for (const BlendLayer& layer : layers) {
-      const float w = bone_weight(layer, b);
-      if (!(w > 0.0f)) continue;
-      accumulate(q, layer.rotations[b], w);
-      t += w * layer.translations[b];
-      total += w;
+      const glm::quat* rotation = layer.rotations.data() + first;
+      const glm::vec3* translation = layer.translations.data() + first;
+      if (layer.bone_weights.empty()) {
+        const float w = layer.weight;
+        if (!(w > 0.0f)) continue;
+        for (std::size_t j = 0; j < m; ++j) add(j, rotation[j], translation[j], w);
+      } else {
+        const float* mask = layer.bone_weights.data() + first;
+        for (std::size_t j = 0; j < m; ++j) {
+          const float w = layer.weight * mask[j];
+          if (w > 0.0f) add(j, rotation[j], translation[j], w);
+        }
+      }
     }
-    if (total < threshold) {
-      const float w = threshold - total;
-      accumulate(q, rest_rotations[b], w);
-      t += w * rest_translations[b];
-      total = threshold;
+    for (std::size_t j = 0; j < m; ++j)
+      if (total[j] < threshold) {
+        add(j, rest_rotations[first + j], rest_translations[first + j], threshold - total[j]);
+        total[j] = threshold;
+      }
+    // normalized_or and the division by the total as plain arithmetic over the chunk's arrays (a loop the compiler
+    // runs in vector lanes); a sum that cannot be normalised (zero, or overflowed) takes the rest rotation below.
+    int fallback[chunk];
+    for (std::size_t j = 0; j < m; ++j) {
+      const float n = std::sqrt(qx[j] * qx[j] + qy[j] * qy[j] + qz[j] * qz[j] + qw[j] * qw[j]);
+      const bool ok = n > 0.0f && n <= std::numeric_limits<float>::max();  // positive and finite
+      const float d = ok ? n : 1.0f;
+      qx[j] /= d;
+      qy[j] /= d;
+      qz[j] /= d;
+      qw[j] /= d;
+      tx[j] /= total[j];
+      ty[j] /= total[j];
+      tz[j] /= total[j];
+      fallback[j] = ok ? 0 : 1;
     }
-    q = normalized_or(q, rest_rotations[b]);
-    t /= total;
-    for (const BlendLayer& layer : additive_layers) {
-      const float w = bone_weight(layer, b);
-      if (!(w > 0.0f)) continue;
-      // Weight 1 (the common case) is the delta itself: no trigonometry.
-      q = normalized_or(q * (w == 1.0f ? layer.rotations[b] : power(layer.rotations[b], w)), q);
-      t += w * layer.translations[b];
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t b = first + j;
+      glm::quat q = fallback[j] != 0 ? rest_rotations[b] : glm::quat(qw[j], qx[j], qy[j], qz[j]);
+      glm::vec3 t(tx[j], ty[j], tz[j]);
+      for (const BlendLayer& layer : additive_layers) {
+        const float w = bone_weight(layer, b);
+        if (!(w > 0.0f)) continue;
+        // Weight 1 (the common case) is the delta itself: no trigonometry.
+        q = normalized_or(q * (w == 1.0f ? layer.rotations[b] : power(layer.rotations[b], w)), q);
+        t += w * layer.translations[b];
+      }
+      rotations[b] = q;
+      translations[b] = t;
     }
-    rotations[b] = q;
-    translations[b] = t;
   }
   return {};
 }

@@ -220,8 +220,8 @@ glm::mat4 local_matrix(glm::quat rotation, glm::vec3 translation) noexcept {
 
 namespace {
 
-// What LocalToWorldJob::run checks for the bones order()[begin, end).
-Status check(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noexcept {
+// The size checks of LocalToWorldJob (O(1)).
+Status check_sizes(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noexcept {
   if (job.skeleton == nullptr) return Status::failure("no skeleton");
   const std::size_t n = job.skeleton->bone_count();
   if (job.rotations.size() != n || job.translations.size() != n)
@@ -230,47 +230,89 @@ Status check(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noe
   if (!job.palette.empty() && job.palette.size() != n)
     return Status::failure("palette is neither empty nor one entry per bone");
   if (begin > end || end > n) return Status::failure("bone range out of bounds");
-  const std::span<const std::int32_t> order = job.skeleton->order();
-  for (std::size_t k = begin; k < end; ++k) {
-    const auto i = static_cast<std::size_t>(order[k]);
-    if (!finite(job.rotations[i]) || !finite(job.translations[i])) return Status::failure("pose is not finite");
-  }
   return {};
+}
+
+// Whether the pose entries of bones order()[begin, end) are finite, without a branch per number: v - v is 0 for a
+// finite v and NaN for an infinity or a NaN, and a NaN stays NaN through the sums, so one test at the end decides.
+// The whole pose (the usual call) is read in memory order, a range through order().
+bool pose_finite(const LocalToWorldJob& job, std::size_t begin, std::size_t end) noexcept {
+  glm::vec4 r(0.0f);
+  glm::vec3 t(0.0f);
+  auto add = [&](std::size_t i) noexcept {
+    const glm::quat q = job.rotations[i];
+    const glm::vec3 v = job.translations[i];
+    r += glm::vec4(q.x - q.x, q.y - q.y, q.z - q.z, q.w - q.w);
+    t += v - v;
+  };
+  if (begin == 0 && end == job.rotations.size()) {
+    for (std::size_t i = 0; i < end; ++i) add(i);
+  } else {
+    const std::span<const std::int32_t> order = job.skeleton->order();
+    for (std::size_t k = begin; k < end; ++k) add(static_cast<std::size_t>(order[k]));
+  }
+  return finite(r) && finite(t);
 }
 
 }  // namespace
 
 std::size_t LocalToWorldJob::count() const noexcept { return skeleton == nullptr ? 0 : skeleton->bone_count(); }
 
-Status LocalToWorldJob::validate() const noexcept { return check(*this, 0, count()); }
+Status LocalToWorldJob::validate() const noexcept {
+  if (const Status status = check_sizes(*this, 0, count()); !status) return status;
+  if (!pose_finite(*this, 0, count())) return Status::failure("pose is not finite");
+  return {};
+}
 
 Status LocalToWorldJob::run() const noexcept { return run(0, count()); }
 
 namespace {
 
-// a · b for affine matrices (bottom row 0 0 0 1): glm's product without the terms that multiply b's zero bottom row
-// (or its 1), which add +0 (or a's translation times 1): the same bits (but for the sign of a zero), a quarter of the
-// arithmetic less.
-glm::mat4 affine_product(const glm::mat4& a, const glm::mat4& b) noexcept {
+// a · b for affine matrices (bottom row 0 0 0 1), b given by its rotation columns and translation: glm's product
+// without the terms that multiply b's zero bottom row (or its 1), which add +0 (or a's translation times 1): the same
+// bits (but for the sign of a zero), a quarter of the arithmetic less. Always inlined: as a call its arguments and
+// result went through the stack, which cost as much as the products.
+[[gnu::always_inline]] inline glm::mat4 affine_product(const glm::mat4& a, const glm::vec3& b0, const glm::vec3& b1,
+                                                       const glm::vec3& b2, const glm::vec3& b3) noexcept {
   glm::mat4 r;
-  for (int c = 0; c < 3; ++c) r[c] = a[0] * b[c][0] + a[1] * b[c][1] + a[2] * b[c][2];
-  r[3] = a[0] * b[3][0] + a[1] * b[3][1] + a[2] * b[3][2] + a[3];
+  r[0] = a[0] * b0.x + a[1] * b0.y + a[2] * b0.z;
+  r[1] = a[0] * b1.x + a[1] * b1.y + a[2] * b1.z;
+  r[2] = a[0] * b2.x + a[1] * b2.y + a[2] * b2.z;
+  r[3] = a[0] * b3.x + a[1] * b3.y + a[2] * b3.z + a[3];
   return r;
 }
 
 }  // namespace
 
+// Per bone: the local rotation as glm::mat3_cast computes it (local_matrix's columns), the world matrix as the affine
+// product with the parent's, the palette as the affine product with the inverse bind matrix; all inline, the world
+// matrix kept in registers for the palette. Bit for bit what local_matrix and the full affine products give.
 Status LocalToWorldJob::run(std::size_t begin, std::size_t end) const noexcept {
-  if (const Status status = check(*this, begin, end); !status) return status;
+  if (const Status status = check_sizes(*this, begin, end); !status) return status;
+  if (!pose_finite(*this, begin, end)) return Status::failure("pose is not finite");
   const std::span<const Bone> bones = skeleton->bones();
   const std::span<const std::int32_t> order = skeleton->order();
   const std::span<const glm::mat4> inverse_bind = skeleton->inverse_bind_world();
+  const bool with_palette = !palette.empty();
   for (std::size_t n = begin; n < end; ++n) {
     const auto i = static_cast<std::size_t>(order[n]);
-    const glm::mat4 local = local_matrix(rotations[i], translations[i]);
+    const glm::mat3 r = glm::mat3_cast(rotations[i]);
+    const glm::vec3 t = translations[i];
     const std::int32_t parent = bones[i].parent;
-    world[i] = parent < 0 ? local : affine_product(world[static_cast<std::size_t>(parent)], local);
-    if (!palette.empty()) palette[i] = affine_product(world[i], inverse_bind[i]);
+    glm::mat4 w;
+    if (parent < 0) {
+      w[0] = glm::vec4(r[0], 0.0f);
+      w[1] = glm::vec4(r[1], 0.0f);
+      w[2] = glm::vec4(r[2], 0.0f);
+      w[3] = glm::vec4(t, 1.0f);
+    } else {
+      w = affine_product(world[static_cast<std::size_t>(parent)], r[0], r[1], r[2], t);
+    }
+    world[i] = w;
+    if (with_palette) {
+      const glm::mat4& b = inverse_bind[i];
+      palette[i] = affine_product(w, glm::vec3(b[0]), glm::vec3(b[1]), glm::vec3(b[2]), glm::vec3(b[3]));
+    }
   }
   return {};
 }

@@ -3,8 +3,8 @@
 //
 // A clip drives the pose; IK and the elastic deformers then act on top of it. Tracks are in the skeleton's own
 // space: a bone's translation and rotation keys are the local values a Pose holds (relative to the parent bone).
-// Animation::validate checks a clip once, at bind time; SamplingJob is the per-frame path: a binary search per track,
-// no allocation, no I/O.
+// Animation::validate checks a clip once, at bind time; SamplingJob is the per-frame path: a binary search per track
+// (or, with a cursor, a look at the segment found last frame), no allocation, no I/O.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -19,7 +19,8 @@ namespace deform {
 
 // How a track moves between two keys.
 //  - step: holds a key's value until the next key.
-//  - linear: lerp for vectors, shortest-path slerp for rotations.
+//  - linear: lerp for vectors, shortest-path slerp for rotations (normalised; evaluated without acos and sin, by a
+//    polynomial angle and sinc: within 1e-6 per component of the exact slerp of the same keys, docs/animation.md).
 //  - cubic_spline: cubic Hermite with per-key in/out tangents (glTF CUBICSPLINE: tangents are per second, scaled by
 //    the key interval); a rotation result is normalised.
 enum class Interpolation : std::uint8_t { step, linear, cubic_spline };
@@ -75,23 +76,36 @@ struct DEFORM_RUNTIME_API Animation {
 
 // Samples a clip at one time into a pose's spans (the per-frame job): the local rotation and translation of every
 // animated bone; other bones keep their values (start from Skeleton::bind_pose()). The elements are the clip's
-// channels: run(begin, end) samples channels [begin, end), each writing only its own bone, so disjoint ranges run on
-// different threads. Assumes the clip passed Animation::validate for the skeleton (keys finite and increasing).
+// channels: run(begin, end) samples channels [begin, end), each writing only its own bone (and its own cursor
+// entries), so disjoint ranges run on different threads. Assumes the clip passed Animation::validate for the skeleton
+// (keys finite and increasing).
+//
+// Cursor (optional): a caller-owned index per sampled track, cursor_size() = 2 · channels entries (channel c's
+// translation at 2c, its rotation at 2c + 1), holding the key segment each track found last run. With one, a track
+// first looks at that segment and the next before searching, and only on the side of it that holds the time: O(1)
+// for playback forwards by less than a key per frame, the binary search's cost otherwise (backwards, jumps, loops).
+// The result is bit for bit the result without a cursor, whatever the cursor holds (zeros, a stale or another clip's
+// values: any entry is safe), so one may be shared across clips of a blend only at the cost of searching. Give each
+// (instance, clip) pair its own, zero-filled or not, once at bind time.
 struct DEFORM_RUNTIME_API SamplingJob {
   const Animation* animation = nullptr;
   float time = 0.0f;                  // seconds, any finite value: Animation::local_time maps it into the clip
   std::span<glm::quat> rotations;     // out: local rotations, index = bone id
   std::span<glm::vec3> translations;  // out: local translations, as many
+  std::span<std::uint32_t> cursor{};  // in/out, optional: empty, or cursor_size() entries (see above)
 
-  // The clip is set, the time finite, every channel's bone within both spans and every track's values (and tangents)
-  // as many as its times. O(channels).
+  // The clip is set, the time finite, every channel's bone within both spans, the cursor empty or cursor_size()
+  // entries, and every track's values (and tangents) as many as its times. O(channels).
   Status validate() const noexcept;
-  // The time and the bones of the channels it samples (one comparison per channel, a fraction of the binary
-  // searches); on failure writes nothing. O(channels · log keys), no allocation.
+  // The time, the cursor's size and the bones of the channels it samples (one comparison per channel, a fraction of
+  // the searches); on failure writes nothing. O(channels · log keys) without a cursor, O(channels) with one when the
+  // time moved forward by less than a key; no allocation.
   Status run() const noexcept;
   Status run(std::size_t begin, std::size_t end) const noexcept;
   // The clip's channel count, 0 without a clip.
   std::size_t count() const noexcept;
+  // The entries a cursor needs: 2 · count().
+  std::size_t cursor_size() const noexcept;
 };
 
 // One track's value at clip-local time `seconds` (no wrapping). `fallback` is returned for an empty track.
