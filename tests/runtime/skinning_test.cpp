@@ -551,40 +551,6 @@ TEST_CASE("a vertex's result does not depend on where its range begins, nor on s
       }
 }
 
-TEST_CASE("a block whose last weights are all zero gives the bits of one that uses them, signed zeros included") {
-  // The AVX-512 kernel leaves out the influences whose weights are zero in every lane of a block. Here a point's
-  // blended translation is -0 (bones 0 and 1) plus zero-weight products of bone 2's +0: run alone (its block padded
-  // with weights 1, 0, 0, 0) the zero weights are left out, in the whole run point 5's fourth weight makes its block
-  // use them. The sign of every output zero must agree (a sum that could be -0 would come out -0 alone, +0 whole).
-  glm::mat4 minus_zero_translation(1.0f);
-  minus_zero_translation[3] = glm::vec4(-0.0f, -0.0f, -0.0f, 1.0f);
-  const std::vector<glm::mat4> palette = {minus_zero_translation, minus_zero_translation, glm::mat4(1.0f)};
-  const std::size_t count = 20;
-  std::vector<glm::u16vec4> bones(count, glm::u16vec4(0, 1, 2, 2));
-  std::vector<glm::vec4> weights(count, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
-  weights[5] = glm::vec4(0.5f, 0.0f, 0.0f, 0.5f);
-  std::vector<glm::vec3> positions(count, glm::vec3(-0.0f)), normals(count, glm::vec3(-0.0f, -0.0f, 1.0f));
-  for (Isa isa : available_isas()) {
-    CAPTURE(isa_name(isa));
-    SkinningJob job;
-    job.isa = isa, job.matrices = palette, job.bone_indices = bones, job.bone_weights = weights;
-    job.in_positions = as_floats(positions), job.in_normals = as_floats(normals);
-    std::vector<glm::vec3> whole_p(count), whole_n(count), alone_p(count), alone_n(count);
-    job.out_positions = as_floats(whole_p), job.out_normals = as_floats(whole_n);
-    REQUIRE(job.run());
-    job.out_positions = as_floats(alone_p), job.out_normals = as_floats(alone_n);
-    for (std::size_t i = 0; i < count; ++i) REQUIRE(job.run(i, i + 1));
-    for (std::size_t i = 0; i < count; ++i)
-      for (int c = 0; c < 3; ++c) {
-        CAPTURE(i);
-        CAPTURE(c);
-        CHECK(alone_p[i][c] == whole_p[i][c]);
-        CHECK(std::signbit(alone_p[i][c]) == std::signbit(whole_p[i][c]));
-        CHECK(std::signbit(alone_n[i][c]) == std::signbit(whole_n[i][c]));
-      }
-  }
-}
-
 TEST_CASE("validate() rejects malformed jobs and says why; run() refuses the O(1) ones and writes nothing") {
   const std::vector<glm::mat4> palette(3, glm::mat4(1.0f));
   std::vector<DualQuat> dual_quats(3);

@@ -29,10 +29,8 @@ inline F16 max(F16 a, F16 b) { return {_mm512_max_ps(a.v, b.v)}; }
 // 14-bit estimates refined by one Newton step (relative error ~1e-7).
 inline F16 rsqrt(F16 x) {
   const __m512 y = _mm512_rsqrt14_ps(x.v);
-  // y (1.5 - (0.5 x) y²), the subtraction fused (FMA is enabled in this file).
-  const __m512 correction =
-      _mm512_fnmadd_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), x.v), _mm512_mul_ps(y, y), _mm512_set1_ps(1.5f));
-  return {_mm512_mul_ps(y, correction)};
+  const __m512 half_x_yy = _mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), x.v), _mm512_mul_ps(y, y));
+  return {_mm512_mul_ps(y, _mm512_sub_ps(_mm512_set1_ps(1.5f), half_x_yy))};
 }
 inline F16 rcp(F16 x) {
   const __m512 y = _mm512_rcp14_ps(x.v);
@@ -169,33 +167,16 @@ struct Avx512 {
     }
   }
 
-  // Σₖ wₖ Mₖ from the tables, one SoA component at a time, over the first `influences` influences (the block's
-  // later weights are all zero). The sum starts from +0 and so is never -0: adding a zero-weight product (±0) then
-  // leaves it unchanged to the bit, and leaving that product out gives the bits that computing it would.
-  template <bool wide_table, int influences>
+  // Σₖ wₖ Mₖ from the tables, one SoA component at a time.
+  template <bool wide_table>
   void blend_from_tables(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
     const __m512i low = raw_bone_ids(job, i, 0), high = raw_bone_ids(job, i, 2);
     const Ids ids[4] = {ids_for<wide_table>(low), ids_for<wide_table>(_mm512_srli_epi32(low, 16)),
                         ids_for<wide_table>(high), ids_for<wide_table>(_mm512_srli_epi32(high, 16))};
     for (int c = 0; c < 12; ++c) {
-      __m512 sum = _mm512_fmadd_ps(w[0].v, lookup<wide_table>(c, ids[0]), _mm512_setzero_ps());
-      for (int k = 1; k < influences; ++k) sum = _mm512_fmadd_ps(w[k].v, lookup<wide_table>(c, ids[k]), sum);
+      __m512 sum = _mm512_mul_ps(w[0].v, lookup<wide_table>(c, ids[0]));
+      for (int k = 1; k < 4; ++k) sum = _mm512_fmadd_ps(w[k].v, lookup<wide_table>(c, ids[k]), sum);
       a[c].v = sum;
-    }
-  }
-
-  // The blend with as many influences as the block uses: a character's points mostly have fewer than four
-  // non-zero weights (the built-in one: 2,111 of 2,850 have a zero fourth weight, and 105 of its 178 blocks of 16
-  // points none at all), and a block whose last weights are zero in every lane skips their lookups and products.
-  template <bool wide_table>
-  DEFORM_ALWAYS_INLINE void blend_used(const SkinningJob& job, std::size_t i, const V w[4], V a[12]) const {
-    const __m512i magnitude = _mm512_set1_epi32(0x7fffffff);  // -0 counts as zero
-    if (_mm512_test_epi32_mask(_mm512_castps_si512(w[3].v), magnitude) != 0) {
-      blend_from_tables<wide_table, 4>(job, i, w, a);
-    } else if (_mm512_test_epi32_mask(_mm512_castps_si512(w[2].v), magnitude) != 0) {
-      blend_from_tables<wide_table, 3>(job, i, w, a);
-    } else {
-      blend_from_tables<wide_table, 2>(job, i, w, a);
     }
   }
 
@@ -206,9 +187,9 @@ struct Avx512 {
       // takes the narrow lookups: with bones ordered root first, most blocks of a 33- to 64-bone character do.
       const __m512i any = _mm512_or_si512(raw_bone_ids(job, i, 0), raw_bone_ids(job, i, 2));
       if (wide && _mm512_test_epi32_mask(any, _mm512_set1_epi32(0x00200020)) != 0) {
-        blend_used<true>(job, i, w, a);
+        blend_from_tables<true>(job, i, w, a);
       } else {
-        blend_used<false>(job, i, w, a);
+        blend_from_tables<false>(job, i, w, a);
       }
       return;
     }
