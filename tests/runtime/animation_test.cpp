@@ -307,25 +307,27 @@ Animation random_clip(std::mt19937& random, std::size_t channels, bool loop) {
     channel.translation.interpolation = channel.rotation.interpolation = interpolation;
     for (Track<glm::vec3>* track : {&channel.translation}) {
       float t = gap(random) - 0.1f;
-      for (int n = keys(random); n > 0; --n, t += gap(random)) {
+      for (int n = keys(random); n > 0; --n) {
         track->times.push_back(t);
         track->values.push_back({unit(random), unit(random), unit(random)});
         if (interpolation == Interpolation::cubic_spline) {
           track->in_tangents.push_back({unit(random), unit(random), unit(random)});
           track->out_tangents.push_back({unit(random), unit(random), unit(random)});
         }
+        t += gap(random);
       }
       clip.duration = std::max(clip.duration, t);
     }
     float t = gap(random) - 0.1f;
-    for (int n = keys(random); n > 0; --n, t += gap(random)) {
+    for (int n = keys(random); n > 0; --n) {
       channel.rotation.times.push_back(t);
       channel.rotation.values.push_back(
-          glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random))));
+          glm::normalize(glm::quat{unit(random), unit(random), unit(random), unit(random)}));
       if (interpolation == Interpolation::cubic_spline) {
         channel.rotation.in_tangents.push_back({unit(random), unit(random), unit(random), unit(random)});
         channel.rotation.out_tangents.push_back({unit(random), unit(random), unit(random), unit(random)});
       }
+      t += gap(random);
     }
     clip.duration = std::max(clip.duration, t);
     clip.channels.push_back(std::move(channel));
@@ -434,17 +436,17 @@ TEST_CASE("linear rotations: within 1e-6 of the exact slerp, angles near 0 and n
   double worst = 0.0, worst_glm = 0.0;
   int near_zero = 0, near_half_turn = 0;
   for (int i = 0; i < 200000; ++i) {
-    const glm::quat a = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
+    const glm::quat a = glm::normalize(glm::quat{unit(random), unit(random), unit(random), unit(random)});
     glm::quat b;
     const int kind = i % 4;
     if (kind == 0) {
-      b = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
+      b = glm::normalize(glm::quat{unit(random), unit(random), unit(random), unit(random)});
     } else {
       // Rotations apart by an angle near 0 (down to 1e-7 rad) or near 180° (the keys' dot product near 0),
       // either sign.
       const float small = std::pow(10.0f, -7.0f * fraction(random));
       const float angle = kind == 1 ? small : glm::radians(180.0f) - small;
-      b = a * glm::angleAxis(angle, glm::normalize(glm::vec3(unit(random), unit(random), unit(random))));
+      b = a * glm::angleAxis(angle, glm::normalize(glm::vec3{unit(random), unit(random), unit(random)}));
       if (kind == 3) b = -b;
       (kind == 1 ? near_zero : near_half_turn)++;
     }

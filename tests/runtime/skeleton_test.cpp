@@ -223,14 +223,14 @@ TEST_CASE("LocalToWorldJob: glm's products bit for bit over random trees; a rang
       bones[std::size_t(id)].parent = parent;
       bones[std::size_t(parent)].children.push_back(id);
       bones[std::size_t(id)].bind_translation = {unit(random), unit(random), unit(random)};
-      bones[std::size_t(id)].bind_rotation = 180.0f * glm::vec3(unit(random), unit(random), unit(random));
+      bones[std::size_t(id)].bind_rotation = 180.0f * glm::vec3{unit(random), unit(random), unit(random)};
       placed.push_back(id);
     }
     const Skeleton s(bones);
     deform::Pose pose = s.bind_pose();
     for (std::size_t b = 0; b < s.bone_count(); ++b) {
-      pose.rotations[b] = glm::normalize(glm::quat(unit(random), unit(random), unit(random), unit(random)));
-      pose.translations[b] = 3.0f * glm::vec3(unit(random), unit(random), unit(random));
+      pose.rotations[b] = glm::normalize(glm::quat{unit(random), unit(random), unit(random), unit(random)});
+      pose.translations[b] = 3.0f * glm::vec3{unit(random), unit(random), unit(random)};
     }
     std::vector<glm::mat4> world(s.bone_count()), palette(s.bone_count());
     deform::LocalToWorldJob fk{&s, pose.rotations, pose.translations, world, palette};
