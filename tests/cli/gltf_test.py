@@ -205,6 +205,19 @@ if out:
         correspondence("my model%.gltf (bind pose)", source, obj_points(os.path.join(work, back["obj"])))
 written.append("my model%.gltf")
 
+def check_posed(source, exported, mapping, clip, time, turn=lambda points: points):
+    """`deform skin` of the exported file gives the source's posed points (turned by `turn`) at `mapping`."""
+    a = run("skin", source, "--clip", clip, "--time", time, "--out", "posed-source.obj")
+    b = run("skin", exported, "--clip", clip, "--time", time, "--out", "posed-back.obj")
+    if a and b and mapping:
+        posed_source = turn(obj_points(os.path.join(work, "posed-source.obj")))
+        posed_back = obj_points(os.path.join(work, "posed-back.obj"))
+        limit = TOLERANCE * diagonal(posed_source)
+        worst = max(math.dist(posed_back[i], posed_source[j]) for i, j in enumerate(mapping))
+        check(worst <= limit, f"{exported} posed by {clip} at {time} s: a point is {worst:g} from the source's "
+              f"(limit {limit:g})")
+
+
 # --- export: an imported character with clips, posed by a clip after the round trip ---
 wuson = os.path.join(models, "X", "Testwuson.X")
 if os.path.exists(wuson):
@@ -217,15 +230,7 @@ if os.path.exists(wuson):
         mapping = correspondence("wuson.glb (bind pose)", obj_points(os.path.join(work, native["obj"])),
                                  obj_points(os.path.join(work, back["obj"])))
         for clip, time in (("Wuson_Run", "0.37"), ("Wuson_Walk", "1.1")):
-            a = run("skin", wuson, "--clip", clip, "--time", time, "--out", "posed-source.obj")
-            b = run("skin", "wuson.glb", "--clip", clip, "--time", time, "--out", "posed-back.obj")
-            if a and b and mapping:
-                posed_source = obj_points(os.path.join(work, "posed-source.obj"))
-                posed_back = obj_points(os.path.join(work, "posed-back.obj"))
-                limit = TOLERANCE * diagonal(posed_source)
-                worst = max(math.dist(posed_back[i], posed_source[j]) for i, j in enumerate(mapping))
-                check(worst <= limit, f"wuson.glb posed by {clip} at {time} s: a point is {worst:g} from the "
-                      f"source's (limit {limit:g})")
+            check_posed(wuson, "wuson.glb", mapping, clip, time)
 else:
     print(f"skipped the imported character: {wuson} is missing (Debian's assimp-testmodels)")
 
@@ -243,15 +248,7 @@ if os.path.exists(mrfixit):
         mapping = correspondence("mrfixit.glb (bind pose, turned)",
                                  turned(obj_points(os.path.join(work, native["obj"]))),
                                  obj_points(os.path.join(work, back["obj"])))
-        a = run("skin", mrfixit, "--clip", "idle", "--time", "0.7", "--out", "mrfixit-posed-source.obj")
-        b = run("skin", "mrfixit.glb", "--clip", "idle", "--time", "0.7", "--out", "mrfixit-posed-back.obj")
-        if a and b and mapping:
-            posed_source = turned(obj_points(os.path.join(work, "mrfixit-posed-source.obj")))
-            posed_back = obj_points(os.path.join(work, "mrfixit-posed-back.obj"))
-            limit = TOLERANCE * diagonal(posed_source)
-            worst = max(math.dist(posed_back[i], posed_source[j]) for i, j in enumerate(mapping))
-            check(worst <= limit, f"mrfixit.glb posed by idle at 0.7 s: a point is {worst:g} from the turned "
-                  f"source's (limit {limit:g})")
+        check_posed(mrfixit, "mrfixit.glb", mapping, "idle", "0.7", turned)
 else:
     print(f"skipped the Z-up character: {mrfixit} is missing (Debian's assimp-testmodels)")
 
