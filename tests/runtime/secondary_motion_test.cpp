@@ -772,10 +772,20 @@ TEST_CASE("vrm_spring_settings: at 60 Hz the converted chain moves as VRM's upda
 
 namespace {
 
+// The colliders, in the root's frame: a sphere under the first chain and a slanted capsule under the second.
+const glm::vec3 crowd_sphere(0.27f, -0.24f, 0.06f);
+constexpr float crowd_sphere_radius = 0.15f;
+const glm::vec3 crowd_capsule_start(-0.32f, -0.17f, -0.06f), crowd_capsule_end(-0.27f, -0.12f, 0.12f);
+constexpr float crowd_capsule_radius = 0.1f;
+
 // A crowd for SpringCrowdJob: a root with two chains of five hanging from it (so that gravity lays them on the
-// colliders under them), a sphere and a capsule; instance i swings at its own seeded phase and amplitude, and some
-// have their own frequency and damping. `crowded`: the second chain also has 9 far spheres, more colliders than
-// SpringCrowdJob's lanes take, so that it runs one instance at a time beside the first chain in lanes.
+// colliders under them), a sphere and a slanted capsule; instance i moves at its own phase and amplitude about its own
+// axis (crowd_pose), and some have their own frequency and damping. No coordinate plane holds the chains (each bone's
+// offset has x, y and z parts), the colliders or the motion, so that the lanes' quaternions (the sub-steps' bends
+// and the bend in lanes after a whole step) have all four parts at once: motion in one plane leaves each either
+// (w, 0, 0, z) or, folded back, (0, x, y, 0), where a wrong sign on a w·x or z·x term changes no bit.
+// `crowded`: the second chain also has 9 far spheres, more colliders than SpringCrowdJob's lanes take, so that it
+// runs one instance at a time beside the first chain in lanes.
 struct SpringCrowd {
   deform::Skeleton skeleton;
   std::vector<deform::SpringChains> instances;
@@ -790,7 +800,9 @@ SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed, bool crowded = f
       bones.push_back({"strand" + std::to_string(s) + "_" + std::to_string(k),
                        k == 0 ? 0 : id - 1,
                        k + 1 < 5 ? std::vector<std::int32_t>{id + 1} : std::vector<std::int32_t>{},
-                       k == 0 ? glm::vec3(s == 0 ? 0.1f : -0.1f, 0.0f, 0.0f) : glm::vec3(0.06f, 0.0f, 0.0f),
+                       k == 0   ? (s == 0 ? glm::vec3(0.1f, 0.0f, 0.03f) : glm::vec3(-0.1f, 0.0f, -0.03f))
+                       : s == 0 ? glm::vec3(0.05f, -0.012f, 0.032f)
+                                : glm::vec3(-0.045f, 0.015f, 0.04f),
                        glm::vec3(0.0f),
                        {}});
     }
@@ -808,9 +820,8 @@ SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed, bool crowded = f
     chain.colliders = {0, 1};
     chains.push_back(chain);
   }
-  std::vector<deform::SpringCollider> colliders = {
-      {0, glm::vec3(0.25f, -0.2f, 0.0f), glm::vec3(0.25f, -0.2f, 0.0f), 0.15f},
-      {0, glm::vec3(-0.3f, -0.15f, -0.1f), glm::vec3(-0.3f, -0.15f, 0.1f), 0.1f}};
+  std::vector<deform::SpringCollider> colliders = {{0, crowd_sphere, crowd_sphere, crowd_sphere_radius},
+                                                   {0, crowd_capsule_start, crowd_capsule_end, crowd_capsule_radius}};
   if (crowded) {
     for (std::uint32_t n = 0; n < 9; ++n) {
       const auto far = float(50 + n);
@@ -832,18 +843,39 @@ SpringCrowd spring_crowd(std::size_t count, std::uint32_t seed, bool crowded = f
   return crowd;
 }
 
-// Instance i's animated pose at time t: the root swinging about Z and bobbing, at the instance's own phase.
+// Instance i's animated pose at time t: the root bobbing along a slanted line and swinging about an axis of its own
+// (x, y and z parts, none zero, other for each i mod 15), each strand's bones curling about a slanted axis of the
+// strand's, at the instance's own phase; every bone's world matrix by forward kinematics from its bind offset (the
+// crowd's bones have no bind rotation). The rate by central differences.
 void crowd_pose(const deform::Skeleton& skeleton, std::size_t i, double t, std::span<glm::mat4> world,
                 std::span<glm::mat4> rate) {
-  const auto root = [&](double time) {
-    const double phase = 0.71 * double(i), amplitude = 0.3 + 0.05 * double(i % 7);
-    glm::dmat4 m = glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 0.1 * std::sin(2 * pi * 1.3 * time + phase), 0.0));
-    return glm::rotate(m, amplitude * std::sin(2 * pi * 0.9 * time + phase), glm::dvec3(0, 0, 1));
+  const double phase = 0.71 * double(i), amplitude = 0.3 + 0.05 * double(i % 7);
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(0.4 + 0.15 * double(i % 5), 0.8 - 0.3 * double(i % 3), 1.0));
+  const glm::dvec3 curl_axes[2] = {glm::normalize(glm::dvec3(0.3, 0.5, -0.8)),
+                                   glm::normalize(glm::dvec3(-0.6, 0.4, 0.7))};
+  const std::span<const deform::Bone> bones = skeleton.bones();
+  const auto posed = [&](double time, std::vector<glm::dmat4>& out) {
+    out.resize(bones.size());
+    for (std::size_t b = 0; b < bones.size(); ++b) {
+      if (bones[b].parent < 0) {
+        const double bob = 0.1 * std::sin(2 * pi * 1.3 * time + phase);
+        out[b] = glm::translate(glm::dmat4(1.0), glm::dvec3(0.03, 1.0, -0.04) * bob);
+        out[b] = glm::rotate(out[b], amplitude * std::sin(2 * pi * 0.9 * time + phase), axis);
+        continue;
+      }
+      const double curl = 0.1 * std::sin(2 * pi * 1.7 * time + phase + 0.6 * double(b));
+      const glm::dmat4 placed =
+          glm::translate(out[std::size_t(bones[b].parent)], glm::dvec3(bones[b].bind_translation));
+      out[b] = glm::rotate(placed, curl, curl_axes[b < 6 ? 0 : 1]);
+    }
   };
-  const glm::dmat4 now = root(t), rate_now = (root(t + 1e-6) - root(t - 1e-6)) / 2e-6;
+  std::vector<glm::dmat4> now, before, after;
+  posed(t, now);
+  posed(t - 1e-6, before);
+  posed(t + 1e-6, after);
   for (std::size_t b = 0; b < world.size(); ++b) {
-    world[b] = glm::mat4(now * glm::dmat4(skeleton.bind_world()[b]));
-    if (!rate.empty()) rate[b] = glm::mat4(rate_now * glm::dmat4(skeleton.bind_world()[b]));
+    world[b] = glm::mat4(now[b]);
+    if (!rate.empty()) rate[b] = glm::mat4((after[b] - before[b]) / 2e-6);
   }
 }
 
@@ -869,7 +901,7 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
       std::mt19937 random(11);
       std::uniform_real_distribution<double> jitter(0.9, 1.1);
       double t = 0.0;
-      float closest = 1e9f;
+      float closest = 1e9f, closest_capsule = 1e9f;  // the tails' least distances to the sphere's and capsule's core
       for (int frame = 0; frame < 90; ++frame) {
         // Frame times jittered so that leftovers differ; a pause (dt 0) now and then; rates on some frames only;
         // some instances reset or restarted, so that their kept states differ in age within a group. On split 1, and
@@ -920,15 +952,25 @@ TEST_CASE("SpringCrowdJob: the same bits as each instance's run(), any group and
           for (std::size_t c = 0; c < 2; ++c) {
             const auto a = alone.instances[i].points(c), b = together.instances[i].points(c);
             REQUIRE(std::memcmp(a.data(), b.data(), a.size_bytes()) == 0);
-            const glm::vec3 sphere(world[i * bones] * glm::vec4(0.25f, -0.2f, 0.0f, 1.0f));
-            for (const glm::vec3& p : b) closest = std::min(closest, glm::length(p - sphere));
+            const glm::mat4& root = world[i * bones];
+            const glm::vec3 sphere(root * glm::vec4(crowd_sphere, 1.0f));
+            const glm::vec3 from(root * glm::vec4(crowd_capsule_start, 1.0f)),
+                to(root * glm::vec4(crowd_capsule_end, 1.0f));
+            for (const glm::vec3& p : b) {
+              closest = std::min(closest, glm::length(p - sphere));
+              const float along =
+                  std::clamp(glm::dot(p - from, to - from) / glm::dot(to - from, to - from), 0.0f, 1.0f);
+              closest_capsule = std::min(closest_capsule, glm::length(p - (from + (to - from) * along)));
+            }
           }
         }
       }
-      // The chains come to the sphere (radius 0.15 plus the tails' 0.02) and are kept about out of it (the length
-      // may pull a tail back in by a little): the colliders were in play.
+      // The chains come to the sphere (radius 0.15 plus the tails' 0.02) and to the capsule (0.1 plus 0.02) and are
+      // kept about out of them (the length may pull a tail back in by a little): both colliders were in play.
       CHECK(closest < 0.171f);
       CHECK(closest > 0.15f);
+      CHECK(closest_capsule < 0.121f);
+      CHECK(closest_capsule > 0.1f);
     }
   }
 }
