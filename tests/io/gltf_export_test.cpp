@@ -286,6 +286,20 @@ TEST_CASE("write_gltf: a model whose up is not +Y is written turned so that it s
   CHECK(track[4] == doctest::Approx(2.0f));
   CHECK(track[5] == doctest::Approx(0.0f).epsilon(1e-6));
 
+  // Baked frames turn too: point 2 rising along +Z in the data rises along +Y in the file.
+  deform::BakedFrames baked;
+  baked.times = {0.0f, 1.0f};
+  baked.positions = {model.mesh.positions, model.mesh.positions};
+  baked.positions[1][2].z += 1.0f;
+  deform::GltfExportOptions bake_options;
+  bake_options.baked = &baked;
+  bake_options.up = {0, 0, 1};
+  deform::write_gltf((folder.path / "bake.gltf").string(), model, bake_options);
+  const Json bake_doc = Json::parse(deform::read_file_text((folder.path / "bake.gltf").string()));
+  const Json& moved = bake_doc["meshes"][0]["primitives"][0]["targets"][1]["POSITION"];
+  CHECK(bake_doc["accessors"][moved.get<int>()]["max"][1].get<float>() == doctest::Approx(1.0f));
+  CHECK(bake_doc["accessors"][moved.get<int>()]["max"][2].get<float>() == doctest::Approx(0.0f).epsilon(1e-6));
+
   // -Y up: half a turn. Zero or not finite: refused, writing nothing.
   const auto [down_doc, down_bin] = written({0, -1, 0}, "down.gltf");
   const std::vector<float> down = floats(down_doc, down_bin, primitive["attributes"]["POSITION"].get<int>());
