@@ -61,7 +61,7 @@ void check_model(const Expected& e) {
 
 }  // namespace
 
-TEST_CASE("heat weights stay near the artists' on X/Testwuson.X") { check_model({"X/Testwuson.X", 0.23, 2.69, 5.31}); }
+TEST_CASE("heat weights stay near the artists' on X/Testwuson.X") { check_model({"X/Testwuson.X", 0.23, 2.62, 5.31}); }
 TEST_CASE("heat weights stay near the artists' on X/BCN_Epileptic.X") {
   check_model({"X/BCN_Epileptic.X", 0.17, 1.90, 4.46});
 }
@@ -114,7 +114,7 @@ void check_side_by_side(const SideBySide& e) {
 }  // namespace
 
 TEST_CASE("side by side with Blender's bone heat: X/Testwuson.X") {
-  check_side_by_side({"X/Testwuson.X", {0.77, 5.40, 11.53}, {1.40, 21.50, 39.73}, true});
+  check_side_by_side({"X/Testwuson.X", {0.77, 5.35, 11.62}, {1.40, 21.50, 39.73}, true});
 }
 TEST_CASE("side by side with Blender's bone heat: X/BCN_Epileptic.X") {
   check_side_by_side({"X/BCN_Epileptic.X", {0.36, 2.19, 4.98}, {0.54, 4.45, 31.64}, true});

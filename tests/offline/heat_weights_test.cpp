@@ -1,8 +1,9 @@
 // Volumetric weights: bone heat (heat_weights.hpp) and geodesic voxel (voxel_weights.hpp) weights on a two-bone
 // cylinder (monotone along the axis, sums of 1), a hand resting against a thigh (where distance weights bind the
 // hand to the leg and these do not), a hand bone parented elsewhere at the end of the forearm (the points behind it
-// left to the forearm, the two bones' weights shared over a narrow band at the wrist), islands no bone sees or
-// reaches, bones with no vertex, points outside every triangle, the deforming mask, invalid options.
+// left to the forearm, the two bones' weights shared over a narrow band at the wrist), points equidistant from two
+// bones (weighted alike whatever the bones' numbering), islands no bone sees or reaches, bones with no vertex, points
+// outside every triangle, the deforming mask, invalid options.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -493,6 +494,54 @@ TEST_CASE("heat weights: islands the body hides from every bone are named, and w
     CHECK(mentions(r.warnings, "sees no bone: bound rigidly to the nearest, bone '"));
     for (std::size_t i = shell; i < shell + 16; ++i) CHECK(r.weights.weights[i][0] == 1.0f);
     for (std::size_t i = inner; i < inner + 8; ++i) CHECK(r.weights.bones[i][0] == 0);  // 4 votes each: the lower id
+  }
+}
+
+TEST_CASE("heat weights: a point equidistant from two bones does not depend on their numbering") {
+  // A cylinder along +Y and bones that meet at y = 1: the ring through the joint is equally near both (their
+  // nearest points are the joint itself), as the points behind an elbow or a heel are. Numbered either way, each
+  // bone gets the same weights; taking the first bone in id order at a tie gave the ring to whichever came first.
+  Mesh mesh;
+  add_cylinder(mesh, {0, 0, 0}, 0.2f, 2.0f);
+  // The weight of the bone named "up" at every point; bone 0 is a non-deforming root at y = 1.
+  const auto up_weights = [&](std::vector<Bone> bones) {
+    const Skeleton skeleton = make_skeleton(std::move(bones));
+    deform::HeatWeightsOptions o;
+    o.deforming.assign(skeleton.bone_count(), 1);
+    o.deforming[0] = 0;
+    for (std::size_t b = 0; b < skeleton.bone_count(); ++b)
+      if (skeleton.bones()[b].name.rfind("end", 0) == 0) o.deforming[b] = 0;
+    const deform::WeightsResult r = deform::compute_heat_weights(mesh, skeleton, o);
+    check_contract(r.weights, mesh.point_count(), skeleton.bone_count());
+    int up = -1;
+    for (std::size_t b = 0; b < skeleton.bone_count(); ++b)
+      if (skeleton.bones()[b].name == "up") up = static_cast<int>(b);
+    std::vector<float> w;
+    for (std::size_t p = 0; p < mesh.point_count(); ++p) w.push_back(weight_of(r.weights, p, up));
+    return w;
+  };
+  const auto ring = [](const std::vector<float>& w, int side) { return w[static_cast<std::size_t>(10 * 12 + side)]; };
+  SUBCASE("two siblings from one joint, down to y = 0 and up to y = 2, share the ring half and half") {
+    const std::vector<float> a =
+        up_weights({bone(-1, {0, 1, 0}, "joint"), bone(0, {0, 0, 0}, "down"), bone(0, {0, 0, 0}, "up"),
+                    bone(1, {0, -1, 0}, "end1"), bone(2, {0, 1, 0}, "end2")});
+    const std::vector<float> b =
+        up_weights({bone(-1, {0, 1, 0}, "joint"), bone(0, {0, 0, 0}, "up"), bone(0, {0, 0, 0}, "down"),
+                    bone(1, {0, 1, 0}, "end1"), bone(2, {0, -1, 0}, "end2")});
+    for (std::size_t p = 0; p < a.size(); ++p) CHECK(a[p] == doctest::Approx(b[p]).epsilon(1e-5));
+    for (int side = 0; side < 12; ++side) {
+      CHECK(ring(a, side) > 0.4f);
+      CHECK(ring(a, side) < 0.6f);
+    }
+  }
+  SUBCASE("a parent and its child, the child listed first or last: the ring behind the joint follows the parent") {
+    // "down" from y = 0 to its child "up" at y = 1 (a leaf, to the cylinder's top), under a root at the origin.
+    const std::vector<float> a =
+        up_weights({bone(-1, {0, 0, 0}, "root"), bone(0, {0, 0, 0}, "down"), bone(1, {0, 1, 0}, "up")});
+    const std::vector<float> b =
+        up_weights({bone(-1, {0, 0, 0}, "root"), bone(2, {0, 1, 0}, "up"), bone(0, {0, 0, 0}, "down")});
+    for (std::size_t p = 0; p < a.size(); ++p) CHECK(a[p] == doctest::Approx(b[p]).epsilon(1e-5));
+    for (int side = 0; side < 12; ++side) CHECK(ring(a, side) < 0.5f);
   }
 }
 

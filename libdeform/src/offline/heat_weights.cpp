@@ -28,6 +28,12 @@ constexpr float min_weight = 1e-3f;
 constexpr double uniform_share = 1e-3;
 // Nearest bones tried for visibility per point before the point is declared to see none.
 constexpr std::size_t max_visibility_tries = 32;
+// Bones whose (oblique) distances to a point are within this fraction of the nearest one's are equidistant: they heat
+// the point together (HeatSources). Ties are exact where two bones' nearest points are one joint (a parent's segment
+// ends where its child's starts: the points behind an elbow or a heel); the margin only absorbs rounding.
+constexpr float tie_tolerance = 1e-5f;
+// The most bones that heat one point together; a point equidistant from more keeps the nearest-ranked ones.
+constexpr std::size_t max_tied_sources = 4;
 // A bone heats a point only from behind the surface: the direction to the bone at most 78° from the inward normal
 // (cos 78° ≈ 0.2). A bone beside or in front of the surface is another part's (a finger resting on the hip).
 constexpr float max_facing = -0.2f;
@@ -205,11 +211,24 @@ void build_bvh(const Surface& s, TriangleBvh& bvh, std::uint32_t only_island) {
 
 // --- heat: the nearest visible bone of every surface vertex ---
 
-// Each surface vertex's source of heat, as HeatFinder::heat_vertex leaves it.
+// Each surface vertex's source of heat, as HeatFinder::heat_vertex leaves it. A point equidistant from visible bones
+// (behind a joint, where a parent's segment ends at its child's start: an elbow's tip, a heel) takes its heat from
+// the ancestor among them. Among bones of which none descends from another (siblings that start at one place), it
+// takes p_j = 1/k from each of the k, with the same H_jj, as Baran & Popović (section 4) do for every tie: either
+// way the weights do not depend on the bones' numbering. Sharing a parent's tie with the child, as the paper does,
+// measured further from the artists' weights (docs/weights.md, "What was tried and not kept").
 struct HeatSources {
-  std::vector<std::uint32_t> heated_by;    // bone, or UINT32_MAX for none
-  std::vector<double> heat;                // heat / d² from that bone; 0 for none
+  std::vector<std::uint32_t> heated_by;    // the nearest visible bone, or UINT32_MAX for none
+  std::vector<double> heat;                // heat / d² from it; 0 for none
   std::vector<std::uint32_t> nearest_any;  // nearest deforming bone, seen or not
+  // Every bone that heats the vertex (heated_by first, then the bones equidistant with it), UINT32_MAX past them.
+  std::vector<std::array<std::uint32_t, max_tied_sources>> sources;
+
+  std::size_t source_count(std::uint32_t v) const noexcept {
+    std::size_t k = 0;
+    while (k < max_tied_sources && sources[v][k] != UINT32_MAX) ++k;
+    return k;
+  }
 };
 
 // Finds each vertex's heat source among the deforming bones (`candidates`). Its buffers are sized once here, so that
@@ -228,6 +247,7 @@ struct HeatFinder {
   // Per bone: the deforming bone whose chain it continues (find_chain_joints), or UINT32_MAX; and that bone's
   // segment's direction into the joint.
   std::vector<std::uint32_t> continues;
+  std::vector<std::int32_t> parents;  // each bone's parent (find_chain_joints)
   std::vector<glm::vec3> continues_direction;
 
   HeatFinder(const Surface& s, const std::vector<detail::BoneShape>& bone_shapes,
@@ -243,6 +263,7 @@ struct HeatFinder {
         nearest_point(bone_count) {
     sources.heated_by.assign(s.size(), UINT32_MAX);
     sources.heat.assign(s.size(), 0.0);
+    sources.sources.assign(s.size(), no_sources());
     sources.nearest_any.assign(s.size(), 0);
   }
 
@@ -253,15 +274,11 @@ struct HeatFinder {
   // every joint costs the models whose artists blend there. `parent`: each bone's parent. O(deforming² · segments),
   // once; run after the segments are clipped.
   void find_chain_joints(const std::vector<std::int32_t>& parent) {
+    parents = parent;
     continues.assign(shapes.size(), UINT32_MAX);
     continues_direction.assign(shapes.size(), glm::vec3(0.0f));
     // A descendant continues its ancestor's own chain, through bones of no length too (BCN_Epileptic.X's neck
     // sits on two bones at the same place).
-    auto descends = [&](std::uint32_t b, std::uint32_t a) {
-      for (std::int32_t up = parent[b]; up >= 0; up = parent[static_cast<std::size_t>(up)])
-        if (up == static_cast<std::int32_t>(a)) return true;
-      return false;
-    };
     for (std::uint32_t b : candidates) {
       const glm::vec3 head = shapes[b].segments.front().first;
       for (std::size_t k = 0; k < candidates.size() && continues[b] == UINT32_MAX; ++k) {
@@ -275,6 +292,13 @@ struct HeatFinder {
           }
       }
     }
+  }
+
+  // Whether bone b descends from bone a.
+  bool descends(std::uint32_t b, std::uint32_t a) const {
+    for (std::int32_t up = parents[b]; up >= 0; up = parents[static_cast<std::size_t>(up)])
+      if (up == static_cast<std::int32_t>(a)) return true;
+    return false;
   }
 
   // Whether v sees `bone` past `bvh` (null: nothing), from behind its surface with `facing` (heat_vertex's test).
@@ -342,7 +366,12 @@ struct HeatFinder {
       }
       std::sort(by_distance.begin(), tried_end);
     }
-    for (std::size_t k = 0; k < tries; ++k) {
+    // The nearest visible bone and the visible bones as near as it (HeatSources).
+    std::array<std::uint32_t, max_tied_sources> tied = no_sources();
+    std::size_t count = 0;
+    float tie_limit = 0.0f;
+    for (std::size_t k = 0; k < tries && count < max_tied_sources; ++k) {
+      if (count > 0 && by_distance[k].first > tie_limit) break;
       std::uint32_t bone = by_distance[k].second;
       if (!sees(v, bone, bvh, facing)) continue;
       const std::uint32_t incoming = continues.empty() ? UINT32_MAX : continues[bone];
@@ -350,11 +379,31 @@ struct HeatFinder {
           glm::dot(p - shapes[bone].segments.front().first, continues_direction[bone]) < 0.0f &&
           sees(v, incoming, bvh, facing))
         bone = incoming;
-      sources.heated_by[v] = bone;
-      const double d = std::max(glm::length(nearest_point[bone] - p), min_distance);
-      sources.heat[v] = static_cast<double>(options.heat) / (d * d);
-      return;
+      if (count == 0) tie_limit = by_distance[k].first * (1.0f + tie_tolerance);
+      // Two equidistant bones may both give way to one incoming bone.
+      if (std::find(tied.begin(), tied.begin() + static_cast<std::ptrdiff_t>(count), bone) ==
+          tied.begin() + static_cast<std::ptrdiff_t>(count))
+        tied[count++] = bone;
     }
+    // Of a bone and its descendant, the ancestor: the points behind a joint follow the parent (HeatSources).
+    std::array<std::uint32_t, max_tied_sources>& heating = sources.sources[v];
+    heating = no_sources();
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      bool below = false;
+      for (std::size_t j = 0; j < count && !below; ++j) below = j != i && descends(tied[i], tied[j]);
+      if (!below) heating[kept++] = tied[i];
+    }
+    if (kept == 0) return;
+    sources.heated_by[v] = heating[0];
+    const double d = std::max(glm::length(nearest_point[heating[0]] - p), min_distance);
+    sources.heat[v] = static_cast<double>(options.heat) / (d * d);
+  }
+
+  static std::array<std::uint32_t, max_tied_sources> no_sources() {
+    std::array<std::uint32_t, max_tied_sources> none;
+    none.fill(UINT32_MAX);
+    return none;
   }
 };
 
@@ -569,7 +618,8 @@ std::vector<Strongest> solve_heat(const HeatSystem& system, const HeatSources& s
   const std::vector<std::int32_t>& row = system.row;
   std::vector<std::uint8_t> heats(bone_count, 0);
   for (std::uint32_t v = 0; v < n; ++v)
-    if (row[v] >= 0 && sources.heated_by[v] != UINT32_MAX) heats[sources.heated_by[v]] = 1;
+    if (row[v] >= 0)
+      for (std::size_t k = 0; k < sources.source_count(v); ++k) heats[sources.sources[v][k]] = 1;
   // The bones of a chain joint where both have heat keep their whole solution until it is shared.
   std::vector<std::uint8_t> kept(bone_count, 0);
   for (const ChainJoint& j : joints)
@@ -587,8 +637,13 @@ std::vector<Strongest> solve_heat(const HeatSystem& system, const HeatSources& s
   for (std::uint32_t bone = 0; bone < bone_count; ++bone) {
     if (!heats[bone]) continue;
     rhs.setZero();
-    for (std::uint32_t v = 0; v < n; ++v)
-      if (row[v] >= 0 && sources.heated_by[v] == bone) rhs[row[v]] = system.mass[v] * sources.heat[v];
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (row[v] < 0) continue;
+      const std::size_t k = sources.source_count(v);
+      if (std::find(sources.sources[v].begin(), sources.sources[v].begin() + static_cast<std::ptrdiff_t>(k), bone) !=
+          sources.sources[v].begin() + static_cast<std::ptrdiff_t>(k))
+        rhs[row[v]] = system.mass[v] * sources.heat[v] / static_cast<double>(k);  // H_jj · p_j, p_j = 1/k
+    }
     w = solver.solve(rhs);
     if (kept[bone]) solution[bone] = w;
     else offer(bone, w);

@@ -11,14 +11,17 @@
 //     distance to the parent (as bone_segments() does); a root without children is a point. A leaf's segment, and
 //     each segment of a bone that forks, ends where it leaves the mesh (an IK goal parented to the spine and placed
 //     at the hand must not make the spine reach along the arm).
-//  2. Heat: among the bones, nearest first, the first one *visible* from the point heats it: p_j = that bone,
-//     H_jj = heat / d². Nearest counts a bone seen obliquely as farther: at angle θ from the inward normal, its
-//     distance times 1 + oblique_penalty · (1 − cos θ) (the bone straight behind a point is the one it lies on;
-//     one beside it, a neighbouring part's). Visible: the bone lies behind the surface (the direction to its
-//     nearest point within 78° of the inward normal; normals are turned per island so that most points have their
-//     nearest bone behind them) and the straight segment from the point to it crosses no triangle of the mesh but
-//     the point's own. A point that sees no bone gets no heat (H_jj = 0) and takes its weights from its
-//     neighbours; an island where no point sees a bone behind it takes the nearest visible bone on either side.
+//  2. Heat: among the bones, nearest first, the first one *visible* from the point heats it: p_j = that bone, H_jj =
+//     heat / d². Bones as near (within 1e-5 of d: behind a joint, where a parent's segment ends at its child's head, as
+//     at an elbow or a heel) tie with it: of a bone and its descendant the ancestor heats the point; k bones none of
+//     which descends from another share it, p_j = 1/k each (the paper's rule for ties). The weights do not depend on
+//     the bones' numbering. Nearest counts a bone seen obliquely as farther: at angle θ from the inward normal, its
+//     distance times 1 + oblique_penalty · (1 − cos θ) (the bone straight behind a point is the one it lies on; one
+//     beside it, a neighbouring part's). Visible: the bone lies behind the surface (the direction to its nearest point
+//     within 78° of the inward normal; normals are turned per island so that most points have their nearest bone behind
+//     them) and the straight segment from the point to it crosses no triangle of the mesh but the point's own. A point
+//     that sees no bone gets no heat (H_jj = 0) and takes its weights from its neighbours; an island where no point
+//     sees a bone behind it takes the nearest visible bone on either side.
 //  3. For each bone i, solve (L + A·H) w_i = A·H·p_i over the surface, L the cotangent Laplacian (negative
 //     cotangents clamped to 0, degenerate triangles skipped, plus 1e-3 of a uniform Laplacian over every edge so
 //     that a surface of slivers stays connected), A the barycentric point areas. The matrix is the same for every
