@@ -12,7 +12,10 @@
 // issue #36 states for one camera: 100 at level 0 (the full character), 900 at level 1, 4,500 each at levels 2 and 3,
 // interleaved by index (as a camera's distances would be, and so each thread's range gets the same mix), all walking
 // at their own clip times, each updated as above (walk sampled, set_pose, update, normals()), except that the clip is
-// not sampled for an update that does not deform (Character::next_update_deforms). The levels, from
+// not sampled for an update that does not deform (Character::next_update_deforms), and that the loop reads what a
+// renderer would: interpolation() every update, normals() after the updates that deform. Levels 2 and 3 interpolate
+// on the renderer (Settings::renderer_interpolates: an update between their deformed ones moves no point; the
+// renderer draws from + share · (to − from)). The levels, from
 // build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
 // bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Where the optional
 // deform::simplify is built, levels 1, 2 and 3 deform only the points of a simplified mesh (LevelOptions::points
@@ -22,9 +25,9 @@
 // 1 then runs the ponytail's spring chain but not the arm's lattices (a subset runs the springs alone). Without
 // deform::simplify every level deforms every point.
 // Counters:
-// error_mean_lN, error_max_lN — level N's own points against the full character's walking beside it (the same clip
-// times, 2 s), as a fraction of its height: the mean over points and frames and the largest; points_influences_lN —
-// its LevelCost::influences; points_lN — its LevelCost::points.
+// error_mean_lN, error_max_lN — level N's own points as drawn (interpolation()) against the full character's walking
+// beside it (the same clip times, 2 s), as a fraction of its height: the mean over points and frames and the largest;
+// points_influences_lN — its LevelCost::influences; points_lN — its LevelCost::points.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -221,11 +224,12 @@ std::vector<LevelError> level_errors(const deform::Character& first, const defor
       full.update(dt);
       level.update(dt);
       if (f < frames - measured) continue;
-      const auto a = full.positions(), b = level.positions();
+      const auto a = full.positions();
+      const deform::Character::Interpolation b = level.interpolation();
       const std::size_t count = options[l].points.empty() ? a.size() : options[l].points.size();
       for (std::size_t i = 0; i < count; ++i) {
         const std::size_t p = options[l].points.empty() ? i : options[l].points[i];
-        const double d = double(glm::length(a[p] - b[p])) / height;
+        const double d = double(glm::length(a[p] - (b.from[p] + b.share * (b.to[p] - b.from[p])))) / height;
         errors[l].mean += d / double(count * std::size_t(measured));
         errors[l].max = std::max(errors[l].max, d);
       }
@@ -248,6 +252,7 @@ struct LevelCrowd {
     std::vector<std::uint32_t> level_points;
     deform::Character first = crowd_character(options, level_points);
     first.set_levels(crowd_lod(first), options);
+    first.settings.renderer_interpolates = true;  // copied by instance()
     walk = deform::builtin_walk(first.model());
     errors = level_errors(first, walk, options);
     for (std::size_t l = 0; l < first.level_count(); ++l) {
@@ -273,7 +278,8 @@ struct LevelCrowd {
       if (i + 2 < end) characters[i + 2].prefetch_record();
       if (i + 1 < end) characters[i + 1].prefetch();
       // An update between a level's deformed ones reads no pose: the clip is not sampled for it.
-      if (c.next_update_deforms()) {
+      const bool deforms = c.next_update_deforms();
+      if (deforms) {
         sampling.time = times[i];
         sampling.rotations = poses[i].rotations;
         sampling.translations = poses[i].translations;
@@ -281,7 +287,12 @@ struct LevelCrowd {
         c.set_pose(poses[i]);
       }
       c.update(dt);
-      benchmark::DoNotOptimize(c.normals().data());
+      // What a renderer reads: the interpolation's buffers and share each update, the normals when they change.
+      const deform::Character::Interpolation shown = c.interpolation();
+      benchmark::DoNotOptimize(shown.to.data());
+      benchmark::DoNotOptimize(shown.from.data());
+      benchmark::DoNotOptimize(shown.share);
+      if (deforms) benchmark::DoNotOptimize(c.normals().data());
     }
   }
 };

@@ -284,6 +284,7 @@ TEST_CASE("1,000 frames of a crowd switching levels of detail allocate nothing: 
   characters.front().set_levels(deform::build_bone_lod(characters.front().model(), settings), options, 6);
   characters.push_back(characters.front().instance());
   characters.push_back(characters.front().instance());
+  characters.back().settings.renderer_interpolates = true;  // the third: level 3 interpolated on the renderer
   const deform::Animation walk = deform::builtin_walk(characters.front().model());
   deform::Pose pose = characters.front().skeleton().bind_pose();
   deform::SamplingJob sampling;
@@ -305,6 +306,8 @@ TEST_CASE("1,000 frames of a crowd switching levels of detail allocate nothing: 
       tally.note(c.set_level(std::size_t((frame / (7 + 3 * int(i)) + int(i)) % 4)));
       tally.note(c.update(dt));
       tally.normals_checksum += c.normals()[std::size_t(frame) % 100].y;
+      const Character::Interpolation shown = c.interpolation();
+      tally.normals_checksum += shown.share * shown.to[std::size_t(frame) % 100].y;
       tally.largest_stretch = std::max(tally.largest_stretch, c.deformers().stretch(0));
     }
   }

@@ -529,3 +529,143 @@ TEST_CASE("levels: a subset that is a range of points (renumbered) is skinned in
   }
   CHECK(largest_move(full.c.positions(), before) > 1e-3f);
 }
+
+namespace {
+
+// The frame a renderer draws from Character::interpolation(): from + share · (to − from), per point.
+glm::vec3 drawn(const Character::Interpolation& i, std::size_t p) {
+  return i.from[p] + i.share * (i.to[p] - i.from[p]);
+}
+
+// Two walkers through the same frames and set_level calls (frame -> level), one interpolating on the CPU, the other
+// on the renderer: what the renderer draws is what the CPU shows, on the shown level's points (`member(level, p)`:
+// whether the level deforms point p), every update; the buffers move as interpolation() says.
+template <class Member>
+void compare_interpolations(Walker& cpu, Walker& gpu, Member&& member, int frames,
+                            const std::vector<std::pair<int, std::size_t>>& schedule) {
+  gpu.c.settings.renderer_interpolates = true;
+  const float tolerance = 1e-5f * height(cpu.c);
+  int interpolated = 0, swapped = 0;
+  float largest = 0.0f;
+  Character::Interpolation last = gpu.c.interpolation();
+  std::vector<glm::vec3> last_to;
+  for (int f = 0; f < frames; ++f) {
+    for (const auto& [at, level] : schedule)
+      if (at == f) {
+        REQUIRE(cpu.c.set_level(level));
+        REQUIRE(gpu.c.set_level(level));
+      }
+    // Once, mid-interval: the renderer's interpolation given up and taken up again between deformed updates.
+    if (f == frames / 2) gpu.c.settings.renderer_interpolates = false;
+    if (f == frames / 2 + 1) gpu.c.settings.renderer_interpolates = true;
+    const bool deforms = gpu.c.next_update_deforms();
+    REQUIRE(deforms == cpu.c.next_update_deforms());
+    last_to.assign(last.to.begin(), last.to.end());
+    cpu.frame(), gpu.frame();
+    const Character::Interpolation now = gpu.c.interpolation();
+    const auto shown = cpu.c.positions();
+    REQUIRE(now.from.size() == shown.size());
+    REQUIRE(now.to.size() == shown.size());
+    CHECK(now.to.data() == gpu.c.positions().data());
+    for (std::size_t p = 0; p < shown.size(); ++p)
+      if (member(gpu.c.level(), p)) largest = std::max(largest, glm::length(drawn(now, p) - shown[p]));
+    if (now.from.data() != now.to.data()) {
+      ++interpolated;
+      CHECK(now.share > 0.0f);
+      CHECK(now.share <= 1.0f);
+      if (!deforms) {
+        if (last.from.data() != last.to.data()) {  // nothing moved: the buffers and versions as they were
+          CHECK(now.from.data() == last.from.data());
+          CHECK(now.to.data() == last.to.data());
+          CHECK(now.from_version == last.from_version);
+          CHECK(now.to_version == last.to_version);
+        }
+      } else if (now.from_version == last.to_version) {
+        // A whole interval: the new `from` is the old `to` (the same buffer, swapped rather than copied).
+        ++swapped;
+        CHECK(last.share == 1.0f);
+        CHECK(now.from.data() == last.to.data());
+        CHECK(std::equal(now.from.begin(), now.from.end(), last_to.begin()));
+      }
+      if (deforms) CHECK(now.to_version != last.to_version);
+    } else {
+      CHECK(now.share == 0.0f);
+      CHECK(now.from_version == now.to_version);
+      CHECK(now.from_version != last.to_version);  // without the renderer's interpolation every update moves them
+    }
+    last = now;
+  }
+  MESSAGE("renderer against CPU interpolation: largest difference "
+          << largest << " (tolerance " << tolerance << "), " << interpolated << " of " << frames
+          << " updates interpolated, " << swapped << " whole intervals swapped");
+  CHECK(largest <= tolerance);
+  CHECK(interpolated > frames / 2);  // the comparison above did see the renderer's interpolation
+  CHECK(swapped > 5);
+}
+
+}  // namespace
+
+TEST_CASE("levels: interpolated on the renderer, the frames drawn are the CPU's, through switches, blends, subsets") {
+  // Level 1 every 2nd update on a third of the points, level 2 every 4th on the even ones, level 3 every 4th on all:
+  // switches between them mid-interval, blended or not, to and from level 0 that deforms every update.
+  const auto member = [](std::size_t level, std::size_t p) {
+    return level == 1 ? p % 3 == 0 : level == 2 ? p % 2 == 0 : true;
+  };
+  const std::vector<std::pair<int, std::size_t>> schedule = {{5, 3},  {18, 2},  {21, 1},  {30, 3}, {33, 0}, {37, 2},
+                                                             {50, 3}, {62, 1},  {65, 2},  {70, 0}, {71, 3}, {90, 2},
+                                                             {99, 3}, {110, 1}, {125, 3}, {142, 2}};
+  const std::size_t points = deform::builtin_character().mesh.point_count();
+  const std::vector<std::uint32_t> thirds = every(points, 3, true), halves = every(points, 2, true);
+  std::vector<Character::LevelOptions> opts = {{true, 1}, {true, 2}, {false, 4}, {false, 4}};
+  opts[1].points = thirds;
+  opts[2].points = halves;
+  const auto make_options = [&](const Character& c) {
+    REQUIRE(c.model().mesh.point_count() == points);
+    return opts;
+  };
+  SUBCASE("the built-in character: lattices stretched, the ponytail's springs") {
+    for (const std::uint32_t blend : {8u, 0u}) {
+      CAPTURE(blend);
+      Walker cpu, gpu;
+      cpu.c.set_levels(builtin_lod(cpu.c), make_options(cpu.c), blend);
+      gpu.c.set_levels(builtin_lod(gpu.c), make_options(gpu.c), blend);
+      for (int f = 0; f < 30; ++f) cpu.frame(), gpu.frame();  // level 0: the springs and lattices going
+      compare_interpolations(cpu, gpu, member, 160, schedule);
+    }
+  }
+  SUBCASE("a morphed character without a rig") {
+    deform::Model model = deform::builtin_character();
+    deform::MorphTarget target;
+    target.name = "bulge";
+    for (std::uint32_t p = 0; p < model.mesh.point_count(); p += 5) {
+      target.points.push_back(p);
+      target.position_deltas.push_back({0.0f, 0.01f, 0.02f});
+      target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
+    }
+    model.morph_targets.push_back(target);
+    Walker cpu{Character(model)}, gpu{Character(model)};
+    for (Walker* w : {&cpu, &gpu}) {
+      REQUIRE(w->c.set_morph_weight(0, 0.7f));
+      w->c.set_levels(builtin_lod(w->c), make_options(w->c), 6);
+    }
+    compare_interpolations(cpu, gpu, member, 160, schedule);
+  }
+}
+
+TEST_CASE("levels: without levels or the renderer's interpolation, interpolation() is positions() at share 0") {
+  Walker plain, levelled;
+  levelled.c.set_levels(builtin_lod(levelled.c), options);
+  REQUIRE(levelled.c.set_level(3));               // every 4th update, interpolated on the CPU
+  plain.c.settings.renderer_interpolates = true;  // no levels: nothing to interpolate
+  for (int f = 0; f < 6; ++f) {
+    plain.frame(), levelled.frame();
+    for (Walker* w : {&plain, &levelled}) {
+      const Character::Interpolation i = w->c.interpolation();
+      CHECK(i.from.data() == w->c.positions().data());
+      CHECK(i.to.data() == w->c.positions().data());
+      CHECK(i.from.size() == w->c.positions().size());
+      CHECK(i.share == 0.0f);
+      CHECK(i.from_version == i.to_version);
+    }
+  }
+}

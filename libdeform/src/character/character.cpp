@@ -641,11 +641,47 @@ Status Character::skin_subset(std::size_t level) noexcept {
   return {};
 }
 
+// f(p) for each point of `level`: all of them, or its subset's (the others are not drawn and keep stale values).
+template <class F>
+void Character::for_each_point(std::size_t level, F&& f) const {
+  const LevelPoints& subset = levels_->subsets[level];
+  if (subset.points.empty()) {
+    for (std::size_t p = 0; p < positions_.size(); ++p) f(p);
+  } else if (subset.contiguous) {
+    const std::size_t begin = subset.points.front(), end = begin + subset.points.size();
+    for (std::size_t p = begin; p < end; ++p) f(p);
+  } else {
+    for (const std::uint32_t p : subset.points) f(std::size_t(p));
+  }
+}
+
+// The frame shown by a renderer interpolation in progress, made the CPU's again: positions_ (its `from`) becomes that
+// frame, as update() would have moved it (the points of `level`, or all). A frame shown whole (share 1) is `to`
+// itself: the buffers swap, nothing is copied. O(points) unless the share is 1 or 0.
+void Character::settle_interpolation(std::size_t level) noexcept {
+  if (!lerp_) return;
+  lerp_ = false;
+  if (approach_left_ == 0) {
+    std::swap(positions_, target_);
+    std::swap(positions_version_, target_version_);
+    return;
+  }
+  const std::uint32_t done = lerp_span_ - approach_left_;
+  if (done == 0) return;
+  const float share = float(done) / float(lerp_span_);
+  for_each_point(level, [&](std::size_t p) { positions_[p] += share * (target_[p] - positions_[p]); });
+  positions_version_ = ++version_counter_;
+}
+
 Status Character::update(float dt) {
   if (!(dt >= 0.0f) || !std::isfinite(dt)) return Status::failure("dt is negative or not finite");
-  if (!levels_) return deform_frame(dt, 0);
+  if (!levels_) {
+    positions_version_ = ++version_counter_;
+    return deform_frame(dt, 0);
+  }
   if (!settings.deform_on_cpu) {
-    // Posing only: no points to blend or interpolate.
+    // Posing only: no points to blend or interpolate; positions() keeps the frame shown last.
+    settle_interpolation(shown_);
     shown_ = level_;
     approach_left_ = 0;
     blend_left_ = 0;
@@ -653,28 +689,22 @@ Status Character::update(float dt) {
   }
   const LevelCost& cost = levels_->costs[level_];
   const std::uint32_t interval = cost.update_interval;
-  // The points of the level shown (all, or its subset: the rest are not drawn and keep stale values).
-  const auto each_point = [this](std::size_t level, auto&& f) {
-    const LevelPoints& subset = levels_->subsets[level];
-    if (subset.points.empty()) {
-      for (std::size_t p = 0; p < positions_.size(); ++p) f(p);
-    } else if (subset.contiguous) {
-      const std::size_t begin = subset.points.front(), end = begin + subset.points.size();
-      for (std::size_t p = begin; p < end; ++p) f(p);
-    } else {
-      for (const std::uint32_t p : subset.points) f(std::size_t(p));
-    }
-  };
+  bool from_changed = false;  // a deformed update's `from` is not the last `to` as it was (interpolation())
   if (!next_update_deforms()) {
     // Between deformed updates: the time adds up for the next one, positions() goes a share of the way on (below).
     ++tick_;
     pending_dt_ += dt;
   } else {
+    // The CPU's state again (positions_ the frame shown last): the renderer's interpolation, if any, settled.
+    const std::uint64_t shown_version = lerp_ && approach_left_ == 0 ? target_version_ : 0;
+    settle_interpolation(shown_);
+    from_changed = shown_version == 0 || positions_version_ != shown_version;
     const float step = dt + pending_dt_;
     tick_ = 0;
     pending_dt_ = 0.0f;
     const std::size_t outgoing = shown_;
     const bool switching = outgoing != level_;
+    from_changed = from_changed || switching;
     // Deformers that come back on start again from the pose: the spring chains after a level without deformers, the
     // lattices after one without them or with a point subset (which runs the springs only).
     const bool restart_springs = switching && !levels_->costs[outgoing].deformers && cost.deformers;
@@ -684,7 +714,7 @@ Status Character::update(float dt) {
     const bool from_shown = switching && levels_->costs[outgoing].update_interval > 1;
     if (from_shown) {
       const float share = approach_left_ > 0 ? 1.0f / float(approach_left_) : 0.0f;
-      each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p] + share * (target_[p] - positions_[p]); });
+      for_each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p] + share * (target_[p] - positions_[p]); });
     }
     approach_left_ = 0;
     // Deform into target_ when the level interpolates, into positions_ (what positions() shows) otherwise.
@@ -694,7 +724,7 @@ Status Character::update(float dt) {
     if (switching && !from_shown) {
       // The frame at the outgoing level (the whole step) is the blend's start; the new level then takes no more time.
       status = deform_frame(step, outgoing);
-      if (status) each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p]; });
+      if (status) for_each_point(level_, [&](std::size_t p) { blend_[p] = positions_[p]; });
     }
     if (status && restart_lattices)  // as they are after a cut
       for (std::size_t l = 0; l < hierarchy_.lattice_count(); ++l) (void)hierarchy_.restart_motion(l);
@@ -703,7 +733,7 @@ Status Character::update(float dt) {
     if (status) status = deform_frame(switching && !from_shown ? 0.0f : step, level_);
     if (status && switching) {
       // A point new to the level was not drawn: no offset, it starts at its new place.
-      each_point(level_, [&](std::size_t p) {
+      for_each_point(level_, [&](std::size_t p) {
         blend_[p] = level_has(outgoing, p) ? blend_[p] - positions_[p] : glm::vec3(0.0f);
       });
       blend_left_ = levels_->blend_frames;
@@ -712,25 +742,39 @@ Status Character::update(float dt) {
     if (status && blend_left_ > 0) {
       // The switch's offset, shrinking linearly: all of it on the switch's update, none after blend_frames.
       const float share = float(blend_left_) / float(levels_->blend_frames);
-      each_point(level_, [&](std::size_t p) { positions_[p] += share * blend_[p]; });
+      for_each_point(level_, [&](std::size_t p) { positions_[p] += share * blend_[p]; });
       --blend_left_;
     }
     if (approach) std::swap(positions_, target_);
+    target_version_ = ++version_counter_;  // approach or not: the deformed points, positions_'s when not
     if (!status) return status;
     if (approach && switching) {
       // Interpolating, a point new to the level starts at its deformed place too, not on its way from a stale one.
-      each_point(level_, [&](std::size_t p) {
+      for_each_point(level_, [&](std::size_t p) {
         if (!level_has(outgoing, p)) positions_[p] = target_[p];
       });
     }
     approach_left_ = approach ? interval : 0;
   }
+  if (approach_left_ > 0 && settings.renderer_interpolates) {
+    // The renderer draws from + share · (to − from): no point moves here. A deformed update (or the opt-in taken
+    // up between them) starts from the frame shown now, `approach_left_` updates from the last deformed points.
+    if (!lerp_) {
+      lerp_ = true;
+      lerp_span_ = approach_left_;
+      if (from_changed) positions_version_ = ++version_counter_;
+    }
+    --approach_left_;
+    return {};
+  }
+  settle_interpolation(shown_);  // the opt-in given up between deformed updates: the CPU moves the points again
   if (approach_left_ > 0) {
     // Piecewise linear toward the last deformed points: 1 / approach_left_ of the way that remains.
     const float share = 1.0f / float(approach_left_);
-    each_point(shown_, [&](std::size_t p) { positions_[p] += share * (target_[p] - positions_[p]); });
+    for_each_point(shown_, [&](std::size_t p) { positions_[p] += share * (target_[p] - positions_[p]); });
     --approach_left_;
   }
+  positions_version_ = ++version_counter_;
   return {};
 }
 
@@ -957,7 +1001,7 @@ std::span<const glm::vec3> Character::normals() {
     } else if (!normals_scratch_.empty()) {
       VertexNormalsJob job;
       job.binding = &bind_->vertex_normals;
-      job.positions = positions_;
+      job.positions = positions();  // the last deformed points, while the renderer interpolates
       job.normals = std::span<glm::vec3>(normals_).first(bind_->model.mesh.vertex_count());
       job.scratch = normals_scratch_;
       job.run();
@@ -1045,6 +1089,7 @@ void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> opt
     data->costs.push_back(cost);
     data->subsets.push_back(std::move(subset));
   }
+  settle_interpolation(shown_);  // the frame shown stays, at the outgoing levels' numbering
   levels_ = std::move(data);
   allocate_level_state();
 }
@@ -1056,6 +1101,8 @@ void Character::allocate_level_state() {
   const std::size_t subset = levels_->largest_subset;
   blend_.assign(positions_.size(), glm::vec3(0.0f));
   target_ = positions_;
+  target_version_ = positions_version_;
+  lerp_ = false;
   level_positions_.assign(subset, glm::vec3(0.0f));
   level_normals_.assign(subset, glm::vec3(0.0f));
   level_rest_.assign(morph_weights_.empty() ? 0 : 2 * subset, glm::vec3(0.0f));

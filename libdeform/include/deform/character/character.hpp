@@ -242,6 +242,15 @@ class DEFORM_CHARACTER_API Character {
     // derived from them (swing_twist_from_euler: a twist range about each bone's axis and a swing cone around it, which
     // may leave the Euler box; the reached pose is kept as solved). Takes effect at the next reach().
     JointLimits reach_limits = JointLimits::euler;
+    // Levels with an update_interval > 1 (LevelOptions): false (the default), update() moves positions() a share of
+    // the way to the last deformed points on every update (36 bytes a point); true, the renderer does it, drawing
+    // from + share · (to − from) of interpolation() in its vertex shader, and an update between deformed ones does no
+    // per-point work at all (O(1)). The frames shown are the same, to float rounding. While such an interpolation
+    // runs, positions() gives its `to`, the last deformed points (what picking and bounds then see, at most one
+    // interval ahead of the frame drawn). A Settings flag rather than a LevelOptions field: it is the renderer's
+    // choice, the same for every level it draws, and it may change between any two updates (the interpolation in
+    // progress is then finished on the other side, without a jump).
+    bool renderer_interpolates = false;
   };
   Settings settings;
   // The bones of the last reach's chain, root first, effector last (empty before any).
@@ -278,7 +287,9 @@ class DEFORM_CHARACTER_API Character {
     // The level deforms on every Nth update() (1 to 64): update() sums the dt of the updates between, so the springs
     // take the longer step, and positions() moves each update a share of the way to the last deformed points, reaching
     // them after N updates: piecewise linear, N updates behind, no pop. Normals follow the deformed updates only.
-    // Used while the character deforms on the CPU (settings.deform_on_cpu), else every update poses.
+    // Used while the character deforms on the CPU (settings.deform_on_cpu), else every update poses. With
+    // Settings::renderer_interpolates the renderer does that interpolation (interpolation()), and positions() gives
+    // the last deformed points.
     std::uint32_t update_interval = 1;
     // The mesh points the level deforms, as the full mesh's point ids (any order, each once; copied by set_levels);
     // empty: all of them. A level drawn with a simplified mesh lists that mesh's points: simplify_model's
@@ -314,8 +325,9 @@ class DEFORM_CHARACTER_API Character {
   // range. No allocation, O(1): call it per frame with what pick_level gives.
   Status set_level(std::size_t level) noexcept;
   // Whether the next update() deforms: true without levels or off the CPU; false while an update_interval level is
-  // between its deformed updates (that update only moves positions() on, reading no pose: a crowd loop may skip
-  // sampling the clip and set_pose for it). No allocation, O(1).
+  // between its deformed updates (that update only moves positions() on, or with Settings::renderer_interpolates
+  // only the share, reading no pose: a crowd loop may skip sampling the clip and set_pose for it). No allocation,
+  // O(1).
   bool next_update_deforms() const noexcept;
   // What a level costs per deformed update, for a caller that budgets a crowd.
   struct LevelCost {
@@ -344,8 +356,31 @@ class DEFORM_CHARACTER_API Character {
   // neither waits on memory (crowd/builtin_1000 in bench/crowd_bench.cpp). No effect on any result.
   void prefetch_record() const noexcept;
 
-  // Deformed positions, one per mesh point (OBJ `v`), as of the last update().
-  std::span<const glm::vec3> positions() const noexcept { return positions_; }
+  // Deformed positions, one per mesh point (OBJ `v`), as of the last update(): the frame shown, or, while the renderer
+  // interpolates (Settings::renderer_interpolates), the last deformed points, interpolation().to. Valid until the next
+  // update(): under renderer_interpolates a deformed update swaps buffers, so the span's data moves.
+  std::span<const glm::vec3> positions() const noexcept { return lerp_ ? target_ : positions_; }
+  // The frame shown as the renderer draws it: point p at from[p] + share · (to[p] − from[p]), one per mesh point (the
+  // level's points; the others as positions() says). While a level with an update_interval of N > 1 interpolates on
+  // the renderer (Settings::renderer_interpolates), `to` is the last deformed points (positions()), `from` the frame
+  // shown before that deformed update, and share goes k / N over the N updates from it (k = 1 at the deformed update;
+  // a switch or set_level cutting an interval short starts the next one from the frame shown then). Otherwise from =
+  // to = positions() and share 0, so that a renderer can always draw through it. A version names a buffer's content
+  // (equal versions, equal points; each is at least 1): a renderer that keeps its two buffers tagged with them uploads
+  // only what it lacks — after a whole interval the new `from` is the old `to` (its version too), so once per
+  // interval only the new `to`. Valid until the next update(). No allocation, O(1).
+  struct Interpolation {
+    std::span<const glm::vec3> from;
+    std::span<const glm::vec3> to;
+    float share = 0.0f;
+    std::uint64_t from_version = 0;
+    std::uint64_t to_version = 0;
+  };
+  Interpolation interpolation() const noexcept {
+    if (!lerp_) return {positions_, positions_, 0.0f, positions_version_, positions_version_};
+    return {positions_, target_, float(lerp_span_ - approach_left_) / float(lerp_span_), positions_version_,
+            target_version_};
+  }
   // How normals() gets its normals (see the top of this file).
   enum class NormalsMode : std::uint8_t {
     transported,  // the default: carried through skinning and lattices in update(); normals() gathers (O(vertices))
@@ -506,8 +541,19 @@ class DEFORM_CHARACTER_API Character {
   float pending_dt_ = 0.0f;          // their dt, summed
   std::uint32_t blend_left_ = 0;     // deformed updates the switch's offset still shrinks over
   std::vector<glm::vec3> blend_;     // the switch's offset per point (outgoing - new)
-  std::vector<glm::vec3> target_;    // update_interval > 1: the last deformed points, positions() moving toward them
-  std::uint32_t approach_left_ = 0;  // updates until positions() reaches target_
+  std::vector<glm::vec3> target_;    // update_interval > 1: the last deformed points, the frame shown moving to them
+  std::uint32_t approach_left_ = 0;  // updates until the frame shown reaches target_
+  // Settings::renderer_interpolates: an interpolation on the renderer runs (positions_ holds its `from`, target_ its
+  // `to`, the share is (lerp_span_ - approach_left_) / lerp_span_); the versions of positions_'s and target_'s content
+  // (interpolation()), from a counter per character.
+  bool lerp_ = false;
+  std::uint32_t lerp_span_ = 0;
+  std::uint64_t positions_version_ = 1;
+  std::uint64_t target_version_ = 1;
+  std::uint64_t version_counter_ = 1;
+  template <class F>
+  void for_each_point(std::size_t level, F&& f) const;
+  void settle_interpolation(std::size_t level) noexcept;
   // A subset level's skinned points and normals, one per subset point (sized by the largest subset), and its rest
   // points and normals gathered from the morphed ones (only with morph targets); the subset level whose normals
   // normals() scatters to its render vertices (-1: none, the last update's normals are the whole mesh's).
