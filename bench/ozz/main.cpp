@@ -11,6 +11,9 @@
 //                    local to model, the skinning palette, skin positions and normals. Character c plays from
 //                    0.37 · c s on, every iteration one frame (1/60 s) later: forward playback, which ozz's sampling
 //                    contexts are made for (one per clip and character), and libdeform's SamplingJob cursors too.
+//  ozz/skin/parts:  ozz/skin/auto against ozz given the benefit its own pipeline gives itself: the mesh split into
+//                    parts by influence count (fbx2mesh's way), one ozz SkinningJob per part with influences_count 1
+//                    to 4; libdeform's job as in ozz/skin/auto (the whole mesh, 4 slots).
 //  ozz/skin_positions/auto, ozz/pose/<n>: where the time goes: skinning positions only, and the frame without the
 //                    skinning (sampling, blending, local to model and the palette).
 // Each benchmark times both libraries in every iteration, alternating which goes first, and reports the mean time of
@@ -281,6 +284,20 @@ bool check() {
       double(skin.points), double(skin.points / height), double(skin.normals), skin.normals_mean(), double(rule));
   ok = ok && skin.points < 1e-5f * height && rule < 1e-4f;
 
+  // ozz's parts against its whole-mesh job, point by point through the parts' order.
+  std::vector<float> part_positions(s.ozz_positions.size()), part_normals(s.ozz_normals.size());
+  if (!s.ozz->skin_parts(part_positions, part_normals)) throw std::runtime_error("an ozz part job refused");
+  const std::vector<std::uint32_t> order = s.ozz->part_points();
+  float parts_apart = 0.0f;
+  for (std::size_t j = 0; j < order.size(); ++j)
+    for (std::size_t c = 0; c < 3; ++c)
+      parts_apart = std::max({parts_apart, std::abs(part_positions[3 * j + c] - s.ozz_positions[3 * order[j] + c]),
+                              std::abs(part_normals[3 * j + c] - s.ozz_normals[3 * order[j] + c])});
+  const std::vector<std::size_t> sizes = s.ozz->part_sizes();
+  std::printf("ozz's parts: points of 1/2/3/4 influences %zu/%zu/%zu/%zu; against its whole mesh: max %.3g\n", sizes[0],
+              sizes[1], sizes[2], sizes[3], double(parts_apart));
+  ok = ok && parts_apart < 1e-5f;
+
   float bone = 0.0f;
   Difference frame;
   for (int f = 0; f < 120; f += 7)
@@ -340,7 +357,8 @@ void paired(benchmark::State& state, Deform&& deform_side, Ozz&& ozz_side) {
   state.counters["speedup"] = ozz_seconds / deform_seconds;
 }
 
-void skin(benchmark::State& state, deform::Isa isa, bool normals) {
+// `parts`: ozz by parts (normals on).
+void skin(benchmark::State& state, deform::Isa isa, bool normals, bool parts) {
   Scene& s = scene();
   deform::SkinningJob job = s.skinning(s.skin_palette, s.out_positions, s.out_normals, isa);
   if (!normals) {
@@ -358,7 +376,8 @@ void skin(benchmark::State& state, deform::Isa isa, bool normals) {
         benchmark::DoNotOptimize(s.out_positions.data());
       },
       [&] {
-        if (normals) s.ozz->skin(s.ozz_positions, s.ozz_normals);
+        if (parts) s.ozz->skin_parts(s.ozz_positions, s.ozz_normals);
+        else if (normals) s.ozz->skin(s.ozz_positions, s.ozz_normals);
         else s.ozz->skin_positions(s.ozz_positions);
         benchmark::DoNotOptimize(s.ozz_positions.data());
       });
@@ -409,11 +428,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
   }
-  benchmark::RegisterBenchmark("ozz/skin/auto", skin, deform::Isa::automatic, true);
-  benchmark::RegisterBenchmark("ozz/skin/avx2", skin, deform::Isa::avx2, true);
+  benchmark::RegisterBenchmark("ozz/skin/auto", skin, deform::Isa::automatic, true, false);
+  benchmark::RegisterBenchmark("ozz/skin/avx2", skin, deform::Isa::avx2, true, false);
+  benchmark::RegisterBenchmark("ozz/skin/parts", skin, deform::Isa::automatic, true, true);
   benchmark::RegisterBenchmark("ozz/frame", frame, true)->ArgName("characters")->Arg(1)->Arg(crowd);
   // Where the time goes: skinning without normals, and the frame without the skinning.
-  benchmark::RegisterBenchmark("ozz/skin_positions/auto", skin, deform::Isa::automatic, false);
+  benchmark::RegisterBenchmark("ozz/skin_positions/auto", skin, deform::Isa::automatic, false, false);
   benchmark::RegisterBenchmark("ozz/pose", frame, false)->ArgName("characters")->Arg(1)->Arg(crowd);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -5,6 +5,7 @@
 #include "ozz_side.hpp"
 
 #include <cmath>
+#include <vector>
 #include <stdexcept>
 #include <utility>
 
@@ -55,6 +56,15 @@ struct Character {
 
 }  // namespace
 
+// The points of one influence count as their own mesh, as ozz's fbx2mesh splits a mesh into parts (each part's
+// points, indices and weights copied; influences_count - 1 weights per point, the last one implied).
+struct Part {
+  int influences = 0;
+  std::vector<std::uint32_t> points;  // the whole mesh's points, ascending
+  std::vector<float> positions, normals, weights;
+  std::vector<std::uint16_t> indices;
+};
+
 struct Runner::Impl {
   ozz::unique_ptr<ozz::animation::Skeleton> skeleton;
   ozz::unique_ptr<ozz::animation::Animation> clips[2];
@@ -62,6 +72,7 @@ struct Runner::Impl {
   std::vector<ozz::math::Float4x4> inverse_bind;
   std::vector<ozz::math::Float4x4> palette;  // skinning alone (set_palette)
   MeshData mesh;
+  std::vector<Part> parts;  // by influence count, 1 to 4; empty parts left out
   float blend = 0.5f;
   std::vector<Character> characters;
 
@@ -88,6 +99,35 @@ struct Runner::Impl {
     }
     return job.Run();
   }
+
+  // Each part with its own influences_count, into the outputs at the part's offset (parts in order).
+  bool skin_parts(float* out_positions, float* out_normals) const {
+    std::size_t at = 0;
+    for (const Part& part : parts) {
+      ozz::geometry::SkinningJob job;
+      const std::size_t points = part.points.size(), k = std::size_t(part.influences);
+      job.vertex_count = static_cast<int>(points);
+      job.influences_count = part.influences;
+      job.joint_matrices = {palette.data(), palette.size()};
+      job.joint_indices = {part.indices.data(), part.indices.size()};
+      job.joint_indices_stride = k * sizeof(std::uint16_t);
+      if (k > 1) {
+        job.joint_weights = {part.weights.data(), part.weights.size()};
+        job.joint_weights_stride = (k - 1) * sizeof(float);
+      }
+      job.in_positions = {part.positions.data(), part.positions.size()};
+      job.in_positions_stride = 3 * sizeof(float);
+      job.out_positions = {out_positions + 3 * at, points * 3};
+      job.out_positions_stride = 3 * sizeof(float);
+      job.in_normals = {part.normals.data(), part.normals.size()};
+      job.in_normals_stride = 3 * sizeof(float);
+      job.out_normals = {out_normals + 3 * at, points * 3};
+      job.out_normals_stride = 3 * sizeof(float);
+      if (!job.Run()) return false;
+      at += points;
+    }
+    return true;
+  }
 };
 
 Runner::Runner(const RigData& rig, std::span<const ClipData> clips, const MeshData& mesh, float blend, int characters)
@@ -95,6 +135,24 @@ Runner::Runner(const RigData& rig, std::span<const ClipData> clips, const MeshDa
   Impl& s = *impl_;
   s.mesh = mesh;
   s.blend = blend;
+  // Parts by influence count: a point uses slots 0 .. k-1, slot k-1 its last with a nonzero weight.
+  const std::size_t mesh_points = mesh.positions.size() / 3;
+  s.parts.resize(4);
+  for (std::size_t p = 0; p < mesh_points; ++p) {
+    int used = 1;
+    for (int k = 1; k < 4; ++k)
+      if (mesh.weights[4 * p + std::size_t(k)] != 0.0f) used = k + 1;
+    Part& part = s.parts[std::size_t(used - 1)];
+    part.influences = used;
+    part.points.push_back(std::uint32_t(p));
+    for (int c = 0; c < 3; ++c) {
+      part.positions.push_back(mesh.positions[3 * p + std::size_t(c)]);
+      part.normals.push_back(mesh.normals[3 * p + std::size_t(c)]);
+    }
+    for (int k = 0; k < used; ++k) part.indices.push_back(mesh.indices[4 * p + std::size_t(k)]);
+    for (int k = 0; k + 1 < used; ++k) part.weights.push_back(mesh.weights[4 * p + std::size_t(k)]);
+  }
+  std::erase_if(s.parts, [](const Part& part) { return part.points.empty(); });
   const std::size_t bones = rig.names.size();
   std::vector<std::vector<int>> children(bones);
   for (std::size_t b = 1; b < bones; ++b) children[std::size_t(rig.parents[b])].push_back(int(b));
@@ -163,6 +221,24 @@ bool Runner::skin(std::span<float> out_positions, std::span<float> out_normals) 
   if (out_positions.size() < impl_->mesh.positions.size() || out_normals.size() < impl_->mesh.positions.size())
     return false;
   return impl_->skin(impl_->palette, out_positions.data(), out_normals.data());
+}
+
+bool Runner::skin_parts(std::span<float> out_positions, std::span<float> out_normals) const {
+  if (out_positions.size() < impl_->mesh.positions.size() || out_normals.size() < impl_->mesh.positions.size())
+    return false;
+  return impl_->skin_parts(out_positions.data(), out_normals.data());
+}
+
+std::vector<std::uint32_t> Runner::part_points() const {
+  std::vector<std::uint32_t> points;
+  for (const Part& part : impl_->parts) points.insert(points.end(), part.points.begin(), part.points.end());
+  return points;
+}
+
+std::vector<std::size_t> Runner::part_sizes() const {
+  std::vector<std::size_t> sizes(4, 0);
+  for (const Part& part : impl_->parts) sizes[std::size_t(part.influences - 1)] = part.points.size();
+  return sizes;
 }
 
 bool Runner::skin_positions(std::span<float> out_positions) const {

@@ -55,6 +55,13 @@ class Runner {
   // False when ozz's job refuses.
   void set_palette(std::span<const std::array<float, 16>> palette);
   bool skin(std::span<float> out_positions, std::span<float> out_normals) const;
+  // The mesh split into parts by influence count as ozz's fbx2mesh does (a point's count: its last slot with a
+  // nonzero weight), one ozz SkinningJob per part with influences_count 1 to 4 and the part's own copies of the
+  // points' data; results in part order (part_points(): the whole mesh's point of each output, part by part).
+  bool skin_parts(std::span<float> out_positions, std::span<float> out_normals) const;
+  std::vector<std::uint32_t> part_points() const;
+  // The number of points of 1, 2, 3 and 4 influences.
+  std::vector<std::size_t> part_sizes() const;
   // The same without normals (positions only).
   bool skin_positions(std::span<float> out_positions) const;
   // The whole frame of character `c` at `seconds`: sample both clips, blend, local to model, the skinning palette
