@@ -213,6 +213,20 @@ TEST_CASE("levels: costs, the camera helper, refusals") {
 namespace {
 
 // Mesh levels (LevelOptions::points): hand-made subsets, as simplify_model's source_point would give (any order).
+// The built-in character with a morph target, "bulge", on every fifth point.
+deform::Model bulged_builtin() {
+  deform::Model model = deform::builtin_character();
+  deform::MorphTarget target;
+  target.name = "bulge";
+  for (std::uint32_t p = 0; p < model.mesh.point_count(); p += 5) {
+    target.points.push_back(p);
+    target.position_deltas.push_back({0.0f, 0.01f, 0.02f});
+    target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
+  }
+  model.morph_targets.push_back(target);
+  return model;
+}
+
 std::vector<std::uint32_t> every(std::size_t points, std::uint32_t step, bool keep) {
   std::vector<std::uint32_t> out;
   for (std::uint32_t p = std::uint32_t(points); p-- > 0;)
@@ -340,15 +354,7 @@ TEST_CASE("levels: a switch between subsets blends the shared points and starts 
 }
 
 TEST_CASE("levels: a subset skins the morphed points as the whole level does") {
-  deform::Model model = deform::builtin_character();
-  deform::MorphTarget target;
-  target.name = "bulge";
-  for (std::uint32_t p = 0; p < model.mesh.point_count(); p += 5) {
-    target.points.push_back(p);
-    target.position_deltas.push_back({0.0f, 0.01f, 0.02f});
-    target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
-  }
-  model.morph_targets.push_back(target);
+  const deform::Model model = bulged_builtin();
   Character full(model), mesh(model);
   const std::vector<std::uint32_t> half = every(model.mesh.point_count(), 2, true);
   const std::vector<Character::LevelOptions> whole = {{true, 1}, {false, 1}};
@@ -634,15 +640,7 @@ TEST_CASE("levels: interpolated on the renderer, the frames drawn are the CPU's,
     }
   }
   SUBCASE("a morphed character without a rig") {
-    deform::Model model = deform::builtin_character();
-    deform::MorphTarget target;
-    target.name = "bulge";
-    for (std::uint32_t p = 0; p < model.mesh.point_count(); p += 5) {
-      target.points.push_back(p);
-      target.position_deltas.push_back({0.0f, 0.01f, 0.02f});
-      target.normal_deltas.push_back({0.1f, 0.0f, 0.0f});
-    }
-    model.morph_targets.push_back(target);
+    const deform::Model model = bulged_builtin();
     Walker cpu{Character(model)}, gpu{Character(model)};
     for (Walker* w : {&cpu, &gpu}) {
       REQUIRE(w->c.set_morph_weight(0, 0.7f));
