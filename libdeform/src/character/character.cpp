@@ -631,8 +631,9 @@ Status Character::skin_subset(std::size_t level) noexcept {
   const std::span<glm::vec3> out = subset.contiguous
                                        ? std::span<glm::vec3>(positions_).subspan(subset.points.front(), count)
                                        : std::span<glm::vec3>(level_positions_).first(count);
-  if (const Status status = skin(rest_positions, rest_normals, true, levels_->weights[level], out,
-                                 std::span<glm::vec3>(level_normals_).first(count));
+  const std::span<glm::vec3> normals = std::span<glm::vec3>(subset.normals_in_place ? normals_ : level_normals_);
+  if (const Status status =
+          skin(rest_positions, rest_normals, true, levels_->weights[level], out, normals.first(count));
       !status)
     return status;
   if (!subset.contiguous)
@@ -988,8 +989,9 @@ std::span<const glm::vec3> Character::normals() {
     if (subset_normals_ >= 0) {
       // A subset level: its render vertices only (the others keep stale values; LevelOptions::points).
       const LevelPoints& subset = levels_->subsets[std::size_t(subset_normals_)];
-      for (std::size_t i = 0; i < subset.vertices.size(); ++i)
-        normals_[subset.vertices[i]] = level_normals_[subset.vertex_slot[i]];
+      const std::vector<glm::vec3>& skinned = subset.normals_in_place ? normals_ : level_normals_;
+      for (std::size_t i = subset.normals_in_place ? subset.points.size() : 0; i < subset.vertices.size(); ++i)
+        normals_[subset.vertices[i]] = skinned[subset.vertex_slot[i]];
     } else if (transported_current_ && bind_->normals_in_place) {
       InPlaceGatherJob gather;
       gather.plan = &bind_->normals_gather;
@@ -1072,6 +1074,12 @@ void Character::set_levels(const BoneLod& lod, std::span<const LevelOptions> opt
         subset.vertex_slot.push_back(slot[vertex_point[v]]);
       }
       data->largest_subset = std::max(data->largest_subset, subset.points.size());
+      // In place when subset point i is vertex i's: the seams' vertices come after them all (vertices ascending).
+      bool own = subset.vertices.size() >= subset.points.size();
+      for (std::size_t i = 0; own && i < subset.points.size(); ++i)
+        own = subset.vertices[i] == i && subset.vertex_slot[i] == i;
+      subset.normals_in_place = own;
+      if (!own) data->largest_scattered_subset = std::max(data->largest_scattered_subset, subset.points.size());
     }
     LevelCost cost;
     cost.points = weights.size();
@@ -1104,7 +1112,7 @@ void Character::allocate_level_state() {
   target_version_ = positions_version_;
   lerp_ = false;
   level_positions_.assign(subset, glm::vec3(0.0f));
-  level_normals_.assign(subset, glm::vec3(0.0f));
+  level_normals_.assign(levels_->largest_scattered_subset, glm::vec3(0.0f));
   level_rest_.assign(morph_weights_.empty() ? 0 : 2 * subset, glm::vec3(0.0f));
   subset_normals_ = -1;
   level_ = shown_ = 0;

@@ -518,12 +518,17 @@ class DEFORM_CHARACTER_API Character {
     std::vector<glm::vec3> rest_normals;
     std::vector<std::uint32_t> vertices;  // the render vertices of those points, and each one's subset index
     std::vector<std::uint32_t> vertex_slot;
+    // Subset point i is render vertex i's (points renumbered first, vertices ordered by point, order_points_first):
+    // the skinning writes the normals into normals_ itself and normals() copies them to the seams' vertices alone.
+    // Else they go through level_normals_.
+    bool normals_in_place = false;
   };
   struct LevelData {
     std::vector<SkinWeights> weights;  // per level: one per mesh point, or one per subset point
     std::vector<LevelCost> costs;
     std::vector<LevelPoints> subsets;
-    std::size_t largest_subset = 0;
+    std::size_t largest_subset = 0;            // points, of any subset level
+    std::size_t largest_scattered_subset = 0;  // points, of a subset level whose normals are not in place
     std::uint32_t blend_frames = 0;
   };
   // Whether `level` runs the lattices (and the mushes): its deformers on and every point deformed.
@@ -554,9 +559,10 @@ class DEFORM_CHARACTER_API Character {
   template <class F>
   void for_each_point(std::size_t level, F&& f) const;
   void settle_interpolation(std::size_t level) noexcept;
-  // A subset level's skinned points and normals, one per subset point (sized by the largest subset), and its rest
-  // points and normals gathered from the morphed ones (only with morph targets); the subset level whose normals
-  // normals() scatters to its render vertices (-1: none, the last update's normals are the whole mesh's).
+  // A subset level's skinned points and normals, one per subset point (sized by the largest subset; the normals only
+  // for a level whose normals are not in place), and its rest points and normals gathered from the morphed ones (only
+  // with morph targets); the subset level whose normals normals() copies to its render vertices (-1: none, the last
+  // update's normals are the whole mesh's).
   std::vector<glm::vec3> level_positions_;
   std::vector<glm::vec3> level_normals_;
   std::vector<glm::vec3> level_rest_;
