@@ -8,15 +8,18 @@
 // Counters: bytes_first — heap bytes held by the first character (make_builtin_character);
 // bytes_per_instance — held by each further instance (glibc's mallinfo2, live bytes after construction).
 //
-// crowd/builtin_10000/threads:N — one frame of 10,000 instances at levels of detail (Character::set_levels), the mix
-// issue #36 states for one camera: 100 at level 0 (the full character), 900 at level 1, 4,500 each at levels 2 and 3,
-// interleaved by index (as a camera's distances would be, and so each thread's range gets the same mix), all walking
-// at their own clip times, each updated as above (walk sampled, set_pose, update, normals()), except that the clip is
-// not sampled for an update that does not deform (Character::next_update_deforms), and that the loop reads what a
-// renderer would: interpolation() every update, normals() after the updates that deform. Levels 2 and 3 interpolate
-// on the renderer (Settings::renderer_interpolates: an update between their deformed ones moves no point; the
-// renderer draws from + share · (to − from)). The levels, from
-// build_bone_lod on the built-in character's 33 bones, the hands and feet kept: 1 — 25 bones, deformers on; 2 — 20
+// crowd/builtin_10000/threads:N/level1_interval:K — one frame of 10,000 instances at levels of detail
+// (Character::set_levels), the mix issue #36 states for one camera: 100 at level 0 (the full character), 900 at level
+// 1, 4,500 each at levels 2 and 3, interleaved by index (as a camera's distances would be, and so each thread's range
+// gets the same mix), all walking at their own clip times, each updated as above (walk sampled, set_pose, update,
+// normals()), except that the clip is not sampled for an update that does not deform (Character::next_update_deforms),
+// and that the loop reads what a renderer would: interpolation() every update, normals() after the updates that deform.
+// Levels 2 and 3 interpolate on the renderer (Settings::renderer_interpolates: an update between their deformed ones
+// moves no point; the renderer draws from + share · (to − from)). Each instance takes its level on one of the warm-up's
+// first 4 frames (as characters cross a camera's distances on different frames), so the deformed updates of an interval
+// spread over its frames rather than all falling on one. The levels, from build_bone_lod on the built-in character's 33
+// bones, the hands and feet kept: 1 — 25 bones, deformers on, deformed every Kth update (1: every one; 2: as a
+// mid-distance character is in engines' update-rate levels, interpolated on the renderer as levels 2 and 3); 2 — 20
 // bones, no deformers, deformed every 2nd update; 3 — 17 bones, no deformers, every 4th. Where the optional
 // deform::simplify is built, levels 1, 2 and 3 deform only the points of a simplified mesh (LevelOptions::points
 // from simplify_model's source_point: 0.5 of the triangles, that mesh simplified again to 0.5 of its own, 0.25 of the
@@ -156,8 +159,8 @@ deform::BoneLod crowd_lod(const deform::Character& c) {
 // The crowd's character and its levels' options: levels 1, 2 and 3 with the points of simplified meshes, nested and
 // first in the model's renumbered points (a prefix each), where deform::simplify is built.
 deform::Character crowd_character(std::vector<deform::Character::LevelOptions>& levels,
-                                  std::vector<std::uint32_t>& points) {
-  levels = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+                                  std::vector<std::uint32_t>& points, std::uint32_t level1_interval) {
+  levels = {{true, 1}, {true, level1_interval}, {false, 2}, {false, 4}};
 #if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
   deform::Model model = deform::builtin_character();
   // Each mesh simplified from the one before: 0.5, 0.25 and 0.1 of the triangles, each one's points the next's too.
@@ -247,10 +250,10 @@ struct LevelCrowd {
   std::vector<std::size_t> influences;
   std::vector<std::size_t> points;
 
-  LevelCrowd() {
+  explicit LevelCrowd(std::uint32_t level1_interval) {
     std::vector<deform::Character::LevelOptions> options;
     std::vector<std::uint32_t> level_points;
-    deform::Character first = crowd_character(options, level_points);
+    deform::Character first = crowd_character(options, level_points, level1_interval);
     first.set_levels(crowd_lod(first), options);
     first.settings.renderer_interpolates = true;  // copied by instance()
     walk = deform::builtin_walk(first.model());
@@ -263,9 +266,17 @@ struct LevelCrowd {
     for (std::size_t i = 1; i < big_crowd_size; ++i) characters.push_back(first.instance());
     characters.push_back(std::move(first));
     poses.assign(big_crowd_size, characters.front().skeleton().bind_pose());
-    for (std::size_t i = 0; i < big_crowd_size; ++i) {
-      characters[i].set_level(crowd_level(i));
-      times.push_back(0.618034f * float(i));
+    for (std::size_t i = 0; i < big_crowd_size; ++i) times.push_back(0.618034f * float(i));
+  }
+
+  // Instance i takes its level at update i % 4 of the warm-up: in a game characters cross the distances that choose
+  // their levels on different frames, so that the deformed updates of an interval are spread over its frames, not
+  // all on one (each frame of the benchmark then costs about the same).
+  void warm_up() {
+    for (std::size_t f = 0; f < 8; ++f) {
+      for (std::size_t i = 0; i < big_crowd_size; ++i)
+        if (i % 4 == f) characters[i].set_level(crowd_level(i));
+      update(0, big_crowd_size);
     }
   }
 
@@ -298,9 +309,8 @@ struct LevelCrowd {
 };
 
 void level_crowd(benchmark::State& state) {
-  LevelCrowd crowd;
-  // Every level's interval under way, the springs moving: a few frames.
-  for (int f = 0; f < 8; ++f) crowd.update(0, big_crowd_size);
+  LevelCrowd crowd(std::uint32_t(state.range(1)));
+  crowd.warm_up();  // every level's interval under way, the springs moving
   deform::ThreadPool pool(unsigned(state.range(0)));
   const std::function<void(std::size_t, std::size_t)> range = [&](std::size_t begin, std::size_t end) {
     crowd.update(begin, end);
@@ -319,9 +329,8 @@ void level_crowd(benchmark::State& state) {
 
 BENCHMARK(level_crowd)
     ->Name("crowd/builtin_10000")
-    ->ArgName("threads")
-    ->Arg(1)
-    ->Arg(2)
+    ->ArgNames({"threads", "level1_interval"})
+    ->ArgsProduct({{1, 2}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
