@@ -28,12 +28,15 @@
 // 1 then runs the ponytail's spring chain but not the arm's lattices (a subset runs the springs alone). Without
 // deform::simplify every level deforms every point.
 // Counters:
+// frame_p50_ms, frame_p90_ms — the median and 90th percentile of the frames' wall times (with every level deforming on
+// the same frames they were 15–16 and 24–32 ms, for a mean of 15–16: docs/performance.md, 22:40 UTC);
 // error_mean_lN, error_max_lN — level N's own points as drawn (interpolation()) against the full character's walking
 // beside it (the same clip times, 2 s), as a fraction of its height: the mean over points and frames and the largest;
 // points_influences_lN — its LevelCost::influences; points_lN — its LevelCost::points.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -315,8 +318,17 @@ void level_crowd(benchmark::State& state) {
   const std::function<void(std::size_t, std::size_t)> range = [&](std::size_t begin, std::size_t end) {
     crowd.update(begin, end);
   };
-  for (auto _ : state) pool.parallel_for(big_crowd_size, 1, range);
+  std::vector<double> frame_ms;  // each frame's wall time: the target is per frame, not on average
+  frame_ms.reserve(std::size_t(state.max_iterations));
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    pool.parallel_for(big_crowd_size, 1, range);
+    frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
   state.SetItemsProcessed(state.iterations() * std::int64_t(big_crowd_size));
+  std::sort(frame_ms.begin(), frame_ms.end());
+  state.counters["frame_p50_ms"] = frame_ms[frame_ms.size() / 2];
+  state.counters["frame_p90_ms"] = frame_ms[frame_ms.size() * 9 / 10];
   for (std::size_t l = 1; l < crowd.errors.size(); ++l) {
     state.counters["error_mean_l" + std::to_string(l)] = crowd.errors[l].mean;
     state.counters["error_max_l" + std::to_string(l)] = crowd.errors[l].max;
