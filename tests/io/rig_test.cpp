@@ -140,6 +140,11 @@ TEST_CASE("the written form: hierarchy, names, model") {
   no_springs.spring_chains.clear();
   no_springs.colliders.clear();
   CHECK_FALSE(nlohmann::json::parse(deform::format_rig_json(no_springs, model().skeleton)).contains("springs"));
+  // Unless its substep is not the default: that is written, and read back (the rig fuzzer found it dropped).
+  no_springs.spring_substep = 0.0041644443f;
+  const std::string text = deform::format_rig_json(no_springs, model().skeleton);
+  CHECK(nlohmann::json::parse(text)["springs"]["chains"].empty());
+  CHECK(deform::parse_rig_json(text, model().skeleton, 100, "again.json") == no_springs);
 }
 
 TEST_CASE("the stretch shape: written where it differs from the default, read back exactly") {

@@ -410,7 +410,8 @@ std::string format_rig_json(const Rig& rig, const Skeleton& skeleton) {
     written["elastic"] = elastic;
   }
   document["lattices"] = lattices;
-  if (!rig.spring_chains.empty() || !rig.colliders.empty()) {
+  // Written when there are chains or colliders, or a substep of its own (which would otherwise be lost on a read back).
+  if (!rig.spring_chains.empty() || !rig.colliders.empty() || rig.spring_substep != SpringChains::default_substep) {
     ojson colliders = ojson::array();
     for (const SpringCollider& c : rig.colliders) {
       colliders.push_back({{"bone", skeleton.key(c.bone)},
