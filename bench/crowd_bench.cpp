@@ -167,23 +167,13 @@ deform::Character crowd_character(std::vector<deform::Character::LevelOptions>& 
 #if defined(DEFORM_BENCH_HAVE_SIMPLIFY)
   deform::Model model = deform::builtin_character();
   // Each mesh simplified from the one before: 0.5, 0.25 and 0.1 of the triangles, each one's points the next's too.
-  const deform::SimplifiedModel mid = deform::simplify_model(model, {0.5f, 0.05f});
-  const deform::SimplifiedModel near = deform::simplify_model(mid.model, {0.5f, 0.05f});
-  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
-  std::vector<std::uint32_t> first;
-  std::vector<bool> listed(model.mesh.point_count(), false);
-  const auto list = [&](std::uint32_t p) {
-    if (!listed[p]) first.push_back(p), listed[p] = true;
-  };
-  for (const std::uint32_t p : far.source_point) list(mid.source_point[near.source_point[p]]);
-  for (const std::uint32_t p : near.source_point) list(mid.source_point[p]);
-  for (const std::uint32_t p : mid.source_point) list(p);
-  deform::order_points_first(model, first);
-  points.resize(mid.source_point.size());
-  for (std::size_t i = 0; i < points.size(); ++i) points[i] = std::uint32_t(i);
-  levels[1].points = points;  // deformers on: the ponytail's spring chain; the arm's lattices wait for level 0
-  levels[2].points = std::span<const std::uint32_t>(points).first(near.source_point.size());
-  levels[3].points = std::span<const std::uint32_t>(points).first(far.source_point.size());
+  std::vector<deform::MeshLevel> meshes = deform::simplify_levels(
+      model, std::vector<deform::SimplifySettings>{{0.5f, 0.05f}, {0.25f, 0.05f}, {0.1f, 0.05f}});
+  deform::renumber_levels(meshes, deform::order_points_first(model, meshes.front().points));
+  points = meshes.front().points;  // 0, 1, ...: each level's points a prefix
+  levels[1].points = points;       // deformers on: the ponytail's spring chain; the arm's lattices wait for level 0
+  levels[2].points = std::span<const std::uint32_t>(points).first(meshes[1].points.size());
+  levels[3].points = std::span<const std::uint32_t>(points).first(meshes[2].points.size());
   const deform::Rig rig = deform::builtin_rig(model);
   return deform::Character(std::move(model), rig);
 #else

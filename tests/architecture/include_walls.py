@@ -28,7 +28,7 @@ LAYERS = {
     "extras": ("runtime", "offline", "character"),
     "c": ("runtime", "offline", "io", "character", "extras"),
     "import": ("runtime", "io"),
-    "simplify": ("runtime",),
+    "simplify": ("runtime", "offline"),
     "gpu": ("runtime",),
 }
 BASE = "base"  # libdeform/src/base: private to the library, included by every layer (bare names: "finite.hpp")

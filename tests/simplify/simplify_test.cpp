@@ -184,31 +184,111 @@ TEST_CASE("simplify_model on assimp-testmodels' rigged characters") {
 }
 #endif
 
-// A Character level on simplified meshes, built as docs/skinning.md says: nested simplifications, the model's points
-// renumbered so that each level is a prefix, the simplified triangles drawn from the full character's arrays through
-// source_vertex, source_point and the renumbering.
+namespace {
+
+// simplify_levels on one model: the chain of simplify_model it stands for (each level from the one before, at its
+// share of the level before's triangles), nested point lists with each coarser level's first, every corner's point in
+// its level, and, after order_points_first and renumber_levels, each level's points a prefix of the renumbered model
+// whose triangles draw what the level's own did.
+void check_levels(const std::string& name, const Model& model) {
+  CAPTURE(name);
+  const std::vector<deform::SimplifySettings> settings = {{0.5f, 0.05f}, {0.25f, 0.05f}, {0.1f, 0.05f}};
+  std::vector<deform::MeshLevel> levels = deform::simplify_levels(model, settings);
+  REQUIRE(levels.size() == 3);
+  // The chain by hand: 0.5, then 0.5 of that, then 0.4 of that.
+  const deform::SimplifiedModel mid = deform::simplify_model(model, settings[0]);
+  const deform::SimplifiedModel near = deform::simplify_model(mid.model, {0.5f, 0.05f});
+  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
+  const deform::SimplifiedModel* chain[3] = {&mid, &near, &far};
+  for (std::size_t l = 0; l < 3; ++l) {
+    CAPTURE(l);
+    const deform::Mesh& own = chain[l]->model.mesh;
+    REQUIRE(levels[l].triangles.size() == own.triangles.size());
+    CHECK(levels[l].points.size() == own.point_count());
+    CHECK(levels[l].submeshes.size() == own.submeshes.size());
+    for (std::size_t c = 0; c < own.triangles.size(); ++c) {
+      std::uint32_t v = own.triangles[c];
+      for (std::size_t up = l + 1; up-- > 0;) v = chain[up]->source_vertex[v];
+      CHECK(levels[l].triangles[c] == v);
+    }
+    std::vector<char> member(model.mesh.point_count(), 0);
+    for (const std::uint32_t p : levels[l].points) {
+      REQUIRE(p < member.size());
+      CHECK(member[p] == 0);  // each once
+      member[p] = 1;
+    }
+    for (const std::uint32_t v : levels[l].triangles) CHECK(member[model.mesh.vertex_point[v]] == 1);
+    if (l > 0) {
+      CHECK(levels[l].points.size() < levels[l - 1].points.size());
+      CHECK(std::equal(levels[l].points.begin(), levels[l].points.end(), levels[l - 1].points.begin()));
+      CHECK(levels[l].error >= levels[l - 1].error);
+    }
+  }
+  MESSAGE(name << ": " << levels[0].points.size() << ", " << levels[1].points.size() << ", " << levels[2].points.size()
+               << " of " << model.mesh.point_count() << " points; errors " << levels[0].error << ", " << levels[1].error
+               << ", " << levels[2].error);
+  // Renumbered: prefixes, and the same corners in the same places.
+  const std::vector<std::vector<std::uint32_t>> before = {levels[0].triangles, levels[1].triangles,
+                                                          levels[2].triangles};
+  Model renumbered = model;
+  const deform::PointOrder order = deform::order_points_first(renumbered, levels.front().points);
+  deform::renumber_levels(levels, order);
+  for (std::size_t l = 0; l < 3; ++l) {
+    for (std::size_t i = 0; i < levels[l].points.size(); ++i) CHECK(levels[l].points[i] == i);
+    for (std::size_t c = 0; c < levels[l].triangles.size(); ++c) {
+      const std::uint32_t v = levels[l].triangles[c];
+      CHECK(renumbered.mesh.vertex_point[v] < levels[l].points.size());
+      CHECK(renumbered.mesh.positions[renumbered.mesh.vertex_point[v]] ==
+            model.mesh.positions[model.mesh.vertex_point[before[l][c]]]);
+      if (!model.mesh.vertex_uvs.empty()) CHECK(renumbered.mesh.vertex_uvs[v] == model.mesh.vertex_uvs[before[l][c]]);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("simplify_levels: nested meshes whose points become prefixes") {
+  check_levels("builtin", deform::builtin_character());
+#if defined(DEFORM_HAVE_IMPORT)
+  for (const char* path : {"IQM/mrfixit.iqm", "X/Testwuson.X"}) {
+    const std::string file = std::string("/usr/share/assimp/models/") + path;
+    REQUIRE_MESSAGE(std::filesystem::exists(file), path << " is missing: install Debian's assimp-testmodels");
+    check_levels(path, deform::import_model(file).model);
+  }
+#endif
+  const Model model = deform::builtin_character();
+  for (const std::vector<deform::SimplifySettings>& refused :
+       {std::vector<deform::SimplifySettings>{}, {{0.25f, 0.05f}, {0.5f, 0.05f}}, {{0.5f, 0.05f}, {0.0f, 0.05f}}}) {
+    try {
+      (void)deform::simplify_levels(model, refused);
+      FAIL("accepted");
+    } catch (const deform::Error& error) {
+      CHECK(std::string(error.what())
+                .find(refused.size() == 2 && refused[1].triangle_ratio == 0.0f ? "triangle_ratio" : "levels") !=
+            std::string::npos);
+    }
+  }
+}
+
+// A Character level on simplified meshes, built as docs/skinning.md says: simplify_levels, the model's points
+// renumbered so that each level is a prefix, the simplified triangles drawn from the full character's arrays.
 TEST_CASE("simplified meshes as Character levels: prefixes after order_points_first, drawn through the maps") {
   Model model = deform::builtin_character();
-  const deform::SimplifiedModel near = deform::simplify_model(model, {0.25f, 0.05f});
-  const deform::SimplifiedModel far = deform::simplify_model(near.model, {0.4f, 0.05f});
-  std::vector<std::uint32_t> first;
-  for (const std::uint32_t p : far.source_point) first.push_back(near.source_point[p]);
-  for (const std::uint32_t p : near.source_point)
-    if (std::find(first.begin(), first.end(), p) == first.end()) first.push_back(p);
   const Model before = model;
-  const deform::PointOrder order = deform::order_points_first(model, first);
+  const std::vector<deform::SimplifySettings> settings = {{0.25f, 0.05f}, {0.1f, 0.05f}};
+  std::vector<deform::MeshLevel> levels = deform::simplify_levels(model, settings);
+  const deform::PointOrder order = deform::order_points_first(model, levels.front().points);
+  deform::renumber_levels(levels, order);
   deform::Character hero(model);
   deform::Character whole(model);
-  std::vector<std::uint32_t> prefix(near.source_point.size());
-  std::iota(prefix.begin(), prefix.end(), 0u);
   std::vector<deform::Character::LevelOptions> options = {{true, 1}, {false, 1}, {false, 1}};
-  options[1].points = prefix;
-  options[2].points = std::span<const std::uint32_t>(prefix).first(far.source_point.size());
+  options[1].points = levels[0].points;
+  options[2].points = levels[1].points;
   deform::BoneLodSettings lod;
   lod.bones_per_level = {20, 20};
   hero.set_levels(deform::build_bone_lod(hero.model(), lod), options);
   whole.set_levels(deform::build_bone_lod(whole.model(), lod), {{{true, 1}, {false, 1}, {false, 1}}});
-  CHECK(hero.level_cost(2).points == far.model.mesh.point_count());
+  CHECK(hero.level_cost(2).points == levels[1].points.size());
   deform::Pose pose = hero.skeleton().bind_pose();
   pose.rotations[5] = glm::angleAxis(0.6f, glm::vec3(1.0f, 0.0f, 0.0f));
   for (deform::Character* c : {&hero, &whole}) {
@@ -218,15 +298,12 @@ TEST_CASE("simplified meshes as Character levels: prefixes after order_points_fi
     REQUIRE(c->update(0.0f));  // past the switch's update (which deforms the outgoing level 0 too)
   }
   const auto normals = hero.normals(), whole_normals = whole.normals();
-  // Each corner of far's triangles: its render vertex in the renumbered full mesh, and that vertex's point.
-  for (const std::uint32_t v : far.model.mesh.triangles) {
-    const std::uint32_t full_vertex = order.vertex[near.source_vertex[far.source_vertex[v]]];
+  // Each corner of level 2's triangles: a render vertex of the renumbered full mesh, drawn as the whole level draws it.
+  for (const std::uint32_t full_vertex : levels[1].triangles) {
     const std::uint32_t full_point = hero.model().mesh.vertex_point[full_vertex];
-    CHECK(full_point == order.point[near.source_point[far.source_point[far.model.mesh.vertex_point[v]]]]);
-    CHECK(full_point < far.model.mesh.point_count());  // in level 2's prefix
+    CHECK(full_point < levels[1].points.size());  // in level 2's prefix
     CHECK(hero.positions()[full_point] == whole.positions()[full_point]);
     CHECK(normals[full_vertex] == whole_normals[full_vertex]);
-    CHECK(hero.model().mesh.positions[full_point] == far.model.mesh.positions[far.model.mesh.vertex_point[v]]);
   }
   CHECK(before.mesh.point_count() == model.mesh.point_count());
 }

@@ -140,4 +140,51 @@ SimplifiedModel simplify_model(const Model& model, const SimplifySettings& setti
   return result;
 }
 
+std::vector<MeshLevel> simplify_levels(const Model& model, std::span<const SimplifySettings> levels) {
+  if (levels.empty()) throw Error::invalid_argument("levels", "no level to make");
+  for (std::size_t l = 1; l < levels.size(); ++l)
+    if (levels[l].triangle_ratio > levels[l - 1].triangle_ratio)
+      throw Error::invalid_argument(
+          "levels", "level " + std::to_string(l + 1) + " keeps more triangles than level " + std::to_string(l));
+  // Each level from the one before: `chain` maps the current model's points and render vertices to the input's.
+  std::vector<SimplifiedModel> made;
+  made.reserve(levels.size());
+  std::vector<MeshLevel> out(levels.size());
+  float ratio = 1.0f, error = 0.0f;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    SimplifySettings step = levels[l];
+    if (l > 0) step.triangle_ratio = std::min(1.0f, levels[l].triangle_ratio / ratio);  // of the level before
+    made.push_back(simplify_model(l == 0 ? model : made.back().model, step));
+    if (l > 0) {  // back to the input's numbering
+      const SimplifiedModel& before = made[made.size() - 2];
+      for (std::uint32_t& p : made.back().source_point) p = before.source_point[p];
+      for (std::uint32_t& v : made.back().source_vertex) v = before.source_vertex[v];
+    }
+    ratio = levels[l].triangle_ratio;
+    error += made.back().error;
+    MeshLevel& level = out[l];
+    level.error = error;
+    level.submeshes = made.back().model.mesh.submeshes;
+    level.triangles = made.back().model.mesh.triangles;
+    for (std::uint32_t& v : level.triangles) v = made.back().source_vertex[v];
+  }
+  // Points: the coarsest level's, then each finer level's others (nested: a level's points are all its finer
+  // neighbour's), so that every level's list is a prefix of the finer ones'.
+  std::vector<char> listed(model.mesh.point_count(), 0);
+  std::vector<std::uint32_t> order;
+  for (std::size_t l = levels.size(); l-- > 0;) {
+    for (const std::uint32_t p : made[l].source_point)
+      if (!listed[p]) listed[p] = 1, order.push_back(p);
+    out[l].points.assign(order.begin(), order.begin() + std::ptrdiff_t(made[l].source_point.size()));
+  }
+  return out;
+}
+
+void renumber_levels(std::vector<MeshLevel>& levels, const PointOrder& order) {
+  for (MeshLevel& level : levels) {
+    for (std::uint32_t& p : level.points) p = order.point[p];
+    for (std::uint32_t& v : level.triangles) v = order.vertex[v];
+  }
+}
+
 }  // namespace deform

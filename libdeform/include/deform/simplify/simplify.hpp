@@ -4,8 +4,10 @@
 // meshoptimizer is found (libmeshoptimizer-dev).
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
+#include "deform/offline/topology.hpp"
 #include "deform/runtime/model.hpp"
 #include "deform/simplify/export.hpp"
 
@@ -35,5 +37,30 @@ struct SimplifiedModel {
 // holes keep their outlines. Throws deform::Error (kind argument, element "triangle_ratio" or "max_error") for a
 // setting out of range, and ("mesh") for a mesh without triangles or whose triangles or points are out of range.
 DEFORM_SIMPLIFY_API SimplifiedModel simplify_model(const Model& model, const SimplifySettings& settings = {});
+
+// One level of detail's mesh (simplify_levels): what a Character level deforms (LevelOptions::points) and what the
+// renderer draws, both in the numbering of the model it was made from; level 0, the whole mesh, has none.
+struct MeshLevel {
+  // The level's points, as the model's point ids. Nested: the next (coarser) level's points come first, in the same
+  // order, so that after order_points_first(model, levels.front().points) every level's points are a prefix.
+  std::vector<std::uint32_t> points;
+  // Its triangles as the model's render vertex ids (3 each), grouped by submesh as `submeshes` says (materials kept).
+  // Every corner's point is one of `points`.
+  std::vector<std::uint32_t> triangles;
+  std::vector<Submesh> submeshes;
+  // Simplification error, a fraction of the mesh's largest extent: the errors of the simplifications that made this
+  // level (each from the level before it) added, a bound on how far its surface lies from the whole mesh's.
+  float error = 0.0f;
+};
+// Meshes for levels 1, 2, ... of a Character: level l keeps levels[l - 1].triangle_ratio of the whole mesh's triangles
+// (ratios decreasing: each level is simplify_model of the level before it, so the levels are nested) within its
+// max_error. Throws deform::Error as simplify_model does, and (kind argument, element "levels") for no levels or
+// ratios that increase. Offline: allocates.
+DEFORM_SIMPLIFY_API std::vector<MeshLevel> simplify_levels(const Model& model,
+                                                           std::span<const SimplifySettings> levels);
+// The levels in a renumbered model's numbering, after `order` = order_points_first(model, levels.front().points)
+// (deform/offline/topology.hpp): then level l's points are 0, 1, ..., points.size() - 1 and its triangles name the
+// renumbered render vertices.
+DEFORM_SIMPLIFY_API void renumber_levels(std::vector<MeshLevel>& levels, const PointOrder& order);
 
 }  // namespace deform
