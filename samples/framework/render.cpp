@@ -183,10 +183,8 @@ void MeshRenderer::create(const deform::Mesh& mesh) {
   glEnableVertexAttribArray(2);
   glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(5 * sizeof(float)));
   glGenBuffers(1, &ibo_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(mesh.triangles.size() * sizeof(std::uint32_t)),
-               mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
+  set_triangles({}, {});
 
   textures_.assign(mesh.materials.size(), 0);
 #ifndef __EMSCRIPTEN__  // the browser has no files: a page sets its textures from memory (set_texture_rgb)
@@ -238,6 +236,23 @@ void MeshRenderer::set_texture_rgb(std::size_t material, int width, int height, 
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
 }
 
+void MeshRenderer::set_triangles(std::span<const std::uint32_t> triangles, std::span<const deform::Submesh> submeshes) {
+  const bool own = triangles.empty();
+  const std::span<const std::uint32_t> drawn = own ? std::span<const std::uint32_t>(mesh_->triangles) : triangles;
+  const std::span<const deform::Submesh> groups = own ? std::span<const deform::Submesh>(mesh_->submeshes) : submeshes;
+  submeshes_.assign(groups.begin(), groups.end());
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(drawn.size() * sizeof(std::uint32_t)), drawn.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+}
+
+std::size_t MeshRenderer::triangle_count() const {
+  std::size_t count = 0;
+  for (const deform::Submesh& s : submeshes_) count += s.triangle_count;
+  return count;
+}
+
 void MeshRenderer::upload(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals) {
   float* out = interleaved_.data();
   for (std::size_t v = 0; v < positions.size(); ++v, out += floats_per_vertex) {
@@ -258,7 +273,7 @@ void MeshRenderer::draw(const glm::mat4& model, const glm::mat4& view, const glm
   glUniform3fv(glGetUniformLocation(program_, "tint"), 1, glm::value_ptr(tint));
   glUniform1i(glGetUniformLocation(program_, "diffuse_map"), 0);
   glBindVertexArray(vao_);
-  for (const deform::Submesh& s : mesh_->submeshes) {
+  for (const deform::Submesh& s : submeshes_) {
     const deform::Material fallback;
     const deform::Material& m = s.material >= 0 && std::size_t(s.material) < mesh_->materials.size()
                                     ? mesh_->materials[std::size_t(s.material)]

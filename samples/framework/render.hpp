@@ -59,6 +59,11 @@ class MeshRenderer {
   void create(const deform::Mesh& mesh);
   // Replaces a material's texture with RGB pixels held in memory (row 0 = top), e.g. deform::builtin_texture().
   void set_texture_rgb(std::size_t material, int width, int height, const std::uint8_t* pixels);
+  // Draws `triangles` (render vertex ids of the mesh, grouped by `submeshes`) instead of the mesh's own: a level of
+  // detail's simplified mesh over the same vertex buffer. Empty: the mesh's own triangles again.
+  void set_triangles(std::span<const std::uint32_t> triangles, std::span<const deform::Submesh> submeshes);
+  // The triangles draw() draws.
+  std::size_t triangle_count() const;
   // Per render vertex positions and normals (size = mesh.vertex_count()).
   void upload(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals);
   void draw(const glm::mat4& model, const glm::mat4& view, const glm::mat4& projection, glm::vec3 eye,
@@ -70,7 +75,9 @@ class MeshRenderer {
  private:
   const deform::Mesh* mesh_ = nullptr;
   GLuint vao_ = 0, vbo_ = 0, ibo_ = 0, program_ = 0;
-  std::vector<GLuint> textures_;  // per material (0 = none)
+  std::vector<GLuint> textures_;            // per material (0 = none)
+  std::vector<deform::Submesh> submeshes_;  // what draw() draws: the mesh's, or set_triangles'
+
   std::vector<float> interleaved_;
 };
 

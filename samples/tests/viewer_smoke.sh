@@ -7,11 +7,13 @@
 # (skipped without OpenGL 4.3); the up axis a Z-up FBX declares and an imported character on the floor of its clip
 # (when Debian's assimp-testmodels are there), and a glTF model's morph targets, played by its clip and held; the
 # lattice overlay drawing the reaching limb's lattices only, unless all are asked for; the bent elbow with Direct
-# Delta Mush and with Delta Mush; the walk at a level of detail; imported characters framed by the camera and standing on the floor, with and
-# without their clip.
-# usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR
+# Delta Mush and with Delta Mush; the walk at a level of detail and at the four levels of --lod (chosen, and picked
+# by the zoom), and mrfixit's; imported characters framed by the camera and standing on the floor, with and without
+# their clip.
+# usage: viewer_smoke.sh VIEWER PNG_CHECK WORKDIR [simplified|whole]  (the levels' meshes: the build has the simplify
+# layer, or not; default whole)
 set -euo pipefail
-viewer=$1 check=$2 work=$3
+viewer=$1 check=$2 work=$3 level_meshes=${4:-whole}
 mkdir -p "$work"
 run() { xvfb-run -a -s "-screen 0 640x480x24" "$viewer" --width 640 --height 480 "$@"; }
 run --bare --screenshot "$work/before.png" --frames 20
@@ -59,6 +61,29 @@ run --bare --screenshot "$work/walk_lod33.png" --frames 40 --clip walk --inertia
 "$check" --same-picture "$work/walk_rigid.png" "$work/walk_lod33.png"
 run --bare --screenshot "$work/walk_lod8.png" --frames 40 --clip walk --inertia 0 --lod-bones 8 2>/dev/null
 "$check" "$work/walk_rigid.png" "$work/walk_lod8.png"
+# The four levels of detail (--lod): level 0 is the rigid walk's picture; level 3 (a third of the bones, a tenth of the
+# triangles where the simplify layer is built, every 4th frame) another; --lod auto picks level 0 at the framing
+# distance, 1 at twice it, 2 at 4 times and 3 at 8 times (the character a half, a quarter, an eighth of the window high).
+run --bare --screenshot "$work/walk_level0.png" --frames 40 --clip walk --inertia 0 --lod 0 2>/dev/null >/dev/null
+"$check" --same-picture "$work/walk_rigid.png" "$work/walk_level0.png"
+level3=$(run --bare --screenshot "$work/walk_level3.png" --frames 40 --clip walk --inertia 0 --lod 3 2>/dev/null)
+"$check" "$work/walk_rigid.png" "$work/walk_level3.png"
+autos=()
+for zoom in 1 2 4 8; do
+  autos+=("$(run --bare --screenshot "$work/walk_auto$zoom.png" --frames 10 --clip walk --lod auto --zoom $zoom 2>/dev/null)")
+done
+python3 - "$level_meshes" "$level3" "${autos[@]}" <<'PY'
+import json, sys
+level3, autos = json.loads(sys.argv[2]), [json.loads(a) for a in sys.argv[3:]]
+assert level3["lod_level"] == 3, level3
+assert [a["lod_level"] for a in autos] == [0, 1, 2, 3], autos
+drawn = [a["lod_triangles"] for a in autos]                           # what the renderer draws
+if sys.argv[1] == "simplified":
+    assert drawn == [5696, 2848, 1424, 594], drawn                    # 0.5, 0.25 and 0.1 of the whole mesh
+else:
+    assert drawn == [5696] * 4, drawn
+assert level3["lod_triangles"] == drawn[3], level3
+PY
 run --bare --screenshot "$work/walk_reach.png" --frames 40 --clip walk --reach 1.3,1.6,0.4 --at 2
 "$check" "$work/walk.png" "$work/walk_reach.png"
 run --screenshot "$work/walk_full.png" --frames 40 --clip walk --rig "$rig" --reach 1.3,1.6,0.4 --at 2 >/dev/null
@@ -111,6 +136,19 @@ assert idle["floor"] < rest["floor"] - 1e-3, (rest, idle)          # the clip's 
 assert idle["lowest"] >= idle["floor"] - 1e-5, idle                 # standing on it, never through it
 PY
   done
+  # Its levels of detail: level 3 another picture of the idle than level 0, on fewer triangles.
+  whole=$(run "$iqm" --bare --clip idle --inertia 0 --frames 30 --lod 0 --screenshot "$work/mrfixit_level0.png" 2>/dev/null)
+  far=$(run "$iqm" --bare --clip idle --inertia 0 --frames 30 --lod 3 --screenshot "$work/mrfixit_level3.png" 2>/dev/null)
+  "$check" "$work/mrfixit_level0.png" "$work/mrfixit_level3.png"
+  python3 - "$whole" "$far" "$level_meshes" <<'PY'
+import json, sys
+whole, far = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+assert (whole["lod_level"], far["lod_level"]) == (0, 3), (whole, far)
+if sys.argv[3] == "simplified":
+    assert far["lod_triangles"] < whole["lod_triangles"], (whole, far)
+else:
+    assert far["lod_triangles"] == whole["lod_triangles"], (whole, far)
+PY
 fi
 # An imported model with morph targets morphs: AnimatedMorphCube's clip animates target0 (the summary's weights
 # follow it), --morph holds weights over the clip, and each picture differs from the one before.

@@ -67,6 +67,7 @@ void frame(ViewerState& state, float dt) {
   place_floor(state);
   animate(state, dt);
   apply_morph_weights(state);
+  choose_lod(state);
   if (state.cut) {  // a new clip, a rebuilt character: the pose jumps, which a zero step takes as a cut, not motion
                     // (a reach that begins or ends is one the character takes care of itself)
     state.character->update(0.0f);
@@ -106,11 +107,11 @@ int run_headless(ViewerState& state) {
       "{\"screenshot\": \"%s\", \"frames\": %d, \"renderer\": \"%s\", \"gpu_lattices\": %s, "
       "\"up\": [%g, %g, %g], \"effector\": [%.5f, %.5f, %.5f], \"floor\": %.6f, \"lowest\": %.6f, "
       "\"morph_weights\": [%s], \"lattices_shown\": %d, \"floor_row\": %.1f, \"weight_tools_run\": %d, "
-      "\"weight_tools_refused\": %d}\n",
+      "\"weight_tools_refused\": %d, \"lod_level\": %zu, \"lod_triangles\": %zu}\n",
       options.screenshot.c_str(), options.frames, window.renderer_name().c_str(), state.gpu ? "true" : "false",
       double(up.x), double(up.y), double(up.z), e.x, e.y, e.z, double(floor_y(state)), double(lowest_y(state)),
       morph_weights_text(state).c_str(), lattices_shown(state), double(floor_row(state)), state.weight_tools_run,
-      state.weight_tools_refused);
+      state.weight_tools_refused, state.character->level(), state.renderer->triangle_count());
   return 0;
 }
 

@@ -11,6 +11,9 @@
 #include "deform/io/rig_json.hpp"
 #include "deform/runtime/blending.hpp"
 #include "deform/runtime/error.hpp"
+#if defined(DEFORM_VIEWER_HAVE_SIMPLIFY)
+#include "deform/simplify/simplify.hpp"
+#endif
 #include "model_loading.hpp"
 #include "view.hpp"
 
@@ -144,8 +147,9 @@ void set_gpu(ViewerState& state, bool on) {
     std::fprintf(stderr, "deform_viewer: Direct Delta Mush and Delta Mush are CPU stages; deforming on the CPU\n");
     on = false;
   }
-  if (on && state.options.lod_bones > 0) {  // GpuSkinning skins with the model's own weights, not a level's
-    std::fprintf(stderr, "deform_viewer: --lod-bones is a CPU level of detail; deforming on the CPU\n");
+  if (on && state.character->level_count() > 1) {  // GpuSkinning skins with the model's own weights, not a level's
+    std::fprintf(stderr,
+                 "deform_viewer: the levels of detail (--lod-bones, --lod) are CPU levels; deforming on the CPU\n");
     on = false;
   }
   if (on && state.character->morph_target_count() > 0) {  // GpuSkinning skins the bind positions, not the morphed ones
@@ -200,28 +204,79 @@ deform::Rig tuned_rig(ViewerState& state) {
 
 // Everything a new state.character needs around it: the picking triangles and BVH, the renderer, the per-lattice
 // and per-target state, the poses, and the panel's settings passed to it.
-// --lod-bones N: the character shown at a level of detail that skins with N bones (fewer when the skeleton has
-// fewer), merged on the motion of all the model's clips (16 poses from each), by weight alone when it has none.
-void apply_lod(ViewerState& state) {
-  const int bones = state.options.lod_bones;
-  if (bones <= 0) return;
-  deform::BoneLodSettings settings;
-  settings.bones_per_level = {std::size_t(bones)};
+// The motion of all the model's clips, 16 poses from each, for build_bone_lod to judge merges by.
+std::vector<deform::Pose> clip_poses(const ViewerState& state) {
+  std::vector<deform::Pose> poses;
   for (const deform::Animation& clip : state.clips) {
     for (int k = 0; k < 16; ++k) {
       deform::Pose pose = state.character->skeleton().bind_pose();
       sample_one(state, clip, clip.duration * float(k) / 16.0f, pose);
-      settings.poses.push_back(std::move(pose));
+      poses.push_back(std::move(pose));
     }
   }
-  const deform::BoneLod lod = deform::build_bone_lod(state.character->model(), settings);
-  const std::vector<deform::Character::LevelOptions> options(2);  // deformers on, every update
-  state.character->set_levels(lod, options, 0);
-  (void)state.character->set_level(1);  // cannot fail: the level exists
-  std::fprintf(stderr, "deform_viewer: --lod-bones %d: skinning with %zu of %zu bones\n", bones,
-               lod.levels[1].kept_bones, lod.levels[0].kept_bones);
+  return poses;
 }
 
+// --lod-bones N: the character shown at a level of detail that skins with N bones (fewer when the skeleton has
+// fewer), merged on the motion of all the model's clips, by weight alone when it has none.
+// --lod L|auto: four levels, as a game would give a character (docs/skinning.md, "Levels of detail"): level 0 the
+// whole character; 1, 2 and 3 with 3/4, 1/2 and 1/3 of the bones (merged as above) and, where the simplify layer is
+// built, the points and triangles of the mesh simplified to 0.5, 0.25 and 0.1 of its triangles; 1 with its deformers
+// (on a simplified mesh, the spring chains), 2 and 3 without, deformed every 2nd and 4th update. A switch blends over
+// 8 deformed updates. The model is not renumbered (order_points_first), so that the rig's per-point data stays valid:
+// the levels deform scattered points, slower than a game's would but the same picture.
+void apply_lod(ViewerState& state) {
+  state.lod_levels = false;
+  state.lod_triangles.clear();
+  state.lod_submeshes.clear();
+  state.lod_drawn = 0;
+  const int bones = state.options.lod_bones;
+  if (bones > 0) {
+    deform::BoneLodSettings settings;
+    settings.bones_per_level = {std::size_t(bones)};
+    settings.poses = clip_poses(state);
+    const deform::BoneLod lod = deform::build_bone_lod(state.character->model(), settings);
+    const std::vector<deform::Character::LevelOptions> options(2);  // deformers on, every update
+    state.character->set_levels(lod, options, 0);
+    (void)state.character->set_level(1);  // cannot fail: the level exists
+    std::fprintf(stderr, "deform_viewer: --lod-bones %d: skinning with %zu of %zu bones\n", bones,
+                 lod.levels[1].kept_bones, lod.levels[0].kept_bones);
+    return;
+  }
+  if (state.options.lod < 0 && !state.options.lod_auto) return;
+  const std::size_t count = state.character->skeleton().bone_count();
+  deform::BoneLodSettings settings;
+  settings.bones_per_level = {std::max<std::size_t>(1, (3 * count + 3) / 4), std::max<std::size_t>(1, (count + 1) / 2),
+                              std::max<std::size_t>(1, (count + 2) / 3)};
+  settings.poses = clip_poses(state);
+  std::vector<deform::Character::LevelOptions> options = {{true, 1}, {true, 1}, {false, 2}, {false, 4}};
+  state.lod_triangles.resize(4);
+  state.lod_submeshes.resize(4);
+#if defined(DEFORM_VIEWER_HAVE_SIMPLIFY)
+  const std::vector<deform::SimplifySettings> shares = {{0.5f, 0.05f}, {0.25f, 0.05f}, {0.1f, 0.05f}};
+  const std::vector<deform::MeshLevel> meshes = deform::simplify_levels(state.character->model(), shares);
+  for (std::size_t l = 1; l < 4; ++l) {
+    options[l].points = meshes[l - 1].points;  // copied by set_levels
+    state.lod_triangles[l] = meshes[l - 1].triangles;
+    state.lod_submeshes[l] = meshes[l - 1].submeshes;
+  }
+#endif
+  const deform::BoneLod lod = deform::build_bone_lod(state.character->model(), settings);
+  state.character->set_levels(lod, options, 8);
+  state.lod_levels = true;
+  const deform::Bounds box = deform::compute_bounds(state.character->model().mesh.positions);
+  state.lod_centre = 0.5f * (box.min + box.max);
+  state.lod_choice = state.options.lod_auto ? -1 : state.options.lod;
+  for (std::size_t l = 0; l < 4; ++l) {
+    const deform::Character::LevelCost cost = state.character->level_cost(l);
+    std::fprintf(stderr,
+                 "deform_viewer: --lod: level %zu: %zu bones, %zu points, %zu triangles, every %u update(s)%s\n", l,
+                 lod.levels[l].kept_bones, cost.points,
+                 l == 0 || state.lod_triangles[l].empty() ? state.character->model().mesh.triangle_count()
+                                                          : state.lod_triangles[l].size() / 3,
+                 unsigned(cost.update_interval), cost.deformers ? ", deformers on" : "");
+  }
+}
 void adopt_character(ViewerState& state) {
   const deform::Mesh& mesh = state.character->model().mesh;
   state.triangle_points.resize(mesh.triangles.size());
@@ -377,6 +432,33 @@ void apply_elastic(ViewerState& state) {
     if (s.integrator == deform::Integrator::verlet) s.springs = deform::NeighbourSprings{};  // exact only
     state.character->deformers().set_elastic(i, s);
   }
+}
+
+void choose_lod(ViewerState& state) {
+  if (!state.lod_levels) return;
+  std::size_t level = std::size_t(std::max(0, state.lod_choice));
+  if (state.lod_choice < 0) {
+    // The character's height on screen, from its bind pose's box carried into the world (the model node's turn and
+    // scale) and the camera's distance to the box's centre: level 1 below half the window, 2 below a quarter, 3 below
+    // an eighth.
+    const glm::mat4 world = character_world(state);
+    const glm::vec3 centre = transform_point(world, state.lod_centre);
+    const float height = (state.rest_bounds.max.y - state.rest_bounds.min.y) * glm::length(glm::vec3(world[1]));
+    constexpr float thresholds[] = {0.5f, 0.25f, 0.125f};
+    level = deform::pick_level(
+        thresholds, deform::screen_height(height, glm::length(state.camera.eye() - centre), state.camera.fov_y));
+  }
+  (void)state.character->set_level(level);  // cannot fail: the four levels exist
+  if (int(level) == state.lod_drawn) return;
+  // The level's own triangles for the renderer and the picking: the points outside its mesh keep stale places.
+  state.lod_drawn = int(level);
+  state.renderer->set_triangles(state.lod_triangles[level], state.lod_submeshes[level]);
+  const deform::Mesh& mesh = state.character->model().mesh;
+  const std::vector<std::uint32_t>& triangles =
+      state.lod_triangles[level].empty() ? mesh.triangles : state.lod_triangles[level];
+  state.triangle_points.resize(triangles.size());
+  for (std::size_t i = 0; i < triangles.size(); ++i) state.triangle_points[i] = mesh.vertex_point[triangles[i]];
+  state.bvh.build(state.character->positions(), state.triangle_points);
 }
 
 std::string gpu_missing(const ViewerState& state) {

@@ -29,6 +29,10 @@ void animate(ViewerState& state, float dt);
 // The morph weights of this frame: the defaults, the playing clips' morph channels, then the panel's held weights.
 void apply_morph_weights(ViewerState& state);
 
+// The level of detail for this frame (--lod, the panel): the one asked for, or the one the character's height on
+// screen picks; when it changes, the renderer and the picking take its triangles. Nothing without levels.
+void choose_lod(ViewerState& state);
+
 // The panel's settings passed to the character (each after its control changes).
 void set_gpu(ViewerState& state, bool on);
 void apply_mush(ViewerState& state);

@@ -15,8 +15,9 @@ const char* usage =
     "                     [--screenshot OUT.png --frames N [--reach X,Y,Z --at F] [--release-at F]] [--pole X,Y,Z]\n"
     "                     [--limits euler|swing-twist] [--weight-map BONE] [--weights-tool TOOL]...\n"
     "                     [--save-weights OUT.skw]\n"
-    "                     [--width W] [--height H] [--bare] [--gpu] [--dqs] [--up y|z] [--lattices none|active|all]\n"
-    "                     [--skinning lbs|dqs|ddm] [--mush N] [--lod-bones N]\n"
+    "                     [--width W] [--height H] [--zoom F] [--bare] [--gpu] [--dqs] [--up y|z]\n"
+    "                     [--lattices none|active|all]\n"
+    "                     [--skinning lbs|dqs|ddm] [--mush N] [--lod-bones N | --lod 0|1|2|3|auto]\n"
     "With no MODEL: the built-in character. MODEL: an OBJ (with --skeleton, and --weights or automatic weights)\n"
     "or any rigged file the importer reads (glTF, FBX, Collada, X, ...).\n"
     "--clip NAME|#N: play a clip (by name, or the N-th) from the start: the built-in character's \"walk\" (also for\n"
@@ -41,9 +42,16 @@ const char* usage =
     "skinning. --skinning ddm: Direct Delta Mush (CPU only; --dqs is --skinning dqs). --mush N: Delta Mush with N\n"
     "iterations after the lattices (CPU only; 0, the default: off). --lod-bones N: the level of detail that skins "
     "with\n"
-    "N bones, merged on the motion of the model's clips (CPU only; docs/skinning.md, \"Levels of detail\"). --up z: "
+    "N bones, merged on the motion of the model's clips (CPU only; docs/skinning.md, \"Levels of detail\").\n"
+    "--lod L: the character at level L of four levels of detail (CPU only): 0 the whole character; 1, 2 and 3 with\n"
+    "3/4, 1/2 and 1/3 of the bones, the mesh simplified to 0.5, 0.25 and 0.1 of its triangles (where libdeform has\n"
+    "its simplify layer), 1 with the deformers, 2 and 3 without, deformed every 2nd and 4th frame. --lod auto: the\n"
+    "level from the character's height on screen (below 1/2, 1/4 and 1/8 of the window), switching as you zoom.\n"
+    "--up z: "
     "the model's up axis is +Z (default: +Y, or "
     "what an imported file's metadata says).\n"
+    "--zoom F: the camera F times as far as the distance that frames the character, [0.1, 100] (C frames it again\n"
+    "so; the wheel zooms).\n"
     "--lattices: draw no lattice, the active limb's (default: the one reaching, else the one a click would move),\n"
     "or all of them (L cycles the three).\n"
     "Mouse: left click/drag a point to reach for it, release to let go; shift+left click places the pole (the\n"
@@ -51,6 +59,14 @@ const char* usage =
     "shift+right drag pans; wheel zooms. Keys: D cycles LBS/DQS/DDM, S the skeleton,\n"
     "L cycles the lattices shown (active limb, all, none), G the GPU deformation, R resets, C frames the\n"
     "character again (the camera fitted to the playing clip), Esc quits.\n";
+
+// A number in [low, high]; `range` says so in the message.
+float parse_in(const std::string& text, const char* what, float low, float high, const char* range) {
+  char* end = nullptr;
+  const float v = std::strtof(text.c_str(), &end);
+  if (text.empty() || *end || !(v >= low && v <= high)) fail(std::string(what) + ": '" + text + "' is not in " + range);
+  return v;
+}
 
 int parse_int(const std::string& s, const char* what) {
   char* end = nullptr;
@@ -149,19 +165,10 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--prop") o.props.push_back(next());
     else if (a == "--clip") o.clip = next();
     else if (a == "--blend") o.blend_clip = next();
-    else if (a == "--blend-weight") {
-      const std::string text = next();
-      char* end = nullptr;
-      o.blend_weight = std::strtof(text.c_str(), &end);
-      if (text.empty() || *end || !(o.blend_weight >= 0.0f && o.blend_weight <= 1.0f))
-        fail("--blend-weight: '" + text + "' is not in [0, 1]");
-    } else if (a == "--inertia") {
-      const std::string text = next();
-      char* end = nullptr;
-      o.inertia = std::strtof(text.c_str(), &end);
-      if (text.empty() || *end || !(o.inertia >= 0.0f && o.inertia <= 1.0f))
-        fail("--inertia: '" + text + "' is not in [0, 1]");
-    } else if (a == "--morph") {
+    else if (a == "--blend-weight") o.blend_weight = parse_in(next(), "--blend-weight", 0.0f, 1.0f, "[0, 1]");
+    else if (a == "--inertia") o.inertia = parse_in(next(), "--inertia", 0.0f, 1.0f, "[0, 1]");
+    else if (a == "--zoom") o.zoom = parse_in(next(), "--zoom", 0.1f, 100.0f, "[0.1, 100]");
+    else if (a == "--morph") {
       const std::string list = next();
       std::size_t at = 0;
       while (at <= list.size()) {
@@ -203,6 +210,11 @@ Options parse_options(int argc, char** argv) {
     } else if (a == "--lod-bones") {
       o.lod_bones = parse_int(next(), "--lod-bones");
       if (o.lod_bones < 1) fail("--lod-bones: fewer than 1 bone");
+    } else if (a == "--lod") {
+      const std::string level = next();
+      if (level == "auto") o.lod_auto = true;
+      else if (level.size() == 1 && level[0] >= '0' && level[0] <= '3') o.lod = level[0] - '0';
+      else fail("--lod: '" + level + "' is not 0, 1, 2, 3 or auto");
     } else if (a == "--limits") {
       const std::string limits = next();
       if (limits != "euler" && limits != "swing-twist") fail("--limits: '" + limits + "' is not euler or swing-twist");
@@ -222,6 +234,7 @@ Options parse_options(int argc, char** argv) {
     else if (o.model.empty()) o.model = a;
     else fail("more than one model given");
   }
+  if (o.lod_bones > 0 && (o.lod >= 0 || o.lod_auto)) fail("--lod-bones and --lod: choose one level of detail");
   return o;
 }
 

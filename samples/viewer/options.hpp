@@ -27,6 +27,7 @@ struct Options {
   std::vector<std::string> props;
   std::vector<std::pair<std::string, float>> morphs;  // --morph NAME:W: held morph weights
   int frames = 120, reach_at = 0, release_at = -1, width = 1280, height = 800;
+  float zoom = 1.0f;          // the camera this many times as far as the distance that frames the character
   float inertia = 1.0f;       // while a clip plays, the scale of each lattice's tuned inertia (scaled_inertia)
   float blend_weight = 0.5f;  // the second clip's weight
   bool bare = false;          // the character alone: no floor, props, overlays or panel (for pixel tests)
@@ -35,6 +36,8 @@ struct Options {
   bool ddm = false;           // start with Direct Delta Mush skinning (--skinning ddm)
   int mush = 0;               // Delta Mush iterations after the lattices (--mush; 0: off)
   int lod_bones = 0;          // --lod-bones N: skin with N bones merged on the clips' motion (0: every bone)
+  int lod = -1;               // --lod L: show level L (0 to 3) of the viewer's levels of detail; -1: none
+  bool lod_auto = false;      // --lod auto: the level from the character's height on screen
   bool swing_twist = false;   // reach with swing-twist joint limits
   char up = 0;                // the model's up axis: 'y', 'z', or 0 for the file's own (+Y when it says nothing)
   char lattices = 'a';        // which lattices are drawn: 'n'one, the 'a'ctive limb's, or 'e'very one (--lattices)

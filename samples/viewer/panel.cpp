@@ -210,6 +210,33 @@ void skinning_section(ViewerState& state) {
   }
 }
 
+// Levels of detail (--lod): the level shown, picked from the screen or chosen, and what each level deforms.
+void lod_section(ViewerState& state) {
+  if (!state.lod_levels || !ImGui::CollapsingHeader("Level of detail", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const char* choices[] = {"auto (height on screen)", "0: whole", "1", "2", "3"};
+  int choice = state.lod_choice + 1;
+  if (ImGui::Combo("level", &choice, choices, 5)) state.lod_choice = choice - 1;
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("auto: level 1 below 1/2 of the window's height, 2 below 1/4, 3 below 1/8 (zoom out to see it)");
+  if (!ImGui::BeginTable("levels", 6, ImGuiTableFlags_SizingFixedFit)) return;
+  for (const char* heading : {"", "bones", "points", "triangles", "every", "deformers"})
+    ImGui::TableSetupColumn(heading);
+  ImGui::TableHeadersRow();
+  for (std::size_t l = 0; l < 4; ++l) {
+    const deform::Character::LevelCost cost = state.character->level_cost(l);
+    const std::size_t triangles = state.lod_triangles[l].empty() ? state.character->model().mesh.triangle_count()
+                                                                 : state.lod_triangles[l].size() / 3;
+    ImGui::TableNextRow();
+    ImGui::TableNextColumn(), ImGui::Text("%s%zu", int(l) == state.lod_drawn ? ">" : " ", l);
+    ImGui::TableNextColumn(), ImGui::Text("%zu", cost.bones);
+    ImGui::TableNextColumn(), ImGui::Text("%zu", cost.points);
+    ImGui::TableNextColumn(), ImGui::Text("%zu", triangles);
+    ImGui::TableNextColumn(), ImGui::Text("%u", unsigned(cost.update_interval));
+    ImGui::TableNextColumn(), ImGui::Text("%s", cost.deformers ? "on" : "off");
+  }
+  ImGui::EndTable();
+}
+
 // Reach: the stall escape, iterations, solver, pole, swing-twist limits.
 void reach_section(ViewerState& state) {
   if (ImGui::CollapsingHeader("Reach")) {
@@ -342,6 +369,7 @@ void panel(ViewerState& state, float frame_ms) {
   clip_section(state);
   lattices_section(state);
   skinning_section(state);
+  lod_section(state);
   reach_section(state);
   morph_section(state);
   springs_section(state);

@@ -122,6 +122,15 @@ struct ViewerState {
   std::vector<float> morph_second;          // the blended second clip's morph weights (sized once)
   std::vector<float> clip_floors;           // the floor under each clip (lowest_height)
   float clip_time = 0.0f, deform_ms = 0.0f, drag_depth = 1.0f, pick_radius = 1.0f;
+  // Levels of detail (--lod, the panel; model.cpp's apply_lod): the character's four levels when set, the mesh each
+  // level draws (per level, render vertex ids and their submeshes; empty: the whole mesh), the level asked for (-1:
+  // picked from the character's height on screen) and the level whose triangles the renderer and picking have.
+  bool lod_levels = false;
+  std::vector<std::vector<std::uint32_t>> lod_triangles;
+  std::vector<std::vector<deform::Submesh>> lod_submeshes;
+  int lod_choice = -1;
+  int lod_drawn = 0;
+  glm::vec3 lod_centre{0.0f};  // the bind pose's box centre, model space: where the camera's distance is taken to
   std::int32_t effector = -1;
   glm::vec3 target{0.0f};
   deform::ReachResult last_reach;

@@ -208,12 +208,17 @@ void draw_weight_map(ViewerState& state, const glm::mat4& to_world, const glm::m
   const glm::mat4 camera = glm::inverse(view);
   const glm::vec3 light_offset = 1.2f * glm::vec3(camera[1]) + 0.8f * glm::vec3(camera[0]);
   const bool smooth = normals.size() == mesh.vertex_count();
-  for (std::size_t t = 0; t + 2 < mesh.triangles.size(); t += 3) {
+  // The triangles drawn: a level of detail's own (choose_lod), else the mesh's.
+  const std::size_t level = std::size_t(state.lod_drawn);
+  const std::vector<std::uint32_t>& triangles =
+      level < state.lod_triangles.size() && !state.lod_triangles[level].empty() ? state.lod_triangles[level]
+                                                                                : mesh.triangles;
+  for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
     glm::vec3 corner[3], colour[3];
-    for (int c = 0; c < 3; ++c) corner[c] = transform_point(to_world, points[mesh.vertex_point[mesh.triangles[t + c]]]);
+    for (int c = 0; c < 3; ++c) corner[c] = transform_point(to_world, points[mesh.vertex_point[triangles[t + c]]]);
     const glm::vec3 face = glm::cross(corner[1] - corner[0], corner[2] - corner[0]);
     for (int c = 0; c < 3; ++c) {
-      const std::uint32_t r = mesh.triangles[t + c];
+      const std::uint32_t r = triangles[t + c];
       glm::vec3 n = smooth ? turn * normals[r] : face;
       const glm::vec3 to_eye = glm::normalize(eye - corner[c]);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: the side the eye sees
@@ -408,7 +413,7 @@ void fit_camera(ViewerState& state) {
   half_width /= tan_y * state.window.aspect();
   camera.shift_x = hidden > 0.0f ? std::max(0.0f, -1.0f + 2.0f * hidden + 0.1f * (1.0f - hidden) + half_width) : 0.0f;
   camera.target = centre;
-  camera.distance = distance;
+  camera.distance = distance * state.options.zoom;
   state.camera = state.fitted_camera = camera;
 }
 
