@@ -96,6 +96,7 @@ void bind_model(py::module_& m);
 void bind_rig(py::module_& m);
 void bind_automatic_weights(py::module_& m);
 void bind_import_export(py::module_& m);
+void bind_simplify(py::module_& m);
 void bind_animation(py::module_& m);
 void bind_blending(py::module_& m);
 void bind_jobs(py::module_& m);

@@ -18,6 +18,9 @@
 #ifdef DEFORM_PYTHON_IMPORT
 #include "deform/import/import.hpp"
 #endif
+#ifdef DEFORM_PYTHON_SIMPLIFY
+#include "deform/simplify/simplify.hpp"
+#endif
 
 namespace deform_python {
 namespace {
@@ -288,6 +291,40 @@ void bind_import_export(py::module_& m) {
       "Writes the model as native files (OBJ + MTL + textures, .sk, .skw) into `folder`; returns their paths.");
 #else
   m.attr("has_import") = false;
+#endif
+}
+
+// has_simplify says whether simplify_levels exists (the build found meshoptimizer).
+void bind_simplify(py::module_& m) {
+#ifdef DEFORM_PYTHON_SIMPLIFY
+  m.attr("has_simplify") = true;
+  m.def(
+      "simplify_levels",
+      [](const deform::Model& md, const std::vector<float>& triangle_ratios, float max_error) {
+        std::vector<deform::SimplifySettings> settings;
+        for (const float ratio : triangle_ratios) settings.push_back({ratio, max_error});
+        py::list out;
+        for (const deform::MeshLevel& level : deform::simplify_levels(md, settings)) {
+          py::array_t<std::uint32_t> points(static_cast<py::ssize_t>(level.points.size()));
+          std::copy(level.points.begin(), level.points.end(), points.mutable_data());
+          py::array_t<std::uint32_t> triangles({static_cast<py::ssize_t>(level.triangles.size() / 3), py::ssize_t{3}});
+          for (std::size_t i = 0; i < level.triangles.size(); ++i)
+            triangles.mutable_data()[i] = md.mesh.vertex_point[level.triangles[i]];
+          py::dict d;
+          d["points"] = points, d["triangles"] = triangles, d["error"] = level.error;
+          out.append(d);
+        }
+        return out;
+      },
+      py::arg("model"), py::arg("triangle_ratios"), py::arg("max_error") = 0.05f,
+      "Meshes for levels 1, 2, ... of a Character (deform::simplify_levels, meshoptimizer): level l keeps "
+      "triangle_ratios[l - 1] of the whole mesh's triangles (decreasing; each level simplified from the one before, "
+      "so they are nested), each collapse moving the surface at most max_error of the mesh's size. A list of dicts: "
+      "points (uint32, the model's point ids the level keeps, the coarser levels' first: a Character level's "
+      "`points`), triangles ((T, 3) uint32 over the model's points, as Model.triangles), error (a bound on the "
+      "level's distance from the whole mesh, a fraction of its size).");
+#else
+  m.attr("has_simplify") = false;
 #endif
 }
 

@@ -70,6 +70,7 @@ PYBIND11_MODULE(deform, m) {
   bind_rig(m);
   bind_automatic_weights(m);
   bind_import_export(m);
+  bind_simplify(m);
   bind_animation(m);
   bind_blending(m);
   bind_jobs(m);

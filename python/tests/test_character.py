@@ -224,3 +224,22 @@ def test_a_level_deforms_only_its_points():
         mesh.set_levels([14], deformers=[True, False], points=[[], [len(full.positions)]])  # out of range
     with pytest.raises(deform.Error):
         mesh.set_levels([14], deformers=[True, False], points=[[]])  # not one per level
+
+
+@pytest.mark.skipif(not deform.has_simplify, reason="needs deform::simplify (meshoptimizer)")
+def test_simplified_meshes_as_levels():
+    hero = deform.Character.builtin()
+    model = hero.model
+    levels = deform.simplify_levels(model, [0.25, 0.1])
+    assert [len(lv["triangles"]) for lv in levels] == [1424, 594]
+    near, far = levels
+    assert len(far["points"]) < len(near["points"]) < model.point_count
+    np.testing.assert_array_equal(near["points"][: len(far["points"])], far["points"])  # nested: the coarser first
+    for level in levels:
+        assert np.isin(level["triangles"], level["points"]).all()  # every corner a point of its level
+        assert 0 < level["error"] < 0.2
+    assert near["error"] <= far["error"]
+    hero.set_levels([20, 12], deformers=[True, True, False], points=[[], near["points"], far["points"]])
+    assert [hero.level_cost(level)["points"] for level in range(3)] == [model.point_count, 714, 299]
+    with pytest.raises(deform.Error):
+        deform.simplify_levels(model, [0.1, 0.25])  # more triangles than the level before
