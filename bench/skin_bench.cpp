@@ -6,6 +6,10 @@
 // writes the same 24 bytes per vertex with almost no arithmetic, the bound a skinning kernel can at best reach.
 #include <benchmark/benchmark.h>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <memory>
 #include <random>
 #include <thread>
@@ -147,6 +151,68 @@ void skin_same_bytes(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0));
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * state.range(0) * 72);
 }
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// skin/avx512_pipes/N: how fast this CPU runs the two operations the AVX-512 skinning block is made of: vpermt2ps (the
+// palette lookups and the packed vec3 shuffles) and vfmadd (the blend and the transforms). 16 independent chains, so
+// that the rate is the pipes' and not a latency: N = 0 permutes alone, 1 FMAs alone, 2 permutes and FMAs alternating,
+// 3 FMAs and adds alternating. items_per_second counts operations. Where permutes and FMAs share their pipes, mixing
+// them (2) runs no faster than either alone; where they do not, as FMAs and adds (3), the mix runs at the sum of the
+// rates (docs/performance.md, "the block's bound").
+// Sixteen independent chains (zmm16 to zmm31), written as instructions so that the compiler can neither fold nor
+// spill them: `even` on zmm16, 18, ..., `odd` on zmm17, 19, ...
+#define DEFORM_PIPES_PAIR(even, odd, r) even ",%%zmm" #r "\n\t" odd ",%%zmm" DEFORM_PIPES_NEXT_##r "\n\t"
+#define DEFORM_PIPES_NEXT_16 "17"
+#define DEFORM_PIPES_NEXT_18 "19"
+#define DEFORM_PIPES_NEXT_20 "21"
+#define DEFORM_PIPES_NEXT_22 "23"
+#define DEFORM_PIPES_NEXT_24 "25"
+#define DEFORM_PIPES_NEXT_26 "27"
+#define DEFORM_PIPES_NEXT_28 "29"
+#define DEFORM_PIPES_NEXT_30 "31"
+#define DEFORM_PIPES_ROUND(even, odd)                                                                                 \
+  asm volatile(DEFORM_PIPES_PAIR(even, odd, 16) DEFORM_PIPES_PAIR(even, odd, 18) DEFORM_PIPES_PAIR(even, odd, 20)     \
+                   DEFORM_PIPES_PAIR(even, odd, 22) DEFORM_PIPES_PAIR(even, odd, 24) DEFORM_PIPES_PAIR(even, odd, 26) \
+                       DEFORM_PIPES_PAIR(even, odd, 28) DEFORM_PIPES_PAIR(even, odd, 30)                              \
+               :                                                                                                      \
+               : "v"(table), "v"(index)                                                                               \
+               : "xmm16", "xmm17", "xmm18", "xmm19", "xmm20", "xmm21", "xmm22", "xmm23", "xmm24", "xmm25", "xmm26",   \
+                 "xmm27", "xmm28", "xmm29", "xmm30", "xmm31")
+
+template <int mix>
+__attribute__((target("avx512f"))) void avx512_ops(std::int64_t rounds) {
+  const __m512 table = _mm512_set1_ps(1.0f);
+  const __m512i index = _mm512_setr_epi32(3, 17, 5, 30, 1, 8, 22, 14, 0, 31, 9, 12, 27, 6, 19, 2);
+#define DEFORM_PERMUTE "vpermt2ps %0,%1"
+#define DEFORM_FMA "vfmadd231ps %0,%0"
+#define DEFORM_ADD "vaddps %0,%0"
+  for (std::int64_t r = 0; r < rounds; ++r) {
+    if constexpr (mix == 0) DEFORM_PIPES_ROUND(DEFORM_PERMUTE, DEFORM_PERMUTE);
+    if constexpr (mix == 1) DEFORM_PIPES_ROUND(DEFORM_FMA, DEFORM_FMA);
+    if constexpr (mix == 2) DEFORM_PIPES_ROUND(DEFORM_PERMUTE, DEFORM_FMA);
+    if constexpr (mix == 3) DEFORM_PIPES_ROUND(DEFORM_ADD, DEFORM_FMA);
+  }
+#undef DEFORM_PERMUTE
+#undef DEFORM_FMA
+#undef DEFORM_ADD
+}
+
+template <int mix>
+void avx512_pipes(benchmark::State& state) {
+  if (!__builtin_cpu_supports("avx512f")) {
+    state.SkipWithError("no AVX-512 on this CPU");
+    return;
+  }
+  std::int64_t rounds = 1 << 16;
+  benchmark::DoNotOptimize(rounds);
+  for (auto _ : state) avx512_ops<mix>(rounds);
+  state.SetItemsProcessed(state.iterations() * rounds * 16);
+}
+BENCHMARK(avx512_pipes<0>)->Name("skin/avx512_pipes/0");
+BENCHMARK(avx512_pipes<1>)->Name("skin/avx512_pipes/1");
+BENCHMARK(avx512_pipes<2>)->Name("skin/avx512_pipes/2");
+BENCHMARK(avx512_pipes<3>)->Name("skin/avx512_pipes/3");
+#endif
 
 void sizes_and_threads(benchmark::internal::Benchmark* b) {
   b->ArgNames({"vertices", "threads"})->ArgsProduct({{2552, 100'000, 1'000'000}, {1, 0}});
