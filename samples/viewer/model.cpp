@@ -202,8 +202,6 @@ deform::Rig tuned_rig(ViewerState& state) {
   return rig;
 }
 
-// Everything a new state.character needs around it: the picking triangles and BVH, the renderer, the per-lattice
-// and per-target state, the poses, and the panel's settings passed to it.
 // The motion of all the model's clips, 16 poses from each, for build_bone_lod to judge merges by.
 std::vector<deform::Pose> clip_poses(const ViewerState& state) {
   std::vector<deform::Pose> poses;
@@ -272,11 +270,14 @@ void apply_lod(ViewerState& state) {
     std::fprintf(stderr,
                  "deform_viewer: --lod: level %zu: %zu bones, %zu points, %zu triangles, every %u update(s)%s\n", l,
                  lod.levels[l].kept_bones, cost.points,
-                 l == 0 || state.lod_triangles[l].empty() ? state.character->model().mesh.triangle_count()
-                                                          : state.lod_triangles[l].size() / 3,
+                 state.lod_triangles[l].empty() ? state.character->model().mesh.triangle_count()
+                                                : state.lod_triangles[l].size() / 3,
                  unsigned(cost.update_interval), cost.deformers ? ", deformers on" : "");
   }
 }
+
+// Everything a new state.character needs around it: the picking triangles and BVH, the renderer, the per-lattice
+// and per-target state, the poses, and the panel's settings passed to it.
 void adopt_character(ViewerState& state) {
   const deform::Mesh& mesh = state.character->model().mesh;
   state.triangle_points.resize(mesh.triangles.size());
@@ -454,8 +455,7 @@ void choose_lod(ViewerState& state) {
   state.lod_drawn = int(level);
   state.renderer->set_triangles(state.lod_triangles[level], state.lod_submeshes[level]);
   const deform::Mesh& mesh = state.character->model().mesh;
-  const std::vector<std::uint32_t>& triangles =
-      state.lod_triangles[level].empty() ? mesh.triangles : state.lod_triangles[level];
+  const std::vector<std::uint32_t>& triangles = drawn_triangles(state);
   state.triangle_points.resize(triangles.size());
   for (std::size_t i = 0; i < triangles.size(); ++i) state.triangle_points[i] = mesh.vertex_point[triangles[i]];
   state.bvh.build(state.character->positions(), state.triangle_points);

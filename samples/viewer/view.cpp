@@ -208,11 +208,7 @@ void draw_weight_map(ViewerState& state, const glm::mat4& to_world, const glm::m
   const glm::mat4 camera = glm::inverse(view);
   const glm::vec3 light_offset = 1.2f * glm::vec3(camera[1]) + 0.8f * glm::vec3(camera[0]);
   const bool smooth = normals.size() == mesh.vertex_count();
-  // The triangles drawn: a level of detail's own (choose_lod), else the mesh's.
-  const std::size_t level = std::size_t(state.lod_drawn);
-  const std::vector<std::uint32_t>& triangles =
-      level < state.lod_triangles.size() && !state.lod_triangles[level].empty() ? state.lod_triangles[level]
-                                                                                : mesh.triangles;
+  const std::vector<std::uint32_t>& triangles = drawn_triangles(state);
   for (std::size_t t = 0; t + 2 < triangles.size(); t += 3) {
     glm::vec3 corner[3], colour[3];
     for (int c = 0; c < 3; ++c) corner[c] = transform_point(to_world, points[mesh.vertex_point[triangles[t + c]]]);
@@ -425,6 +421,12 @@ bool camera_fitted(const ViewerState& state) {
 
 // The model's space in the world (the character node, then the upright turn).
 glm::mat4 character_world(const ViewerState& state) { return state.scene.node(state.model_node).world; }
+
+const std::vector<std::uint32_t>& drawn_triangles(const ViewerState& state) {
+  const std::size_t level = std::size_t(state.lod_drawn);
+  if (level < state.lod_triangles.size() && !state.lod_triangles[level].empty()) return state.lod_triangles[level];
+  return state.character->model().mesh.triangles;
+}
 
 // The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer
 // (for picking and the weight map only: a GPU-to-CPU copy, not done for drawing).

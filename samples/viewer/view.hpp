@@ -29,6 +29,9 @@ void fit_camera(ViewerState& state);
 bool camera_fitted(const ViewerState& state);
 // The model's space in the world (the character node, then the upright turn).
 glm::mat4 character_world(const ViewerState& state);
+// The character's triangles the renderer draws (render vertex ids): the level of detail's own (choose_lod), else the
+// mesh's.
+const std::vector<std::uint32_t>& drawn_triangles(const ViewerState& state);
 // The deformed points as drawn: the character's, or with the GPU deformation, read back from the vertex buffer with
 // the render vertices' normals (state.gpu_normals) (for picking and the weight map only: a GPU-to-CPU copy, not done
 // for drawing).
