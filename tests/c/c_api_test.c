@@ -577,6 +577,217 @@ static void corrective_driven_by_the_elbow(void) {
   deform_character_destroy(padded);
 }
 
+/* Per point, the unit sum of its triangles' area-weighted normals: what a point's normal is, computed here. */
+static void face_normals_per_point(const deform_character* c, double* out) {
+  const size_t points = deform_character_point_count(c), triangles = deform_character_triangle_count(c);
+  const uint32_t* corner = deform_character_triangles(c);
+  const uint32_t* point_of = deform_character_vertex_points(c);
+  const float* xyz = deform_character_positions(c);
+  memset(out, 0, 3 * points * sizeof(double));
+  for (size_t t = 0; t < triangles; ++t) {
+    const float* a = xyz + 3 * point_of[corner[3 * t]];
+    const float* b = xyz + 3 * point_of[corner[3 * t + 1]];
+    const float* d = xyz + 3 * point_of[corner[3 * t + 2]];
+    const double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, f[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    const double n[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
+    for (int k = 0; k < 3; ++k)
+      for (int r = 0; r < 3; ++r) out[3 * point_of[corner[3 * t + k]] + r] += n[r];
+  }
+  for (size_t p = 0; p < points; ++p) {
+    double* n = out + 3 * p;
+    const double length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (length > 0)
+      for (int r = 0; r < 3; ++r) n[r] /= length;
+  }
+}
+
+/* The mean over render vertices of the cosine between the character's normal and its point's face normals. */
+static double normals_agreement(deform_character* c, double* scratch) {
+  face_normals_per_point(c, scratch);
+  const float* normals = deform_character_normals(c);
+  const uint32_t* point_of = deform_character_vertex_points(c);
+  const size_t vertices = deform_character_vertex_count(c);
+  double sum = 0.0, worst_length = 0.0;
+  for (size_t v = 0; v < vertices; ++v) {
+    const float* n = normals + 3 * v;
+    const double* f = scratch + 3 * point_of[v];
+    sum += n[0] * f[0] + n[1] * f[1] + n[2] * f[2];
+    worst_length = fmax(worst_length, fabs(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0));
+  }
+  CHECK(worst_length < 1e-5);
+  return sum / (double)vertices;
+}
+
+/* The render mesh and normals a host draws with, and instances sharing a character's data. */
+static void render_mesh_normals_and_instances(void) {
+  deform_character* hero = NULL;
+  CHECK(deform_character_create_builtin(&hero) == DEFORM_OK);
+  if (hero == NULL) return;
+  const size_t points = deform_character_point_count(hero), vertices = deform_character_vertex_count(hero);
+  const size_t triangles = deform_character_triangle_count(hero);
+  CHECK(vertices >= points);
+  CHECK(triangles > 1000);
+  CHECK(deform_character_uvs(hero) != NULL);
+  const uint32_t* point_of = deform_character_vertex_points(hero);
+  const uint32_t* corner = deform_character_triangles(hero);
+  int in_range = 1;
+  for (size_t v = 0; v < vertices; ++v) in_range &= point_of[v] < points;
+  for (size_t k = 0; k < 3 * triangles; ++k) in_range &= corner[k] < vertices;
+  CHECK(in_range);
+
+  /* Bent and stretched: the normals carried through skinning and the lattices still face as the triangles do. */
+  double* scratch = malloc(3 * points * sizeof(double));
+  CHECK(deform_character_update(hero, 0.0f) == DEFORM_OK);
+  CHECK(normals_agreement(hero, scratch) > 0.97);
+  const float target[3] = {1.6f, 1.5f, 0.3f};
+  CHECK(deform_character_reach(hero, deform_character_find_bone(hero, "hand_l"), target, NULL) == DEFORM_OK);
+  for (int frame = 0; frame < 30; ++frame) CHECK(deform_character_update(hero, 1.0f / 60.0f) == DEFORM_OK);
+  CHECK(normals_agreement(hero, scratch) > 0.97);
+
+  /* An instance starts at rest, deforms as its source did from rest, and outlives it. */
+  deform_character* twin = NULL;
+  CHECK(deform_character_instance(hero, &twin) == DEFORM_OK);
+  CHECK(deform_character_instance(hero, NULL) == DEFORM_ERROR_ARGUMENT);
+  if (twin != NULL) {
+    CHECK(deform_character_vertex_points(twin) == point_of); /* shared, not copied */
+    deform_character_destroy(hero);
+    hero = NULL;
+    deform_character* fresh = NULL;
+    CHECK(deform_character_create_builtin(&fresh) == DEFORM_OK);
+    CHECK(deform_character_reach(twin, deform_character_find_bone(twin, "hand_l"), target, NULL) == DEFORM_OK);
+    CHECK(deform_character_reach(fresh, deform_character_find_bone(fresh, "hand_l"), target, NULL) == DEFORM_OK);
+    for (int frame = 0; frame < 30; ++frame) {
+      CHECK(deform_character_update(twin, 1.0f / 60.0f) == DEFORM_OK);
+      CHECK(deform_character_update(fresh, 1.0f / 60.0f) == DEFORM_OK);
+    }
+    CHECK(memcmp(deform_character_positions(twin), deform_character_positions(fresh), 3 * points * sizeof(float)) == 0);
+    deform_character_destroy(fresh);
+  }
+  deform_character_destroy(twin);
+  deform_character_destroy(hero);
+  free(scratch);
+}
+
+/* The largest distance between two characters' positions over `count` points (all when ids is NULL). */
+static double largest_gap(const deform_character* a, const deform_character* b, const uint32_t* ids, size_t count) {
+  const float* pa = deform_character_positions(a);
+  const float* pb = deform_character_positions(b);
+  double worst = 0.0;
+  for (size_t k = 0; k < count; ++k) {
+    const size_t p = ids ? ids[k] : k;
+    worst = fmax(worst, distance3(pa + 3 * p, pb + 3 * p));
+  }
+  return worst;
+}
+
+/* Levels of detail: level 0 is the whole character; fewer bones, a point subset and an update interval change the
+ * cost as stated and keep the shape near; the camera helpers pick levels; malformed levels are refused whole. */
+static void levels_of_detail(void) {
+  deform_character *lod = NULL, *whole = NULL;
+  CHECK(deform_character_create_builtin(&lod) == DEFORM_OK);
+  CHECK(deform_character_create_builtin(&whole) == DEFORM_OK);
+  if (lod == NULL || whole == NULL) return;
+  const size_t points = deform_character_point_count(lod), bones = deform_character_bone_count(lod);
+  CHECK(deform_character_level_count(lod) == 1);
+
+  /* A bent pose: the bones a walk turns, each about a random axis. */
+  float* rotations = malloc(4 * bones * sizeof(float));
+  float* translations = malloc(3 * bones * sizeof(float));
+  CHECK(deform_character_bind_pose(lod, rotations, translations, bones) == DEFORM_OK);
+  const char* bent[] = {"spine",  "neck",       "thigh_l",    "thigh_r",  "shin_l",
+                        "shin_r", "upperarm_l", "upperarm_r", "forearm_l"};
+  for (size_t k = 0; k < sizeof bent / sizeof *bent; ++k) {
+    const int32_t b = deform_character_find_bone(lod, bent[k]);
+    CHECK(b >= 0);
+    if (b < 0) continue;
+    const double half = uniform(0.1, 0.3), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
+    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), c = cos(half);
+    const double t[4] = {ax * s, ay * s, az * s, c};
+    float* q = rotations + 4 * b;
+    const double r[4] = {
+        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
+        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
+    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
+  }
+
+  uint32_t* half_points = malloc(points / 2 * sizeof(uint32_t));
+  for (size_t k = 0; k < points / 2; ++k) half_points[k] = (uint32_t)(2 * k + 1);
+  deform_level levels[3] = {{0, 1, 1, NULL, 0}, {bones / 2, 1, 1, NULL, 0}, {bones / 3, 0, 2, half_points, points / 2}};
+  CHECK(deform_character_set_levels(lod, levels, 3, rotations, translations, 1, 0) == DEFORM_OK);
+  CHECK(deform_character_level_count(lod) == 3);
+  CHECK(deform_character_level(lod) == 0);
+
+  deform_level_cost cost[3];
+  for (size_t l = 0; l < 3; ++l) CHECK(deform_character_level_cost(lod, l, &cost[l]) == DEFORM_OK);
+  CHECK(deform_character_level_cost(lod, 3, &cost[0]) == DEFORM_ERROR_ARGUMENT);
+  CHECK(cost[0].points == points && cost[1].points == points && cost[2].points == points / 2);
+  CHECK(cost[0].bones > cost[1].bones && cost[1].bones > cost[2].bones && cost[1].bones <= bones / 2);
+  CHECK(cost[0].influences > cost[2].influences);
+  CHECK(cost[0].deformers == 1 && cost[2].deformers == 0);
+  CHECK(cost[0].update_interval == 1 && cost[2].update_interval == 2);
+
+  /* Level 0 draws what the character without levels draws. The updates take no time (dt 0), so that the comparisons
+   * see the skin alone, not the springs' response to a pose set at once. */
+  CHECK(deform_character_set_pose(lod, rotations, translations, bones) == DEFORM_OK);
+  CHECK(deform_character_set_pose(whole, rotations, translations, bones) == DEFORM_OK);
+  CHECK(deform_character_update(lod, 0.0f) == DEFORM_OK);
+  CHECK(deform_character_update(whole, 0.0f) == DEFORM_OK);
+  CHECK(largest_gap(lod, whole, NULL, points) == 0.0);
+
+  /* Level 1 merges the bones the pose given to set_levels leaves unturned: the same shape. */
+  CHECK(deform_character_set_level(lod, 3) == DEFORM_ERROR_REFUSED);
+  CHECK(deform_character_level(lod) == 0);
+  CHECK(deform_character_set_level(lod, 1) == DEFORM_OK);
+  CHECK(deform_character_level(lod) == 1);
+  CHECK(deform_character_update(lod, 0.0f) == DEFORM_OK);
+  CHECK(largest_gap(lod, whole, NULL, points) < 1e-5);
+
+  /* Level 2 deforms every 2nd update, its own points only, and merges turned bones: near, not the same. */
+  CHECK(deform_character_set_level(lod, 2) == DEFORM_OK);
+  int deformed = 0;
+  for (int frame = 0; frame < 8; ++frame) {
+    deformed += deform_character_next_update_deforms(lod);
+    CHECK(deform_character_update(lod, 0.0f) == DEFORM_OK);
+  }
+  CHECK(deformed == 4);
+  const double level2_gap = largest_gap(lod, whole, half_points, points / 2);
+  CHECK(level2_gap > 1e-3 && level2_gap < 0.3);
+
+  /* Instances share the levels. */
+  deform_character* member = NULL;
+  CHECK(deform_character_instance(lod, &member) == DEFORM_OK);
+  CHECK(deform_character_level_count(member) == 3);
+  deform_character_destroy(member);
+
+  /* Malformed levels change nothing. */
+  deform_level bad[2] = {{0, 1, 1, NULL, 0}, {bones + 5, 1, 0, NULL, 0}};
+  CHECK(deform_character_set_levels(lod, bad, 2, NULL, NULL, 0, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "level 1") != NULL);
+  bad[1].update_interval = 1;
+  const uint32_t twice[2] = {7, 7};
+  bad[1].points = twice, bad[1].point_count = 2;
+  CHECK(deform_character_set_levels(lod, bad, 2, NULL, NULL, 0, 0) == DEFORM_ERROR_ARGUMENT);
+  bad[1].points = NULL;
+  CHECK(deform_character_set_levels(lod, bad, 2, NULL, NULL, 0, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_levels(lod, bad, 0, NULL, NULL, 0, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_levels(lod, bad, 2, NULL, NULL, 1, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_set_levels(lod, levels, 3, NULL, NULL, 0, 1001) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_level_count(lod) == 3 && deform_character_level(lod) == 2);
+
+  /* The camera helpers: a 2-unit character 2 units away fills 2 atan(1/2) / (pi/2) of a 90-degree view. */
+  CHECK(fabs(deform_screen_height(2.0f, 2.0f, 1.5707963f) - 2.0 * atan(0.5) / 1.5707963) < 1e-5);
+  CHECK(deform_screen_height(2.0f, -1.0f, 1.0f) == 0.0f);
+  const float thresholds[3] = {0.5f, 0.25f, 0.125f};
+  CHECK(deform_pick_level(thresholds, 3, 0.6f) == 0 && deform_pick_level(thresholds, 3, 0.3f) == 1);
+  CHECK(deform_pick_level(thresholds, 3, 0.2f) == 2 && deform_pick_level(thresholds, 3, 0.1f) == 3);
+
+  free(half_points);
+  free(rotations);
+  free(translations);
+  deform_character_destroy(lod);
+  deform_character_destroy(whole);
+}
+
 int main(void) {
   CHECK(strlen(deform_version()) >= 5);
   CHECK(strcmp(deform_last_error(), "") == 0);
@@ -589,6 +800,8 @@ int main(void) {
   character_direct_delta_mush();
   direct_delta_mush_keeps_rest_and_rigid_motion();
   corrective_driven_by_the_elbow();
+  render_mesh_normals_and_instances();
+  levels_of_detail();
   if (failures) {
     fprintf(stderr, "%d checks failed\n", failures);
     return 1;

@@ -9,11 +9,13 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "deform/character/character.hpp"
 #include "deform/extras/builtin.hpp"
 #include "deform/io/model_files.hpp"
 #include "deform/io/rig_json.hpp"
+#include "deform/offline/bone_lod.hpp"
 #include "deform/offline/direct_delta_mush.hpp"
 #include "deform/offline/lattice_binding.hpp"
 #include "deform/runtime/error.hpp"
@@ -134,6 +136,11 @@ deform_status deform_character_load_allowing(const char* obj_path, const char* s
 }
 
 void deform_character_destroy(deform_character* character) { delete character; }
+
+deform_status deform_character_instance(const deform_character* character, deform_character** out) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_instance: NULL argument");
+  return guarded([&] { return adopt(character->character.instance(), out); });
+}
 
 size_t deform_character_point_count(const deform_character* character) {
   return character ? character->character.model().mesh.point_count() : 0;
@@ -334,6 +341,108 @@ deform_status deform_character_copy_positions(const deform_character* character,
     return fail_argument("deform_character_copy_positions: capacity is less than point_count * 3");
   for (const glm::vec3& p : positions) *out++ = p.x, *out++ = p.y, *out++ = p.z;
   return DEFORM_OK;
+}
+
+size_t deform_character_vertex_count(const deform_character* character) {
+  return character != nullptr ? character->character.model().mesh.vertex_count() : 0;
+}
+
+const uint32_t* deform_character_vertex_points(const deform_character* character) {
+  return character != nullptr ? character->character.model().mesh.vertex_point.data() : nullptr;
+}
+
+size_t deform_character_triangle_count(const deform_character* character) {
+  return character != nullptr ? character->character.model().mesh.triangle_count() : 0;
+}
+
+const uint32_t* deform_character_triangles(const deform_character* character) {
+  return character != nullptr ? character->character.model().mesh.triangles.data() : nullptr;
+}
+
+const float* deform_character_uvs(const deform_character* character) {
+  if (character == nullptr || character->character.model().mesh.vertex_uvs.empty()) return nullptr;
+  return &character->character.model().mesh.vertex_uvs.data()->x;
+}
+
+const float* deform_character_normals(deform_character* character) {
+  if (character == nullptr) return nullptr;
+  return &character->character.normals().data()->x;
+}
+
+deform_status deform_character_set_levels(deform_character* character, const deform_level* levels, size_t level_count,
+                                          const float* pose_rotations_xyzw, const float* pose_translations,
+                                          size_t pose_count, uint32_t blend_frames) {
+  if (character == nullptr || (levels == nullptr && level_count > 0) ||
+      (pose_count > 0 && (pose_rotations_xyzw == nullptr || pose_translations == nullptr)))
+    return fail_argument("deform_character_set_levels: NULL argument");
+  if (level_count == 0) return fail_argument("deform_character_set_levels: no level (level 0 is the whole character)");
+  return guarded([&] {
+    deform::Character& c = character->character;
+    const std::size_t bones = c.skeleton().bone_count();
+    deform::BoneLodSettings settings;
+    for (std::size_t l = 1; l < level_count; ++l) settings.bones_per_level.push_back(levels[l].bones);
+    deform::Pose pose = c.skeleton().bind_pose();
+    for (std::size_t k = 0; k < pose_count; ++k) {
+      stage(pose, pose_rotations_xyzw + 4 * bones * k, pose_translations + 3 * bones * k);
+      settings.poses.push_back(pose);
+    }
+    std::vector<deform::Character::LevelOptions> options(level_count);
+    for (std::size_t l = 0; l < level_count; ++l) {
+      if (levels[l].points == nullptr && levels[l].point_count > 0)
+        return fail_argument(
+            ("deform_character_set_levels: level " + std::to_string(l) + ": points is NULL and point_count is not 0")
+                .c_str());
+      options[l].deformers = levels[l].deformers != 0;
+      options[l].update_interval = levels[l].update_interval;
+      options[l].points = std::span<const std::uint32_t>(levels[l].points, levels[l].point_count);
+    }
+    // A single level: the whole character, which build_bone_lod makes from an empty list it would refuse.
+    deform::BoneLod lod;
+    if (level_count > 1) {
+      lod = deform::build_bone_lod(c.model(), settings);
+    } else {
+      settings.weight_error = {0.0f};
+      lod = deform::build_bone_lod(c.model(), settings);
+      lod.levels.resize(1);
+    }
+    c.set_levels(lod, options, blend_frames);
+    return DEFORM_OK;
+  });
+}
+
+size_t deform_character_level_count(const deform_character* character) {
+  return character != nullptr ? character->character.level_count() : 0;
+}
+
+size_t deform_character_level(const deform_character* character) {
+  return character != nullptr ? character->character.level() : 0;
+}
+
+deform_status deform_character_set_level(deform_character* character, size_t level) {
+  if (character == nullptr) return fail_argument("deform_character_set_level: character is NULL");
+  return refused(character->character.set_level(level));
+}
+
+int deform_character_next_update_deforms(const deform_character* character) {
+  return character != nullptr && character->character.next_update_deforms() ? 1 : 0;
+}
+
+deform_status deform_character_level_cost(const deform_character* character, size_t level, deform_level_cost* out) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_level_cost: NULL argument");
+  if (level >= character->character.level_count())
+    return fail_argument("deform_character_level_cost: level out of range");
+  const deform::Character::LevelCost cost = character->character.level_cost(level);
+  *out = deform_level_cost{cost.points, cost.influences, cost.bones, cost.deformers ? 1 : 0, cost.update_interval};
+  return DEFORM_OK;
+}
+
+float deform_screen_height(float extent, float distance, float vertical_fov) {
+  return deform::screen_height(extent, distance, vertical_fov);
+}
+
+size_t deform_pick_level(const float* thresholds, size_t count, float height) {
+  if (thresholds == nullptr) return 0;
+  return deform::pick_level(std::span<const float>(thresholds, count), height);
 }
 
 deform_status deform_character_bone_position(const deform_character* character, int32_t bone, float out[3]) {

@@ -59,6 +59,10 @@ DEFORM_C_API deform_status deform_character_load_allowing(const char* obj_path, 
                                                           const char* const* allow_outside, size_t allow_count,
                                                           deform_character** out);
 DEFORM_C_API void deform_character_destroy(deform_character* character);
+/* Another character of the same model and rig that shares this one's immutable data (mesh, skin, bindings, levels)
+ * and has its own pose, springs and deformed mesh: what a crowd makes per member (about 142 KB each for the built-in
+ * character), far cheaper than loading again. Destroy each with deform_character_destroy, in any order. */
+DEFORM_C_API deform_status deform_character_instance(const deform_character* character, deform_character** out);
 
 /* Mesh points (OBJ `v`) and bones. */
 DEFORM_C_API size_t deform_character_point_count(const deform_character* character);
@@ -164,11 +168,84 @@ DEFORM_C_API const float* deform_character_positions(const deform_character* cha
 /* Copies them: `capacity` floats at `out`, at least point_count * 3. */
 DEFORM_C_API deform_status deform_character_copy_positions(const deform_character* character, float* out,
                                                            size_t capacity);
+/* The render mesh the positions are drawn with: render vertices (a point may have several, at UV and normal seams),
+ * each with its point; triangles of render vertex ids; UVs. Views into the character, valid until destroy. */
+DEFORM_C_API size_t deform_character_vertex_count(const deform_character* character);
+/* The point of each render vertex (vertex_count ids below point_count): positions[3 * vertex_points[v]] is vertex v's
+ * position. */
+DEFORM_C_API const uint32_t* deform_character_vertex_points(const deform_character* character);
+DEFORM_C_API size_t deform_character_triangle_count(const deform_character* character);
+/* triangle_count * 3 render vertex ids, counter-clockwise seen from outside. */
+DEFORM_C_API const uint32_t* deform_character_triangles(const deform_character* character);
+/* vertex_count * 2 floats (u, v), or NULL when the mesh has no UVs. */
+DEFORM_C_API const float* deform_character_uvs(const deform_character* character);
+/* The unit normals of the last update, one per render vertex (vertex_count * 3 floats): carried through skinning and
+ * the lattices (the default) or recomputed from the positions, as Character::normals() gives them. A view into the
+ * character, valid until the next update or destroy; call it after each update that is drawn. Allocates nothing. */
+DEFORM_C_API const float* deform_character_normals(deform_character* character);
+
 /* A bone's world head, including what the lattices carry it by. */
 DEFORM_C_API deform_status deform_character_bone_position(const deform_character* character, int32_t bone,
                                                           float out[3]);
 /* The stretch the lattices have now (model units). */
 DEFORM_C_API float deform_character_stretch(const deform_character* character);
+
+/* ---- Levels of detail (docs/skinning.md, "Levels of detail"; Character::set_levels) ---- */
+
+/* How one level deforms. Level 0 is the whole character: its `bones` is ignored (every bone) and its `points` should
+ * be NULL. */
+typedef struct deform_level {
+  /* The bones the level skins with (levels after 0: non-increasing, raised to the roots where smaller): bones merged
+   * into their kept ancestors, leaves and fingers first, by the weight they move (and the motion of the poses given
+   * to deform_character_set_levels). The root motion is kept. */
+  size_t bones;
+  /* Nonzero: the lattices, spring chains and Delta Mush run at this level; 0: it skins the animated pose alone. */
+  int deformers;
+  /* The level deforms on every Nth update (1 to 64) and moves the points a share of the way in between: the springs
+   * take the longer step, no pop. */
+  uint32_t update_interval;
+  /* The full mesh's point ids the level deforms (each once), e.g. those of a simplified mesh made for this level;
+   * NULL: all. The other points keep stale positions and normals at this level: draw the level's own triangles. */
+  const uint32_t* points;
+  size_t point_count;
+} deform_level;
+
+/* Binds `level_count` levels (level 0 first) and shows level 0. Bones are merged on the motion of `pose_count` poses
+ * of the skeleton (e.g. the clips the character plays, sampled over their length; bone_count rotations (x, y, z, w)
+ * and translations each, pose after pose), or by weight alone when `pose_count` is 0 (the pointers may then be
+ * NULL). A switch blends over `blend_frames` deformed updates (0 to 1000; 0: at once). DEFORM_ERROR_ARGUMENT, naming
+ * the level, for no level, bones increasing, an interval outside [1, 64], a point id out of range or listed twice.
+ * Allocates and takes time: call it at set-up. */
+DEFORM_C_API deform_status deform_character_set_levels(deform_character* character, const deform_level* levels,
+                                                       size_t level_count, const float* pose_rotations_xyzw,
+                                                       const float* pose_translations, size_t pose_count,
+                                                       uint32_t blend_frames);
+/* How many levels (1 without levels), and the one the next update shows. */
+DEFORM_C_API size_t deform_character_level_count(const deform_character* character);
+DEFORM_C_API size_t deform_character_level(const deform_character* character);
+/* Shows `level` from the next update on, with the switch's blend. DEFORM_ERROR_REFUSED for a level out of range.
+ * Allocates nothing: call it per frame with what deform_pick_level gives. */
+DEFORM_C_API deform_status deform_character_set_level(deform_character* character, size_t level);
+/* Nonzero when the next update deforms; 0 while a level with an update interval is between its deformed updates
+ * (that update reads no pose: a crowd may skip sampling the clip for it). */
+DEFORM_C_API int deform_character_next_update_deforms(const deform_character* character);
+
+typedef struct deform_level_cost {
+  size_t points;     /* points skinned */
+  size_t influences; /* the sum over them of their bone influences */
+  size_t bones;      /* bones the skin uses */
+  int deformers;
+  uint32_t update_interval;
+} deform_level_cost;
+/* What a level's deformed update costs, for a caller that budgets a crowd. DEFORM_ERROR_ARGUMENT for a level out of
+ * range. */
+DEFORM_C_API deform_status deform_character_level_cost(const deform_character* character, size_t level,
+                                                       deform_level_cost* out);
+/* The fraction of the viewport's height that a height of `extent` at `distance` from a perspective camera with
+ * `vertical_fov` (radians) covers; 0 for an argument not finite or not positive. */
+DEFORM_C_API float deform_screen_height(float extent, float distance, float vertical_fov);
+/* The level for that height: how many of `thresholds` (decreasing fractions, one per level after 0) it is below. */
+DEFORM_C_API size_t deform_pick_level(const float* thresholds, size_t count, float height);
 
 /* ---- Skinning over caller arrays (deform/runtime/skinning.hpp, SkinningJob) ---- */
 
