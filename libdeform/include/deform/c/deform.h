@@ -175,7 +175,7 @@ DEFORM_C_API size_t deform_character_vertex_count(const deform_character* charac
  * position. */
 DEFORM_C_API const uint32_t* deform_character_vertex_points(const deform_character* character);
 DEFORM_C_API size_t deform_character_triangle_count(const deform_character* character);
-/* triangle_count * 3 render vertex ids, counter-clockwise seen from outside. */
+/* triangle_count * 3 render vertex ids, in the mesh's own winding. */
 DEFORM_C_API const uint32_t* deform_character_triangles(const deform_character* character);
 /* vertex_count * 2 floats (u, v), or NULL when the mesh has no UVs. */
 DEFORM_C_API const float* deform_character_uvs(const deform_character* character);
@@ -205,7 +205,8 @@ typedef struct deform_level {
    * take the longer step, no pop. */
   uint32_t update_interval;
   /* The full mesh's point ids the level deforms (each once), e.g. those of a simplified mesh made for this level;
-   * NULL: all. The other points keep stale positions and normals at this level: draw the level's own triangles. */
+   * NULL: all. The other points keep stale positions and normals at this level: draw the level's own triangles.
+   * With `deformers`, such a level runs the spring chains alone (the lattices and Delta Mush need the whole mesh). */
   const uint32_t* points;
   size_t point_count;
 } deform_level;
