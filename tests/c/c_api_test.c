@@ -753,6 +753,16 @@ static void levels_of_detail(void) {
   const double level2_gap = largest_gap(lod, whole, half_points, points / 2);
   CHECK(level2_gap > 1e-3 && level2_gap < 0.3);
 
+  /* One level alone is the whole character again (levels cleared), on an instance. */
+  deform_character* cleared = NULL;
+  CHECK(deform_character_instance(lod, &cleared) == DEFORM_OK);
+  CHECK(deform_character_set_levels(cleared, levels, 1, NULL, NULL, 0, 0) == DEFORM_OK);
+  CHECK(deform_character_level_count(cleared) == 1 && deform_character_level(cleared) == 0);
+  CHECK(deform_character_set_pose(cleared, rotations, translations, bones) == DEFORM_OK);
+  CHECK(deform_character_update(cleared, 0.0f) == DEFORM_OK);
+  CHECK(largest_gap(cleared, whole, NULL, points) == 0.0);
+  deform_character_destroy(cleared);
+
   /* Instances share the levels. */
   deform_character* member = NULL;
   CHECK(deform_character_instance(lod, &member) == DEFORM_OK);
