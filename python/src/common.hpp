@@ -4,10 +4,12 @@
 // Arrays in: a float32 C-contiguous (N, 3) array is read in place (a span over its buffer, no copy); any other
 // layout or dtype is converted once (a copy) by pybind11's forcecast. Arrays out: views (no copy) over storage that
 // the owning Python object keeps alive, or new arrays where the data has to be computed or transposed.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -61,6 +63,20 @@ py::array view(const T* data, std::size_t count, std::size_t width, py::handle o
 
 inline py::array vec3_view(std::span<const glm::vec3> v, py::handle owner, bool writeable) {
   return view(v.empty() ? nullptr : &v[0].x, v.size(), 3, owner, writeable);
+}
+
+// A new array with a copy of `values`: (N / width, width), or (N,) for width 1.
+template <class T>
+py::array copy_array(std::span<const T> values, std::size_t width) {
+  std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(values.size() / width)};
+  if (width > 1) shape.push_back(static_cast<py::ssize_t>(width));
+  py::array_t<T> out(shape);
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+template <class T>
+py::array copy_array(const std::vector<T>& values, std::size_t width) {
+  return copy_array(std::span<const T>(values), width);
 }
 
 // New (N, 3) float32 array with a copy of `v`.

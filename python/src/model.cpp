@@ -79,6 +79,23 @@ void bind_model(py::module_& m) {
           },
           "(T, 3) uint32 triangles as indices into positions (a new array; the mesh stores them "
           "over render vertices).")
+      .def_property_readonly("vertex_count", [](const deform::Model& md) { return md.mesh.vertex_count(); })
+      .def_property_readonly(
+          "vertex_points", [](const deform::Model& md) { return copy_array(md.mesh.vertex_point, 1); },
+          "(V,) uint32: the point of each render vertex (a point has several at UV and normal seams); "
+          "Character.normals() and uvs are per render vertex, positions[vertex_points] their positions.")
+      .def_property_readonly(
+          "vertex_triangles", [](const deform::Model& md) { return copy_array(md.mesh.triangles, 3); },
+          "(T, 3) uint32 triangles over render vertices, the mesh's own winding: what a renderer draws with "
+          "uvs and Character.normals().")
+      .def_property_readonly(
+          "uvs",
+          [](const deform::Model& md) -> py::object {
+            const auto& uv = md.mesh.vertex_uvs;
+            if (uv.empty()) return py::none();
+            return copy_array(std::span<const float>(&uv[0].x, 2 * uv.size()), 2);
+          },
+          "(V, 2) float32 texture coordinates per render vertex, or None when the mesh has none.")
       .def_property_readonly("bone_indices",
                              [](py::object self) {
                                auto& w = self.cast<deform::Model&>().weights.bones;
@@ -312,6 +329,7 @@ void bind_simplify(py::module_& m) {
             triangles.mutable_data()[i] = md.mesh.vertex_point[level.triangles[i]];
           py::dict d;
           d["points"] = points, d["triangles"] = triangles, d["error"] = level.error;
+          d["vertex_triangles"] = copy_array(level.triangles, 3);
           out.append(d);
         }
         return out;
@@ -321,7 +339,9 @@ void bind_simplify(py::module_& m) {
       "triangle_ratios[l - 1] of the whole mesh's triangles (decreasing; each level simplified from the one before, "
       "so they are nested), each collapse moving the surface at most max_error of the mesh's size. A list of dicts: "
       "points (uint32, the model's point ids the level keeps, the coarser levels' first: a Character level's "
-      "`points`), triangles ((T, 3) uint32 over the model's points, as Model.triangles), error (a bound on the "
+      "`points`), triangles ((T, 3) uint32 over the model's points, as Model.triangles), vertex_triangles (the "
+      "same triangles over the model's render vertices, as Model.vertex_triangles: what a renderer draws with uvs and "
+      "Character.normals()), error (a bound on the "
       "level's distance from the whole mesh, a fraction of its size).");
 #else
   m.attr("has_simplify") = false;

@@ -54,6 +54,16 @@ def test_normals_and_control_points(hero):
     hero.update(0.0)
     normals = hero.normals()
     np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-4)
+    # The render mesh they belong to: each triangle's own normal, from the deformed points, agrees with its corners'.
+    model = hero.model
+    assert normals.shape == (model.vertex_count, 3) and model.vertex_points.shape == (model.vertex_count,)
+    assert model.uvs is None or model.uvs.shape == (model.vertex_count, 2)
+    corners = hero.positions[model.vertex_points[model.vertex_triangles]]
+    faces = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    faces /= np.linalg.norm(faces, axis=1, keepdims=True)
+    cosines = np.einsum("tj,tcj->tc", faces, normals[model.vertex_triangles])
+    assert cosines.mean() > 0.95
+    np.testing.assert_array_equal(model.vertex_points[model.vertex_triangles], model.triangles)
     assert hero.lattice_count == 3
     assert hero.control_points(0).shape == (64, 3)
     with pytest.raises(deform.Error):
@@ -239,6 +249,8 @@ def test_simplified_meshes_as_levels():
         assert np.isin(level["triangles"], level["points"]).all()  # every corner a point of its level
         assert 0 < level["error"] < 0.2
     assert near["error"] <= far["error"]
+    for level in levels:  # the same triangles over render vertices, for drawing with uvs and normals()
+        np.testing.assert_array_equal(model.vertex_points[level["vertex_triangles"]], level["triangles"])
     hero.set_levels([20, 12], deformers=[True, True, False], points=[[], near["points"], far["points"]])
     assert [hero.level_cost(level)["points"] for level in range(3)] == [model.point_count, 714, 299]
     with pytest.raises(deform.Error):
