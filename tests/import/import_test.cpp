@@ -27,6 +27,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -571,6 +572,35 @@ TEST_CASE("an unrigged model imports as a static mesh with a one-bone skeleton")
   CHECK(fs::is_regular_file(imported.model.mesh.materials[material].diffuse_map));
   const std::vector<glm::vec3> rest = skin(imported.model, imported.model.skeleton.bind_pose());
   CHECK(rest == imported.model.mesh.positions);
+}
+
+// The Ogre importer looks for `<material>.material` by its bare name, which Assimp's own IO system takes from the
+// working directory: from anywhere else the model failed to load (the name resolved outside its folder and was
+// refused). It is looked for beside the model, and a file of that name in the working directory is never read.
+TEST_CASE("a name an importer looks for bare is found beside the model, never in the working directory") {
+  const std::string path = test_model("Ogre/TheThing/Mesh.mesh.xml");
+  const fs::path elsewhere = fs::temp_directory_path() / ("deform_import_cwd_" + std::to_string(::getpid()));
+  fs::create_directories(elsewhere);
+  std::ofstream(elsewhere / "BlockMat.material")
+      << "material BlockMat { technique { pass { diffuse 0.1 0.2 0.3 1 } } }";
+  const fs::path previous = fs::current_path();
+  fs::current_path(elsewhere);
+  std::optional<deform::ImportedModel> imported;
+  std::string failure;
+  try {
+    imported = deform::import_model(path);
+  } catch (const deform::Error& e) {
+    failure = e.what();
+  }
+  fs::current_path(previous);
+  fs::remove_all(elsewhere);
+  REQUIRE_MESSAGE(imported, failure);
+  REQUIRE(imported->model.mesh.materials.size() == 1);
+  const deform::Material& material = imported->model.mesh.materials[0];
+  CHECK(material.name == "BlockMat");
+  CHECK(material.diffuse.x == doctest::Approx(0.64));  // the model's own BlockMat.material, not the decoy's 0.1
+  CHECK(fs::path(material.diffuse_map).filename() == "Wrinkles.jpg");
+  CHECK(imported->warnings.empty());
 }
 
 TEST_CASE("the up axis a file declares: +Z for a Z-up FBX, +Y for glTF and for files that say nothing") {

@@ -31,42 +31,60 @@ namespace {
 namespace fs = std::filesystem;
 using namespace import_detail;
 
+// The absolute form of `path` (as given when the working directory cannot be read).
+fs::path absolute_path(const fs::path& path) {
+  std::error_code error;
+  fs::path absolute = fs::absolute(path, error);
+  return error ? path : absolute;
+}
+
 // Every file Assimp opens while it reads a model (an .md5anim beside an .md5mesh, an MD3's skins, an Ogre
 // .material) is a file the model names: it is opened only inside the model's folder or a folder the policy allows
 // (resolve_referenced_file). A refusal cannot travel through Assimp as an exception: it is kept, the open fails, and
 // import_model throws it once ReadFile returns. Exists() answers false for a refused file, so whether a file outside
-// exists never shows.
+// exists never shows; a file an importer only looked for (its Exists() refused, never opened) fails the import only
+// when the import fails, and is a warning otherwise: importers probe several names and go on without one.
+// Assimp's own IO system takes a relative name from the working directory. The model's path is made absolute before
+// ReadFile, so that the names importers build from it are absolute; a bare name an importer looks for (the Ogre
+// importer's `<material>.material`) is looked for beside the model, where the format keeps it — from another working
+// directory it would be refused, and the model fail to load.
 class ConfinedIOSystem : public Assimp::DefaultIOSystem {
  public:
-  ConfinedIOSystem(const std::string& model, const ReferencePolicy& policy) : model_(model), policy_(policy) {}
+  ConfinedIOSystem(const std::string& model, const ReferencePolicy& policy)
+      : model_(model), folder_(absolute_path(utf8_path::from_utf8(model)).parent_path()), policy_(policy) {}
 
-  bool Exists(const char* file) const override { return allowed(file) && Assimp::DefaultIOSystem::Exists(file); }
-  Assimp::IOStream* Open(const char* file, const char* mode) override {
-    if (!allowed(file)) return nullptr;
-    return Assimp::DefaultIOSystem::Open(file, mode);
+  bool Exists(const char* file) const override {
+    const std::optional<std::string> name = allowed(file, "a file the importer looked for", probe_refusal_);
+    return name && Assimp::DefaultIOSystem::Exists(name->c_str());
   }
-  // The first refusal, if any.
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    const std::optional<std::string> name = allowed(file, "a file the importer opened", refusal_);
+    return name ? Assimp::DefaultIOSystem::Open(name->c_str(), mode) : nullptr;
+  }
+  // The first refusal of a file opened, and of a file only looked for, if any.
   const std::optional<Error>& refusal() const { return refusal_; }
+  const std::optional<Error>& probe_refusal() const { return probe_refusal_; }
 
  private:
-  bool allowed(const char* file) const {
-    if (file == nullptr) return false;
+  // The absolute name of `file` (relative names beside the model) when the policy allows it; else the refusal (of
+  // `element`) is kept in `kept` (the first one) and nothing is returned.
+  std::optional<std::string> allowed(const char* file, const char* element, std::optional<Error>& kept) const {
+    if (file == nullptr) return std::nullopt;
     try {
-      std::error_code error;
-      // Assimp joins the folder; its names are UTF-8 (its Windows IO system opens them as wide names).
-      const std::string absolute =
-          utf8_path::to_utf8(fs::absolute(utf8_path::from_utf8(file), error).lexically_normal());
-      if (error) return false;
-      resolve_referenced_file(model_, absolute, "a file the importer opened", policy_);
-      return true;
+      // Assimp's names are UTF-8 (its Windows IO system opens them as wide names).
+      const fs::path name = utf8_path::from_utf8(file);
+      const std::string absolute = utf8_path::to_utf8((name.is_absolute() ? name : folder_ / name).lexically_normal());
+      resolve_referenced_file(model_, absolute, element, policy_);
+      return absolute;
     } catch (const Error& e) {
-      if (!refusal_) refusal_ = e;
-      return false;
+      if (!kept) kept = e;
+      return std::nullopt;
     }
   }
   std::string model_;
+  fs::path folder_;  // the model's, absolute
   const ReferencePolicy& policy_;
-  mutable std::optional<Error> refusal_;
+  mutable std::optional<Error> refusal_, probe_refusal_;
 };
 
 glm::mat4 to_glm(const aiMatrix4x4& m) {
@@ -249,13 +267,17 @@ void AssimpImport::load() {
                          aiProcess_GenSmoothNormals | aiProcess_ValidateDataStructure;
   auto* io = new ConfinedIOSystem(path_, options_.references);  // the importer owns it
   importer_.SetIOHandler(io);
-  scene_ = importer_.ReadFile(path_, flags);
+  scene_ = importer_.ReadFile(utf8_path::to_utf8(absolute_path(utf8_path::from_utf8(path_))), flags);
   if (io->refusal()) throw Error(*io->refusal());
   if (scene_ == nullptr || scene_->mRootNode == nullptr || (scene_->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) {
+    if (io->probe_refusal()) throw Error(*io->probe_refusal());  // the file it looked for is the likely reason
     const char* message = importer_.GetErrorString();
     throw Error::in_file(
         path_, "", std::string("Assimp cannot import it: ") + (message && *message ? message : "incomplete scene"));
   }
+  if (io->probe_refusal())
+    result_.warnings.push_back(io->probe_refusal()->element() + ": " + io->probe_refusal()->message() +
+                               "; read without it");
 }
 
 void AssimpImport::read_nodes() {
