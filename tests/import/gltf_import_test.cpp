@@ -313,6 +313,11 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
       {"extension.gltf", R"({"asset": {"version": "2.0"}, "extensionsRequired": ["KHR_draco_mesh_compression"]})",
        "extensionsRequired: KHR_draco_mesh_compression is not supported"},
       {"not_json.gltf", "{ this is not glTF", "not a valid glTF 2.0 file"},
+      // glTF 1.0 (tinygltf read it as a scene with "no mesh", or "no asset"): said for what it is.
+      {"version1.gltf", R"({"asset": {"version": "1.0"}, "meshes": {"box": {"primitives": []}}})",
+       "asset.version: glTF 1.0 is not read, only 2.0"},
+      {"version1_no_asset.gltf", R"({"meshes": {"box": {"primitives": []}}, "scene": "defaultScene"})",
+       "asset.version: glTF 1.0 is not read, only 2.0"},
   };
   for (const Case& c : cases) {
     const std::string path = write(c.name, c.json);
@@ -327,6 +332,10 @@ TEST_CASE("malformed glTF files are errors naming the file and the JSON path or 
   glb += std::string(20, ' ');
   const std::string path = write("chunk.glb", glb);
   CHECK(import_error(path).find("GLB header") != std::string::npos);
+  const std::uint32_t version1[5] = {0x46546C67u, 1u, 40u, 20u, 0u};
+  const std::string glb1 = write(
+      "version1.glb", std::string(reinterpret_cast<const char*>(version1), sizeof version1) + std::string(20, ' '));
+  CHECK(import_error(glb1).find("GLB header: version 1, not 2 (glTF 1.0 is not read") != std::string::npos);
 }
 
 TEST_CASE("embedded PNG and JPEG textures are kept as their bytes: imported, exported natively and as glTF") {

@@ -113,13 +113,12 @@ bool read_whole_file(std::vector<unsigned char>* out, std::string* error, const 
 }
 
 // Confines every external buffer the file names before tinygltf reads any (resolve_referenced_file): a buffer
-// outside the model's folder and the policy's folders throws here, naming "buffers[i].uri", unread. `json` is the
-// glTF JSON (a .gltf file, or a .glb's JSON chunk); malformed JSON approves nothing and is left to tinygltf to
-// report. Images are confined after parsing, as tinygltf never reads them.
-ApprovedFiles approve_buffers(const std::string& path, const std::string& base, std::string_view json,
+// outside the model's folder and the policy's folders throws here, naming "buffers[i].uri", unread. `document` is
+// the parsed glTF JSON (a .gltf file, or a .glb's JSON chunk); malformed JSON (discarded) approves nothing and is left
+// to tinygltf to report. Images are confined after parsing, as tinygltf never reads them.
+ApprovedFiles approve_buffers(const std::string& path, const std::string& base, const nlohmann::json& document,
                               const ReferencePolicy& policy) {
   ApprovedFiles files;
-  const nlohmann::json document = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
   if (!document.is_object() || !document.contains("buffers") || !document["buffers"].is_array()) return files;
   const nlohmann::json& buffers = document["buffers"];
   for (std::size_t i = 0; i < buffers.size(); ++i) {
@@ -131,6 +130,20 @@ ApprovedFiles approve_buffers(const std::string& path, const std::string& base, 
     files.approved[tinygltf::JoinPath(base, tinygltf::dlib::urldecode(uri))] = real;
   }
   return files;
+}
+
+// Whether a parsed document is glTF 1.0: its asset.version says 1.x, or (1.0 makes `asset` optional) it has no
+// version and keeps its meshes in an object by id, where 2.0 has an array.
+bool is_gltf1(const nlohmann::json& document) {
+  if (!document.is_object()) return false;
+  const auto asset = document.find("asset");
+  if (asset != document.end() && asset->is_object()) {
+    const auto version = asset->find("version");
+    if (version != asset->end() && version->is_string())
+      return version->get_ref<const std::string&>().rfind("1", 0) == 0;
+  }
+  const auto meshes = document.find("meshes");
+  return meshes != document.end() && meshes->is_object();
 }
 
 bool refuse_write(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
@@ -482,7 +495,11 @@ void GltfImport::load() {
     std::uint32_t header[5] = {};
     if (bytes.size() < 20) throw Error::in_file(path_, "GLB header", "shorter than 20 bytes");
     std::memcpy(header, bytes.data(), 20);
-    if (header[1] != 2) throw Error::in_file(path_, "GLB header", "version " + std::to_string(header[1]) + ", not 2");
+    if (header[1] != 2)
+      throw Error::in_file(
+          path_, "GLB header",
+          "version " + std::to_string(header[1]) + ", not 2" +
+              (header[1] == 1 ? " (glTF 1.0 is not read, only 2.0: convert the file to glTF 2.0)" : ""));
     if (header[2] > bytes.size() || header[2] < 20)
       throw Error::in_file(
           path_, "GLB header",
@@ -491,11 +508,19 @@ void GltfImport::load() {
       throw Error::in_file(
           path_, "GLB header",
           "the first chunk is not JSON within the file (" + std::to_string(header[3]) + " bytes claimed)");
-    approved = approve_buffers(path_, base_, text(20, header[3]), options_.references);
+    const std::string_view json = text(20, header[3]);
+    approved = approve_buffers(path_, base_, nlohmann::json::parse(json.begin(), json.end(), nullptr, false),
+                               options_.references);
     loaded = loader.LoadBinaryFromMemory(&gltf_, &error, &warning, bytes.data(),
                                          static_cast<unsigned int>(bytes.size()), base_);
   } else {
-    approved = approve_buffers(path_, base_, text(0, bytes.size()), options_.references);
+    const std::string_view json = text(0, bytes.size());
+    const nlohmann::json document = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+    // tinygltf reads 2.0 only: a 1.0 file came through it as "no mesh" or "no asset". (Assimp reads 1.0's meshes,
+    // not its skins, and its reader is not hardened against hostile files as this one is: not a route to take.)
+    if (is_gltf1(document))
+      throw Error::in_file(path_, "asset.version", "glTF 1.0 is not read, only 2.0: convert the file to glTF 2.0");
+    approved = approve_buffers(path_, base_, document, options_.references);
     loaded = loader.LoadASCIIFromString(&gltf_, &error, &warning, reinterpret_cast<const char*>(bytes.data()),
                                         static_cast<unsigned int>(bytes.size()), base_);
   }
