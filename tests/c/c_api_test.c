@@ -668,6 +668,25 @@ static void render_mesh_normals_and_instances(void) {
   free(scratch);
 }
 
+/* Turns each named bone of a pose (rotations x, y, z, w per bone) further, about a random axis by a random angle whose
+ * half is in [half_lo, half_hi] radians. */
+static void bend_randomly(const deform_character* c, float* rotations, const char* const* names, size_t count,
+                          double half_lo, double half_hi) {
+  for (size_t k = 0; k < count; ++k) {
+    const int32_t b = deform_character_find_bone(c, names[k]);
+    CHECK(b >= 0);
+    if (b < 0) continue;
+    const double half = uniform(half_lo, half_hi), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
+    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), cosine = cos(half);
+    const double t[4] = {ax * s, ay * s, az * s, cosine};
+    float* q = rotations + 4 * b;
+    const double r[4] = {
+        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
+        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
+    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
+  }
+}
+
 /* The largest distance between two characters' positions over `count` points (all when ids is NULL). */
 static double largest_gap(const deform_character* a, const deform_character* b, const uint32_t* ids, size_t count) {
   const float* pa = deform_character_positions(a);
@@ -696,19 +715,7 @@ static void levels_of_detail(void) {
   CHECK(deform_character_bind_pose(lod, rotations, translations, bones) == DEFORM_OK);
   const char* bent[] = {"spine",  "neck",       "thigh_l",    "thigh_r",  "shin_l",
                         "shin_r", "upperarm_l", "upperarm_r", "forearm_l"};
-  for (size_t k = 0; k < sizeof bent / sizeof *bent; ++k) {
-    const int32_t b = deform_character_find_bone(lod, bent[k]);
-    CHECK(b >= 0);
-    if (b < 0) continue;
-    const double half = uniform(0.1, 0.3), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
-    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), c = cos(half);
-    const double t[4] = {ax * s, ay * s, az * s, c};
-    float* q = rotations + 4 * b;
-    const double r[4] = {
-        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
-        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
-    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
-  }
+  bend_randomly(lod, rotations, bent, sizeof bent / sizeof *bent, 0.1, 0.3);
 
   uint32_t* half_points = malloc(points / 2 * sizeof(uint32_t));
   for (size_t k = 0; k < points / 2; ++k) half_points[k] = (uint32_t)(2 * k + 1);
@@ -967,19 +974,7 @@ static void gpu_route_reproduces_the_cpu(void) {
   float* translations = malloc(3 * bones * sizeof(float));
   CHECK(deform_character_bind_pose(gpu, rotations, translations, bones) == DEFORM_OK);
   const char* bent[] = {"spine", "neck", "thigh_l", "shin_r", "upperarm_r", "forearm_r"};
-  for (size_t k = 0; k < sizeof bent / sizeof *bent; ++k) {
-    const int32_t b = deform_character_find_bone(gpu, bent[k]);
-    CHECK(b >= 0);
-    if (b < 0) continue;
-    const double half = uniform(0.2, 0.5), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
-    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), c = cos(half);
-    const double t[4] = {ax * s, ay * s, az * s, c};
-    float* q = rotations + 4 * b;
-    const double r[4] = {
-        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
-        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
-    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
-  }
+  bend_randomly(gpu, rotations, bent, sizeof bent / sizeof *bent, 0.2, 0.5);
   /* Gravity on every lattice's control points makes the fields bend, not only stretch along the bone. */
   const float gravity[3] = {0.0f, -9.81f, 0.0f};
   const float target[3] = {1.6f, 1.5f, 0.3f};
@@ -992,6 +987,9 @@ static void gpu_route_reproduces_the_cpu(void) {
   CHECK(deform_character_set_deform_on_cpu(gpu, 0) == DEFORM_OK);
   float* held = malloc(3 * points * sizeof(float));
   CHECK(deform_character_copy_positions(gpu, held, 3 * points) == DEFORM_OK);
+  const size_t vertices = deform_character_vertex_count(gpu);
+  float* held_normals = malloc(3 * vertices * sizeof(float));
+  memcpy(held_normals, deform_character_normals(gpu), 3 * vertices * sizeof(float));
   for (int i = 0; i < 2; ++i)
     CHECK(deform_character_reach(both[i], deform_character_find_bone(both[i], "hand_l"), target, NULL) == DEFORM_OK);
 
@@ -1008,6 +1006,7 @@ static void gpu_route_reproduces_the_cpu(void) {
       for (int i = 0; i < 2; ++i) deform_character_release(both[i]); /* spring back */
     for (int i = 0; i < 2; ++i) CHECK(deform_character_update(both[i], 1.0f / 60.0f) == DEFORM_OK);
     positions_held &= memcmp(deform_character_positions(gpu), held, 3 * points * sizeof(float)) == 0;
+    positions_held &= memcmp(deform_character_normals(gpu), held_normals, 3 * vertices * sizeof(float)) == 0;
     const double moved = deform_like_a_shader(gpu, &skin, lattices, lattice_count, shaded);
     lattices_moved = fmax(lattices_moved, moved);
     const double gap = gap_to(cpu, shaded, points);
@@ -1024,7 +1023,7 @@ static void gpu_route_reproduces_the_cpu(void) {
   CHECK(worst < bound);
   CHECK(lattices_moved > 0.02 * size); /* the stretch is in the comparison */
   CHECK(actives == 4 * (int)lattice_count);
-  CHECK(positions_held); /* posing only: the last deforming update's points stay */
+  CHECK(positions_held); /* posing only: the last deforming update's points and normals stay */
 
   /* Deforming on the CPU again, the twin's next update is the first one's to the bit: posing kept the same state. */
   CHECK(deform_character_set_deform_on_cpu(gpu, 1) == DEFORM_OK);
@@ -1052,6 +1051,7 @@ static void gpu_route_reproduces_the_cpu(void) {
 
   free(shaded);
   free(held);
+  free(held_normals);
   free(rotations);
   free(translations);
   deform_character_destroy(cpu);
