@@ -477,8 +477,10 @@ deform_status deform_character_skin_bind(const deform_character* character, defo
   const deform::Model& model = character->character.model();
   const deform::SkinWeights& skin = model.weights;
   if (skin.has_extra())
-    return fail(DEFORM_ERROR_REFUSED, "deform_character_skin_bind: " + std::to_string(skin.extra_points.size()) +
-                                          " points have more than four influences, which the four slots cannot hold");
+    return guarded([&] {
+      return fail(DEFORM_ERROR_REFUSED, "deform_character_skin_bind: " + std::to_string(skin.extra_points.size()) +
+                                            " points have more than four influences, which four slots cannot hold");
+    });
   // GLM's vector types are plain arrays of their components, as the header's layout promises.
   *out = deform_skin_bind{model.mesh.point_count(), reinterpret_cast<const float*>(model.mesh.positions.data()),
                           reinterpret_cast<const float*>(character->character.bind_normals().data()),
