@@ -668,6 +668,25 @@ static void render_mesh_normals_and_instances(void) {
   free(scratch);
 }
 
+/* Turns each named bone of a pose (rotations x, y, z, w per bone) further, about a random axis by a random angle whose
+ * half is in [half_lo, half_hi] radians. */
+static void bend_randomly(const deform_character* c, float* rotations, const char* const* names, size_t count,
+                          double half_lo, double half_hi) {
+  for (size_t k = 0; k < count; ++k) {
+    const int32_t b = deform_character_find_bone(c, names[k]);
+    CHECK(b >= 0);
+    if (b < 0) continue;
+    const double half = uniform(half_lo, half_hi), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
+    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), cosine = cos(half);
+    const double t[4] = {ax * s, ay * s, az * s, cosine};
+    float* q = rotations + 4 * b;
+    const double r[4] = {
+        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
+        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
+    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
+  }
+}
+
 /* The largest distance between two characters' positions over `count` points (all when ids is NULL). */
 static double largest_gap(const deform_character* a, const deform_character* b, const uint32_t* ids, size_t count) {
   const float* pa = deform_character_positions(a);
@@ -696,19 +715,7 @@ static void levels_of_detail(void) {
   CHECK(deform_character_bind_pose(lod, rotations, translations, bones) == DEFORM_OK);
   const char* bent[] = {"spine",  "neck",       "thigh_l",    "thigh_r",  "shin_l",
                         "shin_r", "upperarm_l", "upperarm_r", "forearm_l"};
-  for (size_t k = 0; k < sizeof bent / sizeof *bent; ++k) {
-    const int32_t b = deform_character_find_bone(lod, bent[k]);
-    CHECK(b >= 0);
-    if (b < 0) continue;
-    const double half = uniform(0.1, 0.3), ax = uniform(-1, 1), ay = uniform(-1, 1), az = uniform(-1, 1);
-    const double s = sin(half) / sqrt(ax * ax + ay * ay + az * az + 1e-12), c = cos(half);
-    const double t[4] = {ax * s, ay * s, az * s, c};
-    float* q = rotations + 4 * b;
-    const double r[4] = {
-        q[3] * t[0] + q[0] * t[3] + q[1] * t[2] - q[2] * t[1], q[3] * t[1] - q[0] * t[2] + q[1] * t[3] + q[2] * t[0],
-        q[3] * t[2] + q[0] * t[1] - q[1] * t[0] + q[2] * t[3], q[3] * t[3] - q[0] * t[0] - q[1] * t[1] - q[2] * t[2]};
-    for (int i = 0; i < 4; ++i) q[i] = (float)r[i];
-  }
+  bend_randomly(lod, rotations, bent, sizeof bent / sizeof *bent, 0.1, 0.3);
 
   uint32_t* half_points = malloc(points / 2 * sizeof(uint32_t));
   for (size_t k = 0; k < points / 2; ++k) half_points[k] = (uint32_t)(2 * k + 1);
@@ -798,6 +805,259 @@ static void levels_of_detail(void) {
   deform_character_destroy(whole);
 }
 
+/* B_i,n(t) = C(n, i) t^i (1 - t)^(n - i), the Bernstein polynomial, in double. */
+static double bernstein(int n, int i, double t) {
+  double value = 1.0;
+  for (int k = 1; k <= i; ++k) value = value * (double)(n - i + k) / (double)k; /* C(n, i) */
+  for (int k = 0; k < i; ++k) value *= t;
+  for (int k = 0; k < n - i; ++k) value *= 1.0 - t;
+  return value;
+}
+
+enum { most_lattices = 8 };
+
+/* What a host's shaders do with the GPU route's data (deform.h, "The whole deformation on the GPU"), in plain loops
+ * over every point, into `out` (point_count * 3 doubles): linear blend skinning by the palette, then every active
+ * lattice's carried points, then every active lattice's Bezier field. Returns the largest distance the lattices moved
+ * a point, so that a caller can see they did. */
+static double deform_like_a_shader(const deform_character* c, const deform_skin_bind* skin,
+                                   const deform_lattice_binding* lattices, size_t lattice_count, double* out) {
+  const float* palette = deform_character_palette(c);
+  for (size_t p = 0; p < skin->point_count; ++p) {
+    double m[16] = {0.0}, sum = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const double w = skin->weights[4 * p + k];
+      const float* bone = palette + 16 * (size_t)skin->bones[4 * p + k];
+      for (int e = 0; e < 16; ++e) m[e] += w * bone[e];
+      sum += w;
+    }
+    const float* x = skin->positions + 3 * p;
+    for (int r = 0; r < 3; ++r) /* column-major: element (row r, column c) at m[4c + r] */
+      out[3 * p + r] = (m[r] * x[0] + m[4 + r] * x[1] + m[8 + r] * x[2] + m[12 + r]) / sum;
+  }
+  double* skinned = malloc(3 * skin->point_count * sizeof(double));
+  memcpy(skinned, out, 3 * skin->point_count * sizeof(double));
+  deform_lattice_frame frames[most_lattices];
+  for (size_t l = 0; l < lattice_count; ++l) CHECK(deform_character_lattice_frame(c, l, &frames[l]) == DEFORM_OK);
+  for (size_t l = 0; l < lattice_count; ++l) {
+    if (!frames[l].active) continue;
+    for (size_t n = 0; n < lattices[l].carried_count; ++n)
+      for (int r = 0; r < 3; ++r)
+        out[3 * lattices[l].carried_points[n] + r] +=
+            (double)lattices[l].carried_weights[n] * frames[l].far_displacement[r];
+  }
+  for (size_t l = 0; l < lattice_count; ++l) {
+    if (!frames[l].active) continue;
+    const deform_lattice_binding* b = &lattices[l];
+    const int du = b->degree[0], dv = b->degree[1], dw = b->degree[2];
+    for (size_t n = 0; n < b->lane_count; ++n) {
+      if (b->points[n] == DEFORM_NO_POINT) continue;
+      double field[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k <= dw; ++k)
+        for (int j = 0; j <= dv; ++j)
+          for (int i = 0; i <= du; ++i) {
+            const double basis = bernstein(du, i, b->u[n]) * bernstein(dv, j, b->v[n]) * bernstein(dw, k, b->w[n]);
+            const float* d = frames[l].displacements + 3 * (size_t)(i + (du + 1) * (j + (dv + 1) * k));
+            for (int r = 0; r < 3; ++r) field[r] += basis * d[r];
+          }
+      for (int r = 0; r < 3; ++r) out[3 * b->points[n] + r] += (double)b->weights[n] * field[r];
+    }
+  }
+  double moved = 0.0;
+  for (size_t p = 0; p < skin->point_count; ++p) {
+    const double dx = out[3 * p] - skinned[3 * p], dy = out[3 * p + 1] - skinned[3 * p + 1],
+                 dz = out[3 * p + 2] - skinned[3 * p + 2];
+    moved = fmax(moved, sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  free(skinned);
+  return moved;
+}
+
+/* The largest distance between a character's positions and points in double. */
+static double gap_to(const deform_character* c, const double* points, size_t count) {
+  const float* p = deform_character_positions(c);
+  double worst = 0.0;
+  for (size_t i = 0; i < 3 * count; i += 3) {
+    const double dx = p[i] - points[i], dy = p[i + 1] - points[i + 1], dz = p[i + 2] - points[i + 2];
+    worst = fmax(worst, sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  return worst;
+}
+
+/* The whole deformation on the host's GPU: a character deforming on the CPU and a twin that only poses (deform_on_cpu
+ * off) take the same bent pose, reach beyond the arm (the lattices stretch), jiggle under gravity and spring back after
+ * a release. From the twin's palette, bind arrays and lattice data, plain loops here (skinning, carried points,
+ * Bernstein polynomials of their own) give the first one's points. */
+static void gpu_route_reproduces_the_cpu(void) {
+  deform_character *cpu = NULL, *gpu = NULL;
+  CHECK(deform_character_create_builtin(&cpu) == DEFORM_OK);
+  CHECK(deform_character_create_builtin(&gpu) == DEFORM_OK);
+  if (cpu == NULL || gpu == NULL) return;
+  const size_t points = deform_character_point_count(gpu), bones = deform_character_bone_count(gpu);
+  const size_t lattice_count = deform_character_lattice_count(gpu);
+  CHECK(lattice_count == 3 && lattice_count <= most_lattices);
+
+  /* Refusals, each with a message. */
+  deform_skin_bind skin;
+  deform_lattice_binding lattices[most_lattices];
+  deform_lattice_frame frame;
+  CHECK(deform_character_set_deform_on_cpu(NULL, 0) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "NULL") != NULL);
+  CHECK(deform_character_palette(NULL) == NULL);
+  CHECK(strstr(deform_last_error(), "deform_character_palette") != NULL);
+  CHECK(deform_character_skin_bind(gpu, NULL) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_skin_bind(NULL, &skin) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_lattice_binding(gpu, lattice_count, &lattices[0]) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "lattice out of range") != NULL);
+  CHECK(deform_character_lattice_binding(gpu, 0, NULL) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_lattice_frame(gpu, lattice_count, &frame) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "lattice out of range") != NULL);
+  CHECK(deform_character_lattice_frame(NULL, 0, &frame) == DEFORM_ERROR_ARGUMENT);
+
+  /* The bind data, once: four influences per point summing to 1, lanes of 16 with padding marked, parameters in the
+   * box, the carried points apart from the bound ones. */
+  CHECK(deform_character_skin_bind(gpu, &skin) == DEFORM_OK);
+  CHECK(skin.point_count == points);
+  int sane = 1;
+  for (size_t p = 0; p < points; ++p) {
+    double sum = 0.0;
+    for (int k = 0; k < 4; ++k) sane &= skin.bones[4 * p + k] < bones, sum += skin.weights[4 * p + k];
+    const float* n = skin.normals + 3 * p;
+    sane &= fabs(sum - 1.0) < 1e-5 && fabs(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0) < 1e-5;
+  }
+  CHECK(sane);
+  for (size_t l = 0; l < lattice_count; ++l) {
+    CHECK(deform_character_lattice_binding(gpu, l, &lattices[l]) == DEFORM_OK);
+    const deform_lattice_binding* b = &lattices[l];
+    CHECK(b->degree[0] >= 1 && b->degree[0] <= 16 && b->degree[1] >= 1 && b->degree[1] <= 16 && b->degree[2] >= 1 &&
+          b->degree[2] <= 16);
+    CHECK(b->control_point_count ==
+          (size_t)(b->degree[0] + 1) * (size_t)(b->degree[1] + 1) * (size_t)(b->degree[2] + 1));
+    CHECK(b->lane_count % 16 == 0 && b->lane_count >= b->bound_count && b->bound_count > 0);
+    size_t real = 0;
+    sane = 1;
+    for (size_t n = 0; n < b->lane_count; ++n) {
+      if (b->points[n] == DEFORM_NO_POINT) {
+        sane &= b->weights[n] == 0.0f;
+        continue;
+      }
+      ++real;
+      sane &= b->points[n] < points && b->weights[n] > 0.0f && b->weights[n] <= 1.0f;
+      sane &= b->u[n] >= -1e-4f && b->u[n] <= 1.0001f && b->v[n] >= -1e-4f && b->v[n] <= 1.0001f && b->w[n] >= -1e-4f &&
+              b->w[n] <= 1.0001f;
+      for (size_t m = 0; m < b->carried_count; ++m) sane &= b->carried_points[m] != b->points[n];
+    }
+    for (size_t m = 0; m < b->carried_count; ++m)
+      sane &= b->carried_points[m] < points && b->carried_weights[m] > 0.0f && b->carried_weights[m] <= 1.0f;
+    CHECK(sane && real == b->bound_count);
+    /* Shared by instances, not copied. */
+    deform_character* member = NULL;
+    deform_lattice_binding shared;
+    CHECK(deform_character_instance(gpu, &member) == DEFORM_OK);
+    CHECK(deform_character_lattice_binding(member, l, &shared) == DEFORM_OK);
+    CHECK(shared.points == b->points && shared.u == b->u && shared.carried_points == b->carried_points);
+    deform_character_destroy(member);
+  }
+  CHECK(lattices[0].carried_count > 0); /* the upper arm carries the forearm and the hand */
+
+  /* The model's size: the diagonal of its bind positions' box. */
+  double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
+  for (size_t p = 0; p < points; ++p)
+    for (int r = 0; r < 3; ++r)
+      lo[r] = fmin(lo[r], skin.positions[3 * p + r]), hi[r] = fmax(hi[r], skin.positions[3 * p + r]);
+  const double size =
+      sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  CHECK(size > 1.0 && size < 5.0);
+
+  /* A bent pose (spine, neck, legs and the right arm, each about a random axis), the same for both. */
+  float* rotations = malloc(4 * bones * sizeof(float));
+  float* translations = malloc(3 * bones * sizeof(float));
+  CHECK(deform_character_bind_pose(gpu, rotations, translations, bones) == DEFORM_OK);
+  const char* bent[] = {"spine", "neck", "thigh_l", "shin_r", "upperarm_r", "forearm_r"};
+  bend_randomly(gpu, rotations, bent, sizeof bent / sizeof *bent, 0.2, 0.5);
+  /* Gravity on every lattice's control points makes the fields bend, not only stretch along the bone. */
+  const float gravity[3] = {0.0f, -9.81f, 0.0f};
+  const float target[3] = {1.6f, 1.5f, 0.3f};
+  deform_character* both[2] = {cpu, gpu};
+  for (int i = 0; i < 2; ++i) {
+    CHECK(deform_character_set_lattice_motion(both[i], DEFORM_ALL_LATTICES, 1.0f, gravity, 1.0f) == DEFORM_OK);
+    CHECK(deform_character_set_pose(both[i], rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_update(both[i], 1.0f / 60.0f) == DEFORM_OK); /* both deform once */
+  }
+  CHECK(deform_character_set_deform_on_cpu(gpu, 0) == DEFORM_OK);
+  float* held = malloc(3 * points * sizeof(float));
+  CHECK(deform_character_copy_positions(gpu, held, 3 * points) == DEFORM_OK);
+  const size_t vertices = deform_character_vertex_count(gpu);
+  float* held_normals = malloc(3 * vertices * sizeof(float));
+  memcpy(held_normals, deform_character_normals(gpu), 3 * vertices * sizeof(float));
+  for (int i = 0; i < 2; ++i)
+    CHECK(deform_character_reach(both[i], deform_character_find_bone(both[i], "hand_l"), target, NULL) == DEFORM_OK);
+
+  /* The bound: the CPU sums in float, these loops in double; the terms (points and displacements about the model's
+   * size, 64 Bernstein terms a tricubic lattice, four matrices a point) round at a few 1e-7 of the size, so 1e-5 of it
+   * leaves room for another CPU's fused multiply-adds and stays far below what a mistake moves (a lattice's field or
+   * carried translation here: several percent of the size). */
+  const double bound = 1e-5 * size;
+  double* shaded = malloc(3 * points * sizeof(double));
+  double worst = 0.0, lattices_moved = 0.0;
+  int positions_held = 1, actives = 0;
+  for (int step = 1; step <= 50; ++step) {
+    if (step == 30)
+      for (int i = 0; i < 2; ++i) deform_character_release(both[i]); /* spring back */
+    for (int i = 0; i < 2; ++i) CHECK(deform_character_update(both[i], 1.0f / 60.0f) == DEFORM_OK);
+    positions_held &= memcmp(deform_character_positions(gpu), held, 3 * points * sizeof(float)) == 0;
+    positions_held &= memcmp(deform_character_normals(gpu), held_normals, 3 * vertices * sizeof(float)) == 0;
+    const double moved = deform_like_a_shader(gpu, &skin, lattices, lattice_count, shaded);
+    lattices_moved = fmax(lattices_moved, moved);
+    const double gap = gap_to(cpu, shaded, points);
+    worst = fmax(worst, gap);
+    if (step == 3 || step == 12 || step == 30 || step == 50) {
+      for (size_t l = 0; l < lattice_count; ++l) {
+        CHECK(deform_character_lattice_frame(gpu, l, &frame) == DEFORM_OK);
+        actives += frame.active != 0;
+      }
+      printf("GPU route, update %d: largest gap %.3g of the size (bound 1e-5), lattices move points by %.3g\n", step,
+             gap / size, moved / size);
+    }
+  }
+  CHECK(worst < bound);
+  CHECK(lattices_moved > 0.02 * size); /* the stretch is in the comparison */
+  CHECK(actives == 4 * (int)lattice_count);
+  CHECK(positions_held); /* posing only: the last deforming update's points and normals stay */
+
+  /* Deforming on the CPU again, the twin's next update is the first one's to the bit: posing kept the same state. */
+  CHECK(deform_character_set_deform_on_cpu(gpu, 1) == DEFORM_OK);
+  for (int i = 0; i < 2; ++i) CHECK(deform_character_update(both[i], 1.0f / 60.0f) == DEFORM_OK);
+  CHECK(memcmp(deform_character_positions(gpu), deform_character_positions(cpu), 3 * points * sizeof(float)) == 0);
+
+  /* A level without deformers runs no lattice: none is active, though the springs still swing, and the skin alone is
+   * the first one's at that level. */
+  const deform_level levels[2] = {{0, 1, 1, NULL, 0}, {bones, 0, 1, NULL, 0}};
+  for (int i = 0; i < 2; ++i) {
+    CHECK(deform_character_set_levels(both[i], levels, 2, NULL, NULL, 0, 0) == DEFORM_OK);
+    CHECK(deform_character_set_level(both[i], 1) == DEFORM_OK);
+  }
+  CHECK(deform_character_set_deform_on_cpu(gpu, 0) == DEFORM_OK);
+  for (int step = 0; step < 3; ++step)
+    for (int i = 0; i < 2; ++i) CHECK(deform_character_update(both[i], 1.0f / 60.0f) == DEFORM_OK);
+  int none_active = 1;
+  for (size_t l = 0; l < lattice_count; ++l) {
+    CHECK(deform_character_lattice_frame(gpu, l, &frame) == DEFORM_OK);
+    none_active &= frame.active == 0;
+  }
+  CHECK(none_active);
+  CHECK(deform_like_a_shader(gpu, &skin, lattices, lattice_count, shaded) == 0.0);
+  CHECK(gap_to(cpu, shaded, points) < bound);
+
+  free(shaded);
+  free(held);
+  free(held_normals);
+  free(rotations);
+  free(translations);
+  deform_character_destroy(cpu);
+  deform_character_destroy(gpu);
+}
+
 int main(void) {
   CHECK(strlen(deform_version()) >= 5);
   CHECK(strcmp(deform_last_error(), "") == 0);
@@ -812,6 +1072,7 @@ int main(void) {
   corrective_driven_by_the_elbow();
   render_mesh_normals_and_instances();
   levels_of_detail();
+  gpu_route_reproduces_the_cpu();
   if (failures) {
     fprintf(stderr, "%d checks failed\n", failures);
     return 1;

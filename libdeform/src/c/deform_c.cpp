@@ -458,6 +458,76 @@ float deform_character_stretch(const deform_character* character) {
   return character ? character->character.stretch() : 0.0f;
 }
 
+deform_status deform_character_set_deform_on_cpu(deform_character* character, int on) {
+  if (character == nullptr) return fail_argument("deform_character_set_deform_on_cpu: the handle is NULL");
+  character->character.settings.deform_on_cpu = on != 0;
+  return DEFORM_OK;
+}
+
+const float* deform_character_palette(const deform_character* character) {
+  if (character == nullptr) {
+    fail_argument("deform_character_palette: the handle is NULL");
+    return nullptr;
+  }
+  return reinterpret_cast<const float*>(character->character.palette().data());
+}
+
+deform_status deform_character_skin_bind(const deform_character* character, deform_skin_bind* out) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_skin_bind: NULL argument");
+  const deform::Model& model = character->character.model();
+  const deform::SkinWeights& skin = model.weights;
+  if (skin.has_extra())
+    return guarded([&] {
+      return fail(DEFORM_ERROR_REFUSED, "deform_character_skin_bind: " + std::to_string(skin.extra_points.size()) +
+                                            " points have more than four influences, which four slots cannot hold");
+    });
+  // GLM's vector types are plain arrays of their components, as the header's layout promises.
+  *out = deform_skin_bind{model.mesh.point_count(), reinterpret_cast<const float*>(model.mesh.positions.data()),
+                          reinterpret_cast<const float*>(character->character.bind_normals().data()),
+                          reinterpret_cast<const std::uint16_t*>(skin.bones.data()),
+                          reinterpret_cast<const float*>(skin.weights.data())};
+  return DEFORM_OK;
+}
+
+deform_status deform_character_lattice_binding(const deform_character* character, size_t lattice,
+                                               deform_lattice_binding* out) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_lattice_binding: NULL argument");
+  const deform::DeformerHierarchy& lattices = character->character.deformers();
+  if (lattice >= lattices.lattice_count())
+    return fail_argument("deform_character_lattice_binding: lattice out of range");
+  // The hierarchy's own binding (one lane per bound point, 16-lane blocks): handed out as it is, so that instances
+  // share it and nothing is copied.
+  const deform::LatticeBinding& binding = lattices.binding(lattice);
+  const glm::ivec3 degree = binding.point_counts - 1;
+  const std::span<const std::uint32_t> carried = lattices.carried_points(lattice);
+  *out = deform_lattice_binding{{degree.x, degree.y, degree.z},
+                                binding.control_point_count(),
+                                binding.vertex_count,
+                                binding.vertices.size(),
+                                binding.vertices.data(),
+                                binding.u.data(),
+                                binding.v.data(),
+                                binding.w.data(),
+                                lattices.bound_weights(lattice).data(),
+                                carried.size(),
+                                carried.data(),
+                                lattices.carried_weights(lattice).data()};
+  return DEFORM_OK;
+}
+
+deform_status deform_character_lattice_frame(const deform_character* character, size_t lattice,
+                                             deform_lattice_frame* out) {
+  if (character == nullptr || out == nullptr) return fail_argument("deform_character_lattice_frame: NULL argument");
+  const deform::DeformerHierarchy& lattices = character->character.deformers();
+  if (lattice >= lattices.lattice_count()) return fail_argument("deform_character_lattice_frame: lattice out of range");
+  // A level that did not run the lattices left the hierarchy's state as an earlier update had it: nothing to add.
+  const glm::vec3 far = lattices.far_displacement(lattice);
+  *out = deform_lattice_frame{character->character.lattices_ran() && lattices.active(lattice) ? 1 : 0,
+                              reinterpret_cast<const float*>(lattices.displacements(lattice).data()),
+                              {far.x, far.y, far.z}};
+  return DEFORM_OK;
+}
+
 deform_status deform_skin_lbs(const float* palette, size_t bone_count, const uint16_t* bones, const float* weights,
                               const float* positions, size_t vertex_count, float* out) {
   if (palette == nullptr || bones == nullptr || weights == nullptr || positions == nullptr || out == nullptr)

@@ -1,7 +1,7 @@
-/* libdeform's C API (target deform::c): a Character (load, pose, reach, release, update, read the deformed mesh),
- * linear-blend skinning and Direct Delta Mush over caller arrays, and Bezier lattices (bind points once, move control
- * points, evaluate), for any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md
- * walks through it.
+/* libdeform's C API (target deform::c): a Character (load, pose, reach, release, update, read the deformed mesh, or
+ * pose only and hand a GPU its palette, bind arrays and lattice data to deform it there), linear-blend skinning and
+ * Direct Delta Mush over caller arrays, and Bezier lattices (bind points once, move control points, evaluate), for
+ * any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md walks through it.
  *
  * Conventions:
  *  - Objects are opaque handles made by a *_create / *_load function and freed by the matching *_destroy (NULL is
@@ -12,7 +12,8 @@
  *    column-major (as GLM and OpenGL). Quaternions are float[4] as (x, y, z, w).
  *  - Nothing here keeps a caller's pointer after it returns, except where stated.
  *  - A handle is used by one thread at a time; distinct handles are independent. deform_last_error is per thread.
- *  - The per-frame functions (update, reach, release, skinning, lattice evaluation) allocate nothing. */
+ *  - The per-frame functions (update, reach, release, skinning, lattice evaluation, the GPU route's palette and
+ *    lattice frames) allocate nothing. */
 #ifndef DEFORM_C_DEFORM_H
 #define DEFORM_C_DEFORM_H
 
@@ -247,6 +248,83 @@ DEFORM_C_API deform_status deform_character_level_cost(const deform_character* c
 DEFORM_C_API float deform_screen_height(float extent, float distance, float vertical_fov);
 /* The level for that height: how many of `thresholds` (decreasing fractions, one per level after 0) it is below. */
 DEFORM_C_API size_t deform_pick_level(const float* thresholds, size_t count, float height);
+
+/* ---- The whole deformation on the GPU (docs/c-api.md, "Deforming on the GPU"; docs/gpu.md) ----
+ *
+ * With deform_on_cpu off, update() only poses and the host deforms each point p itself (a shader) from what the calls
+ * below hand it, in this order:
+ *  1. skinning: p = (sum_k weights[4p+k] * palette[bones[4p+k]]) * rest[p] / sum_k weights[4p+k], the matrices
+ *     blended, then applied (linear blend skinning, as deform_skin_lbs);
+ *  2. for every active lattice: each of its carried points += carried_weights[n] * far_displacement;
+ *  3. for every active lattice, in index order: each bound point += weights[n] * sum_ijk D_ijk B_i(u) B_j(v) B_k(w),
+ *     D its displacements (i-fastest: D_ijk = displacements[3 * (i + (du + 1) * (j + (dv + 1) * k))]) and B the
+ *     Bernstein polynomials of its degrees (du, dv, dw): B_i(u) = C(du, i) u^i (1 - u)^(du - i).
+ * That gives the points a deforming update() gives, to float rounding (the order of 3 matters only for rounding).
+ * Normals: skinning the bind normals by the cofactor of the blended 3x3 gives the skinned ones; this API does not hand
+ * out the lattices' normal maps, so with this route the normals are those of the skinned surface (the C++
+ * GpuLatticeFields turns them by the lattices too). What only the CPU does stays out of it: morph targets and pose
+ * correctives (rest[] is the bind pose unmorphed), Delta Mush and Direct Delta Mush, and the levels' reduced skins
+ * (the bind arrays are the whole character's; the palette covers every bone). */
+
+/* 1 (the default): update() deforms on the CPU. 0: update() only poses — forward kinematics, the spring chains, the
+ * lattices' springs and their control points — and deform_character_positions and _normals keep the last deforming
+ * update's points and normals (the bind pose before any); bone_position and stretch follow the pose as always, and
+ * with levels every update poses at the level set (no update_interval). Takes effect at the next update; instances
+ * made later copy it. No allocation. */
+DEFORM_C_API deform_status deform_character_set_deform_on_cpu(deform_character* character, int on);
+/* The skinning palette of the last update (deforming or not): bone_count matrices, 16 floats each, column-major,
+ * T_world * T_bind^-1 with the spring chains' bending included (what deform_skin_lbs takes). Identity before any
+ * update. A view into the character, valid until destroy; its content changes at each update. NULL for a NULL handle
+ * (deform_last_error says so). No allocation. */
+DEFORM_C_API const float* deform_character_palette(const deform_character* character);
+
+/* What a GPU binds once for skinning: views into the character (shared by its instances), valid until destroy. */
+typedef struct deform_skin_bind {
+  size_t point_count;     /* mesh points (deform_character_point_count) */
+  const float* positions; /* point_count * 3: the bind positions */
+  const float* normals;   /* point_count * 3: the bind-pose unit normals (angle-weighted), which the CPU skins */
+  const uint16_t* bones;  /* point_count * 4 bone ids */
+  const float* weights;   /* point_count * 4 weights, unused slots 0, summing to 1 */
+} deform_skin_bind;
+/* Fills `out`. DEFORM_ERROR_ARGUMENT for a NULL argument; DEFORM_ERROR_REFUSED for a skin with points of more than
+ * four influences, which four slots cannot hold (a character loaded by this API never has them: the loader keeps the
+ * four strongest). No allocation. */
+DEFORM_C_API deform_status deform_character_skin_bind(const deform_character* character, deform_skin_bind* out);
+
+/* Marks the padding lanes of a lattice binding. */
+#define DEFORM_NO_POINT ((uint32_t)0xFFFFFFFFu)
+/* What a GPU binds once for lattice `lattice`: views into the character (shared by its instances), valid until
+ * destroy. The bound points come in lanes, blocks of 16 as the CPU evaluates them: lane n is point points[n] at
+ * (u[n], v[n], w[n]) in the lattice's box with selection weight weights[n]; a padding lane has point DEFORM_NO_POINT
+ * and weight 0 and is skipped. Each point is in at most one lane of a lattice, and in a lattice's bound or carried
+ * points, not both. */
+typedef struct deform_lattice_binding {
+  int32_t degree[3];          /* Bezier degree along u (the bone), v and w, 1 to 16: degree + 1 control points each */
+  size_t control_point_count; /* (degree[0] + 1) * (degree[1] + 1) * (degree[2] + 1) */
+  size_t bound_count;         /* points the field moves (lanes that are not padding) */
+  size_t lane_count;          /* entries of points, u, v, w and weights: bound_count plus padding, a multiple of 16 */
+  const uint32_t* points;
+  const float* u;
+  const float* v;
+  const float* w;
+  const float* weights; /* in (0, 1] */
+  size_t carried_count; /* points beyond the far face, moved by its displacement */
+  const uint32_t* carried_points;
+  const float* carried_weights; /* in (0, 1] */
+} deform_lattice_binding;
+/* What lattice `lattice` adds this frame, as of the last update. */
+typedef struct deform_lattice_frame {
+  int active; /* nonzero: the lattice moves points; 0: at rest, or not run by the update (a level without deformers
+               * or with a point subset): it adds nothing, and the rest of this is an earlier update's */
+  const float* displacements; /* control_point_count * 3, world space, i-fastest: a view, valid until destroy */
+  float far_displacement[3];  /* what each carried point gets, times its weight */
+} deform_lattice_frame;
+/* Fill `out` for lattice `lattice` (below deform_character_lattice_count). DEFORM_ERROR_ARGUMENT for a NULL argument
+ * or a lattice out of range. No allocation: call _lattice_binding at set-up, _lattice_frame after each update. */
+DEFORM_C_API deform_status deform_character_lattice_binding(const deform_character* character, size_t lattice,
+                                                            deform_lattice_binding* out);
+DEFORM_C_API deform_status deform_character_lattice_frame(const deform_character* character, size_t lattice,
+                                                          deform_lattice_frame* out);
 
 /* ---- Skinning over caller arrays (deform/runtime/skinning.hpp, SkinningJob) ---- */
 

@@ -405,6 +405,11 @@ class DEFORM_CHARACTER_API Character {
   // The bind-pose unit normals the transported mode skins, one per mesh point (angle-weighted over the bind
   // positions): a GPU skinning that should give normals() gathers them per render vertex (Mesh::vertex_point).
   std::span<const glm::vec3> bind_normals() const noexcept { return bind_->point_normals; }
+  // Whether the last update() ran the lattices (their springs and DeformerHierarchy::update): true without levels,
+  // false when it showed a level without deformers or with a point subset (LevelOptions), whose lattices wait. The
+  // frame then has no lattice in it, and deformers()'s state (active(), displacements()) is an earlier update's: a
+  // caller that adds the lattices itself (deform_on_cpu = false) adds none.
+  bool lattices_ran() const noexcept { return runs_lattices(shown_); }
   // A lattice's control points in world space (for drawing), i-fastest.
   std::span<const glm::vec3> control_points(std::size_t lattice) const { return hierarchy_.control_points(lattice); }
   // World head of a bone including what the lattices above it carry it by.
