@@ -58,6 +58,16 @@ int run(const std::vector<std::string>& argv) {
   gltf.up = loaded.up;
   const deform::GltfWritten written = deform::write_gltf(out, model, gltf);
   for (const std::string& w : written.warnings) note(w);
+  // Short of the ratio by more than a rounding: say why, so that a mesh written back unchanged is not a surprise.
+  const std::size_t source = loaded.model.mesh.triangle_count(), kept = model.mesh.triangle_count();
+  const double asked = ratio * double(source);
+  if (double(kept) > 1.25 * asked + 2.0)
+    note("kept " + std::to_string(kept) + " of " + std::to_string(source) + " triangles where --ratio asks for about " +
+         std::to_string(std::size_t(asked + 0.5)) +
+         (double(simplified.error) >= 0.9 * max_error
+              ? ": the collapses stopped at --max-error"
+              : ": the others lie on UV or normal seams and open borders, which stay (a faceted mesh, each triangle "
+                "with UVs or normals of its own, keeps them all)"));
   print_json(Json{{"gltf", written.gltf},
                   {"bin", written.bin.empty() ? Json(nullptr) : Json(written.bin)},
                   {"bytes", written.bytes},
@@ -90,7 +100,7 @@ const Command simplify_command = {
     "skeleton, the skin and the clips (the built-in character's: idle, walk, run, wave). Prints {\"gltf\": FILE,\n"
     "\"bin\": path or null, \"bytes\", \"source_vertices\", \"source_triangles\", \"vertices\", \"render_vertices\",\n"
     "\"triangles\", \"error\": the largest surface error meshoptimizer reports, as a fraction of the largest extent,\n"
-    "\"clips\": count}.\n"
+    "\"clips\": count}. Short of R by more than a quarter, it says why on stderr (--max-error, or seams).\n"
     "\n"
     "Exit status: 0 success; 2 bad usage or a file that cannot be read (the message names it); 1 any other failure\n"
     "(a build without the simplify component).\n",
