@@ -4,7 +4,10 @@
 #include "deform/c/deform.h"
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <exception>
+#include <memory>
 #include <new>
 #include <optional>
 #include <span>
@@ -22,11 +25,29 @@
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "deform/version.hpp"
+#ifdef DEFORM_C_HAVE_IMPORT
+#include "deform/import/import.hpp"
+#include "deform/offline/rig.hpp"
+#endif
+
+namespace {
+
+// What a character and its instances share besides the Character's own data: its clips and the import's warnings.
+struct CharacterSource {
+  std::vector<deform::Animation> clips;
+  std::vector<std::string> warnings;
+};
+
+}  // namespace
 
 struct deform_character {
   deform::Character character;
-  deform::Pose pose;   // set_pose's staging, sized once so that the call allocates nothing
-  deform::Pose later;  // set_pose_moving's second pose, likewise
+  std::shared_ptr<const CharacterSource> source;    // never null
+  deform::Pose pose;                                // set_pose's staging, sized once so that the call allocates nothing
+  deform::Pose later;                               // set_pose_moving's second pose, likewise
+  deform::Pose bind;                                // the bind pose, where sample_clip starts
+  deform::Pose sampled;                             // sample_clip's staging
+  std::vector<std::vector<std::uint32_t>> cursors;  // one SamplingJob cursor per clip, this handle's own
 };
 
 struct deform_ddm {
@@ -88,12 +109,25 @@ deform_status refused(const deform::Status& status) {
   return status ? DEFORM_OK : fail(DEFORM_ERROR_REFUSED, status.reason());
 }
 
-deform_status adopt(deform::Character character, deform_character** out) {
-  auto* handle = new deform_character{std::move(character), {}, {}};
-  handle->pose = handle->character.skeleton().bind_pose();
-  handle->later = handle->pose;
-  *out = handle;
+deform_status adopt(deform::Character character, std::shared_ptr<const CharacterSource> source,
+                    deform_character** out) {
+  std::unique_ptr<deform_character> handle(
+      new deform_character{std::move(character), std::move(source), {}, {}, {}, {}, {}});
+  handle->bind = handle->character.skeleton().bind_pose();
+  handle->pose = handle->bind;
+  handle->later = handle->bind;
+  handle->sampled = handle->bind;
+  for (const deform::Animation& clip : handle->source->clips) {
+    deform::SamplingJob job;
+    job.animation = &clip;
+    handle->cursors.emplace_back(job.cursor_size(), 0u);
+  }
+  *out = handle.release();
   return DEFORM_OK;
+}
+
+deform_status adopt(deform::Character character, deform_character** out) {
+  return adopt(std::move(character), std::make_shared<const CharacterSource>(), out);
 }
 
 bool finite3(const float* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
@@ -108,7 +142,12 @@ const char* deform_version(void) { return DEFORM_VERSION_STRING; }
 
 deform_status deform_character_create_builtin(deform_character** out) {
   if (out == nullptr) return fail_argument("deform_character_create_builtin: out is NULL");
-  return guarded([&] { return adopt(deform::make_builtin_character(), out); });
+  return guarded([&] {
+    deform::Character character = deform::make_builtin_character();
+    auto source = std::make_shared<CharacterSource>();
+    source->clips = deform::builtin_clips(character.model());
+    return adopt(std::move(character), std::move(source), out);
+  });
 }
 
 deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
@@ -129,7 +168,7 @@ deform_status deform_character_load_allowing(const char* obj_path, const char* s
     deform::ReferencePolicy policy;
     for (size_t i = 0; i < allow_count; ++i) policy.allow_outside.emplace_back(allow_outside[i]);
     deform::Model model = deform::load_model(obj_path, sk_path, skw_path, nullptr, deform::max_influences, policy);
-    if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);
+    if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);  // native files carry no clips
     deform::Rig rig = deform::read_rig_json(rig_path, model.skeleton, model.mesh.point_count());
     return adopt(deform::Character(std::move(model), rig), out);
   });
@@ -139,7 +178,136 @@ void deform_character_destroy(deform_character* character) { delete character; }
 
 deform_status deform_character_instance(const deform_character* character, deform_character** out) {
   if (character == nullptr || out == nullptr) return fail_argument("deform_character_instance: NULL argument");
-  return guarded([&] { return adopt(character->character.instance(), out); });
+  return guarded([&] { return adopt(character->character.instance(), character->source, out); });
+}
+
+void deform_import_options_init(deform_import_options* options) {
+  if (options == nullptr) return;
+  *options = deform_import_options{};
+  options->struct_size = sizeof(deform_import_options);
+  options->rig = DEFORM_IMPORT_RIG_NONE;
+}
+
+deform_status deform_character_import(const char* path, const deform_import_options* options, deform_character** out) {
+  if (path == nullptr || out == nullptr) return fail_argument("deform_character_import: path or out is NULL");
+  deform_import_options defaults;
+  deform_import_options_init(&defaults);
+  if (options == nullptr) options = &defaults;
+  // The first version's fields end with worker_path; a later version reads its own fields only when struct_size
+  // covers them.
+  if (options->struct_size < offsetof(deform_import_options, worker_path) + sizeof(options->worker_path))
+    return fail_argument("deform_import_options: struct_size is too small (use deform_import_options_init)");
+  if (options->rig != DEFORM_IMPORT_RIG_NONE && options->rig != DEFORM_IMPORT_RIG_DEFAULT &&
+      options->rig != DEFORM_IMPORT_RIG_FILE)
+    return fail_argument("deform_import_options: rig is not a deform_import_rig");
+  if (options->rig == DEFORM_IMPORT_RIG_FILE && options->rig_path == nullptr)
+    return fail_argument("deform_import_options: DEFORM_IMPORT_RIG_FILE with rig_path NULL");
+  if (options->allow_count > 0 && options->allow_outside == nullptr)
+    return fail_argument("deform_import_options: allow_outside is NULL with a count above 0");
+  for (size_t i = 0; i < options->allow_count; ++i)
+    if (options->allow_outside[i] == nullptr) return fail_argument("deform_import_options: a folder is NULL");
+  if (!(options->max_seconds >= 0.0))
+    return fail_argument("deform_import_options: max_seconds is negative or not a number");
+#ifdef DEFORM_C_HAVE_IMPORT
+  return guarded([&] {
+    deform::ImportOptions import_options;
+    for (size_t i = 0; i < options->allow_count; ++i)
+      import_options.references.allow_outside.emplace_back(options->allow_outside[i]);
+    deform::IsolationLimits limits;
+    if (options->max_memory_bytes != 0) limits.max_memory_bytes = options->max_memory_bytes;
+    if (options->max_seconds != 0.0) limits.max_seconds = options->max_seconds;
+    if (options->worker_path != nullptr) limits.worker = options->worker_path;
+    deform::ImportedModel imported = deform::import_model_isolated(path, import_options, limits);
+    auto source = std::make_shared<CharacterSource>();
+    source->clips = std::move(imported.clips);
+    // As the CLI reports them (model_loading::load_model): each line names the file.
+    for (const std::string& message : imported.warnings) source->warnings.push_back(std::string(path) + ": " + message);
+    deform::Model& model = imported.model;
+    // The rig as the CLI picks it for an imported model: the file's (read against the model's skeleton and points),
+    // or default_rig's (model_loading::starting_rig), bound by the Character, whose refusal fails the call.
+    switch (options->rig) {
+      case DEFORM_IMPORT_RIG_FILE: {
+        const deform::Rig rig = deform::read_rig_json(options->rig_path, model.skeleton, model.mesh.point_count());
+        return adopt(deform::Character(std::move(model), rig), std::move(source), out);
+      }
+      case DEFORM_IMPORT_RIG_DEFAULT: {
+        const deform::Rig rig = deform::default_rig(model);
+        return adopt(deform::Character(std::move(model), rig), std::move(source), out);
+      }
+      default: return adopt(deform::Character(std::move(model)), std::move(source), out);
+    }
+  });
+#else
+  return fail(DEFORM_ERROR_INTERNAL, std::string("deform_character_import: this build lacks the import component ") +
+                                         "(deform::import, built when Assimp and tinygltf are found): cannot read '" +
+                                         path + "'");
+#endif
+}
+
+size_t deform_character_warning_count(const deform_character* character) {
+  return character != nullptr ? character->source->warnings.size() : 0;
+}
+
+const char* deform_character_warning(const deform_character* character, size_t warning) {
+  if (character == nullptr || warning >= character->source->warnings.size()) return nullptr;
+  return character->source->warnings[warning].c_str();
+}
+
+size_t deform_character_clip_count(const deform_character* character) {
+  return character != nullptr ? character->source->clips.size() : 0;
+}
+
+const char* deform_character_clip_name(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return nullptr;
+  return character->source->clips[clip].name.c_str();
+}
+
+float deform_character_clip_duration(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return 0.0f;
+  return character->source->clips[clip].duration;
+}
+
+int deform_character_clip_loops(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return 0;
+  return character->source->clips[clip].loop ? 1 : 0;
+}
+
+int32_t deform_character_find_clip(const deform_character* character, const char* name) {
+  if (character == nullptr || name == nullptr) return -1;
+  const std::vector<deform::Animation>& clips = character->source->clips;
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    if (clips[c].name == name) return static_cast<int32_t>(c);
+  return -1;
+}
+
+deform_status deform_character_sample_clip(deform_character* character, size_t clip, float seconds,
+                                           float* rotations_xyzw, float* translations, size_t bone_count) {
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr)
+    return fail_argument("deform_character_sample_clip: a handle or array is NULL");
+  if (clip >= character->source->clips.size()) return fail_argument("deform_character_sample_clip: clip out of range");
+  if (bone_count != character->bind.rotations.size())
+    return fail_argument("deform_character_sample_clip: bone_count differs from the skeleton's");
+  // The bind pose, then the clip's bones over it (SamplingJob writes the bones it animates), staged in the handle:
+  // a refusal writes nothing into the caller's arrays.
+  deform::Pose& pose = character->sampled;
+  std::copy(character->bind.rotations.begin(), character->bind.rotations.end(), pose.rotations.begin());
+  std::copy(character->bind.translations.begin(), character->bind.translations.end(), pose.translations.begin());
+  deform::SamplingJob job;
+  job.animation = &character->source->clips[clip];
+  job.time = seconds;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.cursor = character->cursors[clip];
+  if (const deform::Status status = job.run(); !status) return refused(status);
+  for (std::size_t b = 0; b < bone_count; ++b) {
+    const glm::quat& q = pose.rotations[b];
+    const glm::vec3& t = pose.translations[b];
+    float* r = rotations_xyzw + 4 * b;
+    r[0] = q.x, r[1] = q.y, r[2] = q.z, r[3] = q.w;
+    float* o = translations + 3 * b;
+    o[0] = t.x, o[1] = t.y, o[2] = t.z;
+  }
+  return DEFORM_OK;
 }
 
 size_t deform_character_point_count(const deform_character* character) {
