@@ -25,30 +25,8 @@
 #include "deform/runtime/lattice.hpp"
 #include "deform/runtime/skinning.hpp"
 #include "deform/version.hpp"
-#ifdef DEFORM_C_HAVE_IMPORT
-#include "deform/import/import.hpp"
-#include "deform/offline/rig.hpp"
-#endif
 
-namespace {
-
-// What a character and its instances share besides the Character's own data: its clips and the import's warnings.
-struct CharacterSource {
-  std::vector<deform::Animation> clips;
-  std::vector<std::string> warnings;
-};
-
-}  // namespace
-
-struct deform_character {
-  deform::Character character;
-  std::shared_ptr<const CharacterSource> source;    // never null
-  deform::Pose pose;                                // set_pose's staging, sized once so that the call allocates nothing
-  deform::Pose later;                               // set_pose_moving's second pose, likewise
-  deform::Pose bind;                                // the bind pose, where sample_clip starts
-  deform::Pose sampled;                             // sample_clip's staging
-  std::vector<std::vector<std::uint32_t>> cursors;  // one SamplingJob cursor per clip, this handle's own
-};
+#include "c_character.hpp"
 
 struct deform_ddm {
   deform::DirectDeltaMushBinding binding;
@@ -64,6 +42,10 @@ namespace {
 
 thread_local std::string last_error;
 
+}  // namespace
+
+namespace deform_c {
+
 deform_status fail(deform_status status, std::string message) {
   try {
     last_error = std::move(message);
@@ -74,40 +56,6 @@ deform_status fail(deform_status status, std::string message) {
 }
 
 deform_status fail_argument(const char* message) { return fail(DEFORM_ERROR_ARGUMENT, message); }
-
-// Runs `body` (returning deform_status), translating what C++ throws.
-template <class Body>
-deform_status guarded(Body&& body) noexcept {
-  try {
-    return body();
-  } catch (const deform::Error& e) {
-    // The environment (a full disk, permissions) is neither the input nor the call: "anything else".
-    return fail(e.kind() == deform::Error::Kind::input      ? DEFORM_ERROR_INPUT
-                : e.kind() == deform::Error::Kind::argument ? DEFORM_ERROR_ARGUMENT
-                                                            : DEFORM_ERROR_INTERNAL,
-                e.what());
-  } catch (const std::bad_alloc&) {
-    return fail(DEFORM_ERROR_INTERNAL, "out of memory");
-  } catch (const std::exception& e) {
-    return fail(DEFORM_ERROR_INTERNAL, e.what());
-  } catch (...) {
-    return fail(DEFORM_ERROR_INTERNAL, "unknown failure");
-  }
-}
-
-// Copies C arrays (quaternions x, y, z, w; translations) into a pose sized for them.
-void stage(deform::Pose& pose, const float* rotations_xyzw, const float* translations) {
-  for (std::size_t b = 0; b < pose.rotations.size(); ++b) {
-    const float* q = rotations_xyzw + 4 * b;
-    pose.rotations[b] = glm::quat(q[3], q[0], q[1], q[2]);
-    const float* t = translations + 3 * b;
-    pose.translations[b] = glm::vec3(t[0], t[1], t[2]);
-  }
-}
-
-deform_status refused(const deform::Status& status) {
-  return status ? DEFORM_OK : fail(DEFORM_ERROR_REFUSED, status.reason());
-}
 
 deform_status adopt(deform::Character character, std::shared_ptr<const CharacterSource> source,
                     deform_character** out) {
@@ -124,6 +72,30 @@ deform_status adopt(deform::Character character, std::shared_ptr<const Character
   }
   *out = handle.release();
   return DEFORM_OK;
+}
+
+}  // namespace deform_c
+
+using deform_c::adopt;
+using deform_c::CharacterSource;
+using deform_c::fail;
+using deform_c::fail_argument;
+using deform_c::guarded;
+
+namespace {
+
+// Copies C arrays (quaternions x, y, z, w; translations) into a pose sized for them.
+void stage(deform::Pose& pose, const float* rotations_xyzw, const float* translations) {
+  for (std::size_t b = 0; b < pose.rotations.size(); ++b) {
+    const float* q = rotations_xyzw + 4 * b;
+    pose.rotations[b] = glm::quat(q[3], q[0], q[1], q[2]);
+    const float* t = translations + 3 * b;
+    pose.translations[b] = glm::vec3(t[0], t[1], t[2]);
+  }
+}
+
+deform_status refused(const deform::Status& status) {
+  return status ? DEFORM_OK : fail(DEFORM_ERROR_REFUSED, status.reason());
 }
 
 deform_status adopt(deform::Character character, deform_character** out) {
@@ -186,62 +158,6 @@ void deform_import_options_init(deform_import_options* options) {
   *options = deform_import_options{};
   options->struct_size = sizeof(deform_import_options);
   options->rig = DEFORM_IMPORT_RIG_NONE;
-}
-
-deform_status deform_character_import(const char* path, const deform_import_options* options, deform_character** out) {
-  if (path == nullptr || out == nullptr) return fail_argument("deform_character_import: path or out is NULL");
-  deform_import_options defaults;
-  deform_import_options_init(&defaults);
-  if (options == nullptr) options = &defaults;
-  // The first version's fields end with worker_path; a later version reads its own fields only when struct_size
-  // covers them.
-  if (options->struct_size < offsetof(deform_import_options, worker_path) + sizeof(options->worker_path))
-    return fail_argument("deform_import_options: struct_size is too small (use deform_import_options_init)");
-  if (options->rig != DEFORM_IMPORT_RIG_NONE && options->rig != DEFORM_IMPORT_RIG_DEFAULT &&
-      options->rig != DEFORM_IMPORT_RIG_FILE)
-    return fail_argument("deform_import_options: rig is not a deform_import_rig");
-  if (options->rig == DEFORM_IMPORT_RIG_FILE && options->rig_path == nullptr)
-    return fail_argument("deform_import_options: DEFORM_IMPORT_RIG_FILE with rig_path NULL");
-  if (options->allow_count > 0 && options->allow_outside == nullptr)
-    return fail_argument("deform_import_options: allow_outside is NULL with a count above 0");
-  for (size_t i = 0; i < options->allow_count; ++i)
-    if (options->allow_outside[i] == nullptr) return fail_argument("deform_import_options: a folder is NULL");
-  if (!(options->max_seconds >= 0.0))
-    return fail_argument("deform_import_options: max_seconds is negative or not a number");
-#ifdef DEFORM_C_HAVE_IMPORT
-  return guarded([&] {
-    deform::ImportOptions import_options;
-    for (size_t i = 0; i < options->allow_count; ++i)
-      import_options.references.allow_outside.emplace_back(options->allow_outside[i]);
-    deform::IsolationLimits limits;
-    if (options->max_memory_bytes != 0) limits.max_memory_bytes = options->max_memory_bytes;
-    if (options->max_seconds != 0.0) limits.max_seconds = options->max_seconds;
-    if (options->worker_path != nullptr) limits.worker = options->worker_path;
-    deform::ImportedModel imported = deform::import_model_isolated(path, import_options, limits);
-    auto source = std::make_shared<CharacterSource>();
-    source->clips = std::move(imported.clips);
-    // As the CLI reports them (model_loading::load_model): each line names the file.
-    for (const std::string& message : imported.warnings) source->warnings.push_back(std::string(path) + ": " + message);
-    deform::Model& model = imported.model;
-    // The rig as the CLI picks it for an imported model: the file's (read against the model's skeleton and points),
-    // or default_rig's (model_loading::starting_rig), bound by the Character, whose refusal fails the call.
-    switch (options->rig) {
-      case DEFORM_IMPORT_RIG_FILE: {
-        const deform::Rig rig = deform::read_rig_json(options->rig_path, model.skeleton, model.mesh.point_count());
-        return adopt(deform::Character(std::move(model), rig), std::move(source), out);
-      }
-      case DEFORM_IMPORT_RIG_DEFAULT: {
-        const deform::Rig rig = deform::default_rig(model);
-        return adopt(deform::Character(std::move(model), rig), std::move(source), out);
-      }
-      default: return adopt(deform::Character(std::move(model)), std::move(source), out);
-    }
-  });
-#else
-  return fail(DEFORM_ERROR_INTERNAL, std::string("deform_character_import: this build lacks the import component ") +
-                                         "(deform::import, built when Assimp and tinygltf are found): cannot read '" +
-                                         path + "'");
-#endif
 }
 
 size_t deform_character_warning_count(const deform_character* character) {

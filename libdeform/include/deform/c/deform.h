@@ -110,7 +110,8 @@ DEFORM_C_API void deform_import_options_init(deform_import_options* options);
  * naming the file (and the element) for a model that is missing, malformed, names a file outside the allowed
  * folders or exceeds a limit, and for a rig that does not fit it; DEFORM_ERROR_INTERNAL for a build without the
  * import component (Assimp and tinygltf were not found: deform_last_error says so) or a worker that is not found.
- * Allocates and takes time (a process start plus the import): call it at load time, not per frame. */
+ * Allocates and takes time (a process start plus the import): call it at load time, not per frame. With a static
+ * libdeform, a program that calls it links deform::import too (CMake: find_package(libdeform COMPONENTS import)). */
 DEFORM_C_API deform_status deform_character_import(const char* path, const deform_import_options* options,
                                                    deform_character** out);
 /* The import's non-fatal findings (unweighted vertices bound rigidly, influences dropped, scale a skeleton cannot
