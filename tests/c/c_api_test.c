@@ -313,6 +313,7 @@ static void builtin_clips_play(void) {
 
 #define MRFIXIT "/usr/share/assimp/models/IQM/mrfixit.iqm"
 
+#ifdef DEFORM_TEST_HAVE_IMPORT
 /* A glTF triangle whose buffer lies outside its folder: refused unless that folder is allowed. */
 static void imports_are_confined(const char* work) {
   char model[300], gltf[320], bin[320];
@@ -368,6 +369,8 @@ static size_t read_obj_points(const char* path, float* out, size_t capacity) {
   fclose(f);
   return n;
 }
+
+#endif
 
 /* deform_character_import on a real model: its clip played through the C API deforms as `deform skin` does. */
 static void imported_model_plays_its_clips(void) {

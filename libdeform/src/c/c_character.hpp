@@ -24,10 +24,10 @@ struct CharacterSource {
 struct deform_character {
   deform::Character character;
   std::shared_ptr<const deform_c::CharacterSource> source;  // never null
-  deform::Pose pose;     // set_pose's staging, sized once so that the call allocates nothing
-  deform::Pose later;    // set_pose_moving's second pose, likewise
-  deform::Pose bind;     // the bind pose, where sample_clip starts
-  deform::Pose sampled;  // sample_clip's staging
+  deform::Pose pose;                                // set_pose's staging, sized once so that the call allocates nothing
+  deform::Pose later;                               // set_pose_moving's second pose, likewise
+  deform::Pose bind;                                // the bind pose, where sample_clip starts
+  deform::Pose sampled;                             // sample_clip's staging
   std::vector<std::vector<std::uint32_t>> cursors;  // one SamplingJob cursor per clip, this handle's own
 };
 
@@ -59,7 +59,6 @@ deform_status guarded(Body&& body) noexcept {
 
 // Wraps `character` in a new handle at *out, with the clips and warnings `source` holds (shared, never copied), its
 // staging poses and clip cursors allocated once. Throws std::bad_alloc.
-deform_status adopt(deform::Character character, std::shared_ptr<const CharacterSource> source,
-                    deform_character** out);
+deform_status adopt(deform::Character character, std::shared_ptr<const CharacterSource> source, deform_character** out);
 
 }  // namespace deform_c
