@@ -394,6 +394,10 @@ static void imported_model_plays_its_clips(void) {
   CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT); /* no rig_path */
   options.struct_size = 0;
   CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT);
+  deform_import_options_init(&options);
+  options.worker_path = "/nonexistent/deform-import-worker";
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_INTERNAL);
+  CHECK(strstr(deform_last_error(), "/nonexistent/deform-import-worker") != NULL);
   CHECK(c == NULL);
   if (access(MRFIXIT, R_OK) != 0) {
     printf("C API: %s is missing (Debian's assimp-testmodels): its import is not checked\n", MRFIXIT);

@@ -46,7 +46,17 @@ deform_status deform_character_import(const char* path, const deform_import_opti
     if (options->max_memory_bytes != 0) limits.max_memory_bytes = options->max_memory_bytes;
     if (options->max_seconds != 0.0) limits.max_seconds = options->max_seconds;
     if (options->worker_path != nullptr) limits.worker = options->worker_path;
-    deform::ImportedModel imported = deform::import_model_isolated(path, import_options, limits);
+    deform::ImportedModel imported;
+    try {
+      imported = deform::import_model_isolated(path, import_options, limits);
+    } catch (const deform::Error& e) {
+      // Its one argument error is a worker that is not found: the installation, not the call, so "anything else".
+      if (e.kind() == deform::Error::Kind::argument)
+        return fail(DEFORM_ERROR_INTERNAL, options->worker_path != nullptr
+                                               ? "worker_path '" + limits.worker + "': " + e.what()
+                                               : std::string(e.what()));
+      throw;
+    }
     auto source = std::make_shared<deform_c::CharacterSource>();
     source->clips = std::move(imported.clips);
     // As the CLI reports them (model_loading::load_model): each line names the file.
