@@ -395,6 +395,10 @@ static void imported_model_plays_its_clips(void) {
   options.struct_size = 0;
   CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT);
   deform_import_options_init(&options);
+  options.max_seconds = INFINITY;
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "max_seconds") != NULL);
+  deform_import_options_init(&options);
   options.worker_path = "/nonexistent/deform-import-worker";
   CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_INTERNAL);
   CHECK(strstr(deform_last_error(), "/nonexistent/deform-import-worker") != NULL);

@@ -1,5 +1,6 @@
 // deform_character_import (deform/c/deform.h): in a source of its own, so that a static program that does not call it
 // pulls no importer from libdeform_c.a and needs no deform::import to link.
+#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -35,8 +36,8 @@ deform_status deform_character_import(const char* path, const deform_import_opti
     return fail_argument("deform_import_options: allow_outside is NULL with a count above 0");
   for (size_t i = 0; i < options->allow_count; ++i)
     if (options->allow_outside[i] == nullptr) return fail_argument("deform_import_options: a folder is NULL");
-  if (!(options->max_seconds >= 0.0))
-    return fail_argument("deform_import_options: max_seconds is negative or not a number");
+  if (!(options->max_seconds >= 0.0 && std::isfinite(options->max_seconds)))
+    return fail_argument("deform_import_options: max_seconds is negative or not finite");
 #ifdef DEFORM_C_HAVE_IMPORT
   return deform_c::guarded([&] {
     deform::ImportOptions import_options;
@@ -50,7 +51,7 @@ deform_status deform_character_import(const char* path, const deform_import_opti
     try {
       imported = deform::import_model_isolated(path, import_options, limits);
     } catch (const deform::Error& e) {
-      // Its one argument error is a worker that is not found: the installation, not the call, so "anything else".
+      // Its argument errors are the environment's (no worker found, no pipe), not the call's: "anything else".
       if (e.kind() == deform::Error::Kind::argument)
         return fail(DEFORM_ERROR_INTERNAL, options->worker_path != nullptr
                                                ? "worker_path '" + limits.worker + "': " + e.what()

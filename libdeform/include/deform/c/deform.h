@@ -106,10 +106,11 @@ DEFORM_C_API void deform_import_options_init(deform_import_options* options);
  * its morph targets, and the rig `options` asks for (NULL: deform_import_options_init's defaults). The importer runs
  * isolated in deform-import-worker (import_model_isolated), so a hostile file cannot crash or hang the host.
  * Errors: DEFORM_ERROR_ARGUMENT for a NULL `path` or `out`, a NULL folder among `allow_outside`, a `struct_size`
- * smaller than this version's, an unknown `rig`, or DEFORM_IMPORT_RIG_FILE without `rig_path`; DEFORM_ERROR_INPUT
- * naming the file (and the element) for a model that is missing, malformed, names a file outside the allowed
- * folders or exceeds a limit, and for a rig that does not fit it; DEFORM_ERROR_INTERNAL for a build without the
- * import component (Assimp and tinygltf were not found: deform_last_error says so) or a worker that is not found.
+ * smaller than this version's, an unknown `rig`, DEFORM_IMPORT_RIG_FILE without `rig_path`, or a `max_seconds`
+ * negative or not finite; DEFORM_ERROR_INPUT naming the file (and the element) for a model that is missing,
+ * malformed, names a file outside the allowed folders or exceeds a limit, and for a rig that does not fit it;
+ * DEFORM_ERROR_INTERNAL for a build without the import component (Assimp and tinygltf were not found:
+ * deform_last_error says so) or a worker that is not found. On failure `*out` is left as it was.
  * Allocates and takes time (a process start plus the import): call it at load time, not per frame. With a static
  * libdeform, a program that calls it links deform::import too (CMake: find_package(libdeform COMPONENTS import)). */
 DEFORM_C_API deform_status deform_character_import(const char* path, const deform_import_options* options,
