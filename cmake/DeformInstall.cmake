@@ -25,6 +25,9 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/libdeform/include/deform DESTINATION ${C
 # layer's archive, in link order, and the C++ runtime; a shared one, libdeform_c alone.
 set(deform_pc_libs "-ldeform_c")
 set(deform_pc_private "-ldeform_extras -ldeform_character -ldeform_io -ldeform_offline -ldeform_runtime -pthread")
+if(TARGET deform_import)  # deform_character_import's object needs the import layer and Assimp (shared on Debian)
+  set(deform_pc_private "-ldeform_import ${deform_pc_private} -lassimp")
+endif()
 if(NOT BUILD_SHARED_LIBS)
   get_property(deform_cxx_runtime GLOBAL PROPERTY DEFORM_CXX_RUNTIME)
   list(TRANSFORM deform_cxx_runtime PREPEND "-l")

@@ -26,8 +26,8 @@ LAYERS = {
     "io": ("runtime", "offline"),
     "character": ("runtime", "offline"),
     "extras": ("runtime", "offline", "character"),
-    "c": ("runtime", "offline", "io", "character", "extras"),
     "import": ("runtime", "io"),
+    "c": ("runtime", "offline", "io", "character", "extras", "import"),  # import: optional, when it is built
     "simplify": ("runtime", "offline"),
     "gpu": ("runtime",),
 }

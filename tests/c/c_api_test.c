@@ -210,6 +210,262 @@ static void files_outside_the_model_folder_are_refused(void) {
   rmdir(root);
 }
 
+/* The built-in character's clips: sampled into whole poses that set_pose takes, shared by its instances. */
+static void builtin_clips_play(void) {
+  deform_character* hero = NULL;
+  CHECK(deform_character_create_builtin(&hero) == DEFORM_OK);
+  if (hero == NULL) return;
+  const char* const names[] = {"idle", "walk", "run", "wave"};
+  CHECK(deform_character_clip_count(hero) == 4);
+  for (size_t c = 0; c < 4 && c < deform_character_clip_count(hero); ++c) {
+    CHECK(strcmp(deform_character_clip_name(hero, c), names[c]) == 0);
+    CHECK(deform_character_clip_duration(hero, c) > 0.0f);
+  }
+  CHECK(deform_character_clip_name(hero, 4) == NULL);
+  CHECK(deform_character_clip_duration(hero, 4) == 0.0f);
+  const int32_t walk = deform_character_find_clip(hero, "walk");
+  CHECK(walk == 1);
+  CHECK(deform_character_find_clip(hero, "moonwalk") == -1);
+  if (walk < 0) {
+    deform_character_destroy(hero);
+    return;
+  }
+
+  const size_t bones = deform_character_bone_count(hero);
+  float* r0 = malloc(4 * bones * sizeof(float));
+  float* t0 = malloc(3 * bones * sizeof(float));
+  float* r1 = malloc(4 * bones * sizeof(float));
+  float* t1 = malloc(3 * bones * sizeof(float));
+  float* bind_r = malloc(4 * bones * sizeof(float));
+  float* bind_t = malloc(3 * bones * sizeof(float));
+  CHECK(deform_character_bind_pose(hero, bind_r, bind_t, bones) == DEFORM_OK);
+  const float duration = deform_character_clip_duration(hero, (size_t)walk);
+  CHECK(deform_character_sample_clip(hero, (size_t)walk, 0.1f * duration, r0, t0, bones) == DEFORM_OK);
+  CHECK(deform_character_sample_clip(hero, (size_t)walk, 0.4f * duration, r1, t1, bones) == DEFORM_OK);
+  double rotation_gap = 0.0, unit_error = 0.0;
+  size_t unchanged = 0;
+  for (size_t b = 0; b < bones; ++b) {
+    const float* q = r0 + 4 * b;
+    unit_error = fmax(unit_error, fabs(sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) - 1.0));
+    for (int k = 0; k < 4; ++k) rotation_gap = fmax(rotation_gap, fabs(r0[4 * b + k] - r1[4 * b + k]));
+    /* Bones the walk leaves alone keep the bind pose, rotations in (x, y, z, w) order as bind_pose gives them. */
+    if (memcmp(r0 + 4 * b, r1 + 4 * b, 4 * sizeof(float)) == 0 &&
+        memcmp(t0 + 3 * b, t1 + 3 * b, 3 * sizeof(float)) == 0) {
+      ++unchanged;
+      CHECK(memcmp(r0 + 4 * b, bind_r + 4 * b, 4 * sizeof(float)) == 0);
+      CHECK(memcmp(t0 + 3 * b, bind_t + 3 * b, 3 * sizeof(float)) == 0);
+    }
+  }
+  CHECK(unit_error < 1e-5);
+  CHECK(rotation_gap > 0.05);
+  CHECK(unchanged < bones);
+  /* A looping clip wraps its time: one duration later is the same pose. */
+  CHECK(deform_character_clip_loops(hero, (size_t)walk) != 0);
+  CHECK(deform_character_sample_clip(hero, (size_t)walk, 1.1f * duration, r1, t1, bones) == DEFORM_OK);
+  double wrap_gap = 0.0;
+  for (size_t k = 0; k < 4 * bones; ++k) wrap_gap = fmax(wrap_gap, fabs(r0[k] - r1[k]));
+  CHECK(wrap_gap < 1e-4);
+
+  /* The sampled pose, set and updated, moves the points from the bind pose's. */
+  const size_t points = deform_character_point_count(hero);
+  float* rest = malloc(3 * points * sizeof(float));
+  CHECK(deform_character_update(hero, 0.0f) == DEFORM_OK);
+  CHECK(deform_character_copy_positions(hero, rest, 3 * points) == DEFORM_OK);
+  CHECK(deform_character_set_pose(hero, r0, t0, bones) == DEFORM_OK);
+  CHECK(deform_character_update(hero, 1.0f / 60.0f) == DEFORM_OK);
+  const float* walked = deform_character_positions(hero);
+  double moved = 0.0;
+  for (size_t i = 0; i < points; ++i) moved = fmax(moved, distance3(walked + 3 * i, rest + 3 * i));
+  CHECK(moved > 0.05);
+
+  /* An instance shares the clips (the same name views) and samples as the original does. */
+  deform_character* twin = NULL;
+  CHECK(deform_character_instance(hero, &twin) == DEFORM_OK);
+  CHECK(deform_character_clip_count(twin) == 4);
+  CHECK(deform_character_clip_name(twin, 1) == deform_character_clip_name(hero, 1));
+  CHECK(deform_character_sample_clip(twin, (size_t)walk, 0.1f * duration, r1, t1, bones) == DEFORM_OK);
+  CHECK(memcmp(r0, r1, 4 * bones * sizeof(float)) == 0 && memcmp(t0, t1, 3 * bones * sizeof(float)) == 0);
+  deform_character_destroy(hero); /* in either order: the twin keeps the clips */
+  CHECK(strcmp(deform_character_clip_name(twin, 3), "wave") == 0);
+
+  /* Refusals write nothing. */
+  memcpy(r1, r0, 4 * bones * sizeof(float));
+  CHECK(deform_character_sample_clip(twin, 4, 0.0f, r1, t1, bones) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "clip out of range") != NULL);
+  CHECK(deform_character_sample_clip(twin, 0, 0.0f, r1, t1, bones - 1) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "bone_count") != NULL);
+  CHECK(deform_character_sample_clip(twin, 0, NAN, r1, t1, bones) == DEFORM_ERROR_REFUSED);
+  CHECK(deform_character_sample_clip(twin, 0, 0.0f, NULL, t1, bones) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_sample_clip(NULL, 0, 0.0f, r1, t1, bones) == DEFORM_ERROR_ARGUMENT);
+  CHECK(memcmp(r0, r1, 4 * bones * sizeof(float)) == 0);
+  CHECK(deform_character_clip_count(NULL) == 0);
+  deform_character_destroy(twin);
+
+  /* Native files carry no clips. */
+  deform_character* native = NULL;
+  CHECK(deform_character_load(DEFORM_DATA_DIR "/builtin.obj", DEFORM_DATA_DIR "/builtin.sk",
+                              DEFORM_DATA_DIR "/builtin.skw", NULL, &native) == DEFORM_OK);
+  CHECK(deform_character_clip_count(native) == 0);
+  CHECK(deform_character_warning_count(native) == 0);
+  deform_character_destroy(native);
+  free(r0), free(t0), free(r1), free(t1), free(bind_r), free(bind_t), free(rest);
+}
+
+#define MRFIXIT "/usr/share/assimp/models/IQM/mrfixit.iqm"
+
+#ifdef DEFORM_TEST_HAVE_IMPORT
+/* A glTF triangle whose buffer lies outside its folder: refused unless that folder is allowed. */
+static void imports_are_confined(const char* work) {
+  char model[300], gltf[320], bin[320];
+  snprintf(model, sizeof model, "%s/confined", work);
+  snprintf(gltf, sizeof gltf, "%s/triangle.gltf", model);
+  snprintf(bin, sizeof bin, "%s/outside.bin", work);
+  mkdir(model, 0700);
+  const float triangle[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  FILE* f = fopen(bin, "wb");
+  CHECK(f != NULL);
+  if (f == NULL) return;
+  fwrite(triangle, sizeof triangle, 1, f);
+  fclose(f);
+  write_text(gltf,
+             "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"uri\":\"../outside.bin\",\"byteLength\":36}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"accessors\":[{\"bufferView\":0,"
+             "\"componentType\":5126,\"count\":3,\"type\":\"VEC3\",\"min\":[0,0,0],\"max\":[1,1,0]}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],\"nodes\":[{\"mesh\":0}],"
+             "\"scenes\":[{\"nodes\":[0]}],\"scene\":0}");
+  deform_character* c = NULL;
+  CHECK(deform_character_import(gltf, NULL, &c) == DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), gltf) != NULL);
+  CHECK(strstr(deform_last_error(), "buffers[0]") != NULL);
+  CHECK(c == NULL);
+  deform_import_options options;
+  deform_import_options_init(&options);
+  const char* const allowed[] = {work};
+  options.allow_outside = allowed;
+  options.allow_count = 1;
+  CHECK(deform_character_import(gltf, &options, &c) == DEFORM_OK);
+  CHECK(deform_character_point_count(c) == 3);
+  CHECK(deform_character_bone_count(c) == 1); /* a static scene: one bone "root" */
+  CHECK(deform_character_clip_count(c) == 0);
+  deform_character_destroy(c);
+  options.allow_outside = NULL;
+  CHECK(deform_character_import(gltf, &options, &c) == DEFORM_ERROR_ARGUMENT);
+}
+
+/* What `deform skin` writes: the OBJ's `v` lines, up to `capacity` points; the count read. */
+static size_t read_obj_points(const char* path, float* out, size_t capacity) {
+  FILE* f = fopen(path, "r");
+  CHECK(f != NULL);
+  if (f == NULL) return 0;
+  char line[512];
+  size_t n = 0;
+  while (fgets(line, sizeof line, f) != NULL) {
+    float x, y, z;
+    if (line[0] == 'v' && line[1] == ' ' && sscanf(line + 2, "%f %f %f", &x, &y, &z) == 3) {
+      if (n < capacity) out[3 * n] = x, out[3 * n + 1] = y, out[3 * n + 2] = z;
+      ++n;
+    }
+  }
+  fclose(f);
+  return n;
+}
+
+#endif
+
+/* deform_character_import on a real model: its clip played through the C API deforms as `deform skin` does. */
+static void imported_model_plays_its_clips(void) {
+  deform_character* c = NULL;
+#ifndef DEFORM_TEST_HAVE_IMPORT
+  CHECK(deform_character_import(MRFIXIT, NULL, &c) == DEFORM_ERROR_INTERNAL);
+  CHECK(strstr(deform_last_error(), "lacks the import component") != NULL);
+  CHECK(c == NULL);
+#else
+  const char* work = DEFORM_TEST_WORK_DIR;
+  mkdir(work, 0700);
+  imports_are_confined(work);
+
+  CHECK(deform_character_import("/nonexistent/model.iqm", NULL, &c) == DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), "/nonexistent/model.iqm") != NULL);
+  CHECK(deform_character_import(NULL, NULL, &c) == DEFORM_ERROR_ARGUMENT);
+  CHECK(deform_character_import(MRFIXIT, NULL, NULL) == DEFORM_ERROR_ARGUMENT);
+  deform_import_options options;
+  deform_import_options_init(&options);
+  options.rig = DEFORM_IMPORT_RIG_FILE;
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT); /* no rig_path */
+  options.struct_size = 0;
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT);
+  deform_import_options_init(&options);
+  options.max_seconds = INFINITY;
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_ARGUMENT);
+  CHECK(strstr(deform_last_error(), "max_seconds") != NULL);
+  deform_import_options_init(&options);
+  options.worker_path = "/nonexistent/deform-import-worker";
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_INTERNAL);
+  CHECK(strstr(deform_last_error(), "/nonexistent/deform-import-worker") != NULL);
+  CHECK(c == NULL);
+  if (access(MRFIXIT, R_OK) != 0) {
+    printf("C API: %s is missing (Debian's assimp-testmodels): its import is not checked\n", MRFIXIT);
+    return;
+  }
+  deform_import_options_init(&options);
+  options.rig = DEFORM_IMPORT_RIG_FILE;
+  options.rig_path = "/nonexistent/mrfixit.rig.json";
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_ERROR_INPUT);
+  CHECK(strstr(deform_last_error(), "/nonexistent/mrfixit.rig.json") != NULL);
+
+  /* No rig: skinning and IK only; the counts `deform info` gives. */
+  CHECK(deform_character_import(MRFIXIT, NULL, &c) == DEFORM_OK);
+  if (c == NULL) return;
+  CHECK(deform_character_bone_count(c) == 76);
+  const size_t points = deform_character_point_count(c);
+  CHECK(points == 1504); /* `deform info`: 1504 vertices (points), 76 bones, one clip "idle" */
+  CHECK(deform_character_clip_count(c) == 1);
+  CHECK(deform_character_lattice_count(c) == 0);
+  const int32_t idle = deform_character_find_clip(c, "idle");
+  CHECK(idle >= 0);
+  const size_t bones = deform_character_bone_count(c);
+  float* rotations = malloc(4 * bones * sizeof(float));
+  float* translations = malloc(3 * bones * sizeof(float));
+  float* expected = malloc(3 * (points + 1) * sizeof(float));
+  if (idle >= 0) {
+    CHECK(deform_character_sample_clip(c, (size_t)idle, 0.5f, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_set_pose(c, rotations, translations, bones) == DEFORM_OK);
+    CHECK(deform_character_update(c, 0.0f) == DEFORM_OK);
+    const float* got = deform_character_positions(c);
+
+    char command[1024], obj[512];
+    snprintf(obj, sizeof obj, "%s/mrfixit_idle.obj", work);
+    remove(obj);
+    snprintf(command, sizeof command, "'%s' skin '%s' --clip idle --time 0.5 --out '%s' > /dev/null", DEFORM_TEST_CLI,
+             MRFIXIT, obj);
+    CHECK(system(command) == 0);
+    CHECK(read_obj_points(obj, expected, points + 1) == points);
+    float low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < points; ++i)
+      for (int k = 0; k < 3; ++k)
+        low[k] = fminf(low[k], expected[3 * i + k]), high[k] = fmaxf(high[k], expected[3 * i + k]);
+    const double size = distance3(low, high);
+    CHECK(size > 0.0);
+    double gap = 0.0;
+    for (size_t i = 0; i < points; ++i) gap = fmax(gap, distance3(got + 3 * i, expected + 3 * i));
+    CHECK(gap <= 1e-5 * size);
+    printf("mrfixit idle at 0.5 s: largest gap %.3g of the size (bound 1e-5) from deform skin's %zu points\n",
+           gap / size, points);
+  }
+  deform_character_destroy(c);
+
+  /* The default rig, as the CLI gives it: lattices on the limbs it finds. */
+  deform_import_options_init(&options);
+  options.rig = DEFORM_IMPORT_RIG_DEFAULT;
+  c = NULL;
+  CHECK(deform_character_import(MRFIXIT, &options, &c) == DEFORM_OK);
+  CHECK(deform_character_lattice_count(c) > 0);
+  CHECK(deform_character_clip_count(c) > 0);
+  deform_character_destroy(c);
+  free(rotations), free(translations), free(expected);
+#endif
+}
+
 /* Rigid transforms: a rotation about a random axis, a translation, column-major. */
 static void random_rigid(float* m) {
   double axis[3] = {uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
@@ -1064,6 +1320,8 @@ int main(void) {
   character_reaches_stretches_and_springs_back();
   loading_errors_name_the_file();
   files_outside_the_model_folder_are_refused();
+  builtin_clips_play();
+  imported_model_plays_its_clips();
   skinning_matches_a_plain_reference();
   lattice_matches_trilinear_interpolation();
   delta_mush_smooths_a_bent_elbow();

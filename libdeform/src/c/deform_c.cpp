@@ -4,7 +4,10 @@
 #include "deform/c/deform.h"
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <exception>
+#include <memory>
 #include <new>
 #include <optional>
 #include <span>
@@ -23,11 +26,7 @@
 #include "deform/runtime/skinning.hpp"
 #include "deform/version.hpp"
 
-struct deform_character {
-  deform::Character character;
-  deform::Pose pose;   // set_pose's staging, sized once so that the call allocates nothing
-  deform::Pose later;  // set_pose_moving's second pose, likewise
-};
+#include "c_character.hpp"
 
 struct deform_ddm {
   deform::DirectDeltaMushBinding binding;
@@ -43,6 +42,10 @@ namespace {
 
 thread_local std::string last_error;
 
+}  // namespace
+
+namespace deform_c {
+
 deform_status fail(deform_status status, std::string message) {
   try {
     last_error = std::move(message);
@@ -54,25 +57,32 @@ deform_status fail(deform_status status, std::string message) {
 
 deform_status fail_argument(const char* message) { return fail(DEFORM_ERROR_ARGUMENT, message); }
 
-// Runs `body` (returning deform_status), translating what C++ throws.
-template <class Body>
-deform_status guarded(Body&& body) noexcept {
-  try {
-    return body();
-  } catch (const deform::Error& e) {
-    // The environment (a full disk, permissions) is neither the input nor the call: "anything else".
-    return fail(e.kind() == deform::Error::Kind::input      ? DEFORM_ERROR_INPUT
-                : e.kind() == deform::Error::Kind::argument ? DEFORM_ERROR_ARGUMENT
-                                                            : DEFORM_ERROR_INTERNAL,
-                e.what());
-  } catch (const std::bad_alloc&) {
-    return fail(DEFORM_ERROR_INTERNAL, "out of memory");
-  } catch (const std::exception& e) {
-    return fail(DEFORM_ERROR_INTERNAL, e.what());
-  } catch (...) {
-    return fail(DEFORM_ERROR_INTERNAL, "unknown failure");
+deform_status adopt(deform::Character character, std::shared_ptr<const CharacterSource> source,
+                    deform_character** out) {
+  std::unique_ptr<deform_character> handle(
+      new deform_character{std::move(character), std::move(source), {}, {}, {}, {}, {}});
+  handle->bind = handle->character.skeleton().bind_pose();
+  handle->pose = handle->bind;
+  handle->later = handle->bind;
+  handle->sampled = handle->bind;
+  for (const deform::Animation& clip : handle->source->clips) {
+    deform::SamplingJob job;
+    job.animation = &clip;
+    handle->cursors.emplace_back(job.cursor_size(), 0u);
   }
+  *out = handle.release();
+  return DEFORM_OK;
 }
+
+}  // namespace deform_c
+
+using deform_c::adopt;
+using deform_c::CharacterSource;
+using deform_c::fail;
+using deform_c::fail_argument;
+using deform_c::guarded;
+
+namespace {
 
 // Copies C arrays (quaternions x, y, z, w; translations) into a pose sized for them.
 void stage(deform::Pose& pose, const float* rotations_xyzw, const float* translations) {
@@ -89,11 +99,7 @@ deform_status refused(const deform::Status& status) {
 }
 
 deform_status adopt(deform::Character character, deform_character** out) {
-  auto* handle = new deform_character{std::move(character), {}, {}};
-  handle->pose = handle->character.skeleton().bind_pose();
-  handle->later = handle->pose;
-  *out = handle;
-  return DEFORM_OK;
+  return adopt(std::move(character), std::make_shared<const CharacterSource>(), out);
 }
 
 bool finite3(const float* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
@@ -108,7 +114,12 @@ const char* deform_version(void) { return DEFORM_VERSION_STRING; }
 
 deform_status deform_character_create_builtin(deform_character** out) {
   if (out == nullptr) return fail_argument("deform_character_create_builtin: out is NULL");
-  return guarded([&] { return adopt(deform::make_builtin_character(), out); });
+  return guarded([&] {
+    deform::Character character = deform::make_builtin_character();
+    auto source = std::make_shared<CharacterSource>();
+    source->clips = deform::builtin_clips(character.model());
+    return adopt(std::move(character), std::move(source), out);
+  });
 }
 
 deform_status deform_character_load(const char* obj_path, const char* sk_path, const char* skw_path,
@@ -129,7 +140,7 @@ deform_status deform_character_load_allowing(const char* obj_path, const char* s
     deform::ReferencePolicy policy;
     for (size_t i = 0; i < allow_count; ++i) policy.allow_outside.emplace_back(allow_outside[i]);
     deform::Model model = deform::load_model(obj_path, sk_path, skw_path, nullptr, deform::max_influences, policy);
-    if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);
+    if (rig_path == nullptr) return adopt(deform::Character(std::move(model)), out);  // native files carry no clips
     deform::Rig rig = deform::read_rig_json(rig_path, model.skeleton, model.mesh.point_count());
     return adopt(deform::Character(std::move(model), rig), out);
   });
@@ -139,7 +150,80 @@ void deform_character_destroy(deform_character* character) { delete character; }
 
 deform_status deform_character_instance(const deform_character* character, deform_character** out) {
   if (character == nullptr || out == nullptr) return fail_argument("deform_character_instance: NULL argument");
-  return guarded([&] { return adopt(character->character.instance(), out); });
+  return guarded([&] { return adopt(character->character.instance(), character->source, out); });
+}
+
+void deform_import_options_init(deform_import_options* options) {
+  if (options == nullptr) return;
+  *options = deform_import_options{};
+  options->struct_size = sizeof(deform_import_options);
+  options->rig = DEFORM_IMPORT_RIG_NONE;
+}
+
+size_t deform_character_warning_count(const deform_character* character) {
+  return character != nullptr ? character->source->warnings.size() : 0;
+}
+
+const char* deform_character_warning(const deform_character* character, size_t warning) {
+  if (character == nullptr || warning >= character->source->warnings.size()) return nullptr;
+  return character->source->warnings[warning].c_str();
+}
+
+size_t deform_character_clip_count(const deform_character* character) {
+  return character != nullptr ? character->source->clips.size() : 0;
+}
+
+const char* deform_character_clip_name(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return nullptr;
+  return character->source->clips[clip].name.c_str();
+}
+
+float deform_character_clip_duration(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return 0.0f;
+  return character->source->clips[clip].duration;
+}
+
+int deform_character_clip_loops(const deform_character* character, size_t clip) {
+  if (character == nullptr || clip >= character->source->clips.size()) return 0;
+  return character->source->clips[clip].loop ? 1 : 0;
+}
+
+int32_t deform_character_find_clip(const deform_character* character, const char* name) {
+  if (character == nullptr || name == nullptr) return -1;
+  const std::vector<deform::Animation>& clips = character->source->clips;
+  for (std::size_t c = 0; c < clips.size(); ++c)
+    if (clips[c].name == name) return static_cast<int32_t>(c);
+  return -1;
+}
+
+deform_status deform_character_sample_clip(deform_character* character, size_t clip, float seconds,
+                                           float* rotations_xyzw, float* translations, size_t bone_count) {
+  if (character == nullptr || rotations_xyzw == nullptr || translations == nullptr)
+    return fail_argument("deform_character_sample_clip: a handle or array is NULL");
+  if (clip >= character->source->clips.size()) return fail_argument("deform_character_sample_clip: clip out of range");
+  if (bone_count != character->bind.rotations.size())
+    return fail_argument("deform_character_sample_clip: bone_count differs from the skeleton's");
+  // The bind pose, then the clip's bones over it (SamplingJob writes the bones it animates), staged in the handle:
+  // a refusal writes nothing into the caller's arrays.
+  deform::Pose& pose = character->sampled;
+  std::copy(character->bind.rotations.begin(), character->bind.rotations.end(), pose.rotations.begin());
+  std::copy(character->bind.translations.begin(), character->bind.translations.end(), pose.translations.begin());
+  deform::SamplingJob job;
+  job.animation = &character->source->clips[clip];
+  job.time = seconds;
+  job.rotations = pose.rotations;
+  job.translations = pose.translations;
+  job.cursor = character->cursors[clip];
+  if (const deform::Status status = job.run(); !status) return refused(status);
+  for (std::size_t b = 0; b < bone_count; ++b) {
+    const glm::quat& q = pose.rotations[b];
+    const glm::vec3& t = pose.translations[b];
+    float* r = rotations_xyzw + 4 * b;
+    r[0] = q.x, r[1] = q.y, r[2] = q.z, r[3] = q.w;
+    float* o = translations + 3 * b;
+    o[0] = t.x, o[1] = t.y, o[2] = t.z;
+  }
+  return DEFORM_OK;
 }
 
 size_t deform_character_point_count(const deform_character* character) {

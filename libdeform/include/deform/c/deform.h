@@ -1,11 +1,12 @@
-/* libdeform's C API (target deform::c): a Character (load, pose, reach, release, update, read the deformed mesh, or
- * pose only and hand a GPU its palette, bind arrays and lattice data to deform it there), linear-blend skinning and
- * Direct Delta Mush over caller arrays, and Bezier lattices (bind points once, move control points, evaluate), for
- * any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md walks through it.
+/* libdeform's C API (target deform::c): a Character (load or import, play its clips, pose, reach, release, update, read
+ * the deformed mesh, or pose only and hand a GPU its palette, bind arrays and lattice data to deform it there),
+ * linear-blend skinning and Direct Delta Mush over caller arrays, and Bezier lattices (bind points once, move control
+ * points, evaluate), for any language that calls C (C#, Rust, Zig, Python's ctypes, engine scripting). docs/c-api.md
+ * walks through it.
  *
  * Conventions:
- *  - Objects are opaque handles made by a *_create / *_load function and freed by the matching *_destroy (NULL is
- *    accepted there and ignored).
+ *  - Objects are opaque handles made by a *_create / *_load / *_import function and freed by the matching *_destroy
+ * (NULL is accepted there and ignored).
  *  - Every function that can fail returns a deform_status; DEFORM_OK is 0. On failure nothing is changed and
  *    deform_last_error() says why, with the file, line or byte and element for input errors, as the C++ API does.
  *  - Vectors are float[3] (x, y, z); arrays of them are packed, 3 floats per element. Matrices are float[16],
@@ -45,7 +46,7 @@ DEFORM_C_API const char* deform_version(void);
 
 typedef struct deform_character deform_character;
 
-/* The built-in character with its rig (three elastic lattices on the left arm). */
+/* The built-in character with its rig (three elastic lattices on the left arm) and its four clips. */
 DEFORM_C_API deform_status deform_character_create_builtin(deform_character** out);
 /* A character from native files: OBJ mesh, .sk skeleton, .skw weights, and optionally a rig (JSON; NULL: no
  * lattices, skinning and IK only). */
@@ -60,10 +61,88 @@ DEFORM_C_API deform_status deform_character_load_allowing(const char* obj_path, 
                                                           const char* const* allow_outside, size_t allow_count,
                                                           deform_character** out);
 DEFORM_C_API void deform_character_destroy(deform_character* character);
-/* Another character of the same model and rig that shares this one's immutable data (mesh, skin, bindings, levels)
- * and has its own pose, springs and deformed mesh: what a crowd makes per member (about 142 KB each for the built-in
- * character), far cheaper than loading again. Destroy each with deform_character_destroy, in any order. */
+/* Another character of the same model and rig that shares this one's immutable data (mesh, skin, bindings, levels
+ * and clips) and has its own pose, springs, clip cursors and deformed mesh: what a crowd makes per member (about 142 KB
+ * each for the built-in character), far cheaper than loading again. Destroy each with deform_character_destroy, in any
+ * order. */
 DEFORM_C_API deform_status deform_character_instance(const deform_character* character, deform_character** out);
+
+/* ---- Importing a model (deform/import/import.hpp; docs/import.md, docs/security.md) ---- */
+
+/* The rig an imported character gets. */
+typedef enum deform_import_rig {
+  DEFORM_IMPORT_RIG_NONE = 0,    /* no lattices: skinning and IK only (as deform_character_load with no rig) */
+  DEFORM_IMPORT_RIG_DEFAULT = 1, /* the rig the `deform` CLI gives an imported model (deform::default_rig: lattices
+                                  * on the limbs it finds, reach chains); the call fails if it cannot be made or
+                                  * bound, as the CLI does */
+  DEFORM_IMPORT_RIG_FILE = 2     /* the rig JSON at `rig_path` */
+} deform_import_rig;
+
+/* How deform_character_import reads a model. Fill it with deform_import_options_init, then change what differs:
+ * `struct_size` lets later versions add fields at the end without breaking callers built against this one. */
+typedef struct deform_import_options {
+  size_t struct_size; /* sizeof(deform_import_options), set by _init */
+  deform_import_rig rig;
+  const char* rig_path; /* with DEFORM_IMPORT_RIG_FILE: the rig JSON (its bones named as the model's); else unused */
+  /* `allow_count` folders besides the model's own from which the model may name files (glTF buffers and images,
+   * textures). By default only the model's folder is read: a file named elsewhere fails the call with
+   * DEFORM_ERROR_INPUT naming the model and the key, before it is opened (docs/security.md). */
+  const char* const* allow_outside;
+  size_t allow_count;
+  /* The importer runs in its own process (deform-import-worker) with these limits; 0 keeps the default (4 GiB of
+   * memory, 60 s). A model that exceeds one, or crashes the importer, fails the call with DEFORM_ERROR_INPUT. */
+  uint64_t max_memory_bytes;
+  double max_seconds;
+  /* The importer executable; NULL: $DEFORM_IMPORT_WORKER, then the one this build made, then the installed one
+   * (LIBEXECDIR/deform-import-worker). A plugin that ships the worker beside itself names it here. */
+  const char* worker_path;
+} deform_import_options;
+
+/* Sets `options` to the defaults: struct_size, no rig, the model's folder only, the default limits and worker. */
+DEFORM_C_API void deform_import_options_init(deform_import_options* options);
+
+/* A character from any model the import component reads: glTF 2.0 (.gltf, .glb), IQM, FBX, Collada, DirectX .x and
+ * the other formats Assimp reads (docs/import.md), with the model's own animation clips (deform_character_clip_*),
+ * its morph targets, and the rig `options` asks for (NULL: deform_import_options_init's defaults). The importer runs
+ * isolated in deform-import-worker (import_model_isolated), so a hostile file cannot crash or hang the host.
+ * Errors: DEFORM_ERROR_ARGUMENT for a NULL `path` or `out`, a NULL folder among `allow_outside`, a `struct_size`
+ * smaller than this version's, an unknown `rig`, DEFORM_IMPORT_RIG_FILE without `rig_path`, or a `max_seconds`
+ * negative or not finite; DEFORM_ERROR_INPUT naming the file (and the element) for a model that is missing,
+ * malformed, names a file outside the allowed folders or exceeds a limit, and for a rig that does not fit it;
+ * DEFORM_ERROR_INTERNAL for a build without the import component (Assimp and tinygltf were not found:
+ * deform_last_error says so) or a worker that is not found. On failure `*out` is left as it was.
+ * Allocates and takes time (a process start plus the import): call it at load time, not per frame. With a static
+ * libdeform, a program that calls it links deform::import too (CMake: find_package(libdeform COMPONENTS import)). */
+DEFORM_C_API deform_status deform_character_import(const char* path, const deform_import_options* options,
+                                                   deform_character** out);
+/* The import's non-fatal findings (unweighted vertices bound rigidly, influences dropped, scale a skeleton cannot
+ * hold, textures missing), one line each naming the file; none for the other characters. `_warning` is a view valid
+ * as long as the handle, or NULL for an index out of range. */
+DEFORM_C_API size_t deform_character_warning_count(const deform_character* character);
+DEFORM_C_API const char* deform_character_warning(const deform_character* character, size_t warning);
+
+/* ---- Animation clips (deform/runtime/animation.hpp) ---- */
+
+/* The clips the character has: an imported model's own, the built-in character's ("idle", "walk", "run", "wave"),
+ * none for deform_character_load's. Instances share them (nothing is copied). `_clip_name` is a view valid as long
+ * as the handle ("" for an unnamed clip), NULL for a clip out of range; `_clip_duration` is in seconds (>= 0; 0 for
+ * a clip out of range); `_clip_loops` is nonzero when sampling wraps the time (every imported clip loops). */
+DEFORM_C_API size_t deform_character_clip_count(const deform_character* character);
+DEFORM_C_API const char* deform_character_clip_name(const deform_character* character, size_t clip);
+DEFORM_C_API float deform_character_clip_duration(const deform_character* character, size_t clip);
+DEFORM_C_API int deform_character_clip_loops(const deform_character* character, size_t clip);
+/* The index of the first clip named `name`, or -1. */
+DEFORM_C_API int32_t deform_character_find_clip(const deform_character* character, const char* name);
+/* Clip `clip` at `seconds` into the caller's pose arrays (bone_count rotations (x, y, z, w) and translations, as
+ * deform_character_set_pose takes them): every bone the clip animates gets its sampled local rotation and
+ * translation, every other bone its bind pose, so the arrays hold a whole pose to blend with others or pass straight
+ * to deform_character_set_pose. The time maps into the clip as the C++ SamplingJob maps it: a looping clip wraps it
+ * into [0, duration) (negative times too), another clamps it into [0, duration]. Morph-weight tracks are not sampled
+ * here. The handle keeps a key cursor per clip, so playing forwards costs O(channels) a frame. DEFORM_ERROR_ARGUMENT
+ * for a NULL argument, a clip out of range or a bone_count that differs from the skeleton's; DEFORM_ERROR_REFUSED for
+ * a time that is not finite. On failure nothing is written. No allocation. */
+DEFORM_C_API deform_status deform_character_sample_clip(deform_character* character, size_t clip, float seconds,
+                                                        float* rotations_xyzw, float* translations, size_t bone_count);
 
 /* Mesh points (OBJ `v`) and bones. */
 DEFORM_C_API size_t deform_character_point_count(const deform_character* character);
