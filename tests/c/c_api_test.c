@@ -463,6 +463,34 @@ static void imported_model_plays_its_clips(void) {
   CHECK(deform_character_clip_count(c) > 0);
   deform_character_destroy(c);
   free(rotations), free(translations), free(expected);
+
+  /* A model with six influences on some points (`deform info`: max_influences 6): its skin does not fit the GPU
+   * route's four slots, unless imported with four_influences, which keeps each point's four strongest and says so. */
+  const char* six = "/usr/share/assimp/models/FBX/animation_with_skeleton.fbx";
+  if (access(six, R_OK) != 0) return;
+  deform_skin_bind bind;
+  c = NULL;
+  CHECK(deform_character_import(six, NULL, &c) == DEFORM_OK);
+  CHECK(deform_character_skin_bind(c, &bind) == DEFORM_ERROR_REFUSED);
+  CHECK(strstr(deform_last_error(), "more than four influences") != NULL);
+  deform_character_destroy(c);
+  deform_import_options_init(&options);
+  options.four_influences = 1;
+  c = NULL;
+  CHECK(deform_character_import(six, &options, &c) == DEFORM_OK);
+  const deform_status bound = deform_character_skin_bind(c, &bind);
+  CHECK(bound == DEFORM_OK);
+  int normalised = 1;
+  for (size_t i = 0; bound == DEFORM_OK && i < bind.point_count; ++i) {
+    const float* w = bind.weights + 4 * i;
+    normalised = normalised && fabsf(w[0] + w[1] + w[2] + w[3] - 1.0f) < 1e-5f;
+  }
+  CHECK(normalised);
+  int said = 0;
+  for (size_t i = 0; i < deform_character_warning_count(c); ++i)
+    said = said || strstr(deform_character_warning(c, i), "four strongest influences") != NULL;
+  CHECK(said);
+  deform_character_destroy(c);
 #endif
 }
 

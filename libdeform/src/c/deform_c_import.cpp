@@ -11,6 +11,7 @@
 #include "deform/import/import.hpp"
 #include "deform/io/rig_json.hpp"
 #include "deform/offline/rig.hpp"
+#include "deform/runtime/skeleton.hpp"
 #endif
 
 using deform_c::fail;
@@ -63,6 +64,17 @@ deform_status deform_character_import(const char* path, const deform_import_opti
     // As the CLI reports them (model_loading::load_model): each line names the file.
     for (const std::string& message : imported.warnings) source->warnings.push_back(std::string(path) + ": " + message);
     deform::Model& model = imported.model;
+    // A field past the first version's end is read only when the caller's struct has it.
+    const bool four = options->struct_size >= offsetof(deform_import_options, four_influences) + sizeof(int) &&
+                      options->four_influences != 0;
+    if (four && model.weights.has_extra()) {
+      float largest = 0.0f;
+      const std::size_t dropped = deform::drop_extra_influences(model.weights, &largest);
+      source->warnings.push_back(std::string(path) + ": " + std::to_string(dropped) +
+                                 " points kept their four strongest influences (four_influences; the largest weight "
+                                 "dropped " +
+                                 std::to_string(largest) + " of its point's)");
+    }
     // The rig as the CLI picks it for an imported model: the file's (read against the model's skeleton and points),
     // or default_rig's (model_loading::starting_rig), bound by the Character, whose refusal fails the call.
     switch (options->rig) {

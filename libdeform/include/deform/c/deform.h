@@ -96,9 +96,14 @@ typedef struct deform_import_options {
   /* The importer executable; NULL: $DEFORM_IMPORT_WORKER, then the one this build made, then the installed one
    * (LIBEXECDIR/deform-import-worker). A plugin that ships the worker beside itself names it here. */
   const char* worker_path;
+  /* Nonzero: each point keeps its four strongest influences, renormalised (as a .skw file holds them), which the GPU
+   * route's four slots need (deform_character_skin_bind refuses more); the points that lost some are counted in a
+   * warning. 0 (the default): every influence the file gives, more than four skinned on the CPU. */
+  int four_influences;
 } deform_import_options;
 
-/* Sets `options` to the defaults: struct_size, no rig, the model's folder only, the default limits and worker. */
+/* Sets `options` to the defaults: struct_size, no rig, the model's folder only, the default limits and worker, every
+ * influence. */
 DEFORM_C_API void deform_import_options_init(deform_import_options* options);
 
 /* A character from any model the import component reads: glTF 2.0 (.gltf, .glb), IQM, FBX, Collada, DirectX .x and
@@ -366,8 +371,9 @@ typedef struct deform_skin_bind {
   const float* weights;   /* point_count * 4 weights, unused slots 0, summing to 1 */
 } deform_skin_bind;
 /* Fills `out`. DEFORM_ERROR_ARGUMENT for a NULL argument; DEFORM_ERROR_REFUSED for a skin with points of more than
- * four influences, which four slots cannot hold (a character loaded by this API never has them: the loader keeps the
- * four strongest). No allocation. */
+ * four influences, which four slots cannot hold: deform_character_load keeps the four strongest, an imported model
+ * may have more (`deform info` prints max_influences) unless imported with deform_import_options::four_influences.
+ * No allocation. */
 DEFORM_C_API deform_status deform_character_skin_bind(const deform_character* character, deform_skin_bind* out);
 
 /* Marks the padding lanes of a lattice binding. */
